@@ -1,0 +1,735 @@
+"""Event-to-event motion of a rigid sphere on the centre path (PHYSICS.md).
+
+The rock is in one of two modes:
+
+* FLIGHT: a parabola, solved exactly for the next contact with the centre
+  path (one quadratic per piece walked);
+* CONTACT: rolling, sliding, or rolling with sliding on one straight piece
+  of the centre path, with constant accelerations between events (end of the
+  piece, speed reaching zero, slip reaching zero), all closed forms.
+
+Impacts apply Newton restitution with Coulomb friction and spin (``spang``) or
+the lumped-mass law (``rn_rt``). There is no time step anywhere.
+
+All functions are compiled with numba and take plain arrays. Sign conventions:
+x downslope, y up, angular velocity ``w`` counter-clockwise positive; a rock
+rolling towards +x without slip has ``w = -v / r``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .rng import next_normal, truncated_normal
+
+G = 9.81
+"""Acceleration of gravity (m/s^2)."""
+
+# Columns of the material table (one row per material).
+M_MODEL = 0  #: impact model: 0 = spang, 1 = rn_rt
+M_E = 1  #: e (spang) or Rn (rn_rt), mean
+M_RT = 2  #: Rt (rn_rt)
+M_MU = 3  #: Coulomb friction coefficient mu, mean
+M_MUR = 4  #: rolling-resistance coefficient mu_r, mean
+M_VSCALE = 5  #: 1 = Pfeiffer & Bowen velocity scaling of the normal restitution
+M_VSK = 6  #: K of the velocity scaling (m/s)
+M_ROUGH = 7  #: standard deviation of the tilt of the impact normal (rad)
+M_SD_E = 8  #: standard deviation of e / Rn
+M_SD_MU = 9  #: standard deviation of mu
+M_SD_MUR = 10  #: standard deviation of mu_r
+N_MAT_COLS = 11
+
+MODEL_SPANG = 0
+MODEL_RN_RT = 1
+
+# Columns of the settings vector.
+S_V_CONTACT = 0  #: outgoing normal speed below which the rock stays in contact (m/s)
+S_V_STOP = 1  #: speed below which a rock that can be held is stopped (m/s)
+S_MAX_EVENTS = 2  #: event limit per rock
+N_SETTINGS = 3
+
+# How a path ends.
+RUNNING = 0
+STOPPED = 1
+EXIT_UPSLOPE = 2  #: left the section at its upslope end (x < x_first)
+EXIT_DOWNSLOPE = 3  #: left the section at its downslope end (x > x_last)
+UNRESOLVED = 4  #: reached the event limit
+STATUS_NAMES = ("running", "stopped", "exit_upslope", "exit_downslope", "unresolved")
+
+FLIGHT = 0
+CONTACT = 1
+
+# Columns of a recorded trajectory point.
+T_X, T_Y, T_VX, T_VY, T_W, T_T, T_MODE = 0, 1, 2, 3, 4, 5, 6
+N_TRAJ_COLS = 7
+
+# Columns of the per-station detail record.
+C_H, C_VX, C_VY, C_W, C_T = 0, 1, 2, 3, 4
+N_CROSS_COLS = 5
+
+
+@njit(cache=True)
+def locate(px: np.ndarray, x: float, vx: float) -> int:
+    """Index of the centre-path piece under ``x``, on the side ``vx`` moves to."""
+    npc = px.shape[0] - 1
+    k = np.searchsorted(px, x, side="right") - 1
+    if k < 0:
+        k = 0
+    if k > npc - 1:
+        k = npc - 1
+    # On a vertex, the piece ahead in the direction of travel.
+    if vx < 0.0 and k > 0 and x <= px[k]:
+        k -= 1
+    return k
+
+
+@njit(cache=True)
+def path_height(px: np.ndarray, py: np.ndarray, k: int, x: float) -> float:
+    """Height (m) of piece ``k`` of the centre path at ``x``."""
+    return py[k] + (py[k + 1] - py[k]) * (x - px[k]) / (px[k + 1] - px[k])
+
+
+@njit(cache=True)
+def next_landing(px, py, x0, y0, vx, vy, k):
+    """Time and piece of the next contact of a free flight with the centre path.
+
+    Parameters
+    ----------
+    px, py : ndarray
+        Centre path vertices (m).
+    x0, y0 : float
+        Start of the flight (m); on or above the path.
+    vx, vy : float
+        Initial velocity (m/s).
+    k : int
+        Piece under ``x0`` on the side of travel (see :func:`locate`).
+
+    Returns
+    -------
+    leaves : bool
+        True if the rock leaves the section before landing.
+    t : float
+        Flight time (s) to the landing, or to the section end if ``leaves``.
+    k : int
+        Piece landed on (or the last one walked).
+
+    Notes
+    -----
+    On a piece with slope ``c`` the height of the centre above it is the
+    concave quadratic h(t) = C + B t - g t^2 / 2, C = y0 - Y(x0),
+    B = vy - c vx. The flight is above the piece at both ends of its time
+    window [t_in, t_out] exactly when no landing lies within it (a concave
+    function is above the smaller of its end values), so the walk tests only
+    h(t_out) and, on the piece where it is <= 0, takes the descending root
+    t = (B + sqrt(B^2 + 2 g C)) / g, written without cancellation.
+    """
+    npc = px.shape[0] - 1
+    t_in = 0.0
+    while True:
+        c = (py[k + 1] - py[k]) / (px[k + 1] - px[k])
+        if vx > 0.0:
+            t_out = (px[k + 1] - x0) / vx
+        elif vx < 0.0:
+            t_out = (px[k] - x0) / vx
+        else:
+            t_out = np.inf
+        cc = y0 - (py[k] + c * (x0 - px[k]))
+        bb = vy - c * vx
+        if t_out < np.inf:
+            h_out = cc + t_out * (bb - 0.5 * G * t_out)
+            if h_out > 0.0:
+                k = k + 1 if vx > 0.0 else k - 1
+                if k < 0 or k >= npc:
+                    return True, t_out, k
+                t_in = t_out
+                continue
+        disc = bb * bb + 2.0 * G * cc
+        sq = np.sqrt(disc) if disc > 0.0 else 0.0
+        if bb >= 0.0:
+            t = (bb + sq) / G
+        elif sq - bb > 0.0:
+            t = 2.0 * cc / (sq - bb)
+        else:
+            t = 0.0
+        if t < t_in:
+            t = t_in
+        if t > t_out:
+            t = t_out
+        return False, t, k
+
+
+@njit(cache=True)
+def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng):
+    """Velocity and spin after an impact on ground of outward normal (nx, ny).
+
+    Parameters
+    ----------
+    vx, vy : float
+        Velocity before the impact (m/s).
+    w : float
+        Angular velocity before (rad/s), counter-clockwise positive.
+    nx, ny : float
+        Unit outward normal of the ground (centre path piece).
+    r : float
+        Rock radius (m).
+    model : int
+        ``MODEL_SPANG`` or ``MODEL_RN_RT``.
+    e : float
+        Coefficient of restitution e (spang) or Rn (rn_rt), this impact's draw.
+    rt : float
+        Tangential restitution Rt (rn_rt only).
+    mu : float
+        Coulomb friction coefficient, this impact's draw.
+    vscale : bool
+        Apply the Pfeiffer & Bowen (1989) scaling e / (1 + (|v_n| / K)^2).
+    vsk : float
+        K of that scaling (m/s), 9.144 m/s in CRSP.
+    rough : float
+        Standard deviation of the tilt of the impact normal (rad).
+    rng : ndarray of uint64, shape (1,)
+        The rock's random stream (for the tilt).
+
+    Returns
+    -------
+    vx, vy, w : float
+        Velocity (m/s) and angular velocity (rad/s) after the impact.
+
+    Notes
+    -----
+    With v_n = v.n < 0, v_t = v.t, slip u = v_t + r w, normal impulse per
+    unit mass p_n = (1 + e)|v_n| (Spang & Rautenstrauch 1988; PHYSICS.md):
+
+    * spang, stick (|u| <= 7/2 mu p_n): v_t' = (5 v_t - 2 r w) / 7,
+      w' = -v_t' / r;
+    * spang, slip: v_t' = v_t - mu p_n sgn(u), w' = w - 5/2 mu p_n sgn(u) / r;
+    * rn_rt: v_n' = -Rn v_n, v_t' = Rt v_t and w' = Rt w, so that a rolling
+      rock stays rolling and no energy is gained (the lumped-mass law has no
+      spin; scaling the spin like the tangential velocity is our choice).
+
+    A tilted normal that would make the rock arrive from below is drawn again
+    (at most 64 times, then the untilted normal is used).
+    """
+    mx = nx
+    my = ny
+    if rough > 0.0:
+        for _ in range(64):
+            th = rough * next_normal(rng)
+            c = np.cos(th)
+            s = np.sin(th)
+            ax = c * nx - s * ny
+            ay = s * nx + c * ny
+            if vx * ax + vy * ay < 0.0:
+                mx = ax
+                my = ay
+                break
+    tx = my
+    ty = -mx
+    vn = vx * mx + vy * my
+    vt = vx * tx + vy * ty
+    if vn >= 0.0:
+        return vx, vy, w
+    ee = e
+    if vscale:
+        q = vn / vsk
+        ee = e / (1.0 + q * q)
+    vn2 = -ee * vn
+    if model == MODEL_SPANG:
+        pn = -(1.0 + ee) * vn
+        u = vt + r * w
+        if abs(u) <= 3.5 * mu * pn:
+            vt2 = (5.0 * vt - 2.0 * r * w) / 7.0
+            w2 = -vt2 / r
+        else:
+            sg = 1.0 if u > 0.0 else -1.0
+            vt2 = vt - mu * pn * sg
+            w2 = w - 2.5 * mu * pn * sg / r
+    else:
+        vt2 = rt * vt
+        w2 = rt * w
+    return vn2 * mx + vt2 * tx, vn2 * my + vt2 * ty, w2
+
+
+@njit(cache=True)
+def _draw(mats, mat, rng, drawn):
+    """Draw this contact's e, mu and mu_r for material ``mat`` into ``drawn``."""
+    drawn[0] = truncated_normal(rng, mats[mat, M_E], mats[mat, M_SD_E], 0.0, 1.0)
+    drawn[1] = truncated_normal(rng, mats[mat, M_MU], mats[mat, M_SD_MU], 0.0, np.inf)
+    drawn[2] = truncated_normal(rng, mats[mat, M_MUR], mats[mat, M_SD_MUR], 0.0, np.inf)
+
+
+@njit(cache=True)
+def _unit_tangent(px, py, k):
+    dx = px[k + 1] - px[k]
+    dy = py[k + 1] - py[k]
+    ln = np.hypot(dx, dy)
+    return dx / ln, dy / ln
+
+
+@njit(cache=True)
+def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn):
+    """Impact on piece ``k``, then decide between flight and contact.
+
+    Draws the material parameters of the piece (per impact), applies
+    :func:`impact`, and returns (vx, vy, w, mode, seg). If the outgoing normal
+    speed against the true piece is below ``v_contact`` the normal component
+    is removed and the rock continues in contact.
+    """
+    seg = pseg[k]
+    mat = seg_mat[seg]
+    _draw(mats, mat, rng, drawn)
+    tx, ty = _unit_tangent(px, py, k)
+    nx = -ty
+    ny = tx
+    vx, vy, w = impact(
+        vx,
+        vy,
+        w,
+        nx,
+        ny,
+        r,
+        int(mats[mat, M_MODEL]),
+        drawn[0],
+        mats[mat, M_RT],
+        drawn[1],
+        mats[mat, M_VSCALE] > 0.5,
+        mats[mat, M_VSK],
+        mats[mat, M_ROUGH],
+        rng,
+    )
+    vn = vx * nx + vy * ny
+    if vn >= v_contact:
+        return vx, vy, w, FLIGHT, seg
+    vt = vx * tx + vy * ty
+    return vt * tx, vt * ty, w, CONTACT, seg
+
+
+@njit(cache=True)
+def _contact_accel(sinb, cosb, sigma, mu, mur, r):
+    """Accelerations of a rock in contact, moving along a piece.
+
+    Parameters
+    ----------
+    sinb, cosb : float
+        Sine and cosine of the piece angle, beta > 0 where the motion goes downhill.
+    sigma : float
+        Slip v - r s (m/s), s the spin in the rolling sense.
+    mu, mu_r : float
+        Friction and rolling-resistance coefficients.
+    r : float
+        Radius (m).
+
+    Returns
+    -------
+    a : float
+        dv/dt (m/s^2).
+    dsig : float
+        d(sigma)/dt (m/s^2); 0 while the rock rolls without slip.
+    ds : float
+        ds/dt (rad/s^2) of the spin; nan while rolling (then s = v / r).
+
+    Notes
+    -----
+    Rolling without slip (sigma = 0, tan beta <= (7 mu - 5 mu_r) / 2):
+    a = 5/7 g (sin beta - mu_r cos beta). With slip:
+    a = g (sin beta - mu cos beta sgn sigma), r ds/dt = 5/2 mu g cos beta sgn sigma.
+    Between the two limits, (7 mu - 5 mu_r) / 2 < tan beta <= 7/2 mu, the slip
+    can neither grow nor vanish: the rock keeps sigma = 0 with friction at its
+    Coulomb limit, a = g (sin beta - mu cos beta), which dissipates energy at
+    the rate m v g (7/5 mu cos beta - 2/5 sin beta) >= 0.
+    """
+    eps = 1e-9
+    if abs(sigma) <= eps:
+        if 2.0 * sinb <= (7.0 * mu - 5.0 * mur) * cosb:
+            return 5.0 / 7.0 * G * (sinb - mur * cosb), 0.0, np.nan
+        if sinb - 3.5 * mu * cosb <= 0.0:
+            return G * (sinb - mu * cosb), 0.0, np.nan
+        sg = 1.0
+    else:
+        sg = 1.0 if sigma > 0.0 else -1.0
+    a = G * (sinb - mu * cosb * sg)
+    return a, G * (sinb - 3.5 * mu * cosb * sg), 2.5 * mu * G * cosb * sg / r
+
+
+@njit(cache=True)
+def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
+    """Choose piece and direction for a rock at (almost) zero speed.
+
+    Returns (k, dirn) with dirn = +1 or -1 for the direction in which the
+    rock accelerates, or dirn = 0 if the ground holds it in both directions.
+    On a vertex the piece ahead in each direction is used, so a rock at the
+    bottom of a V is held and one on a crest rolls off the steeper side.
+    """
+    npc = px.shape[0] - 1
+    scale = 1e-9 * max(1.0, abs(x))
+    kp = k
+    if abs(x - px[k + 1]) <= scale and k + 1 < npc:
+        kp = k + 1
+    km = k
+    if abs(x - px[k]) <= scale and k > 0:
+        km = k - 1
+    best_a = 1e-9
+    best_k = k
+    best_d = 0
+    for dirn in (1, -1):
+        kk = kp if dirn > 0 else km
+        tx, ty = _unit_tangent(px, py, kk)
+        sinb = -dirn * ty
+        cosb = tx
+        s = -w * dirn
+        a = _contact_accel(sinb, cosb, -r * s, mu, mur, r)[0]
+        if a > best_a:
+            best_a = a
+            best_k = kk
+            best_d = dirn
+    return best_k, best_d
+
+
+@njit(cache=True)
+def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, cross):
+    """Record the first downslope passage of station ``j`` (if not yet done)."""
+    if not np.isnan(grid_h[j]):
+        return
+    grid_h[j] = h
+    grid_e[j] = 0.5 * m * (vx * vx + vy * vy) + 0.2 * m * r * r * w * w
+    u = st_user[j]
+    if u >= 0:
+        cross[u, C_H] = h
+        cross[u, C_VX] = vx
+        cross[u, C_VY] = vy
+        cross[u, C_W] = w
+        cross[u, C_T] = t
+
+
+@njit(cache=True)
+def simulate_rock(
+    px,
+    py,
+    pseg,
+    seg_mat,
+    mats,
+    settings,
+    r,
+    m,
+    x0,
+    h0,
+    vx0,
+    vy0,
+    w0,
+    spin_rolling,
+    rng,
+    st_x,
+    st_yg,
+    st_user,
+    grid_h,
+    grid_e,
+    cross,
+    traj,
+):
+    """Follow one rock from its release to the end of its path.
+
+    Parameters
+    ----------
+    px, py : ndarray of float
+        Centre path of this rock's radius (m), see ``profile.centre_path``.
+    pseg : ndarray of int
+        Ground segment under each piece of the centre path.
+    seg_mat : ndarray of int
+        Material index of each ground segment.
+    mats : ndarray of float, shape (n_materials, N_MAT_COLS)
+        Material table (columns ``M_*``).
+    settings : ndarray of float, shape (N_SETTINGS,)
+        ``v_contact`` (m/s), ``v_stop`` (m/s), ``max_events``.
+    r, m : float
+        Radius (m) and mass (kg).
+    x0 : float
+        Release x of the centre (m).
+    h0 : float
+        Clearance above the centre path at release (m); 0 = on the ground.
+    vx0, vy0 : float
+        Initial velocity (m/s).
+    w0 : float
+        Initial angular velocity (rad/s), ignored if ``spin_rolling``.
+    spin_rolling : bool
+        Start with the spin of rolling without slip along the ground.
+    rng : ndarray of uint64, shape (1,)
+        The rock's random stream.
+    st_x, st_yg : ndarray of float, shape (S,)
+        Stations (m), sorted, and the ground height there (m).
+    st_user : ndarray of int, shape (S,)
+        Row of ``cross`` for each station, or -1 (envelope-only station).
+    grid_h, grid_e : ndarray of float, shape (S,)
+        Out: passing height (m) and total kinetic energy (J) at the first
+        downslope passage of each station; must come in as NaN.
+    cross : ndarray of float, shape (U, N_CROSS_COLS)
+        Out: detail of the first downslope passage of each user station.
+    traj : ndarray of float, shape (T, N_TRAJ_COLS)
+        Out: the state at each event (T may be 0 to record nothing).
+
+    Returns
+    -------
+    status : int
+        How the path ended (``STOPPED``, ``EXIT_*``, ``UNRESOLVED``).
+    x, y : float
+        Final position of the centre (m).
+    n_impacts : int
+        Number of landings from flight.
+    n_events : int
+        Number of events.
+    max_x : float
+        Largest x reached by the centre (m).
+    t : float
+        Duration of the path (s).
+    n_traj : int
+        Number of rows written to ``traj``.
+    """
+    v_contact = settings[S_V_CONTACT]
+    v_stop = settings[S_V_STOP]
+    max_events = int(settings[S_MAX_EVENTS])
+    npc = px.shape[0] - 1
+    ntraj_cap = traj.shape[0]
+    drawn = np.empty(3)
+    cur_seg = -1
+
+    x = x0
+    vx = vx0
+    vy = vy0
+    k = locate(px, x, vx)
+    y = path_height(px, py, k, x)
+    tx, ty = _unit_tangent(px, py, k)
+    w = -(vx * tx + vy * ty) / r if spin_rolling else w0
+    t = 0.0
+    n_imp = 0
+    n_ev = 0
+    n_traj = 0
+    max_x = x
+    status = RUNNING
+    if h0 > 0.0:
+        y += h0
+        mode = FLIGHT
+    else:
+        vn = -vx * ty + vy * tx
+        if vn > 1e-9:
+            mode = FLIGHT
+        elif vn < -1e-9:
+            vx, vy, w, mode, cur_seg = _collide(
+                vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
+            )
+        else:
+            mode = CONTACT
+            vt = vx * tx + vy * ty
+            vx = vt * tx
+            vy = vt * ty
+
+    while True:
+        if n_ev >= max_events:
+            status = UNRESOLVED
+            break
+        n_ev += 1
+        if n_traj < ntraj_cap:
+            traj[n_traj, T_X] = x
+            traj[n_traj, T_Y] = y
+            traj[n_traj, T_VX] = vx
+            traj[n_traj, T_VY] = vy
+            traj[n_traj, T_W] = w
+            traj[n_traj, T_T] = t
+            traj[n_traj, T_MODE] = mode
+            n_traj += 1
+
+        if mode == FLIGHT:
+            k = locate(px, x, vx)
+            leaves, tf, k = next_landing(px, py, x, y, vx, vy, k)
+            x1 = x + vx * tf
+            if vx > 0.0:
+                # Stations crossed downslope by this flight, in (x, x1].
+                j = np.searchsorted(st_x, x, side="right")
+                while j < st_x.shape[0] and st_x[j] <= x1:
+                    ts = (st_x[j] - x) / vx
+                    ys = y + vy * ts - 0.5 * G * ts * ts
+                    _record(
+                        j,
+                        ys - st_yg[j],
+                        vx,
+                        vy - G * ts,
+                        w,
+                        t + ts,
+                        m,
+                        r,
+                        st_user,
+                        grid_h,
+                        grid_e,
+                        cross,
+                    )
+                    j += 1
+            t += tf
+            if leaves:
+                x = px[npc] if vx > 0.0 else px[0]
+                y = y + vy * tf - 0.5 * G * tf * tf
+                vy -= G * tf
+                max_x = max(max_x, x)
+                status = EXIT_DOWNSLOPE if vx > 0.0 else EXIT_UPSLOPE
+                break
+            x = x1
+            y = path_height(px, py, k, x)
+            vy -= G * tf
+            max_x = max(max_x, x)
+            n_imp += 1
+            vx, vy, w, mode, cur_seg = _collide(
+                vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
+            )
+            continue
+
+        # ---- CONTACT: rolling and/or sliding on piece k ----
+        seg = pseg[k]
+        if seg != cur_seg:
+            _draw(mats, seg_mat[seg], rng, drawn)
+            cur_seg = seg
+        mu = drawn[1]
+        mur = drawn[2]
+        tx, ty = _unit_tangent(px, py, k)
+        vt = vx * tx + vy * ty
+        v = abs(vt)
+        if v < v_stop:
+            # Slow enough to be held, if the ground can hold it.
+            k2, d2 = _start_from_rest(px, py, k, x, y, w, r, mu, mur)
+            if d2 == 0:
+                status = STOPPED
+                vx = 0.0
+                vy = 0.0
+                w = 0.0
+                break
+            if v <= 1e-12:
+                k = k2
+                tx, ty = _unit_tangent(px, py, k)
+                dirn = d2
+                v = 0.0
+            else:
+                dirn = 1 if vt > 0.0 else -1
+        else:
+            dirn = 1 if vt > 0.0 else -1
+        dx = dirn * tx
+        dy = dirn * ty
+        sinb = -dy
+        cosb = tx
+        s = -w * dirn
+        sigma = v - r * s
+        a, dsig, dsp = _contact_accel(sinb, cosb, sigma, mu, mur, r)
+        rolling = np.isnan(dsp)
+        if rolling:
+            sigma = 0.0
+        if dirn > 0:
+            dist = np.hypot(px[k + 1] - x, py[k + 1] - y)
+        else:
+            dist = np.hypot(x - px[k], y - py[k])
+        # Event times: end of piece, speed zero, slip zero.
+        t_end = np.inf
+        if dist <= 0.0:
+            t_end = 0.0
+        elif a == 0.0:
+            if v > 0.0:
+                t_end = dist / v
+        else:
+            disc = v * v + 2.0 * a * dist
+            if disc >= 0.0 and v + np.sqrt(disc) > 0.0:
+                t_end = 2.0 * dist / (v + np.sqrt(disc))
+        t_zero = v / -a if a < 0.0 else np.inf
+        t_slip = -sigma / dsig if (not rolling and sigma * dsig < 0.0) else np.inf
+        ev = 0
+        tm = t_end
+        if t_zero < tm:
+            ev = 1
+            tm = t_zero
+        if t_slip < tm:
+            ev = 2
+            tm = t_slip
+        if tm == np.inf:
+            status = STOPPED
+            break
+        ds_ = v * tm + 0.5 * a * tm * tm
+        if ds_ < 0.0:
+            ds_ = 0.0
+        if ds_ > dist:
+            ds_ = dist
+        v1 = v + a * tm
+        if v1 < 0.0 or ev == 1:
+            v1 = 0.0
+        if rolling:
+            s1 = v1 / r
+        elif ev == 2:
+            s1 = v1 / r
+        else:
+            s1 = s + dsp * tm
+        if ev == 0:
+            xn = px[k + 1] if dirn > 0 else px[k]
+            yn = py[k + 1] if dirn > 0 else py[k]
+        else:
+            xn = x + dx * ds_
+            yn = y + dy * ds_
+        if dirn > 0 and st_x.shape[0] > 0:
+            j = np.searchsorted(st_x, x, side="right")
+            while j < st_x.shape[0] and st_x[j] <= xn:
+                dd = (st_x[j] - x) / dx
+                q = v * v + 2.0 * a * dd
+                vs = np.sqrt(q) if q > 0.0 else 0.0
+                ts = 2.0 * dd / (v + vs) if v + vs > 0.0 else 0.0
+                ss = vs / r if rolling else s + dsp * ts
+                _record(
+                    j,
+                    y + dy * dd - st_yg[j],
+                    vs * dx,
+                    vs * dy,
+                    -ss * dirn,
+                    t + ts,
+                    m,
+                    r,
+                    st_user,
+                    grid_h,
+                    grid_e,
+                    cross,
+                )
+                j += 1
+        x = xn
+        y = yn
+        t += tm
+        vx = v1 * dx
+        vy = v1 * dy
+        w = -s1 * dirn
+        max_x = max(max_x, x)
+        if ev != 0:
+            continue
+        # End of the piece: leave the section, fly off a convex vertex, or
+        # meet the next piece (impact at a concave vertex).
+        k2 = k + dirn
+        if k2 < 0 or k2 >= npc:
+            status = EXIT_DOWNSLOPE if dirn > 0 else EXIT_UPSLOPE
+            break
+        kl = k if dirn > 0 else k2
+        cl = (py[kl + 1] - py[kl]) / (px[kl + 1] - px[kl])
+        cr = (py[kl + 2] - py[kl + 1]) / (px[kl + 2] - px[kl + 1])
+        tol = 1e-9 * (1.0 + abs(cl) + abs(cr))
+        if cr < cl - tol:
+            mode = FLIGHT
+            continue
+        k = k2
+        if cr > cl + tol:
+            t2x, t2y = _unit_tangent(px, py, k)
+            if vx * -t2y + vy * t2x < 0.0:
+                vx, vy, w, mode, cur_seg = _collide(
+                    vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
+                )
+                continue
+        t2x, t2y = _unit_tangent(px, py, k)
+        vt = vx * t2x + vy * t2y
+        vx = vt * t2x
+        vy = vt * t2y
+
+    if n_traj < ntraj_cap:
+        traj[n_traj, T_X] = x
+        traj[n_traj, T_Y] = y
+        traj[n_traj, T_VX] = vx
+        traj[n_traj, T_VY] = vy
+        traj[n_traj, T_W] = w
+        traj[n_traj, T_T] = t
+        traj[n_traj, T_MODE] = mode
+        n_traj += 1
+    return status, x, y, n_imp, n_ev, max_x, t, n_traj

@@ -1,0 +1,501 @@
+"""Run many rocks through the engine: plain inputs in, plain arrays out.
+
+This is the boundary of the numeric core: it knows nothing of project files,
+plugins or reports. Every random number of a rock comes from that rock's own
+counter-based stream (``rng.stream_start(key, index)``), so rock *i* gives
+the same path whatever batch it runs in and whatever the other rocks do.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from . import core
+from .profile import centre_path
+from .rng import stream_start
+
+__all__ = [
+    "Material",
+    "Section",
+    "Releases",
+    "EngineSettings",
+    "EnsembleResult",
+    "run_ensemble",
+    "rock_mass",
+    "STATUS_NAMES",
+]
+
+STATUS_NAMES = core.STATUS_NAMES
+
+
+@dataclass(frozen=True)
+class Material:
+    """Impact and contact parameters of one ground material.
+
+    Attributes
+    ----------
+    impact_model : str
+        ``"spang"`` (restitution e, friction mu, spin) or ``"rn_rt"``
+        (lumped-mass v_n' = -Rn v_n, v_t' = Rt v_t).
+    restitution : float
+        e (spang) or Rn (rn_rt), in [0, 1].
+    friction : float
+        Coulomb friction coefficient mu (-), >= 0.
+    rolling_resistance : float
+        Rolling-resistance coefficient mu_r (-), >= 0.
+    tangential_restitution : float
+        Rt (rn_rt only), in [0, 1].
+    velocity_scaling : bool
+        Pfeiffer & Bowen (1989) scaling of the normal restitution.
+    velocity_scaling_k : float
+        K of that scaling (m/s).
+    roughness_deg : float
+        Standard deviation of the tilt of the impact normal (degrees).
+    sd_restitution, sd_friction, sd_rolling_resistance : float
+        Standard deviations of the per-impact draws.
+    """
+
+    impact_model: str = "spang"
+    restitution: float = 0.35
+    friction: float = 0.5
+    rolling_resistance: float = 0.0
+    tangential_restitution: float = 1.0
+    velocity_scaling: bool = False
+    velocity_scaling_k: float = 9.144
+    roughness_deg: float = 0.0
+    sd_restitution: float = 0.0
+    sd_friction: float = 0.0
+    sd_rolling_resistance: float = 0.0
+
+    def row(self) -> np.ndarray:
+        """This material as a row of the engine's material table."""
+        out = np.zeros(core.N_MAT_COLS)
+        out[core.M_MODEL] = core.MODEL_SPANG if self.impact_model == "spang" else core.MODEL_RN_RT
+        out[core.M_E] = self.restitution
+        out[core.M_RT] = self.tangential_restitution
+        out[core.M_MU] = self.friction
+        out[core.M_MUR] = self.rolling_resistance
+        out[core.M_VSCALE] = 1.0 if self.velocity_scaling else 0.0
+        out[core.M_VSK] = self.velocity_scaling_k
+        out[core.M_ROUGH] = np.radians(self.roughness_deg)
+        out[core.M_SD_E] = self.sd_restitution
+        out[core.M_SD_MU] = self.sd_friction
+        out[core.M_SD_MUR] = self.sd_rolling_resistance
+        return out
+
+
+@dataclass(frozen=True)
+class Section:
+    """A slope section: ground polyline and the material of each segment.
+
+    Attributes
+    ----------
+    x, y : ndarray of float
+        Ground vertices (m), x strictly increasing, at least two.
+    segment_material : ndarray of int
+        Index into ``materials`` for each of the ``len(x) - 1`` segments.
+    materials : tuple of Material
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    segment_material: np.ndarray
+    materials: tuple[Material, ...]
+
+    def __post_init__(self) -> None:
+        x = np.ascontiguousarray(self.x, dtype=float)
+        y = np.ascontiguousarray(self.y, dtype=float)
+        sm = np.ascontiguousarray(self.segment_material, dtype=np.int64)
+        if x.ndim != 1 or x.shape != y.shape or x.size < 2:
+            raise ValueError("a section needs at least two (x, y) vertices")
+        if not np.all(np.diff(x) > 0):
+            raise ValueError("section x must be strictly increasing")
+        if sm.shape != (x.size - 1,):
+            raise ValueError("one material index per segment is needed")
+        if sm.min() < 0 or sm.max() >= len(self.materials):
+            raise ValueError("material index out of range")
+        object.__setattr__(self, "x", x)
+        object.__setattr__(self, "y", y)
+        object.__setattr__(self, "segment_material", sm)
+
+    def material_table(self) -> np.ndarray:
+        return np.vstack([m.row() for m in self.materials])
+
+    def ground_height(self, x: np.ndarray | float) -> np.ndarray:
+        """Ground height (m) at ``x``, linear between vertices."""
+        return np.interp(x, self.x, self.y)
+
+    def centre_path(self, radius: float, max_chord_deg: float = 5.0):
+        """Centre path (px, py, pseg) of a sphere of ``radius`` (m)."""
+        return centre_path(
+            self.x, self.y, np.arange(self.x.size - 1), float(radius), np.radians(max_chord_deg)
+        )
+
+
+@dataclass(frozen=True)
+class Releases:
+    """Per-rock initial conditions (all arrays of one length N).
+
+    Attributes
+    ----------
+    radius : ndarray
+        Rock radius (m).
+    density : float or ndarray
+        Rock density (kg/m^3).
+    x : ndarray
+        Release x of the rock centre (m).
+    height : ndarray
+        Clearance above the ground at release (m), >= 0.
+    vx, vy : ndarray
+        Initial velocity (m/s).
+    spin : ndarray
+        Initial angular velocity (rad/s), counter-clockwise positive.
+    spin_rolling : ndarray of bool
+        Start with the spin of rolling along the ground instead of ``spin``.
+    zone : ndarray of int
+        Index of the release zone each rock came from (for reports).
+    """
+
+    radius: np.ndarray
+    density: float | np.ndarray
+    x: np.ndarray
+    height: np.ndarray
+    vx: np.ndarray
+    vy: np.ndarray
+    spin: np.ndarray
+    spin_rolling: np.ndarray
+    zone: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    def __len__(self) -> int:
+        return int(np.asarray(self.radius).size)
+
+    @property
+    def mass(self) -> np.ndarray:
+        return rock_mass(np.asarray(self.radius), self.density)
+
+
+def rock_mass(radius: np.ndarray | float, density: np.ndarray | float) -> np.ndarray:
+    """Mass (kg) of a solid sphere: m = 4/3 pi r^3 rho."""
+    return 4.0 / 3.0 * np.pi * np.asarray(radius) ** 3 * np.asarray(density)
+
+
+@dataclass(frozen=True)
+class EngineSettings:
+    """Numerical parameters of the engine (PHYSICS.md).
+
+    Attributes
+    ----------
+    v_contact : float
+        Outgoing normal speed (m/s) below which a rock stays in contact.
+    v_stop : float
+        Speed (m/s) below which a rock that the ground can hold is stopped.
+    max_events : int
+        Event limit per rock; a rock reaching it is reported as unresolved.
+    max_chord_deg : float
+        Largest turn (degrees) of an edge of the polygon replacing the arc of
+        the centre path at a convex vertex.
+    """
+
+    v_contact: float = 0.5
+    v_stop: float = 0.05
+    max_events: int = 10_000
+    max_chord_deg: float = 5.0
+
+    def vector(self) -> np.ndarray:
+        out = np.zeros(core.N_SETTINGS)
+        out[core.S_V_CONTACT] = self.v_contact
+        out[core.S_V_STOP] = self.v_stop
+        out[core.S_MAX_EVENTS] = self.max_events
+        return out
+
+
+@dataclass
+class EnsembleResult:
+    """Per-rock outcomes of an ensemble run.
+
+    Attributes
+    ----------
+    radius, mass : ndarray, shape (N,)
+        Rock radius (m) and mass (kg).
+    status : ndarray of int8, shape (N,)
+        How each path ended, index into ``STATUS_NAMES``.
+    x_end, y_end : ndarray, shape (N,)
+        Final position of the rock centre (m).
+    max_x : ndarray, shape (N,)
+        Largest x reached (m).
+    n_impacts, n_events : ndarray of int, shape (N,)
+    duration : ndarray, shape (N,)
+        Duration of each path (s).
+    stations : ndarray, shape (U,)
+        The user's analysis stations (m).
+    crossings : ndarray, shape (N, U, 5)
+        First downslope passage of each station: passing height (m),
+        vx, vy (m/s), w (rad/s), time (s); NaN where not crossed.
+    grid : ndarray, shape (S,)
+        Envelope stations (m), sorted, including the user stations.
+    grid_height : ndarray of float32, shape (N, S)
+        Passing height (m) at the first downslope passage, NaN if none.
+    grid_energy : ndarray of float32, shape (N, S)
+        Total kinetic energy (J) there.
+    trajectories : list of ndarray
+        Event states (columns x, y, vx, vy, w, t, mode) of the first rocks.
+    """
+
+    radius: np.ndarray
+    mass: np.ndarray
+    status: np.ndarray
+    x_end: np.ndarray
+    y_end: np.ndarray
+    max_x: np.ndarray
+    n_impacts: np.ndarray
+    n_events: np.ndarray
+    duration: np.ndarray
+    stations: np.ndarray
+    crossings: np.ndarray
+    grid: np.ndarray
+    grid_height: np.ndarray
+    grid_energy: np.ndarray
+    trajectories: list[np.ndarray]
+
+    @property
+    def n(self) -> int:
+        return int(self.status.size)
+
+    @property
+    def events_total(self) -> int:
+        return int(self.n_events.sum())
+
+
+@njit(cache=True)
+def _run_batch(
+    gx,
+    gy,
+    seg_mat,
+    mats,
+    settings,
+    max_chord,
+    key,
+    first_index,
+    radius,
+    mass,
+    x0,
+    h0,
+    vx0,
+    vy0,
+    w0,
+    rolling,
+    st_x,
+    st_yg,
+    st_user,
+    status,
+    x_end,
+    y_end,
+    n_imp,
+    n_ev,
+    max_x,
+    dur,
+    grid_h,
+    grid_e,
+    cross,
+    traj,
+    n_traj,
+):
+    n = radius.shape[0]
+    nseg = gx.shape[0] - 1
+    seg_ids = np.arange(nseg)
+    r_prev = -1.0
+    px = np.empty(0)
+    py = np.empty(0)
+    pseg = np.empty(0, dtype=np.int64)
+    gh = np.empty(st_x.shape[0])
+    ge = np.empty(st_x.shape[0])
+    rng = np.empty(1, dtype=np.uint64)
+    empty_traj = np.empty((0, core.N_TRAJ_COLS))
+    for i in range(n):
+        if radius[i] != r_prev:
+            # Rocks of one size share their centre path.
+            px, py, pseg = centre_path(gx, gy, seg_ids, radius[i], max_chord)
+            r_prev = radius[i]
+        rng[0] = stream_start(key, first_index + i)
+        gh[:] = np.nan
+        ge[:] = np.nan
+        cr = cross[i]
+        cr[:, :] = np.nan
+        tr = traj[i] if i < traj.shape[0] else empty_traj
+        st, xe, ye, ni, ne, mx, tt, nt = core.simulate_rock(
+            px,
+            py,
+            pseg,
+            seg_mat,
+            mats,
+            settings,
+            radius[i],
+            mass[i],
+            x0[i],
+            h0[i],
+            vx0[i],
+            vy0[i],
+            w0[i],
+            rolling[i],
+            rng,
+            st_x,
+            st_yg,
+            st_user,
+            gh,
+            ge,
+            cr,
+            tr,
+        )
+        status[i] = st
+        x_end[i] = xe
+        y_end[i] = ye
+        n_imp[i] = ni
+        n_ev[i] = ne
+        max_x[i] = mx
+        dur[i] = tt
+        grid_h[i, :] = gh
+        grid_e[i, :] = ge
+        if i < traj.shape[0]:
+            n_traj[i] = nt
+
+
+def run_ensemble(
+    section: Section,
+    releases: Releases,
+    *,
+    key: int,
+    stations: np.ndarray | list[float] = (),
+    grid: np.ndarray | list[float] = (),
+    settings: EngineSettings | None = None,
+    n_trajectories: int = 0,
+    max_trajectory_points: int = 4000,
+    batch_size: int = 4096,
+    progress: Callable[[int], None] | None = None,
+) -> EnsembleResult:
+    """Simulate every rock of ``releases`` on ``section``.
+
+    Parameters
+    ----------
+    section : Section
+    releases : Releases
+    key : int
+        64-bit key of the run's random streams (derive it from the seed).
+    stations : array_like
+        Analysis stations (m) with full crossing detail.
+    grid : array_like
+        Further envelope stations (m) with passing height and energy only.
+    settings : EngineSettings, optional
+    n_trajectories : int
+        Record the event states of the first ``n_trajectories`` rocks.
+    max_trajectory_points : int
+        Rows kept per recorded trajectory.
+    batch_size : int
+        Rocks per compiled call (memory and progress granularity only; the
+        results do not depend on it).
+    progress : callable, optional
+        Called with the number of rocks done after each batch.
+
+    Returns
+    -------
+    EnsembleResult
+    """
+    settings = settings or EngineSettings()
+    n = len(releases)
+    user = np.asarray(stations, dtype=float).ravel()
+    grid_all = np.unique(np.concatenate([user, np.asarray(grid, dtype=float).ravel()]))
+    st_user = np.full(grid_all.size, -1, dtype=np.int64)
+    # Rows of `crossings` follow the user's order; duplicates share a grid slot.
+    for u, xs in enumerate(user):
+        st_user[np.searchsorted(grid_all, xs)] = u
+    st_yg = section.ground_height(grid_all).astype(float)
+    radius = np.ascontiguousarray(np.broadcast_to(releases.radius, (n,)), dtype=float)
+    mass = np.ascontiguousarray(rock_mass(radius, releases.density) * np.ones(n), dtype=float)
+
+    def arr(a, dtype=float):
+        return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=dtype), (n,)))
+
+    x0, h0 = arr(releases.x), arr(releases.height)
+    vx0, vy0, w0 = arr(releases.vx), arr(releases.vy), arr(releases.spin)
+    rolling = arr(releases.spin_rolling, bool)
+
+    status = np.empty(n, dtype=np.int8)
+    x_end = np.empty(n)
+    y_end = np.empty(n)
+    n_imp = np.empty(n, dtype=np.int64)
+    n_ev = np.empty(n, dtype=np.int64)
+    max_x = np.empty(n)
+    dur = np.empty(n)
+    grid_h = np.empty((n, grid_all.size), dtype=np.float32)
+    grid_e = np.empty((n, grid_all.size), dtype=np.float32)
+    cross = np.empty((n, user.size, core.N_CROSS_COLS))
+    ntr = min(n_trajectories, n)
+    traj = np.zeros((ntr, max_trajectory_points, core.N_TRAJ_COLS))
+    n_traj = np.zeros(ntr, dtype=np.int64)
+    mats = section.material_table()
+    sv = settings.vector()
+    # numba wants a uint64 scalar; Python ints above 2**63 need the wrap.
+    k64 = np.uint64(int(key) % (1 << 64))
+    max_chord = float(np.radians(settings.max_chord_deg))
+
+    for a in range(0, n, batch_size):
+        b = min(a + batch_size, n)
+        sl = slice(a, b)
+        t0 = min(a, ntr)
+        t1 = min(b, ntr)
+        _run_batch(
+            section.x,
+            section.y,
+            section.segment_material,
+            mats,
+            sv,
+            max_chord,
+            k64,
+            a,
+            radius[sl],
+            mass[sl],
+            x0[sl],
+            h0[sl],
+            vx0[sl],
+            vy0[sl],
+            w0[sl],
+            rolling[sl],
+            grid_all,
+            st_yg,
+            st_user,
+            status[sl],
+            x_end[sl],
+            y_end[sl],
+            n_imp[sl],
+            n_ev[sl],
+            max_x[sl],
+            dur[sl],
+            grid_h[sl],
+            grid_e[sl],
+            cross[sl],
+            traj[t0:t1],
+            n_traj[t0:t1],
+        )
+        if progress is not None:
+            progress(b)
+
+    return EnsembleResult(
+        radius=radius,
+        mass=mass,
+        status=status,
+        x_end=x_end,
+        y_end=y_end,
+        max_x=max_x,
+        n_impacts=n_imp,
+        n_events=n_ev,
+        duration=dur,
+        stations=user,
+        crossings=cross,
+        grid=grid_all,
+        grid_height=grid_h,
+        grid_energy=grid_e,
+        trajectories=[traj[i, : n_traj[i]].copy() for i in range(ntr)],
+    )

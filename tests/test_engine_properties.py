@@ -1,0 +1,216 @@
+"""Invariants of the engine over random profiles, materials and releases."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from numpy.testing import assert_array_equal
+
+from rockfall_design.engine import (
+    EngineSettings,
+    G,
+    Material,
+    Releases,
+    Section,
+    core,
+    run_ensemble,
+)
+from rockfall_design.engine.core import T_MODE, T_T, T_VX, T_VY, T_W, T_X, T_Y
+from rockfall_design.engine.profile import centre_path
+
+# RF_EXAMPLES raises the number of examples for a long hunt (default keeps CI quick).
+SETTINGS = settings(
+    max_examples=int(os.environ.get("RF_EXAMPLES", "60")),
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+
+
+@st.composite
+def profiles(draw, max_vertices: int = 12):
+    n = draw(st.integers(2, max_vertices))
+    dx = draw(
+        st.lists(
+            st.sampled_from([0.001, 0.05, 0.7, 4.0, 15.0, 40.0]), min_size=n - 1, max_size=n - 1
+        )
+    )
+    scale = draw(st.lists(st.floats(0.5, 1.5), min_size=n - 1, max_size=n - 1))
+    # Angles up to 85 degrees either way: cliffs, counter-slopes, flats.
+    ang = draw(st.lists(st.floats(-1.48, 1.48), min_size=n - 1, max_size=n - 1))
+    dx = np.asarray(dx) * np.asarray(scale)
+    x = np.concatenate([[0.0], np.cumsum(dx)])
+    y = np.concatenate([[0.0], np.cumsum(-dx * np.tan(ang))])
+    return x, y
+
+
+@st.composite
+def materials(draw):
+    return Material(
+        impact_model=draw(st.sampled_from(["spang", "rn_rt"])),
+        restitution=draw(st.floats(0.0, 1.0)),
+        tangential_restitution=draw(st.floats(0.0, 1.0)),
+        friction=draw(st.floats(0.0, 1.5)),
+        rolling_resistance=draw(st.floats(0.0, 0.6)),
+        velocity_scaling=draw(st.booleans()),
+        roughness_deg=draw(st.sampled_from([0.0, 3.0, 15.0])),
+        sd_restitution=draw(st.sampled_from([0.0, 0.1])),
+        sd_friction=draw(st.sampled_from([0.0, 0.1])),
+        sd_rolling_resistance=draw(st.sampled_from([0.0, 0.05])),
+    )
+
+
+@st.composite
+def cases(draw):
+    x, y = draw(profiles())
+    mats = (draw(materials()), draw(materials()))
+    seg_mat = np.asarray(
+        draw(st.lists(st.integers(0, 1), min_size=x.size - 1, max_size=x.size - 1))
+    )
+    sec = Section(x, y, seg_mat, mats)
+    n = 4
+    fr = draw(st.lists(st.floats(0.0, 1.0), min_size=n, max_size=n))
+    rel = Releases(
+        radius=np.full(n, draw(st.sampled_from([0.05, 0.3, 1.0, 2.5]))),
+        density=2650.0,
+        x=x[0] + np.asarray(fr) * (x[-1] - x[0]),
+        height=np.asarray(
+            draw(st.lists(st.sampled_from([0.0, 0.0, 0.5, 6.0]), min_size=n, max_size=n))
+        ),
+        vx=np.asarray(draw(st.lists(st.floats(-15, 15), min_size=n, max_size=n))),
+        vy=np.asarray(draw(st.lists(st.floats(-15, 15), min_size=n, max_size=n))),
+        spin=np.asarray(draw(st.lists(st.floats(-20, 20), min_size=n, max_size=n))),
+        spin_rolling=np.asarray(draw(st.lists(st.booleans(), min_size=n, max_size=n))),
+    )
+    return sec, rel
+
+
+def _run(sec, rel, key=7):
+    return run_ensemble(
+        sec,
+        rel,
+        key=key,
+        stations=[sec.x.mean()],
+        grid=np.linspace(sec.x[0], sec.x[-1], 17),
+        settings=EngineSettings(max_events=3000),
+        n_trajectories=len(rel),
+        max_trajectory_points=3001,
+    )
+
+
+def _distance_to_ground(gx, gy, X, Y):
+    d = np.full(np.shape(X), np.inf)
+    for i in range(len(gx) - 1):
+        vx, vy = gx[i + 1] - gx[i], gy[i + 1] - gy[i]
+        wx, wy = X - gx[i], Y - gy[i]
+        s = np.clip((wx * vx + wy * vy) / (vx * vx + vy * vy), 0.0, 1.0)
+        d = np.minimum(d, np.hypot(wx - s * vx, wy - s * vy))
+    return d
+
+
+@SETTINGS
+@given(cases())
+def test_energy_never_increases(case):
+    sec, rel = case
+    res = _run(sec, rel)
+    for i, tr in enumerate(res.trajectories):
+        m, r = res.mass[i], res.radius[i]
+        e = 0.5 * m * (tr[:, T_VX] ** 2 + tr[:, T_VY] ** 2) + 0.2 * m * r * r * tr[:, T_W] ** 2
+        e = e + m * G * tr[:, T_Y]
+        scale = m * (
+            G * (np.abs(tr[:, T_Y]).max() + 1.0)
+            + (tr[:, T_VX] ** 2).max()
+            + (tr[:, T_VY] ** 2).max()
+            + (r * tr[:, T_W]).max() ** 2
+        )
+        assert np.all(np.diff(e) <= 1e-9 * scale), np.diff(e).max() / scale
+
+
+@SETTINGS
+@given(cases())
+def test_rock_never_enters_the_ground(case):
+    sec, rel = case
+    res = _run(sec, rel)
+    for i, tr in enumerate(res.trajectories):
+        r = res.radius[i]
+        X, Y = [tr[:, T_X]], [tr[:, T_Y]]
+        # Sample every flight between its events.
+        for a in np.flatnonzero(tr[:-1, T_MODE] == core.FLIGHT):
+            dt = tr[a + 1, T_T] - tr[a, T_T]
+            ts = np.linspace(0.0, dt, 25)
+            X.append(tr[a, T_X] + tr[a, T_VX] * ts)
+            Y.append(tr[a, T_Y] + tr[a, T_VY] * ts - 0.5 * G * ts**2)
+        X, Y = np.concatenate(X), np.concatenate(Y)
+        inside = (X >= sec.x[0]) & (X <= sec.x[-1])
+        d = _distance_to_ground(sec.x, sec.y, X[inside], Y[inside])
+        assert d.min() >= r * (1 - 1e-9) - 1e-9, (d.min(), r)
+
+
+@SETTINGS
+@given(cases())
+def test_every_rock_ends_in_a_named_state_and_same_seed_same_result(case):
+    sec, rel = case
+    a = _run(sec, rel, key=11)
+    b = _run(sec, rel, key=11)
+    assert set(np.unique(a.status)) <= {
+        core.STOPPED,
+        core.EXIT_UPSLOPE,
+        core.EXIT_DOWNSLOPE,
+        core.UNRESOLVED,
+    }
+    for name in ("status", "x_end", "y_end", "n_events", "crossings", "grid_height", "grid_energy"):
+        assert_array_equal(getattr(a, name), getattr(b, name))
+    stopped = a.status == core.STOPPED
+    assert np.all((a.x_end[stopped] >= sec.x[0]) & (a.x_end[stopped] <= sec.x[-1]))
+
+
+@SETTINGS
+@given(profiles(max_vertices=30), st.sampled_from([0.01, 0.3, 1.0, 3.0]))
+def test_centre_path_keeps_the_radius(profile, r):
+    """The centre path is at least r from the ground, and at most r / cos(2.5 deg)."""
+    gx, gy = profile
+    px, py, pseg = centre_path(gx, gy, np.arange(gx.size - 1), r, np.radians(5.0))
+    assert px[0] == gx[0] and abs(px[-1] - gx[-1]) <= 1e-9 * max(1.0, gx[-1])
+    assert np.all(np.diff(px) > 0)
+    X = np.concatenate([px, np.linspace(gx[0], gx[-1], 3000)])
+    Y = np.interp(X, px, py)
+    d = _distance_to_ground(gx, gy, X, Y)
+    assert d.min() >= r * (1 - 1e-9)
+    inner = (X > gx[0] + 3 * r) & (X < gx[-1] - 3 * r)
+    if inner.any():
+        assert d[inner].max() <= r / np.cos(np.radians(2.5)) * (1 + 1e-9)
+
+
+def test_rock_streams_do_not_depend_on_batches_or_other_rocks():
+    x = np.array([0.0, 30, 60, 80, 120, 200])
+    y = np.array([100.0, 60, 30, 20, 15, 12])
+    mat = Material(
+        restitution=0.35,
+        friction=0.58,
+        rolling_resistance=0.3,
+        roughness_deg=5,
+        sd_restitution=0.05,
+        sd_friction=0.05,
+        sd_rolling_resistance=0.02,
+    )
+    sec = Section(x, y, np.zeros(5, dtype=int), (mat,))
+    n = 50
+    rel = Releases(
+        radius=np.full(n, 0.5),
+        density=2650.0,
+        x=np.full(n, 1.0),
+        height=np.zeros(n),
+        vx=np.full(n, 0.6),
+        vy=np.full(n, -0.8),
+        spin=np.zeros(n),
+        spin_rolling=np.zeros(n, bool),
+    )
+    a = run_ensemble(sec, rel, key=3, batch_size=7)
+    b = run_ensemble(sec, rel, key=3, batch_size=4096)
+    assert_array_equal(a.duration, b.duration)
+    c = run_ensemble(sec, rel, key=4)
+    assert not np.array_equal(a.duration, c.duration)
+    # Scatter makes the rocks of one run differ from each other.
+    assert np.unique(a.duration).size > n // 2
