@@ -1,0 +1,189 @@
+"""The ``rockfall-design`` command. The only place that turns errors into exit codes."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, NoReturn
+
+from . import __version__
+from .errors import ExitCode, InputError, RockfallError
+
+__all__ = ["main"]
+
+PROG = "rockfall-design"
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line and exit code 2 (BAD_INPUT)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(int(ExitCode.BAD_INPUT), f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a number >= 1, got {v}")
+    return v
+
+
+def _seed(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a seed >= 0, got {v}")
+    return v
+
+
+def _add_run_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("project", type=Path, help="project file (YAML)")
+    p.add_argument("--rocks", type=_positive_int, metavar="N",
+                   help="number of rocks (default: rocks.count of the project)")
+    p.add_argument("--seed", type=_seed, metavar="S",
+                   help="random seed (default: rocks.seed of the project)")
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help="write rocks.csv, crossings.csv and summary.json into DIR")
+    p.add_argument("--plot", type=Path, metavar="DIR", help="write PNG figures into DIR")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object on stdout instead of the report")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog=PROG, description="Rockfall trajectories and protection design.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sim = sub.add_parser(
+        "simulate",
+        help="run the rockfall study of a project",
+        description="Simulate the rocks of a project: where they go, how high and how fast "
+        "they pass the analysis stations, and where they stop.",
+    )
+    _add_run_options(sim)
+    sim.set_defaults(func=cmd_simulate)
+    return parser
+
+
+def _memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
+    """Refuse a run whose result arrays would not fit in memory, before it starts."""
+    per_rock = 8 * n_grid + 40 * n_stations + 160
+    need = n_rocks * per_rock
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
+        return
+    if need > 0.6 * total:
+        raise InputError(
+            f"{n_rocks:,} rocks with {n_grid} envelope points would need about "
+            f"{need / 2**30:.1f} GiB of memory; this machine has {total / 2**30:.1f} GiB. "
+            "Use fewer rocks or fewer analysis.envelope_points."
+        )
+
+
+def _progress(console_needed: bool, total: int):
+    """A rich progress bar on stderr for long interactive runs, else nothing."""
+    if not console_needed:
+        return None, None
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
+
+    prog = Progress(
+        "[progress.description]{task.description}",
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeRemainingColumn(),
+        console=Console(stderr=True),
+        transient=True,
+    )
+    task = prog.add_task("rocks", total=total)
+    return prog, (lambda done: prog.update(task, completed=done))
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from .outputs import write_csv, write_json
+    from .project import load_project
+    from .simulation import run_study
+
+    project = load_project(args.project)
+    n = args.rocks or project.rocks.count
+    _memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
+                  len(project.analysis.stations))
+    interactive = sys.stderr.isatty() and n >= 20_000
+    prog, callback = _progress(interactive, n)
+    if prog is not None:
+        with prog:
+            study = run_study(project, rocks=n, seed=args.seed, progress=callback,
+                              n_trajectories=60 if args.plot else 0)
+    else:
+        study = run_study(project, rocks=n, seed=args.seed,
+                          n_trajectories=60 if args.plot else 0)
+    summary = study.summary()
+    if args.out:
+        out: Path = args.out
+        write_csv(out / "rocks.csv", study.rocks_table())
+        write_csv(out / "crossings.csv", study.crossings_table())
+        write_json(out / "summary.json", {**summary, "run": run_record(study, args)})
+    if args.plot:
+        from .report import plot_study
+
+        plot_study(study, args.plot)
+    if args.json:
+        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
+    else:
+        from .report import print_simulation
+
+        print_simulation(summary)
+    return int(ExitCode.OK)
+
+
+def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:
+    """What is needed to repeat a run exactly: version, seed, rocks, project."""
+    return {
+        "command": args.command,
+        "version": __version__,
+        "seed": int(study.seed),
+        "rocks": int(study.n),
+        "project_file": str(args.project),
+        "project_hash": study.project.resolved_hash(),
+        "project": study.project.resolved_dict(),
+    }
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    # Treat SIGTERM like Ctrl-C, so that atomic writers clean up and the
+    # previous results stay as they were.
+    raise KeyboardInterrupt
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``rockfall-design`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        return int(args.func(args))
+    except RockfallError as exc:
+        msg = " ".join(str(exc).split("\n"))
+        sys.stderr.write(f"{PROG}: error: {msg}\n")
+        return int(exc.exit_code)
+    except KeyboardInterrupt:
+        sys.stderr.write(
+            f"{PROG}: interrupted; files written before were left as they were\n"
+        )
+        return int(ExitCode.INTERRUPTED)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,1031 @@
+"""The project file: ``project.yaml`` -> a validated, normalised :class:`Project`.
+
+Loading is strict and reports the first problem as one line,
+``file:line: key.path: message`` (a :class:`~rockfall_design.errors.ProjectError`):
+
+- every section forbids unknown keys, with "did you mean" for near misses;
+- numbers must be finite YAML numbers: booleans, strings such as ``"0.5"``,
+  ``.nan`` and ``.inf`` are rejected;
+- duplicate keys in a mapping are an error (plain YAML keeps the last one);
+- cross-field rules (materials used by the slope are defined, release zones,
+  stations and the protection lie on the section, ...) name the key involved.
+
+Normalisation (what the models hold, whatever short form the file used):
+
+- ``slope.materials`` is always a list with one material name per segment;
+- ``rocks.release`` is always a list of :class:`ReleaseZone`;
+- ``ReleaseZone.x`` is always a ``(min, max)`` tuple in m;
+- ``rocks.radius`` / ``rocks.volume`` / ``rocks.mass`` hold a :class:`SizeSpec`
+  (exactly one of them is set); :attr:`Rocks.size` and
+  :attr:`Rocks.size_quantity` give the one that is set.
+
+:meth:`Project.resolved_dict` writes the normalised project back in the
+file's own syntax with every default filled in, so it is itself a valid
+project file; :meth:`Project.resolved_hash` is the sha256 of its canonical JSON.
+
+Units are SI throughout: m, m/s, rad/s, kg, m3, kg/m3; angles in degrees
+where the key says ``_deg``.
+"""
+
+import difflib
+import hashlib
+import json
+import math
+import os
+import re
+from collections.abc import Callable
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import yaml
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    PlainValidator,
+    PrivateAttr,
+    ValidationError,
+    WithJsonSchema,
+    field_serializer,
+    model_validator,
+)
+from pydantic_core import PydanticCustomError
+
+from .errors import ProjectError
+
+__all__ = [
+    "Analysis",
+    "EngineConfig",
+    "Material",
+    "Project",
+    "Protect",
+    "ReleaseZone",
+    "Rocks",
+    "Scatter",
+    "SizeSpec",
+    "Slope",
+    "load_project",
+    "load_project_text",
+]
+
+# --------------------------------------------------------------------------------------
+# Validation helpers: strict scalars with one-line messages
+# --------------------------------------------------------------------------------------
+
+_ERROR_TYPE = "rockfall_project"
+
+
+def _fail(message: str, subpath: tuple = ()) -> PydanticCustomError:
+    """An error to raise from a validator.
+
+    ``subpath`` is appended to the location pydantic reports, so a model-level
+    check can point at the field (or list item) it is about.
+    """
+    return PydanticCustomError(_ERROR_TYPE, "{message}", {"message": message, "subpath": subpath})
+
+
+def _fmt(value: Any) -> str:
+    """A number as the user would write it (``1`` rather than ``1.0``)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return ".nan"
+        if math.isinf(value):
+            return ".inf" if value > 0 else "-.inf"
+        return format(value, ".12g")
+    return str(value)
+
+
+def _describe(value: Any) -> str:
+    """A short, one-line description of a YAML value for "got ..." messages."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return f"{_fmt(value)} (a boolean)"
+    if isinstance(value, int | float):
+        return _fmt(value)
+    if isinstance(value, str):
+        text = value if len(value) <= 40 else value[:37] + "..."
+        return f"string {text!r}"
+    if isinstance(value, list | tuple):
+        return f"a list of {len(value)} item{'s' if len(value) != 1 else ''}"
+    if isinstance(value, dict):
+        return "a mapping"
+    return f"a value of type {type(value).__name__}"
+
+
+def _as_number(value: Any, subpath: tuple = ()) -> float:
+    """``value`` as a finite float; bools, strings and None are rejected."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise _fail(f"expected a number, got {_describe(value)}", subpath)
+    try:
+        number = float(value)
+    except OverflowError:
+        raise _fail("number is too large", subpath) from None
+    if not math.isfinite(number):
+        raise _fail(f"must be finite, got {_fmt(number)}", subpath)
+    return number
+
+
+def _as_integer(value: Any) -> int:
+    """``value`` as an int; integral floats (``1000.0``) are accepted, bools are not."""
+    if isinstance(value, float) and not isinstance(value, bool):
+        if not math.isfinite(value):
+            raise _fail(f"must be finite, got {_fmt(value)}")
+        if value.is_integer():
+            return int(value)
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise _fail(f"expected an integer, got {_describe(value)}")
+    return value
+
+
+def _as_string(value: Any) -> str:
+    if not isinstance(value, str):
+        raise _fail(f"expected a string, got {_describe(value)}")
+    return value
+
+
+def _as_bool(value: Any) -> bool:
+    if not isinstance(value, bool):
+        raise _fail(f"expected true or false, got {_describe(value)}")
+    return value
+
+
+def _as_list(value: Any) -> list:
+    if isinstance(value, tuple):
+        return list(value)
+    if not isinstance(value, list):
+        raise _fail(f"expected a list, got {_describe(value)}")
+    return value
+
+
+def _pair(what: str) -> Callable[[Any], tuple[float, float]]:
+    """Validator for a ``[a, b]`` pair of finite numbers, ``what`` naming it in messages."""
+
+    def check(value: Any) -> tuple[float, float]:
+        if not isinstance(value, list | tuple) or len(value) != 2:
+            raise _fail(f"expected a pair {what}, got {_describe(value)}")
+        return (_as_number(value[0], (0,)), _as_number(value[1], (1,)))
+
+    return check
+
+
+def _choice(*options: str) -> Callable[[Any], str]:
+    def check(value: Any) -> str:
+        if value not in options or not isinstance(value, str):
+            hint = _did_you_mean(value, options) if isinstance(value, str) else ""
+            raise _fail(f"expected one of {', '.join(options)}, got {_describe(value)}{hint}")
+        return value
+
+    return check
+
+
+def _did_you_mean(word: str, candidates: Any) -> str:
+    matches = difflib.get_close_matches(word, [str(c) for c in candidates], n=1)
+    return f"; did you mean {matches[0]!r}?" if matches else ""
+
+
+def _none_as_empty(value: Any) -> Any:
+    """An empty section (``analysis:`` with nothing under it) means "all defaults"."""
+    return {} if value is None else value
+
+
+Number = Annotated[float, BeforeValidator(_as_number)]
+Integer = Annotated[int, BeforeValidator(_as_integer)]
+String = Annotated[str, BeforeValidator(_as_string)]
+Boolean = Annotated[bool, BeforeValidator(_as_bool)]
+Fraction = Annotated[Number, Field(ge=0.0, le=1.0)]
+NonNegative = Annotated[Number, Field(ge=0.0)]
+Positive = Annotated[Number, Field(gt=0.0)]
+
+
+class _Model(BaseModel):
+    """Base of every section: unknown keys are rejected with "did you mean"."""
+
+    model_config = ConfigDict(extra="forbid", validate_default=False)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _check_mapping_and_keys(cls, data: Any) -> Any:
+        if isinstance(data, cls):
+            return data
+        if not isinstance(data, dict):
+            raise _fail(f"expected a mapping of key: value, got {_describe(data)}")
+        fields = list(cls.model_fields)
+        for key in data:
+            if key not in cls.model_fields:
+                if isinstance(key, str):
+                    hint = _did_you_mean(key, fields) or f"; expected one of {', '.join(fields)}"
+                else:
+                    hint = f"; keys must be names, expected one of {', '.join(fields)}"
+                raise _fail(f"unknown key {key!r}{hint}", (key,))
+        return data
+
+
+# --------------------------------------------------------------------------------------
+# Sections
+# --------------------------------------------------------------------------------------
+
+
+class Scatter(_Model):
+    """Standard deviations of the material parameters, drawn per impact (default 0)."""
+
+    restitution: NonNegative = Field(
+        0.0, description="Standard deviation of the restitution coefficient (-)."
+    )
+    friction: NonNegative = Field(0.0, description="Standard deviation of the friction mu (-).")
+    rolling_resistance: NonNegative = Field(
+        0.0, description="Standard deviation of the rolling resistance mu_r (-)."
+    )
+
+
+class Material(_Model):
+    """Ground material of slope segments: impact and contact parameters."""
+
+    impact_model: Annotated[
+        Literal["spang", "rn_rt"], BeforeValidator(_choice("spang", "rn_rt"))
+    ] = Field(
+        "spang",
+        description="Impact model: 'spang' (one restitution e) or 'rn_rt' "
+        "(normal Rn and tangential Rt restitution).",
+    )
+    restitution: Fraction = Field(
+        description="Restitution (-): e for impact_model spang, Rn for rn_rt; 0..1."
+    )
+    tangential_restitution: Fraction | None = Field(
+        None, description="Tangential restitution Rt (-), 0..1; only (and required) for rn_rt."
+    )
+    friction: Annotated[NonNegative, Field(le=10.0)] = Field(
+        description="Coulomb friction coefficient mu (-) for sliding and impacts; 0..10."
+    )
+    rolling_resistance: NonNegative = Field(
+        0.0, description="Rolling resistance coefficient mu_r (-)."
+    )
+    velocity_scaling: Boolean = Field(
+        False,
+        description="Scale the restitution with the impact velocity (Pfeiffer & Bowen 1989).",
+    )
+    velocity_scaling_k: Positive = Field(
+        9.144, description="Velocity scaling constant K (m/s) of Pfeiffer & Bowen."
+    )
+    roughness_deg: Annotated[NonNegative, Field(lt=45.0)] = Field(
+        0.0,
+        description="Slope roughness: standard deviation of the random tilt of the impact "
+        "normal (deg), drawn per impact.",
+    )
+    scatter: Annotated[Scatter, BeforeValidator(_none_as_empty)] = Field(
+        default_factory=Scatter, description="Standard deviations of the parameters."
+    )
+
+    @model_validator(mode="after")
+    def _check_impact_model(self) -> "Material":
+        if self.impact_model == "rn_rt" and self.tangential_restitution is None:
+            raise _fail(
+                "required for impact_model rn_rt (tangential restitution Rt, 0..1)",
+                ("tangential_restitution",),
+            )
+        if self.impact_model == "spang" and self.tangential_restitution is not None:
+            raise _fail(
+                "only for impact_model rn_rt; remove it or set impact_model: rn_rt",
+                ("tangential_restitution",),
+            )
+        return self
+
+
+class Slope(_Model):
+    """The 2-D slope section: a polyline of ground points and a material per segment."""
+
+    points: Annotated[
+        list[Annotated[tuple[float, float], BeforeValidator(_pair("[x, y]"))]],
+        BeforeValidator(_as_list),
+    ] = Field(description="Ground points [x, y] (m), x strictly increasing downslope; at least 2.")
+    materials: Annotated[list[String], BeforeValidator(_as_list)] = Field(
+        description="Material name for all segments, or a list with one name per segment "
+        "(len(points) - 1). Always stored as the per-segment list."
+    )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _broadcast_material(cls, data: Any) -> Any:
+        if isinstance(data, dict) and isinstance(data.get("materials"), str):
+            points = data.get("points")
+            n_segments = max(len(points) - 1, 1) if isinstance(points, list | tuple) else 1
+            data = {**data, "materials": [data["materials"]] * n_segments}
+        return data
+
+    @model_validator(mode="after")
+    def _check_geometry(self) -> "Slope":
+        if len(self.points) < 2:
+            raise _fail(f"expected at least 2 points, got {len(self.points)}", ("points",))
+        for i in range(1, len(self.points)):
+            if self.points[i][0] <= self.points[i - 1][0]:
+                raise _fail(
+                    f"x must increase strictly along the slope: x = {_fmt(self.points[i][0])} "
+                    f"follows x = {_fmt(self.points[i - 1][0])}",
+                    ("points", i),
+                )
+        if len(self.materials) != self.n_segments:
+            raise _fail(
+                f"expected one material name per segment ({self.n_segments}), "
+                f"got {len(self.materials)}; or give a single name for all",
+                ("materials",),
+            )
+        return self
+
+    @property
+    def n_segments(self) -> int:
+        """Number of segments (``len(points) - 1``)."""
+        return len(self.points) - 1
+
+    @property
+    def x_range(self) -> tuple[float, float]:
+        """(first x, last x) of the section (m)."""
+        return (self.points[0][0], self.points[-1][0])
+
+
+class SizeSpec(_Model):
+    """A rock size distribution, in the quantity given by :attr:`Rocks.size_quantity`.
+
+    ``kind`` and the meaning of ``a`` and ``b``:
+
+    - ``fixed``: every rock has size ``a`` (= ``b``);
+    - ``uniform``: uniform on [a, b], 0 < a <= b;
+    - ``normal``: mean a > 0, standard deviation b >= 0;
+    - ``lognormal``: median a > 0, sigma b >= 0 of the underlying normal (log) distribution.
+
+    In the project file this is written as a number (fixed) or as a one-key
+    mapping ``{uniform: [a, b]}``, ``{normal: [mean, sd]}`` or
+    ``{lognormal: [median, sigma]}``; :meth:`Project.resolved_dict` writes it
+    back the same way.
+    """
+
+    kind: Literal["fixed", "uniform", "normal", "lognormal"] = Field(
+        description="Distribution kind."
+    )
+    a: Number = Field(description="Fixed value, minimum, mean or median (m, m3 or kg).")
+    b: Number = Field(description="Fixed value, maximum, standard deviation or sigma.")
+
+    @model_validator(mode="after")
+    def _check_parameters(self) -> "SizeSpec":
+        problem = _size_problem(self.kind, self.a, self.b)
+        if problem:
+            raise _fail(problem)
+        return self
+
+    def to_yaml(self) -> float | dict[str, list[float]]:
+        """The project-file form: a number, or ``{kind: [a, b]}``."""
+        if self.kind == "fixed":
+            return self.a
+        return {self.kind: [self.a, self.b]}
+
+
+_SIZE_KINDS = {
+    "uniform": "[min, max]",
+    "normal": "[mean, sd]",
+    "lognormal": "[median, sigma]",
+}
+
+
+def _size_problem(kind: str, a: float, b: float) -> str:
+    if kind == "fixed":
+        if a <= 0:
+            return f"expected a number > 0, got {_fmt(a)}"
+        if a != b:
+            return "a fixed size needs a == b"
+    elif kind == "uniform":
+        if not 0 < a <= b:
+            return f"uniform [min, max] needs 0 < min <= max, got [{_fmt(a)}, {_fmt(b)}]"
+    elif a <= 0 or b < 0:
+        first, second = _SIZE_KINDS[kind][1:-1].split(", ")
+        return (
+            f"{kind} {_SIZE_KINDS[kind]} needs {first} > 0 and {second} >= 0, "
+            f"got [{_fmt(a)}, {_fmt(b)}]"
+        )
+    return ""
+
+
+def _parse_size(value: Any) -> Any:
+    """Project-file size (number or ``{kind: [a, b]}``) -> :class:`SizeSpec` data."""
+    if value is None or isinstance(value, SizeSpec):
+        return value
+    forms = "a number > 0 or one of " + ", ".join(
+        f"{{{kind}: {what}}}" for kind, what in _SIZE_KINDS.items()
+    )
+    if isinstance(value, dict):
+        if len(value) != 1:
+            raise _fail(f"expected {forms}, got a mapping with {len(value)} keys")
+        ((kind, params),) = value.items()
+        if kind not in _SIZE_KINDS:
+            hint = _did_you_mean(kind, _SIZE_KINDS) if isinstance(kind, str) else ""
+            raise _fail(
+                f"unknown distribution {kind!r}{hint}; expected {', '.join(_SIZE_KINDS)}",
+                (kind,),
+            )
+        if not isinstance(params, list | tuple) or len(params) != 2:
+            raise _fail(f"expected {_SIZE_KINDS[kind]}, got {_describe(params)}", (kind,))
+        a = _as_number(params[0], (kind, 0))
+        b = _as_number(params[1], (kind, 1))
+        problem = _size_problem(kind, a, b)
+        if problem:
+            raise _fail(problem, (kind,))
+        return SizeSpec(kind=kind, a=a, b=b)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise _fail(f"expected {forms}, got {_describe(value)}")
+    number = _as_number(value)
+    if number <= 0:
+        raise _fail(f"expected a number > 0, got {_fmt(number)}")
+    return SizeSpec(kind="fixed", a=number, b=number)
+
+
+_SIZE_SCHEMA = {
+    "anyOf": [
+        {"type": "number", "exclusiveMinimum": 0},
+        *(
+            {
+                "type": "object",
+                "properties": {
+                    kind: {
+                        "type": "array",
+                        "items": {"type": "number"},
+                        "minItems": 2,
+                        "maxItems": 2,
+                    }
+                },
+                "required": [kind],
+                "additionalProperties": False,
+            }
+            for kind in _SIZE_KINDS
+        ),
+        {"type": "null"},
+    ]
+}
+
+SizeField = Annotated[SizeSpec | None, BeforeValidator(_parse_size), WithJsonSchema(_SIZE_SCHEMA)]
+
+
+def _parse_x_range(value: Any) -> tuple[float, float]:
+    if isinstance(value, list | tuple):
+        low, high = _pair("[min, max]")(value)
+        if low > high:
+            raise _fail(f"expected [min, max] with min <= max, got [{_fmt(low)}, {_fmt(high)}]")
+        return (low, high)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise _fail(f"expected a number or [min, max], got {_describe(value)}")
+    x = _as_number(value)
+    return (x, x)
+
+
+def _parse_spin(value: Any) -> float | str:
+    if value == "rolling" and isinstance(value, str):
+        return "rolling"
+    if isinstance(value, str):
+        raise _fail(f"expected a number (rad/s) or 'rolling', got {_describe(value)}")
+    return _as_number(value)
+
+
+class ReleaseZone(_Model):
+    """A release zone: where and how rocks start."""
+
+    x: Annotated[
+        tuple[float, float],
+        BeforeValidator(_parse_x_range),
+        WithJsonSchema(
+            {
+                "anyOf": [
+                    {"type": "number"},
+                    {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
+                ]
+            }
+        ),
+    ] = Field(
+        description="Release x (m): a number or a range [min, max] sampled uniformly. "
+        "Always stored as (min, max)."
+    )
+    height: NonNegative = Field(0.0, description="Initial clearance above the ground (m).")
+    velocity: Annotated[tuple[float, float], BeforeValidator(_pair("[vx, vy]"))] = Field(
+        (0.0, 0.0), description="Initial velocity [vx, vy] (m/s)."
+    )
+    spin: Annotated[
+        float | Literal["rolling"],
+        PlainValidator(_parse_spin),
+        WithJsonSchema({"anyOf": [{"type": "number"}, {"const": "rolling"}]}),
+    ] = Field(
+        0.0,
+        description="Initial angular velocity (rad/s), or 'rolling' for the spin matching "
+        "rolling without slip.",
+    )
+    weight: Positive = Field(1.0, description="Relative weight of this zone (-).")
+
+
+def _zones(value: Any) -> Any:
+    """One zone (a mapping) or a list of zones -> a list of zones."""
+    if isinstance(value, dict | ReleaseZone):
+        return [value]
+    if isinstance(value, list | tuple):
+        if not value:
+            raise _fail("expected at least one release zone, got an empty list")
+        return list(value)
+    raise _fail(f"expected a release zone (mapping) or a list of zones, got {_describe(value)}")
+
+
+class Rocks(_Model):
+    """The rock ensemble: how many, what size, where they are released.
+
+    Exactly one of ``radius``, ``volume`` and ``mass`` is set; :attr:`size`
+    and :attr:`size_quantity` give it without looking at all three.
+    """
+
+    count: Annotated[Integer, Field(ge=1)] = Field(1000, description="Number of rocks.")
+    seed: Annotated[Integer, Field(ge=0)] = Field(0, description="Random seed (reproducible).")
+    density: Positive = Field(2650.0, description="Rock density (kg/m3).")
+    radius: SizeField = Field(None, description="Rock radius (m): a number or a distribution.")
+    volume: SizeField = Field(None, description="Rock volume (m3): a number or a distribution.")
+    mass: SizeField = Field(None, description="Rock mass (kg): a number or a distribution.")
+    release: Annotated[list[ReleaseZone], BeforeValidator(_zones)] = Field(
+        description="One release zone or a list of zones. Always stored as a list."
+    )
+
+    @model_validator(mode="after")
+    def _check_size(self) -> "Rocks":
+        given = [name for name in ("radius", "volume", "mass") if getattr(self, name) is not None]
+        if not given:
+            raise _fail(
+                "give the rock size as one of radius (m), volume (m3) or mass (kg)", ("radius",)
+            )
+        if len(given) > 1:
+            raise _fail(
+                f"give only one of radius, volume, mass; got {' and '.join(given)}",
+                (given[1],),
+            )
+        return self
+
+    @field_serializer("radius", "volume", "mass")
+    def _size_to_yaml(self, value: SizeSpec | None) -> Any:
+        return None if value is None else value.to_yaml()
+
+    @property
+    def size_quantity(self) -> Literal["radius", "volume", "mass"]:
+        """Which of radius (m), volume (m3) or mass (kg) the size is given as."""
+        for name in ("radius", "volume", "mass"):
+            if getattr(self, name) is not None:
+                return name  # type: ignore[return-value]
+        raise ValueError("no rock size given")  # unreachable for a validated model
+
+    @property
+    def size(self) -> SizeSpec:
+        """The size distribution, in the units of :attr:`size_quantity`."""
+        return getattr(self, self.size_quantity)
+
+
+class Analysis(_Model):
+    """What to evaluate along the section."""
+
+    stations: Annotated[list[Number], BeforeValidator(_as_list)] = Field(
+        default_factory=list, description="Stations x (m) where crossings are recorded."
+    )
+    percentiles: Annotated[
+        list[Annotated[Number, Field(gt=0.0, lt=100.0)]], BeforeValidator(_as_list)
+    ] = Field(
+        default_factory=lambda: [50.0, 95.0, 99.0],
+        description="Percentiles (%) of height and energy reported, each in (0, 100).",
+    )
+    envelope_points: Annotated[Integer, Field(ge=2)] = Field(
+        201, description="Number of envelope stations spread along the section."
+    )
+
+
+class Protect(_Model):
+    """Where the protection is to be placed."""
+
+    x: Number = Field(description="Position of the protective measure along the section (m).")
+
+
+class EngineConfig(_Model):
+    """Advanced numerical parameters of the trajectory engine."""
+
+    v_contact: Positive = Field(
+        0.5, description="Below this outgoing normal speed (m/s) the rock stays in contact."
+    )
+    v_stop: Positive = Field(0.05, description="Below this speed (m/s) the rock stops.")
+    max_events: Annotated[Integer, Field(ge=10)] = Field(
+        10000, description="Maximum number of events (impacts, phase changes) per rock."
+    )
+    max_chord_deg: Annotated[Positive, Field(le=30.0)] = Field(
+        5.0, description="Maximum angle (deg) between trajectory chords and the arc."
+    )
+
+
+class Project(_Model):
+    """A validated, normalised project file.
+
+    Load one with :func:`load_project` or :func:`load_project_text`; the file
+    it came from is :attr:`source`.
+    """
+
+    name: Annotated[String, Field(min_length=1)] = Field(description="Project name.")
+    description: Annotated[String, BeforeValidator(lambda v: "" if v is None else v)] = Field(
+        "", description="Free text."
+    )
+    slope: Slope = Field(description="The slope section.")
+    materials: Annotated[dict[String, Material], Field(min_length=1)] = Field(
+        description="Ground materials by name."
+    )
+    rocks: Rocks = Field(description="The rock ensemble.")
+    analysis: Annotated[Analysis, BeforeValidator(_none_as_empty)] = Field(
+        default_factory=Analysis, description="What to evaluate."
+    )
+    protect: Protect | None = Field(None, description="Protection position; none if absent.")
+    engine: Annotated[EngineConfig, BeforeValidator(_none_as_empty)] = Field(
+        default_factory=EngineConfig, description="Advanced numerical parameters."
+    )
+
+    _source: str = PrivateAttr(default="<string>")
+
+    @property
+    def source(self) -> str:
+        """The file the project was loaded from (``"<string>"`` for text)."""
+        return self._source
+
+    @model_validator(mode="after")
+    def _check_references(self) -> "Project":
+        for i, name in enumerate(self.slope.materials):
+            if name not in self.materials:
+                hint = _did_you_mean(name, self.materials) or (
+                    f"; defined: {', '.join(map(str, self.materials))}"
+                )
+                raise _fail(f"undefined material {name!r}{hint}", ("slope", "materials", i))
+        first, last = self.slope.x_range
+        section = f"[{_fmt(first)}, {_fmt(last)}] m"
+        for i, zone in enumerate(self.rocks.release):
+            low, high = zone.x
+            if low < first or high > last:
+                shown = _fmt(low) if low == high else f"[{_fmt(low)}, {_fmt(high)}]"
+                raise _fail(
+                    f"release x {shown} is outside the slope section {section}",
+                    ("rocks", "release", i, "x"),
+                )
+        for i, x in enumerate(self.analysis.stations):
+            if not first <= x <= last:
+                raise _fail(
+                    f"station x {_fmt(x)} is outside the slope section {section}",
+                    ("analysis", "stations", i),
+                )
+        if self.protect is not None and not first <= self.protect.x <= last:
+            raise _fail(
+                f"x {_fmt(self.protect.x)} is outside the slope section {section}",
+                ("protect", "x"),
+            )
+        return self
+
+    def resolved_dict(self) -> dict[str, Any]:
+        """The project with every default filled in, as plain JSON-serialisable data.
+
+        Written in the project file's own syntax (sizes as a number or
+        ``{kind: [a, b]}``, the release as a list of zones, ``x`` as
+        ``[min, max]``, materials per segment), so that dumping it as YAML
+        gives a valid project file that loads to the same resolved dict.
+        Unset optional values (``protect``, the two unused of
+        radius/volume/mass, ``tangential_restitution`` for spang) are ``None``.
+        """
+        return self.model_dump(mode="json")
+
+    def resolved_hash(self) -> str:
+        """sha256 (hex) of the canonical JSON of :meth:`resolved_dict` (sorted keys)."""
+        text = json.dumps(
+            self.resolved_dict(),
+            sort_keys=True,
+            separators=(",", ":"),
+            ensure_ascii=False,
+            allow_nan=False,
+        )
+        return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+# --------------------------------------------------------------------------------------
+# YAML with line numbers
+# --------------------------------------------------------------------------------------
+
+_MERGE_TAG = "tag:yaml.org,2002:merge"
+_MAX_NODES = 200_000  # guards against alias bombs ("billion laughs")
+
+
+class _Loader(yaml.SafeLoader):
+    """SafeLoader with project-friendly scalars.
+
+    - ``1e3`` is a number (as in YAML 1.2; PyYAML's YAML 1.1 reads it as a string);
+    - dates stay strings (a name like ``2024-05-01`` is text, not a date);
+    - scalar conversion errors (``!!int abc``) become YAML errors with a mark.
+    """
+
+    def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
+        try:
+            return super().construct_object(node, deep=deep)
+        except yaml.YAMLError:
+            raise
+        except (ValueError, TypeError, OverflowError) as exc:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"invalid value: {exc}", node.start_mark
+            ) from exc
+
+
+_Loader.add_constructor("tag:yaml.org,2002:timestamp", yaml.SafeLoader.construct_yaml_str)
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+#: key path -> (1-based line, node kind: "map" | "seq" | "scalar")
+_Lines = dict[tuple, tuple[int, str]]
+
+
+def _key_text(path: tuple, lines: _Lines) -> str:
+    """Dotted key path as the user sees it: ``rocks.release[1].x``."""
+    text = ""
+    prefix: tuple = ()
+    for element in path:
+        parent = lines.get(prefix)
+        if parent is not None and parent[1] == "seq" and isinstance(element, int):
+            text += f"[{element}]"
+        elif parent is None and isinstance(element, int) and not isinstance(element, bool):
+            text += f"[{element}]"
+        else:
+            text += f".{element}" if text else str(element)
+        prefix += (element,)
+    return text
+
+
+def _yaml_path(loc: tuple, lines: _Lines) -> tuple:
+    """Drop list indices that normalisation added (a single zone or material name
+    stored as a list): an int under a YAML mapping or scalar that is not one of its keys."""
+    path: tuple = ()
+    for element in loc:
+        parent = lines.get(path)
+        if (
+            isinstance(element, int)
+            and not isinstance(element, bool)
+            and parent is not None
+            and parent[1] in ("map", "scalar")
+            and path + (element,) not in lines
+        ):
+            continue
+        path += (element,)
+    return path
+
+
+def _line_of(path: tuple, lines: _Lines) -> int | None:
+    """Line of ``path`` or of its nearest ancestor present in the file."""
+    for end in range(len(path), -1, -1):
+        hit = lines.get(path[:end])
+        if hit is not None:
+            return hit[0]
+    return None
+
+
+def _map_lines(loader: _Loader, root: yaml.Node, source: str) -> _Lines:
+    """Walk the node tree: key path -> line, rejecting duplicate and non-scalar keys."""
+    lines: _Lines = {}
+    budget = [_MAX_NODES]
+
+    def error(node: yaml.Node, path: tuple, message: str) -> ProjectError:
+        return ProjectError(source, node.start_mark.line + 1, _key_text(path, lines), message)
+
+    def key_of(key_node: yaml.Node, path: tuple) -> Any:
+        if not isinstance(key_node, yaml.ScalarNode):
+            raise error(key_node, path, "keys must be plain names, not lists or mappings")
+        key = loader.construct_object(key_node)
+        try:
+            hash(key)
+        except TypeError:
+            key = key_node.value
+        return key
+
+    def visit(node: yaml.Node, path: tuple, line: int, ancestors: frozenset) -> None:
+        budget[0] -= 1
+        if budget[0] < 0:
+            raise error(
+                node, path, f"the file has more than {_MAX_NODES} values (alias expansion?)"
+            )
+        if id(node) in ancestors:
+            raise error(node, path, "recursive alias: a value contains itself")
+        if isinstance(node, yaml.MappingNode):
+            lines.setdefault(path, (line, "map"))
+            inner = ancestors | {id(node)}
+            seen: dict[Any, int] = {}
+            merges = []
+            for key_node, value_node in node.value:
+                if key_node.tag == _MERGE_TAG:
+                    merges.append(value_node)
+                    continue
+                key = key_of(key_node, path)
+                key_line = key_node.start_mark.line + 1
+                if key in seen:
+                    raise error(
+                        key_node,
+                        path + (key,),
+                        f"duplicate key {key!r} (first given on line {seen[key]})",
+                    )
+                seen[key] = key_line
+                visit(value_node, path + (key,), key_line, inner)
+            pending = list(merges)
+            while pending:  # merged keys ("<<: *base") that the mapping does not override
+                source_node = pending.pop(0)
+                if id(source_node) in inner:
+                    raise error(source_node, path, "recursive alias: a value contains itself")
+                if isinstance(source_node, yaml.SequenceNode):
+                    pending[:0] = source_node.value
+                    continue
+                if not isinstance(source_node, yaml.MappingNode):
+                    continue  # the constructor reports the bad merge
+                for key_node, value_node in source_node.value:
+                    if key_node.tag == _MERGE_TAG:
+                        pending.append(value_node)
+                        continue
+                    key = key_of(key_node, path)
+                    if key not in seen:
+                        seen[key] = key_node.start_mark.line + 1
+                        visit(value_node, path + (key,), seen[key], inner)
+        elif isinstance(node, yaml.SequenceNode):
+            lines.setdefault(path, (line, "seq"))
+            inner = ancestors | {id(node)}
+            for i, item in enumerate(node.value):
+                visit(item, path + (i,), item.start_mark.line + 1, inner)
+        else:
+            lines.setdefault(path, (line, "scalar"))
+
+    visit(root, (), root.start_mark.line + 1, frozenset())
+    return lines
+
+
+def _parse_yaml(text: str, source: str) -> tuple[Any, _Lines]:
+    try:
+        loader = _Loader(text)
+        try:
+            root = loader.get_single_node()
+            if root is None:
+                return None, {}
+            lines = _map_lines(loader, root, source)
+            data = loader.construct_document(root)
+        finally:
+            loader.dispose()
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        problem = " ".join(p for p in (exc.context, exc.problem) if p) or "invalid YAML"
+        if mark is None:
+            raise ProjectError(source, None, "", f"invalid YAML: {problem}") from exc
+        raise ProjectError(
+            source, mark.line + 1, "", f"invalid YAML: {problem} (column {mark.column + 1})"
+        ) from exc
+    except yaml.reader.ReaderError as exc:  # a character YAML does not allow
+        line = text.count("\n", 0, exc.position) + 1 if isinstance(text, str) else None
+        raise ProjectError(
+            source, line, "", f"invalid YAML: character #x{exc.character:04x} is not allowed"
+        ) from exc
+    except yaml.YAMLError as exc:
+        raise ProjectError(source, None, "", f"invalid YAML: {exc}") from exc
+    except RecursionError as exc:
+        raise ProjectError(source, None, "", "the file is nested too deeply") from exc
+    return data, lines
+
+
+# --------------------------------------------------------------------------------------
+# pydantic errors -> one line
+# --------------------------------------------------------------------------------------
+
+_BOUNDS = {
+    "greater_than": (">", "gt"),
+    "greater_than_equal": (">=", "ge"),
+    "less_than": ("<", "lt"),
+    "less_than_equal": ("<=", "le"),
+}
+
+
+def _message(error: dict) -> str:
+    kind = error["type"]
+    ctx = error.get("ctx") or {}
+    value = error.get("input")
+    if kind == _ERROR_TYPE:
+        return str(ctx["message"])
+    if kind == "missing":
+        return "required key is missing"
+    if kind == "extra_forbidden":
+        return "unknown key"
+    if kind in _BOUNDS:
+        op, name = _BOUNDS[kind]
+        # integer fields carry integer bounds (ge=1), float fields float bounds (gt=0.0)
+        bound = ctx[name]
+        noun = (
+            "an integer" if isinstance(bound, int) and not isinstance(bound, bool) else "a number"
+        )
+        return f"expected {noun} {op} {_fmt(ctx[name])}, got {_describe(value)}"
+    if kind == "too_short":
+        if isinstance(value, str):
+            return "must not be empty"
+        return f"expected at least {ctx.get('min_length')} item(s), got {ctx.get('actual_length')}"
+    if kind == "too_long":
+        return f"expected at most {ctx.get('max_length')} item(s), got {ctx.get('actual_length')}"
+    if kind in ("dict_type", "model_type", "model_attributes_type"):
+        return f"expected a mapping of key: value, got {_describe(value)}"
+    if kind in ("list_type", "tuple_type"):
+        return f"expected a list, got {_describe(value)}"
+    return str(error.get("msg", kind))
+
+
+def _to_project_error(exc: ValidationError, source: str, lines: _Lines) -> ProjectError:
+    located = []
+    for order, error in enumerate(exc.errors()):
+        loc = tuple(error["loc"])
+        ctx = error.get("ctx") or {}
+        if error["type"] == _ERROR_TYPE:
+            loc += tuple(ctx.get("subpath", ()))
+        prefix = ""
+        if loc and loc[-1] == "[key]":  # a bad mapping key, e.g. a material named 1
+            loc = loc[:-1]
+            prefix = "invalid key: "
+        path = _yaml_path(loc, lines)
+        line = _line_of(path, lines)
+        message = prefix + _message(error)
+        located.append((line if line is not None else 0, order, path, line, message))
+    _, _, path, line, message = min(located, key=lambda item: item[:2])
+    return ProjectError(source, line, _key_text(path, lines), message)
+
+
+# --------------------------------------------------------------------------------------
+# Public entry points
+# --------------------------------------------------------------------------------------
+
+
+def load_project_text(text: str, source: str = "<string>") -> Project:
+    """Parse and validate a project from YAML text.
+
+    Parameters
+    ----------
+    text
+        The YAML document.
+    source
+        Name used in error messages and stored as :attr:`Project.source`.
+
+    Returns
+    -------
+    Project
+        The validated, normalised project.
+
+    Raises
+    ------
+    ProjectError
+        For any problem (the one earliest in the file), as one line
+        ``source:line: key.path: message``.
+    """
+    data, lines = _parse_yaml(text, source)
+    if data is None:
+        raise ProjectError(source, 1, "", "the project file is empty")
+    if not isinstance(data, dict):
+        raise ProjectError(
+            source,
+            _line_of((), lines),
+            "",
+            f"expected a mapping of top-level keys (name, slope, materials, rocks, ...), "
+            f"got {_describe(data)}",
+        )
+    try:
+        project = Project.model_validate(data)
+    except ValidationError as exc:
+        raise _to_project_error(exc, source, lines) from exc
+    except RecursionError as exc:
+        raise ProjectError(source, None, "", "the file is nested too deeply") from exc
+    project._source = source
+    return project
+
+
+def load_project(path: str | os.PathLike[str]) -> Project:
+    """Read, parse and validate a project file.
+
+    Parameters
+    ----------
+    path
+        Path of the YAML project file (UTF-8).
+
+    Returns
+    -------
+    Project
+        The validated, normalised project; :attr:`Project.source` is ``path``.
+
+    Raises
+    ------
+    ProjectError
+        If the file cannot be read or is not a valid project (one line,
+        ``path:line: key.path: message``).
+    """
+    source = os.fspath(path)
+    try:
+        text = Path(source).read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise ProjectError(
+            source, None, "", f"cannot read file: not UTF-8 text ({exc.reason})"
+        ) from exc
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise ProjectError(source, None, "", f"cannot read file: {reason}") from exc
+    return load_project_text(text, source)

@@ -1,0 +1,241 @@
+"""Terminal reports (rich) and figures for engineers' reports (matplotlib)."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from rich.console import Console, Group
+from rich.panel import Panel
+from rich.table import Table
+from rich.text import Text
+
+from .engine import G
+from .engine.core import T_MODE, T_T, T_VX, T_VY, T_X, T_Y
+from .outputs import write_with
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .simulation import Study
+
+__all__ = ["print_simulation", "plot_study"]
+
+
+def _fmt(v: float | None, digits: int = 2) -> str:
+    return "-" if v is None else f"{v:,.{digits}f}"
+
+
+def simulation_renderable(summary: dict[str, Any]) -> Group:
+    """The rich renderable of a ``simulate`` summary."""
+    n = summary["rocks"]
+    rate = n / summary["runtime_s"] if summary["runtime_s"] > 0 else float("nan")
+    head = Text.assemble(
+        (summary["project"], "bold"),
+        f"   {n:,} rocks, seed {summary['seed']}, "
+        f"{summary['runtime_s']:.2f} s ({rate:,.0f} rocks/s, {summary['events']:,} events)",
+    )
+    st = summary["stops"]
+    ends = Table(title="How the paths ended", show_edge=False, title_justify="left")
+    ends.add_column("end")
+    ends.add_column("rocks", justify="right")
+    ends.add_column("share", justify="right")
+    for label, key in (
+        ("stopped on the section", "stopped"),
+        ("left downslope end", "exit_downslope"),
+        ("left upslope end", "exit_upslope"),
+        ("unresolved (event limit)", "unresolved"),
+    ):
+        ends.add_row(label, f"{st[key]:,}", f"{100 * st[key] / max(n, 1):.1f} %")
+    sx = st["x"]
+    stops = Text(
+        f"Stop position x (m) of the rocks at rest: mean {_fmt(sx['mean'], 1)}, "
+        f"p50 {_fmt(sx['p50'], 1)}, p95 {_fmt(sx['p95'], 1)}, max {_fmt(sx['max'], 1)}"
+    )
+    parts: list[Any] = [head, Text(""), ends, Text(""), stops]
+    if summary["stations"]:
+        tab = Table(
+            title="Analysis stations (first passage downslope)",
+            caption="h: passing height of the rock centre above ground (m); "
+            "v: speed (m/s); E: total kinetic energy (kJ)",
+            title_justify="left",
+            caption_justify="left",
+            show_edge=False,
+        )
+        tab.add_column("x (m)", justify="right")
+        tab.add_column("rocks", justify="right")
+        for q in ("p95", "p99", "max"):
+            tab.add_column(f"h {q}", justify="right", no_wrap=True)
+        tab.add_column("v max", justify="right")
+        for q in ("p95", "p99", "max"):
+            tab.add_column(f"E {q}", justify="right", no_wrap=True)
+        for s in summary["stations"]:
+            h, v, e = s["passing_height_m"], s["velocity_ms"], s["energy_kj"]
+            tab.add_row(
+                f"{s['x']:g}",
+                f"{s['crossings']:,}",
+                *(_fmt(h[q]) for q in ("p95", "p99", "max")),
+                _fmt(v["max"], 1),
+                *(_fmt(e[q], 0) for q in ("p95", "p99", "max")),
+            )
+        parts += [Text(""), tab]
+    if "protect" in summary:
+        p = summary["protect"]
+        style = "bold red" if p["reaching"] else "bold green"
+        parts += [
+            Text(""),
+            Text.assemble(
+                f"Protected zone x >= {p['x']:g} m: ",
+                (f"{p['reaching']:,} rocks reach it ({100 * p['fraction']:.2f} %)", style),
+            ),
+        ]
+    if st["unresolved"]:
+        parts.append(
+            Text(
+                f"{st['unresolved']} rocks reached the event limit and are reported as "
+                "unresolved; raise engine.max_events if this matters.",
+                style="yellow",
+            )
+        )
+    return Group(*parts)
+
+
+def print_simulation(summary: dict[str, Any], console: Console | None = None) -> None:
+    console = console or Console()
+    console.print(Panel(simulation_renderable(summary), title="rockfall-design simulate"))
+
+
+# ---- figures -----------------------------------------------------------------
+
+
+def _trajectory_xy(tr: np.ndarray, pts_per_flight: int = 24) -> tuple[np.ndarray, np.ndarray]:
+    """Centre positions along a recorded path: parabolas in flight, lines in contact."""
+    xs: list[np.ndarray] = []
+    ys: list[np.ndarray] = []
+    for i in range(len(tr) - 1):
+        a = tr[i]
+        if a[T_MODE] == 0:  # flight
+            t = np.linspace(0.0, tr[i + 1, T_T] - a[T_T], pts_per_flight)
+            xs.append(a[T_X] + a[T_VX] * t)
+            ys.append(a[T_Y] + a[T_VY] * t - 0.5 * G * t**2)
+        else:
+            xs.append(np.array([a[T_X], tr[i + 1, T_X]]))
+            ys.append(np.array([a[T_Y], tr[i + 1, T_Y]]))
+    if not xs:
+        return tr[:, T_X], tr[:, T_Y]
+    return np.concatenate(xs), np.concatenate(ys)
+
+
+def _ground(ax, study: Study) -> None:
+    sec = study.section
+    ymin = sec.y.min() - 0.05 * max(np.ptp(sec.y), 1.0)
+    ax.fill_between(sec.x, sec.y, ymin, color="#d9cfc1", zorder=1)
+    ax.plot(sec.x, sec.y, color="#5b4a36", lw=1.5, zorder=3, label="ground")
+    ax.set_ylim(bottom=ymin)
+
+
+def _marks(ax, study: Study, label: bool = True) -> None:
+    for j, xs in enumerate(study.result.stations):
+        ax.axvline(xs, color="#1f5fa8", ls="--", lw=0.9, zorder=2,
+                   label="analysis station" if (label and j == 0) else None)
+    if study.project.protect is not None:
+        ax.axvspan(study.project.protect.x, study.section.x[-1], color="#e8a0a0", alpha=0.25,
+                   zorder=0, label="protected zone" if label else None)
+
+
+def _save(fig, path: Path) -> None:
+    def writer(fh: io.BufferedWriter) -> None:
+        fig.savefig(fh, format="png", dpi=150, bbox_inches="tight")
+
+    write_with(path, writer)
+
+
+def plot_study(study: Study, directory: str | Path) -> list[Path]:
+    """Write profile.png, envelopes.png and stops.png into ``directory``.
+
+    Returns the paths written.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    written: list[Path] = []
+    name = study.project.name
+    res = study.result
+
+    # 1. Profile with a sample of trajectories.
+    fig, ax = plt.subplots(figsize=(11, 5.5))
+    _ground(ax, study)
+    for k, tr in enumerate(res.trajectories):
+        x, y = _trajectory_xy(tr)
+        ax.plot(x, y, lw=0.6, alpha=0.55, color="#c0392b", zorder=4,
+                label="rock centre paths" if k == 0 else None)
+    stopped = res.status == 1
+    if stopped.any():
+        ax.plot(res.x_end[stopped], res.y_end[stopped], "k.", ms=2, alpha=0.4, zorder=5,
+                label="rest positions")
+    _marks(ax, study)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("elevation (m)")
+    ax.set_title(f"{name}: slope section and {len(res.trajectories)} of {res.n:,} paths")
+    ax.set_aspect("equal", adjustable="box")
+    ax.legend(loc="upper right", fontsize=8)
+    ax.grid(alpha=0.3)
+    p = out / "profile.png"
+    _save(fig, p)
+    plt.close(fig)
+    written.append(p)
+
+    # 2. Envelopes of passing height and energy along x.
+    env = study.envelopes()
+    pcts = [c for c in env.columns if c.startswith("height_p")]
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(11, 7), sharex=True)
+    a1.plot(env["x_m"], env["height_max_m"], color="k", lw=1.4, label="max")
+    a2.plot(env["x_m"], env["energy_max_kj"], color="k", lw=1.4, label="max")
+    colors = plt.cm.viridis(np.linspace(0.15, 0.85, max(len(pcts), 1)))
+    for c, col in zip(colors, pcts, strict=False):
+        q = col[len("height_p") : -len("_m")].replace("_", ".")
+        a1.plot(env["x_m"], env[col], color=c, lw=1.0, label=f"p{q}")
+        a2.plot(env["x_m"], env[col.replace("height", "energy")[:-2] + "_kj"], color=c,
+                lw=1.0, label=f"p{q}")
+    for ax in (a1, a2):
+        _marks(ax, study, label=False)
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    a1.set_ylabel("passing height of the\nrock centre above ground (m)")
+    a2.set_ylabel("total kinetic energy (kJ)")
+    a2.set_xlabel("x (m)")
+    a1.set_title(f"{name}: envelopes over {res.n:,} rocks (first passage downslope)")
+    p = out / "envelopes.png"
+    _save(fig, p)
+    plt.close(fig)
+    written.append(p)
+
+    # 3. Where rocks stop.
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(11, 6), sharex=True,
+                                 gridspec_kw={"height_ratios": [2, 1]})
+    sec = study.section
+    bins = np.linspace(sec.x[0], sec.x[-1], 81)
+    if stopped.any():
+        a1.hist(res.x_end[stopped], bins=bins, color="#7f8c8d", edgecolor="white")
+    outs = int((res.status == 3).sum())
+    a1.set_ylabel("rocks at rest")
+    a1.set_title(
+        f"{name}: rest positions of {int(stopped.sum()):,} rocks; "
+        f"{outs:,} left the section downslope"
+    )
+    _marks(a1, study)
+    a1.grid(alpha=0.3)
+    if study.project.protect is not None or len(res.stations):
+        a1.legend(loc="upper left", fontsize=8)
+    _ground(a2, study)
+    a2.set_xlabel("x (m)")
+    a2.set_ylabel("elevation (m)")
+    p = out / "stops.png"
+    _save(fig, p)
+    plt.close(fig)
+    written.append(p)
+    return written

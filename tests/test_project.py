@@ -1,0 +1,743 @@
+"""Tests of the project file: loading, normalisation, round trip and error lines."""
+
+import copy
+import json
+import pickle
+
+import pytest
+import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from rockfall_design.errors import ExitCode, InputError, ProjectError, RockfallError
+from rockfall_design.project import (
+    Project,
+    SizeSpec,
+    load_project,
+    load_project_text,
+)
+
+EXAMPLE = """\
+name: Standard slope
+description: ""
+slope:
+  points: [[0, 100], [30, 60], [60, 30], [80, 20], [120, 15], [200, 12]]
+  materials: talus
+materials:
+  talus:
+    impact_model: spang
+    restitution: 0.35
+    friction: 0.58
+    rolling_resistance: 0.3
+    velocity_scaling: false
+    velocity_scaling_k: 9.144
+    roughness_deg: 5
+    scatter: {restitution: 0.05, friction: 0.05, rolling_resistance: 0.02}
+rocks:
+  count: 1000
+  seed: 42
+  density: 2650
+  radius: 0.5
+  release:
+    x: 1
+    height: 0
+    velocity: [0.6, -0.8]
+    spin: 0
+    weight: 1
+analysis:
+  stations: [80]
+  percentiles: [50, 95, 99]
+  envelope_points: 201
+protect:
+  x: 150
+engine:
+  v_contact: 0.5
+  v_stop: 0.05
+  max_events: 10000
+  max_chord_deg: 5.0
+"""
+
+MINIMAL = """\
+name: Minimal
+slope:
+  points: [[0, 10], [10, 0]]
+  materials: rock
+materials:
+  rock: {restitution: 0.3, friction: 0.5}
+rocks:
+  mass: 100
+  release: {x: 0}
+"""
+
+
+def line_of(text: str, needle: str, occurrence: int = 1) -> int:
+    """1-based line of the ``occurrence``-th line containing ``needle``."""
+    hits = [i for i, line in enumerate(text.splitlines(), start=1) if needle in line]
+    assert len(hits) >= occurrence, f"{needle!r} not in text"
+    return hits[occurrence - 1]
+
+
+def edit(old: str, new: str, text: str = EXAMPLE) -> str:
+    assert text.count(old) == 1, f"{old!r} must occur once"
+    return text.replace(old, new)
+
+
+def load_error(text: str) -> ProjectError:
+    with pytest.raises(ProjectError) as info:
+        load_project_text(text, source="p.yaml")
+    message = str(info.value)
+    assert "\n" not in message and "\r" not in message
+    return info.value
+
+
+def assert_error(text: str, line: int | None, key: str, *fragments: str) -> ProjectError:
+    err = load_error(text)
+    prefix = "p.yaml" if line is None else f"p.yaml:{line}"
+    prefix += f": {key}: " if key else ": "
+    assert str(err).startswith(prefix), f"{str(err)!r} does not start with {prefix!r}"
+    for fragment in fragments:
+        assert fragment in err.message, f"{fragment!r} not in {err.message!r}"
+    assert err.line == line and err.key == key and err.file == "p.yaml"
+    return err
+
+
+# --------------------------------------------------------------------------------------
+# Loading and normalisation
+# --------------------------------------------------------------------------------------
+
+
+def test_example_loads_and_normalises():
+    project = load_project_text(EXAMPLE)
+    assert project.name == "Standard slope"
+    assert project.source == "<string>"
+    assert project.slope.points[3] == (80.0, 20.0)
+    assert project.slope.n_segments == 5
+    assert project.slope.materials == ["talus"] * 5
+    talus = project.materials["talus"]
+    assert talus.impact_model == "spang"
+    assert talus.tangential_restitution is None
+    assert talus.scatter.rolling_resistance == 0.02
+    assert talus.roughness_deg == 5.0 and isinstance(talus.roughness_deg, float)
+    rocks = project.rocks
+    assert (rocks.count, rocks.seed, rocks.density) == (1000, 42, 2650.0)
+    assert rocks.size_quantity == "radius"
+    assert rocks.size == SizeSpec(kind="fixed", a=0.5, b=0.5)
+    assert rocks.volume is None and rocks.mass is None
+    assert len(rocks.release) == 1
+    zone = rocks.release[0]
+    assert zone.x == (1.0, 1.0)
+    assert zone.velocity == (0.6, -0.8)
+    assert zone.spin == 0.0 and zone.weight == 1.0
+    assert project.analysis.stations == [80.0]
+    assert project.protect is not None and project.protect.x == 150.0
+    assert project.engine.max_events == 10000
+
+
+def test_defaults_are_filled_in():
+    project = load_project_text(MINIMAL)
+    assert project.description == ""
+    rock = project.materials["rock"]
+    assert rock.impact_model == "spang"
+    assert rock.rolling_resistance == 0.0
+    assert rock.velocity_scaling is False and rock.velocity_scaling_k == 9.144
+    assert rock.scatter.restitution == rock.scatter.friction == 0.0
+    assert project.rocks.count == 1000 and project.rocks.seed == 0
+    assert project.rocks.density == 2650.0
+    assert project.rocks.size_quantity == "mass"
+    zone = project.rocks.release[0]
+    assert (zone.x, zone.height, zone.velocity, zone.spin, zone.weight) == (
+        (0.0, 0.0),
+        0.0,
+        (0.0, 0.0),
+        0.0,
+        1.0,
+    )
+    assert project.analysis.stations == []
+    assert project.analysis.percentiles == [50.0, 95.0, 99.0]
+    assert project.analysis.envelope_points == 201
+    assert project.protect is None
+    engine = project.engine
+    assert (engine.v_contact, engine.v_stop, engine.max_events, engine.max_chord_deg) == (
+        0.5,
+        0.05,
+        10000,
+        5.0,
+    )
+
+
+def test_long_forms_and_distributions():
+    text = edit("  materials: rock\n", "  materials: [rock]\n", MINIMAL)
+    text = edit("  mass: 100\n", "  volume: {lognormal: [0.2, 0.5]}\n", text)
+    text = edit(
+        "  release: {x: 0}\n",
+        "  release:\n  - {x: [0, 5], spin: rolling}\n  - {x: 10, weight: 2}\n",
+        text,
+    )
+    text = edit(
+        "  rock: {restitution: 0.3, friction: 0.5}\n",
+        "  rock: {impact_model: rn_rt, restitution: 0.3, tangential_restitution: 0.8,"
+        " friction: 0.5}\n",
+        text,
+    )
+    project = load_project_text(text)
+    assert project.slope.materials == ["rock"]
+    assert project.rocks.size_quantity == "volume"
+    assert project.rocks.size == SizeSpec(kind="lognormal", a=0.2, b=0.5)
+    assert [z.x for z in project.rocks.release] == [(0.0, 5.0), (10.0, 10.0)]
+    assert project.rocks.release[0].spin == "rolling"
+    assert project.materials["rock"].tangential_restitution == 0.8
+    again = load_project_text(yaml.safe_dump(project.resolved_dict()))
+    assert again.resolved_dict() == project.resolved_dict()
+
+
+@pytest.mark.parametrize(
+    ("size", "expected"),
+    [
+        ("2.5", SizeSpec(kind="fixed", a=2.5, b=2.5)),
+        ("{uniform: [0.2, 0.4]}", SizeSpec(kind="uniform", a=0.2, b=0.4)),
+        ("{normal: [0.5, 0]}", SizeSpec(kind="normal", a=0.5, b=0.0)),
+    ],
+)
+def test_size_forms(size, expected):
+    project = load_project_text(edit("  mass: 100\n", f"  radius: {size}\n", MINIMAL))
+    assert project.rocks.radius == expected
+    assert project.rocks.size == expected
+
+
+def test_per_segment_materials():
+    text = edit("  materials: talus\n", "  materials: [talus, talus, scree, talus, scree]\n")
+    text = edit(
+        "materials:\n  talus:\n",
+        "materials:\n  scree: {restitution: 0.2, friction: 0.7}\n  talus:\n",
+        text,
+    )
+    project = load_project_text(text)
+    assert project.slope.materials == ["talus", "talus", "scree", "talus", "scree"]
+
+
+def test_empty_optional_sections_mean_defaults():
+    project = load_project_text(MINIMAL + "analysis:\nengine:\nprotect:\n")
+    assert project.analysis.percentiles == [50.0, 95.0, 99.0]
+    assert project.engine.v_stop == 0.05
+    assert project.protect is None
+
+
+def test_scientific_notation_and_dates():
+    text = edit("  mass: 100\n", "  mass: 1e2\n", MINIMAL)
+    text = edit("name: Minimal\n", "name: 2024-05-01\n", text)
+    project = load_project_text(text)
+    assert project.rocks.mass == SizeSpec(kind="fixed", a=100.0, b=100.0)
+    assert project.name == "2024-05-01"
+
+
+def test_yaml_merge_keys_are_supported():
+    text = edit(
+        "materials:\n  rock: {restitution: 0.3, friction: 0.5}\n",
+        "materials:\n  base: &base {restitution: 0.3, friction: 0.5}\n"
+        "  rock:\n    <<: *base\n    friction: 0.6\n",
+        MINIMAL,
+    )
+    project = load_project_text(text)
+    assert project.materials["rock"].friction == 0.6
+    assert project.materials["rock"].restitution == 0.3
+    bad = edit("    friction: 0.6\n", "    friction: 0.6\n    restitution: 2\n", text)
+    assert_error(bad, line_of(bad, "restitution: 2"), "materials.rock.restitution", "<= 1")
+
+
+def test_load_project_from_file(tmp_path):
+    path = tmp_path / "project.yaml"
+    path.write_text(EXAMPLE, encoding="utf-8")
+    project = load_project(path)
+    assert project.source == str(path)
+    assert project.resolved_dict() == load_project_text(EXAMPLE).resolved_dict()
+
+
+def test_missing_file_names_the_file(tmp_path):
+    path = tmp_path / "nope.yaml"
+    with pytest.raises(ProjectError) as info:
+        load_project(path)
+    assert str(info.value).startswith(f"{path}: cannot read file")
+    assert info.value.exit_code == ExitCode.BAD_INPUT
+
+
+def test_file_error_locations(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(edit("  density: 2650\n", "  density: 0\n"), encoding="utf-8")
+    with pytest.raises(ProjectError) as info:
+        load_project(str(path))
+    assert str(info.value).startswith(f"{path}:{line_of(EXAMPLE, 'density')}: rocks.density: ")
+
+
+def test_json_schema_is_available():
+    schema = Project.model_json_schema()
+    json.dumps(schema)
+    assert "rocks" in schema["properties"]
+
+
+# --------------------------------------------------------------------------------------
+# Reproducibility record
+# --------------------------------------------------------------------------------------
+
+
+def test_resolved_dict_round_trips_through_yaml():
+    resolved = load_project_text(EXAMPLE).resolved_dict()
+    json.dumps(resolved, allow_nan=False)
+    again = load_project_text(yaml.safe_dump(resolved, sort_keys=False))
+    assert again.resolved_dict() == resolved
+
+
+def test_resolved_hash_is_stable_and_sensitive():
+    first = load_project_text(EXAMPLE).resolved_hash()
+    assert len(first) == 64 and int(first, 16) >= 0
+    assert load_project_text(EXAMPLE).resolved_hash() == first
+    # the same project written differently (defaults spelt out or not, 1 vs 1.0)
+    spelt = edit("  density: 2650\n", "  density: 2650.0\n")
+    assert load_project_text(spelt).resolved_hash() == first
+    resolved = load_project_text(EXAMPLE).resolved_dict()
+    assert load_project_text(yaml.safe_dump(resolved)).resolved_hash() == first
+    changed = edit("  seed: 42\n", "  seed: 43\n")
+    assert load_project_text(changed).resolved_hash() != first
+
+
+# --------------------------------------------------------------------------------------
+# Errors: one line, with file, line and key path
+# --------------------------------------------------------------------------------------
+
+
+def test_project_error_format():
+    err = ProjectError("a.yaml", 3, "rocks.count", "bad\nthing")
+    assert str(err) == "a.yaml:3: rocks.count: bad thing"
+    assert str(ProjectError("a.yaml", None, "", "empty")) == "a.yaml: empty"
+    assert str(ProjectError("a.yaml", 7, "", "broken")) == "a.yaml:7: broken"
+    assert isinstance(err, InputError) and isinstance(err, RockfallError)
+    assert err.exit_code == ExitCode.BAD_INPUT == 2
+    copy_ = pickle.loads(pickle.dumps(err))
+    assert str(copy_) == str(err) and copy_.line == 3
+
+
+def test_exit_codes():
+    assert [int(c) for c in ExitCode] == [0, 1, 2, 3, 130]
+    assert RockfallError("x", exit_code=ExitCode.PLUGIN_FAULT).exit_code == 3
+
+
+def test_malformed_yaml():
+    text = edit("  seed: 42\n", "  seed: [42\n")
+    err = assert_error(text, line_of(text, "density"), "", "invalid YAML", "column")
+    assert err.key == ""
+
+
+def test_malformed_yaml_bad_indentation():
+    text = edit("  count: 1000\n", "   count: 1000\n")
+    err = load_error(text)
+    assert err.line in (line_of(text, "count"), line_of(text, "seed")) and "invalid YAML" in str(
+        err
+    )
+
+
+def test_empty_file_and_non_mapping():
+    assert_error("", 1, "", "empty")
+    assert_error("# just a comment\n", 1, "", "empty")
+    assert_error("- a\n- b\n", 1, "", "expected a mapping")
+
+
+def test_unknown_key_did_you_mean():
+    text = edit("  radius: 0.5\n", "  radus: 0.5\n")
+    assert_error(
+        text, line_of(text, "radus"), "rocks.radus", "unknown key 'radus'", "did you mean 'radius'?"
+    )
+
+
+def test_unknown_top_level_key():
+    text = EXAMPLE + "protection:\n  x: 3\n"
+    assert_error(text, line_of(text, "protection"), "protection", "did you mean 'protect'?")
+
+
+def test_unknown_key_without_close_match():
+    text = edit("    roughness_deg: 5\n", "    roughness_deg: 5\n    zzz: 1\n")
+    assert_error(
+        text, line_of(text, "zzz"), "materials.talus.zzz", "unknown key 'zzz'", "expected one of"
+    )
+
+
+def test_wrong_type_string_for_number():
+    text = edit("    restitution: 0.35\n", '    restitution: "0.5"\n')
+    assert_error(
+        text,
+        line_of(text, '"0.5"'),
+        "materials.talus.restitution",
+        "expected a number",
+        "string '0.5'",
+    )
+
+
+def test_wrong_type_list_for_mapping():
+    text = edit("  x: 150\n", "  x: [150, 160]\n")
+    assert_error(text, line_of(text, "[150, 160]"), "protect.x", "expected a number")
+
+
+def test_wrong_type_section():
+    text = edit("protect:\n  x: 150\n", "protect: 150\n")
+    assert_error(text, line_of(text, "protect: 150"), "protect", "expected a mapping")
+
+
+def test_bool_for_number():
+    text = edit("  density: 2650\n", "  density: true\n")
+    assert_error(text, line_of(text, "density"), "rocks.density", "expected a number", "boolean")
+
+
+def test_number_for_bool():
+    text = edit("    velocity_scaling: false\n", "    velocity_scaling: 0\n")
+    assert_error(
+        text,
+        line_of(text, "velocity_scaling:"),
+        "materials.talus.velocity_scaling",
+        "expected true or false",
+    )
+
+
+def test_missing_required_key():
+    text = edit("    friction: 0.58\n", "")
+    assert_error(text, line_of(text, "  talus:"), "materials.talus.friction", "missing")
+
+
+def test_missing_top_level_key():
+    text = edit("name: Standard slope\n", "")
+    assert_error(text, 1, "name", "missing")
+
+
+@pytest.mark.parametrize("value", ["-1", "0"])
+def test_non_positive_radius(value):
+    text = edit("  radius: 0.5\n", f"  radius: {value}\n")
+    assert_error(
+        text, line_of(text, "radius"), "rocks.radius", f"expected a number > 0, got {value}"
+    )
+
+
+def test_bad_uniform_distribution():
+    text = edit("  radius: 0.5\n", "  radius: {uniform: [0.5, 0.2]}\n")
+    assert_error(text, line_of(text, "radius"), "rocks.radius.uniform", "min <= max")
+
+
+def test_unknown_distribution():
+    text = edit("  radius: 0.5\n", "  radius: {lognormall: [0.5, 0.2]}\n")
+    assert_error(
+        text, line_of(text, "radius"), "rocks.radius.lognormall", "did you mean 'lognormal'?"
+    )
+
+
+def test_zero_density():
+    text = edit("  density: 2650\n", "  density: 0\n")
+    assert_error(text, line_of(text, "density"), "rocks.density", "expected a number > 0, got 0")
+
+
+def test_zero_count():
+    text = edit("  count: 1000\n", "  count: 0\n")
+    assert_error(text, line_of(text, "count"), "rocks.count", "expected an integer >= 1, got 0")
+
+
+def test_fractional_count():
+    text = edit("  count: 1000\n", "  count: 10.5\n")
+    assert_error(text, line_of(text, "count"), "rocks.count", "expected an integer")
+
+
+def test_restitution_above_one():
+    text = edit("    restitution: 0.35\n", "    restitution: 1.2\n")
+    assert_error(
+        text,
+        line_of(text, "restitution: 1.2"),
+        "materials.talus.restitution",
+        "expected a number <= 1, got 1.2",
+    )
+
+
+def test_negative_friction():
+    text = edit("    friction: 0.58\n", "    friction: -0.1\n")
+    assert_error(
+        text,
+        line_of(text, "friction: -0.1"),
+        "materials.talus.friction",
+        "expected a number >= 0, got -0.1",
+    )
+
+
+def test_bad_impact_model():
+    text = edit("    impact_model: spang\n", "    impact_model: spnag\n")
+    assert_error(
+        text,
+        line_of(text, "impact_model"),
+        "materials.talus.impact_model",
+        "expected one of spang, rn_rt",
+        "did you mean 'spang'?",
+    )
+
+
+def test_x_not_strictly_increasing():
+    text = edit("[80, 20]", "[60, 20]")
+    assert_error(text, line_of(text, "points:"), "slope.points[3]", "strictly")
+
+
+def test_x_not_strictly_increasing_block_style():
+    text = edit(
+        "  points: [[0, 100], [30, 60], [60, 30], [80, 20], [120, 15], [200, 12]]\n",
+        "  points:\n  - [0, 100]\n  - [30, 60]\n  - [20, 30]\n  - [200, 12]\n",
+    )
+    assert_error(text, line_of(text, "[20, 30]"), "slope.points[2]", "strictly")
+
+
+def test_fewer_than_two_points():
+    text = edit(
+        "  points: [[0, 100], [30, 60], [60, 30], [80, 20], [120, 15], [200, 12]]\n",
+        "  points: [[0, 100]]\n",
+    )
+    assert_error(text, line_of(text, "points:"), "slope.points", "at least 2 points, got 1")
+
+
+def test_bad_point():
+    text = edit("[30, 60]", "[30, 60, 1]")
+    assert_error(text, line_of(text, "points:"), "slope.points[1]", "expected a pair [x, y]")
+
+
+def test_material_count_mismatch():
+    text = edit("  materials: talus\n", "  materials: [talus, talus]\n")
+    assert_error(
+        text,
+        line_of(text, "materials: [talus"),
+        "slope.materials",
+        "one material name per segment (5)",
+    )
+
+
+def test_undefined_material_did_you_mean():
+    text = edit("  materials: talus\n", "  materials: talos\n")
+    assert_error(
+        text,
+        line_of(text, "materials: talos"),
+        "slope.materials",
+        "undefined material 'talos'",
+        "did you mean 'talus'?",
+    )
+
+
+def test_undefined_material_in_list():
+    text = edit(
+        "  materials: talus\n",
+        "  materials:\n  - talus\n  - talus\n  - scree\n  - talus\n  - talus\n",
+    )
+    assert_error(
+        text,
+        line_of(text, "- scree"),
+        "slope.materials[2]",
+        "undefined material 'scree'",
+        "defined: talus",
+    )
+
+
+def test_release_outside_the_section():
+    text = edit("    x: 1\n", "    x: [150, 250]\n")
+    assert_error(
+        text,
+        line_of(text, "x: [150, 250]"),
+        "rocks.release.x",
+        "outside the slope section [0, 200]",
+    )
+
+
+def test_second_release_zone_outside_the_section():
+    text = edit(
+        "  release: {x: 0}\n",
+        "  release:\n  - x: 0\n  - x: 5\n  - x: -3\n    weight: 2\n",
+        MINIMAL,
+    )
+    assert_error(text, line_of(text, "x: -3"), "rocks.release[2].x", "outside")
+
+
+def test_release_range_reversed():
+    text = edit("    x: 1\n", "    x: [5, 1]\n")
+    assert_error(text, line_of(text, "x: [5, 1]"), "rocks.release.x", "min <= max")
+
+
+def test_station_outside_the_section():
+    text = edit("  stations: [80]\n", "  stations: [80, 201]\n")
+    assert_error(
+        text, line_of(text, "stations"), "analysis.stations[1]", "station x 201 is outside"
+    )
+
+
+def test_protect_outside_the_section():
+    text = edit("  x: 150\n", "  x: -5\n")
+    assert_error(text, line_of(text, "x: -5"), "protect.x", "outside")
+
+
+@pytest.mark.parametrize("value", [".nan", ".inf", "-.inf", ".NaN"])
+def test_nan_and_inf_rejected(value):
+    text = edit("  v_stop: 0.05\n", f"  v_stop: {value}\n")
+    assert_error(text, line_of(text, "v_stop"), "engine.v_stop", "must be finite")
+
+
+def test_nan_in_a_list():
+    text = edit("[120, 15]", "[120, .nan]")
+    assert_error(text, line_of(text, "points"), "slope.points[4][1]", "must be finite")
+
+
+def test_duplicate_keys():
+    text = edit("  seed: 42\n", "  seed: 42\n  count: 5\n")
+    err = assert_error(text, line_of(text, "count", 2), "rocks.count", "duplicate key 'count'")
+    assert f"line {line_of(text, 'count')}" in err.message
+
+
+def test_duplicate_material_names():
+    text = edit("rocks:\n", "  talus: {restitution: 0.1, friction: 0.2}\nrocks:\n")
+    assert_error(text, line_of(text, "  talus:", 2), "materials.talus", "duplicate key")
+
+
+def test_rn_rt_without_tangential_restitution():
+    text = edit("    impact_model: spang\n", "    impact_model: rn_rt\n")
+    assert_error(
+        text,
+        line_of(text, "  talus:"),
+        "materials.talus.tangential_restitution",
+        "required for impact_model rn_rt",
+    )
+
+
+def test_tangential_restitution_rejected_for_spang():
+    text = edit("    friction: 0.58\n", "    friction: 0.58\n    tangential_restitution: 0.8\n")
+    assert_error(
+        text,
+        line_of(text, "tangential_restitution"),
+        "materials.talus.tangential_restitution",
+        "only for impact_model rn_rt",
+    )
+
+
+def test_two_of_radius_volume_mass():
+    text = edit("  radius: 0.5\n", "  radius: 0.5\n  mass: 300\n")
+    assert_error(
+        text,
+        line_of(text, "mass: 300"),
+        "rocks.mass",
+        "only one of radius, volume, mass",
+        "radius and mass",
+    )
+
+
+def test_none_of_radius_volume_mass():
+    text = edit("  radius: 0.5\n", "")
+    assert_error(text, line_of(text, "rocks:"), "rocks.radius", "one of radius")
+
+
+def test_bad_spin():
+    text = edit("    spin: 0\n", "    spin: rollin\n")
+    assert_error(text, line_of(text, "spin"), "rocks.release.spin", "'rolling'")
+
+
+def test_percentile_out_of_range():
+    text = edit("  percentiles: [50, 95, 99]\n", "  percentiles: [50, 100]\n")
+    assert_error(text, line_of(text, "percentiles"), "analysis.percentiles[1]", "< 100")
+
+
+def test_bad_scalar_tag_is_a_yaml_error():
+    text = edit("  seed: 42\n", "  seed: !!int abc\n")
+    assert_error(text, line_of(text, "seed"), "", "invalid YAML")
+
+
+def test_earliest_problem_in_the_file_is_reported():
+    text = edit("  density: 2650\n", "  density: -1\n")
+    text = edit("    restitution: 0.35\n", "    restitution: 7\n", text)
+    assert_error(text, line_of(text, "restitution: 7"), "materials.talus.restitution")
+
+
+def test_recursive_alias():
+    text = edit("  stations: [80]\n", "  stations: &a [80, *a]\n")
+    assert_error(text, line_of(text, "stations"), "analysis.stations[1]", "recursive")
+
+
+# --------------------------------------------------------------------------------------
+# Fuzzing: any input gives a Project or a one-line ProjectError
+# --------------------------------------------------------------------------------------
+
+EXAMPLE_DATA = yaml.safe_load(EXAMPLE)
+
+junk = st.one_of(
+    st.none(),
+    st.booleans(),
+    st.integers(min_value=-(10**6), max_value=10**6),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.sampled_from([-1, -0.5, 0, 1e308, "rolling", "0.5", "", "talus", "uniform"]),
+    st.text(max_size=12),
+    st.lists(st.one_of(st.integers(-3, 300), st.floats(), st.text(max_size=3)), max_size=4),
+    st.dictionaries(
+        st.one_of(
+            st.sampled_from(["uniform", "normal", "x", "radius", "talus"]), st.text(max_size=5)
+        ),
+        st.one_of(st.integers(-3, 300), st.lists(st.floats(), max_size=3), st.none()),
+        max_size=3,
+    ),
+)
+
+
+def _paths(node, prefix=()):
+    yield prefix
+    if isinstance(node, dict):
+        for key, value in node.items():
+            yield from _paths(value, prefix + (key,))
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            yield from _paths(value, prefix + (i,))
+
+
+ALL_PATHS = [p for p in _paths(EXAMPLE_DATA) if p]
+
+
+@st.composite
+def mutated_projects(draw):
+    data = copy.deepcopy(EXAMPLE_DATA)
+    for _ in range(draw(st.integers(min_value=1, max_value=3))):
+        path = draw(st.sampled_from(ALL_PATHS))
+        parent = data
+        try:
+            for key in path[:-1]:
+                parent = parent[key]
+            parent[path[-1]]
+        except (KeyError, IndexError, TypeError):
+            continue  # an earlier mutation removed or replaced this path
+        if draw(st.booleans()) and isinstance(parent, dict):
+            del parent[path[-1]]
+        else:
+            parent[path[-1]] = draw(junk)
+    return data
+
+
+def _check_one(text: str) -> None:
+    try:
+        project = load_project_text(text, source="fuzz.yaml")
+    except ProjectError as err:
+        message = str(err)
+        assert "\n" not in message and "\r" not in message
+        assert message.startswith("fuzz.yaml")
+    else:
+        assert isinstance(project, Project)
+        resolved = project.resolved_dict()
+        json.dumps(resolved, allow_nan=False)
+        assert load_project_text(yaml.safe_dump(resolved)).resolved_dict() == resolved
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(mutated_projects())
+def test_mutated_projects_fail_cleanly(data):
+    _check_one(yaml.safe_dump(data, sort_keys=False))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.text(max_size=200))
+def test_arbitrary_text_fails_cleanly(text):
+    _check_one(text)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.data())
+def test_mutated_text_fails_cleanly(data):
+    lines = EXAMPLE.splitlines(keepends=True)
+    i = data.draw(st.integers(min_value=0, max_value=len(lines) - 1))
+    lines[i] = data.draw(st.sampled_from(["", "  ", "\t", "- ", ": ", "{", "]", "&a", "*a"]))
+    _check_one("".join(lines))
