@@ -701,6 +701,8 @@ def mutated_projects(draw):
             parent[path[-1]]
         except (KeyError, IndexError, TypeError):
             continue  # an earlier mutation removed or replaced this path
+        if not isinstance(parent, dict | list):
+            continue  # an earlier mutation put a scalar (e.g. a string) here
         if draw(st.booleans()) and isinstance(parent, dict):
             del parent[path[-1]]
         else:
