@@ -1,4 +1,9 @@
-"""rockfall-design: rockfall trajectories and the least-cost design of protection."""
+"""rockfall-design: rockfall trajectories and the least-cost design of protection.
+
+The public API for plugin authors is what this module exports: the hook
+marker, the contracts of measures, safety concepts and cost models, and the
+plain data they exchange with the program.
+"""
 
 from importlib.metadata import PackageNotFoundError, version
 
@@ -7,4 +12,32 @@ try:
 except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0+unknown"
 
-__all__ = ["__version__"]
+from .costs import CostModel, CostParams
+from .hookspecs import hookimpl
+from .measures import (
+    Barrier,
+    BarrierBehaviour,
+    MeasureParams,
+    MeasureResult,
+    Outcome,
+    ProfileEdit,
+    ProtectiveMeasure,
+)
+from .safety import Check, SafetyConcept, SafetyParams
+
+__all__ = [
+    "__version__",
+    "hookimpl",
+    "Barrier",
+    "BarrierBehaviour",
+    "Check",
+    "CostModel",
+    "CostParams",
+    "MeasureParams",
+    "MeasureResult",
+    "Outcome",
+    "ProfileEdit",
+    "ProtectiveMeasure",
+    "SafetyConcept",
+    "SafetyParams",
+]

@@ -59,6 +59,12 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
                    help="print one JSON object on stdout instead of the report")
 
 
+def _add_block_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--block", action="append", default=[], metavar="NAME",
+                   help="do not load the plugin with this entry-point or distribution "
+                   "name (repeatable)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog=PROG, description="Rockfall trajectories and protection design.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
@@ -71,6 +77,27 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_run_options(sim)
     sim.set_defaults(func=cmd_simulate)
+    chk = sub.add_parser(
+        "check",
+        help="check the protective measures of a project against its safety concept",
+        description="Run the project's rocks against its measures: per measure how many "
+        "rocks it met, caught, let over or through, its safety factors against their "
+        "targets, and how many rocks still reach the protected zone. Exit code 0 when "
+        "every check holds, 1 when one fails.",
+    )
+    _add_run_options(chk)
+    _add_block_option(chk)
+    chk.set_defaults(func=cmd_check)
+    plg = sub.add_parser(
+        "plugins",
+        help="list the measures, safety concepts and cost models of the installed plugins",
+        description="List what the installed plugins provide, which distribution provides "
+        "each name, and every plugin that failed to load (with the reason).",
+    )
+    plg.add_argument("--json", action="store_true",
+                     help="print one JSON object on stdout instead of tables")
+    _add_block_option(plg)
+    plg.set_defaults(func=cmd_plugins)
     return parser
 
 
@@ -109,24 +136,31 @@ def _progress(console_needed: bool, total: int):
     return prog, (lambda done: prog.update(task, completed=done))
 
 
+def _run(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:
+    """Call ``run(project, rocks=..., seed=..., ...)`` with a progress bar if interactive."""
+    n = args.rocks or project.rocks.count
+    _memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
+                  len(project.analysis.stations))
+    kw.update(rocks=n, seed=args.seed, n_trajectories=60 if args.plot else 0)
+    prog, callback = _progress(sys.stderr.isatty() and n >= 20_000, n)
+    if prog is None:
+        return run(project, **kw)
+    with prog:
+        return run(project, progress=callback, **kw)
+
+
+def _warn_failures(registry: Any) -> None:
+    for f in registry.failures:
+        sys.stderr.write(f"{PROG}: warning: plugin {f.plugin!r} was not loaded: {f.reason}\n")
+
+
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .outputs import write_csv, write_json
     from .project import load_project
     from .simulation import run_study
 
     project = load_project(args.project)
-    n = args.rocks or project.rocks.count
-    _memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
-                  len(project.analysis.stations))
-    interactive = sys.stderr.isatty() and n >= 20_000
-    prog, callback = _progress(interactive, n)
-    if prog is not None:
-        with prog:
-            study = run_study(project, rocks=n, seed=args.seed, progress=callback,
-                              n_trajectories=60 if args.plot else 0)
-    else:
-        study = run_study(project, rocks=n, seed=args.seed,
-                          n_trajectories=60 if args.plot else 0)
+    study = _run(run_study, project, args)
     summary = study.summary()
     if args.out:
         out: Path = args.out
@@ -143,6 +177,57 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         from .report import print_simulation
 
         print_simulation(summary)
+    return int(ExitCode.OK)
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    """Evaluate the project's measures; exit 0 if every check holds, else 1."""
+    from .evaluate import evaluate
+    from .outputs import write_csv, write_json
+    from .plugins import load_registry
+    from .project import load_project
+
+    project = load_project(args.project)
+    registry = load_registry(blocked=args.block)
+    _warn_failures(registry)
+    evaluation = _run(evaluate, project, args, registry=registry)
+    summary = evaluation.summary()
+    study = evaluation.study
+    if args.out:
+        out: Path = args.out
+        rocks = study.rocks_table()
+        rocks["caught_by_measure"] = evaluation.caught_by_measure()
+        write_csv(out / "rocks.csv", rocks)
+        write_csv(out / "crossings.csv", study.crossings_table())
+        write_csv(out / "measures.csv", evaluation.outcomes_table())
+        record = run_record(study, args)
+        record["project"] = evaluation.resolved_project().resolved_dict()
+        record["project_hash"] = evaluation.resolved_project().resolved_hash()
+        write_json(out / "summary.json", {**summary, "run": record})
+    if args.plot:
+        from .report import plot_study
+
+        plot_study(study, args.plot, evaluation)
+    if args.json:
+        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
+    else:
+        from .report import print_check
+
+        print_check(summary)
+    return int(ExitCode.OK if evaluation.ok else ExitCode.CHECK_FAILED)
+
+
+def cmd_plugins(args: argparse.Namespace) -> int:
+    """List the plugins; exit 0 even if some failed (they are listed), 3 on duplicates."""
+    from .plugins import load_registry, plugins_json, plugins_table
+
+    registry = load_registry(blocked=args.block)  # PluginError -> exit 3 in main()
+    if args.json:
+        sys.stdout.write(json.dumps(plugins_json(registry), allow_nan=False) + "\n")
+    else:
+        from rich.console import Console
+
+        Console().print(plugins_table(registry))
     return int(ExitCode.OK)
 
 

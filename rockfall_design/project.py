@@ -10,6 +10,13 @@ Loading is strict and reports the first problem as one line,
 - cross-field rules (materials used by the slope are defined, release zones,
   stations and the protection lie on the section, ...) name the key involved.
 
+The plugin sections ``measures:`` (a list of mappings, each with a string
+``type``) and ``safety:`` (a mapping with a string ``concept``, default
+``spang``) are kept raw, as plain data with finite numbers: the plugins that
+own them are loaded later, and their parameters are validated then with
+:meth:`Project.validate_params`, which locates problems in the file as the
+core sections do (:meth:`Project.error_at`, :meth:`Project.unknown_name`).
+
 Normalisation (what the models hold, whatever short form the file used):
 
 - ``slope.materials`` is always a list with one material name per segment;
@@ -27,15 +34,18 @@ Units are SI throughout: m, m/s, rad/s, kg, m3, kg/m3; angles in degrees
 where the key says ``_deg``.
 """
 
+import copy
 import difflib
 import hashlib
 import json
 import math
 import os
 import re
-from collections.abc import Callable
+import types
+import typing
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Union
 
 import yaml
 from pydantic import (
@@ -600,6 +610,10 @@ class Protect(_Model):
     """Where the protection is to be placed."""
 
     x: Number = Field(description="Position of the protective measure along the section (m).")
+    allowed_fraction: Fraction = Field(
+        0.0,
+        description="Fraction of the rocks allowed to reach the protected zone (-), 0..1.",
+    )
 
 
 class EngineConfig(_Model):
@@ -615,6 +629,93 @@ class EngineConfig(_Model):
     max_chord_deg: Annotated[Positive, Field(le=30.0)] = Field(
         5.0, description="Maximum angle (deg) between trajectory chords and the arc."
     )
+
+
+# --------------------------------------------------------------------------------------
+# Plugin sections: measures and safety, kept raw until the plugins are loaded
+# --------------------------------------------------------------------------------------
+
+
+def _raw(value: Any, subpath: tuple = ()) -> Any:
+    """Plain YAML data for a plugin, checked and copied.
+
+    Accepts null, booleans, strings, integers, finite floats, lists and
+    mappings with string keys (recursively); NaN and infinities, non-string
+    keys and other YAML types (``!!binary``, ``!!set``) are rejected at the
+    offending node.
+    """
+    if value is None or isinstance(value, bool | str | int):
+        return value
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise _fail(f"must be finite, got {_fmt(value)}", subpath)
+        return value
+    if isinstance(value, list | tuple):
+        return [_raw(item, subpath + (i,)) for i, item in enumerate(value)]
+    if isinstance(value, dict):
+        copied = {}
+        for key, item in value.items():
+            if not isinstance(key, str):
+                raise _fail(f"keys must be names, got {_describe(key)}", subpath + (key,))
+            copied[key] = _raw(item, subpath + (key,))
+        return copied
+    raise _fail(f"unsupported value: {_describe(value)}", subpath)
+
+
+def _parse_measures(value: Any) -> list[dict[str, Any]]:
+    """``measures:``: a list of mappings, each with a non-empty string ``type``."""
+    if value is None:
+        return []
+    if not isinstance(value, list | tuple):
+        raise _fail(f"expected a list of measures (mappings with a type), got {_describe(value)}")
+    measures = []
+    for i, item in enumerate(value):
+        if not isinstance(item, dict):
+            raise _fail(
+                f"expected a measure (a mapping such as {{type: fence, x: 70, ...}}), "
+                f"got {_describe(item)}",
+                (i,),
+            )
+        if "type" not in item:
+            raise _fail("required key 'type' is missing (the kind of measure, e.g. fence)", (i,))
+        kind = item["type"]
+        if not isinstance(kind, str):
+            raise _fail(f"expected the name of a measure type, got {_describe(kind)}", (i, "type"))
+        if not kind.strip():
+            raise _fail("must not be empty (the kind of measure, e.g. fence)", (i, "type"))
+        measures.append(_raw(item, (i,)))
+    return measures
+
+
+_DEFAULT_CONCEPT = "spang"
+
+
+def _parse_safety(value: Any) -> dict[str, Any]:
+    """``safety:``: a mapping with a string ``concept`` (default spang), listed first."""
+    if value is None:
+        return {"concept": _DEFAULT_CONCEPT}
+    if not isinstance(value, dict):
+        raise _fail(
+            f"expected a mapping (concept: NAME and its parameters), got {_describe(value)}"
+        )
+    concept = value.get("concept", _DEFAULT_CONCEPT)
+    if not isinstance(concept, str):
+        raise _fail(
+            f"expected the name of a safety concept, got {_describe(concept)}", ("concept",)
+        )
+    if not concept.strip():
+        raise _fail("must not be empty (the name of a safety concept, e.g. spang)", ("concept",))
+    rest = _raw({k: v for k, v in value.items() if k != "concept"})
+    return {"concept": concept, **rest}
+
+
+def _plain_copy(value: Any, what: str) -> Any:
+    """:func:`_raw` for data a program passes in: problems are a ValueError (a bug)."""
+    try:
+        return _raw(value)
+    except PydanticCustomError as exc:
+        where = "".join(f"[{p!r}]" for p in (exc.context or {}).get("subpath", ()))
+        raise ValueError(f"{what}{where}: {exc.message()}") from None
 
 
 class Project(_Model):
@@ -640,8 +741,23 @@ class Project(_Model):
     engine: Annotated[EngineConfig, BeforeValidator(_none_as_empty)] = Field(
         default_factory=EngineConfig, description="Advanced numerical parameters."
     )
+    measures: Annotated[list[dict[str, Any]], BeforeValidator(_parse_measures)] = Field(
+        default_factory=list,
+        description="Protective measures: mappings with a 'type' (the measure plugin's kind) "
+        "and that plugin's parameters. Kept raw here; each plugin validates its own "
+        "(see Project.validate_params).",
+    )
+    safety: Annotated[dict[str, Any], BeforeValidator(_parse_safety)] = Field(
+        default_factory=lambda: {"concept": _DEFAULT_CONCEPT},
+        description="Safety concept: 'concept' (a name, default spang) and that concept's "
+        "parameters. Kept raw here; the concept plugin validates them.",
+    )
 
     _source: str = PrivateAttr(default="<string>")
+    #: key path -> (line, node kind) of the file the project was loaded from
+    _lines: dict = PrivateAttr(default_factory=dict)
+    #: (measures, safety) as resolved by the plugins, for resolved_dict
+    _resolved_plugins: tuple | None = PrivateAttr(default=None)
 
     @property
     def source(self) -> str:
@@ -688,8 +804,17 @@ class Project(_Model):
         gives a valid project file that loads to the same resolved dict.
         Unset optional values (``protect``, the two unused of
         radius/volume/mass, ``tangential_restitution`` for spang) are ``None``.
+
+        ``measures`` and ``safety`` are as given in the file (``safety`` with
+        its ``concept`` filled in), or, on a project returned by
+        :meth:`with_resolved_plugins`, the plugin-validated values passed there.
         """
-        return self.model_dump(mode="json")
+        data = self.model_dump(mode="json")
+        if self._resolved_plugins is not None:
+            measures, safety = self._resolved_plugins
+            data["measures"] = copy.deepcopy(measures)
+            data["safety"] = copy.deepcopy(safety)
+        return data
 
     def resolved_hash(self) -> str:
         """sha256 (hex) of the canonical JSON of :meth:`resolved_dict` (sorted keys)."""
@@ -701,6 +826,175 @@ class Project(_Model):
             allow_nan=False,
         )
         return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+    def with_resolved_plugins(
+        self, measures: Sequence[Mapping[str, Any]], safety: Mapping[str, Any]
+    ) -> "Project":
+        """A copy whose :meth:`resolved_dict` (and hash) hold the plugin-resolved values.
+
+        The evaluator calls this once the plugins have validated the raw
+        ``measures`` and ``safety`` sections, so the reproducibility record
+        shows every plugin default too. The copy's :attr:`measures` and
+        :attr:`safety` stay as given in the file (and its error locations
+        those of the file).
+
+        Parameters
+        ----------
+        measures
+            One mapping per measure, in the order of :attr:`measures`, each
+            with its ``type`` and every parameter (defaults included).
+        safety
+            The safety section with its ``concept`` and every parameter.
+
+        Raises
+        ------
+        ValueError
+            If the data is not plain JSON-like data with finite numbers, a
+            measure has no string ``type`` or the safety section no string
+            ``concept`` (a bug of the caller, not a user error).
+        """
+        resolved_measures = _plain_copy(list(measures), "measures")
+        if len(resolved_measures) != len(self.measures):
+            raise ValueError(
+                f"expected {len(self.measures)} resolved measure(s), got {len(resolved_measures)}"
+            )
+        for i, item in enumerate(resolved_measures):
+            if not isinstance(item, dict) or not isinstance(item.get("type"), str):
+                raise ValueError(f"measures[{i}]: expected a mapping with a string 'type'")
+        resolved_safety = _plain_copy(dict(safety), "safety")
+        if not isinstance(resolved_safety.get("concept"), str):
+            raise ValueError("safety: expected a mapping with a string 'concept'")
+        resolved_safety = {"concept": resolved_safety.pop("concept"), **resolved_safety}
+        project = self.model_copy()
+        project._resolved_plugins = (resolved_measures, resolved_safety)
+        return project
+
+    # ----------------------------------------------------------------------------------
+    # Errors located in the file, for the code that validates the plugin sections
+    # ----------------------------------------------------------------------------------
+
+    def error_at(self, path: Sequence[str | int], message: str) -> ProjectError:
+        """A :class:`ProjectError` located at a key path of the project file.
+
+        Parameters
+        ----------
+        path
+            Key path as in the data, e.g. ``("measures", 1, "width")``.
+        message
+            What is wrong (one line; newlines are collapsed).
+
+        Returns
+        -------
+        ProjectError
+            ``file:line: measures[1].width: message``, with the line of that
+            node or, if it is not in the file (a missing key), of its nearest
+            existing ancestor. The line is None for a project not loaded from
+            text.
+        """
+        path = _yaml_path(tuple(path), self._lines)
+        return ProjectError(
+            self._source, _line_of(path, self._lines), _key_text(path, self._lines), message
+        )
+
+    def unknown_name(
+        self, path: Sequence[str | int], name: Any, candidates: Iterable[str], what: str
+    ) -> ProjectError:
+        """A :class:`ProjectError` for an unknown plugin name, with "did you mean".
+
+        Parameters
+        ----------
+        path
+            Key path of the name, e.g. ``("measures", 2, "type")``.
+        name
+            The name given.
+        candidates
+            The names available, listed in the given order.
+        what
+            What the name is, e.g. ``"measure type"`` or ``"safety concept"``.
+
+        Returns
+        -------
+        ProjectError
+            e.g. ``p.yaml:12: measures[2].type: unknown measure type 'fense';
+            did you mean 'fence'? (available: berm, ditch, fence, wall, boulder_row)``.
+        """
+        names = [str(c) for c in candidates]
+        hint = _did_you_mean(name, names) if isinstance(name, str) else ""
+        available = f" (available: {', '.join(names)})" if names else " (none available)"
+        return self.error_at(path, f"unknown {what} {name!r}{hint}{available}")
+
+    def validate_params(
+        self,
+        path: Sequence[str | int],
+        model: type[BaseModel],
+        data: Any,
+        *,
+        drop: Iterable[str] = (),
+    ) -> BaseModel:
+        """Validate a plugin's raw parameters with its model, errors located in the file.
+
+        Parameters
+        ----------
+        path
+            Key path of the parameters in the file, e.g. ``("measures", 1)``
+            or ``("safety",)``.
+        model
+            The plugin's pydantic model (``extra="forbid"`` is expected, so
+            misspelt keys are caught).
+        data
+            The raw mapping, e.g. ``project.measures[1]``.
+        drop
+            Keys consumed by the program rather than the model, e.g.
+            ``("type",)`` or ``("concept",)``.
+
+        Returns
+        -------
+        BaseModel
+            The validated ``model`` instance.
+
+        Raises
+        ------
+        ProjectError
+            For the problem earliest in the file, one line at the offending
+            key: unknown key (with "did you mean" against the model's
+            fields), missing required key, wrong type ("expected a number"),
+            out of range (with the bound), or a plugin validator's message.
+
+        Notes
+        -----
+        Plugin models declare plain ``float``, ``int``, ``bool``, ``str`` and
+        ``Literal`` fields, which pydantic validates leniently (``"5"`` or
+        ``true`` for a float, ``.nan``). Strictness is added here, uniformly
+        for every plugin, by walking the data along the model's annotations
+        (nested models, lists, tuples, dicts and optional/union types
+        included) before validating: booleans and strings are rejected where
+        only a number is accepted, numbers and strings where only a boolean
+        is, and NaN or infinity anywhere. Pydantic's strict mode is not used:
+        it would also reject YAML lists for tuple fields.
+        """
+        path = tuple(path)
+        if not isinstance(data, Mapping):
+            raise self.error_at(path, f"expected a mapping of key: value, got {_describe(data)}")
+        dropped = set(drop)
+        data = {key: value for key, value in data.items() if key not in dropped}
+        problems: list[tuple[tuple, str, int]] = []  # (location, message, rank)
+        _strict_problems(model, data, (), problems)
+        try:
+            instance = model.model_validate(data)
+        except ValidationError as exc:
+            problems.extend(_param_problems(model, exc.errors()))
+        else:
+            if not problems:
+                return instance
+        # unknown keys first (a misspelt key also makes a required one "missing"),
+        # then the problem earliest in the file
+        located = []
+        for order, (loc, message, rank) in enumerate(problems):
+            full = _yaml_path(path + loc, self._lines)
+            line = _line_of(full, self._lines)
+            located.append((rank, line if line is not None else 0, order, full, message))
+        *_, full, message = min(located, key=lambda item: item[:3])
+        raise self.error_at(full, message)
 
 
 # --------------------------------------------------------------------------------------
@@ -953,6 +1247,259 @@ def _to_project_error(exc: ValidationError, source: str, lines: _Lines) -> Proje
 
 
 # --------------------------------------------------------------------------------------
+# Plugin parameters: strictness by annotation, and pydantic errors -> one line
+# --------------------------------------------------------------------------------------
+
+_UNION_ORIGINS = (Union, types.UnionType)
+_SEQUENCE_ORIGINS = (list, tuple, set, frozenset, Sequence)
+_MAPPING_ORIGINS = (dict, Mapping)
+
+
+def _options(annotation: Any) -> list[Any]:
+    """The alternatives of an annotation: ``Annotated`` unwrapped, unions flattened."""
+    origin = typing.get_origin(annotation)
+    if origin is Annotated:
+        return _options(typing.get_args(annotation)[0])
+    if origin in _UNION_ORIGINS:
+        return [option for arg in typing.get_args(annotation) for option in _options(arg)]
+    return [annotation]
+
+
+def _is_model(option: Any) -> bool:
+    return isinstance(option, type) and issubclass(option, BaseModel)
+
+
+def _accepts(options: list[Any]) -> set[str]:
+    """Which plain YAML kinds the alternatives accept: any, bool, number, str."""
+    kinds = set()
+    for option in options:
+        origin = typing.get_origin(option)
+        if option is bool:
+            kinds.add("bool")
+        elif option in (int, float):
+            kinds.add("number")
+        elif option is str:
+            kinds.add("str")
+        elif origin is Literal:
+            for value in typing.get_args(option):
+                kinds.add(
+                    "bool"
+                    if isinstance(value, bool)
+                    else "str"
+                    if isinstance(value, str)
+                    else "number"
+                )
+        elif option is type(None) or _is_model(option):
+            continue
+        elif origin in _SEQUENCE_ORIGINS or origin in _MAPPING_ORIGINS:
+            continue
+        elif option in (list, tuple, dict, set, frozenset):
+            continue
+        else:  # Any, enums, custom types: left to pydantic
+            kinds.add("any")
+    return kinds
+
+
+def _field_of(model: type[BaseModel], key: Any) -> Any:
+    """The FieldInfo of ``key`` (a field name or alias) in ``model``, or None."""
+    for name, info in model.model_fields.items():
+        if key == name or (info.alias is not None and key == info.alias):
+            return info
+    return None
+
+
+def _strict_problems(annotation: Any, value: Any, loc: tuple, problems: list) -> None:
+    """Append ``(loc, message, 1)`` for values pydantic's lax mode would wrongly accept."""
+    if isinstance(value, float) and not math.isfinite(value):
+        problems.append((loc, f"must be finite, got {_fmt(value)}", 1))
+        return
+    options = _options(annotation)
+    kinds = _accepts(options)
+    if isinstance(value, bool):
+        if "number" in kinds and not kinds & {"bool", "any"}:
+            problems.append((loc, f"expected a number, got {_describe(value)}", 1))
+        return
+    if isinstance(value, str):
+        if not kinds & {"str", "any"}:
+            if "number" in kinds:
+                problems.append((loc, f"expected a number, got {_describe(value)}", 1))
+            elif "bool" in kinds:
+                problems.append((loc, f"expected true or false, got {_describe(value)}", 1))
+        return
+    if isinstance(value, int | float):
+        if "bool" in kinds and not kinds & {"number", "any", "str"}:
+            problems.append((loc, f"expected true or false, got {_describe(value)}", 1))
+        return
+    if isinstance(value, Mapping):
+        model = next((o for o in options if _is_model(o)), None)
+        mapping = next((o for o in options if typing.get_origin(o) in _MAPPING_ORIGINS), None)
+        for key, item in value.items():
+            if model is not None:
+                info = _field_of(model, key)
+                inner = Any if info is None else info.annotation
+            elif mapping is not None:
+                inner = (typing.get_args(mapping) or (Any, Any))[-1]
+            else:
+                inner = Any
+            _strict_problems(inner, item, loc + (key,), problems)
+        return
+    if isinstance(value, list | tuple):
+        sequence = next((o for o in options if typing.get_origin(o) in _SEQUENCE_ORIGINS), None)
+        args = typing.get_args(sequence) if sequence is not None else ()
+        for i, item in enumerate(value):
+            if typing.get_origin(sequence) is tuple and args and args[-1] is not Ellipsis:
+                inner = args[i] if i < len(args) else Any
+            else:
+                inner = args[0] if args else Any
+            _strict_problems(inner, item, loc + (i,), problems)
+
+
+def _navigate(model: type[BaseModel], loc: tuple) -> tuple[tuple, Any, Any]:
+    """Follow a pydantic error location through the model's annotations.
+
+    Returns the location without union tags (``'float'``,
+    ``"literal['a']"``), the model owning the last key (or None) and the
+    annotation at the location (``Any`` where it cannot be followed).
+    """
+    clean: tuple = ()
+    annotation: Any = model
+    owner: Any = None
+    for element in loc:
+        options = _options(annotation)
+        model_option = next((o for o in options if _is_model(o)), None)
+        mapping = next((o for o in options if typing.get_origin(o) in _MAPPING_ORIGINS), None)
+        sequence = next((o for o in options if typing.get_origin(o) in _SEQUENCE_ORIGINS), None)
+        if isinstance(element, str) and model_option is not None:
+            owner = model_option
+            info = _field_of(model_option, element)
+            annotation = Any if info is None else info.annotation
+            clean += (element,)
+        elif mapping is not None:
+            annotation = (typing.get_args(mapping) or (Any, Any))[-1]
+            owner = None
+            clean += (element,)
+        elif isinstance(element, int) and sequence is not None:
+            args = typing.get_args(sequence)
+            if typing.get_origin(sequence) is tuple and args and args[-1] is not Ellipsis:
+                annotation = args[element] if element < len(args) else Any
+            else:
+                annotation = args[0] if args else Any
+            owner = None
+            clean += (element,)
+        elif len(options) > 1 and isinstance(element, str):
+            continue  # a union member's tag, e.g. ('spin', 'float')
+        else:
+            annotation = Any
+            owner = None
+            clean += (element,)
+    return clean, owner, annotation
+
+
+_NUMBER_ERRORS = {"float_type", "float_parsing", "int_type", "int_parsing"}
+
+
+def _param_problems(model: type[BaseModel], errors: list[Any]) -> list[tuple[tuple, str, int]]:
+    """Pydantic errors of a plugin model -> (location, one-line message, rank).
+
+    The rank is 0 for an unknown key, reported before anything else, 1
+    otherwise. A value that fits no member of a union (pydantic reports one
+    error per member) gives one message naming every alternative.
+    """
+    problems = []
+    done: set[tuple] = set()
+    for error in errors:
+        loc, owner, annotation = _navigate(model, tuple(error["loc"]))
+        options = _options(annotation)
+        if len(options) > 1 and len(error["loc"]) > len(loc):  # an error of a union member
+            if loc in done:
+                continue
+            done.add(loc)
+            problems.append((loc, _union_message(options, error.get("input")), 1))
+            continue
+        loc, message = _param_message(model, error)
+        problems.append((loc, message, 0 if error["type"] == "extra_forbidden" else 1))
+    return problems
+
+
+def _union_message(options: list[Any], value: Any) -> str:
+    """ "expected a number or one of rolling, got ..." for a value that fits no alternative."""
+    wanted: list[str] = []
+    choices: list[Any] = []
+    for option in options:
+        origin = typing.get_origin(option)
+        if origin is Literal:
+            choices.extend(typing.get_args(option))
+            continue
+        if option in (int, float):
+            text = "a number"
+        elif option is bool:
+            text = "true or false"
+        elif option is str:
+            text = "a string"
+        elif option is type(None):
+            text = "null"
+        elif _is_model(option) or origin in _MAPPING_ORIGINS or option is dict:
+            text = "a mapping"
+        elif origin in _SEQUENCE_ORIGINS or option in (list, tuple):
+            text = "a list"
+        else:
+            text = getattr(option, "__name__", str(option))
+        if text not in wanted:
+            wanted.append(text)
+    if choices:
+        wanted.append("one of " + ", ".join(_fmt(c) for c in choices))
+    hint = _did_you_mean(value, choices) if isinstance(value, str) and choices else ""
+    return f"expected {' or '.join(wanted)}, got {_describe(value)}{hint}"
+
+
+def _param_message(model: type[BaseModel], error: Any) -> tuple[tuple, str]:
+    kind = error["type"]
+    value = error.get("input")
+    loc, owner, annotation = _navigate(model, tuple(error["loc"]))
+    if kind == "extra_forbidden" and loc:
+        key = loc[-1]
+        fields = list(owner.model_fields) if owner is not None else []
+        listing = f"; expected one of {', '.join(fields)}" if fields else ""
+        hint = (_did_you_mean(key, fields) if isinstance(key, str) else "") or listing
+        return loc, f"unknown key {key!r}{hint}"
+    if kind == "missing":
+        if loc and isinstance(loc[-1], int):
+            return loc[:-1], f"expected more items: item {loc[-1]} is missing"
+        info = _field_of(owner, loc[-1]) if owner is not None and loc else None
+        about = ""
+        if info is not None and info.description:
+            about = f" ({info.description.split('. ')[0].strip().rstrip('.')})"
+        return loc, f"required key is missing{about}"
+    if kind == "finite_number":
+        return loc, f"must be finite, got {_describe(value)}"
+    if kind in _NUMBER_ERRORS or kind == "int_from_float":
+        noun = "an integer" if kind.startswith("int") else "a number"
+        return loc, f"expected {noun}, got {_describe(value)}"
+    if kind in ("bool_type", "bool_parsing"):
+        return loc, f"expected true or false, got {_describe(value)}"
+    if kind in ("string_type", "string_sub_type"):
+        return loc, f"expected a string, got {_describe(value)}"
+    if kind == "literal_error":
+        choices = [
+            v
+            for o in _options(annotation)
+            if typing.get_origin(o) is Literal
+            for v in typing.get_args(o)
+        ]
+        if choices:
+            hint = _did_you_mean(value, choices) if isinstance(value, str) else ""
+            listing = ", ".join(_fmt(c) for c in choices)
+            return loc, f"expected one of {listing}, got {_describe(value)}{hint}"
+        return loc, f"expected {error['ctx']['expected']}, got {_describe(value)}"
+    if kind in ("value_error", "assertion_error"):
+        message = str(error.get("msg", ""))
+        for prefix in ("Value error, ", "Assertion failed, "):
+            message = message.removeprefix(prefix)
+        return loc, message
+    return loc, _message(error)
+
+
+# --------------------------------------------------------------------------------------
 # Public entry points
 # --------------------------------------------------------------------------------------
 
@@ -996,6 +1543,7 @@ def load_project_text(text: str, source: str = "<string>") -> Project:
     except RecursionError as exc:
         raise ProjectError(source, None, "", "the file is nested too deeply") from exc
     project._source = source
+    project._lines = lines
     return project
 
 

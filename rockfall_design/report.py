@@ -19,7 +19,7 @@ from .outputs import write_with
 if TYPE_CHECKING:  # pragma: no cover
     from .simulation import Study
 
-__all__ = ["print_simulation", "plot_study"]
+__all__ = ["print_simulation", "print_check", "plot_study"]
 
 
 def _fmt(v: float | None, digits: int = 2) -> str:
@@ -45,7 +45,10 @@ def simulation_renderable(summary: dict[str, Any]) -> Group:
         ("left downslope end", "exit_downslope"),
         ("left upslope end", "exit_upslope"),
         ("unresolved (event limit)", "unresolved"),
+        ("caught by a barrier", "caught"),
     ):
+        if key == "caught" and not st.get(key):
+            continue
         ends.add_row(label, f"{st[key]:,}", f"{100 * st[key] / max(n, 1):.1f} %")
     sx = st["x"]
     stops = Text(
@@ -105,6 +108,79 @@ def print_simulation(summary: dict[str, Any], console: Console | None = None) ->
     console.print(Panel(simulation_renderable(summary), title="rockfall-design simulate"))
 
 
+def _value(v: float | None, unit: str) -> str:
+    if v is None:
+        return "-"
+    return f"{v:,.2f}" if unit == "-" else f"{v:,.2f} {unit}"
+
+
+def check_renderable(summary: dict[str, Any]) -> Group:
+    """The rich renderable of a ``check`` summary (measures, checks, verdict)."""
+    parts: list[Any] = list(simulation_renderable(summary).renderables)
+    tab = Table(
+        title=f"Measures (safety concept: {summary['safety_concept']})",
+        title_justify="left",
+        show_edge=False,
+    )
+    for col, just in (
+        ("measure", "left"),
+        ("met", "right"),
+        ("caught", "right"),
+        ("over", "right"),
+        ("past", "right"),
+        ("factor", "left"),
+        ("value", "right"),
+        ("target", "right"),
+        ("", "left"),
+    ):
+        tab.add_column(col, justify=just)
+    for m in summary["measures"]:
+        checks = m["checks"] or [None]
+        through = m["broken_through"] + m["passed_through_gap"]
+        for k, c in enumerate(checks):
+            head = (
+                [
+                    f"{m['type']} x={m['x']:g}",
+                    f"{m['met']:,}",
+                    f"{m['caught']:,}",
+                    f"{m['passed_over']:,}",
+                    f"{through:,}",
+                ]
+                if k == 0
+                else ["", "", "", "", ""]
+            )
+            if c is None:
+                tab.add_row(*head, "(none)", "", "", "")
+                continue
+            verdict = Text("ok", style="green") if c["ok"] else Text("FAILS", style="bold red")
+            tab.add_row(
+                *head,
+                c["name"].removesuffix("_factor"),
+                _value(c["value"], c["unit"]),
+                _value(c["target"], c["unit"]),
+                verdict,
+            )
+    parts += [Text(""), tab]
+    for m in summary["measures"]:
+        for c in m["checks"]:
+            if c["detail"]:
+                parts.append(Text(f"  {m['label']}: {c['name']}: {c['detail']}", style="dim"))
+    verdict = (
+        Text("Design holds: every check passes.", style="bold green")
+        if summary["ok"]
+        else Text("Design fails:", style="bold red")
+    )
+    parts += [Text(""), verdict]
+    for line in summary.get("failures", []):
+        parts.append(Text(f"  - {line}", style="red"))
+    return Group(*parts)
+
+
+def print_check(summary: dict[str, Any], console: Console | None = None) -> None:
+    console = console or Console()
+    console.print(Panel(check_renderable(summary), title="rockfall-design check"))
+
+
 # ---- figures -----------------------------------------------------------------
 
 
@@ -136,11 +212,23 @@ def _ground(ax, study: Study) -> None:
 
 def _marks(ax, study: Study, label: bool = True) -> None:
     for j, xs in enumerate(study.result.stations):
-        ax.axvline(xs, color="#1f5fa8", ls="--", lw=0.9, zorder=2,
-                   label="analysis station" if (label and j == 0) else None)
+        ax.axvline(
+            xs,
+            color="#1f5fa8",
+            ls="--",
+            lw=0.9,
+            zorder=2,
+            label="analysis station" if (label and j == 0) else None,
+        )
     if study.project.protect is not None:
-        ax.axvspan(study.project.protect.x, study.section.x[-1], color="#e8a0a0", alpha=0.25,
-                   zorder=0, label="protected zone" if label else None)
+        ax.axvspan(
+            study.project.protect.x,
+            study.section.x[-1],
+            color="#e8a0a0",
+            alpha=0.25,
+            zorder=0,
+            label="protected zone" if label else None,
+        )
 
 
 def _save(fig, path: Path) -> None:
@@ -150,9 +238,59 @@ def _save(fig, path: Path) -> None:
     write_with(path, writer)
 
 
-def plot_study(study: Study, directory: str | Path) -> list[Path]:
+def _draw_measures(ax, evaluation: Any, label: bool = True) -> None:
+    """Barriers as bars of their height; edited ground over the original (dashed)."""
+    from .measures import Barrier
+
+    sec0 = evaluation.original_section
+    ax.plot(
+        sec0.x,
+        sec0.y,
+        color="#5b4a36",
+        lw=0.9,
+        ls="--",
+        zorder=3,
+        label="original ground" if label else None,
+    )
+    first = True
+    for p in evaluation.placed:
+        fp = p.footprint
+        if isinstance(fp, Barrier):
+            yg = evaluation.study.section.ground_height(fp.x)
+            ax.plot(
+                [fp.x, fp.x],
+                [yg, yg + fp.height_m],
+                color="#1e8449",
+                lw=3.0,
+                zorder=6,
+                solid_capstyle="butt",
+                label="barrier" if (label and first) else None,
+            )
+            first = False
+            ax.annotate(
+                p.measure.kind,
+                (fp.x, yg + fp.height_m),
+                textcoords="offset points",
+                xytext=(3, 4),
+                fontsize=7,
+                color="#1e8449",
+            )
+        else:
+            ax.axvspan(fp.catch_from, fp.catch_to, color="#1e8449", alpha=0.12, zorder=0)
+            ax.annotate(
+                p.measure.kind,
+                (fp.catch_from, evaluation.study.section.ground_height(fp.catch_from)),
+                textcoords="offset points",
+                xytext=(0, 8),
+                fontsize=7,
+                color="#1e8449",
+            )
+
+
+def plot_study(study: Study, directory: str | Path, evaluation: Any = None) -> list[Path]:
     """Write profile.png, envelopes.png and stops.png into ``directory``.
 
+    With an ``evaluation`` (from ``check``) the measures are drawn too.
     Returns the paths written.
     """
     import matplotlib
@@ -171,13 +309,29 @@ def plot_study(study: Study, directory: str | Path) -> list[Path]:
     _ground(ax, study)
     for k, tr in enumerate(res.trajectories):
         x, y = _trajectory_xy(tr)
-        ax.plot(x, y, lw=0.6, alpha=0.55, color="#c0392b", zorder=4,
-                label="rock centre paths" if k == 0 else None)
+        ax.plot(
+            x,
+            y,
+            lw=0.6,
+            alpha=0.55,
+            color="#c0392b",
+            zorder=4,
+            label="rock centre paths" if k == 0 else None,
+        )
     stopped = res.status == 1
     if stopped.any():
-        ax.plot(res.x_end[stopped], res.y_end[stopped], "k.", ms=2, alpha=0.4, zorder=5,
-                label="rest positions")
+        ax.plot(
+            res.x_end[stopped],
+            res.y_end[stopped],
+            "k.",
+            ms=2,
+            alpha=0.4,
+            zorder=5,
+            label="rest positions",
+        )
     _marks(ax, study)
+    if evaluation is not None:
+        _draw_measures(ax, evaluation)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("elevation (m)")
     ax.set_title(f"{name}: slope section and {len(res.trajectories)} of {res.n:,} paths")
@@ -199,10 +353,23 @@ def plot_study(study: Study, directory: str | Path) -> list[Path]:
     for c, col in zip(colors, pcts, strict=False):
         q = col[len("height_p") : -len("_m")].replace("_", ".")
         a1.plot(env["x_m"], env[col], color=c, lw=1.0, label=f"p{q}")
-        a2.plot(env["x_m"], env[col.replace("height", "energy")[:-2] + "_kj"], color=c,
-                lw=1.0, label=f"p{q}")
+        a2.plot(
+            env["x_m"],
+            env[col.replace("height", "energy")[:-2] + "_kj"],
+            color=c,
+            lw=1.0,
+            label=f"p{q}",
+        )
     for ax in (a1, a2):
         _marks(ax, study, label=False)
+        if evaluation is not None:
+            for p in evaluation.placed:
+                ax.axvline(
+                    p.footprint.x if hasattr(p.footprint, "height_m") else p.footprint.catch_from,
+                    color="#1e8449",
+                    lw=1.2,
+                    alpha=0.8,
+                )
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
     a1.set_ylabel("passing height of the\nrock centre above ground (m)")
@@ -215,8 +382,9 @@ def plot_study(study: Study, directory: str | Path) -> list[Path]:
     written.append(p)
 
     # 3. Where rocks stop.
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(11, 6), sharex=True,
-                                 gridspec_kw={"height_ratios": [2, 1]})
+    fig, (a1, a2) = plt.subplots(
+        2, 1, figsize=(11, 6), sharex=True, gridspec_kw={"height_ratios": [2, 1]}
+    )
     sec = study.section
     bins = np.linspace(sec.x[0], sec.x[-1], 81)
     if stopped.any():
@@ -232,6 +400,8 @@ def plot_study(study: Study, directory: str | Path) -> list[Path]:
     if study.project.protect is not None or len(res.stations):
         a1.legend(loc="upper left", fontsize=8)
     _ground(a2, study)
+    if evaluation is not None:
+        _draw_measures(a2, evaluation, label=False)
     a2.set_xlabel("x (m)")
     a2.set_ylabel("elevation (m)")
     p = out / "stops.png"

@@ -30,6 +30,7 @@ from .engine.core import (
     C_VX,
     C_VY,
     C_W,
+    CAUGHT,
     EXIT_DOWNSLOPE,
     EXIT_UPSLOPE,
     STATUS_NAMES,
@@ -365,6 +366,7 @@ class Study:
                 "exit_downslope": int((r.status == EXIT_DOWNSLOPE).sum()),
                 "exit_upslope": int((r.status == EXIT_UPSLOPE).sum()),
                 "unresolved": int((r.status == UNRESOLVED).sum()),
+                "caught": int((r.status == CAUGHT).sum()),
             },
             "stations": stations,
         }

@@ -15,6 +15,7 @@ from rockfall_design.engine import (
     Material,
     Releases,
     Section,
+    barrier_table,
     core,
     run_ensemble,
 )
@@ -84,10 +85,24 @@ def cases(draw):
         spin=np.asarray(draw(st.lists(st.floats(-20, 20), min_size=n, max_size=n))),
         spin_rolling=np.asarray(draw(st.lists(st.booleans(), min_size=n, max_size=n))),
     )
-    return sec, rel
+    # Up to three barriers of any behaviour anywhere on the section.
+    bars = []
+    for _ in range(draw(st.integers(0, 3))):
+        bars.append(
+            barrier_table(
+                x[0] + draw(st.floats(0.0, 1.0)) * (x[-1] - x[0]),
+                draw(st.sampled_from([0.2, 1.0, 4.0])),
+                draw(st.sampled_from([5e3, 1e5, np.inf])),
+                draw(st.sampled_from([core.B_NET, core.B_RIGID, core.B_BLOCKS])),
+                restitution=draw(st.floats(0.0, 1.0)),
+                gap_m=draw(st.sampled_from([0.0, 0.5, 3.0])),
+                spacing_m=4.0,
+            )
+        )
+    return sec, rel, bars
 
 
-def _run(sec, rel, key=7):
+def _run(sec, rel, bars=(), key=7):
     return run_ensemble(
         sec,
         rel,
@@ -95,6 +110,7 @@ def _run(sec, rel, key=7):
         stations=[sec.x.mean()],
         grid=np.linspace(sec.x[0], sec.x[-1], 17),
         settings=EngineSettings(max_events=3000),
+        barriers=list(bars) or None,
         n_trajectories=len(rel),
         max_trajectory_points=3001,
     )
@@ -113,8 +129,8 @@ def _distance_to_ground(gx, gy, X, Y):
 @SETTINGS
 @given(cases())
 def test_energy_never_increases(case):
-    sec, rel = case
-    res = _run(sec, rel)
+    sec, rel, bars = case
+    res = _run(sec, rel, bars)
     for i, tr in enumerate(res.trajectories):
         m, r = res.mass[i], res.radius[i]
         e = 0.5 * m * (tr[:, T_VX] ** 2 + tr[:, T_VY] ** 2) + 0.2 * m * r * r * tr[:, T_W] ** 2
@@ -131,8 +147,8 @@ def test_energy_never_increases(case):
 @SETTINGS
 @given(cases())
 def test_rock_never_enters_the_ground(case):
-    sec, rel = case
-    res = _run(sec, rel)
+    sec, rel, bars = case
+    res = _run(sec, rel, bars)
     for i, tr in enumerate(res.trajectories):
         r = res.radius[i]
         X, Y = [tr[:, T_X]], [tr[:, T_Y]]
@@ -151,16 +167,28 @@ def test_rock_never_enters_the_ground(case):
 @SETTINGS
 @given(cases())
 def test_every_rock_ends_in_a_named_state_and_same_seed_same_result(case):
-    sec, rel = case
-    a = _run(sec, rel, key=11)
-    b = _run(sec, rel, key=11)
+    sec, rel, bars = case
+    a = _run(sec, rel, bars, key=11)
+    b = _run(sec, rel, bars, key=11)
     assert set(np.unique(a.status)) <= {
         core.STOPPED,
         core.EXIT_UPSLOPE,
         core.EXIT_DOWNSLOPE,
         core.UNRESOLVED,
+        core.CAUGHT,
     }
-    for name in ("status", "x_end", "y_end", "n_events", "crossings", "grid_height", "grid_energy"):
+    for name in (
+        "status",
+        "x_end",
+        "y_end",
+        "n_events",
+        "crossings",
+        "grid_height",
+        "grid_energy",
+        "barrier_outcome",
+        "barrier_meeting",
+        "caught_by",
+    ):
         assert_array_equal(getattr(a, name), getattr(b, name))
     stopped = a.status == core.STOPPED
     assert np.all((a.x_end[stopped] >= sec.x[0]) & (a.x_end[stopped] <= sec.x[-1]))

@@ -2,12 +2,15 @@
 
 import copy
 import json
+import math
 import pickle
+from typing import Literal
 
 import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from rockfall_design.errors import ExitCode, InputError, ProjectError, RockfallError
 from rockfall_design.project import (
@@ -743,3 +746,589 @@ def test_mutated_text_fails_cleanly(data):
     i = data.draw(st.integers(min_value=0, max_value=len(lines) - 1))
     lines[i] = data.draw(st.sampled_from(["", "  ", "\t", "- ", ": ", "{", "]", "&a", "*a"]))
     _check_one("".join(lines))
+
+
+# --------------------------------------------------------------------------------------
+# Plugin sections: measures and safety (kept raw), protect.allowed_fraction
+# --------------------------------------------------------------------------------------
+
+PLUGIN_SECTIONS = """\
+measures:
+  - type: fence
+    x: 70
+    height: 4.0
+    capacity_kj: 1000
+  - type: ditch
+    x: 118
+    width: 4.0
+    depth: 1.5
+safety:
+  concept: spang
+  height_factor: 2.0
+  energy_factor: 1.0
+  statistic: max
+"""
+
+WITH_PLUGINS = edit("protect:\n  x: 150\n", "protect:\n  x: 150\n  allowed_fraction: 0.05\n") + (
+    PLUGIN_SECTIONS
+)
+
+
+def plugin_project(text: str = WITH_PLUGINS) -> Project:
+    return load_project_text(text, source="p.yaml")
+
+
+def assert_project_error(err: ProjectError, line: int | None, key: str, *fragments: str) -> None:
+    prefix = "p.yaml" if line is None else f"p.yaml:{line}"
+    assert str(err).startswith(f"{prefix}: {key}: "), str(err)
+    assert (err.file, err.line, err.key) == ("p.yaml", line, key)
+    for fragment in fragments:
+        assert fragment in err.message, f"{fragment!r} not in {err.message!r}"
+    assert "\n" not in str(err)
+
+
+def test_measures_and_safety_are_kept_raw():
+    project = plugin_project()
+    assert project.measures == [
+        {"type": "fence", "x": 70, "height": 4.0, "capacity_kj": 1000},
+        {"type": "ditch", "x": 118, "width": 4.0, "depth": 1.5},
+    ]
+    assert isinstance(project.measures[0]["x"], int)  # raw: the plugin's model converts
+    assert project.safety == {
+        "concept": "spang",
+        "height_factor": 2.0,
+        "energy_factor": 1.0,
+        "statistic": "max",
+    }
+    assert project.protect is not None and project.protect.allowed_fraction == 0.05
+
+
+def test_plugin_section_defaults():
+    project = load_project_text(MINIMAL + "protect: {x: 5}\n")
+    assert project.measures == []
+    assert project.safety == {"concept": "spang"}
+    assert project.protect is not None and project.protect.allowed_fraction == 0.0
+    empty = load_project_text(MINIMAL + "measures:\nsafety:\n")
+    assert empty.measures == [] and empty.safety == {"concept": "spang"}
+    assert load_project_text(MINIMAL + "measures: []\n").measures == []
+
+
+def test_safety_concept_is_filled_in_and_listed_first():
+    project = load_project_text(MINIMAL + "safety:\n  statistic: p95\n")
+    assert project.safety == {"concept": "spang", "statistic": "p95"}
+    assert list(project.safety) == ["concept", "statistic"]
+    other = load_project_text(MINIMAL + "safety: {gamma_e: 1.2, concept: uni11211}\n")
+    assert list(other.safety.items()) == [("concept", "uni11211"), ("gamma_e", 1.2)]
+
+
+def test_plugin_sections_in_resolved_dict_and_hash():
+    project = plugin_project()
+    resolved = project.resolved_dict()
+    assert resolved["measures"] == project.measures
+    assert resolved["safety"] == project.safety
+    assert resolved["protect"] == {"x": 150.0, "allowed_fraction": 0.05}
+    json.dumps(resolved, allow_nan=False)
+    again = load_project_text(yaml.safe_dump(resolved, sort_keys=False))
+    assert again.resolved_dict() == resolved
+    assert again.resolved_hash() == project.resolved_hash()
+    changed = plugin_project(edit("    depth: 1.5\n", "    depth: 2.5\n", WITH_PLUGINS))
+    assert changed.resolved_hash() != project.resolved_hash()
+    reordered = plugin_project(edit("  statistic: max\n", "  statistic: p95\n", WITH_PLUGINS))
+    assert reordered.resolved_hash() != project.resolved_hash()
+    # resolved_dict is a copy: editing it does not change the project
+    resolved["measures"][0]["x"] = 1
+    assert project.measures[0]["x"] == 70
+
+
+def test_allowed_fraction_out_of_range():
+    text = edit("  allowed_fraction: 0.05\n", "  allowed_fraction: 1.5\n", WITH_PLUGINS)
+    assert_error(text, line_of(text, "allowed_fraction"), "protect.allowed_fraction", "<= 1")
+    text = edit("  allowed_fraction: 0.05\n", "  allowed_fraction: true\n", WITH_PLUGINS)
+    assert_error(text, line_of(text, "allowed_fraction"), "protect.allowed_fraction", "number")
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "needle", "key", "fragment"),
+    [
+        ("    x: 118\n", "    x: .nan\n", "x: .nan", "measures[1].x", "finite"),
+        ("    depth: 1.5\n", "    depth: [1, -.inf]\n", "depth:", "measures[1].depth[1]", "finite"),
+        ("  - type: ditch\n", "  - kind: ditch\n", "kind: ditch", "measures[1]", "'type'"),
+        ("  - type: ditch\n", "  - type: 3\n", "type: 3", "measures[1].type", "measure type"),
+        ("  - type: ditch\n", "  - type: ''\n", "type: ''", "measures[1].type", "empty"),
+        ("    depth: 1.5\n", "    depth: {1: 2}\n", "depth:", "measures[1].depth.1", "names"),
+        ("    depth: 1.5\n", "    depth: !!binary aGk=\n", "depth:", "measures[1].depth", "bytes"),
+        ("  concept: spang\n", "  concept: [spang]\n", "concept:", "safety.concept", "concept"),
+        ("  concept: spang\n", "  concept: ''\n", "concept:", "safety.concept", "empty"),
+        (
+            "  energy_factor: 1.0\n",
+            "  energy_factor: .inf\n",
+            "energy_",
+            "safety.energy_factor",
+            "finite",
+        ),
+    ],
+)
+def test_plugin_section_errors(old, new, needle, key, fragment):
+    text = edit(old, new, WITH_PLUGINS)
+    assert_error(text, line_of(text, needle), key, fragment)
+
+
+def test_plugin_section_shape_errors():
+    text = MINIMAL + "measures: {type: fence}\n"
+    assert_error(text, line_of(text, "measures"), "measures", "expected a list of measures")
+    text = MINIMAL + "measures:\n  - fence\n"
+    assert_error(text, line_of(text, "- fence"), "measures[0]", "expected a measure")
+    text = MINIMAL + "safety: spang\n"
+    assert_error(text, line_of(text, "safety"), "safety", "expected a mapping")
+
+
+# -- Project.error_at / unknown_name ----------------------------------------------------
+
+
+def test_error_at_locates_nodes_and_missing_keys():
+    project = plugin_project()
+    text = WITH_PLUGINS
+    err = project.error_at(("measures", 1, "width"), "too narrow")
+    assert_project_error(err, line_of(text, "width: 4.0"), "measures[1].width", "too narrow")
+    assert str(err) == f"p.yaml:{line_of(text, 'width: 4.0')}: measures[1].width: too narrow"
+    # a missing key: the line of its nearest existing ancestor
+    err = project.error_at(("measures", 0, "restitution"), "required")
+    assert_project_error(err, line_of(text, "type: fence"), "measures[0].restitution")
+    err = project.error_at(("safety", "gamma_e"), "unknown")
+    assert_project_error(err, line_of(text, "safety:"), "safety.gamma_e")
+    err = project.error_at(("measures", 5), "no such measure")
+    assert_project_error(err, line_of(text, "measures:"), "measures[5]")
+    # core sections too, with the paths the models use
+    err = project.error_at(("rocks", "release", 0, "x"), "too far")
+    assert_project_error(err, line_of(text, "    x: 1"), "rocks.release.x")
+    assert isinstance(err, ProjectError) and err.exit_code == ExitCode.BAD_INPUT
+    err = project.error_at((), "whole file")
+    assert str(err) == "p.yaml:1: whole file"
+
+
+def test_error_at_without_a_file():
+    project = Project.model_validate(yaml.safe_load(MINIMAL + "measures: [{type: fence}]\n"))
+    err = project.error_at(("measures", 0, "x"), "missing")
+    assert str(err) == "<string>: measures[0].x: missing" and err.line is None
+
+
+def test_unknown_name():
+    project = plugin_project()
+    available = ["berm", "ditch", "fence", "wall", "boulder_row"]
+    err = project.unknown_name(("measures", 1, "type"), "fense", available, "measure type")
+    assert str(err) == (
+        f"p.yaml:{line_of(WITH_PLUGINS, 'type: ditch')}: measures[1].type: unknown measure "
+        "type 'fense'; did you mean 'fence'? (available: berm, ditch, fence, wall, boulder_row)"
+    )
+    err = project.unknown_name(("safety", "concept"), "eurocode", ["spang"], "safety concept")
+    assert_project_error(err, line_of(WITH_PLUGINS, "concept: spang"), "safety.concept")
+    assert err.message == "unknown safety concept 'eurocode' (available: spang)"
+    err = project.unknown_name(("safety", "concept"), "x", iter(()), "safety concept")
+    assert err.message == "unknown safety concept 'x' (none available)"
+
+
+# -- Project.validate_params ------------------------------------------------------------
+
+
+class Mesh(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    opening_m: float = Field(0.3, gt=0.0)
+    rings: int = 4
+
+
+class FenceParams(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    x: float
+    height_m: float = Field(gt=0.0, description="Nominal height (m). Measured normal to slope.")
+    capacity_kj: float = Field(1000.0, ge=100.0, le=10000.0)
+    posts: int = Field(3, ge=2)
+    anchored: bool = True
+    statistic: Literal["max", "p95", "p99"] = "max"
+    note: str = ""
+    spacing_m: float | None = None
+    offsets_m: list[float] = []
+    anchor_m: tuple[float, float] = (0.0, 0.0)
+    mesh: Mesh = Mesh()
+    spin: float | Literal["rolling"] = 0.0
+
+    @model_validator(mode="after")
+    def _check(self) -> "FenceParams":
+        if self.note == "forbidden":
+            raise ValueError("a note may not say 'forbidden'")
+        return self
+
+
+FENCE_TEXT = """\
+measures:
+  - type: fence
+    x: 70
+    height_m: 4
+    posts: 3
+    anchored: true
+    statistic: max
+    note: hello
+    spacing_m: 2
+    offsets_m: [1, 2.5]
+    anchor_m: [1, 2]
+    mesh:
+      opening_m: 0.3
+      rings: 4
+    spin: rolling
+"""
+
+
+def fence_project(old: str = "", new: str = "") -> tuple[Project, str]:
+    text = MINIMAL + (edit(old, new, FENCE_TEXT) if old else FENCE_TEXT)
+    text = edit("  points: [[0, 10], [10, 0]]\n", "  points: [[0, 10], [200, 0]]\n", text)
+    return load_project_text(text, source="p.yaml"), text
+
+
+def validate_fence(old: str = "", new: str = "") -> tuple[FenceParams, str]:
+    project, text = fence_project(old, new)
+    params = project.validate_params(
+        ("measures", 0), FenceParams, project.measures[0], drop=("type",)
+    )
+    assert isinstance(params, FenceParams)
+    return params, text
+
+
+def fence_error(old: str, new: str, needle: str, key: str, *fragments: str) -> ProjectError:
+    project, text = fence_project(old, new)
+    with pytest.raises(ProjectError) as info:
+        project.validate_params(("measures", 0), FenceParams, project.measures[0], drop=("type",))
+    assert_project_error(info.value, line_of(text, needle), key, *fragments)
+    return info.value
+
+
+def test_validate_params_valid():
+    params, _ = validate_fence()
+    assert params.x == 70.0 and isinstance(params.x, float)
+    assert params.height_m == 4.0 and params.capacity_kj == 1000.0
+    assert params.offsets_m == [1.0, 2.5] and params.anchor_m == (1.0, 2.0)
+    assert params.mesh == Mesh(opening_m=0.3, rings=4)
+    assert params.spin == "rolling" and params.spacing_m == 2.0
+    # integral floats are integers, as in the core sections
+    params, _ = validate_fence("    posts: 3\n", "    posts: 3.0\n")
+    assert params.posts == 3
+
+
+def test_validate_params_drop_and_safety_section():
+    project = plugin_project()
+
+    class SpangLike(BaseModel):
+        model_config = ConfigDict(extra="forbid")
+        height_factor: float = 2.0
+        energy_factor: float = 1.0
+        statistic: Literal["max", "p95", "p99"] = "max"
+
+    params = project.validate_params(("safety",), SpangLike, project.safety, drop=("concept",))
+    assert params == SpangLike(height_factor=2.0, energy_factor=1.0, statistic="max")
+    with pytest.raises(ProjectError) as info:
+        project.validate_params(("safety",), SpangLike, project.safety)
+    assert_project_error(info.value, line_of(WITH_PLUGINS, "concept:"), "safety.concept", "unknown")
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "needle", "key", "fragments"),
+    [
+        # unknown keys, with "did you mean" against the model's fields
+        (
+            "    posts: 3\n",
+            "    post: 3\n",
+            "post:",
+            "measures[0].post",
+            ("unknown key 'post'", "did you mean 'posts'?"),
+        ),
+        (
+            "    posts: 3\n",
+            "    colour: red\n",
+            "colour",
+            "measures[0].colour",
+            ("unknown key 'colour'", "expected one of x, height_m, capacity_kj"),
+        ),
+        (
+            "      rings: 4\n",
+            "      ring: 4\n",
+            "ring:",
+            "measures[0].mesh.ring",
+            ("did you mean 'rings'?",),
+        ),
+        # wrong types that pydantic alone would accept
+        (
+            "    height_m: 4\n",
+            "    height_m: '4'\n",
+            "height_m",
+            "measures[0].height_m",
+            ("expected a number, got string '4'",),
+        ),
+        (
+            "    height_m: 4\n",
+            "    height_m: true\n",
+            "height_m",
+            "measures[0].height_m",
+            ("expected a number, got true (a boolean)",),
+        ),
+        (
+            "    posts: 3\n",
+            "    posts: false\n",
+            "posts",
+            "measures[0].posts",
+            ("expected a number, got false",),
+        ),
+        (
+            "    anchored: true\n",
+            "    anchored: 1\n",
+            "anchored",
+            "measures[0].anchored",
+            ("expected true or false, got 1",),
+        ),
+        (
+            "    anchored: true\n",
+            "    anchored: 'yes'\n",
+            "anchored",
+            "measures[0].anchored",
+            ("expected true or false",),
+        ),
+        (
+            "    spacing_m: 2\n",
+            "    spacing_m: '2'\n",
+            "spacing_m",
+            "measures[0].spacing_m",
+            ("expected a number",),
+        ),
+        (
+            "    offsets_m: [1, 2.5]\n",
+            "    offsets_m: [1, true]\n",
+            "offsets_m",
+            "measures[0].offsets_m[1]",
+            ("expected a number, got true",),
+        ),
+        (
+            "    anchor_m: [1, 2]\n",
+            "    anchor_m: [1, '2']\n",
+            "anchor_m",
+            "measures[0].anchor_m[1]",
+            ("expected a number, got string '2'",),
+        ),
+        (
+            "      opening_m: 0.3\n",
+            "      opening_m: '0.3'\n",
+            "opening_m",
+            "measures[0].mesh.opening_m",
+            ("expected a number",),
+        ),
+        (
+            "    spin: rolling\n",
+            "    spin: true\n",
+            "spin:",
+            "measures[0].spin",
+            ("expected a number",),
+        ),
+        # pydantic's own errors, in house style
+        (
+            "    height_m: 4\n",
+            "    height_m: 0\n",
+            "height_m",
+            "measures[0].height_m",
+            ("expected a number > 0, got 0",),
+        ),
+        (
+            "    posts: 3\n",
+            "    posts: 1\n",
+            "posts",
+            "measures[0].posts",
+            ("expected an integer >= 2, got 1",),
+        ),
+        (
+            "    posts: 3\n",
+            "    posts: 2.5\n",
+            "posts",
+            "measures[0].posts",
+            ("expected an integer, got 2.5",),
+        ),
+        (
+            "    posts: 3\n",
+            "    capacity_kj: 20000\n",
+            "capacity_kj",
+            "measures[0].capacity_kj",
+            ("expected a number <= 10000, got 20000",),
+        ),
+        (
+            "    statistic: max\n",
+            "    statistic: maxx\n",
+            "statistic",
+            "measures[0].statistic",
+            ("expected one of max, p95, p99, got string 'maxx'; did you mean 'max'?",),
+        ),
+        (
+            "    note: hello\n",
+            "    note: 5\n",
+            "note:",
+            "measures[0].note",
+            ("expected a string, got 5",),
+        ),
+        (
+            "    anchor_m: [1, 2]\n",
+            "    anchor_m: [1]\n",
+            "anchor_m",
+            "measures[0].anchor_m",
+            ("item 1 is missing",),
+        ),
+        (
+            "    offsets_m: [1, 2.5]\n",
+            "    offsets_m: 1\n",
+            "offsets_m",
+            "measures[0].offsets_m",
+            ("expected a list",),
+        ),
+        (
+            "      rings: 4\n",
+            "      rings: 4.5\n",
+            "rings",
+            "measures[0].mesh.rings",
+            ("expected an integer",),
+        ),
+        (
+            "    mesh:\n      opening_m: 0.3\n      rings: 4\n",
+            "    mesh: 3\n",
+            "mesh:",
+            "measures[0].mesh",
+            ("expected a mapping",),
+        ),
+        (
+            "    spin: rolling\n",
+            "    spin: roling\n",
+            "spin:",
+            "measures[0].spin",
+            ("expected a number or one of rolling, got string 'roling'; did you mean 'rolling'?",),
+        ),
+        (
+            "    note: hello\n",
+            "    note: forbidden\n",
+            "  - type: fence",
+            "measures[0]",
+            ("a note may not say 'forbidden'",),
+        ),
+        # a missing key: the line of the measure
+        (
+            "    height_m: 4\n",
+            "",
+            "  - type: fence",
+            "measures[0].height_m",
+            ("required key is missing (Nominal height (m))",),
+        ),
+    ],
+)
+def test_validate_params_errors(old, new, needle, key, fragments):
+    fence_error(old, new, needle, key, *fragments)
+
+
+def test_validate_params_nan_anywhere():
+    project, text = fence_project()
+    for key, value in [("height_m", math.nan), ("offsets_m", [1.0, math.inf])]:
+        data = {**project.measures[0], key: value}
+        with pytest.raises(ProjectError) as info:
+            project.validate_params(("measures", 0), FenceParams, data, drop=("type",))
+        assert "must be finite" in info.value.message
+        assert info.value.line == line_of(text, key)
+
+
+def test_validate_params_reports_unknown_keys_first_then_earliest():
+    # a misspelt required key: "unknown key" rather than "missing"
+    fence_error(
+        "    height_m: 4\n",
+        "    hieght_m: 4\n",
+        "hieght_m",
+        "measures[0].hieght_m",
+        "did you mean 'height_m'?",
+    )
+    # two bad values: the one earlier in the file, whichever check found it
+    project, text = fence_project("    note: hello\n", "    note: 5\n")
+    data = {**project.measures[0], "height_m": "tall"}
+    with pytest.raises(ProjectError) as info:
+        project.validate_params(("measures", 0), FenceParams, data, drop=("type",))
+    assert_project_error(info.value, line_of(text, "height_m"), "measures[0].height_m", "number")
+
+
+def test_validate_params_needs_a_mapping():
+    project = load_project_text(MINIMAL + "measures:\n  - type: fence\n", source="p.yaml")
+    with pytest.raises(ProjectError) as info:
+        project.validate_params(("measures", 0), FenceParams, [1, 2])
+    line = line_of(MINIMAL + "measures:\n  - type: fence\n", "- type: fence")
+    assert_project_error(info.value, line, "measures[0]", "expected a mapping")
+
+
+# -- Project.with_resolved_plugins ------------------------------------------------------
+
+
+def test_with_resolved_plugins():
+    project = plugin_project()
+    measures = [
+        {"type": "fence", "x": 70.0, "height": 4.0, "capacity_kj": 1000.0, "posts": 3},
+        {"type": "ditch", "x": 118.0, "width": 4.0, "depth": 1.5},
+    ]
+    safety = {
+        "height_factor": 2.0,
+        "energy_factor": 1.0,
+        "reach_factor": 1.0,
+        "statistic": "max",
+        "concept": "spang",
+    }
+    resolved = project.with_resolved_plugins(measures, safety)
+    assert resolved is not project
+    data = resolved.resolved_dict()
+    assert data["measures"] == measures
+    assert list(data["safety"]) == [
+        "concept",
+        "height_factor",
+        "energy_factor",
+        "reach_factor",
+        "statistic",
+    ]
+    assert resolved.resolved_hash() != project.resolved_hash()
+    # the original and the raw sections are untouched, errors still point into the file
+    assert project.resolved_dict()["measures"] == project.measures
+    assert resolved.measures == project.measures and resolved.safety == project.safety
+    assert resolved.error_at(("measures", 1), "x").line == line_of(WITH_PLUGINS, "type: ditch")
+    # the caller's data is copied
+    measures[0]["x"] = 1.0
+    assert resolved.resolved_dict()["measures"][0]["x"] == 70.0
+    # the record is itself a valid project file
+    again = load_project_text(yaml.safe_dump(data, sort_keys=False))
+    assert again.resolved_dict() == data
+
+
+@pytest.mark.parametrize(
+    ("measures", "safety", "fragment"),
+    [
+        ([{"type": "fence"}], {"concept": "spang"}, "expected 2"),
+        ([{"type": "fence"}, {"x": 1}], {"concept": "spang"}, "type"),
+        ([{"type": "fence"}, {"type": "ditch", "x": math.nan}], {"concept": "s"}, "finite"),
+        ([{"type": "fence"}, {"type": "ditch"}], {"gamma": 1}, "concept"),
+    ],
+)
+def test_with_resolved_plugins_rejects_bad_data(measures, safety, fragment):
+    with pytest.raises(ValueError, match=fragment):
+        plugin_project().with_resolved_plugins(measures, safety)
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.data())
+def test_mutated_plugin_sections_fail_cleanly(data):
+    base = yaml.safe_load(WITH_PLUGINS)
+    paths = [p for p in _paths(base) if p and p[0] in ("measures", "safety", "protect")]
+    for _ in range(data.draw(st.integers(min_value=1, max_value=3))):
+        path = data.draw(st.sampled_from(paths))
+        parent = base
+        try:
+            for key in path[:-1]:
+                parent = parent[key]
+            parent[path[-1]]
+        except (KeyError, IndexError, TypeError):
+            continue
+        if not isinstance(parent, dict | list):
+            continue
+        parent[path[-1]] = data.draw(junk)
+    _check_one(yaml.safe_dump(base, sort_keys=False))

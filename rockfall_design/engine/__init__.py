@@ -11,6 +11,7 @@ from .ensemble import (
     Material,
     Releases,
     Section,
+    barrier_table,
     rock_mass,
     run_ensemble,
 )
@@ -23,6 +24,7 @@ __all__ = [
     "Material",
     "Releases",
     "Section",
+    "barrier_table",
     "rock_mass",
     "run_ensemble",
 ]

@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .rng import next_normal, truncated_normal
+from .rng import next_normal, next_uniform, truncated_normal
 
 G = 9.81
 """Acceleration of gravity (m/s^2)."""
@@ -55,7 +55,36 @@ STOPPED = 1
 EXIT_UPSLOPE = 2  #: left the section at its upslope end (x < x_first)
 EXIT_DOWNSLOPE = 3  #: left the section at its downslope end (x > x_last)
 UNRESOLVED = 4  #: reached the event limit
-STATUS_NAMES = ("running", "stopped", "exit_upslope", "exit_downslope", "unresolved")
+CAUGHT = 5  #: stopped by a barrier (fence net, block of a boulder row)
+STATUS_NAMES = ("running", "stopped", "exit_upslope", "exit_downslope", "unresolved", "caught")
+
+# Barrier behaviours (see rockfall_design.measures.BarrierBehaviour).
+B_NET = 0
+B_RIGID = 1
+B_BLOCKS = 2
+
+# Columns of the barrier table (one row per barrier, sorted by x).
+BR_X = 0  #: station (m)
+BR_YG = 1  #: ground height at the station (m)
+BR_H = 2  #: height of the top above ground (m)
+BR_CAP = 3  #: energy capacity (J)
+BR_BEH = 4  #: behaviour code
+BR_E = 5  #: restitution of a rigid barrier
+BR_GAP = 6  #: clear gap between blocks (m)
+BR_SPACING = 7  #: block spacing (m)
+N_BARRIER_COLS = 8
+
+# Outcome of a rock's first meeting with a barrier (rockfall_design.measures.Outcome).
+O_NOT_MET = 0
+O_CAUGHT = 1
+O_PASSED_OVER = 2
+O_BROKEN_THROUGH = 3
+O_REBOUNDED = 4
+O_PASSED_THROUGH_GAP = 5
+
+# Columns of the record of a rock's first meeting with a barrier.
+BM_H, BM_V, BM_E, BM_T = 0, 1, 2, 3
+N_BMEET_COLS = 4
 
 FLIGHT = 0
 CONTACT = 1
@@ -402,6 +431,71 @@ def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, cross):
 
 
 @njit(cache=True)
+def _barrier_hit(bars, j, h, vx, vy, w, r, m, rng):
+    """What barrier ``j`` does to a rock reaching its station.
+
+    Parameters
+    ----------
+    bars : ndarray, shape (B, N_BARRIER_COLS)
+        Barrier table.
+    j : int
+        Barrier row.
+    h : float
+        Passing height of the rock centre above the ground at the station (m).
+    vx, vy, w : float
+        Velocity (m/s) and angular velocity (rad/s) on arrival.
+    r, m : float
+        Radius (m) and mass (kg).
+    rng : ndarray of uint64
+        The rock's random stream (gap passage of a boulder row).
+
+    Returns
+    -------
+    outcome : int
+        ``O_*`` code.
+    vx, vy, w : float
+        State after the barrier (unchanged if passed; zero if caught).
+
+    Notes
+    -----
+    A rock whose centre passes above the top (h > height) passes over. Below:
+    a net catches it if E <= capacity; a rigid barrier returns it with its
+    horizontal velocity reversed and scaled by the restitution; a boulder row
+    lets it through a gap with probability max(0, gap - 2r) / spacing, else
+    stops it. Beyond capacity the barrier gives way and the rock goes on with
+    the surplus energy E - capacity (velocity and spin scaled by
+    sqrt((E - capacity) / E)).
+    """
+    if h > bars[j, BR_H]:
+        return O_PASSED_OVER, vx, vy, w
+    beh = int(bars[j, BR_BEH])
+    if beh == B_BLOCKS:
+        p = (bars[j, BR_GAP] - 2.0 * r) / bars[j, BR_SPACING]
+        if p > 0.0 and next_uniform(rng) < p:
+            return O_PASSED_THROUGH_GAP, vx, vy, w
+    e = 0.5 * m * (vx * vx + vy * vy) + 0.2 * m * r * r * w * w
+    cap = bars[j, BR_CAP]
+    if e > cap:
+        f = np.sqrt((e - cap) / e)
+        return O_BROKEN_THROUGH, f * vx, f * vy, f * w
+    if beh == B_RIGID:
+        return O_REBOUNDED, -bars[j, BR_E] * vx, vy, w
+    return O_CAUGHT, 0.0, 0.0, 0.0
+
+
+@njit(cache=True)
+def _meet(bar_out, bar_rec, j, code, h, vx, vy, w, t, m, r):
+    """Record the first meeting of barrier ``j``."""
+    if bar_out[j] != O_NOT_MET:
+        return
+    bar_out[j] = code
+    bar_rec[j, BM_H] = h
+    bar_rec[j, BM_V] = np.hypot(vx, vy)
+    bar_rec[j, BM_E] = 0.5 * m * (vx * vx + vy * vy) + 0.2 * m * r * r * w * w
+    bar_rec[j, BM_T] = t
+
+
+@njit(cache=True)
 def simulate_rock(
     px,
     py,
@@ -425,6 +519,9 @@ def simulate_rock(
     grid_e,
     cross,
     traj,
+    bars,
+    bar_out,
+    bar_rec,
 ):
     """Follow one rock from its release to the end of its path.
 
@@ -465,6 +562,14 @@ def simulate_rock(
         Out: detail of the first downslope passage of each user station.
     traj : ndarray of float, shape (T, N_TRAJ_COLS)
         Out: the state at each event (T may be 0 to record nothing).
+    bars : ndarray of float, shape (B, N_BARRIER_COLS)
+        Barriers (columns ``BR_*``), sorted by x; B may be 0.
+    bar_out : ndarray of int8, shape (B,)
+        Out: outcome of the first meeting with each barrier (``O_*``); must
+        come in as ``O_NOT_MET``.
+    bar_rec : ndarray of float, shape (B, N_BMEET_COLS)
+        Out: passing height (m), speed (m/s), total kinetic energy (J) and
+        time (s) of that first meeting.
 
     Returns
     -------
@@ -482,6 +587,8 @@ def simulate_rock(
         Duration of the path (s).
     n_traj : int
         Number of rows written to ``traj``.
+    caught_by : int
+        Barrier row that caught the rock, or -1.
     """
     v_contact = settings[S_V_CONTACT]
     v_stop = settings[S_V_STOP]
@@ -504,6 +611,14 @@ def simulate_rock(
     n_traj = 0
     max_x = x
     status = RUNNING
+    caught_by = -1
+    nbar = bars.shape[0]
+    # Barrier results, defined up front for the compiler.
+    code = O_NOT_MET
+    nvx = 0.0
+    nvy = 0.0
+    nw = 0.0
+    vs = 0.0
     if h0 > 0.0:
         y += h0
         mode = FLIGHT
@@ -540,6 +655,54 @@ def simulate_rock(
             k = locate(px, x, vx)
             leaves, tf, k = next_landing(px, py, x, y, vx, vy, k)
             x1 = x + vx * tf
+            # Barriers crossed by this flight, in the order of travel; the
+            # first that changes the path ends the flight there.
+            hit = -1
+            if nbar > 0 and vx != 0.0:
+                if vx > 0.0:
+                    j = np.searchsorted(bars[:, BR_X], x, side="right")
+                    jstep = 1
+                else:
+                    j = np.searchsorted(bars[:, BR_X], x, side="left") - 1
+                    jstep = -1
+                while 0 <= j < nbar and (bars[j, BR_X] - x1) * jstep <= 0.0:
+                    ts = (bars[j, BR_X] - x) / vx
+                    yb = y + vy * ts - 0.5 * G * ts * ts
+                    vyb = vy - G * ts
+                    hb = yb - bars[j, BR_YG]
+                    code, nvx, nvy, nw = _barrier_hit(bars, j, hb, vx, vyb, w, r, m, rng)
+                    _meet(bar_out, bar_rec, j, code, hb, vx, vyb, w, t + ts, m, r)
+                    if code == O_PASSED_OVER or code == O_PASSED_THROUGH_GAP:
+                        j += jstep
+                        continue
+                    hit = j
+                    break
+            if hit >= 0:
+                xb = bars[hit, BR_X]
+                if vx > 0.0:
+                    j = np.searchsorted(st_x, x, side="right")
+                    while j < st_x.shape[0] and st_x[j] <= xb:
+                        ts = (st_x[j] - x) / vx
+                        ys = y + vy * ts - 0.5 * G * ts * ts
+                        _record(j, ys - st_yg[j], vx, vy - G * ts, w, t + ts, m, r,
+                                st_user, grid_h, grid_e, cross)
+                        j += 1
+                tb = (xb - x) / vx
+                t += tb
+                y = y + vy * tb - 0.5 * G * tb * tb
+                x = xb
+                max_x = max(max_x, x)
+                if code == O_CAUGHT:
+                    status = CAUGHT
+                    caught_by = hit
+                    vx = 0.0
+                    vy = 0.0
+                    w = 0.0
+                    break
+                vx = nvx
+                vy = nvy
+                w = nw
+                continue
             if vx > 0.0:
                 # Stations crossed downslope by this flight, in (x, x1].
                 j = np.searchsorted(st_x, x, side="right")
@@ -665,6 +828,32 @@ def simulate_rock(
         else:
             xn = x + dx * ds_
             yn = y + dy * ds_
+        # Barriers met in this phase, in the order of travel.
+        hit = -1
+        if nbar > 0:
+            if dirn > 0:
+                j = np.searchsorted(bars[:, BR_X], x, side="right")
+            else:
+                j = np.searchsorted(bars[:, BR_X], x, side="left") - 1
+            while 0 <= j < nbar and (bars[j, BR_X] - xn) * dirn <= 0.0:
+                dd = (bars[j, BR_X] - x) / dx
+                q = v * v + 2.0 * a * dd
+                vs = np.sqrt(q) if q > 0.0 else 0.0
+                ts = 2.0 * dd / (v + vs) if v + vs > 0.0 else 0.0
+                ss = vs / r if rolling else s + dsp * ts
+                hb = y + dy * dd - bars[j, BR_YG]
+                code, nvx, nvy, nw = _barrier_hit(
+                    bars, j, hb, vs * dx, vs * dy, -ss * dirn, r, m, rng)
+                _meet(bar_out, bar_rec, j, code, hb, vs * dx, vs * dy, -ss * dirn, t + ts, m, r)
+                if code == O_PASSED_OVER or code == O_PASSED_THROUGH_GAP:
+                    j += dirn
+                    continue
+                hit = j
+                # The phase ends at the barrier.
+                xn = bars[j, BR_X]
+                yn = y + dy * dd
+                tm = ts
+                break
         if dirn > 0 and st_x.shape[0] > 0:
             j = np.searchsorted(st_x, x, side="right")
             while j < st_x.shape[0] and st_x[j] <= xn:
@@ -691,10 +880,36 @@ def simulate_rock(
         x = xn
         y = yn
         t += tm
+        max_x = max(max_x, x)
+        if hit >= 0:
+            if code == O_CAUGHT:
+                status = CAUGHT
+                caught_by = hit
+                vx = 0.0
+                vy = 0.0
+                w = 0.0
+                break
+            if code == O_REBOUNDED:
+                # On the ground the rebound reverses the velocity along it.
+                f = bars[hit, BR_E]
+                vx = -f * vs * dx
+                vy = -f * vs * dy
+                w = nw
+                if f * vs < v_stop:
+                    # Too slow to leave: the rock comes to rest against the barrier.
+                    status = STOPPED
+                    vx = 0.0
+                    vy = 0.0
+                    w = 0.0
+                    break
+            else:
+                vx = nvx
+                vy = nvy
+                w = nw
+            continue
         vx = v1 * dx
         vy = v1 * dy
         w = -s1 * dirn
-        max_x = max(max_x, x)
         if ev != 0:
             continue
         # End of the piece: leave the section, fly off a convex vertex, or
@@ -732,4 +947,4 @@ def simulate_rock(
         traj[n_traj, T_T] = t
         traj[n_traj, T_MODE] = mode
         n_traj += 1
-    return status, x, y, n_imp, n_ev, max_x, t, n_traj
+    return status, x, y, n_imp, n_ev, max_x, t, n_traj, caught_by

@@ -26,6 +26,7 @@ __all__ = [
     "EnsembleResult",
     "run_ensemble",
     "rock_mass",
+    "barrier_table",
     "STATUS_NAMES",
 ]
 
@@ -243,6 +244,14 @@ class EnsembleResult:
         Total kinetic energy (J) there.
     trajectories : list of ndarray
         Event states (columns x, y, vx, vy, w, t, mode) of the first rocks.
+    barrier_outcome : ndarray of int8, shape (N, B)
+        Outcome of each rock's first meeting with each barrier (``core.O_*``),
+        barriers in the order given.
+    barrier_meeting : ndarray, shape (N, B, 4)
+        Passing height (m), speed (m/s), total kinetic energy (J) and time (s)
+        of that meeting; NaN if not met.
+    caught_by : ndarray of int, shape (N,)
+        Barrier that caught each rock (order given), or -1.
     """
 
     radius: np.ndarray
@@ -260,6 +269,9 @@ class EnsembleResult:
     grid_height: np.ndarray
     grid_energy: np.ndarray
     trajectories: list[np.ndarray]
+    barrier_outcome: np.ndarray
+    barrier_meeting: np.ndarray
+    caught_by: np.ndarray
 
     @property
     def n(self) -> int:
@@ -303,6 +315,10 @@ def _run_batch(
     cross,
     traj,
     n_traj,
+    bars,
+    bar_out,
+    bar_rec,
+    caught_by,
 ):
     n = radius.shape[0]
     nseg = gx.shape[0] - 1
@@ -326,7 +342,11 @@ def _run_batch(
         cr = cross[i]
         cr[:, :] = np.nan
         tr = traj[i] if i < traj.shape[0] else empty_traj
-        st, xe, ye, ni, ne, mx, tt, nt = core.simulate_rock(
+        bo = bar_out[i]
+        bo[:] = core.O_NOT_MET
+        br = bar_rec[i]
+        br[:, :] = np.nan
+        st, xe, ye, ni, ne, mx, tt, nt, cb = core.simulate_rock(
             px,
             py,
             pseg,
@@ -349,7 +369,11 @@ def _run_batch(
             ge,
             cr,
             tr,
+            bars,
+            bo,
+            br,
         )
+        caught_by[i] = cb
         status[i] = st
         x_end[i] = xe
         y_end[i] = ye
@@ -371,6 +395,7 @@ def run_ensemble(
     stations: np.ndarray | list[float] = (),
     grid: np.ndarray | list[float] = (),
     settings: EngineSettings | None = None,
+    barriers: np.ndarray | None = None,
     n_trajectories: int = 0,
     max_trajectory_points: int = 4000,
     batch_size: int = 4096,
@@ -389,6 +414,9 @@ def run_ensemble(
     grid : array_like
         Further envelope stations (m) with passing height and energy only.
     settings : EngineSettings, optional
+    barriers : ndarray, shape (B, core.N_BARRIER_COLS), optional
+        Barrier table (columns ``core.BR_*``; the ground-height column is
+        filled in here), any order. See :func:`barrier_table`.
     n_trajectories : int
         Record the event states of the first ``n_trajectories`` rocks.
     max_trajectory_points : int
@@ -435,6 +463,16 @@ def run_ensemble(
     ntr = min(n_trajectories, n)
     traj = np.zeros((ntr, max_trajectory_points, core.N_TRAJ_COLS))
     n_traj = np.zeros(ntr, dtype=np.int64)
+    if barriers is None:
+        barriers = np.zeros((0, core.N_BARRIER_COLS))
+    bars = np.array(barriers, dtype=float, ndmin=2).reshape(-1, core.N_BARRIER_COLS)
+    bar_order = np.argsort(bars[:, core.BR_X], kind="stable")
+    bars = np.ascontiguousarray(bars[bar_order])
+    bars[:, core.BR_YG] = section.ground_height(bars[:, core.BR_X])
+    nb = bars.shape[0]
+    bar_out_s = np.zeros((n, nb), dtype=np.int8)
+    bar_rec_s = np.empty((n, nb, core.N_BMEET_COLS))
+    caught_s = np.empty(n, dtype=np.int64)
     mats = section.material_table()
     sv = settings.vector()
     # numba wants a uint64 scalar; Python ints above 2**63 need the wrap.
@@ -478,6 +516,10 @@ def run_ensemble(
             cross[sl],
             traj[t0:t1],
             n_traj[t0:t1],
+            bars,
+            bar_out_s[sl],
+            bar_rec_s[sl],
+            caught_s[sl],
         )
         if progress is not None:
             progress(b)
@@ -498,4 +540,58 @@ def run_ensemble(
         grid_height=grid_h,
         grid_energy=grid_e,
         trajectories=[traj[i, : n_traj[i]].copy() for i in range(ntr)],
+        # Back to the caller's barrier order.
+        barrier_outcome=_unsort(bar_out_s, bar_order),
+        barrier_meeting=_unsort(bar_rec_s, bar_order),
+        caught_by=_caught_in_given_order(caught_s, bar_order),
     )
+
+
+def _caught_in_given_order(caught: np.ndarray, order: np.ndarray) -> np.ndarray:
+    out = np.full(caught.shape, -1, dtype=np.int64)
+    hit = caught >= 0
+    out[hit] = order[caught[hit]]
+    return out
+
+
+def _unsort(a: np.ndarray, order: np.ndarray) -> np.ndarray:
+    out = np.empty_like(a)
+    out[:, order] = a
+    return out
+
+
+def barrier_table(
+    x: float,
+    height_m: float,
+    capacity_j: float,
+    behaviour: int,
+    restitution: float = 0.0,
+    gap_m: float = 0.0,
+    spacing_m: float = 1.0,
+) -> np.ndarray:
+    """One row of the engine's barrier table (see ``core.BR_*``).
+
+    Parameters
+    ----------
+    x : float
+        Station (m).
+    height_m : float
+        Height of the top above ground (m).
+    capacity_j : float
+        Energy capacity (J); ``np.inf`` for none.
+    behaviour : int
+        ``core.B_NET``, ``core.B_RIGID`` or ``core.B_BLOCKS``.
+    restitution : float
+        Rebound restitution of a rigid barrier (-).
+    gap_m, spacing_m : float
+        Clear gap and spacing of a boulder row (m).
+    """
+    row = np.zeros(core.N_BARRIER_COLS)
+    row[core.BR_X] = x
+    row[core.BR_H] = height_m
+    row[core.BR_CAP] = capacity_j
+    row[core.BR_BEH] = behaviour
+    row[core.BR_E] = restitution
+    row[core.BR_GAP] = gap_m
+    row[core.BR_SPACING] = spacing_m
+    return row

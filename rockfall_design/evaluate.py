@@ -1,0 +1,493 @@
+"""Design -> simulation -> per-measure outcomes and safety checks.
+
+The measures of a project are resolved to plain objects once, through their
+plugins: barriers become rows of the engine's barrier table, profile edits
+are spliced into the ground. Then the same rocks as ``simulate`` (same seed,
+same draws) run once on the edited section with the barriers in place, and
+each measure's :class:`~rockfall_design.measures.MeasureResult` goes through
+the project's safety concept.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .engine import Section, barrier_table, core, run_ensemble
+from .errors import PluginError
+from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
+from .safety import Check, SafetyConcept
+from .simulation import (
+    Study,
+    draw_releases,
+    engine_key,
+    engine_settings,
+    section_from_project,
+)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .measures import ProtectiveMeasure
+    from .plugins import Registry
+    from .project import Project
+
+__all__ = [
+    "Evaluation",
+    "PlacedMeasure",
+    "build_measures",
+    "build_concept",
+    "place_measures",
+    "edited_section",
+    "evaluate",
+]
+
+_BEHAVIOUR_CODE = {
+    BarrierBehaviour.NET: core.B_NET,
+    BarrierBehaviour.RIGID: core.B_RIGID,
+    BarrierBehaviour.BLOCKS: core.B_BLOCKS,
+}
+
+
+@dataclass(frozen=True)
+class PlacedMeasure:
+    """A measure with its footprint on the section and its place in the project."""
+
+    index: int
+    measure: ProtectiveMeasure
+    footprint: Barrier | ProfileEdit
+
+
+def build_measures(project: Project, registry: Registry) -> list[ProtectiveMeasure]:
+    """Instantiate the project's ``measures:`` through their plugins.
+
+    Each entry's parameters are validated by the plugin's own model; errors
+    name the file, line and key path.
+    """
+    out = []
+    for i, raw in enumerate(project.measures):
+        kind = raw["type"]
+        cls = registry.measures.get(kind)
+        if cls is None:
+            raise project.unknown_name(
+                ("measures", i, "type"), kind, registry.measures, "measure type"
+            )
+        params = project.validate_params(("measures", i), cls.Params, raw, drop=("type",))
+        out.append(cls(params))
+    return out
+
+
+def build_concept(project: Project, registry: Registry) -> SafetyConcept:
+    """Instantiate the project's safety concept (``safety.concept``, default spang)."""
+    raw = dict(project.safety)
+    name = raw.get("concept", "spang")
+    cls = registry.safety_concepts.get(name)
+    if cls is None:
+        raise project.unknown_name(
+            ("safety", "concept"), name, registry.safety_concepts, "safety concept"
+        )
+    params = project.validate_params(("safety",), cls.Params, raw, drop=("concept",))
+    return cls(params)
+
+
+def place_measures(
+    project: Project, measures: Sequence[ProtectiveMeasure], section: Section
+) -> list[PlacedMeasure]:
+    """Footprints of the measures on the bare section, checked for fit and overlap."""
+    placed = []
+    for i, m in enumerate(measures):
+        try:
+            fp = m.footprint(section)
+        except ValueError as exc:
+            # A measure that does not fit the section is the user's to fix.
+            raise project.error_at(("measures", i), str(exc)) from None
+        except Exception as exc:
+            raise PluginError(
+                f"plugin measure {m.kind!r} failed in footprint(): {type(exc).__name__}: {exc}"
+            ) from exc
+        if not isinstance(fp, Barrier | ProfileEdit):
+            raise PluginError(
+                f"plugin measure {m.kind!r}: footprint() returned {type(fp).__name__}, "
+                "expected Barrier or ProfileEdit"
+            )
+        placed.append(PlacedMeasure(i, m, fp))
+    edits = sorted(
+        (p for p in placed if isinstance(p.footprint, ProfileEdit)),
+        key=lambda p: p.footprint.x_start,
+    )
+    for a, b in zip(edits, edits[1:], strict=False):
+        if b.footprint.x_start < a.footprint.x_end:
+            raise project.error_at(
+                ("measures", b.index),
+                f"{b.measure.label()} overlaps {a.measure.label()} (measures[{a.index}]): "
+                f"the ground from x = {b.footprint.x_start:g} m to "
+                f"{a.footprint.x_end:g} m would be edited twice",
+            )
+    x0, x1 = section.x[0], section.x[-1]
+    for p in placed:
+        fp = p.footprint
+        lo, hi = (fp.x, fp.x) if isinstance(fp, Barrier) else (fp.x_start, fp.x_end)
+        if lo < x0 or hi > x1:
+            raise project.error_at(
+                ("measures", p.index, "x"),
+                f"{p.measure.label()} lies outside the section ({x0:g} to {x1:g} m)",
+            )
+    return placed
+
+
+def edited_section(project: Project, section: Section, placed: Sequence[PlacedMeasure]) -> Section:
+    """The section with every profile edit spliced into the ground.
+
+    New segments take the edit's material, or else the material of the
+    original ground at their midpoint.
+    """
+    edits = sorted(
+        (p for p in placed if isinstance(p.footprint, ProfileEdit)),
+        key=lambda p: p.footprint.x_start,
+    )
+    if not edits:
+        return section
+    names = list(project.materials)
+    xs, ys, mats = [section.x[0]], [section.y[0]], []
+
+    def original_material(xm: float) -> int:
+        k = int(np.clip(np.searchsorted(section.x, xm, side="right") - 1, 0, section.x.size - 2))
+        return int(section.segment_material[k])
+
+    def extend(px: np.ndarray, py: np.ndarray, mat: int | None) -> None:
+        for x, y in zip(px, py, strict=True):
+            if x <= xs[-1]:
+                continue
+            mats.append(original_material(0.5 * (xs[-1] + x)) if mat is None else mat)
+            xs.append(float(x))
+            ys.append(float(y))
+
+    cursor = section.x[0]
+    for p in edits:
+        e = p.footprint
+        keep = (section.x > cursor) & (section.x < e.x_start)
+        extend(section.x[keep], section.y[keep], None)
+        pts = np.asarray(e.points, dtype=float)
+        if e.material is not None and e.material not in names:
+            raise project.unknown_name(
+                ("measures", p.index, "material"), e.material, names, "material"
+            )
+        mat = None if e.material is None else names.index(e.material)
+        extend(pts[:1, 0], pts[:1, 1], None)
+        extend(pts[1:, 0], pts[1:, 1], mat)
+        cursor = e.x_end
+    keep = section.x > cursor
+    extend(section.x[keep], section.y[keep], None)
+    return Section(
+        np.asarray(xs), np.asarray(ys), np.asarray(mats, dtype=np.int64), section.materials
+    )
+
+
+def _barrier_rows(placed: Sequence[PlacedMeasure]) -> tuple[np.ndarray, list[int]]:
+    rows, owners = [], []
+    for p in placed:
+        fp = p.footprint
+        if isinstance(fp, Barrier):
+            rows.append(
+                barrier_table(
+                    fp.x,
+                    fp.height_m,
+                    fp.capacity_kj * 1e3,
+                    _BEHAVIOUR_CODE[fp.behaviour],
+                    restitution=fp.restitution,
+                    gap_m=fp.gap_m,
+                    spacing_m=fp.spacing_m,
+                )
+            )
+            owners.append(p.index)
+    if not rows:
+        return np.zeros((0, core.N_BARRIER_COLS)), owners
+    return np.vstack(rows), owners
+
+
+@dataclass
+class Evaluation:
+    """A design evaluated on one set of rocks.
+
+    Attributes
+    ----------
+    study : Study
+        The run on the edited section (its ``section`` is the edited one).
+    original_section : Section
+        The bare section.
+    placed : list of PlacedMeasure
+    results : list of MeasureResult
+        One per measure, in project order.
+    checks : list of list of Check
+        The safety concept's checks, one list per measure.
+    concept : SafetyConcept
+    """
+
+    study: Study
+    original_section: Section
+    placed: list[PlacedMeasure]
+    results: list[MeasureResult]
+    checks: list[list[Check]]
+    concept: SafetyConcept
+    _held: list[np.ndarray]
+    _outcome: list[np.ndarray]
+    _meeting: list[np.ndarray]
+
+    @property
+    def protect(self) -> dict[str, Any] | None:
+        """Rocks reaching the protected zone and whether that is within what is allowed."""
+        p = self.study.project.protect
+        if p is None:
+            return None
+        r = self.study.result
+        reaching = int((r.max_x >= p.x).sum())
+        fraction = reaching / r.n if r.n else 0.0
+        allowed = float(getattr(p, "allowed_fraction", 0.0))
+        return {
+            "x": float(p.x),
+            "reaching": reaching,
+            "fraction": fraction,
+            "allowed_fraction": allowed,
+            "ok": fraction <= allowed,
+        }
+
+    @property
+    def ok(self) -> bool:
+        """True when every check of every measure holds and the residual is allowed."""
+        checks_ok = all(c.ok for cs in self.checks for c in cs)
+        prot = self.protect
+        return checks_ok and (prot is None or prot["ok"])
+
+    def failures(self) -> list[str]:
+        """One line per failed check, for reports."""
+        out = []
+        for res, cs in zip(self.results, self.checks, strict=True):
+            for c in cs:
+                if not c.ok:
+                    unit = "" if c.unit == "-" else f" {c.unit}"
+                    value = "-" if c.value is None else f"{c.value:.2f}{unit}"
+                    out.append(
+                        f"{res.measure.label()}: {c.name} {value} does not meet its target "
+                        f"{c.target:.2f}{unit} ({c.detail})"
+                    )
+        prot = self.protect
+        if prot is not None and not prot["ok"]:
+            out.append(
+                f"{prot['reaching']} rocks ({100 * prot['fraction']:.2f} %) reach the protected "
+                f"zone at x >= {prot['x']:g} m; allowed {100 * prot['allowed_fraction']:.2f} %"
+            )
+        return out
+
+    def caught_by_measure(self) -> np.ndarray:
+        """Per rock: the index (in ``measures:``) of the measure that stopped it, or -1.
+
+        A rock is credited to a barrier that caught it, to a wall that returned it
+        for good, or to the catch area (ditch, berm) it came to rest in.
+        """
+        r = self.study.result
+        out = np.full(r.n, -1, dtype=np.int64)
+        for res, held in zip(self.results, self._held, strict=True):
+            out[held & (out < 0)] = res.index
+        return out
+
+    def outcomes_table(self) -> Any:
+        """One row per rock and measure: outcome of the first meeting and its values."""
+        import pandas as pd
+
+        r = self.study.result
+        frames = []
+        names = {int(v): v.name.lower() for v in Outcome}
+        for res, out, rec in zip(self.results, self._outcome, self._meeting, strict=True):
+            frames.append(
+                pd.DataFrame(
+                    {
+                        "rock": np.arange(r.n),
+                        "measure": res.index,
+                        "type": res.measure.kind,
+                        "outcome": [names[int(o)] for o in out],
+                        "passing_height_m": rec[:, core.BM_H],
+                        "velocity_ms": rec[:, core.BM_V],
+                        "energy_kj": rec[:, core.BM_E] / 1e3,
+                    }
+                )
+            )
+        return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+
+    def resolved_project(self) -> Project:
+        """The project with every measure's and the concept's parameters resolved."""
+        measures = [
+            {"type": p.measure.kind, **p.measure.params.model_dump(mode="json")}
+            for p in self.placed
+        ]
+        safety = {"concept": self.concept.name, **self.concept.params.model_dump(mode="json")}
+        return self.study.project.with_resolved_plugins(measures, safety)
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready: the simulate summary plus ``measures``, ``protect`` and ``ok``."""
+        out = self.study.summary()
+        out["safety_concept"] = self.concept.name
+        out["measures"] = [
+            {
+                "type": res.measure.kind,
+                "label": res.measure.label(),
+                "x": res.measure.x,
+                "params": res.measure.params.model_dump(mode="json"),
+                "met": res.met,
+                "caught": res.caught,
+                "passed_over": res.passed_over,
+                "broken_through": res.broken_through,
+                "rebounded": res.rebounded,
+                "passed_through_gap": res.passed_through_gap,
+                "checks": [c.as_dict() for c in cs],
+                "ok": all(c.ok for c in cs),
+            }
+            for res, cs in zip(self.results, self.checks, strict=True)
+        ]
+        prot = self.protect
+        if prot is not None:
+            out["protect"] = prot
+        out["ok"] = self.ok
+        out["failures"] = self.failures()
+        return out
+
+
+def _measure_results(placed: Sequence[PlacedMeasure], owners: list[int], study: Study):
+    """MeasureResult of every measure, with per-rock outcome, meeting record and 'held' mask."""
+    r = study.result
+    n = r.n
+    results, helds, outcomes, meetings = [], [], [], []
+    for p in placed:
+        fp = p.footprint
+        res = MeasureResult(measure=p.measure, index=p.index, n_rocks=n)
+        if isinstance(fp, Barrier):
+            b = owners.index(p.index)
+            out = r.barrier_outcome[:, b]
+            met = out != Outcome.NOT_MET
+            res.met = int(met.sum())
+            res.passed_over = int((out == Outcome.PASSED_OVER).sum())
+            res.broken_through = int((out == Outcome.BROKEN_THROUGH).sum())
+            res.rebounded = int((out == Outcome.REBOUNDED).sum())
+            res.passed_through_gap = int((out == Outcome.PASSED_THROUGH_GAP).sum())
+            held = out == Outcome.CAUGHT
+            if fp.behaviour == BarrierBehaviour.RIGID:
+                # A wall holds the rocks it returned that stay upslope of it.
+                held = (
+                    (out == Outcome.REBOUNDED)
+                    & (r.max_x <= fp.x)
+                    & (r.status != core.EXIT_DOWNSLOPE)
+                )
+            res.caught = int(held.sum())
+            outcomes.append(out.copy())
+            meetings.append(r.barrier_meeting[:, b, :3].copy())
+            rec = r.barrier_meeting[met, b]
+            res.passing_height_m = rec[:, core.BM_H]
+            res.velocity_ms = rec[:, core.BM_V]
+            res.energy_kj = rec[:, core.BM_E] / 1e3
+            res.mass_kg = r.mass[met]
+            res.radius_m = r.radius[met]
+        else:
+            met = r.max_x >= fp.catch_from
+            inside = (
+                (r.status == core.STOPPED) & (r.x_end >= fp.catch_from) & (r.x_end <= fp.catch_to)
+            )
+            held = met & inside
+            res.met = int(met.sum())
+            res.caught = int(held.sum())
+            res.passed_over = res.met - res.caught
+            res.mass_kg = r.mass[met]
+            res.radius_m = r.radius[met]
+            res.reach_m = r.max_x[met] - fp.catch_from
+            out = np.where(
+                held, Outcome.CAUGHT, np.where(met, Outcome.PASSED_OVER, Outcome.NOT_MET)
+            ).astype(np.int8)
+            outcomes.append(out)
+            meetings.append(np.full((n, 3), np.nan))
+        results.append(res)
+        helds.append(held)
+    return results, helds, outcomes, meetings
+
+
+def evaluate(
+    project: Project,
+    registry: Registry,
+    *,
+    rocks: int | None = None,
+    seed: int | None = None,
+    n_trajectories: int = 0,
+    progress: Callable[[int], None] | None = None,
+) -> Evaluation:
+    """Run the project's rocks against its measures and check them.
+
+    Parameters
+    ----------
+    project : Project
+    registry : Registry
+        The loaded plugins.
+    rocks, seed : int, optional
+        Override the project's count and seed.
+    n_trajectories : int
+        Keep the event states of the first rocks, for figures.
+    progress : callable, optional
+        Called with the number of rocks done.
+    """
+    measures = build_measures(project, registry)
+    concept = build_concept(project, registry)
+    bare = section_from_project(project)
+    placed = place_measures(project, measures, bare)
+    section = edited_section(project, bare, placed)
+    bars, owners = _barrier_rows(placed)
+    n = int(project.rocks.count if rocks is None else rocks)
+    s = int(project.rocks.seed if seed is None else seed)
+    releases = draw_releases(project, n, s)
+    grid = np.linspace(section.x[0], section.x[-1], int(project.analysis.envelope_points))
+    t0 = time.perf_counter()
+    result = run_ensemble(
+        section,
+        releases,
+        key=engine_key(s),
+        stations=np.asarray(project.analysis.stations, dtype=float),
+        grid=grid,
+        settings=engine_settings(project),
+        barriers=bars,
+        n_trajectories=n_trajectories,
+        progress=progress,
+    )
+    study = Study(
+        project=project,
+        result=result,
+        releases=releases,
+        seed=s,
+        runtime_s=time.perf_counter() - t0,
+        section=section,
+    )
+    results, held, outcome, meeting = _measure_results(placed, owners, study)
+    checks = [
+        _guarded(registry, "safety", concept.name, "checks", concept.checks, res) for res in results
+    ]
+    return Evaluation(
+        study=study,
+        original_section=bare,
+        placed=placed,
+        results=results,
+        checks=checks,
+        concept=concept,
+        _held=held,
+        _outcome=outcome,
+        _meeting=meeting,
+    )
+
+
+def _guarded(
+    registry: Registry, section: str, name: str, what: str, fn: Callable[..., Any], *args: Any
+) -> Any:
+    """Call plugin code; any exception from it is a plugin fault naming the plugin."""
+    try:
+        return fn(*args)
+    except Exception as exc:
+        provider = registry.provider.get((section, name), "unknown distribution")
+        raise PluginError(
+            f"plugin {section} {name!r} ({provider}) failed in {what}(): "
+            f"{type(exc).__name__}: {exc}"
+        ) from exc

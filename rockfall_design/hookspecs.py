@@ -1,0 +1,308 @@
+"""Hook specifications: the plugin author's manual.
+
+A rockfall-design plugin adds protective measures, safety concepts or cost
+models. It is an ordinary Python module that defines one or more of the hook
+functions below, each marked with :data:`hookimpl`, and returns *classes*
+from them. The built-in fence, wall, ditch, ... are plugins of exactly this
+kind (``rockfall_design_builtins``); they get no special treatment.
+
+How a plugin is found
+---------------------
+Through the entry-point group ``rockfall_design``. In the ``pyproject.toml``
+of the distribution that ships the plugin::
+
+    [project.entry-points.rockfall_design]
+    myplugin = "my_package.module"
+
+Once that distribution is installed (``pip install .``), every run of
+``rockfall-design`` imports ``my_package.module`` and registers the module
+object with pluggy under the name ``myplugin`` (the entry-point name). The
+hooks are then called once each, when the registry of measures, safety
+concepts and cost models is built at start-up, and never again: the classes
+they return are resolved to plain objects before any rock falls, so nothing
+in the per-rock loop goes through a plugin hook.
+
+``rockfall-design plugins`` lists what was found, which distribution
+provides each name, and every plugin that failed to load (``--json`` for a
+machine-readable listing). A plugin that raises on import, implements a
+misspelt hook (``rockfall_design_measure`` instead of
+``rockfall_design_measures``), raises from a hook or returns an invalid class
+is reported by name with a one-line reason, and the other plugins still load.
+Two plugins that register the same measure ``kind`` (or the same safety
+concept / cost model ``name``) are an error that names both: the program
+stops with exit code 3 (``ExitCode.PLUGIN_FAULT``) rather than guess.
+
+What a plugin may import
+------------------------
+From rockfall-design, only the public API: the names exported by the
+``rockfall_design`` package itself (``from rockfall_design import ...``),
+which are :data:`hookimpl`, the contracts :class:`ProtectiveMeasure`,
+:class:`SafetyConcept` and :class:`CostModel` with their parameter bases
+:class:`MeasureParams`, :class:`SafetyParams` and :class:`CostParams`, and
+the data they exchange (:class:`Barrier`, :class:`BarrierBehaviour`,
+:class:`ProfileEdit`, :class:`MeasureResult`, :class:`Outcome`,
+:class:`Check`). Everything else (``rockfall_design.engine``, ``project``,
+``plugins``, ...) is internal and may change in any release. Other libraries
+(numpy, pydantic, ...) are fine as dependencies of the plugin's own
+distribution.
+
+How to block a plugin
+---------------------
+Block it by its entry-point name or its distribution name:
+``rockfall-design plugins --block myplugin`` shows the registry without it
+(the module is not even imported), and ``load_registry(blocked=["myplugin"])``
+does the same in Python. To remove it for good, uninstall its distribution.
+
+Rules for every registered class
+--------------------------------
+* ``kind`` (measures) or ``name`` (safety concepts, cost models): non-empty,
+  lower case, only ``a-z``, ``0-9``, ``_`` and ``-``; unique across all
+  installed plugins.
+* ``summary``: one line shown by ``rockfall-design plugins``.
+* ``Params``: a pydantic model, subclass of :class:`MeasureParams`,
+  :class:`SafetyParams` or :class:`CostParams`; put units in field names
+  (``height_m``, ``capacity_kj``) or descriptions.
+* ``example``: a complete, valid parameter set (``Params(**example)`` must
+  succeed); for a measure without ``type``, for a safety concept without
+  ``concept``.
+* Measures only: ``design_variables`` maps names of ``Params`` fields to
+  default (low, high) bounds with low < high; ``nan`` for a bound that the
+  project (or the optimiser) must supply, e.g. a station range.
+* The class must implement every abstract method of its base.
+
+A class that breaks a rule is reported as a failure of its plugin (naming
+the class) and left out; the plugin's other classes still load.
+"""
+
+from __future__ import annotations
+
+import pluggy
+
+from .costs import CostModel
+from .measures import ProtectiveMeasure
+from .safety import SafetyConcept
+
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "PROJECT_NAME",
+    "hookimpl",
+    "hookspec",
+    "rockfall_design_cost_models",
+    "rockfall_design_measures",
+    "rockfall_design_safety_concepts",
+]
+
+#: Name of the pluggy project; hook functions are prefixed ``rockfall_design_``.
+PROJECT_NAME = "rockfall_design"
+#: Entry-point group through which plugins are found.
+ENTRY_POINT_GROUP = "rockfall_design"
+
+#: Marks the hook specifications below (for rockfall-design itself).
+hookspec = pluggy.HookspecMarker(PROJECT_NAME)
+#: Marks a plugin's hook implementations: ``@hookimpl`` above each hook function.
+hookimpl = pluggy.HookimplMarker(PROJECT_NAME)
+
+
+@hookspec
+def rockfall_design_measures() -> list[type[ProtectiveMeasure]]:
+    """Register protective measures (fences, walls, ditches, ...).
+
+    Called once, at start-up, when the registry is built (before the project
+    file is validated, since its ``measures[].type`` refers to the kinds
+    registered here); never per rock, never per candidate design.
+
+    Returns
+    -------
+    list of type[ProtectiveMeasure]
+        The measure *classes* (not instances) this plugin provides, in any
+        order; the registry sorts them by ``kind``. An empty list (or None)
+        registers nothing.
+
+    Notes
+    -----
+    * ``kind`` is the ``type:`` of the project file. It must be unique across
+      all installed plugins: two plugins with the same ``kind`` stop the
+      program with an error naming both.
+    * Required class attributes: ``kind``, ``summary``, ``Params`` (a
+      :class:`MeasureParams` subclass; every measure has the station ``x``
+      in m) and ``example`` (a valid parameter set *without* ``type``).
+      ``design_variables`` (name -> (low, high)) lists what the optimiser
+      may vary.
+    * Implement ``footprint(section)`` (a :class:`Barrier` at a station, or
+      a :class:`ProfileEdit` of the ground), ``design_properties()`` (the
+      ``height_m``, ``capacity_kj`` and/or ``width_m`` that safety concepts
+      check) and, if the default (the design properties) does not fit,
+      ``quantities(section)`` for costing.
+    * The program instantiates the class itself, with validated parameters:
+      ``Measure(Measure.Params(**fields_without_type))``.
+
+    Examples
+    --------
+    A light net fence, ``type: post_fence`` in a project file:
+
+    .. code-block:: python
+
+        from rockfall_design import (
+            Barrier,
+            BarrierBehaviour,
+            MeasureParams,
+            ProtectiveMeasure,
+            hookimpl,
+        )
+
+
+        class PostFenceParams(MeasureParams):
+            height_m: float = 2.0
+            capacity_kj: float = 100.0
+
+
+        class PostFence(ProtectiveMeasure):
+            kind = "post_fence"
+            summary = "Light post-and-mesh net fence for small rocks"
+            Params = PostFenceParams
+            example = {"x": 70.0, "height_m": 2.0, "capacity_kj": 100.0}
+            design_variables = {"x": (10.0, 120.0), "height_m": (1.0, 4.0)}
+
+            def footprint(self, section):
+                p = self.params
+                return Barrier(x=p.x, height_m=p.height_m, capacity_kj=p.capacity_kj,
+                               behaviour=BarrierBehaviour.NET)
+
+            def design_properties(self):
+                return {"height_m": self.params.height_m,
+                        "capacity_kj": self.params.capacity_kj}
+
+
+        @hookimpl
+        def rockfall_design_measures():
+            return [PostFence]
+    """
+
+
+@hookspec
+def rockfall_design_safety_concepts() -> list[type[SafetyConcept]]:
+    """Register safety concepts (how rock statistics become design checks).
+
+    Called once, at start-up, when the registry is built; never per rock.
+    The project chooses one concept with ``safety: {concept: NAME, ...}``.
+
+    Returns
+    -------
+    list of type[SafetyConcept]
+        The concept *classes* (not instances) this plugin provides, in any
+        order; the registry sorts them by ``name``. An empty list (or None)
+        registers nothing.
+
+    Notes
+    -----
+    * ``name`` must be unique across all installed plugins; two plugins with
+      the same name stop the program with an error naming both.
+    * Required class attributes: ``name``, ``summary``, ``Params`` (a
+      :class:`SafetyParams` subclass: targets and partial factors with
+      documented defaults) and ``example`` (a valid parameter set *without*
+      ``concept``).
+    * Implement ``checks(result)``: given the :class:`MeasureResult` of one
+      measure (passing heights in m, energies in kJ, reaches in m, of the
+      rocks that met it), return a list of :class:`Check`; an empty list when
+      the concept has nothing to check for that kind of measure. Read the
+      measure's properties with ``result.measure.design_properties()``.
+
+    Examples
+    --------
+    Energy capacity against the largest energy with a partial factor,
+    ``safety: {concept: max_energy, factor: 1.5}`` in a project file:
+
+    .. code-block:: python
+
+        from rockfall_design import Check, SafetyConcept, SafetyParams, hookimpl
+
+
+        class MaxEnergyParams(SafetyParams):
+            factor: float = 1.5
+            "Partial factor on the largest energy (-)."
+
+
+        class MaxEnergy(SafetyConcept):
+            name = "max_energy"
+            summary = "Capacity >= factor x the largest energy of any rock"
+            Params = MaxEnergyParams
+            example = {"factor": 1.5}
+
+            def checks(self, result):
+                capacity = result.measure.design_properties().get("capacity_kj")
+                if capacity is None:
+                    return []
+                if len(result.energy_kj) == 0:
+                    return [Check("energy_factor", None, 1.0, True,
+                                  detail="no rock met the measure")]
+                design_kj = self.params.factor * float(max(result.energy_kj))
+                value = capacity / design_kj
+                return [Check("energy_factor", value, 1.0, value >= 1.0,
+                              detail=f"{capacity:g} kJ / {design_kj:g} kJ")]
+
+
+        @hookimpl
+        def rockfall_design_safety_concepts():
+            return [MaxEnergy]
+    """
+
+
+@hookspec
+def rockfall_design_cost_models() -> list[type[CostModel]]:
+    """Register cost models (how the quantities of a measure are priced).
+
+    Called once, at start-up, when the registry is built; never per rock and
+    never per candidate design of the optimiser (it calls the ``cost`` method
+    of an instance it made once).
+
+    Returns
+    -------
+    list of type[CostModel]
+        The cost-model *classes* (not instances) this plugin provides, in any
+        order; the registry sorts them by ``name``. An empty list (or None)
+        registers nothing.
+
+    Notes
+    -----
+    * ``name`` must be unique across all installed plugins; two plugins with
+      the same name stop the program with an error naming both.
+    * Required class attributes: ``name``, ``summary``, ``Params`` (a
+      :class:`CostParams` subclass: the catalogue of unit prices, units in
+      the field names) and ``example`` (a valid parameter set).
+    * Implement ``cost(measure, quantities, length_m)``: the cost of
+      ``measure`` over ``length_m`` metres of slope, from its
+      ``quantities`` per running metre. Raise ``KeyError`` or ``ValueError``
+      when the catalogue has no price for that measure.
+
+    Examples
+    --------
+    A price per running metre plus a price per kJ of capacity per metre:
+
+    .. code-block:: python
+
+        from rockfall_design import CostModel, CostParams, hookimpl
+
+
+        class UnitRateParams(CostParams):
+            per_m: float = 400.0
+            "Price per running metre of slope (currency/m)."
+            per_kj_per_m: float = 0.5
+            "Price per kJ of capacity per running metre (currency/(kJ m))."
+
+
+        class UnitRate(CostModel):
+            name = "unit_rate"
+            summary = "Price per metre plus price per kJ of capacity"
+            Params = UnitRateParams
+            example = {"per_m": 400.0, "per_kj_per_m": 0.5}
+
+            def cost(self, measure, quantities, length_m):
+                p = self.params
+                rate = p.per_m + p.per_kj_per_m * quantities.get("capacity_kj", 0.0)
+                return rate * length_m
+
+
+        @hookimpl
+        def rockfall_design_cost_models():
+            return [UnitRate]
+    """

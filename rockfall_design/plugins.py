@@ -1,0 +1,551 @@
+"""The plugin manager: find, load, check and register plugins.
+
+:func:`load_registry` builds a fresh :class:`pluggy.PluginManager`, loads
+every entry point of the ``rockfall_design`` group on its own (so that one
+broken plugin is reported by name and the others still load), calls each
+hook implementation on its own, validates every class it returns and
+collects them into a :class:`Registry`, sorted by name. Two plugins claiming
+one measure kind, safety concept or cost model is a :class:`PluginError`
+naming both.
+
+Nothing here is cached globally except by :func:`default_registry`, which
+the command line uses; tests build fresh registries with
+:func:`load_registry`.
+"""
+
+from __future__ import annotations
+
+import difflib
+import functools
+import importlib.metadata
+import inspect
+import logging
+import math
+import re
+import traceback
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from importlib.metadata import EntryPoint
+from typing import Any
+
+import pluggy
+from pydantic import BaseModel, ValidationError
+
+from . import hookspecs
+from .costs import CostModel
+from .errors import PluginError
+from .measures import ProtectiveMeasure
+from .safety import SafetyConcept
+
+__all__ = [
+    "PluginFailure",
+    "Registry",
+    "UnknownNameError",
+    "default_registry",
+    "load_registry",
+    "plugins_json",
+    "plugins_table",
+]
+
+log = logging.getLogger(__name__)
+
+_NAME_RE = re.compile(r"[a-z0-9_-]+")
+
+
+@dataclass(frozen=True)
+class PluginFailure:
+    """A plugin (or one class of it) that could not be used.
+
+    Attributes
+    ----------
+    plugin : str
+        The plugin's name (its entry-point name).
+    distribution : str or None
+        The distribution that ships it, None if unknown.
+    reason : str
+        One line: what went wrong.
+    """
+
+    plugin: str
+    distribution: str | None
+    reason: str
+
+
+class UnknownNameError(KeyError):
+    """A measure kind, safety concept or cost model that is not registered.
+
+    A :class:`KeyError` whose ``str()`` is the plain one-line message (with
+    "did you mean" and the names that exist), not its repr.
+    """
+
+    def __init__(self, message: str, name: str, known: list[str]) -> None:
+        super().__init__(message)
+        self.message = message
+        self.name = name
+        self.known = known
+
+    def __str__(self) -> str:
+        return self.message
+
+
+# (registry attribute, what a user calls it, hook, base class, name attribute, provider key)
+_SECTIONS: tuple[tuple[str, str, str, type, str, str], ...] = (
+    ("measures", "measure kind", "rockfall_design_measures", ProtectiveMeasure, "kind",
+     "measure"),
+    ("safety_concepts", "safety concept", "rockfall_design_safety_concepts", SafetyConcept,
+     "name", "safety"),
+    ("cost_models", "cost model", "rockfall_design_cost_models", CostModel, "name", "cost"),
+)
+# What a class's example must not contain: the key the project file uses to choose it.
+_SELECTOR_KEY = {"measures": "type", "safety_concepts": "concept"}
+
+
+@dataclass(frozen=True)
+class Registry:
+    """Everything the installed plugins provide, sorted by name.
+
+    Attributes
+    ----------
+    measures : dict of str to type[ProtectiveMeasure]
+        By ``kind``.
+    safety_concepts : dict of str to type[SafetyConcept]
+        By ``name``.
+    cost_models : dict of str to type[CostModel]
+        By ``name``.
+    provider : dict of (str, str) to str
+        ``("measure" | "safety" | "cost", name)`` -> name of the distribution
+        that provides it (the plugin name where the distribution is unknown).
+    failures : list of PluginFailure
+        Plugins, hooks and classes that were left out, and why.
+    blocked : list of str
+        The names blocked by the caller (entry-point or distribution names).
+    """
+
+    measures: dict[str, type[ProtectiveMeasure]] = field(default_factory=dict)
+    safety_concepts: dict[str, type[SafetyConcept]] = field(default_factory=dict)
+    cost_models: dict[str, type[CostModel]] = field(default_factory=dict)
+    provider: dict[tuple[str, str], str] = field(default_factory=dict)
+    failures: list[PluginFailure] = field(default_factory=list)
+    blocked: list[str] = field(default_factory=list)
+
+    def measure(self, kind: str) -> type[ProtectiveMeasure]:
+        """The measure class of ``kind``; :class:`UnknownNameError` (a KeyError) if none."""
+        return self._lookup(self.measures, kind, "measure kind")
+
+    def safety_concept(self, name: str) -> type[SafetyConcept]:
+        """The safety concept ``name``; :class:`UnknownNameError` (a KeyError) if none."""
+        return self._lookup(self.safety_concepts, name, "safety concept")
+
+    def cost_model(self, name: str) -> type[CostModel]:
+        """The cost model ``name``; :class:`UnknownNameError` (a KeyError) if none."""
+        return self._lookup(self.cost_models, name, "cost model")
+
+    def _lookup(self, table: dict[str, Any], name: str, what: str) -> Any:
+        try:
+            return table[name]
+        except (KeyError, TypeError):
+            pass
+        known = sorted(table)
+        msg = f"unknown {what} {name!r}"
+        close = difflib.get_close_matches(str(name), known, n=3, cutoff=0.6)
+        if close:
+            msg += "; did you mean " + " or ".join(repr(c) for c in close) + "?"
+        if known:
+            msg += f" Known: {', '.join(known)}."
+        else:
+            msg += f"; no {what} is registered."
+        if self.failures:
+            n = len({f.plugin for f in self.failures})
+            msg += (f" ({n} plugin{'s' if n != 1 else ''} failed to load; "
+                    "see `rockfall-design plugins`.)")
+        raise UnknownNameError(msg, str(name), known)
+
+
+# ---------------------------------------------------------------------------
+# loading
+
+
+def _one_line(text: object) -> str:
+    return " ".join(str(text).split())
+
+
+def _normalise(name: str) -> str:
+    """PEP 503 normalisation, so that ``My_Plugin`` blocks ``my-plugin``."""
+    return re.sub(r"[-_.]+", "-", name).lower()
+
+
+def _describe_exception(exc: BaseException) -> str:
+    """``Type: message (file:line)`` with the innermost frame outside importlib."""
+    text = f"{type(exc).__name__}: {_one_line(exc)}" if str(exc) else type(exc).__name__
+    frames = [f for f in traceback.extract_tb(exc.__traceback__)
+              if not f.filename.startswith("<")]
+    if frames:
+        text += f" ({frames[-1].filename}:{frames[-1].lineno})"
+    return text
+
+
+def _dist_name(ep: EntryPoint) -> str | None:
+    dist = getattr(ep, "dist", None)
+    if dist is None:
+        return None
+    try:
+        return dist.name or None
+    except Exception:  # pragma: no cover - broken metadata
+        return None
+
+
+@dataclass
+class _Plugin:
+    name: str
+    distribution: str | None
+
+    @property
+    def provider(self) -> str:
+        return self.distribution or self.name
+
+
+def _validate_class(cls: Any, section: str, base: type, name_attr: str) -> str | None:
+    """Why ``cls`` cannot be registered, or None if it can."""
+    if not inspect.isclass(cls):
+        return f"returned {cls!r}, which is not a class (return the class, not an instance)"
+    if not issubclass(cls, base):
+        return f"class {cls.__qualname__} is not a subclass of {base.__name__}"
+    label = f"class {cls.__qualname__}"
+    name = getattr(cls, name_attr, None)
+    if not isinstance(name, str) or not name:
+        return f"{label} has no {name_attr} (a non-empty string)"
+    if not _NAME_RE.fullmatch(name):
+        return (f"{label} has {name_attr} {name!r}: use only lower-case letters, digits, "
+                "'_' and '-'")
+    params = getattr(cls, "Params", None)
+    if not (inspect.isclass(params) and issubclass(params, BaseModel)):
+        return f"{label} ({name_attr} {name!r}) has no Params (a pydantic model class)"
+    if inspect.isabstract(cls):
+        missing = ", ".join(sorted(getattr(cls, "__abstractmethods__", ())))
+        return f"{label} ({name_attr} {name!r}) does not implement {missing}"
+    example = getattr(cls, "example", None)
+    if not isinstance(example, dict):
+        return f"{label} ({name_attr} {name!r}) has no example (a dict of parameters)"
+    selector = _SELECTOR_KEY.get(section)
+    if selector is not None and selector in example:
+        return (f"{label} ({name_attr} {name!r}): example must not contain {selector!r} "
+                "(it holds the parameters only)")
+    try:
+        params.model_validate(example)
+    except ValidationError as exc:
+        errs = exc.errors()
+        first = errs[0] if errs else {"loc": (), "msg": str(exc)}
+        where = ".".join(str(p) for p in first.get("loc", ())) or "example"
+        more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
+        return (f"{label} ({name_attr} {name!r}): example does not validate against "
+                f"Params: {where}: {_one_line(first.get('msg', ''))}{more}")
+    if section == "measures":
+        variables = getattr(cls, "design_variables", {})
+        if not isinstance(variables, dict):
+            return f"{label} (kind {name!r}): design_variables must be a dict"
+        fields = set(params.model_fields)
+        for var, bounds in variables.items():
+            if var not in fields:
+                return (f"{label} (kind {name!r}): design variable {var!r} is not a field "
+                        f"of Params ({', '.join(sorted(fields))})")
+            try:
+                low, high = (float(b) for b in bounds)
+            except (TypeError, ValueError):
+                return (f"{label} (kind {name!r}): design variable {var!r} needs bounds "
+                        f"(low, high), got {bounds!r}")
+            # NaN: no default bound, the project (or the optimiser) gives it
+            if not (math.isnan(low) or math.isnan(high) or low < high):
+                return (f"{label} (kind {name!r}): design variable {var!r} has bounds "
+                        f"({low:g}, {high:g}); low must be below high")
+    return None
+
+
+def _entry_points(entry_points: Iterable[EntryPoint] | None) -> list[EntryPoint]:
+    if entry_points is None:
+        entry_points = importlib.metadata.entry_points(group=hookspecs.ENTRY_POINT_GROUP)
+    eps = [ep for ep in entry_points
+           if getattr(ep, "group", None) in (None, hookspecs.ENTRY_POINT_GROUP)]
+    return sorted(eps, key=lambda ep: (ep.name, _dist_name(ep) or "", ep.value))
+
+
+def load_registry(
+    *,
+    blocked: Iterable[str] = (),
+    entry_points: Iterable[EntryPoint] | None = None,
+    extra_plugins: Iterable[tuple[str, object]] = (),
+) -> Registry:
+    """Load the plugins and build a fresh :class:`Registry`.
+
+    Parameters
+    ----------
+    blocked
+        Entry-point or distribution names not to load (not even import).
+    entry_points
+        The entry points to load; by default those of the ``rockfall_design``
+        group of every installed distribution.
+    extra_plugins
+        ``(name, module or object)`` pairs registered in addition, as if they
+        came from an entry point (no distribution): for tests and embedding.
+
+    Returns
+    -------
+    Registry
+        Every valid class, sorted by name; everything that failed in
+        ``failures``.
+
+    Raises
+    ------
+    PluginError
+        If two plugins (or two classes of one plugin) claim one measure kind,
+        safety concept or cost-model name. The message names both providers.
+    """
+    blocked_names = sorted(dict.fromkeys(str(b) for b in blocked))
+    blocked_norm = {_normalise(b) for b in blocked_names}
+
+    pm = pluggy.PluginManager(hookspecs.PROJECT_NAME)
+    pm.add_hookspecs(hookspecs)
+    for name in blocked_names:
+        pm.set_blocked(name)
+
+    failures: list[PluginFailure] = []
+    plugins: dict[str, _Plugin] = {}
+
+    def fail(plugin: str, dist: str | None, reason: str) -> None:
+        failures.append(PluginFailure(plugin, dist, _one_line(reason)))
+
+    def register(name: str, dist: str | None, obtain: Callable[[], object]) -> None:
+        if _normalise(name) in blocked_norm or (dist and _normalise(dist) in blocked_norm):
+            pm.set_blocked(name)
+            return
+        if pm.has_plugin(name) or name in plugins:
+            other = plugins.get(name)
+            where = f" (by {other.provider})" if other is not None else ""
+            fail(name, dist, f"plugin name {name!r} is already taken{where}; "
+                 "rename the entry point")
+            return
+        try:
+            obj = obtain()
+        except Exception as exc:
+            log.debug("plugin %s failed to import", name, exc_info=True)
+            fail(name, dist, f"import failed: {_describe_exception(exc)}")
+            return
+        try:
+            if pm.register(obj, name=name) is None:  # blocked by name
+                return
+        except Exception as exc:
+            if pm.get_plugin(name) is not None:  # pluggy may leave half a registration
+                pm.unregister(name=name)
+            if isinstance(exc, ValueError) and "already registered" in str(exc):
+                reason = "the same object is already registered under another plugin name"
+            else:
+                reason = f"cannot register: {_describe_exception(exc)}"
+            fail(name, dist, reason)
+            return
+        try:
+            pm.check_pending()
+        except pluggy.PluginValidationError:
+            unknown = sorted(
+                hname for hname, caller in vars(pm.hook).items()
+                if not hname.startswith("_") and not caller.has_spec()
+                and any(impl.plugin_name == name for impl in caller.get_hookimpls())
+            )
+            pm.unregister(name=name)
+            hint = _hook_hint(unknown)
+            fail(name, dist, f"unknown hook {', '.join(unknown)}{hint}")
+            return
+        impls = [impl for caller in pm.get_hookcallers(obj) or [] for impl in
+                 caller.get_hookimpls() if impl.plugin_name == name]
+        if not impls:
+            pm.unregister(name=name)
+            unmarked = [h for h in _hook_names() if callable(getattr(obj, h, None))]
+            if unmarked:
+                fail(name, dist, f"{', '.join(unmarked)} not marked with @hookimpl "
+                     "(from rockfall_design import hookimpl)")
+            else:
+                fail(name, dist, "implements no rockfall_design hook "
+                     f"({', '.join(_hook_names())})")
+            return
+        plugins[name] = _Plugin(name, dist)
+
+    for ep in _entry_points(entry_points):
+        register(ep.name, _dist_name(ep), ep.load)
+    for name, obj in extra_plugins:
+        register(str(name), None, lambda obj=obj: obj)
+
+    # Call every hook implementation on its own, so that a failure is the
+    # plugin's own; collect everything, then check for duplicates and sort.
+    found: dict[str, dict[str, list[tuple[_Plugin, type]]]] = {}
+    for section, _what, hook_name, base, name_attr, _key in _SECTIONS:
+        claims = found.setdefault(section, {})
+        caller = getattr(pm.hook, hook_name)
+        for impl in caller.get_hookimpls():
+            plugin = plugins.get(impl.plugin_name)
+            if plugin is None:  # pragma: no cover - registered outside register()
+                continue
+            if impl.hookwrapper or impl.wrapper:
+                fail(plugin.name, plugin.distribution,
+                     f"{hook_name} must be a plain hook, not a wrapper")
+                continue
+            try:
+                result = impl.function()
+            except Exception as exc:
+                log.debug("hook %s of plugin %s raised", hook_name, plugin.name,
+                          exc_info=True)
+                fail(plugin.name, plugin.distribution,
+                     f"{hook_name} raised {_describe_exception(exc)}")
+                continue
+            if result is None:
+                continue
+            if not isinstance(result, list | tuple):
+                fail(plugin.name, plugin.distribution,
+                     f"{hook_name} returned {type(result).__name__}; return a list of classes")
+                continue
+            for cls in result:
+                why = _validate_class(cls, section, base, name_attr)
+                if why is not None:
+                    fail(plugin.name, plugin.distribution, f"{hook_name}: {why}")
+                    continue
+                entries = claims.setdefault(getattr(cls, name_attr), [])
+                if not any(p is plugin and c is cls for p, c in entries):
+                    entries.append((plugin, cls))
+
+    duplicates = []
+    for section, what, _hook, _base, _attr, _key in _SECTIONS:
+        for name, entries in sorted(found[section].items()):
+            if len(entries) > 1:
+                who = sorted(
+                    f"{p.name} (distribution {p.distribution}, class {c.__qualname__})"
+                    if p.distribution else f"{p.name} (class {c.__qualname__})"
+                    for p, c in entries
+                )
+                duplicates.append(f"{what} {name!r} is provided by both " + " and ".join(who))
+    if duplicates:
+        raise PluginError(
+            "; ".join(duplicates) + ". Uninstall one of them, or block one with "
+            "`--block PLUGIN`."
+        )
+
+    tables: dict[str, dict[str, type]] = {}
+    provider: dict[tuple[str, str], str] = {}
+    for section, _what, _hook, _base, _attr, key in _SECTIONS:
+        tables[section] = {}
+        for name, [(plugin, cls)] in sorted(found[section].items()):
+            tables[section][name] = cls
+            provider[(key, name)] = plugin.provider
+
+    return Registry(
+        measures=tables["measures"],
+        safety_concepts=tables["safety_concepts"],
+        cost_models=tables["cost_models"],
+        provider=provider,
+        failures=sorted(failures, key=lambda f: (f.plugin, f.distribution or "", f.reason)),
+        blocked=blocked_names,
+    )
+
+
+def _hook_names() -> list[str]:
+    return [section[2] for section in _SECTIONS]
+
+
+def _hook_hint(unknown: list[str]) -> str:
+    for name in unknown:
+        close = difflib.get_close_matches(name, _hook_names(), n=1, cutoff=0.6)
+        if close:
+            return f" (did you mean {close[0]}?)"
+    return f" (known hooks: {', '.join(_hook_names())})"
+
+
+@functools.lru_cache(maxsize=1)
+def _default_registry() -> Registry:
+    return load_registry()
+
+
+def default_registry(blocked: Iterable[str] = ()) -> Registry:
+    """The registry of the installed plugins, for the command line.
+
+    Cached for the life of the process when nothing is blocked (clear it with
+    ``default_registry.cache_clear()``); a fresh registry otherwise.
+    """
+    blocked = list(blocked)
+    if blocked:
+        return load_registry(blocked=blocked)
+    return _default_registry()
+
+
+default_registry.cache_clear = _default_registry.cache_clear  # type: ignore[attr-defined]
+
+
+# ---------------------------------------------------------------------------
+# rendering
+
+
+def _parameters(cls: type) -> list[str]:
+    params = cls.Params  # type: ignore[attr-defined]
+    try:
+        return list(params.model_json_schema().get("properties", {}))
+    except Exception:  # a field type without a JSON schema
+        return list(params.model_fields)
+
+
+def plugins_json(registry: Registry) -> dict[str, Any]:
+    """The registry as plain JSON-able data (``rockfall-design plugins --json``)."""
+    out: dict[str, Any] = {}
+    for section, _what, _hook, _base, name_attr, key in _SECTIONS:
+        out[section] = [
+            {
+                name_attr: name,
+                "summary": str(getattr(cls, "summary", "") or ""),
+                "provider": registry.provider.get((key, name), ""),
+                "parameters": _parameters(cls),
+            }
+            for name, cls in getattr(registry, section).items()
+        ]
+    out["blocked"] = list(registry.blocked)
+    out["failures"] = [
+        {"plugin": f.plugin, "distribution": f.distribution, "reason": f.reason}
+        for f in registry.failures
+    ]
+    return out
+
+
+def plugins_table(registry: Registry):
+    """The registry as rich tables (``rockfall-design plugins``)."""
+    from rich.console import Group
+    from rich.table import Table
+    from rich.text import Text
+
+    titles = {"measures": "Measures", "safety_concepts": "Safety concepts",
+              "cost_models": "Cost models"}
+    parts: list[Any] = []
+    for section, _what, _hook, _base, name_attr, key in _SECTIONS:
+        table = Table(title=titles[section], title_justify="left", expand=False)
+        table.add_column(name_attr, style="bold")
+        table.add_column("summary")
+        table.add_column("provider", style="dim")
+        entries = getattr(registry, section)
+        for name, cls in entries.items():
+            table.add_row(name, str(getattr(cls, "summary", "") or ""),
+                          registry.provider.get((key, name), ""))
+        if not entries:
+            table.add_row(Text("(none)", style="dim"), "", "")
+        parts.append(table)
+    if not any(getattr(registry, section[0]) for section in _SECTIONS):
+        parts.append(Text(
+            "No plugin provides anything. The built-in plugins are found through the "
+            "entry points of the installed distribution: is rockfall-design installed "
+            "(pip install -e .)?", style="yellow"))
+    if registry.blocked:
+        table = Table(title="Blocked", title_justify="left")
+        table.add_column("name")
+        for name in registry.blocked:
+            table.add_row(name)
+        parts.append(table)
+    if registry.failures:
+        table = Table(title="Failures", title_justify="left")
+        table.add_column("plugin", style="bold")
+        table.add_column("distribution")
+        table.add_column("reason", style="red")
+        for f in registry.failures:
+            table.add_row(f.plugin, f.distribution or "-", f.reason)
+        parts.append(table)
+    return Group(*parts)

@@ -1,0 +1,24 @@
+"""Every bundled example project runs as it is."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from rockfall_design.cli import main
+from rockfall_design.project import load_project
+
+PROJECTS = sorted((Path(__file__).resolve().parents[1] / "projects").glob("*.yaml"))
+
+
+@pytest.mark.parametrize("path", PROJECTS, ids=[p.stem for p in PROJECTS])
+def test_example_project_runs(path, capsys):
+    project = load_project(path)
+    if project.measures:
+        code = main(["check", str(path), "--rocks", "30", "--json"])
+        assert code in (0, 1)
+    else:
+        assert main(["simulate", str(path), "--rocks", "30", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["rocks"] == 30
