@@ -82,6 +82,13 @@ O_BROKEN_THROUGH = 3
 O_REBOUNDED = 4
 O_PASSED_THROUGH_GAP = 5
 
+# Columns of a rock's state at the first downslope passage of a restart station,
+# enough to resume the path there exactly as it would have gone on (with the
+# rock's random stream, saved apart as uint64).
+RS_MODE, RS_X, RS_Y, RS_VX, RS_VY, RS_W, RS_T = 0, 1, 2, 3, 4, 5, 6
+RS_SEG, RS_E, RS_MU, RS_MUR, RS_NIMP, RS_NEV, RS_MAXX = 7, 8, 9, 10, 11, 12, 13
+N_RESTART_COLS = 14
+
 # Columns of the record of a rock's first meeting with a barrier.
 BM_H, BM_V, BM_E, BM_T = 0, 1, 2, 3
 N_BMEET_COLS = 4
@@ -415,12 +422,35 @@ def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
 
 
 @njit(cache=True)
-def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, cross):
-    """Record the first downslope passage of station ``j`` (if not yet done)."""
+def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, cross, rec, mode, yabs, xs):
+    """Record the first downslope passage of station ``j`` (if not yet done).
+
+    ``rec`` bundles the restart record: (grid_v, st_srow, srec, srng, rng,
+    drawn, ctx) with ctx = (cur_seg, n_imp, n_ev, max_x).
+    """
     if not np.isnan(grid_h[j]):
         return
     grid_h[j] = h
     grid_e[j] = 0.5 * m * (vx * vx + vy * vy) + 0.2 * m * r * r * w * w
+    grid_v, st_srow, srec, srng, rng, drawn, ctx = rec
+    grid_v[j] = np.hypot(vx, vy)
+    q = st_srow[j]
+    if q >= 0:
+        srec[q, RS_MODE] = mode
+        srec[q, RS_X] = xs
+        srec[q, RS_Y] = yabs
+        srec[q, RS_VX] = vx
+        srec[q, RS_VY] = vy
+        srec[q, RS_W] = w
+        srec[q, RS_T] = t
+        srec[q, RS_SEG] = ctx[0]
+        srec[q, RS_E] = drawn[0]
+        srec[q, RS_MU] = drawn[1]
+        srec[q, RS_MUR] = drawn[2]
+        srec[q, RS_NIMP] = ctx[1]
+        srec[q, RS_NEV] = ctx[2]
+        srec[q, RS_MAXX] = max(ctx[3], xs)
+        srng[q] = rng[0]
     u = st_user[j]
     if u >= 0:
         cross[u, C_H] = h
@@ -522,6 +552,12 @@ def simulate_rock(
     bars,
     bar_out,
     bar_rec,
+    grid_v,
+    st_srow,
+    srec,
+    srng,
+    resume,
+    state0,
 ):
     """Follow one rock from its release to the end of its path.
 
@@ -570,6 +606,20 @@ def simulate_rock(
     bar_rec : ndarray of float, shape (B, N_BMEET_COLS)
         Out: passing height (m), speed (m/s), total kinetic energy (J) and
         time (s) of that first meeting.
+    grid_v : ndarray of float, shape (S,)
+        Out: speed (m/s) at the first downslope passage of each station.
+    st_srow : ndarray of int, shape (S,)
+        Row of ``srec`` for each restart station, or -1.
+    srec : ndarray of float, shape (R, N_RESTART_COLS)
+        Out: the rock's full state at the first downslope passage of each
+        restart station (columns ``RS_*``); must come in as NaN.
+    srng : ndarray of uint64, shape (R,)
+        Out: the rock's random stream there.
+    resume : bool
+        Start from ``state0`` (a row of ``srec``, with ``rng`` set to the
+        matching ``srng``) instead of the release.
+    state0 : ndarray of float, shape (N_RESTART_COLS,)
+        The state to resume from.
 
     Returns
     -------
@@ -619,7 +669,28 @@ def simulate_rock(
     nvy = 0.0
     nw = 0.0
     vs = 0.0
-    if h0 > 0.0:
+    ctx = np.zeros(4)
+    if resume:
+        # Continue a path from its state at a restart station.
+        mode = int(state0[RS_MODE])
+        x = state0[RS_X]
+        y = state0[RS_Y]
+        vx = state0[RS_VX]
+        vy = state0[RS_VY]
+        w = state0[RS_W]
+        t = state0[RS_T]
+        cur_seg = int(state0[RS_SEG])
+        drawn[0] = state0[RS_E]
+        drawn[1] = state0[RS_MU]
+        drawn[2] = state0[RS_MUR]
+        n_imp = int(state0[RS_NIMP])
+        n_ev = int(state0[RS_NEV])
+        max_x = state0[RS_MAXX]
+        k = locate(px, x, vx)
+        if mode == CONTACT:
+            # Back onto the path (the record is exact up to round-off).
+            y = path_height(px, py, k, x)
+    elif h0 > 0.0:
         y += h0
         mode = FLIGHT
     else:
@@ -636,10 +707,15 @@ def simulate_rock(
             vx = vt * tx
             vy = vt * ty
 
+    rec = (grid_v, st_srow, srec, srng, rng, drawn, ctx)
     while True:
         if n_ev >= max_events:
             status = UNRESOLVED
             break
+        ctx[0] = cur_seg
+        ctx[1] = n_imp
+        ctx[2] = n_ev
+        ctx[3] = max_x
         n_ev += 1
         if n_traj < ntraj_cap:
             traj[n_traj, T_X] = x
@@ -685,7 +761,7 @@ def simulate_rock(
                         ts = (st_x[j] - x) / vx
                         ys = y + vy * ts - 0.5 * G * ts * ts
                         _record(j, ys - st_yg[j], vx, vy - G * ts, w, t + ts, m, r,
-                                st_user, grid_h, grid_e, cross)
+                                st_user, grid_h, grid_e, cross, rec, FLIGHT, ys, st_x[j])
                         j += 1
                 tb = (xb - x) / vx
                 t += tb
@@ -722,6 +798,10 @@ def simulate_rock(
                         grid_h,
                         grid_e,
                         cross,
+                        rec,
+                        FLIGHT,
+                        ys,
+                        st_x[j],
                     )
                     j += 1
             t += tf
@@ -875,6 +955,10 @@ def simulate_rock(
                     grid_h,
                     grid_e,
                     cross,
+                    rec,
+                    CONTACT,
+                    y + dy * dd,
+                    st_x[j],
                 )
                 j += 1
         x = xn

@@ -252,6 +252,15 @@ class EnsembleResult:
         of that meeting; NaN if not met.
     caught_by : ndarray of int, shape (N,)
         Barrier that caught each rock (order given), or -1.
+    grid_speed : ndarray of float32, shape (N, S)
+        Speed (m/s) at the first downslope passage of each envelope station.
+    restart_x : ndarray, shape (R,)
+        Restart stations (m), sorted.
+    restart_state : ndarray, shape (N, R, core.N_RESTART_COLS)
+        Each rock's state at the first downslope passage of each restart
+        station; NaN where it never passed.
+    restart_rng : ndarray of uint64, shape (N, R)
+        Each rock's random stream there.
     """
 
     radius: np.ndarray
@@ -272,6 +281,10 @@ class EnsembleResult:
     barrier_outcome: np.ndarray
     barrier_meeting: np.ndarray
     caught_by: np.ndarray
+    grid_speed: np.ndarray
+    restart_x: np.ndarray
+    restart_state: np.ndarray
+    restart_rng: np.ndarray
 
     @property
     def n(self) -> int:
@@ -319,6 +332,13 @@ def _run_batch(
     bar_out,
     bar_rec,
     caught_by,
+    grid_v,
+    st_srow,
+    srec,
+    srng,
+    resume,
+    states0,
+    rngs0,
 ):
     n = radius.shape[0]
     nseg = gx.shape[0] - 1
@@ -336,9 +356,17 @@ def _run_batch(
             # Rocks of one size share their centre path.
             px, py, pseg = centre_path(gx, gy, seg_ids, radius[i], max_chord)
             r_prev = radius[i]
-        rng[0] = stream_start(key, first_index + i)
+        if resume[i]:
+            rng[0] = rngs0[i]
+        else:
+            rng[0] = stream_start(key, first_index + i)
         gh[:] = np.nan
         ge[:] = np.nan
+        gv = grid_v[i]
+        gv[:] = np.nan
+        sr = srec[i]
+        sr[:, :] = np.nan
+        sg = srng[i]
         cr = cross[i]
         cr[:, :] = np.nan
         tr = traj[i] if i < traj.shape[0] else empty_traj
@@ -372,6 +400,12 @@ def _run_batch(
             bars,
             bo,
             br,
+            gv,
+            st_srow,
+            sr,
+            sg,
+            resume[i],
+            states0[i],
         )
         caught_by[i] = cb
         status[i] = st
@@ -396,6 +430,8 @@ def run_ensemble(
     grid: np.ndarray | list[float] = (),
     settings: EngineSettings | None = None,
     barriers: np.ndarray | None = None,
+    restart_stations: np.ndarray | list[float] = (),
+    resume: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
     n_trajectories: int = 0,
     max_trajectory_points: int = 4000,
     batch_size: int = 4096,
@@ -417,6 +453,14 @@ def run_ensemble(
     barriers : ndarray, shape (B, core.N_BARRIER_COLS), optional
         Barrier table (columns ``core.BR_*``; the ground-height column is
         filled in here), any order. See :func:`barrier_table`.
+    restart_stations : array_like
+        Stations (m), each also an envelope station, at whose first downslope
+        passage every rock's full state is kept (``restart_state``,
+        ``restart_rng``), so that a later run can resume the rocks there.
+    resume : (mask, states, rngs), optional
+        Per rock: whether to resume, the state (a row of ``restart_state``)
+        and the random stream (of ``restart_rng``). A resumed rock continues
+        exactly as it would have from that point, on this run's section.
     n_trajectories : int
         Record the event states of the first ``n_trajectories`` rocks.
     max_trajectory_points : int
@@ -434,7 +478,12 @@ def run_ensemble(
     settings = settings or EngineSettings()
     n = len(releases)
     user = np.asarray(stations, dtype=float).ravel()
-    grid_all = np.unique(np.concatenate([user, np.asarray(grid, dtype=float).ravel()]))
+    rs_x = np.unique(np.asarray(restart_stations, dtype=float).ravel())
+    grid_all = np.unique(
+        np.concatenate([user, np.asarray(grid, dtype=float).ravel(), rs_x])
+    )
+    st_srow = np.full(grid_all.size, -1, dtype=np.int64)
+    st_srow[np.searchsorted(grid_all, rs_x)] = np.arange(rs_x.size)
     st_user = np.full(grid_all.size, -1, dtype=np.int64)
     # Rows of `crossings` follow the user's order; duplicates share a grid slot.
     for u, xs in enumerate(user):
@@ -473,6 +522,17 @@ def run_ensemble(
     bar_out_s = np.zeros((n, nb), dtype=np.int8)
     bar_rec_s = np.empty((n, nb, core.N_BMEET_COLS))
     caught_s = np.empty(n, dtype=np.int64)
+    grid_v = np.empty((n, grid_all.size), dtype=np.float32)
+    srec = np.empty((n, rs_x.size, core.N_RESTART_COLS))
+    srng = np.zeros((n, rs_x.size), dtype=np.uint64)
+    if resume is None:
+        res_mask = np.zeros(n, dtype=bool)
+        states0 = np.zeros((n, core.N_RESTART_COLS))
+        rngs0 = np.zeros(n, dtype=np.uint64)
+    else:
+        res_mask = np.ascontiguousarray(resume[0], dtype=bool)
+        states0 = np.ascontiguousarray(resume[1], dtype=float)
+        rngs0 = np.ascontiguousarray(resume[2], dtype=np.uint64)
     mats = section.material_table()
     sv = settings.vector()
     # numba wants a uint64 scalar; Python ints above 2**63 need the wrap.
@@ -520,6 +580,13 @@ def run_ensemble(
             bar_out_s[sl],
             bar_rec_s[sl],
             caught_s[sl],
+            grid_v[sl],
+            st_srow,
+            srec[sl],
+            srng[sl],
+            res_mask[sl],
+            states0[sl],
+            rngs0[sl],
         )
         if progress is not None:
             progress(b)
@@ -544,6 +611,10 @@ def run_ensemble(
         barrier_outcome=_unsort(bar_out_s, bar_order),
         barrier_meeting=_unsort(bar_rec_s, bar_order),
         caught_by=_caught_in_given_order(caught_s, bar_order),
+        grid_speed=grid_v,
+        restart_x=rs_x,
+        restart_state=srec,
+        restart_rng=srng,
     )
 
 
