@@ -88,6 +88,18 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run_options(chk)
     _add_block_option(chk)
     chk.set_defaults(func=cmd_check)
+    opt = sub.add_parser(
+        "optimise",
+        aliases=["optimize"],
+        help="find the least-cost protection that meets the safety targets",
+        description="Search the candidate measures of the project's design section for the "
+        "cheapest design of every family (each type alone, pairs, the same type twice, ...) "
+        "that meets every safety check and the residual target, check each family's best "
+        "exactly and on fresh rocks, and compare them.",
+    )
+    _add_run_options(opt)
+    _add_block_option(opt)
+    opt.set_defaults(func=cmd_optimise)
     plg = sub.add_parser(
         "plugins",
         help="list the measures, safety concepts and cost models of the installed plugins",
@@ -215,6 +227,72 @@ def cmd_check(args: argparse.Namespace) -> int:
 
         print_check(summary)
     return int(ExitCode.OK if evaluation.ok else ExitCode.CHECK_FAILED)
+
+
+def cmd_optimise(args: argparse.Namespace) -> int:
+    """Least-cost design; exit 0 with a design, 1 if no family meets the targets."""
+    from .optimise import optimise
+    from .outputs import write_csv, write_json, write_text
+    from .plugins import load_registry
+    from .project import load_project
+    from .report import alternatives_table, design_yaml, print_optimise
+
+    project = load_project(args.project)
+    if project.design is None:
+        raise project.error_at((), "the project has no design: section to optimise "
+                                   "(see the README, 'Designing protection')")
+    registry = load_registry(blocked=args.block)
+    _warn_failures(registry)
+    n = args.rocks or project.rocks.count
+    _memory_guard(n, project.analysis.envelope_points + 400, len(project.analysis.stations))
+    prog, callback = _stage_progress(sys.stderr.isatty())
+    if prog is None:
+        result = optimise(project, registry, rocks=n, seed=args.seed)
+    else:
+        with prog:
+            result = optimise(project, registry, rocks=n, seed=args.seed, progress=callback)
+    summary = result.summary()
+    if args.out:
+        out: Path = args.out
+        if result.best is not None:
+            write_text(out / "design.yaml", design_yaml(result.best, args.project))
+        write_csv(out / "alternatives.csv", alternatives_table(result))
+        record = {"command": "optimise", "version": __version__, "seed": result.seed,
+                  "rocks": result.rocks, "project_file": str(args.project),
+                  "project_hash": project.resolved_hash(), "project": project.resolved_dict()}
+        write_json(out / "summary.json", {**summary, "run": record})
+    if args.plot and result.best is not None and result.best.evaluation is not None:
+        from .report import plot_study
+
+        ev = result.best.evaluation
+        plot_study(ev.study, args.plot, ev)
+    if args.json:
+        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
+    else:
+        print_optimise(result, project)
+    return int(ExitCode.OK if result.best is not None else ExitCode.CHECK_FAILED)
+
+
+def _stage_progress(interactive: bool):
+    """A rich progress display of the optimiser's stages on stderr."""
+    if not interactive:
+        return None, None
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    prog = Progress("[progress.description]{task.description}", BarColumn(),
+                    MofNCompleteColumn(), TimeElapsedColumn(), console=Console(stderr=True),
+                    transient=True)
+    tasks: dict[str, Any] = {}
+
+    def callback(stage: str, done: int, total: int) -> None:
+        label = {"search": "searching families", "check": "exact and fresh checks"}.get(
+            stage, stage)
+        if stage not in tasks:
+            tasks[stage] = prog.add_task(label, total=total)
+        prog.update(tasks[stage], completed=done, total=total)
+
+    return prog, callback
 
 
 def cmd_plugins(args: argparse.Namespace) -> int:

@@ -42,7 +42,11 @@ __all__ = [
     "place_measures",
     "edited_section",
     "evaluate",
+    "evaluate_design",
 ]
+
+#: Two barriers closer than this (m) stand in each other's place.
+MIN_BARRIER_SPACING_M = 1.0
 
 _BEHAVIOUR_CODE = {
     BarrierBehaviour.NET: core.B_NET,
@@ -124,6 +128,15 @@ def place_measures(
                 f"{b.measure.label()} overlaps {a.measure.label()} (measures[{a.index}]): "
                 f"the ground from x = {b.footprint.x_start:g} m to "
                 f"{a.footprint.x_end:g} m would be edited twice",
+            )
+    bars = sorted((p for p in placed if isinstance(p.footprint, Barrier)),
+                  key=lambda p: p.footprint.x)
+    for a, b in zip(bars, bars[1:], strict=False):
+        if b.footprint.x - a.footprint.x < MIN_BARRIER_SPACING_M:
+            raise project.error_at(
+                ("measures", b.index, "x"),
+                f"{b.measure.label()} stands where {a.measure.label()} (measures[{a.index}]) "
+                f"stands; barriers must be at least {MIN_BARRIER_SPACING_M:g} m apart",
             )
     x0, x1 = section.x[0], section.x[-1]
     for p in placed:
@@ -434,6 +447,22 @@ def evaluate(
     """
     measures = build_measures(project, registry)
     concept = build_concept(project, registry)
+    return evaluate_design(project, registry, measures, concept, rocks=rocks, seed=seed,
+                           n_trajectories=n_trajectories, progress=progress)
+
+
+def evaluate_design(
+    project: Project,
+    registry: Registry,
+    measures: Sequence[ProtectiveMeasure],
+    concept: SafetyConcept,
+    *,
+    rocks: int | None = None,
+    seed: int | None = None,
+    n_trajectories: int = 0,
+    progress: Callable[[int], None] | None = None,
+) -> Evaluation:
+    """Like :func:`evaluate`, for given measure and concept objects (the optimiser's designs)."""
     bare = section_from_project(project)
     placed = place_measures(project, measures, bare)
     section = edited_section(project, bare, placed)

@@ -66,6 +66,12 @@ from .errors import ProjectError
 
 __all__ = [
     "Analysis",
+    "Design",
+    "DesignCosts",
+    "Locator",
+    "ResidualFraction",
+    "Site",
+    "params_problem",
     "EngineConfig",
     "Material",
     "Project",
@@ -636,13 +642,14 @@ class EngineConfig(_Model):
 # --------------------------------------------------------------------------------------
 
 
-def _raw(value: Any, subpath: tuple = ()) -> Any:
+def _raw(value: Any, subpath: tuple = (), *, number_keys: bool = False) -> Any:
     """Plain YAML data for a plugin, checked and copied.
 
     Accepts null, booleans, strings, integers, finite floats, lists and
     mappings with string keys (recursively); NaN and infinities, non-string
     keys and other YAML types (``!!binary``, ``!!set``) are rejected at the
-    offending node.
+    offending node. With ``number_keys``, finite numbers are accepted as keys
+    too (a price table by height, ``{2: 350, 3: 420}``).
     """
     if value is None or isinstance(value, bool | str | int):
         return value
@@ -651,13 +658,17 @@ def _raw(value: Any, subpath: tuple = ()) -> Any:
             raise _fail(f"must be finite, got {_fmt(value)}", subpath)
         return value
     if isinstance(value, list | tuple):
-        return [_raw(item, subpath + (i,)) for i, item in enumerate(value)]
+        return [_raw(item, subpath + (i,), number_keys=number_keys) for i, item in enumerate(value)]
     if isinstance(value, dict):
         copied = {}
         for key, item in value.items():
-            if not isinstance(key, str):
+            number = isinstance(key, int | float) and not isinstance(key, bool)
+            if number and number_keys:
+                if not math.isfinite(key):
+                    raise _fail(f"keys must be finite, got {_fmt(key)}", subpath + (key,))
+            elif not isinstance(key, str):
                 raise _fail(f"keys must be names, got {_describe(key)}", subpath + (key,))
-            copied[key] = _raw(item, subpath + (key,))
+            copied[key] = _raw(item, subpath + (key,), number_keys=number_keys)
         return copied
     raise _fail(f"unsupported value: {_describe(value)}", subpath)
 
@@ -718,6 +729,414 @@ def _plain_copy(value: Any, what: str) -> Any:
         raise ValueError(f"{what}{where}: {exc.message()}") from None
 
 
+# --------------------------------------------------------------------------------------
+# The design section (least-cost optimiser): shapes checked here, plugins resolve it later
+# --------------------------------------------------------------------------------------
+
+
+class ResidualFraction(_Model):
+    """``residual: {fraction: F}``: the fraction of rocks allowed in the protected zone."""
+
+    fraction: Fraction = Field(
+        description="Fraction of the rocks allowed to reach the protected zone (-), 0..1."
+    )
+
+
+def _parse_residual(value: Any) -> Any:
+    """``residual``: a count of rocks (integer >= 0) or ``{fraction: F}``."""
+    forms = "a count of rocks (an integer >= 0) or {fraction: F}"
+    if isinstance(value, ResidualFraction):
+        return value
+    if isinstance(value, dict):
+        for key in value:
+            if key != "fraction":
+                hint = _did_you_mean(key, ["fraction"]) if isinstance(key, str) else ""
+                raise _fail(f"unknown key {key!r}{hint}; expected {forms}", (key,))
+        if "fraction" not in value:
+            raise _fail(f"required key 'fraction' is missing; expected {forms}")
+        fraction = _as_number(value["fraction"], ("fraction",))
+        if not 0.0 <= fraction <= 1.0:
+            raise _fail(f"expected a number in 0..1, got {_fmt(fraction)}", ("fraction",))
+        return ResidualFraction(fraction=fraction)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise _fail(f"expected {forms}, got {_describe(value)}")
+    if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
+        raise _fail(f"expected {forms}, got {_describe(value)}")
+    if value < 0:
+        raise _fail(f"expected {forms}, got {_fmt(value)}")
+    return int(value)
+
+
+class Site(_Model):
+    """The site: how much slope the measures span."""
+
+    length_m: Positive = Field(
+        description="Length of slope to protect, along the contour (m): what the measures span."
+    )
+
+
+_CATALOGUE_FORM = "measure type -> product name -> {capacity_kj: E, heights: [h, ...]}"
+
+
+def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
+    """A product catalogue, normalised: ``{kind: {name: {capacity_kj, heights, ...}}}``.
+
+    ``capacity_kj`` (kJ) is a number > 0, ``heights`` (m) a non-empty list of
+    distinct numbers > 0; other keys of a product are kept as plain data.
+    """
+    if not isinstance(value, dict):
+        raise _fail(f"expected a mapping {_CATALOGUE_FORM}, got {_describe(value)}")
+    catalogue: dict[str, dict[str, dict[str, Any]]] = {}
+    for kind, table in value.items():
+        if not isinstance(kind, str) or not kind.strip():
+            raise _fail(f"expected the name of a measure type, got {_describe(kind)}", (kind,))
+        if not isinstance(table, dict):
+            raise _fail(
+                f"expected a mapping of product name -> {{capacity_kj: E, heights: [h, ...]}}, "
+                f"got {_describe(table)}",
+                (kind,),
+            )
+        products: dict[str, dict[str, Any]] = {}
+        for name, entry in table.items():
+            where = (kind, name)
+            if not isinstance(name, str) or not name.strip():
+                raise _fail(
+                    f"expected a product name, got {_describe(name)} (quote names such as '100')",
+                    where,
+                )
+            if not isinstance(entry, dict):
+                raise _fail(
+                    f"expected a mapping {{capacity_kj: E, heights: [h, ...]}}, "
+                    f"got {_describe(entry)}",
+                    where,
+                )
+            for key in ("capacity_kj", "heights"):
+                if key not in entry:
+                    what = "energy class (kJ)" if key == "capacity_kj" else "heights (m)"
+                    raise _fail(f"required key {key!r} is missing (the product's {what})", where)
+            capacity = _as_number(entry["capacity_kj"], where + ("capacity_kj",))
+            if capacity <= 0:
+                raise _fail(
+                    f"expected a number > 0, got {_fmt(capacity)}", where + ("capacity_kj",)
+                )
+            heights_raw = entry["heights"]
+            if not isinstance(heights_raw, list | tuple) or not heights_raw:
+                raise _fail(
+                    f"expected a non-empty list of heights (m), got {_describe(heights_raw)}",
+                    where + ("heights",),
+                )
+            heights: list[float] = []
+            for j, item in enumerate(heights_raw):
+                h = _as_number(item, where + ("heights", j))
+                if h <= 0:
+                    raise _fail(f"expected a number > 0, got {_fmt(h)}", where + ("heights", j))
+                if h in heights:
+                    raise _fail(f"height {_fmt(h)} is listed twice", where + ("heights", j))
+                heights.append(h)
+            rest = {k: v for k, v in entry.items() if k not in ("capacity_kj", "heights")}
+            products[name] = {
+                "capacity_kj": capacity,
+                "heights": heights,
+                **_raw(rest, where),
+            }
+        catalogue[kind] = products
+    return catalogue
+
+
+def _parse_products(value: Any) -> Any:
+    """``design.products``: a catalogue file (a path) or an inline catalogue."""
+    if value is None:
+        return None
+    if isinstance(value, str):
+        if not value.strip():
+            raise _fail("must not be empty (a catalogue file, e.g. catalogue_products.yaml)")
+        return value
+    if not isinstance(value, dict):
+        raise _fail(
+            f"expected a catalogue file (a path) or a mapping {_CATALOGUE_FORM}, "
+            f"got {_describe(value)}"
+        )
+    return _check_products(value)
+
+
+def _parse_cost_params(value: Any) -> Any:
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise _fail(f"expected a mapping of the cost model's parameters, got {_describe(value)}")
+    return _raw(value, number_keys=True)
+
+
+class DesignCosts(_Model):
+    """``design.costs``: the cost model and its parameters (a file or inline)."""
+
+    model: Annotated[String, Field(min_length=1)] = Field(
+        "unit_prices", description="Name of the cost-model plugin."
+    )
+    file: Annotated[String, Field(min_length=1)] | None = Field(
+        None, description="YAML file of the cost model's parameters, relative to the project."
+    )
+    params: Annotated[Any, BeforeValidator(_parse_cost_params)] = Field(
+        None, description="The cost model's parameters, inline (instead of file)."
+    )
+
+    @model_validator(mode="after")
+    def _one_source(self) -> "DesignCosts":
+        if self.file is None and self.params is None:
+            raise _fail(
+                "give the cost model's parameters: file: PATH (a YAML file) or params: {...}"
+            )
+        if self.file is not None and self.params is not None:
+            raise _fail("give only one of file and params", ("params",))
+        return self
+
+
+_VALUE_FORMS = "a value (fixed), a range [min, max] or {options: [a, b, ...]}"
+
+
+def _check_options(value: Any, subpath: tuple) -> list:
+    if set(value) != {"options"}:
+        extra = next((k for k in value if k != "options"), None)
+        if extra is not None:
+            hint = _did_you_mean(extra, ["options"]) if isinstance(extra, str) else ""
+            raise _fail(
+                f"unknown key {extra!r}{hint}; expected {{options: [...]}}", subpath + (extra,)
+            )
+        raise _fail("required key 'options' is missing: expected {options: [...]}", subpath)
+    options = value["options"]
+    where = subpath + ("options",)
+    if not isinstance(options, list | tuple) or not options:
+        raise _fail(f"expected a non-empty list of options, got {_describe(options)}", where)
+    seen: list = []
+    for k, item in enumerate(options):
+        if item is None or not isinstance(item, bool | int | float | str):
+            raise _fail(
+                f"expected a number, string or boolean, got {_describe(item)}", where + (k,)
+            )
+        _raw(item, where + (k,))
+        if any(type(item) is type(s) and item == s for s in seen):
+            raise _fail(f"option {_fmt(item)} is listed twice", where + (k,))
+        seen.append(item)
+    return list(options)
+
+
+def _check_candidate_value(value: Any, subpath: tuple) -> Any:
+    """A candidate parameter: a fixed value, a range [min, max] or {options: [...]}."""
+    if isinstance(value, list | tuple):
+        if len(value) != 2:
+            raise _fail(
+                f"expected a range [min, max] of two numbers, got {_describe(value)}; "
+                "for a choice write {options: [...]}",
+                subpath,
+            )
+        for k, item in enumerate(value):
+            if isinstance(item, bool) or not isinstance(item, int | float):
+                raise _fail(
+                    f"a range [min, max] needs numbers, got {_describe(item)}; "
+                    "for a choice write {options: [...]}",
+                    subpath + (k,),
+                )
+        low, high = _as_number(value[0], subpath + (0,)), _as_number(value[1], subpath + (1,))
+        if not low < high:
+            raise _fail(
+                f"expected a range [min, max] with min < max, got [{_fmt(low)}, {_fmt(high)}]; "
+                "for a fixed value give the number",
+                subpath,
+            )
+        return list(value)
+    if isinstance(value, dict):
+        return {"options": _check_options(value, subpath)}
+    if value is None or not isinstance(value, bool | int | float | str):
+        raise _fail(f"expected {_VALUE_FORMS}, got {_describe(value)}", subpath)
+    return _raw(value, subpath)
+
+
+def _check_product_choice(value: Any, subpath: tuple) -> Any:
+    """``product``: a name, a list of names or {options: [names]}."""
+    names = value
+    where = subpath
+    if isinstance(value, dict):
+        names = _check_options(value, subpath)
+        where = subpath + ("options",)
+    elif isinstance(value, str):
+        names = [value]
+    elif not isinstance(value, list | tuple) or not value:
+        raise _fail(
+            f"expected a product name or a non-empty list of names, got {_describe(value)}",
+            subpath,
+        )
+    for k, name in enumerate(names):
+        at = where if isinstance(value, str) else where + (k,)
+        if not isinstance(name, str) or not name.strip():
+            raise _fail(f"expected a product name, got {_describe(name)}", at)
+        if name in names[:k]:
+            raise _fail(f"product {name!r} is listed twice", at)
+    return _raw(value, subpath)
+
+
+def _parse_candidates(value: Any) -> list[dict[str, Any]]:
+    """``design.candidates``: a non-empty list of mappings with ``type`` and ``x: [min, max]``."""
+    if not isinstance(value, list | tuple) or not value:
+        raise _fail(
+            "expected a non-empty list of candidate measures (mappings such as "
+            f"{{type: fence, x: [60, 110]}}), got {_describe(value)}"
+        )
+    candidates = []
+    for i, item in enumerate(value):
+        if not isinstance(item, dict):
+            raise _fail(
+                "expected a candidate measure (a mapping such as {type: fence, x: [60, 110]}), "
+                f"got {_describe(item)}",
+                (i,),
+            )
+        if "type" not in item:
+            raise _fail("required key 'type' is missing (the kind of measure, e.g. fence)", (i,))
+        kind = item["type"]
+        if not isinstance(kind, str):
+            raise _fail(f"expected the name of a measure type, got {_describe(kind)}", (i, "type"))
+        if not kind.strip():
+            raise _fail("must not be empty (the kind of measure, e.g. fence)", (i, "type"))
+        if "x" not in item:
+            raise _fail(
+                "required key 'x' is missing (the station range [min, max] (m) where the "
+                "optimiser may place the measure)",
+                (i,),
+            )
+        x = item["x"]
+        if not isinstance(x, list | tuple) or len(x) != 2:
+            raise _fail(
+                f"expected a station range [min, max] (m), got {_describe(x)}; the optimiser "
+                "places the measure within it",
+                (i, "x"),
+            )
+        low, high = _as_number(x[0], (i, "x", 0)), _as_number(x[1], (i, "x", 1))
+        if not low < high:
+            raise _fail(
+                f"expected a station range [min, max] with min < max, "
+                f"got [{_fmt(low)}, {_fmt(high)}]",
+                (i, "x"),
+            )
+        candidate: dict[str, Any] = {"type": kind, "x": [x[0], x[1]]}
+        for key, item_value in item.items():
+            if key in ("type", "x"):
+                continue
+            if not isinstance(key, str):
+                raise _fail(f"keys must be names, got {_describe(key)}", (i, key))
+            if key == "product":
+                candidate[key] = _check_product_choice(item_value, (i, key))
+            else:
+                candidate[key] = _check_candidate_value(item_value, (i, key))
+        candidates.append(candidate)
+    return candidates
+
+
+class Design(_Model):
+    """``design:``, what the least-cost optimiser may build and how it checks a design.
+
+    Candidate parameters are kept raw (the measure plugins are loaded later,
+    see :func:`rockfall_design.design.resolve_design`), their shapes checked:
+    ``x`` is a station range ``[min, max]`` (m) inside the section; any other
+    value is fixed (a number, string or boolean), a range ``[a, b]`` of
+    numbers with a < b (a continuous design variable) or ``{options: [...]}``
+    (a discrete one); ``product`` is a catalogue name or a list of names.
+
+    The product catalogue and the cost model's parameters may come from files
+    (paths relative to the project file); :func:`load_project` reads them and
+    keeps their line numbers: :attr:`catalogue` / :attr:`products_locator`
+    and :attr:`cost_params` / :attr:`costs_locator`.
+    """
+
+    max_measures: Annotated[Integer, Field(ge=1)] = Field(
+        2, description="Largest number of measures in one design."
+    )
+    residual: Annotated[
+        Any,
+        BeforeValidator(_parse_residual),
+        WithJsonSchema(
+            {
+                "anyOf": [
+                    {"type": "integer", "minimum": 0},
+                    {
+                        "type": "object",
+                        "properties": {"fraction": {"type": "number", "minimum": 0, "maximum": 1}},
+                        "required": ["fraction"],
+                        "additionalProperties": False,
+                    },
+                ]
+            }
+        ),
+    ] = Field(
+        0,
+        description="Rocks allowed to reach the protected zone: a count, or {fraction: F}.",
+    )
+    fresh_rocks: Annotated[Integer, Field(ge=1)] | None = Field(
+        None,
+        description="Rocks of the independent re-check of the best design; default: "
+        "max(rocks of the search, rocks.count).",
+    )
+    fresh_seed: Annotated[Integer, Field(ge=0)] | None = Field(
+        None, description="Seed of the re-check; default: the run's seed + 1000003."
+    )
+    site: Site = Field(description="The site: length of slope to protect.")
+    products: Annotated[Any, BeforeValidator(_parse_products)] = Field(
+        None,
+        description="Product catalogue: a YAML file relative to the project file, or inline "
+        f"({_CATALOGUE_FORM}).",
+    )
+    costs: DesignCosts = Field(description="Cost model and its parameters.")
+    candidates: Annotated[list[dict[str, Any]], BeforeValidator(_parse_candidates)] = Field(
+        description="Measures the optimiser may use: mappings with 'type', 'x': [min, max] "
+        "and the measure's parameters (fixed, [min, max] or {options: [...]})."
+    )
+
+    _catalogue: dict | None = PrivateAttr(default=None)
+    _products_locator: "Locator | None" = PrivateAttr(default=None)
+    _cost_params: dict | None = PrivateAttr(default=None)
+    _costs_locator: "Locator | None" = PrivateAttr(default=None)
+
+    @property
+    def residual_count(self) -> int | None:
+        """Allowed number of rocks in the protected zone, or None if a fraction is given."""
+        return self.residual if isinstance(self.residual, int) else None
+
+    @property
+    def residual_fraction(self) -> float | None:
+        """Allowed fraction of the rocks in the protected zone, or None if a count is given."""
+        return self.residual.fraction if isinstance(self.residual, ResidualFraction) else None
+
+    @property
+    def catalogue(self) -> dict[str, dict[str, dict[str, Any]]]:
+        """The product catalogue: ``{kind: {name: {capacity_kj, heights, ...}}}`` ({} if none)."""
+        if self._catalogue is not None:
+            return self._catalogue
+        if isinstance(self.products, str):
+            raise RuntimeError("the product catalogue file is read by load_project/_text")
+        return self.products or {}
+
+    @property
+    def products_locator(self) -> "Locator":
+        """Where the catalogue's nodes are: key paths start at the catalogue's top level."""
+        if self._products_locator is not None:
+            return self._products_locator
+        return Locator("<string>", {}, ("design", "products"))
+
+    @property
+    def cost_params(self) -> dict[str, Any]:
+        """The cost model's raw parameters (from ``costs.file`` or ``costs.params``)."""
+        if self._cost_params is not None:
+            return self._cost_params
+        if self.costs.params is None:
+            raise RuntimeError("the cost parameter file is read by load_project/_text")
+        return self.costs.params
+
+    @property
+    def costs_locator(self) -> "Locator":
+        """Where the cost parameters' nodes are: key paths start at the parameters' mapping."""
+        if self._costs_locator is not None:
+            return self._costs_locator
+        return Locator("<string>", {}, ("design", "costs", "params"))
+
+
 class Project(_Model):
     """A validated, normalised project file.
 
@@ -751,6 +1170,9 @@ class Project(_Model):
         default_factory=lambda: {"concept": _DEFAULT_CONCEPT},
         description="Safety concept: 'concept' (a name, default spang) and that concept's "
         "parameters. Kept raw here; the concept plugin validates them.",
+    )
+    design: Design | None = Field(
+        None, description="What the least-cost optimiser may build; none if absent."
     )
 
     _source: str = PrivateAttr(default="<string>")
@@ -793,6 +1215,21 @@ class Project(_Model):
                 f"x {_fmt(self.protect.x)} is outside the slope section {section}",
                 ("protect", "x"),
             )
+        if self.design is not None:
+            if self.protect is None:
+                raise _fail(
+                    "the design needs protect: (the station x of the protected zone, which the "
+                    "residual rocks are counted at)",
+                    ("design",),
+                )
+            for i, candidate in enumerate(self.design.candidates):
+                low, high = candidate["x"]
+                if low < first or high > last:
+                    raise _fail(
+                        f"station range [{_fmt(low)}, {_fmt(high)}] is outside the slope "
+                        f"section {section}",
+                        ("design", "candidates", i, "x"),
+                    )
         return self
 
     def resolved_dict(self) -> dict[str, Any]:
@@ -808,8 +1245,26 @@ class Project(_Model):
         ``measures`` and ``safety`` are as given in the file (``safety`` with
         its ``concept`` filled in), or, on a project returned by
         :meth:`with_resolved_plugins`, the plugin-validated values passed there.
+
+        In ``design``, the product catalogue and the cost parameters are
+        written inline (``products: {...}``, ``costs: {model, file: null,
+        params: {...}}``) even when the file named catalogue files, so the
+        record is self-contained and its hash changes with any price or product.
+        Numeric keys (heights in a price table) become strings, as in JSON.
         """
         data = self.model_dump(mode="json")
+        if self.design is not None and data.get("design") is not None:
+            # the catalogues inline, so the record (and its hash) holds the figures used
+            design = data["design"]
+            try:
+                design["products"] = _json_copy(self.design.catalogue)
+                design["costs"] = {
+                    "model": self.design.costs.model,
+                    "file": None,
+                    "params": _json_copy(self.design.cost_params),
+                }
+            except RuntimeError:  # not loaded from a file: keep the paths as given
+                pass
         if self._resolved_plugins is not None:
             measures, safety = self._resolved_plugins
             data["measures"] = copy.deepcopy(measures)
@@ -891,10 +1346,12 @@ class Project(_Model):
             existing ancestor. The line is None for a project not loaded from
             text.
         """
-        path = _yaml_path(tuple(path), self._lines)
-        return ProjectError(
-            self._source, _line_of(path, self._lines), _key_text(path, self._lines), message
-        )
+        return self.locator.error_at(path, message)
+
+    @property
+    def locator(self) -> "Locator":
+        """Where the nodes of the project file are (see :class:`Locator`)."""
+        return Locator(self._source, self._lines)
 
     def unknown_name(
         self, path: Sequence[str | int], name: Any, candidates: Iterable[str], what: str
@@ -918,10 +1375,7 @@ class Project(_Model):
             e.g. ``p.yaml:12: measures[2].type: unknown measure type 'fense';
             did you mean 'fence'? (available: berm, ditch, fence, wall, boulder_row)``.
         """
-        names = [str(c) for c in candidates]
-        hint = _did_you_mean(name, names) if isinstance(name, str) else ""
-        available = f" (available: {', '.join(names)})" if names else " (none available)"
-        return self.error_at(path, f"unknown {what} {name!r}{hint}{available}")
+        return self.locator.unknown_name(path, name, candidates, what)
 
     def validate_params(
         self,
@@ -972,29 +1426,133 @@ class Project(_Model):
         is, and NaN or infinity anywhere. Pydantic's strict mode is not used:
         it would also reject YAML lists for tuple fields.
         """
+        return self.locator.validate_params(path, model, data, drop=drop)
+
+
+def _json_copy(value: Any) -> Any:
+    """Plain data as JSON has it: mapping keys become strings."""
+    if isinstance(value, dict):
+        return {
+            (key if isinstance(key, str) else _fmt(key)): _json_copy(item)
+            for key, item in value.items()
+        }
+    if isinstance(value, list | tuple):
+        return [_json_copy(item) for item in value]
+    return value
+
+
+class Locator:
+    """Where the nodes of some YAML data are: a file, its line map and a key prefix.
+
+    The project file has one (:attr:`Project.locator`); so has each part of
+    the design section that may come from another file: the product
+    catalogue (:attr:`Design.products_locator`) and the cost model's
+    parameters (:attr:`Design.costs_locator`). Key paths given to the methods
+    are relative to the data's root; the prefix locates that root in its
+    file (``("design", "products")`` for an inline catalogue, ``()`` for a
+    catalogue file). Errors read ``file:line: key.path: message``.
+
+    Parameters
+    ----------
+    source
+        The file as the user named it.
+    lines
+        Key path -> (line, node kind), from the YAML loader.
+    prefix
+        Key path of the data's root in that file.
+    """
+
+    def __init__(self, source: str, lines: dict, prefix: Sequence[str | int] = ()) -> None:
+        self.source = source
+        self._lines = lines
+        self.prefix = tuple(prefix)
+
+    def __repr__(self) -> str:
+        return f"Locator({self.source!r}, prefix={self.prefix!r})"
+
+    def line(self, path: Sequence[str | int]) -> int | None:
+        """Line of ``path`` (or of its nearest existing ancestor); None if unknown."""
+        return _line_of(_yaml_path(self.prefix + tuple(path), self._lines), self._lines)
+
+    def error_at(self, path: Sequence[str | int], message: str) -> ProjectError:
+        """A :class:`ProjectError` at ``path`` (see :meth:`Project.error_at`)."""
+        full = _yaml_path(self.prefix + tuple(path), self._lines)
+        return ProjectError(
+            self.source, _line_of(full, self._lines), _key_text(full, self._lines), message
+        )
+
+    def unknown_name(
+        self, path: Sequence[str | int], name: Any, candidates: Iterable[str], what: str
+    ) -> ProjectError:
+        """An unknown name with "did you mean" (see :meth:`Project.unknown_name`)."""
+        names = [str(c) for c in candidates]
+        hint = _did_you_mean(name, names) if isinstance(name, str) else ""
+        available = f" (available: {', '.join(names)})" if names else " (none available)"
+        return self.error_at(path, f"unknown {what} {name!r}{hint}{available}")
+
+    def validate_params(
+        self,
+        path: Sequence[str | int],
+        model: type[BaseModel],
+        data: Any,
+        *,
+        drop: Iterable[str] = (),
+    ) -> BaseModel:
+        """Validate plugin parameters at ``path`` (see :meth:`Project.validate_params`)."""
         path = tuple(path)
         if not isinstance(data, Mapping):
             raise self.error_at(path, f"expected a mapping of key: value, got {_describe(data)}")
         dropped = set(drop)
         data = {key: value for key, value in data.items() if key not in dropped}
-        problems: list[tuple[tuple, str, int]] = []  # (location, message, rank)
-        _strict_problems(model, data, (), problems)
-        try:
-            instance = model.model_validate(data)
-        except ValidationError as exc:
-            problems.extend(_param_problems(model, exc.errors()))
-        else:
-            if not problems:
-                return instance
+        instance, problems = _check_params(model, data)
+        if instance is not None:
+            return instance
         # unknown keys first (a misspelt key also makes a required one "missing"),
         # then the problem earliest in the file
         located = []
         for order, (loc, message, rank) in enumerate(problems):
-            full = _yaml_path(path + loc, self._lines)
+            full = _yaml_path(self.prefix + path + loc, self._lines)
             line = _line_of(full, self._lines)
             located.append((rank, line if line is not None else 0, order, full, message))
         *_, full, message = min(located, key=lambda item: item[:3])
-        raise self.error_at(full, message)
+        raise ProjectError(
+            self.source, _line_of(full, self._lines), _key_text(full, self._lines), message
+        )
+
+
+def _check_params(
+    model: type[BaseModel], data: Mapping[str, Any]
+) -> tuple[BaseModel | None, list[tuple[tuple, str, int]]]:
+    """``(instance, [])`` if ``data`` is valid for ``model``, else ``(None, problems)``."""
+    problems: list[tuple[tuple, str, int]] = []  # (location, message, rank)
+    _strict_problems(model, data, (), problems)
+    try:
+        instance = model.model_validate(data)
+    except ValidationError as exc:
+        problems.extend(_param_problems(model, exc.errors()))
+    else:
+        if not problems:
+            return instance, []
+    return None, problems
+
+
+def params_problem(model: type[BaseModel], data: Mapping[str, Any]) -> tuple[tuple, str] | None:
+    """The first problem of plugin parameters ``data`` for ``model``, or None if valid.
+
+    The same strict checks and one-line messages as
+    :meth:`Project.validate_params`, for data that is not in a file (the
+    optimiser's candidates): unknown keys first, then pydantic's order.
+
+    Returns
+    -------
+    tuple of (key path, message) or None
+        e.g. ``(("width",), "expected a number > 0, got -1")``.
+    """
+    _, problems = _check_params(model, dict(data))
+    if not problems:
+        return None
+    loc, message, _ = min(problems, key=lambda item: item[2])
+    return loc, message
 
 
 # --------------------------------------------------------------------------------------
@@ -1408,6 +1966,10 @@ def _param_problems(model: type[BaseModel], errors: list[Any]) -> list[tuple[tup
     problems = []
     done: set[tuple] = set()
     for error in errors:
+        if error["loc"] and error["loc"][-1] == "[key]":  # e.g. a height key 'abc'
+            key_loc, _, _ = _navigate(model, tuple(error["loc"][:-1]))
+            problems.append((key_loc, "invalid key: " + _param_message(model, error)[1], 1))
+            continue
         loc, owner, annotation = _navigate(model, tuple(error["loc"]))
         options = _options(annotation)
         if len(options) > 1 and len(error["loc"]) > len(loc):  # an error of a union member
@@ -1504,7 +2066,9 @@ def _param_message(model: type[BaseModel], error: Any) -> tuple[tuple, str]:
 # --------------------------------------------------------------------------------------
 
 
-def load_project_text(text: str, source: str = "<string>") -> Project:
+def load_project_text(
+    text: str, source: str = "<string>", *, base_dir: str | os.PathLike[str] | None = None
+) -> Project:
     """Parse and validate a project from YAML text.
 
     Parameters
@@ -1513,6 +2077,10 @@ def load_project_text(text: str, source: str = "<string>") -> Project:
         The YAML document.
     source
         Name used in error messages and stored as :attr:`Project.source`.
+    base_dir
+        Directory that catalogue files of ``design:`` are relative to; by
+        default the directory of ``source`` (the current directory for
+        ``"<string>"``).
 
     Returns
     -------
@@ -1544,7 +2112,77 @@ def load_project_text(text: str, source: str = "<string>") -> Project:
         raise ProjectError(source, None, "", "the file is nested too deeply") from exc
     project._source = source
     project._lines = lines
+    if project.design is not None:
+        _attach_catalogues(project, Path(source).parent if base_dir is None else Path(base_dir))
     return project
+
+
+def _catalogue_file(
+    project: Project, relative: str, base_dir: Path, at: tuple, what: str
+) -> tuple[str, Any, _Lines]:
+    """Read and parse a catalogue file named in the project: (shown name, data, lines)."""
+    path = Path(relative)
+    if not path.is_absolute():
+        path = base_dir / path
+    shown = os.fspath(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise project.error_at(
+            at, f"cannot read the {what} {shown}: not UTF-8 text ({exc.reason})"
+        ) from exc
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise project.error_at(at, f"cannot read the {what} {shown}: {reason}") from exc
+    data, lines = _parse_yaml(text, shown)
+    if data is None:
+        raise ProjectError(shown, 1, "", f"the {what} is empty")
+    return shown, data, lines
+
+
+def _custom_error(exc: PydanticCustomError, source: str, lines: _Lines) -> ProjectError:
+    """A ``_fail`` raised outside a model -> a ProjectError located by its subpath."""
+    path = _yaml_path(tuple((exc.context or {}).get("subpath", ())), lines)
+    return ProjectError(source, _line_of(path, lines), _key_text(path, lines), exc.message())
+
+
+def _attach_catalogues(project: Project, base_dir: Path) -> None:
+    """Read the design's catalogue files (or take the inline ones), keeping their lines."""
+    design = project.design
+    assert design is not None
+    if isinstance(design.products, str):
+        shown, data, lines = _catalogue_file(
+            project, design.products, base_dir, ("design", "products"), "product catalogue"
+        )
+        try:
+            design._catalogue = _check_products(data)
+        except PydanticCustomError as exc:
+            raise _custom_error(exc, shown, lines) from None
+        design._products_locator = Locator(shown, lines)
+    else:
+        design._catalogue = design.products or {}
+        design._products_locator = Locator(project.source, project._lines, ("design", "products"))
+    if design.costs.file is not None:
+        shown, data, lines = _catalogue_file(
+            project, design.costs.file, base_dir, ("design", "costs", "file"), "cost file"
+        )
+        if not isinstance(data, dict):
+            raise ProjectError(
+                shown,
+                _line_of((), lines),
+                "",
+                f"expected a mapping of the cost model's parameters, got {_describe(data)}",
+            )
+        try:
+            design._cost_params = _raw(data, number_keys=True)
+        except PydanticCustomError as exc:
+            raise _custom_error(exc, shown, lines) from None
+        design._costs_locator = Locator(shown, lines)
+    else:
+        design._cost_params = design.costs.params
+        design._costs_locator = Locator(
+            project.source, project._lines, ("design", "costs", "params")
+        )
 
 
 def load_project(path: str | os.PathLike[str]) -> Project:
@@ -1576,4 +2214,4 @@ def load_project(path: str | os.PathLike[str]) -> Project:
     except OSError as exc:
         reason = exc.strerror or type(exc).__name__
         raise ProjectError(source, None, "", f"cannot read file: {reason}") from exc
-    return load_project_text(text, source)
+    return load_project_text(text, source, base_dir=Path(source).parent)

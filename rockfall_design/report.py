@@ -19,7 +19,14 @@ from .outputs import write_with
 if TYPE_CHECKING:  # pragma: no cover
     from .simulation import Study
 
-__all__ = ["print_simulation", "print_check", "plot_study"]
+__all__ = [
+    "print_simulation",
+    "print_check",
+    "print_optimise",
+    "alternatives_table",
+    "design_yaml",
+    "plot_study",
+]
 
 
 def _fmt(v: float | None, digits: int = 2) -> str:
@@ -179,6 +186,122 @@ def check_renderable(summary: dict[str, Any]) -> Group:
 def print_check(summary: dict[str, Any], console: Console | None = None) -> None:
     console = console or Console()
     console.print(Panel(check_renderable(summary), title="rockfall-design check"))
+
+
+def _measure_short(m: Any) -> str:
+    """'fence RX-100 3 m @ 110.5' / 'ditch 5.2 x 1.5 m @ 124'."""
+    p = m.params
+    bits = [m.kind]
+    if getattr(p, "product", None):
+        bits.append(str(p.product))
+    if getattr(p, "width", None) is not None and getattr(p, "depth", None) is not None:
+        bits.append(f"{p.width:.3g} x {p.depth:.3g} m")
+    else:
+        for name in ("height", "width", "block_size"):
+            v = getattr(p, name, None)
+            if v is not None:
+                bits.append(f"{v:.3g} m")
+                break
+    bits.append(f"@ {m.x:g}")
+    return " ".join(bits)
+
+
+def _factors(alt: Any) -> str:
+    out = []
+    for c in alt.checks:
+        if c["value"] is None:
+            continue
+        mark = "" if c["ok"] else "!"
+        out.append(f"{c['name'].removesuffix('_factor')[:1]} {c['value']:.2f}{mark}")
+    return " ".join(out)
+
+
+def print_optimise(result: Any, project: Any, console: Console | None = None) -> None:
+    """The optimiser's comparison of alternatives, the chosen one marked."""
+    console = console or Console()
+    cur = result.currency or ""
+    tab = Table(show_edge=False, title="Alternatives (cheapest design of each family)",
+                title_justify="left", caption="factors: h height, e energy, r reach "
+                "(! = misses its target); res.: rocks reaching the protected zone; fresh: "
+                "holds on fresh rocks", caption_justify="left")
+    for col, just in (("", "left"), ("family", "left"),
+                      (f"cost {cur}" if cur else "cost", "right"), ("measures", "left"),
+                      ("factors", "left"), ("res.", "right"), ("fresh", "left")):
+        tab.add_column(col, justify=just)
+    order = sorted(result.alternatives, key=lambda a: (not a.feasible, a.cost))
+    for a in order:
+        star = "*" if result.best is a else ""
+        style = "bold green" if result.best is a else ("" if a.feasible else "dim")
+        fresh = "-" if a.holds_on_fresh_rocks is None else (
+            "yes" if a.holds_on_fresh_rocks else "NO")
+        cost = "-" if not np.isfinite(a.cost) else f"{a.cost:,.0f}"
+        tab.add_row(star, a.name, cost if a.feasible else f"({cost})",
+                    "\n".join(_measure_short(m) for m in a.measures) or "-", _factors(a) or "-",
+                    "-" if a.residual is None else f"{a.residual}", fresh, style=style)
+    parts: list[Any] = [
+        Text.assemble((project.name, "bold"),
+                      f"   search: {result.rocks:,} rocks, seed {result.seed}; fresh check: "
+                      f"{result.fresh_rocks:,} rocks, seed {result.fresh_seed}; "
+                      f"{result.evaluations:,} designs screened, {result.edit_runs} ground "
+                      f"edits simulated, {result.wall_s:.1f} s"),
+        Text(""), tab, Text(""),
+    ]
+    if result.best is not None:
+        b = result.best
+        parts.append(Text(f"Chosen: {b.name}, {b.cost:,.0f} {cur}: "
+                          + "; ".join(m.label() for m in b.measures), style="bold green"))
+        if b.holds_on_fresh_rocks is False:
+            parts.append(Text("Warning: the chosen design does not hold on the fresh rocks: "
+                              + "; ".join(b.fresh_failures), style="bold yellow"))
+    else:
+        parts.append(Text(f"No admissible design: {result.reason}", style="bold red"))
+    for a in order:
+        if not a.feasible and a.reason:
+            parts.append(Text(f"  {a.name}: {a.reason}", style="dim"))
+    console.print(Panel(Group(*parts), title="rockfall-design optimise"))
+
+
+def alternatives_table(result: Any) -> Any:
+    import pandas as pd
+
+    rows = []
+    for a in result.alternatives:
+        rows.append({
+            "family": a.name,
+            "chosen": result.best is a,
+            "feasible": a.feasible,
+            "holds_on_fresh_rocks": a.holds_on_fresh_rocks,
+            "cost": a.cost if np.isfinite(a.cost) else None,
+            "residual": a.residual,
+            "fresh_residual": a.fresh_residual,
+            "measures": "; ".join(m.label() for m in a.measures),
+            "checks": "; ".join(
+                f"{c['name']}={c['value']}/{c['target']}:{'ok' if c['ok'] else 'fails'}"
+                for c in a.checks),
+            "reason": a.reason,
+            "designs_screened": a.evaluations,
+        })
+    return pd.DataFrame(rows)
+
+
+def design_yaml(best: Any, project_file: Any) -> str:
+    """The project with the chosen measures, as YAML that ``check`` accepts."""
+    import yaml
+
+    ev = best.evaluation
+    data = ev.study.project.resolved_dict()
+    data.pop("design", None)
+    data["measures"] = [
+        {"type": m.kind, **m.params.model_dump(mode="json")} for m in best.measures
+    ]
+    data["safety"] = {"concept": ev.concept.name, **ev.concept.params.model_dump(mode="json")}
+    head = (
+        f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
+        f"cost {best.cost:,.0f}.\n"
+        "# The design: section is left out (its catalogue paths are relative to the\n"
+        "# original project); check this file with: rockfall-design check design.yaml\n"
+    )
+    return head + yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
 
 
 # ---- figures -----------------------------------------------------------------

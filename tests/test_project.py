@@ -1332,3 +1332,513 @@ def test_mutated_plugin_sections_fail_cleanly(data):
             continue
         parent[path[-1]] = data.draw(junk)
     _check_one(yaml.safe_dump(base, sort_keys=False))
+
+
+# --------------------------------------------------------------------------------------
+# The design section (shapes only; resolution against the plugins: test_design.py)
+# --------------------------------------------------------------------------------------
+
+DESIGN = """\
+design:
+  max_measures: 3
+  residual: 5
+  fresh_rocks: 4000
+  fresh_seed: 11
+  site:
+    length_m: 120
+  products:
+    fence:
+      RX-100: {capacity_kj: 1000, heights: [3, 4, 5], note: example}
+  costs:
+    model: unit_prices
+    params: {fixed_per_measure: 100, barrier_per_m: {fence: {RX-100: {3: 500, 4.5: 600}}}}
+  candidates:
+    - type: fence
+      x: [60, 110]
+      product: [RX-100]
+    - type: ditch
+      x: [118, 130]
+      width: [3, 12]
+      depth: {options: [1.0, 1.5, 2.0]}
+      upslope_side_deg: 45
+      material: rock
+"""
+
+WITH_DESIGN = EXAMPLE + DESIGN
+PARAMS_LINE = next(line + "\n" for line in DESIGN.splitlines() if "params:" in line)
+
+
+def test_design_absent_is_none():
+    assert load_project_text(EXAMPLE).design is None
+
+
+def test_design_section_loads_raw_candidates():
+    project = load_project_text(WITH_DESIGN, source="p.yaml")
+    design = project.design
+    assert design is not None
+    assert (design.max_measures, design.fresh_rocks, design.fresh_seed) == (3, 4000, 11)
+    assert design.residual == 5 and design.residual_count == 5
+    assert design.residual_fraction is None
+    assert design.site.length_m == 120.0
+    assert design.costs.model == "unit_prices" and design.costs.file is None
+    assert design.candidates == [
+        {"type": "fence", "x": [60, 110], "product": ["RX-100"]},
+        {
+            "type": "ditch",
+            "x": [118, 130],
+            "width": [3, 12],
+            "depth": {"options": [1.0, 1.5, 2.0]},
+            "upslope_side_deg": 45,
+            "material": "rock",
+        },
+    ]
+    assert design.catalogue == {
+        "fence": {"RX-100": {"capacity_kj": 1000.0, "heights": [3.0, 4.0, 5.0], "note": "example"}}
+    }
+    assert design.cost_params["barrier_per_m"]["fence"]["RX-100"] == {3: 500, 4.5: 600}
+    err = design.products_locator.error_at(("fence", "RX-100", "heights", 1), "bad")
+    assert str(err) == f"p.yaml:{line_of(WITH_DESIGN, 'RX-100: {cap')}: " + (
+        "design.products.fence.RX-100.heights[1]: bad"
+    )
+    err = design.costs_locator.error_at(("fixed_per_measure",), "bad")
+    assert (err.line, err.key) == (
+        line_of(WITH_DESIGN, "params:"),
+        "design.costs.params.fixed_per_measure",
+    )
+
+
+def test_design_defaults_and_fraction():
+    text = EXAMPLE + (
+        "design:\n  site: {length_m: 50}\n  costs: {params: {}}\n"
+        "  candidates: [{type: fence, x: [60, 110]}]\n"
+    )
+    design = load_project_text(text).design
+    assert design is not None
+    assert (design.max_measures, design.residual, design.fresh_rocks, design.fresh_seed) == (
+        2,
+        0,
+        None,
+        None,
+    )
+    assert design.costs.model == "unit_prices" and design.products is None
+    assert design.catalogue == {}
+    text = edit("  residual: 5\n", "  residual: {fraction: 0.001}\n", WITH_DESIGN)
+    design = load_project_text(text).design
+    assert design is not None
+    assert design.residual_fraction == 0.001 and design.residual_count is None
+
+
+def test_design_round_trip_inlines_catalogues():
+    project = load_project_text(WITH_DESIGN)
+    resolved = project.resolved_dict()
+    json.dumps(resolved, allow_nan=False)
+    assert resolved["design"]["residual"] == 5
+    assert resolved["design"]["costs"]["file"] is None
+    again = load_project_text(yaml.safe_dump(resolved, sort_keys=False))
+    assert again.resolved_dict() == resolved
+    cheaper = load_project_text(edit("{3: 500,", "{3: 450,", WITH_DESIGN))
+    assert cheaper.resolved_hash() != project.resolved_hash()
+
+
+def _design_files(tmp_path, products: str, costs: str, design: str = DESIGN) -> str:
+    (tmp_path / "catalogue_products.yaml").write_text(products)
+    (tmp_path / "catalogue_costs.yaml").write_text(costs)
+    text = design.replace(
+        "  products:\n    fence:\n      RX-100: {capacity_kj: 1000, heights: [3, 4, 5], "
+        "note: example}\n",
+        "  products: catalogue_products.yaml\n",
+    ).replace(
+        "    params: {fixed_per_measure: 100, barrier_per_m: {fence: {RX-100: {3: 500, 4.5: "
+        "600}}}}\n",
+        "    file: catalogue_costs.yaml\n",
+    )
+    path = tmp_path / "p.yaml"
+    path.write_text(EXAMPLE + text)
+    return str(path)
+
+
+PRODUCTS = "fence:\n  RX-100:\n    capacity_kj: 1000\n    heights: [3, 4, 5]\n"
+COSTS = "fixed_per_measure: 100\nbarrier_per_m:\n  fence:\n    RX-100: {3: 500}\n"
+
+
+def test_design_catalogue_files(tmp_path):
+    from rockfall_design.project import load_project
+
+    path = _design_files(tmp_path, PRODUCTS, COSTS)
+    design = load_project(path).design
+    assert design is not None
+    assert design.catalogue["fence"]["RX-100"]["heights"] == [3.0, 4.0, 5.0]
+    assert design.cost_params == {
+        "fixed_per_measure": 100,
+        "barrier_per_m": {"fence": {"RX-100": {3: 500}}},
+    }
+    shown = str(tmp_path / "catalogue_costs.yaml")
+    err = design.costs_locator.error_at(("barrier_per_m", "fence", "RX-100", 3), "bad")
+    assert str(err) == f"{shown}:4: barrier_per_m.fence.RX-100.3: bad"
+    err = design.products_locator.error_at(("fence", "RX-100", "heights", 2), "bad")
+    assert str(err) == f"{tmp_path / 'catalogue_products.yaml'}:4: fence.RX-100.heights[2]: bad"
+
+
+@pytest.mark.parametrize(
+    ("products", "line", "key", "fragment"),
+    [
+        ("fence:\n  RX-100:\n    heights: [3]\n", 2, "fence.RX-100", "'capacity_kj' is missing"),
+        (
+            "fence:\n  RX-100: {capacity_kj: 0, heights: [3]}\n",
+            2,
+            "fence.RX-100.capacity_kj",
+            "> 0",
+        ),
+        (
+            "fence:\n  RX-100:\n    capacity_kj: 10\n    heights: [3,\n      -1]\n",
+            5,
+            "fence.RX-100.heights[1]",
+            "> 0",
+        ),
+        (
+            "fence:\n  RX-100:\n    capacity_kj: 10\n    heights: []\n",
+            4,
+            "fence.RX-100.heights",
+            "non-empty",
+        ),
+        (
+            "fence:\n  RX-100: {capacity_kj: 10, heights: [3, 3]}\n",
+            2,
+            "fence.RX-100.heights[1]",
+            "twice",
+        ),
+        ("fence:\n  100: {capacity_kj: 10, heights: [3]}\n", 2, "fence.100", "quote"),
+        ("fence: [RX-100]\n", 1, "fence", "expected a mapping"),
+        ("- fence\n", 1, "", "expected a mapping"),
+        (
+            "fence:\n  RX-100: {capacity_kj: 10, heights: [3]}\n  RX-100: {}\n",
+            3,
+            "fence.RX-100",
+            "duplicate key",
+        ),
+    ],
+)
+def test_design_product_file_errors(tmp_path, products, line, key, fragment):
+    from rockfall_design.project import load_project
+
+    path = _design_files(tmp_path, products, COSTS)
+    with pytest.raises(ProjectError) as info:
+        load_project(path)
+    err = info.value
+    assert err.file == str(tmp_path / "catalogue_products.yaml")
+    assert (err.line, err.key) == (line, key), str(err)
+    assert fragment in err.message
+
+
+def test_design_missing_and_bad_catalogue_files(tmp_path):
+    from rockfall_design.project import load_project
+
+    path = _design_files(tmp_path, PRODUCTS, COSTS)
+    text = (tmp_path / "p.yaml").read_text()
+    (tmp_path / "catalogue_products.yaml").unlink()
+    with pytest.raises(ProjectError) as info:
+        load_project(path)
+    assert info.value.line == line_of(text, "products: catalogue")
+    assert info.value.key == "design.products"
+    assert "cannot read the product catalogue" in info.value.message
+    _design_files(tmp_path, PRODUCTS, COSTS)
+    (tmp_path / "catalogue_costs.yaml").unlink()
+    with pytest.raises(ProjectError) as info:
+        load_project(path)
+    assert (info.value.line, info.value.key) == (
+        line_of(text, "file: catalogue"),
+        "design.costs.file",
+    )
+    _design_files(tmp_path, PRODUCTS, "fixed_per_measure: 100\nx: {.nan: 1}\n")
+    with pytest.raises(ProjectError) as info:
+        load_project(path)
+    assert str(info.value).startswith(f"{tmp_path / 'catalogue_costs.yaml'}:2: x.nan: ")
+    _design_files(tmp_path, PRODUCTS, "[1, 2]\n")
+    with pytest.raises(ProjectError, match="catalogue_costs.yaml:1: expected a mapping"):
+        load_project(path)
+    _design_files(tmp_path, PRODUCTS, "# nothing\n")
+    with pytest.raises(ProjectError, match="catalogue_costs.yaml:1: the cost file is empty"):
+        load_project(path)
+    # relative to the project file, not to the current directory
+    _design_files(tmp_path, PRODUCTS, COSTS)
+    assert load_project_text(text, source=path).design is not None
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "needle", "key", "fragment"),
+    [
+        (
+            "  max_measures: 3\n",
+            "  max_measures: 0\n",
+            "max_measures",
+            "design.max_measures",
+            ">= 1",
+        ),
+        ("  residual: 5\n", "  residual: -1\n", "residual", "design.residual", "integer >= 0"),
+        ("  residual: 5\n", "  residual: 0.5\n", "residual", "design.residual", "{fraction: F}"),
+        (
+            "  residual: 5\n",
+            "  residual: {fraction: 2}\n",
+            "residual",
+            "design.residual.fraction",
+            "0..1",
+        ),
+        (
+            "  residual: 5\n",
+            "  residual: {fractoin: 0.1}\n",
+            "residual",
+            "design.residual.fractoin",
+            "did you mean 'fraction'",
+        ),
+        (
+            "  fresh_rocks: 4000\n",
+            "  fresh_rocks: 0\n",
+            "fresh_rocks",
+            "design.fresh_rocks",
+            ">= 1",
+        ),
+        ("  fresh_seed: 11\n", "  fresh_seed: x\n", "fresh_seed", "design.fresh_seed", "integer"),
+        ("    length_m: 120\n", "    length_m: 0\n", "length_m", "design.site.length_m", "> 0"),
+        (
+            "    length_m: 120\n",
+            "    lenght_m: 120\n",
+            "lenght_m",
+            "design.site.lenght_m",
+            "did you mean 'length_m'",
+        ),
+        (
+            "  max_measures: 3\n",
+            "  max_measure: 3\n",
+            "max_measure",
+            "design.max_measure",
+            "did you mean 'max_measures'",
+        ),
+        ("    model: unit_prices\n", "    model: ''\n", "model: ''", "design.costs.model", "empty"),
+        (
+            "    model: unit_prices\n",
+            "    model: unit_prices\n    file: c.yaml\n",
+            "params:",
+            "design.costs.params",
+            "only one of file and params",
+        ),
+        (
+            PARAMS_LINE,
+            "    params: [1]\n",
+            "params:",
+            "design.costs.params",
+            "expected a mapping",
+        ),
+        (
+            PARAMS_LINE,
+            "",
+            "costs:",
+            "design.costs",
+            "file: PATH",
+        ),
+        (
+            "      RX-100: {capacity_kj: 1000, heights: [3, 4, 5], note: example}\n",
+            "      RX-100: {capacity_kj: 1000, heights: [3, x]}\n",
+            "RX-100: {cap",
+            "design.products.fence.RX-100.heights[1]",
+            "expected a number",
+        ),
+        (
+            "    - type: fence\n",
+            "    - kind: fence\n",
+            "kind: fence",
+            "design.candidates[0]",
+            "'type'",
+        ),
+        (
+            "    - type: fence\n",
+            "    - type: 3\n",
+            "type: 3",
+            "design.candidates[0].type",
+            "measure type",
+        ),
+        (
+            "      x: [60, 110]\n",
+            "      x: 60\n",
+            "x: 60",
+            "design.candidates[0].x",
+            "station range [min, max]",
+        ),
+        (
+            "      x: [60, 110]\n",
+            "      x: [110, 60]\n",
+            "x: [110",
+            "design.candidates[0].x",
+            "min < max",
+        ),
+        (
+            "      x: [60, 110]\n",
+            "      x: [60, 250]\n",
+            "x: [60",
+            "design.candidates[0].x",
+            "outside the slope section [0, 200]",
+        ),
+        (
+            "      x: [60, 110]\n",
+            "      x: [60, true]\n",
+            "x: [60",
+            "design.candidates[0].x[1]",
+            "expected a number",
+        ),
+        (
+            "      x: [60, 110]\n",
+            "",
+            "type: fence",
+            "design.candidates[0]",
+            "'x' is missing",
+        ),
+        (
+            "      product: [RX-100]\n",
+            "      product: []\n",
+            "product:",
+            "design.candidates[0].product",
+            "non-empty list",
+        ),
+        (
+            "      product: [RX-100]\n",
+            "      product: [RX-100, 3]\n",
+            "product:",
+            "design.candidates[0].product[1]",
+            "product name",
+        ),
+        (
+            "      product: [RX-100]\n",
+            "      product: [RX-100, RX-100]\n",
+            "product:",
+            "design.candidates[0].product[1]",
+            "twice",
+        ),
+        (
+            "      width: [3, 12]\n",
+            "      width: [12, 3]\n",
+            "width:",
+            "design.candidates[1].width",
+            "min < max",
+        ),
+        (
+            "      width: [3, 12]\n",
+            "      width: [3, 12, 20]\n",
+            "width:",
+            "design.candidates[1].width",
+            "{options: [...]}",
+        ),
+        (
+            "      width: [3, 12]\n",
+            "      width: [a, b]\n",
+            "width:",
+            "design.candidates[1].width[0]",
+            "needs numbers",
+        ),
+        (
+            "      width: [3, 12]\n",
+            "      width: [3, .inf]\n",
+            "width:",
+            "design.candidates[1].width[1]",
+            "finite",
+        ),
+        (
+            "      width: [3, 12]\n",
+            "      width:\n",
+            "width:",
+            "design.candidates[1].width",
+            "a range [min, max] or {options",
+        ),
+        (
+            "      depth: {options: [1.0, 1.5, 2.0]}\n",
+            "      depth: {options: []}\n",
+            "depth:",
+            "design.candidates[1].depth.options",
+            "non-empty list",
+        ),
+        (
+            "      depth: {options: [1.0, 1.5, 2.0]}\n",
+            "      depth: {option: [1]}\n",
+            "depth:",
+            "design.candidates[1].depth.option",
+            "did you mean 'options'",
+        ),
+        (
+            "      depth: {options: [1.0, 1.5, 2.0]}\n",
+            "      depth: {}\n",
+            "depth:",
+            "design.candidates[1].depth",
+            "'options' is missing",
+        ),
+        (
+            "      depth: {options: [1.0, 1.5, 2.0]}\n",
+            "      depth: {options: [1, [2]]}\n",
+            "depth:",
+            "design.candidates[1].depth.options[1]",
+            "number, string or boolean",
+        ),
+        (
+            "      depth: {options: [1.0, 1.5, 2.0]}\n",
+            "      depth: {options: [1, 1]}\n",
+            "depth:",
+            "design.candidates[1].depth.options[1]",
+            "twice",
+        ),
+        (
+            "  candidates:\n",
+            "  candidates: []\n  old_candidates:\n",
+            "candidates: []",
+            "design.candidates",
+            "non-empty list",
+        ),
+    ],
+)
+def test_design_section_errors(old, new, needle, key, fragment):
+    text = edit(old, new, WITH_DESIGN)
+    if "old_candidates" in new:  # drop the list that followed
+        text = text[: text.index("  old_candidates:")]
+    assert_error(text, line_of(text, needle), key, fragment)
+
+
+def test_design_needs_protect():
+    text = edit("protect:\n  x: 150\n", "", WITH_DESIGN)
+    assert_error(text, line_of(text, "design:"), "design", "needs protect")
+
+
+def test_locator_validate_params_on_a_catalogue_file(tmp_path):
+    from rockfall_design.project import Locator, load_project
+
+    class Prices(BaseModel):
+        model_config = ConfigDict(extra="forbid")
+        fixed_per_measure: float = Field(ge=0)
+        barrier_per_m: dict[str, dict[str, dict[float, float]]] = {}
+
+    costs = "fixed_per_measure: 100\nbarrier_per_m:\n  fence:\n    RX-100: {3: 500, x: 1}\n"
+    design = load_project(_design_files(tmp_path, PRODUCTS, costs)).design
+    assert design is not None and isinstance(design.costs_locator, Locator)
+    with pytest.raises(ProjectError) as info:
+        design.costs_locator.validate_params((), Prices, design.cost_params)
+    assert str(info.value) == (
+        f"{tmp_path / 'catalogue_costs.yaml'}:4: barrier_per_m.fence.RX-100.x: "
+        "invalid key: expected a number, got string 'x'"
+    )
+    costs = "fixed_per_measure: -1\nbarier_per_m: {}\n"
+    design = load_project(_design_files(tmp_path, PRODUCTS, costs)).design
+    assert design is not None
+    with pytest.raises(ProjectError, match=r"catalogue_costs.yaml:2: barier_per_m: unknown key"):
+        design.costs_locator.validate_params((), Prices, design.cost_params)
+
+
+def test_params_problem():
+    from rockfall_design.project import params_problem
+
+    class P(BaseModel):
+        model_config = ConfigDict(extra="forbid")
+        width: float = Field(gt=0)
+        flag: bool = False
+
+    assert params_problem(P, {"width": 1}) is None
+    assert params_problem(P, {"width": -1}) == (("width",), "expected a number > 0, got -1")
+    assert params_problem(P, {"width": True}) == (
+        ("width",),
+        "expected a number, got true (a boolean)",
+    )
+    assert params_problem(P, {"width": 1, "widht": 2})[0] == ("widht",)

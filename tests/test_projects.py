@@ -10,7 +10,12 @@ import pytest
 from rockfall_design.cli import main
 from rockfall_design.project import load_project
 
-PROJECTS = sorted((Path(__file__).resolve().parents[1] / "projects").glob("*.yaml"))
+# Catalogue files (products, prices) live beside the projects but are not projects.
+PROJECTS = sorted(
+    p
+    for p in (Path(__file__).resolve().parents[1] / "projects").glob("*.yaml")
+    if not p.name.startswith("catalogue_")
+)
 
 
 @pytest.mark.parametrize("path", PROJECTS, ids=[p.stem for p in PROJECTS])

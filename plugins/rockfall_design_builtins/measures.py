@@ -262,6 +262,9 @@ class WallParams(_Params):
     thickness: float = Field(
         default=1.0, gt=0, description="Mean thickness of the wall (m), for costing."
     )
+    product: str | None = Field(
+        default=None, description="Catalogue name of the wall type (for costing), if any."
+    )
 
 
 class Wall(ProtectiveMeasure):

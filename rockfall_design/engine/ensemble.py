@@ -351,6 +351,8 @@ def _run_batch(
     ge = np.empty(st_x.shape[0])
     rng = np.empty(1, dtype=np.uint64)
     empty_traj = np.empty((0, core.N_TRAJ_COLS))
+    # Serial on purpose: a prange version measured slower here (per-rock
+    # allocations), and compiles for much longer.
     for i in range(n):
         if radius[i] != r_prev:
             # Rocks of one size share their centre path.
