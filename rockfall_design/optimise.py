@@ -89,11 +89,22 @@ def families(candidates: Sequence[CandidateSpec], max_measures: int) -> list[tup
     return out
 
 
+def candidate_name(candidates: Sequence[CandidateSpec], i: int) -> str:
+    """'fence', or 'fence 25-92 m' where several candidates share a type."""
+    c = candidates[i]
+    if sum(d.kind == c.kind for d in candidates) == 1:
+        return c.kind
+    return f"{c.kind} {c.x_range[0]:g}-{c.x_range[1]:g} m"
+
+
 def family_name(candidates: Sequence[CandidateSpec], fam: tuple[int, ...]) -> str:
-    counts: dict[str, int] = {}
+    """'fence + ditch', '2 x fence', 'fence 25-92 m + fence 113-280 m'."""
+    counts: dict[int, int] = {}
     for i in fam:
-        counts[candidates[i].kind] = counts.get(candidates[i].kind, 0) + 1
-    return " + ".join(k if n == 1 else f"{n} x {k}" for k, n in counts.items())
+        counts[i] = counts.get(i, 0) + 1
+    names = [candidate_name(candidates, i) for i in counts]
+    return " + ".join(nm if n == 1 else f"{n} x {nm}" for nm, n in zip(names, counts.values(),
+                                                                        strict=True))
 
 
 def _variables(
@@ -602,7 +613,7 @@ def optimise(
             np.random.SeedSequence([s, fi]).generate_state(1)[0]))
         alt.evaluations = screen.evaluations - ev0
         try:
-            alt.measures = screen.measures(decoded)
+            alt.measures = sorted(screen.measures(decoded), key=lambda m: m.x)
             sr = screen.screen(alt.measures)
         except ValueError as exc:
             alt.reason = f"no design of this family fits: {exc}"
