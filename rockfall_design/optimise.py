@@ -271,7 +271,7 @@ class Screening:
         t0 = time.perf_counter()
         bare = run_ensemble(
             self.section, self.releases, key=self.key, grid=self.grid,
-            restart_stations=self.restart_x, settings=self.settings,
+            restart_stations=self.restart_x, settings=self.settings, record_speed=True,
         )
         self.bare_runtime_s = time.perf_counter() - t0
         cols = np.searchsorted(bare.grid, self.grid)
@@ -356,6 +356,7 @@ class Screening:
             first = int(np.searchsorted(self.grid, xs, side="right"))
             res = run_ensemble(
                 edited, sub, key=self.key, grid=self.grid[first:], settings=self.settings,
+                record_speed=True,
                 resume=(np.ones(idx.size, bool), state[idx], self.restart_rng[idx, q]),
             )
             cols = np.searchsorted(res.grid, self.grid[first:])

@@ -228,3 +228,23 @@ def test_rock_resting_on_gentle_slope_does_not_move():
     assert core.STATUS_NAMES[res.status[0]] == "stopped"
     assert res.x_end[0] == 5.0
     assert res.n_events[0] == 1
+
+
+@pytest.mark.parametrize("shape", ["V", "trapezoid"])
+@pytest.mark.parametrize("side", ["left", "right"])
+@pytest.mark.parametrize("model", ["spang", "rn_rt"])
+def test_rock_released_in_a_hollow_comes_to_rest_inside(shape, side, model):
+    """Whichever side it starts on, a rock released in a hollow stays in it."""
+    pts = (
+        [[0, 10], [20, 0], [40, 10]]
+        if shape == "V"
+        else [[0, 10], [15, 0], [25, 0], [40, 10]]
+    )
+    mat = Material(impact_model=model, restitution=0.4, tangential_restitution=0.85,
+                   friction=0.6, rolling_resistance=0.1, roughness_deg=5.0,
+                   sd_restitution=0.05, sd_friction=0.05)
+    x0 = 3.0 if side == "left" else 37.0
+    res = run_one(section(pts, mat), one_rock(r=0.4, x=x0, h=1.0, n=20), key=9)
+    assert np.all(res.status == core.STOPPED)
+    lo, hi = (15.0, 25.0) if shape == "V" else (14.0, 26.0)
+    assert np.all((res.x_end > lo) & (res.x_end < hi)), res.x_end

@@ -421,36 +421,18 @@ def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
     return best_k, best_d
 
 
-@njit(cache=True)
-def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, cross, rec, mode, yabs, xs):
-    """Record the first downslope passage of station ``j`` (if not yet done).
+@njit(cache=True, inline="always")
+def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
+    """Record the first downslope passage of station ``j``; True if it was the first.
 
-    ``rec`` bundles the restart record: (grid_v, st_srow, srec, srng, rng,
-    drawn, ctx) with ctx = (cur_seg, n_imp, n_ev, max_x).
+    Hot path: takes only the arrays it writes (passing more arrays to a
+    compiled call costs reference counting on every call).
     """
     if not np.isnan(grid_h[j]):
-        return
+        return False
     grid_h[j] = h
     grid_e[j] = 0.5 * m * (vx * vx + vy * vy) + 0.2 * m * r * r * w * w
-    grid_v, st_srow, srec, srng, rng, drawn, ctx = rec
     grid_v[j] = np.hypot(vx, vy)
-    q = st_srow[j]
-    if q >= 0:
-        srec[q, RS_MODE] = mode
-        srec[q, RS_X] = xs
-        srec[q, RS_Y] = yabs
-        srec[q, RS_VX] = vx
-        srec[q, RS_VY] = vy
-        srec[q, RS_W] = w
-        srec[q, RS_T] = t
-        srec[q, RS_SEG] = ctx[0]
-        srec[q, RS_E] = drawn[0]
-        srec[q, RS_MU] = drawn[1]
-        srec[q, RS_MUR] = drawn[2]
-        srec[q, RS_NIMP] = ctx[1]
-        srec[q, RS_NEV] = ctx[2]
-        srec[q, RS_MAXX] = max(ctx[3], xs)
-        srng[q] = rng[0]
     u = st_user[j]
     if u >= 0:
         cross[u, C_H] = h
@@ -458,6 +440,30 @@ def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, cross, rec, mode,
         cross[u, C_VY] = vy
         cross[u, C_W] = w
         cross[u, C_T] = t
+    return True
+
+
+@njit(cache=True)
+def _record_restart(q, srec, srng, rng, drawn, ctx, mode, xs, yabs, vx, vy, w, t):
+    """The full state of a rock at the first passage of restart station row ``q``.
+
+    ``ctx`` holds (cur_seg, n_imp, n_ev, max_x) at the start of the phase.
+    """
+    srec[q, RS_MODE] = mode
+    srec[q, RS_X] = xs
+    srec[q, RS_Y] = yabs
+    srec[q, RS_VX] = vx
+    srec[q, RS_VY] = vy
+    srec[q, RS_W] = w
+    srec[q, RS_T] = t
+    srec[q, RS_SEG] = ctx[0]
+    srec[q, RS_E] = drawn[0]
+    srec[q, RS_MU] = drawn[1]
+    srec[q, RS_MUR] = drawn[2]
+    srec[q, RS_NIMP] = ctx[1]
+    srec[q, RS_NEV] = ctx[2]
+    srec[q, RS_MAXX] = max(ctx[3], xs)
+    srng[q] = rng[0]
 
 
 @njit(cache=True)
@@ -707,7 +713,6 @@ def simulate_rock(
             vx = vt * tx
             vy = vt * ty
 
-    rec = (grid_v, st_srow, srec, srng, rng, drawn, ctx)
     while True:
         if n_ev >= max_events:
             status = UNRESOLVED
@@ -760,8 +765,10 @@ def simulate_rock(
                     while j < st_x.shape[0] and st_x[j] <= xb:
                         ts = (st_x[j] - x) / vx
                         ys = y + vy * ts - 0.5 * G * ts * ts
-                        _record(j, ys - st_yg[j], vx, vy - G * ts, w, t + ts, m, r,
-                                st_user, grid_h, grid_e, cross, rec, FLIGHT, ys, st_x[j])
+                        if _record(j, ys - st_yg[j], vx, vy - G * ts, w, t + ts, m, r,
+                                   st_user, grid_h, grid_e, grid_v, cross) and st_srow[j] >= 0:
+                            _record_restart(st_srow[j], srec, srng, rng, drawn, ctx, FLIGHT,
+                                            st_x[j], ys, vx, vy - G * ts, w, t + ts)
                         j += 1
                 tb = (xb - x) / vx
                 t += tb
@@ -785,24 +792,13 @@ def simulate_rock(
                 while j < st_x.shape[0] and st_x[j] <= x1:
                     ts = (st_x[j] - x) / vx
                     ys = y + vy * ts - 0.5 * G * ts * ts
-                    _record(
-                        j,
-                        ys - st_yg[j],
-                        vx,
-                        vy - G * ts,
-                        w,
-                        t + ts,
-                        m,
-                        r,
-                        st_user,
-                        grid_h,
-                        grid_e,
-                        cross,
-                        rec,
-                        FLIGHT,
-                        ys,
-                        st_x[j],
-                    )
+                    if (
+                        _record(j, ys - st_yg[j], vx, vy - G * ts, w, t + ts, m, r,
+                                st_user, grid_h, grid_e, grid_v, cross)
+                        and st_srow[j] >= 0
+                    ):
+                        _record_restart(st_srow[j], srec, srng, rng, drawn, ctx, FLIGHT,
+                                        st_x[j], ys, vx, vy - G * ts, w, t + ts)
                     j += 1
             t += tf
             if leaves:
@@ -942,24 +938,13 @@ def simulate_rock(
                 vs = np.sqrt(q) if q > 0.0 else 0.0
                 ts = 2.0 * dd / (v + vs) if v + vs > 0.0 else 0.0
                 ss = vs / r if rolling else s + dsp * ts
-                _record(
-                    j,
-                    y + dy * dd - st_yg[j],
-                    vs * dx,
-                    vs * dy,
-                    -ss * dirn,
-                    t + ts,
-                    m,
-                    r,
-                    st_user,
-                    grid_h,
-                    grid_e,
-                    cross,
-                    rec,
-                    CONTACT,
-                    y + dy * dd,
-                    st_x[j],
-                )
+                if (
+                    _record(j, y + dy * dd - st_yg[j], vs * dx, vs * dy, -ss * dirn, t + ts,
+                            m, r, st_user, grid_h, grid_e, grid_v, cross)
+                    and st_srow[j] >= 0
+                ):
+                    _record_restart(st_srow[j], srec, srng, rng, drawn, ctx, CONTACT, st_x[j],
+                                    y + dy * dd, vs * dx, vs * dy, -ss * dirn, t + ts)
                 j += 1
         x = xn
         y = yn

@@ -252,8 +252,9 @@ class EnsembleResult:
         of that meeting; NaN if not met.
     caught_by : ndarray of int, shape (N,)
         Barrier that caught each rock (order given), or -1.
-    grid_speed : ndarray of float32, shape (N, S)
-        Speed (m/s) at the first downslope passage of each envelope station.
+    grid_speed : ndarray of float32, shape (N, S), or (N, 0)
+        Speed (m/s) at the first downslope passage of each envelope station
+        (only with ``record_speed``).
     restart_x : ndarray, shape (R,)
         Restart stations (m), sorted.
     restart_state : ndarray, shape (N, R, core.N_RESTART_COLS)
@@ -364,7 +365,8 @@ def _run_batch(
             rng[0] = stream_start(key, first_index + i)
         gh[:] = np.nan
         ge[:] = np.nan
-        gv = grid_v[i]
+        # Without speed recording grid_v is one scratch row shared by all rocks.
+        gv = grid_v[i] if grid_v.shape[0] == n else grid_v[0]
         gv[:] = np.nan
         sr = srec[i]
         sr[:, :] = np.nan
@@ -433,6 +435,7 @@ def run_ensemble(
     settings: EngineSettings | None = None,
     barriers: np.ndarray | None = None,
     restart_stations: np.ndarray | list[float] = (),
+    record_speed: bool = False,
     resume: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
     n_trajectories: int = 0,
     max_trajectory_points: int = 4000,
@@ -455,6 +458,9 @@ def run_ensemble(
     barriers : ndarray, shape (B, core.N_BARRIER_COLS), optional
         Barrier table (columns ``core.BR_*``; the ground-height column is
         filled in here), any order. See :func:`barrier_table`.
+    record_speed : bool
+        Keep the speed at every envelope station too (``grid_speed``; the
+        optimiser needs it), at 4 bytes per rock and station.
     restart_stations : array_like
         Stations (m), each also an envelope station, at whose first downslope
         passage every rock's full state is kept (``restart_state``,
@@ -524,7 +530,7 @@ def run_ensemble(
     bar_out_s = np.zeros((n, nb), dtype=np.int8)
     bar_rec_s = np.empty((n, nb, core.N_BMEET_COLS))
     caught_s = np.empty(n, dtype=np.int64)
-    grid_v = np.empty((n, grid_all.size), dtype=np.float32)
+    grid_v = np.empty((n if record_speed else 1, grid_all.size), dtype=np.float32)
     srec = np.empty((n, rs_x.size, core.N_RESTART_COLS))
     srng = np.zeros((n, rs_x.size), dtype=np.uint64)
     if resume is None:
@@ -582,7 +588,7 @@ def run_ensemble(
             bar_out_s[sl],
             bar_rec_s[sl],
             caught_s[sl],
-            grid_v[sl],
+            grid_v[sl] if record_speed else grid_v,
             st_srow,
             srec[sl],
             srng[sl],
@@ -613,7 +619,7 @@ def run_ensemble(
         barrier_outcome=_unsort(bar_out_s, bar_order),
         barrier_meeting=_unsort(bar_rec_s, bar_order),
         caught_by=_caught_in_given_order(caught_s, bar_order),
-        grid_speed=grid_v,
+        grid_speed=grid_v if record_speed else np.zeros((n, 0), dtype=np.float32),
         restart_x=rs_x,
         restart_state=srec,
         restart_rng=srng,
