@@ -262,9 +262,13 @@ def cmd_optimise(args: argparse.Namespace) -> int:
                   "project_hash": project.resolved_hash(), "project": project.resolved_dict()}
         write_json(out / "summary.json", {**summary, "run": record})
     if args.plot and result.best is not None and result.best.evaluation is not None:
+        from .evaluate import evaluate_design
         from .report import plot_study
 
-        ev = result.best.evaluation
+        # The same rocks again, keeping a sample of paths for the figure.
+        best = result.best.evaluation
+        ev = evaluate_design(best.study.project, registry, result.best.measures, best.concept,
+                             rocks=result.rocks, seed=result.seed, n_trajectories=60)
         plot_study(ev.study, args.plot, ev)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
