@@ -10,24 +10,17 @@ the project's safety concept.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .engine import Section, barrier_table, core, run_ensemble
+from .engine import Section, barrier_table, core
 from .errors import PluginError
 from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from .safety import Check, SafetyConcept
-from .simulation import (
-    Study,
-    draw_releases,
-    engine_key,
-    engine_settings,
-    section_from_project,
-)
+from .simulation import Study, run_study, section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
     from .measures import ProtectiveMeasure
@@ -467,30 +460,8 @@ def evaluate_design(
     placed = place_measures(project, measures, bare)
     section = edited_section(project, bare, placed)
     bars, owners = _barrier_rows(placed)
-    n = int(project.rocks.count if rocks is None else rocks)
-    s = int(project.rocks.seed if seed is None else seed)
-    releases = draw_releases(project, n, s)
-    grid = np.linspace(section.x[0], section.x[-1], int(project.analysis.envelope_points))
-    t0 = time.perf_counter()
-    result = run_ensemble(
-        section,
-        releases,
-        key=engine_key(s),
-        stations=np.asarray(project.analysis.stations, dtype=float),
-        grid=grid,
-        settings=engine_settings(project),
-        barriers=bars,
-        n_trajectories=n_trajectories,
-        progress=progress,
-    )
-    study = Study(
-        project=project,
-        result=result,
-        releases=releases,
-        seed=s,
-        runtime_s=time.perf_counter() - t0,
-        section=section,
-    )
+    study = run_study(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
+                      progress=progress, section=section, barriers=bars)
     results, held, outcome, meeting = _measure_results(placed, owners, study)
     checks = [
         _guarded(registry, "safety", concept.name, "checks", concept.checks, res) for res in results

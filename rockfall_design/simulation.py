@@ -393,6 +393,8 @@ def run_study(
     seed: int | None = None,
     n_trajectories: int = 0,
     progress: Callable[[int], None] | None = None,
+    section: Section | None = None,
+    barriers: np.ndarray | None = None,
 ) -> Study:
     """Run the project's rockfall study.
 
@@ -407,10 +409,16 @@ def run_study(
         Keep the event states of the first rocks, for figures.
     progress : callable, optional
         Called with the number of rocks done.
+    section : Section, optional
+        The ground to run on (default: the project's slope; ``check`` passes
+        the slope with its ditches and berms).
+    barriers : ndarray, optional
+        The engine's barrier table (``check``'s fences, walls, boulder rows).
     """
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
-    section = section_from_project(project)
+    if section is None:
+        section = section_from_project(project)
     releases = draw_releases(project, n, s)
     x0, x1 = section.x[0], section.x[-1]
     grid = np.linspace(x0, x1, int(project.analysis.envelope_points))
@@ -422,6 +430,7 @@ def run_study(
         stations=np.asarray(project.analysis.stations, dtype=float),
         grid=grid,
         settings=engine_settings(project),
+        barriers=barriers,
         n_trajectories=n_trajectories,
         progress=progress,
     )

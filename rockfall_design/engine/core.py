@@ -443,6 +443,21 @@ def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
     return True
 
 
+@njit(cache=True, inline="always")
+def _traj_row(traj, n, x, y, vx, vy, w, t, mode):
+    """Append the state at an event to ``traj`` if there is room; the new count."""
+    if n >= traj.shape[0]:
+        return n
+    traj[n, T_X] = x
+    traj[n, T_Y] = y
+    traj[n, T_VX] = vx
+    traj[n, T_VY] = vy
+    traj[n, T_W] = w
+    traj[n, T_T] = t
+    traj[n, T_MODE] = mode
+    return n + 1
+
+
 @njit(cache=True)
 def _record_restart(q, srec, srng, rng, drawn, ctx, mode, xs, yabs, vx, vy, w, t):
     """The full state of a rock at the first passage of restart station row ``q``.
@@ -650,7 +665,6 @@ def simulate_rock(
     v_stop = settings[S_V_STOP]
     max_events = int(settings[S_MAX_EVENTS])
     npc = px.shape[0] - 1
-    ntraj_cap = traj.shape[0]
     drawn = np.empty(3)
     cur_seg = -1
 
@@ -722,15 +736,7 @@ def simulate_rock(
         ctx[2] = n_ev
         ctx[3] = max_x
         n_ev += 1
-        if n_traj < ntraj_cap:
-            traj[n_traj, T_X] = x
-            traj[n_traj, T_Y] = y
-            traj[n_traj, T_VX] = vx
-            traj[n_traj, T_VY] = vy
-            traj[n_traj, T_W] = w
-            traj[n_traj, T_T] = t
-            traj[n_traj, T_MODE] = mode
-            n_traj += 1
+        n_traj = _traj_row(traj, n_traj, x, y, vx, vy, w, t, mode)
 
         if mode == FLIGHT:
             k = locate(px, x, vx)
@@ -1007,13 +1013,5 @@ def simulate_rock(
         vx = vt * t2x
         vy = vt * t2y
 
-    if n_traj < ntraj_cap:
-        traj[n_traj, T_X] = x
-        traj[n_traj, T_Y] = y
-        traj[n_traj, T_VX] = vx
-        traj[n_traj, T_VY] = vy
-        traj[n_traj, T_W] = w
-        traj[n_traj, T_T] = t
-        traj[n_traj, T_MODE] = mode
-        n_traj += 1
+    n_traj = _traj_row(traj, n_traj, x, y, vx, vy, w, t, mode)
     return status, x, y, n_imp, n_ev, max_x, t, n_traj, caught_by
