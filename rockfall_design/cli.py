@@ -46,8 +46,14 @@ def _seed(text: str) -> int:
     return v
 
 
-def _add_run_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("project", type=Path, help="project file (YAML)")
+def _add_run_options(p: argparse.ArgumentParser, repeatable: bool = False) -> None:
+    if repeatable:
+        p.add_argument("project", type=Path, nargs="?", help="project file (YAML)")
+        p.add_argument("--repeat", type=Path, metavar="SUMMARY",
+                       help="repeat the run recorded in a summary.json (its resolved project, "
+                       "seed and rock count) instead of reading a project file")
+    else:
+        p.add_argument("project", type=Path, help="project file (YAML)")
     p.add_argument("--rocks", type=_positive_int, metavar="N",
                    help="number of rocks (default: rocks.count of the project)")
     p.add_argument("--seed", type=_seed, metavar="S",
@@ -75,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Simulate the rocks of a project: where they go, how high and how fast "
         "they pass the analysis stations, and where they stop.",
     )
-    _add_run_options(sim)
+    _add_run_options(sim, repeatable=True)
     sim.set_defaults(func=cmd_simulate)
     chk = sub.add_parser(
         "check",
@@ -171,9 +177,24 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .project import load_project
     from .simulation import run_study
 
-    project = load_project(args.project)
+    recorded = None
+    if getattr(args, "repeat", None):
+        if args.project is not None:
+            raise InputError("give either a project file or --repeat SUMMARY, not both")
+        project, recorded = _load_repeat(args)
+    elif args.project is None:
+        raise InputError("a project file (or --repeat SUMMARY) is needed")
+    else:
+        project = load_project(args.project)
     study = _run(run_study, project, args)
     summary = study.summary()
+    if recorded is not None:
+        same = _comparable(summary) == _comparable(recorded)
+        sys.stderr.write(
+            f"{PROG}: repeated {args.repeat}: "
+            + ("the results are identical\n" if same else
+               "the results DIFFER from the recorded ones (another version or machine?)\n")
+        )
     if args.out:
         out: Path = args.out
         write_csv(out / "rocks.csv", study.rocks_table())
@@ -190,6 +211,35 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
         print_simulation(summary)
     return int(ExitCode.OK)
+
+
+def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
+    """The project, seed and rock count recorded in a summary.json, for --repeat."""
+    import yaml
+
+    from .project import load_project_text
+
+    path: Path = args.repeat
+    try:
+        recorded = json.loads(path.read_text(encoding="utf-8"))
+        run = recorded["run"]
+        text = yaml.safe_dump(run["project"], sort_keys=False)
+        seed, rocks = int(run["seed"]), int(run["rocks"])
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise InputError(f"{path}: not a summary.json with a run record ({exc})") from None
+    if run.get("version") != __version__:
+        sys.stderr.write(f"{PROG}: warning: {path} was written by version "
+                         f"{run.get('version')}, this is {__version__}\n")
+    project = load_project_text(text, f"{path} (run.project)")
+    args.seed = seed if args.seed is None else args.seed
+    args.rocks = rocks if args.rocks is None else args.rocks
+    args.project = path
+    return project, recorded
+
+
+def _comparable(summary: dict[str, Any]) -> dict[str, Any]:
+    """A summary without what legitimately changes between runs (timing, the run record)."""
+    return {k: v for k, v in summary.items() if k not in ("runtime_s", "run")}
 
 
 def cmd_check(args: argparse.Namespace) -> int:
