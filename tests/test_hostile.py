@@ -1,0 +1,130 @@
+"""Hostile but valid geometry and misbehaving plugins (hardening)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+
+from rockfall_design.cli import main
+from rockfall_design.engine import EngineSettings, Material, core
+
+from .engine_helpers import one_rock, run_one, section
+from .plugin_helpers import write_distribution
+from .test_project import EXAMPLE, mutated_projects
+
+MAT = Material(restitution=0.35, friction=0.55, rolling_resistance=0.3, roughness_deg=5,
+               sd_restitution=0.05, sd_friction=0.05)
+NAMED = {core.STOPPED, core.EXIT_UPSLOPE, core.EXIT_DOWNSLOPE, core.UNRESOLVED}
+
+
+def _ok(res, sec):
+    assert set(np.unique(res.status)) <= NAMED
+    stopped = res.status == core.STOPPED
+    assert np.all((res.x_end[stopped] >= sec.x[0]) & (res.x_end[stopped] <= sec.x[-1]))
+
+
+def test_near_vertical_cliff_face():
+    sec = section([[0, 60], [5, 58], [5.001, 10], [60, 0]], MAT)
+    res = run_one(sec, one_rock(r=0.4, x=1.0, vx=2.0, rolling=True, n=50))
+    _ok(res, sec)
+    assert np.all(res.max_x > 5.0)  # every rock went over the cliff
+
+
+def test_millimetre_segments_among_long_ones():
+    pts = [[0, 30], [20, 20], [20.001, 19.9995], [20.002, 19.9992], [40, 10], [80, 8]]
+    sec = section(pts, MAT)
+    _ok(run_one(sec, one_rock(r=0.5, x=1.0, rolling=True, n=50)), sec)
+
+
+def test_thousands_of_vertices():
+    x = np.linspace(0, 200, 4001)
+    y = 100 - 0.45 * x + 0.3 * np.sin(x * 3.0)  # a rough surveyed surface
+    sec = section(np.column_stack([x, y]), MAT)
+    res = run_one(sec, one_rock(r=0.3, x=2.0, rolling=True, n=20),
+                  settings=EngineSettings(max_events=20000))
+    _ok(res, sec)
+
+
+def test_counter_slope_and_flat_section():
+    sec = section([[0, 20], [30, 0], [60, 0], [80, 6], [100, 6]], MAT)
+    _ok(run_one(sec, one_rock(r=0.5, x=1.0, rolling=True, n=50)), sec)
+
+
+def test_rock_larger_than_the_segments():
+    sec = section([[0, 20], [10, 12], [10.5, 11.8], [11, 11.4], [11.5, 11.3], [40, 0]], MAT)
+    res = run_one(sec, one_rock(r=3.0, x=1.0, rolling=True, n=20))
+    _ok(res, sec)
+
+
+@pytest.mark.parametrize("x0", [30.0, 60.0, 80.0])
+def test_release_exactly_on_a_vertex(x0):
+    sec = section([[0, 20], [30, 0], [60, 0], [80, 6], [100, 6]], MAT)
+    res = run_one(sec, one_rock(r=0.5, x=x0, n=10))
+    _ok(res, sec)
+    res = run_one(sec, one_rock(r=0.5, x=x0, vx=3.0, rolling=True, n=10))
+    _ok(res, sec)
+
+
+# capsys is read (and so emptied) once per example, which is what the test needs.
+@settings(
+    max_examples=40,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
+@given(mutated_projects())
+def test_mutated_project_files_run_or_fail_with_one_line(tmp_path_factory, capsys, data):
+    import yaml
+
+    path = tmp_path_factory.mktemp("mut") / "p.yaml"
+    path.write_text(yaml.safe_dump(data))
+    try:
+        code = main(["simulate", str(path), "--rocks", "3", "--json"])
+    except SystemExit as exc:  # argparse-level errors are exit 2 as well
+        code = exc.code
+    out = capsys.readouterr()
+    assert code in (0, 2), out.err
+    if code == 2:
+        assert out.err.count("\n") == 1 and "Traceback" not in out.err
+    else:
+        assert json.loads(out.out)["rocks"] == 3
+
+
+RAISING = '''
+from rockfall_design import (Barrier, BarrierBehaviour, MeasureParams, ProtectiveMeasure,
+                             hookimpl)
+
+
+class BadParams(MeasureParams):
+    height: float = 2.0
+
+
+class Bad(ProtectiveMeasure):
+    kind = "bad_net"
+    Params = BadParams
+    example = {"x": 10.0}
+
+    def footprint(self, section):
+        raise ZeroDivisionError("oops in the plugin")
+
+    def design_properties(self):
+        return {"height_m": self.params.height}
+
+
+@hookimpl
+def rockfall_design_measures():
+    return [Bad]
+'''
+
+
+def test_a_plugin_that_raises_is_named_and_stops_the_run_with_exit_3(tmp_path, monkeypatch,
+                                                                      capsys):
+    write_distribution(tmp_path, "bad_plugin", RAISING, "bad")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    p = tmp_path / "p.yaml"
+    p.write_text(EXAMPLE + "measures:\n  - {type: bad_net, x: 70}\n")
+    assert main(["check", str(p), "--rocks", "5"]) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad_net" in err and "oops in the plugin" in err
