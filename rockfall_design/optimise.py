@@ -289,6 +289,8 @@ class Screening:
         self.u_gap = np.random.default_rng(np.random.SeedSequence([self.seed, 7919])).random(
             self.n)
         self._edit_cache: dict[tuple, _Table] = {}
+        # A cost above any design's: infeasible designs cost at least this much.
+        self.penalty_floor = 1e3 + 1e5 * spec.max_measures * max(1.0, spec.length_m)
         self.evaluations = 0
         self.edit_runs = 0
 
@@ -524,7 +526,7 @@ def _search_family(screen: Screening, fam: tuple[int, ...], seed: int) -> tuple[
     cands = screen.spec.candidates
     variables = _variables(cands, fam, screen.edit_candidates)
     has_edit = any(i in screen.edit_candidates for i in fam)
-    big = _cost_scale(screen)
+    big = screen.penalty_floor
 
     def objective(vec: np.ndarray) -> float:
         decoded = _decode(cands, fam, variables, vec)
@@ -552,14 +554,6 @@ def _search_family(screen: Screening, fam: tuple[int, ...], seed: int) -> tuple[
         init="sobol" if dims > 1 else "latinhypercube",
     )
     return res, _decode(cands, fam, variables, res.x)
-
-
-def _cost_scale(screen: Screening) -> float:
-    """A cost larger than any design's: the penalty floor for infeasible ones."""
-    if not hasattr(screen, "_big"):
-        m = screen.spec.max_measures
-        screen._big = 1e3 + 10.0 * m * max(1.0, screen.spec.length_m) * 1e4  # type: ignore
-    return screen._big  # type: ignore[attr-defined]
 
 
 def optimise(
