@@ -673,6 +673,19 @@ def _raw(value: Any, subpath: tuple = (), *, number_keys: bool = False) -> Any:
     raise _fail(f"unsupported value: {_describe(value)}", subpath)
 
 
+
+def _check_typed_item(item: Any, i: int, expected: str) -> None:
+    """An entry of ``measures:`` or ``design.candidates``: a mapping with a string ``type``."""
+    if not isinstance(item, dict):
+        raise _fail(f"expected {expected}, got {_describe(item)}", (i,))
+    if "type" not in item:
+        raise _fail("required key 'type' is missing (the kind of measure, e.g. fence)", (i,))
+    kind = item["type"]
+    if not isinstance(kind, str):
+        raise _fail(f"expected the name of a measure type, got {_describe(kind)}", (i, "type"))
+    if not kind.strip():
+        raise _fail("must not be empty (the kind of measure, e.g. fence)", (i, "type"))
+
 def _parse_measures(value: Any) -> list[dict[str, Any]]:
     """``measures:``: a list of mappings, each with a non-empty string ``type``."""
     if value is None:
@@ -681,19 +694,7 @@ def _parse_measures(value: Any) -> list[dict[str, Any]]:
         raise _fail(f"expected a list of measures (mappings with a type), got {_describe(value)}")
     measures = []
     for i, item in enumerate(value):
-        if not isinstance(item, dict):
-            raise _fail(
-                f"expected a measure (a mapping such as {{type: fence, x: 70, ...}}), "
-                f"got {_describe(item)}",
-                (i,),
-            )
-        if "type" not in item:
-            raise _fail("required key 'type' is missing (the kind of measure, e.g. fence)", (i,))
-        kind = item["type"]
-        if not isinstance(kind, str):
-            raise _fail(f"expected the name of a measure type, got {_describe(kind)}", (i, "type"))
-        if not kind.strip():
-            raise _fail("must not be empty (the kind of measure, e.g. fence)", (i, "type"))
+        _check_typed_item(item, i, "a measure (a mapping such as {type: fence, x: 70, ...})")
         measures.append(_raw(item, (i,)))
     return measures
 
@@ -983,19 +984,9 @@ def _parse_candidates(value: Any) -> list[dict[str, Any]]:
         )
     candidates = []
     for i, item in enumerate(value):
-        if not isinstance(item, dict):
-            raise _fail(
-                "expected a candidate measure (a mapping such as {type: fence, x: [60, 110]}), "
-                f"got {_describe(item)}",
-                (i,),
-            )
-        if "type" not in item:
-            raise _fail("required key 'type' is missing (the kind of measure, e.g. fence)", (i,))
-        kind = item["type"]
-        if not isinstance(kind, str):
-            raise _fail(f"expected the name of a measure type, got {_describe(kind)}", (i, "type"))
-        if not kind.strip():
-            raise _fail("must not be empty (the kind of measure, e.g. fence)", (i, "type"))
+        _check_typed_item(
+            item, i, "a candidate measure (a mapping such as {type: fence, x: [60, 110]})"
+        )
         if "x" not in item:
             raise _fail(
                 "required key 'x' is missing (the station range [min, max] (m) where the "
@@ -1016,7 +1007,7 @@ def _parse_candidates(value: Any) -> list[dict[str, Any]]:
                 f"got [{_fmt(low)}, {_fmt(high)}]",
                 (i, "x"),
             )
-        candidate: dict[str, Any] = {"type": kind, "x": [x[0], x[1]]}
+        candidate: dict[str, Any] = {"type": item["type"], "x": [x[0], x[1]]}
         for key, item_value in item.items():
             if key in ("type", "x"):
                 continue
