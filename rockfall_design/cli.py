@@ -134,21 +134,32 @@ def _memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
         )
 
 
+def _rich_progress(elapsed: bool) -> Any:
+    """A transient rich progress display on stderr (time remaining, or elapsed)."""
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    return Progress(
+        "[progress.description]{task.description}",
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn() if elapsed else TimeRemainingColumn(),
+        console=Console(stderr=True),
+        transient=True,
+    )
+
+
 def _progress(console_needed: bool, total: int):
     """A rich progress bar on stderr for long interactive runs, else nothing."""
     if not console_needed:
         return None, None
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeRemainingColumn
-
-    prog = Progress(
-        "[progress.description]{task.description}",
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeRemainingColumn(),
-        console=Console(stderr=True),
-        transient=True,
-    )
+    prog = _rich_progress(elapsed=False)
     task = prog.add_task("rocks", total=total)
     return prog, (lambda done: prog.update(task, completed=done))
 
@@ -330,12 +341,7 @@ def _stage_progress(interactive: bool):
     """A rich progress display of the optimiser's stages on stderr."""
     if not interactive:
         return None, None
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
-
-    prog = Progress("[progress.description]{task.description}", BarColumn(),
-                    MofNCompleteColumn(), TimeElapsedColumn(), console=Console(stderr=True),
-                    transient=True)
+    prog = _rich_progress(elapsed=True)
     tasks: dict[str, Any] = {}
 
     def callback(stage: str, done: int, total: int) -> None:
