@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import signal
@@ -118,20 +119,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
-    """Refuse a run whose result arrays would not fit in memory, before it starts."""
-    per_rock = 8 * n_grid + 40 * n_stations + 160
-    need = n_rocks * per_rock
+def _memory_guard(need: int, what: str, advice: str) -> None:
+    """Refuse a run that would need more memory than the machine has, before it starts.
+
+    ``need`` (bytes) is the run's estimated peak; the limit is 60 % of the
+    physical memory, leaving room for Python, the libraries and the rest of
+    the machine.
+    """
     try:
         total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
     except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
         return
     if need > 0.6 * total:
         raise InputError(
-            f"{n_rocks:,} rocks with {n_grid} envelope points would need about "
-            f"{need / 2**30:.1f} GiB of memory; this machine has {total / 2**30:.1f} GiB. "
-            "Use fewer rocks or fewer analysis.envelope_points."
+            f"{what} would need about {need / 2**30:.1f} GiB of memory; this machine has "
+            f"{total / 2**30:.1f} GiB. {advice}"
         )
+
+
+def _in_memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
+    """The guard for ``check`` and ``optimise``, which keep every rock's results.
+
+    Per rock and envelope point: float32 height and energy, and float64
+    copies of them while the percentiles are taken.
+    """
+    need = n_rocks * (32 * n_grid + 40 * n_stations + 200)
+    _memory_guard(need, f"{n_rocks:,} rocks with {n_grid} envelope points",
+                  "Use fewer rocks or fewer analysis.envelope_points.")
 
 
 def _rich_progress(elapsed: bool) -> Any:
@@ -167,8 +181,6 @@ def _progress(console_needed: bool, total: int):
 def _run(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:
     """Call ``run(project, rocks=..., seed=..., ...)`` with a progress bar if interactive."""
     n = args.rocks or project.rocks.count
-    _memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
-                  len(project.analysis.stations))
     kw.update(rocks=n, seed=args.seed, n_trajectories=60 if args.plot else 0)
     prog, callback = _progress(sys.stderr.isatty() and n >= 20_000, n)
     if prog is None:
@@ -183,9 +195,9 @@ def _warn_failures(registry: Any) -> None:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from .outputs import write_csv, write_json
+    from .outputs import write_json
     from .project import load_project
-    from .simulation import run_study
+    from .simulation import simulate, study_memory
 
     recorded = None
     if getattr(args, "repeat", None):
@@ -196,7 +208,13 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         raise InputError("a project file (or --repeat SUMMARY) is needed")
     else:
         project = load_project(args.project)
-    study = _run(run_study, project, args)
+    n = args.rocks or project.rocks.count
+    _memory_guard(study_memory(project, n), f"{n:,} rocks with "
+                  f"{project.analysis.envelope_points} envelope points",
+                  "Use fewer analysis.envelope_points or analysis.stations.")
+    with contextlib.ExitStack() as files:
+        on_chunk = _table_writers(files, args.out) if args.out else None
+        study = _run(simulate, project, args, on_chunk=on_chunk)
     summary = study.summary()
     if recorded is not None:
         same = _comparable(summary) == _comparable(recorded)
@@ -206,10 +224,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                "the results DIFFER from the recorded ones (another version or machine?)\n")
         )
     if args.out:
-        out: Path = args.out
-        write_csv(out / "rocks.csv", study.rocks_table())
-        write_csv(out / "crossings.csv", study.crossings_table())
-        write_json(out / "summary.json", {**summary, "run": run_record(study, args)})
+        write_json(args.out / "summary.json", {**summary, "run": run_record(study, args)})
     if args.plot:
         from .report import plot_study
 
@@ -221,6 +236,26 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
         print_simulation(summary)
     return int(ExitCode.OK)
+
+
+def _table_writers(files: contextlib.ExitStack, out: Path) -> Any:
+    """A chunk callback that appends rocks.csv and crossings.csv as the run goes.
+
+    Both files are temporary until ``files`` closes without an error, so an
+    interrupted run leaves the previous tables as they were.
+    """
+    from .outputs import atomic_writer
+
+    rocks = files.enter_context(atomic_writer(out / "rocks.csv"))
+    crossings = files.enter_context(atomic_writer(out / "crossings.csv"))
+    first = [True]
+
+    def write(part: Any) -> None:
+        for fh, table in ((rocks, part.rocks_table()), (crossings, part.crossings_table())):
+            table.to_csv(fh, index=False, header=first[0], lineterminator="\n")
+        first[0] = False
+
+    return write
 
 
 def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
@@ -262,6 +297,9 @@ def cmd_check(args: argparse.Namespace) -> int:
     project = load_project(args.project)
     registry = load_registry(blocked=args.block)
     _warn_failures(registry)
+    n = args.rocks or project.rocks.count
+    _in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
+                     len(project.analysis.stations))
     evaluation = _run(evaluate, project, args, registry=registry)
     summary = evaluation.summary()
     study = evaluation.study
@@ -304,7 +342,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     registry = load_registry(blocked=args.block)
     _warn_failures(registry)
     n = args.rocks or project.rocks.count
-    _memory_guard(n, project.analysis.envelope_points + 400, len(project.analysis.stations))
+    _in_memory_guard(n, project.analysis.envelope_points + 400, len(project.analysis.stations))
     prog, callback = _stage_progress(sys.stderr.isatty())
     if prog is None:
         result = optimise(project, registry, rocks=n, seed=args.seed)

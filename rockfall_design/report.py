@@ -13,11 +13,11 @@ from rich.table import Table
 from rich.text import Text
 
 from .engine import G
-from .engine.core import T_MODE, T_T, T_VX, T_VY, T_X, T_Y
+from .engine.core import EXIT_DOWNSLOPE, STOPPED, T_MODE, T_T, T_VX, T_VY, T_X, T_Y
 from .outputs import write_with
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .simulation import Study
+    from .simulation import StreamedStudy, Study
 
 __all__ = [
     "print_simulation",
@@ -72,8 +72,8 @@ def simulation_renderable(summary: dict[str, Any]) -> Group:
             caption_justify="left",
             show_edge=False,
         )
-        tab.add_column("x (m)", justify="right")
-        tab.add_column("rocks", justify="right")
+        tab.add_column("x (m)", justify="right", no_wrap=True)
+        tab.add_column("rocks", justify="right", no_wrap=True)
         for q in ("p95", "p99", "max"):
             tab.add_column(f"h {q}", justify="right", no_wrap=True)
         tab.add_column("v max", justify="right")
@@ -97,6 +97,18 @@ def simulation_renderable(summary: dict[str, Any]) -> Group:
             Text.assemble(
                 f"Protected zone x >= {p['x']:g} m: ",
                 (f"{p['reaching']:,} rocks reach it ({100 * p['fraction']:.2f} %)", style),
+            ),
+        ]
+    stats = summary.get("statistics", {})
+    if stats.get("method") == "histograms":
+        parts += [
+            Text(""),
+            Text(
+                f"A large run, streamed in chunks of {stats['chunk_rocks']:,} rocks: counts, "
+                "means and maxima are exact, percentiles within "
+                f"{100 * stats['relative_error']:g} % (stop positions within "
+                f"{stats['stop_x_error_m']:.2g} m).",
+                style="dim",
             ),
         ]
     if st["unresolved"]:
@@ -334,7 +346,7 @@ def _ground(ax, study: Study) -> None:
 
 
 def _marks(ax, study: Study, label: bool = True) -> None:
-    for j, xs in enumerate(study.result.stations):
+    for j, xs in enumerate(study.stations):
         ax.axvline(
             xs,
             color="#1f5fa8",
@@ -410,7 +422,9 @@ def _draw_measures(ax, evaluation: Any, label: bool = True) -> None:
             )
 
 
-def plot_study(study: Study, directory: str | Path, evaluation: Any = None) -> list[Path]:
+def plot_study(
+    study: Study | StreamedStudy, directory: str | Path, evaluation: Any = None
+) -> list[Path]:
     """Write profile.png, envelopes.png and stops.png into ``directory``.
 
     With an ``evaluation`` (from ``check``) the measures are drawn too.
@@ -425,12 +439,13 @@ def plot_study(study: Study, directory: str | Path, evaluation: Any = None) -> l
     out.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     name = study.project.name
-    res = study.result
+    counts = study.status_counts()
+    n_stopped = int(counts[STOPPED])
 
     # 1. Profile with a sample of trajectories.
     fig, ax = plt.subplots(figsize=(11, 5.5))
     _ground(ax, study)
-    for k, tr in enumerate(res.trajectories):
+    for k, tr in enumerate(study.trajectories):
         x, y = _trajectory_xy(tr)
         ax.plot(
             x,
@@ -441,23 +456,24 @@ def plot_study(study: Study, directory: str | Path, evaluation: Any = None) -> l
             zorder=4,
             label="rock centre paths" if k == 0 else None,
         )
-    stopped = res.status == 1
-    if stopped.any():
+    rest_x, rest_y = study.rest_positions()
+    if rest_x.size:
         ax.plot(
-            res.x_end[stopped],
-            res.y_end[stopped],
+            rest_x,
+            rest_y,
             "k.",
             ms=2,
             alpha=0.4,
             zorder=5,
-            label="rest positions",
+            label="rest positions" if rest_x.size == n_stopped
+            else f"rest positions (first {rest_x.size:,} of {n_stopped:,})",
         )
     _marks(ax, study)
     if evaluation is not None:
         _draw_measures(ax, evaluation)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("elevation (m)")
-    ax.set_title(f"{name}: slope section and {len(res.trajectories)} of {res.n:,} paths")
+    ax.set_title(f"{name}: slope section and {len(study.trajectories)} of {study.n:,} paths")
     ax.set_aspect("equal", adjustable="box")
     ax.legend(loc="upper right", fontsize=8)
     ax.grid(alpha=0.3)
@@ -498,7 +514,7 @@ def plot_study(study: Study, directory: str | Path, evaluation: Any = None) -> l
     a1.set_ylabel("passing height of the\nrock centre above ground (m)")
     a2.set_ylabel("total kinetic energy (kJ)")
     a2.set_xlabel("x (m)")
-    a1.set_title(f"{name}: envelopes over {res.n:,} rocks (first passage downslope)")
+    a1.set_title(f"{name}: envelopes over {study.n:,} rocks (first passage downslope)")
     p = out / "envelopes.png"
     _save(fig, p)
     plt.close(fig)
@@ -510,17 +526,18 @@ def plot_study(study: Study, directory: str | Path, evaluation: Any = None) -> l
     )
     sec = study.section
     bins = np.linspace(sec.x[0], sec.x[-1], 81)
-    if stopped.any():
-        a1.hist(res.x_end[stopped], bins=bins, color="#7f8c8d", edgecolor="white")
-    outs = int((res.status == 3).sum())
+    if n_stopped:
+        a1.bar(bins[:-1], study.stop_counts(80), width=np.diff(bins), align="edge",
+               color="#7f8c8d", edgecolor="white")
+    outs = int(counts[EXIT_DOWNSLOPE])
     a1.set_ylabel("rocks at rest")
     a1.set_title(
-        f"{name}: rest positions of {int(stopped.sum()):,} rocks; "
+        f"{name}: rest positions of {n_stopped:,} rocks; "
         f"{outs:,} left the section downslope"
     )
     _marks(a1, study)
     a1.grid(alpha=0.3)
-    if study.project.protect is not None or len(res.stations):
+    if study.project.protect is not None or len(study.stations):
         a1.legend(loc="upper left", fontsize=8)
     _ground(a2, study)
     if evaluation is not None:

@@ -441,6 +441,7 @@ def run_ensemble(
     max_trajectory_points: int = 4000,
     batch_size: int = 4096,
     progress: Callable[[int], None] | None = None,
+    first_index: int = 0,
 ) -> EnsembleResult:
     """Simulate every rock of ``releases`` on ``section``.
 
@@ -478,6 +479,10 @@ def run_ensemble(
         results do not depend on it).
     progress : callable, optional
         Called with the number of rocks done after each batch.
+    first_index : int
+        Index of the first rock of ``releases`` in the whole run: rock ``i``
+        draws from the random stream of rock ``first_index + i``, so a run cut
+        into chunks gives exactly the rocks of the run in one piece.
 
     Returns
     -------
@@ -560,7 +565,7 @@ def run_ensemble(
             sv,
             max_chord,
             k64,
-            a,
+            int(first_index) + a,
             radius[sl],
             mass[sl],
             x0[sl],
