@@ -65,6 +65,7 @@ from pydantic_core import PydanticCustomError
 from .errors import ProjectError
 
 __all__ = [
+    "dump_yaml",
     "Analysis",
     "Design",
     "DesignCosts",
@@ -310,6 +311,24 @@ class Material(_Model):
         return self
 
 
+#: Largest coordinate (m) of a slope point. Far from the origin a float64 keeps
+#: too few digits for the contact geometry of a small rock: with coordinates
+#: near 1e7 m the same rocks already take measurably different paths.
+MAX_COORDINATE_M = 1e6
+#: Largest rock radius (m). A sphere of 25 m radius holds 65,000 m3: a rock
+#: avalanche, far beyond the blocks this model is for. Size distributions are
+#: truncated here, so that no draw from a long tail overflows the energies.
+MAX_RADIUS_M = 25.0
+#: Largest rock density (kg/m3), above any rock's (ores reach about 5,000).
+MAX_DENSITY = 20_000.0
+#: Largest release speed (m/s) in x or y: a free fall of 500 m ends at 99 m/s.
+MAX_RELEASE_SPEED = 100.0
+#: Largest release spin (rad/s).
+MAX_RELEASE_SPIN = 1000.0
+#: Largest release clearance above the ground (m).
+MAX_RELEASE_HEIGHT_M = 10_000.0
+
+
 class Slope(_Model):
     """The 2-D slope section: a polyline of ground points and a material per segment."""
 
@@ -335,6 +354,15 @@ class Slope(_Model):
     def _check_geometry(self) -> "Slope":
         if len(self.points) < 2:
             raise _fail(f"expected at least 2 points, got {len(self.points)}", ("points",))
+        for i, point in enumerate(self.points):
+            for k, value in enumerate(point):
+                if abs(value) > MAX_COORDINATE_M:
+                    raise _fail(
+                        f"{'xy'[k]} = {_fmt(value)} m is farther than {MAX_COORDINATE_M:,.0f} m "
+                        "from the origin: give the section in metres, x measured along it "
+                        "(from its top, say) and y as height",
+                        ("points", i, k),
+                    )
         for i in range(1, len(self.points)):
             if self.points[i][0] <= self.points[i - 1][0]:
                 raise _fail(
@@ -498,7 +526,35 @@ def _parse_spin(value: Any) -> float | str:
         return "rolling"
     if isinstance(value, str):
         raise _fail(f"expected a number (rad/s) or 'rolling', got {_describe(value)}")
-    return _as_number(value)
+    spin = _as_number(value)
+    if abs(spin) > MAX_RELEASE_SPIN:
+        raise _fail(f"expected a spin within +-{MAX_RELEASE_SPIN:g} rad/s, got {_fmt(spin)}")
+    return spin
+
+
+def _release_velocity(value: Any) -> tuple[float, float]:
+    """A release ``velocity`` [vx, vy] (m/s), each component within MAX_RELEASE_SPEED."""
+    velocity = _pair("[vx, vy]")(value)
+    for k, v in enumerate(velocity):
+        if abs(v) > MAX_RELEASE_SPEED:
+            raise _fail(
+                f"expected a speed within +-{MAX_RELEASE_SPEED:g} m/s, got {_fmt(v)}", (k,)
+            )
+    return velocity
+
+
+def _clearance(value: Any) -> float:
+    """A release ``height``: the clearance (m) above the ground, so never negative."""
+    height = _as_number(value)
+    if height > MAX_RELEASE_HEIGHT_M:
+        raise _fail(f"expected a clearance <= {MAX_RELEASE_HEIGHT_M:,.0f} m, got {_fmt(height)}")
+    if height < 0:
+        raise _fail(
+            f"expected a clearance >= 0 (m), got {_fmt(height)}: the release would start "
+            "the rock below the ground (height is measured from the ground up; "
+            "0 = resting on it)"
+        )
+    return height
 
 
 class ReleaseZone(_Model):
@@ -519,9 +575,11 @@ class ReleaseZone(_Model):
         description="Release x (m): a number or a range [min, max] sampled uniformly. "
         "Always stored as (min, max)."
     )
-    height: NonNegative = Field(0.0, description="Initial clearance above the ground (m).")
-    velocity: Annotated[tuple[float, float], BeforeValidator(_pair("[vx, vy]"))] = Field(
-        (0.0, 0.0), description="Initial velocity [vx, vy] (m/s)."
+    height: Annotated[float, BeforeValidator(_clearance)] = Field(
+        0.0, description="Initial clearance between the rock and the ground (m), >= 0."
+    )
+    velocity: Annotated[tuple[float, float], BeforeValidator(_release_velocity)] = Field(
+        (0.0, 0.0), description="Initial velocity [vx, vy] (m/s), each within +-100 m/s."
     )
     spin: Annotated[
         float | Literal["rolling"],
@@ -555,7 +613,9 @@ class Rocks(_Model):
 
     count: Annotated[Integer, Field(ge=1)] = Field(1000, description="Number of rocks.")
     seed: Annotated[Integer, Field(ge=0)] = Field(0, description="Random seed (reproducible).")
-    density: Positive = Field(2650.0, description="Rock density (kg/m3).")
+    density: Annotated[Positive, Field(le=MAX_DENSITY)] = Field(
+        2650.0, description="Rock density (kg/m3), at most 20,000."
+    )
     radius: SizeField = Field(None, description="Rock radius (m): a number or a distribution.")
     volume: SizeField = Field(None, description="Rock volume (m3): a number or a distribution.")
     mass: SizeField = Field(None, description="Rock mass (kg): a number or a distribution.")
@@ -575,7 +635,29 @@ class Rocks(_Model):
                 f"give only one of radius, volume, mass; got {' and '.join(given)}",
                 (given[1],),
             )
+        spec, top = self.size, self.max_size
+        # The smallest size the distribution must be able to exceed: its fixed
+        # value, its maximum, or its mean or median (a tail beyond is cut off).
+        least = spec.b if spec.kind == "uniform" else spec.a
+        if least > top:
+            unit = {"radius": "m", "volume": "m3", "mass": "kg"}[self.size_quantity]
+            raise _fail(
+                f"expected sizes up to {_fmt(float(f'{top:.6g}'))} {unit} (a sphere of "
+                f"{MAX_RADIUS_M:g} m radius), got {_fmt(least)}",
+                (self.size_quantity,),
+            )
         return self
+
+    @property
+    def max_size(self) -> float:
+        """The largest size a rock may have, in the units of :attr:`size_quantity`.
+
+        A sphere of :data:`MAX_RADIUS_M`; draws beyond it are cut off (the
+        distribution is truncated there).
+        """
+        volume = 4.0 / 3.0 * math.pi * MAX_RADIUS_M**3
+        return {"radius": MAX_RADIUS_M, "volume": volume,
+                "mass": volume * self.density}[self.size_quantity]
 
     @field_serializer("radius", "volume", "mass")
     def _size_to_yaml(self, value: SizeSpec | None) -> Any:
@@ -629,8 +711,9 @@ class EngineConfig(_Model):
         0.5, description="Below this outgoing normal speed (m/s) the rock stays in contact."
     )
     v_stop: Positive = Field(0.05, description="Below this speed (m/s) the rock stops.")
-    max_events: Annotated[Integer, Field(ge=10)] = Field(
-        10000, description="Maximum number of events (impacts, phase changes) per rock."
+    max_events: Annotated[Integer, Field(ge=10, le=10_000_000)] = Field(
+        10000, description="Maximum number of events (impacts, phase changes) per rock, "
+        "10..10,000,000."
     )
     max_chord_deg: Annotated[Positive, Field(le=30.0)] = Field(
         5.0, description="Maximum angle (deg) between trajectory chords and the arc."
@@ -1580,6 +1663,41 @@ _Loader.add_implicit_resolver(
     list("-+0123456789"),
 )
 
+
+
+class _Dumper(yaml.SafeDumper):
+    """SafeDumper that quotes every string the project loader would read as something else.
+
+    The dumper decides whether a string may be written plain by asking its own
+    resolvers what the plain scalar would be read as; giving it the loader's
+    extra resolver makes it quote a product or material named ``1e3``, which
+    :class:`_Loader` would otherwise read back as the number 1000.
+    """
+
+    def represent_str(self, data: str) -> yaml.ScalarNode:
+        # YAML 1.1 folds the line breaks NEL, LS and PS inside plain and single-
+        # quoted scalars; only double quotes keep them (escaped).
+        if any(ch in data for ch in "\x85\u2028\u2029"):
+            return self.represent_scalar("tag:yaml.org,2002:str", data, style='"')
+        return super().represent_str(data)
+
+
+_Dumper.add_representer(str, _Dumper.represent_str)
+_Dumper.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
+def dump_yaml(data: Any) -> str:
+    """``data`` as YAML that :func:`load_project_text` reads back to the same values.
+
+    Keys keep their order; non-ASCII text is written as it is.
+    """
+    return yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True)
+
+
 #: key path -> (1-based line, node kind: "map" | "seq" | "scalar")
 _Lines = dict[tuple, tuple[int, str]]
 
@@ -1776,7 +1894,9 @@ def _message(error: dict) -> str:
     return str(error.get("msg", kind))
 
 
-def _to_project_error(exc: ValidationError, source: str, lines: _Lines) -> ProjectError:
+def _to_project_error(
+    exc: ValidationError, source: str, lines: _Lines, model: type[BaseModel]
+) -> ProjectError:
     located = []
     for order, error in enumerate(exc.errors()):
         loc = tuple(error["loc"])
@@ -1789,7 +1909,10 @@ def _to_project_error(exc: ValidationError, source: str, lines: _Lines) -> Proje
             prefix = "invalid key: "
         path = _yaml_path(loc, lines)
         line = _line_of(path, lines)
-        message = prefix + _message(error)
+        if error["type"] == "missing":
+            message = _missing_message(_navigate(model, loc)[1], loc)
+        else:
+            message = prefix + _message(error)
         located.append((line if line is not None else 0, order, path, line, message))
     _, _, path, line, message = min(located, key=lambda item: item[:2])
     return ProjectError(source, line, _key_text(path, lines), message)
@@ -2005,6 +2128,15 @@ def _union_message(options: list[Any], value: Any) -> str:
     return f"expected {' or '.join(wanted)}, got {_describe(value)}{hint}"
 
 
+def _missing_message(owner: Any, loc: tuple) -> str:
+    """"required key is missing", with what the key holds (its field's description)."""
+    info = _field_of(owner, loc[-1]) if owner is not None and loc else None
+    about = ""
+    if info is not None and info.description:
+        about = f" ({info.description.split('. ')[0].strip().rstrip('.')})"
+    return f"required key is missing{about}"
+
+
 def _param_message(model: type[BaseModel], error: Any) -> tuple[tuple, str]:
     kind = error["type"]
     value = error.get("input")
@@ -2018,11 +2150,7 @@ def _param_message(model: type[BaseModel], error: Any) -> tuple[tuple, str]:
     if kind == "missing":
         if loc and isinstance(loc[-1], int):
             return loc[:-1], f"expected more items: item {loc[-1]} is missing"
-        info = _field_of(owner, loc[-1]) if owner is not None and loc else None
-        about = ""
-        if info is not None and info.description:
-            about = f" ({info.description.split('. ')[0].strip().rstrip('.')})"
-        return loc, f"required key is missing{about}"
+        return loc, _missing_message(owner, loc)
     if kind == "finite_number":
         return loc, f"must be finite, got {_describe(value)}"
     if kind in _NUMBER_ERRORS or kind == "int_from_float":
@@ -2098,7 +2226,7 @@ def load_project_text(
     try:
         project = Project.model_validate(data)
     except ValidationError as exc:
-        raise _to_project_error(exc, source, lines) from exc
+        raise _to_project_error(exc, source, lines, Project) from exc
     except RecursionError as exc:
         raise ProjectError(source, None, "", "the file is nested too deeply") from exc
     project._source = source

@@ -693,10 +693,12 @@ ALL_PATHS = [p for p in _paths(EXAMPLE_DATA) if p]
 
 
 @st.composite
-def mutated_projects(draw):
-    data = copy.deepcopy(EXAMPLE_DATA)
+def mutated_projects(draw, base=None):
+    """``base`` (default: EXAMPLE's data) with 1-3 keys deleted or replaced by junk."""
+    data = copy.deepcopy(EXAMPLE_DATA if base is None else base)
+    paths = ALL_PATHS if base is None else [p for p in _paths(base) if p]
     for _ in range(draw(st.integers(min_value=1, max_value=3))):
-        path = draw(st.sampled_from(ALL_PATHS))
+        path = draw(st.sampled_from(paths))
         parent = data
         try:
             for key in path[:-1]:
@@ -1842,3 +1844,35 @@ def test_params_problem():
         "expected a number, got true (a boolean)",
     )
     assert params_problem(P, {"width": 1, "widht": 2})[0] == ("widht",)
+
+
+# --------------------------------------------------------------------------------------
+# Writing YAML the loader reads back (design.yaml, --repeat)
+# --------------------------------------------------------------------------------------
+
+_scalars = st.one_of(
+    st.text(max_size=10),
+    st.sampled_from(["1e3", "-2E-3", "1_000", "2024-05-01", "true", "null", "~", ".inf"]),
+    st.integers(-(10**9), 10**9),
+    st.floats(allow_nan=False, allow_infinity=False),
+    st.booleans(),
+    st.none(),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.dictionaries(st.one_of(st.text(max_size=8), st.sampled_from(["1e3", "2e-1"])),
+                       st.one_of(_scalars, st.lists(_scalars, max_size=3)), max_size=6))
+def test_dump_yaml_is_read_back_as_written(data):
+    from rockfall_design.project import _parse_yaml, dump_yaml
+
+    back, _ = _parse_yaml(dump_yaml(data), "d.yaml")
+    assert back == (data or {}) or (back is None and not data)
+
+
+def test_a_product_named_like_a_number_stays_a_string():
+    from rockfall_design.project import dump_yaml
+
+    text = dump_yaml({"product": "1e3", "material": "2e-1"})
+    assert yaml.safe_load(text) == {"product": "1e3", "material": "2e-1"}
+    assert "'1e3'" in text  # PyYAML's safe_dump would leave it plain, read as 1000.0
