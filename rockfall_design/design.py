@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from .costs import CostModel
+from .plugins import call_plugin
 from .project import params_problem
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -196,6 +197,8 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
         products set (``height``, ``capacity_kj``); a required parameter
         with neither a value nor plugin bounds; a catalogue product the
         measure rejects; cost parameters the cost model rejects.
+    PluginError
+        If the cost model's class fails to instantiate.
     """
     design = project.design
     if design is None:
@@ -243,7 +246,7 @@ def _resolve_cost_model(project: Project, registry: Registry) -> CostModel:
             ("design", "costs", "model"), name, registry.cost_models, "cost model"
         )
     params = design.costs_locator.validate_params((), cls.Params, design.cost_params)
-    return cls(params)
+    return call_plugin(registry, cls, "__init__", params)
 
 
 def _resolve_candidate(
@@ -503,6 +506,8 @@ def build_candidate_measure(
         If the values are not valid for the measure's parameter model, ``x``
         or a range value lies outside its range, an option value is not one of
         the options, or the product is not allowed or lacks that height.
+    PluginError
+        If the measure's class fails to instantiate.
     """
     cls = registry.measure(spec.kind)
     fields = cls.Params.model_fields
@@ -550,4 +555,4 @@ def build_candidate_measure(
         loc, message = problem
         where = ".".join(str(p) for p in loc)
         raise ValueError(f"{label}: {where + ': ' if where else ''}{message}")
-    return cls(cls.Params.model_validate(values))
+    return call_plugin(registry, cls, "__init__", cls.Params.model_validate(values))

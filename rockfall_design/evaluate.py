@@ -17,8 +17,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .engine import Section, barrier_table, core
-from .errors import PluginError
 from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
+from .plugins import call_plugin
 from .safety import Check, SafetyConcept
 from .simulation import Study, run_study, section_from_project
 
@@ -50,11 +50,15 @@ _BEHAVIOUR_CODE = {
 
 @dataclass(frozen=True)
 class PlacedMeasure:
-    """A measure with its footprint on the section and its place in the project."""
+    """A measure with its footprint on the section and its place in the project.
+
+    ``label`` is the measure's ``label()``, obtained once when it was placed.
+    """
 
     index: int
     measure: ProtectiveMeasure
     footprint: Barrier | ProfileEdit
+    label: str
 
 
 def build_measures(project: Project, registry: Registry) -> list[ProtectiveMeasure]:
@@ -72,7 +76,7 @@ def build_measures(project: Project, registry: Registry) -> list[ProtectiveMeasu
                 ("measures", i, "type"), kind, registry.measures, "measure type"
             )
         params = project.validate_params(("measures", i), cls.Params, raw, drop=("type",))
-        out.append(cls(params))
+        out.append(call_plugin(registry, cls, "__init__", params))
     return out
 
 
@@ -86,30 +90,41 @@ def build_concept(project: Project, registry: Registry) -> SafetyConcept:
             ("safety", "concept"), name, registry.safety_concepts, "safety concept"
         )
     params = project.validate_params(("safety",), cls.Params, raw, drop=("concept",))
-    return cls(params)
+    return call_plugin(registry, cls, "__init__", params)
 
 
 def place_measures(
-    project: Project, measures: Sequence[ProtectiveMeasure], section: Section
+    project: Project,
+    registry: Registry,
+    measures: Sequence[ProtectiveMeasure],
+    section: Section,
 ) -> list[PlacedMeasure]:
-    """Footprints of the measures on the bare section, checked for fit and overlap."""
+    """Footprints of the measures on the bare section, checked for fit and overlap.
+
+    Every measure's footprint, design properties and label are asked for
+    here, through :func:`~rockfall_design.plugins.call_plugin`, before any
+    safety concept or report uses the measure: a measure that misbehaves is
+    named as itself, not as the safety concept that reads
+    ``result.measure.design_properties()``.
+
+    Raises
+    ------
+    ProjectError
+        A measure does not fit on the section (its footprint raised
+        ValueError), two profile edits overlap, two barriers stand in one
+        place, or a measure lies outside the section.
+    PluginError
+        A measure misbehaved.
+    """
     placed = []
     for i, m in enumerate(measures):
         try:
-            fp = m.footprint(section)
+            fp = call_plugin(registry, m, "footprint", section)
         except ValueError as exc:
             # A measure that does not fit the section is the user's to fix.
             raise project.error_at(("measures", i), str(exc)) from None
-        except Exception as exc:
-            raise PluginError(
-                f"plugin measure {m.kind!r} failed in footprint(): {type(exc).__name__}: {exc}"
-            ) from exc
-        if not isinstance(fp, Barrier | ProfileEdit):
-            raise PluginError(
-                f"plugin measure {m.kind!r}: footprint() returned {type(fp).__name__}, "
-                "expected Barrier or ProfileEdit"
-            )
-        placed.append(PlacedMeasure(i, m, fp))
+        call_plugin(registry, m, "design_properties")
+        placed.append(PlacedMeasure(i, m, fp, call_plugin(registry, m, "label")))
     edits = sorted(
         (p for p in placed if isinstance(p.footprint, ProfileEdit)),
         key=lambda p: p.footprint.x_start,
@@ -118,7 +133,7 @@ def place_measures(
         if b.footprint.x_start < a.footprint.x_end:
             raise project.error_at(
                 ("measures", b.index),
-                f"{b.measure.label()} overlaps {a.measure.label()} (measures[{a.index}]): "
+                f"{b.label} overlaps {a.label} (measures[{a.index}]): "
                 f"the ground from x = {b.footprint.x_start:g} m to "
                 f"{a.footprint.x_end:g} m would be edited twice",
             )
@@ -128,7 +143,7 @@ def place_measures(
         if b.footprint.x - a.footprint.x < MIN_BARRIER_SPACING_M:
             raise project.error_at(
                 ("measures", b.index, "x"),
-                f"{b.measure.label()} stands where {a.measure.label()} (measures[{a.index}]) "
+                f"{b.label} stands where {a.label} (measures[{a.index}]) "
                 f"stands; barriers must be at least {MIN_BARRIER_SPACING_M:g} m apart",
             )
     x0, x1 = section.x[0], section.x[-1]
@@ -138,7 +153,7 @@ def place_measures(
         if lo < x0 or hi > x1:
             raise project.error_at(
                 ("measures", p.index, "x"),
-                f"{p.measure.label()} lies outside the section ({x0:g} to {x1:g} m)",
+                f"{p.label} lies outside the section ({x0:g} to {x1:g} m)",
             )
     return placed
 
@@ -269,13 +284,13 @@ class Evaluation:
     def failures(self) -> list[str]:
         """One line per failed check, for reports."""
         out = []
-        for res, cs in zip(self.results, self.checks, strict=True):
+        for p, cs in zip(self.placed, self.checks, strict=True):
             for c in cs:
                 if not c.ok:
                     unit = "" if c.unit == "-" else f" {c.unit}"
                     value = "-" if c.value is None else f"{c.value:.2f}{unit}"
                     out.append(
-                        f"{res.measure.label()}: {c.name} {value} does not meet its target "
+                        f"{p.label}: {c.name} {value} does not meet its target "
                         f"{c.target:.2f}{unit} ({c.detail})"
                     )
         prot = self.protect
@@ -337,7 +352,7 @@ class Evaluation:
         out["measures"] = [
             {
                 "type": res.measure.kind,
-                "label": res.measure.label(),
+                "label": p.label,
                 "x": res.measure.x,
                 "params": res.measure.params.model_dump(mode="json"),
                 "met": res.met,
@@ -349,7 +364,7 @@ class Evaluation:
                 "checks": [c.as_dict() for c in cs],
                 "ok": all(c.ok for c in cs),
             }
-            for res, cs in zip(self.results, self.checks, strict=True)
+            for p, res, cs in zip(self.placed, self.results, self.checks, strict=True)
         ]
         prot = self.protect
         if prot is not None:
@@ -457,15 +472,13 @@ def evaluate_design(
 ) -> Evaluation:
     """Like :func:`evaluate`, for given measure and concept objects (the optimiser's designs)."""
     bare = section_from_project(project)
-    placed = place_measures(project, measures, bare)
+    placed = place_measures(project, registry, measures, bare)
     section = edited_section(project, bare, placed)
     bars, owners = _barrier_rows(placed)
     study = run_study(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
                       progress=progress, section=section, barriers=bars)
     results, held, outcome, meeting = _measure_results(placed, owners, study)
-    checks = [
-        _guarded(registry, "safety", concept.name, "checks", concept.checks, res) for res in results
-    ]
+    checks = [call_plugin(registry, concept, "checks", res) for res in results]
     return Evaluation(
         study=study,
         original_section=bare,
@@ -478,16 +491,3 @@ def evaluate_design(
         _meeting=meeting,
     )
 
-
-def _guarded(
-    registry: Registry, section: str, name: str, what: str, fn: Callable[..., Any], *args: Any
-) -> Any:
-    """Call plugin code; any exception from it is a plugin fault naming the plugin."""
-    try:
-        return fn(*args)
-    except Exception as exc:
-        provider = registry.provider.get((section, name), "unknown distribution")
-        raise PluginError(
-            f"plugin {section} {name!r} ({provider}) failed in {what}(): "
-            f"{type(exc).__name__}: {exc}"
-        ) from exc

@@ -72,6 +72,38 @@ Rules for every registered class
 
 A class that breaks a rule is reported as a failure of its plugin (naming
 the class) and left out; the plugin's other classes still load.
+
+When plugin code fails at run time
+----------------------------------
+The program calls into a plugin's classes at set-up and once per design (each
+candidate design of the optimiser included), never per rock: the
+constructors, a measure's ``footprint``, ``design_properties``,
+``quantities`` and ``label``, a safety concept's ``checks`` and a cost
+model's ``cost``. Every such call goes through one guard
+(``rockfall_design.plugins.call_plugin``). Only two exceptions are part of
+the contract:
+
+* ``footprint`` raises ``ValueError``: the measure does not fit on the
+  section. ``check`` shows the message at the measure's key path (bad input,
+  exit code 2); the optimiser counts the design as infeasible.
+* ``cost`` raises ``KeyError`` or ``ValueError``: the catalogue has no price
+  for the measure. The optimiser skips the design and reports why.
+
+Anything else raised, and a return value of the wrong kind, is a fault of the
+plugin: the run stops with exit code 3 (``ExitCode.PLUGIN_FAULT``) and one
+line naming the measure kind, safety concept or cost model, the distribution
+that provides it, the method and the exception (type, message, file:line).
+What must come back: ``footprint`` a :class:`Barrier` or
+:class:`ProfileEdit`; ``design_properties`` and ``quantities`` a dict of str
+to number, never NaN (``inf`` is allowed, e.g. "no capacity given");
+``label`` a str; ``checks`` a list of :class:`Check`; ``cost`` a finite
+number >= 0.
+
+A measure's ``design_properties()`` and ``label()`` are asked for by the
+program before any safety concept or report sees the measure, so a measure
+that fails there is named itself, not the concept that reads
+``result.measure.design_properties()``. Keep these methods deterministic and
+free of side effects: they may be called several times per design.
 """
 
 from __future__ import annotations
@@ -135,6 +167,10 @@ def rockfall_design_measures() -> list[type[ProtectiveMeasure]]:
       ``quantities(section)`` for costing.
     * The program instantiates the class itself, with validated parameters:
       ``Measure(Measure.Params(**fields_without_type))``.
+    * Raise ``ValueError`` from ``footprint`` when the measure does not fit
+      on the section (the message is shown to the user). Any other exception
+      from the measure is a plugin fault (exit code 3); see "When plugin code
+      fails at run time" above.
 
     Examples
     --------
@@ -206,6 +242,8 @@ def rockfall_design_safety_concepts() -> list[type[SafetyConcept]]:
       rocks that met it), return a list of :class:`Check`; an empty list when
       the concept has nothing to check for that kind of measure. Read the
       measure's properties with ``result.measure.design_properties()``.
+      Anything but a list of :class:`Check`, or an exception, is a plugin
+      fault (exit code 3).
 
     Examples
     --------
@@ -272,7 +310,9 @@ def rockfall_design_cost_models() -> list[type[CostModel]]:
     * Implement ``cost(measure, quantities, length_m)``: the cost of
       ``measure`` over ``length_m`` metres of slope, from its
       ``quantities`` per running metre. Raise ``KeyError`` or ``ValueError``
-      when the catalogue has no price for that measure.
+      when the catalogue has no price for that measure (the optimiser skips
+      the design and says why); return a finite number >= 0 otherwise. Any
+      other exception is a plugin fault (exit code 3).
 
     Examples
     --------

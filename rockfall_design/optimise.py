@@ -26,6 +26,13 @@ what reaches the next one; a rock rolling back upslope into a barrier) is
 settled by the exact check: the best design of every family is run through
 ``evaluate_design`` with the search rocks and again with fresh, independent
 rocks, and the report says whether it holds on each.
+
+A design that does not fit (a measure's ``footprint`` raises ValueError, two
+measures stand in one place) or that the cost model has no price for (its
+``cost`` raises KeyError or ValueError) is infeasible, and the reason is
+reported. Any other failure of plugin code is a
+:class:`~rockfall_design.errors.PluginError` that stops the search (exit 3):
+it is never taken for an infeasible design.
 """
 
 from __future__ import annotations
@@ -41,8 +48,10 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from .engine import Releases, Section, core, run_ensemble
+from .errors import ProjectError
 from .evaluate import Evaluation, edited_section, evaluate_design, place_measures
 from .measures import Barrier, BarrierBehaviour, MeasureResult, ProfileEdit
+from .plugins import call_plugin
 from .safety import Check
 from .simulation import draw_releases, engine_key, engine_settings, section_from_project
 
@@ -177,6 +186,12 @@ def _decode(cands, fam, variables, vec) -> list[tuple[int, dict[str, Any]]]:
 
 @dataclass
 class ScreenResult:
+    """One design judged on the search rocks.
+
+    ``labels`` are the measures' labels, in the order of ``results``;
+    ``reason`` says why a design that could not be judged is infeasible.
+    """
+
     cost: float
     feasible: bool
     violation: float
@@ -184,6 +199,7 @@ class ScreenResult:
     results: list[MeasureResult]
     residual: int
     reason: str = ""
+    labels: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -301,13 +317,23 @@ class Screening:
         mid = [0.5 * (v.low + v.high) if not v.integer else 0 for v in variables]
         try:
             (m,) = self.measures(_decode(self.spec.candidates, (ci,), variables, mid))
-            return isinstance(m.footprint(self.section), ProfileEdit)
-        except Exception:
+            footprint = call_plugin(self.registry, m, "footprint", self.section)
+        except ValueError:
             # Cannot tell from the middle of its range: treat it as the costly kind.
             return c.kind in ("ditch", "berm")
+        return isinstance(footprint, ProfileEdit)
 
     # -- measures -----------------------------------------------------------------
     def measures(self, decoded: Sequence[tuple[int, dict[str, Any]]]) -> list[ProtectiveMeasure]:
+        """The measures of a decoded design, built once per set of parameters.
+
+        Raises
+        ------
+        ValueError
+            The values are not valid for a measure (see ``build_candidate_measure``).
+        PluginError
+            A measure's class failed to instantiate or to label itself.
+        """
         cands = self.spec.candidates
         out = []
         for ci, p in decoded:
@@ -316,15 +342,26 @@ class Screening:
             if m is None:
                 if len(self._measure_cache) > 20000:
                     self._measure_cache.clear()
-                m = self._measure_cache[key] = self._build(cands[ci], self.registry, p)
+                m = self._build(cands[ci], self.registry, p)
+                # The report labels the designs it lists itself, also those that
+                # never got as far as place_measures: a faulty label() shows here.
+                call_plugin(self.registry, m, "label")
+                self._measure_cache[key] = m
             out.append(m)
         return out
 
     def cost(self, measures: Sequence[ProtectiveMeasure]) -> float:
-        total = 0.0
+        """Cost of a design (currency units).
+
+        Raises
+        ------
+        KeyError or ValueError
+            From the cost model: it has no price for one of the measures.
+        """
+        model, total = self.spec.cost_model, 0.0
         for m in measures:
-            q = m.quantities(self.section)
-            total += float(self.spec.cost_model.cost(m, q, self.spec.length_m))
+            q = call_plugin(self.registry, m, "quantities", self.section)
+            total += float(call_plugin(self.registry, model, "cost", m, q, self.spec.length_m))
         return total
 
     # -- tables -------------------------------------------------------------------
@@ -381,10 +418,11 @@ class Screening:
         """Judge a design on the search rocks (see the module docs)."""
         self.evaluations += 1
         try:
-            placed = place_measures(self.project, measures, self.section)
-        except Exception as exc:  # overlap or misfit: infeasible, not an error
-            why = getattr(exc, "message", None) or str(exc)
-            return ScreenResult(math.inf, False, math.inf, [], [], self.n, reason=why)
+            placed = place_measures(self.project, self.registry, measures, self.section)
+        except ProjectError as exc:
+            # A measure that does not fit, or two in one place: an infeasible
+            # design, not an error. A PluginError (a fault) goes on up.
+            return ScreenResult(math.inf, False, math.inf, [], [], self.n, reason=exc.message)
         edits = [p.footprint for p in placed if isinstance(p.footprint, ProfileEdit)]
         edited = edited_section(self.project, self.section, placed) if edits else None
         try:
@@ -434,7 +472,7 @@ class Screening:
                 alive &= ~held
             results[i] = res
         residual = int((alive & (table.max_x >= self.protect_x)).sum())
-        checks = [self.concept.checks(res) for res in results]
+        checks = [call_plugin(self.registry, self.concept, "checks", res) for res in results]
         violation = 0.0
         for cs in checks:
             for c in cs:
@@ -445,8 +483,18 @@ class Screening:
                         violation += abs(c.value - c.target) / max(abs(c.target), 1e-9)
         if residual > self.allowed_residual:
             violation += 1.0 + (residual - self.allowed_residual) / max(self.n, 1) * 100.0
-        cost = self.cost([p.measure for p in placed])
-        return ScreenResult(cost, violation == 0.0, violation, checks, results, residual)
+        labels = [p.label for p in placed]
+        try:
+            cost = self.cost([p.measure for p in placed])
+        except (KeyError, ValueError) as exc:
+            # The cost model's contract: no price for a measure skips the design.
+            why = exc.args[0] if exc.args else type(exc).__name__
+            return ScreenResult(
+                math.inf, False, math.inf, checks, results, residual, labels=labels,
+                reason=f"cost model {self.spec.cost_model.name!r} has no price for this "
+                       f"design: {why}")
+        return ScreenResult(cost, violation == 0.0, violation, checks, results, residual,
+                            labels=labels)
 
 
 def _start(fp: Barrier | ProfileEdit) -> float:
@@ -667,10 +715,10 @@ def _why(sr: ScreenResult) -> str:
     if sr.reason:
         return sr.reason
     parts = []
-    for res, cs in zip(sr.results, sr.checks, strict=True):
+    for label, cs in zip(sr.labels, sr.checks, strict=True):
         for c in cs:
             if not c.ok:
-                parts.append(f"{res.measure.label()}: {c.name} {c.detail}")
+                parts.append(f"{label}: {c.name} {c.detail}")
     if not parts:
         parts.append(f"{sr.residual} rocks reach the protected zone")
     return "best design found still fails: " + "; ".join(parts)

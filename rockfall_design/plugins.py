@@ -21,7 +21,9 @@ import importlib.metadata
 import inspect
 import logging
 import math
+import numbers
 import re
+import reprlib
 import traceback
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
@@ -34,13 +36,14 @@ from pydantic import BaseModel, ValidationError
 from . import hookspecs
 from .costs import CostModel
 from .errors import PluginError
-from .measures import ProtectiveMeasure
-from .safety import SafetyConcept
+from .measures import Barrier, ProfileEdit, ProtectiveMeasure
+from .safety import Check, SafetyConcept
 
 __all__ = [
     "PluginFailure",
     "Registry",
     "UnknownNameError",
+    "call_plugin",
     "default_registry",
     "load_registry",
     "plugins_json",
@@ -473,6 +476,141 @@ def default_registry(blocked: Iterable[str] = ()) -> Registry:
 
 
 default_registry.cache_clear = _default_registry.cache_clear  # type: ignore[attr-defined]
+
+
+# ---------------------------------------------------------------------------
+# calling plugin code
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
+def _is_number_dict(value: Any) -> bool:
+    # NaN is never a property or a quantity; infinity is allowed, since a
+    # measure may state "no capacity given" as capacity_kj = inf (see Barrier).
+    return isinstance(value, dict) and all(
+        isinstance(k, str) and _is_number(v) and not math.isnan(v) for k, v in value.items()
+    )
+
+
+def _is_cost(value: Any) -> bool:
+    return _is_number(value) and math.isfinite(value) and value >= 0
+
+
+def _is_check_list(value: Any) -> bool:
+    return isinstance(value, list) and all(isinstance(c, Check) for c in value)
+
+
+@dataclass(frozen=True)
+class _Contract:
+    """What one plugin method may raise by contract, and what it must return.
+
+    Attributes
+    ----------
+    raises : tuple of exception types
+        Exceptions that are part of the contract: they reach the caller as
+        they are, and the caller gives them their documented meaning.
+    returns : callable or None
+        Whether a returned value is acceptable (None: anything is).
+    expected : str
+        What ``returns`` accepts, for the error message.
+    """
+
+    raises: tuple[type[Exception], ...] = ()
+    returns: Callable[[Any], bool] | None = None
+    expected: str = ""
+
+
+_NUMBER_DICT = _Contract((), _is_number_dict, "a dict of str to number (not NaN)")
+
+#: (provider key, method) -> contract; ``__init__`` is the class being instantiated.
+_CONTRACTS: dict[tuple[str, str], _Contract] = {
+    ("measure", "__init__"): _Contract(),
+    # ValueError: the measure does not fit on the section (bad input, exit 2).
+    ("measure", "footprint"): _Contract(
+        (ValueError,), lambda v: isinstance(v, Barrier | ProfileEdit),
+        "a Barrier or a ProfileEdit"),
+    ("measure", "design_properties"): _NUMBER_DICT,
+    ("measure", "quantities"): _NUMBER_DICT,
+    ("measure", "label"): _Contract((), lambda v: isinstance(v, str), "a str"),
+    ("safety", "__init__"): _Contract(),
+    ("safety", "checks"): _Contract((), _is_check_list, "a list of Check"),
+    ("cost", "__init__"): _Contract(),
+    # KeyError or ValueError: no price for this measure (the optimiser skips the design).
+    ("cost", "cost"): _Contract((KeyError, ValueError), _is_cost, "a finite number >= 0"),
+}
+
+_NOUN = {"measure": "measure", "safety": "safety concept", "cost": "cost model"}
+
+
+def _identify(plugin: Any) -> tuple[str, str]:
+    """``(provider key, name)`` of a measure, safety concept or cost model (class or object)."""
+    cls = plugin if inspect.isclass(plugin) else type(plugin)
+    for _section, _what, _hook, base, name_attr, key in _SECTIONS:
+        if issubclass(cls, base):
+            return key, str(getattr(cls, name_attr, "?"))
+    raise TypeError(f"{cls.__qualname__} is not a measure, safety concept or cost model")
+
+
+def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any:
+    """Call plugin code from the core: every call into a plugin's class goes through here.
+
+    Parameters
+    ----------
+    registry
+        The registry the class came from, for the distribution that provides it.
+    plugin
+        A measure, safety concept or cost model: the class for ``"__init__"``,
+        otherwise an instance.
+    method
+        ``"__init__"`` (instantiate the class with ``args``), or the name of
+        the method: ``footprint``, ``design_properties``, ``quantities``,
+        ``label`` (measures), ``checks`` (safety concepts), ``cost`` (cost
+        models).
+    *args
+        Passed on to the method.
+
+    Returns
+    -------
+    Any
+        What the method returned, checked against its contract.
+
+    Raises
+    ------
+    ValueError
+        From ``footprint`` (the measure does not fit on the section).
+    KeyError or ValueError
+        From ``cost`` (the catalogue has no price for the measure).
+    PluginError
+        Exit code 3: the method raised anything else, or returned what its
+        contract does not allow. The one-line message names the measure,
+        safety concept or cost model, the distribution that provides it, the
+        method, and the exception (type, message and the plugin's line).
+    """
+    key, name = _identify(plugin)
+    contract = _CONTRACTS[(key, method)]
+    provider = registry.provider.get((key, name))
+    who = f"{_NOUN[key]} {name!r}" + (f" (from {provider})" if provider else "")
+    fn = plugin if method == "__init__" else getattr(plugin, method)
+    try:
+        value = fn(*args)
+    except (*contract.raises, PluginError):
+        # The contract's own exceptions mean something to the caller; a
+        # PluginError comes from a nested call that already named its plugin.
+        raise
+    except Exception as exc:
+        raise PluginError(
+            f"{who} failed in {method}(): {_describe_exception(exc)}; "
+            "this is a bug in the plugin, not in the project"
+        ) from exc
+    if contract.returns is not None and not contract.returns(value):
+        shown = reprlib.repr(value)
+        raise PluginError(
+            f"{who}: {method}() returned {type(value).__name__} {shown}, "
+            f"expected {contract.expected}; this is a bug in the plugin, not in the project"
+        )
+    return value
 
 
 # ---------------------------------------------------------------------------
