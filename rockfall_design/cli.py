@@ -3,17 +3,19 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import os
 import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from . import __version__
 from .errors import ExitCode, InputError, RockfallError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .outputs import OutputSet
 
 __all__ = ["main"]
 
@@ -195,7 +197,7 @@ def _warn_failures(registry: Any) -> None:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from .outputs import write_json
+    from .outputs import OutputSet
     from .project import load_project
     from .simulation import simulate, study_memory
 
@@ -212,10 +214,18 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     _memory_guard(study_memory(project, n), f"{n:,} rocks with "
                   f"{project.analysis.envelope_points} envelope points",
                   "Use fewer analysis.envelope_points or analysis.stations.")
-    with contextlib.ExitStack() as files:
+    with OutputSet() as files:
+        _reserve(files, args.out, ("rocks.csv", "crossings.csv", "summary.json"))
         on_chunk = _table_writers(files, args.out) if args.out else None
         study = _run(simulate, project, args, on_chunk=on_chunk)
-    summary = study.summary()
+        summary = study.summary()
+        if args.out:
+            files.write_json(args.out / "summary.json",
+                             {**summary, "run": run_record(study, args)})
+        if args.plot:
+            from .report import plot_study
+
+            plot_study(study, args.plot, outputs=files)
     if recorded is not None:
         same = _comparable(summary) == _comparable(recorded)
         sys.stderr.write(
@@ -223,12 +233,6 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             + ("the results are identical\n" if same else
                "the results DIFFER from the recorded ones (another version or machine?)\n")
         )
-    if args.out:
-        write_json(args.out / "summary.json", {**summary, "run": run_record(study, args)})
-    if args.plot:
-        from .report import plot_study
-
-        plot_study(study, args.plot)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
@@ -238,16 +242,25 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return int(ExitCode.OK)
 
 
-def _table_writers(files: contextlib.ExitStack, out: Path) -> Any:
+def _reserve(files: OutputSet, out: Path | None, names: Sequence[str]) -> None:
+    """Reserve the files ``names`` in the --out directory ``out`` (if given) of a run.
+
+    Done before the run, so that a directory that cannot be written is
+    reported at once instead of after minutes of computing.
+    """
+    if out is not None:
+        files.reserve(*(out / name for name in names))
+
+
+def _table_writers(files: OutputSet, out: Path) -> Any:
     """A chunk callback that appends rocks.csv and crossings.csv as the run goes.
 
-    Both files are temporary until ``files`` closes without an error, so an
-    interrupted run leaves the previous tables as they were.
+    Both files belong to the command's output set ``files``: they stay
+    temporary until it commits, so an interrupted run leaves the previous
+    tables as they were.
     """
-    from .outputs import atomic_writer
-
-    rocks = files.enter_context(atomic_writer(out / "rocks.csv"))
-    crossings = files.enter_context(atomic_writer(out / "crossings.csv"))
+    rocks = files.open(out / "rocks.csv")
+    crossings = files.open(out / "crossings.csv")
     first = [True]
 
     def write(part: Any) -> None:
@@ -290,7 +303,7 @@ def _comparable(summary: dict[str, Any]) -> dict[str, Any]:
 def cmd_check(args: argparse.Namespace) -> int:
     """Evaluate the project's measures; exit 0 if every check holds, else 1."""
     from .evaluate import evaluate
-    from .outputs import write_csv, write_json
+    from .outputs import OutputSet
     from .plugins import load_registry
     from .project import load_project
 
@@ -300,24 +313,26 @@ def cmd_check(args: argparse.Namespace) -> int:
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
                      len(project.analysis.stations))
-    evaluation = _run(evaluate, project, args, registry=registry)
-    summary = evaluation.summary()
-    study = evaluation.study
-    if args.out:
-        out: Path = args.out
-        rocks = study.rocks_table()
-        rocks["caught_by_measure"] = evaluation.caught_by_measure()
-        write_csv(out / "rocks.csv", rocks)
-        write_csv(out / "crossings.csv", study.crossings_table())
-        write_csv(out / "measures.csv", evaluation.outcomes_table())
-        record = run_record(study, args)
-        record["project"] = evaluation.resolved_project().resolved_dict()
-        record["project_hash"] = evaluation.resolved_project().resolved_hash()
-        write_json(out / "summary.json", {**summary, "run": record})
-    if args.plot:
-        from .report import plot_study
+    with OutputSet() as files:
+        _reserve(files, args.out, ("rocks.csv", "crossings.csv", "measures.csv", "summary.json"))
+        evaluation = _run(evaluate, project, args, registry=registry)
+        summary = evaluation.summary()
+        study = evaluation.study
+        if args.out:
+            out: Path = args.out
+            rocks = study.rocks_table()
+            rocks["caught_by_measure"] = evaluation.caught_by_measure()
+            files.write_csv(out / "rocks.csv", rocks)
+            files.write_csv(out / "crossings.csv", study.crossings_table())
+            files.write_csv(out / "measures.csv", evaluation.outcomes_table())
+            record = run_record(study, args)
+            record["project"] = evaluation.resolved_project().resolved_dict()
+            record["project_hash"] = evaluation.resolved_project().resolved_hash()
+            files.write_json(out / "summary.json", {**summary, "run": record})
+        if args.plot:
+            from .report import plot_study
 
-        plot_study(study, args.plot, evaluation)
+            plot_study(study, args.plot, evaluation, outputs=files)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
@@ -330,7 +345,7 @@ def cmd_check(args: argparse.Namespace) -> int:
 def cmd_optimise(args: argparse.Namespace) -> int:
     """Least-cost design; exit 0 with a design, 1 if no family meets the targets."""
     from .optimise import optimise
-    from .outputs import write_csv, write_json, write_text
+    from .outputs import OutputSet
     from .plugins import load_registry
     from .project import load_project
     from .report import alternatives_table, design_yaml, print_optimise
@@ -343,31 +358,39 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     _warn_failures(registry)
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + 400, len(project.analysis.stations))
-    prog, callback = _stage_progress(sys.stderr.isatty())
-    if prog is None:
-        result = optimise(project, registry, rocks=n, seed=args.seed)
-    else:
-        with prog:
-            result = optimise(project, registry, rocks=n, seed=args.seed, progress=callback)
-    summary = result.summary()
-    if args.out:
-        out: Path = args.out
-        if result.best is not None:
-            write_text(out / "design.yaml", design_yaml(result.best, args.project))
-        write_csv(out / "alternatives.csv", alternatives_table(result))
-        record = {"command": "optimise", "version": __version__, "seed": result.seed,
-                  "rocks": result.rocks, "project_file": str(args.project),
-                  "project_hash": project.resolved_hash(), "project": project.resolved_dict()}
-        write_json(out / "summary.json", {**summary, "run": record})
-    if args.plot and result.best is not None and result.best.evaluation is not None:
-        from .evaluate import evaluate_design
-        from .report import plot_study
+    with OutputSet() as files:
+        _reserve(files, args.out, ("design.yaml", "alternatives.csv", "summary.json"))
+        prog, callback = _stage_progress(sys.stderr.isatty())
+        if prog is None:
+            result = optimise(project, registry, rocks=n, seed=args.seed)
+        else:
+            with prog:
+                result = optimise(project, registry, rocks=n, seed=args.seed, progress=callback)
+        summary = result.summary()
+        if args.out:
+            out: Path = args.out
+            if result.best is not None:
+                files.write_text(out / "design.yaml", design_yaml(result.best, args.project))
+            else:
+                # A design.yaml of an earlier run must not sit beside a
+                # summary that says there is no design.
+                files.remove(out / "design.yaml")
+            files.write_csv(out / "alternatives.csv", alternatives_table(result))
+            record = {"command": "optimise", "version": __version__, "seed": result.seed,
+                      "rocks": result.rocks, "project_file": str(args.project),
+                      "project_hash": project.resolved_hash(),
+                      "project": project.resolved_dict()}
+            files.write_json(out / "summary.json", {**summary, "run": record})
+        if args.plot and result.best is not None and result.best.evaluation is not None:
+            from .evaluate import evaluate_design
+            from .report import plot_study
 
-        # The same rocks again, keeping a sample of paths for the figure.
-        best = result.best.evaluation
-        ev = evaluate_design(best.study.project, registry, result.best.measures, best.concept,
-                             rocks=result.rocks, seed=result.seed, n_trajectories=60)
-        plot_study(ev.study, args.plot, ev)
+            # The same rocks again, keeping a sample of paths for the figure.
+            best = result.best.evaluation
+            ev = evaluate_design(best.study.project, registry, result.best.measures,
+                                 best.concept, rocks=result.rocks, seed=result.seed,
+                                 n_trajectories=60)
+            plot_study(ev.study, args.plot, ev, outputs=files)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
@@ -419,17 +442,34 @@ def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-def _on_sigterm(signum: int, frame: Any) -> None:
-    # Treat SIGTERM like Ctrl-C, so that atomic writers clean up and the
-    # previous results stay as they were.
-    raise KeyboardInterrupt
+class _Interrupted(KeyboardInterrupt):
+    """The ``KeyboardInterrupt`` that SIGINT and SIGTERM raise while a command runs.
+
+    A subclass on purpose: CPython records an exact ``KeyboardInterrupt``
+    that passes through an ``exec()`` of a string (numba compiles that way)
+    as unhandled, and ``python -m rockfall_design`` then ends by SIGINT at
+    exit, even though :func:`main` handled it, instead of with exit code 130.
+    """
+
+
+def _on_signal(signum: int, frame: Any) -> None:
+    # SIGTERM is treated like Ctrl-C, so that the command's output set is
+    # discarded and the previous results stay as they were.
+    raise _Interrupted(signum)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rockfall-design`` console script."""
+    from .outputs import committed_sets
+
     parser = build_parser()
     args = parser.parse_args(argv)
-    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    committed_before = committed_sets()
+    handled = [signal.SIGTERM]
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+        # An ignored SIGINT (a background job of a non-interactive shell) stays so.
+        handled.append(signal.SIGINT)
+    previous = {s: signal.signal(s, _on_signal) for s in handled}
     try:
         return int(args.func(args))
     except RockfallError as exc:
@@ -437,12 +477,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write(f"{PROG}: error: {msg}\n")
         return int(exc.exit_code)
     except KeyboardInterrupt:
-        sys.stderr.write(
-            f"{PROG}: interrupted; files written before were left as they were\n"
-        )
+        # A command commits its output files as one set, and an interrupt that
+        # arrives during the commit is held until it is complete: either all
+        # of the new files are in place, or none was changed.
+        if committed_sets() > committed_before:
+            what = "the results had been written completely before the interrupt"
+        else:
+            what = "no files were changed"
+        sys.stderr.write(f"{PROG}: interrupted; {what}\n")
         return int(ExitCode.INTERRUPTED)
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for s, handler in previous.items():
+            signal.signal(s, handler)
 
 
 if __name__ == "__main__":  # pragma: no cover

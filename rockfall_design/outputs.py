@@ -1,48 +1,366 @@
-"""Writing results without ever leaving a half-written file.
+"""Writing a command's results all together or not at all.
 
-Every file is written to a temporary file in the same directory and renamed
-into place (``os.replace`` is atomic on POSIX and Windows), so a reader sees
-the old file or the new one, never a torn one; an interrupted run leaves the
-previous results as they were.
+The files a command writes (tables, summary, design, figures) form one
+:class:`OutputSet`. Each file goes to a temporary file beside its target, in
+the same directory so that the final rename is atomic (``os.replace`` is, on
+POSIX and Windows); only when the whole command has succeeded are all of
+them renamed into place, one after another, with SIGINT and SIGTERM held so
+that an interrupt cannot fall between two renames. An error or an interrupt
+before that removes every temporary file and touches no target, so a reader
+finds either the complete previous results or the complete new ones, never a
+torn file nor a mix of old and new files.
+
+The single-file helpers (:func:`write_text`, :func:`write_json`,
+:func:`write_csv`, :func:`write_with`, :func:`atomic_writer`) are output sets
+of one file.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import os
+import signal
 import tempfile
+import threading
+import weakref
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import IO, Any
+from types import FrameType, TracebackType
+from typing import IO, Any, Literal
 
-__all__ = ["atomic_writer", "write_text", "write_json", "write_csv", "write_with"]
+from .errors import InputError
+
+__all__ = [
+    "OutputSet",
+    "atomic_writer",
+    "committed_sets",
+    "write_text",
+    "write_json",
+    "write_csv",
+    "write_with",
+]
+
+#: The signals held while an output set is renamed into place: Ctrl-C and
+#: the polite kill, the two a user or a batch system sends to stop a run.
+_HELD = (signal.SIGINT, signal.SIGTERM)
+
+# How many non-empty output sets this process has committed (see
+# committed_sets()); only ever incremented, with the signals held.
+_committed = 0
+
+
+def committed_sets() -> int:
+    """How many output sets with at least one file this process has committed.
+
+    The command line reads it before and after a command: if it grew, an
+    interrupt came after the command's results were completely in place,
+    otherwise no file was changed.
+    """
+    return _committed
 
 
 @contextlib.contextmanager
-def atomic_writer(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO[Any]]:
-    """Open a temporary file beside ``path``; rename it onto ``path`` on success.
+def _signals_held() -> Iterator[None]:
+    """Hold SIGINT and SIGTERM while the block runs; deliver them after it.
 
-    On any exception (KeyboardInterrupt included) the temporary file is removed
-    and ``path`` is left untouched.
+    Their handlers are swapped for one that only notes the signal; after the
+    block the handlers are put back and each noted signal is raised again,
+    so that its own handler (``KeyboardInterrupt``, the default action, ...)
+    takes effect then. A signal mask would not do: the kernel hands a
+    signal that the main thread blocks to another thread (numpy's BLAS
+    threads, say), and Python then runs the handler on the main thread all
+    the same. Python runs signal handlers on the main thread only, so on any
+    other thread an interrupt cannot raise inside the block and nothing is
+    held; nor is a signal whose handler was installed from outside Python
+    (it reads as None and could not be put back).
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    holding = True
+    noted: list[int] = []
+    originals: dict[int, Any] = {}
+
+    def defer(signum: int, frame: FrameType | None) -> None:
+        if holding:
+            noted.append(signum)
+        else:  # the block is over, this handler not yet replaced: pass the signal on
+            signal.signal(signum, originals[signum])
+            signal.raise_signal(signum)
+
     try:
-        encoding = None if "b" in mode else "utf-8"
-        newline = None if "b" in mode else ""
-        # mkstemp creates the file 0600; give it the mode a plain open() would.
-        os.chmod(tmp, 0o666 & ~_umask())
-        with os.fdopen(fd, mode, encoding=encoding, newline=newline) as fh:
-            yield fh
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
+        for s in _HELD:
+            if signal.getsignal(s) is not None:
+                originals[s] = signal.signal(s, defer)
+        yield
+    finally:
+        holding = False
+        for s, handler in originals.items():
+            signal.signal(s, handler)
+        for s in dict.fromkeys(noted):
+            signal.raise_signal(s)
+
+
+@dataclasses.dataclass
+class _Entry:
+    """One target of an output set and what is to replace it."""
+
+    target: Path
+    #: The temporary file beside the target; None if the target is to be removed.
+    tmp: Path | None
+    #: reserved: created, not written yet; open: being written; ready: closed
+    #: and synced to disk; remove: the target is to be deleted.
+    state: Literal["reserved", "open", "ready", "remove"]
+    fh: IO[Any] | None = None
+
+
+def _discard(entries: dict[Path, _Entry], created: list[Path]) -> None:
+    """Remove every temporary file of ``entries`` and the empty directories in ``created``.
+
+    A module function rather than a method so that the set's finalizer can
+    call it without keeping the set alive.
+    """
+    for entry in entries.values():
+        if entry.fh is not None:
+            with contextlib.suppress(OSError):
+                entry.fh.close()
+        if entry.tmp is not None:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(entry.tmp)
+    entries.clear()
+    # Newest first, so that a directory is emptied of the ones made inside it;
+    # one that holds anything else stays.
+    for directory in reversed(created):
+        with contextlib.suppress(OSError):
+            directory.rmdir()
+    created.clear()
+
+
+class OutputSet:
+    """The output files of one command, renamed into place together or not at all.
+
+    Use it as a context manager: leaving the block normally commits the set
+    (:meth:`commit`), leaving it by an exception, ``KeyboardInterrupt``
+    included, discards it (:meth:`discard`). Files are written as temporary
+    files beside their targets, synced to disk, and renamed into place only
+    at the commit, with SIGINT and SIGTERM held during the renames; an
+    interrupt that arrives then is delivered right after the last rename.
+
+    A directory that a target needs is created when the file is reserved or
+    opened, and removed again on discard if it is still empty. If the
+    operating system refuses a rename in the middle of the commit (say, a
+    target that is a directory), the files renamed before it stay renamed
+    and the rest are removed: the set is atomic against interrupts and
+    errors up to the commit, not against a failing file system.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> import tempfile
+    >>> out = Path(tempfile.mkdtemp())
+    >>> with OutputSet() as files:
+    ...     files.reserve(out / "summary.json")      # fail now if out cannot be written
+    ...     rows = files.open(out / "rows.csv")      # streamed; the set closes it
+    ...     _ = rows.write("a,b\\n1,2\\n")
+    ...     files.write_json(out / "summary.json", {"rows": 1})
+    >>> sorted(p.name for p in out.iterdir())
+    ['rows.csv', 'summary.json']
+    """
+
+    def __init__(self) -> None:
+        self._entries: dict[Path, _Entry] = {}
+        self._created: list[Path] = []
+        #: True once every file of the set is in place.
+        self.committed = False
+        # A backstop for an interrupt that lands where neither commit() nor
+        # discard() can react (say, on the first instruction of __exit__):
+        # the temporary files are still removed when the set is dropped or
+        # the interpreter exits. Both methods retire it.
+        self._finalizer = weakref.finalize(self, _discard, self._entries, self._created)
+
+    def __enter__(self) -> OutputSet:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        if exc_type is None:
+            self.commit()
+        else:
+            self.discard()
+
+    # ---- adding files ----------------------------------------------------
+    def reserve(self, *paths: str | os.PathLike[str]) -> None:
+        """Create the temporary files of ``paths`` now, to be written later.
+
+        A command reserves its files before a long run so that an output
+        directory that cannot be written is reported at once, not after the
+        run. Every reserved file must be written, or removed with
+        :meth:`remove`, before the commit.
+
+        Raises
+        ------
+        InputError
+            If the directory cannot be created or written.
+        """
+        for path in paths:
+            self._reserve(path)
+
+    def open(self, path: str | os.PathLike[str], mode: str = "w") -> IO[Any]:
+        """A file to write ``path``'s new content into, e.g. chunk by chunk.
+
+        Text modes write UTF-8 with newlines as given. The set flushes,
+        syncs and closes the file at the commit (or discards it): do not
+        close it yourself.
+        """
+        return self._open(path, mode).fh  # type: ignore[return-value]
+
+    def write_text(self, path: str | os.PathLike[str], text: str) -> None:
+        """Write ``text`` (UTF-8) as the new content of ``path``."""
+        self._write(path, "w", lambda fh: fh.write(text))
+
+    def write_json(self, path: str | os.PathLike[str], data: Any) -> None:
+        """Write ``data`` as indented JSON (NaN refused) as the new content of ``path``."""
+        self.write_text(path, json.dumps(data, indent=2, allow_nan=False) + "\n")
+
+    def write_csv(self, path: str | os.PathLike[str], frame: Any) -> None:
+        """Write a pandas DataFrame as CSV (no index) as the new content of ``path``."""
+        self._write(path, "w", lambda fh: frame.to_csv(fh, index=False, lineterminator="\n"))
+
+    def write_with(self, path: str | os.PathLike[str], writer: Callable[[IO[Any]], None]) -> None:
+        """Write binary content produced by ``writer(fh)`` (e.g. a figure) for ``path``."""
+        self._write(path, "wb", writer)
+
+    def remove(self, path: str | os.PathLike[str]) -> None:
+        """Delete ``path``, if it exists, at the commit: a stale result of an earlier run.
+
+        ``path`` may have been reserved, but not written.
+        """
+        key = _key(path)
+        entry = self._entries.get(key)
+        if entry is None:
+            self._entries[key] = _Entry(key, None, "remove")
+            return
+        if entry.state != "reserved":
+            raise ValueError(f"{key} is written in this output set; it cannot also be removed")
+        os.unlink(entry.tmp)  # type: ignore[arg-type]
+        entry.tmp, entry.state = None, "remove"
+
+    # ---- commit and discard ----------------------------------------------
+    def commit(self) -> None:
+        """Rename every file into place (and delete the removed ones), as one step.
+
+        Every file is synced to disk first; then the renames run with SIGINT
+        and SIGTERM held, and a signal that arrived meanwhile is delivered
+        (as ``KeyboardInterrupt``, say) only after the last one, with
+        :attr:`committed` already True. Any exception before the renames
+        discards the set.
+
+        Raises
+        ------
+        RuntimeError
+            If a reserved file was never written: committing the rest would
+            leave the old file beside new ones.
+        """
+        global _committed
+        try:
+            unwritten = [str(e.target) for e in self._entries.values() if e.state == "reserved"]
+            if unwritten:
+                raise RuntimeError(f"reserved but never written: {', '.join(unwritten)}")
+            for entry in self._entries.values():
+                _finish(entry)
+            with _signals_held():
+                for entry in self._entries.values():
+                    if entry.tmp is None:
+                        with contextlib.suppress(FileNotFoundError):
+                            os.unlink(entry.target)
+                    else:
+                        os.replace(entry.tmp, entry.target)
+                if self._entries:
+                    _committed += 1
+                # Nothing is left to clean up: the entries are in place and
+                # the directories made for them are theirs.
+                self._finalizer.detach()
+                self.committed = True
+        except BaseException:
+            self.discard()
+            raise
+
+    def discard(self) -> None:
+        """Remove every temporary file and the directories made for them; touch no target.
+
+        Does nothing once the set is committed or discarded.
+        """
+        # Held so that a second Ctrl-C cannot cut the clean-up short.
+        with _signals_held():
+            self._finalizer()
+
+    # ---- internals -------------------------------------------------------
+    def _reserve(self, path: str | os.PathLike[str]) -> _Entry:
+        key = _key(path)
+        if key in self._entries:
+            raise ValueError(f"{key} is already in this output set")
+        # Held so that no interrupt can fall between creating the temporary
+        # file (or a directory) and recording it, which would leave it behind.
+        with _signals_held():
+            try:
+                missing = [d for d in (key.parent, *key.parent.parents) if not d.exists()]
+                # Recorded first: mkdir may fail half-way, having made some.
+                self._created.extend(reversed(missing))
+                key.parent.mkdir(parents=True, exist_ok=True)
+                fd, name = tempfile.mkstemp(prefix=f".{key.name}.", suffix=".tmp", dir=key.parent)
+                entry = self._entries[key] = _Entry(key, Path(name), "reserved")
+                os.close(fd)
+                # mkstemp makes the file 0600; give it the mode open() would.
+                os.chmod(name, 0o666 & ~_umask())
+            except OSError as exc:
+                raise InputError(f"cannot write {key}: {exc.strerror or exc}") from None
+        return entry
+
+    def _open(self, path: str | os.PathLike[str], mode: str) -> _Entry:
+        entry = self._entries.get(_key(path))
+        if entry is None:
+            entry = self._reserve(path)
+        elif entry.state != "reserved":
+            raise ValueError(f"{entry.target} is already written in this output set")
+        text = "b" not in mode
+        entry.fh = open(  # closed by _finish or _discard
+            entry.tmp,  # type: ignore[arg-type]
+            mode,
+            encoding="utf-8" if text else None,
+            newline="" if text else None,
+        )
+        entry.state = "open"
+        return entry
+
+    def _write(
+        self, path: str | os.PathLike[str], mode: str, writer: Callable[[IO[Any]], Any]
+    ) -> None:
+        entry = self._open(path, mode)
+        writer(entry.fh)  # type: ignore[arg-type]
+        # Closed at once: a command may write many files; only streamed ones
+        # stay open until the commit.
+        _finish(entry)
+
+
+def _finish(entry: _Entry) -> None:
+    """Flush, sync to disk and close an open entry's file."""
+    if entry.fh is None:
+        return
+    entry.fh.flush()
+    os.fsync(entry.fh.fileno())
+    entry.fh.close()
+    entry.fh, entry.state = None, "ready"
+
+
+def _key(path: str | os.PathLike[str]) -> Path:
+    """The absolute path a target is known by, so one file cannot enter a set twice."""
+    return Path(os.path.abspath(path))
 
 
 def _umask() -> int:
@@ -51,22 +369,36 @@ def _umask() -> int:
     return mask
 
 
+@contextlib.contextmanager
+def atomic_writer(path: str | os.PathLike[str], mode: str = "w") -> Iterator[IO[Any]]:
+    """Open a temporary file beside ``path``; rename it onto ``path`` on success.
+
+    An output set of one file: on any exception (KeyboardInterrupt included)
+    the temporary file is removed and ``path`` is left untouched.
+    """
+    with OutputSet() as files:
+        yield files.open(path, mode)
+
+
 def write_text(path: str | os.PathLike[str], text: str) -> None:
-    with atomic_writer(path) as fh:
-        fh.write(text)
+    """Write ``text`` to ``path`` atomically (see :meth:`OutputSet.write_text`)."""
+    with OutputSet() as files:
+        files.write_text(path, text)
 
 
 def write_json(path: str | os.PathLike[str], data: Any) -> None:
-    write_text(path, json.dumps(data, indent=2, allow_nan=False) + "\n")
+    """Write ``data`` as JSON to ``path`` atomically (see :meth:`OutputSet.write_json`)."""
+    with OutputSet() as files:
+        files.write_json(path, data)
 
 
 def write_csv(path: str | os.PathLike[str], frame: Any) -> None:
-    """Write a pandas DataFrame as CSV (no index)."""
-    with atomic_writer(path) as fh:
-        frame.to_csv(fh, index=False, lineterminator="\n")
+    """Write a pandas DataFrame as CSV (no index) to ``path`` atomically."""
+    with OutputSet() as files:
+        files.write_csv(path, frame)
 
 
 def write_with(path: str | os.PathLike[str], writer: Callable[[IO[Any]], None]) -> None:
     """Write binary content produced by ``writer(fh)`` atomically (e.g. a figure)."""
-    with atomic_writer(path, "wb") as fh:
-        writer(fh)
+    with OutputSet() as files:
+        files.write_with(path, writer)

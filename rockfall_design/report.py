@@ -14,7 +14,7 @@ from rich.text import Text
 
 from .engine import G
 from .engine.core import EXIT_DOWNSLOPE, STOPPED, T_MODE, T_T, T_VX, T_VY, T_X, T_Y
-from .outputs import write_with
+from .outputs import OutputSet
 
 if TYPE_CHECKING:  # pragma: no cover
     from .simulation import StreamedStudy, Study
@@ -366,11 +366,11 @@ def _marks(ax, study: Study, label: bool = True) -> None:
         )
 
 
-def _save(fig, path: Path) -> None:
+def _save(fig, path: Path, outputs: OutputSet) -> None:
     def writer(fh: io.BufferedWriter) -> None:
         fig.savefig(fh, format="png", dpi=150, bbox_inches="tight")
 
-    write_with(path, writer)
+    outputs.write_with(path, writer)
 
 
 def _draw_measures(ax, evaluation: Any, label: bool = True) -> None:
@@ -423,20 +423,27 @@ def _draw_measures(ax, evaluation: Any, label: bool = True) -> None:
 
 
 def plot_study(
-    study: Study | StreamedStudy, directory: str | Path, evaluation: Any = None
+    study: Study | StreamedStudy,
+    directory: str | Path,
+    evaluation: Any = None,
+    outputs: OutputSet | None = None,
 ) -> list[Path]:
     """Write profile.png, envelopes.png and stops.png into ``directory``.
 
-    With an ``evaluation`` (from ``check``) the measures are drawn too.
+    With an ``evaluation`` (from ``check``) the measures are drawn too. The
+    figures join the output set ``outputs`` of the command they belong to
+    and land when it commits; without one they land together on return.
     Returns the paths written.
     """
+    if outputs is None:
+        with OutputSet() as own:
+            return plot_study(study, directory, evaluation, own)
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     out = Path(directory)
-    out.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
     name = study.project.name
     counts = study.status_counts()
@@ -478,7 +485,7 @@ def plot_study(
     ax.legend(loc="upper right", fontsize=8)
     ax.grid(alpha=0.3)
     p = out / "profile.png"
-    _save(fig, p)
+    _save(fig, p, outputs)
     plt.close(fig)
     written.append(p)
 
@@ -516,7 +523,7 @@ def plot_study(
     a2.set_xlabel("x (m)")
     a1.set_title(f"{name}: envelopes over {study.n:,} rocks (first passage downslope)")
     p = out / "envelopes.png"
-    _save(fig, p)
+    _save(fig, p, outputs)
     plt.close(fig)
     written.append(p)
 
@@ -545,7 +552,7 @@ def plot_study(
     a2.set_xlabel("x (m)")
     a2.set_ylabel("elevation (m)")
     p = out / "stops.png"
-    _save(fig, p)
+    _save(fig, p, outputs)
     plt.close(fig)
     written.append(p)
     return written
