@@ -84,6 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
         "they pass the analysis stations, and where they stop.",
     )
     _add_run_options(sim, repeatable=True)
+    _add_block_option(sim)
     sim.set_defaults(func=cmd_simulate)
     chk = sub.add_parser(
         "check",
@@ -196,6 +197,22 @@ def _warn_failures(registry: Any) -> None:
         sys.stderr.write(f"{PROG}: warning: plugin {f.plugin!r} was not loaded: {f.reason}\n")
 
 
+def _plugins_for(project: Any, args: argparse.Namespace) -> Any:
+    """Load the plugins and check the project's plugin sections with them.
+
+    Every command checks the whole project file, ``measures:``, ``safety:``
+    and ``design:`` included, so that a bad file is reported whichever
+    command reads it (``simulate`` runs the bare slope but still says so).
+    """
+    from .evaluate import validate_project
+    from .plugins import load_registry
+
+    registry = load_registry(blocked=args.block)
+    _warn_failures(registry)
+    validate_project(project, registry)
+    return registry
+
+
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .outputs import OutputSet
     from .project import load_project
@@ -210,6 +227,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         raise InputError("a project file (or --repeat SUMMARY) is needed")
     else:
         project = load_project(args.project)
+    _plugins_for(project, args)
     n = args.rocks or project.rocks.count
     _memory_guard(study_memory(project, n), f"{n:,} rocks with "
                   f"{project.analysis.envelope_points} envelope points",
@@ -304,12 +322,10 @@ def cmd_check(args: argparse.Namespace) -> int:
     """Evaluate the project's measures; exit 0 if every check holds, else 1."""
     from .evaluate import evaluate
     from .outputs import OutputSet
-    from .plugins import load_registry
     from .project import load_project
 
     project = load_project(args.project)
-    registry = load_registry(blocked=args.block)
-    _warn_failures(registry)
+    registry = _plugins_for(project, args)
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
                      len(project.analysis.stations))
@@ -346,7 +362,6 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     """Least-cost design; exit 0 with a design, 1 if no family meets the targets."""
     from .optimise import optimise
     from .outputs import OutputSet
-    from .plugins import load_registry
     from .project import load_project
     from .report import alternatives_table, design_yaml, print_optimise
 
@@ -354,8 +369,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     if project.design is None:
         raise project.error_at((), "the project has no design: section to optimise "
                                    "(see the README, 'Designing protection')")
-    registry = load_registry(blocked=args.block)
-    _warn_failures(registry)
+    registry = _plugins_for(project, args)
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + 400, len(project.analysis.stations))
     with OutputSet() as files:

@@ -16,11 +16,12 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .design import resolve_design
 from .engine import Section, barrier_table, core
 from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from .plugins import call_plugin
 from .safety import Check, SafetyConcept
-from .simulation import Study, run_study, section_from_project
+from .simulation import Study, reaches_protected_zone, run_study, section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
     from .measures import ProtectiveMeasure
@@ -36,10 +37,13 @@ __all__ = [
     "edited_section",
     "evaluate",
     "evaluate_design",
+    "validate_project",
 ]
 
 #: Two barriers closer than this (m) stand in each other's place.
 MIN_BARRIER_SPACING_M = 1.0
+#: A barrier this close (m) to the edge of a profile edit stands on that edge.
+_EDGE_TOLERANCE_M = 1e-6
 
 _BEHAVIOUR_CODE = {
     BarrierBehaviour.NET: core.B_NET,
@@ -146,6 +150,20 @@ def place_measures(
                 f"{b.label} stands where {a.label} (measures[{a.index}]) "
                 f"stands; barriers must be at least {MIN_BARRIER_SPACING_M:g} m apart",
             )
+    for b in bars:
+        for e in edits:
+            lo, hi = e.footprint.x_start, e.footprint.x_end
+            # A barrier stands on the ground as the section gives it; inside a
+            # stretch that another measure digs out or fills, that ground is
+            # gone. At the stretch's edges the ground is unchanged, so a fence
+            # on the outer edge of a ditch or berm is fine.
+            if lo + _EDGE_TOLERANCE_M < b.footprint.x < hi - _EDGE_TOLERANCE_M:
+                raise project.error_at(
+                    ("measures", b.index, "x"),
+                    f"{b.label} stands inside {e.label} (measures[{e.index}]), which "
+                    f"reshapes the ground from x = {lo:g} m to {hi:g} m; place it at an edge "
+                    "of that stretch or outside it",
+                )
     x0, x1 = section.x[0], section.x[-1]
     for p in placed:
         fp = p.footprint
@@ -263,13 +281,14 @@ class Evaluation:
         if p is None:
             return None
         r = self.study.result
-        reaching = int((r.max_x >= p.x).sum())
-        fraction = reaching / r.n if r.n else 0.0
+        reaching = reaches_protected_zone(r.max_x, r.status, p.x)
+        fraction = int(reaching.sum()) / r.n if r.n else 0.0
         allowed = float(getattr(p, "allowed_fraction", 0.0))
         return {
             "x": float(p.x),
-            "reaching": reaching,
+            "reaching": int(reaching.sum()),
             "fraction": fraction,
+            "unresolved": int((reaching & (r.max_x < p.x)).sum()),
             "allowed_fraction": allowed,
             "ok": fraction <= allowed,
         }
@@ -295,9 +314,14 @@ class Evaluation:
                     )
         prot = self.protect
         if prot is not None and not prot["ok"]:
+            unresolved = (
+                f" ({prot['unresolved']} of them unresolved paths, counted as reaching it; "
+                "raise engine.max_events)" if prot["unresolved"] else ""
+            )
             out.append(
                 f"{prot['reaching']} rocks ({100 * prot['fraction']:.2f} %) reach the protected "
-                f"zone at x >= {prot['x']:g} m; allowed {100 * prot['allowed_fraction']:.2f} %"
+                f"zone at x >= {prot['x']:g} m{unresolved}; allowed "
+                f"{100 * prot['allowed_fraction']:.2f} %"
             )
         return out
 
@@ -428,6 +452,31 @@ def _measure_results(placed: Sequence[PlacedMeasure], owners: list[int], study: 
         results.append(res)
         helds.append(held)
     return results, helds, outcomes, meetings
+
+
+def validate_project(project: Project, registry: Registry) -> None:
+    """Check the sections of a project that its plugins own, whatever the command.
+
+    Loading a project validates the core sections; ``measures:``, ``safety:``
+    and ``design:`` belong to plugins and are checked here: every measure's
+    parameters and its place on the section (fit, overlaps), the safety
+    concept's parameters, and the design's candidates, catalogues and cost
+    model. Every command calls it, so a bad project file is reported by
+    ``simulate`` too, although ``simulate`` runs the bare slope.
+
+    Raises
+    ------
+    ProjectError
+        Exit code 2, located at the offending key.
+    PluginError
+        Exit code 3, if a plugin misbehaves.
+    """
+    measures = build_measures(project, registry)
+    build_concept(project, registry)
+    bare = section_from_project(project)
+    edited_section(project, bare, place_measures(project, registry, measures, bare))
+    if project.design is not None:
+        resolve_design(project, registry)
 
 
 def evaluate(

@@ -53,7 +53,13 @@ from .evaluate import Evaluation, edited_section, evaluate_design, place_measure
 from .measures import Barrier, BarrierBehaviour, MeasureResult, ProfileEdit
 from .plugins import call_plugin
 from .safety import Check
-from .simulation import draw_releases, engine_key, engine_settings, section_from_project
+from .simulation import (
+    draw_releases,
+    engine_key,
+    engine_settings,
+    reaches_protected_zone,
+    section_from_project,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     from .design import CandidateSpec, DesignSpec
@@ -471,7 +477,8 @@ class Screening:
                 res.reach_m = table.max_x[met] - fp.catch_from
                 alive &= ~held
             results[i] = res
-        residual = int((alive & (table.max_x >= self.protect_x)).sum())
+        residual = int((alive & reaches_protected_zone(table.max_x, table.status,
+                                                       self.protect_x)).sum())
         checks = [call_plugin(self.registry, self.concept, "checks", res) for res in results]
         violation = 0.0
         for cs in checks:

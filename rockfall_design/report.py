@@ -97,6 +97,8 @@ def simulation_renderable(summary: dict[str, Any]) -> Group:
             Text.assemble(
                 f"Protected zone x >= {p['x']:g} m: ",
                 (f"{p['reaching']:,} rocks reach it ({100 * p['fraction']:.2f} %)", style),
+                (f", {p['unresolved']:,} of them unresolved paths counted as reaching it"
+                 if p.get("unresolved") else "", style),
             ),
         ]
     stats = summary.get("statistics", {})
@@ -115,7 +117,8 @@ def simulation_renderable(summary: dict[str, Any]) -> Group:
         parts.append(
             Text(
                 f"{st['unresolved']} rocks reached the event limit and are reported as "
-                "unresolved; raise engine.max_events if this matters.",
+                "unresolved (counted as reaching the protected zone, on the safe side); "
+                "raise engine.max_events.",
                 style="yellow",
             )
         )

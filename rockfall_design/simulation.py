@@ -53,6 +53,7 @@ __all__ = [
     "section_from_project",
     "engine_settings",
     "draw_releases",
+    "reaches_protected_zone",
     "run_study",
     "STATISTICS",
 ]
@@ -113,22 +114,31 @@ def engine_key(seed: int) -> int:
     return int(_children(seed)[_SEED_ENGINE].generate_state(1, np.uint64)[0])
 
 
-def _draw_size(kind: str, a: float, b: float, n: int, rng: np.random.Generator) -> np.ndarray:
-    """Draw n values of a size quantity (radius m, volume m^3 or mass kg)."""
+def _draw_size(
+    kind: str, a: float, b: float, n: int, rng: np.random.Generator, upper: float = np.inf
+) -> np.ndarray:
+    """Draw n values of a size quantity (radius m, volume m^3 or mass kg).
+
+    Normal and lognormal sizes are drawn by inverting their CDF, truncated to
+    (0, ``upper``]: one uniform per rock keeps the draws of the first rocks
+    independent of n. Where the cut-off lies beyond float precision of the
+    CDF (every realistic case) the draws are those of the whole distribution.
+    """
     if kind == "fixed":
         return np.full(n, float(a))
     u = rng.random(n)
     if kind == "uniform":
         return a + (b - a) * u
     if kind == "normal":
-        # Normal truncated to positive values, by inverting its CDF: one uniform
-        # per rock keeps the draws of the first rocks independent of n.
         if b <= 0.0:
             return np.full(n, float(a))
-        lo = sps.norm.cdf(-a / b)
-        return a + b * sps.norm.ppf(lo + (1.0 - lo) * u)
+        lo, hi = sps.norm.cdf(-a / b), sps.norm.cdf((upper - a) / b)
+        return np.minimum(a + b * sps.norm.ppf(lo + (hi - lo) * u), upper)
     if kind == "lognormal":
-        return a * np.exp(b * sps.norm.ppf(u))
+        if b <= 0.0:
+            return np.full(n, float(a))
+        hi = sps.norm.cdf(np.log(upper / a) / b)
+        return np.minimum(a * np.exp(b * sps.norm.ppf(hi * u)), upper)
     raise ValueError(f"unknown size distribution {kind!r}")
 
 
@@ -176,7 +186,7 @@ class ReleaseStream:
         u = self._x_rng.random(n)
         x = lo + (hi - lo) * u
         spec = rocks.size
-        q = _draw_size(spec.kind, spec.a, spec.b, n, self._size_rng)
+        q = _draw_size(spec.kind, spec.a, spec.b, n, self._size_rng, rocks.max_size)
         rho = float(rocks.density)
         if rocks.size_quantity == "radius":
             radius = q
@@ -412,7 +422,7 @@ class Study:
         crossings = np.isfinite(a["passing_height_m"]).sum(axis=0)
         stop_block = _stat_block(r.x_end[r.status == STOPPED])
         protect = self.project.protect
-        reaching = None if protect is None else int((r.max_x >= protect.x).sum())
+        reaching = None if protect is None else _reaching(r.max_x, r.status, protect.x)
         return _summary(self, r.events_total, crossings, blocks, stop_block, reaching)
 
 
@@ -432,9 +442,13 @@ def _summary(
     crossings: np.ndarray,
     blocks: dict[str, list[dict[str, float | None]]],
     stop_block: dict[str, float | None],
-    reaching: int | None,
+    reaching: tuple[int, int] | None,
 ) -> dict[str, Any]:
-    """The summary dict, the same for an exact and a streamed study."""
+    """The summary dict, the same for an exact and a streamed study.
+
+    ``reaching`` is (rocks counted as reaching the protected zone, how many of
+    them are unresolved paths counted so), None without a protected zone.
+    """
     counts = study.status_counts()
     stations = []
     for j, xs in enumerate(study.stations):
@@ -463,12 +477,40 @@ def _summary(
     }
     protect = study.project.protect
     if protect is not None:
+        n_reach, n_unresolved = reaching or (0, 0)
         out["protect"] = {
             "x": float(protect.x),
-            "reaching": int(reaching or 0),
-            "fraction": (reaching or 0) / study.n if study.n else 0.0,
+            "reaching": int(n_reach),
+            "fraction": n_reach / study.n if study.n else 0.0,
+            "unresolved": int(n_unresolved),
         }
     return out
+
+
+def reaches_protected_zone(max_x: np.ndarray, status: np.ndarray, x: float) -> np.ndarray:
+    """Which rocks count as reaching the protected zone at ``x`` (m).
+
+    A rock reaches it when its centre got to ``x``; a path that ended
+    unresolved (at the event limit) short of ``x`` counts too, because an
+    unfinished path is no evidence that the rock would have stopped short:
+    the design is judged on the safe side, and the report says how many.
+
+    Parameters
+    ----------
+    max_x : ndarray
+        Farthest x (m) each rock's centre reached.
+    status : ndarray
+        How each path ended (``engine.core`` status codes).
+    x : float
+        Start of the protected zone (m).
+    """
+    return (max_x >= x) | (status == UNRESOLVED)
+
+
+def _reaching(max_x: np.ndarray, status: np.ndarray, x: float) -> tuple[int, int]:
+    """(rocks counted as reaching x, unresolved paths among them that had not reached it)."""
+    short = (status == UNRESOLVED) & (max_x < x)
+    return int(reaches_protected_zone(max_x, status, x).sum()), int(short.sum())
 
 
 def _pct_label(q: float) -> str:
@@ -604,6 +646,7 @@ class StreamedStudy:
     runtime_s: float = 0.0
     events: int = 0
     reaching: int = 0
+    reaching_unresolved: int = 0
     trajectories: list[np.ndarray] = field(default_factory=list)
     _counts: np.ndarray = field(default_factory=lambda: np.zeros(len(STATUS_NAMES), np.int64))
     _rest_x: list[np.ndarray] = field(default_factory=list)
@@ -646,7 +689,9 @@ class StreamedStudy:
         self._counts += part.status_counts()
         protect = self.project.protect
         if protect is not None:
-            self.reaching += int((r.max_x >= protect.x).sum())
+            n_reach, n_unresolved = _reaching(r.max_x, r.status, protect.x)
+            self.reaching += n_reach
+            self.reaching_unresolved += n_unresolved
         self.events += r.events_total
         self.n += r.n
         if not self.trajectories:
@@ -686,7 +731,8 @@ class StreamedStudy:
         blocks = {key: _hist_blocks(h) for key, h in self._station.items()}
         crossings = self._station["passing_height_m"].n
         stop_block = _hist_blocks(self._stops)[0]
-        reaching = None if self.project.protect is None else self.reaching
+        reaching = (None if self.project.protect is None
+                    else (self.reaching, self.reaching_unresolved))
         return _summary(self, self.events, crossings, blocks, stop_block, reaching)
 
 

@@ -38,7 +38,7 @@ def test_json_has_the_documented_keys(capsys):
         assert set(st[key]) == {"mean", "p50", "p95", "p99", "max"}
     e = st["energy_kj"]
     assert e["p50"] <= e["p95"] <= e["p99"] <= e["max"]
-    assert set(s["protect"]) == {"x", "reaching", "fraction"}
+    assert set(s["protect"]) == {"x", "reaching", "fraction", "unresolved"}
     assert s["protect"]["fraction"] == s["protect"]["reaching"] / 200
 
 

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import HealthCheck, given, settings
 
@@ -70,7 +72,7 @@ def test_release_exactly_on_a_vertex(x0):
 
 # capsys is read (and so emptied) once per example, which is what the test needs.
 @settings(
-    max_examples=40,
+    max_examples=int(os.environ.get("RF_EXAMPLES", "40")),
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
 )
@@ -128,3 +130,45 @@ def test_a_plugin_that_raises_is_named_and_stops_the_run_with_exit_3(tmp_path, m
     assert main(["check", str(p), "--rocks", "5"]) == 3
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "bad_net" in err and "oops in the plugin" in err
+
+
+@pytest.mark.parametrize("streamed", [False, True])
+def test_an_unresolved_path_counts_as_reaching_the_protected_zone(streamed, tmp_path, capsys,
+                                                                  monkeypatch):
+    """A path cut off by the event limit is no evidence that the rock stopped short."""
+    from rockfall_design import simulation
+
+    from .test_bad_input import STANDARD
+
+    if streamed:
+        monkeypatch.setattr(simulation, "EXACT_ROCKS", 20)
+    path = tmp_path / "p.yaml"
+    # Ten events end most paths high on the slope, far from the road at x = 150 m.
+    path.write_text(STANDARD.replace("protect:\n", "engine: {max_events: 10}\nprotect:\n"))
+    out = tmp_path / "out"
+    assert main(["simulate", str(path), "--rocks", "50", "--json", "--out", str(out)]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["statistics"]["method"] == ("histograms" if streamed else "exact")
+    rocks = pd.read_csv(out / "rocks.csv")
+    unresolved = rocks.end == "unresolved"
+    short = unresolved & (rocks.max_x_m < 150.0)
+    assert s["stops"]["unresolved"] == unresolved.sum() and short.sum() > 25
+    assert s["protect"]["unresolved"] == short.sum()
+    assert s["protect"]["reaching"] == ((rocks.max_x_m >= 150.0) | unresolved).sum()
+
+
+def test_check_fails_a_design_whose_rocks_are_unresolved(tmp_path, capsys):
+    """`check` never passes a design on paths that did not end: they count as reaching."""
+    from .test_bad_input import STANDARD, with_measures
+
+    text = STANDARD.replace(*with_measures("{type: fence, x: 100, height: 12, capacity_kj: 1e5}"))
+    path = tmp_path / "p.yaml"
+    path.write_text(text.replace("protect:\n", "engine: {max_events: 10}\nprotect:\n"))
+    assert main(["check", str(path), "--rocks", "40", "--json"]) == 1
+    s = json.loads(capsys.readouterr().out)
+    assert s["protect"]["unresolved"] > 0 and not s["ok"]
+    assert any("unresolved paths, counted as reaching" in f for f in s["failures"])
+    # With enough events the same fence holds every rock.
+    path.write_text(text)
+    assert main(["check", str(path), "--rocks", "40", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["protect"]["unresolved"] == 0
