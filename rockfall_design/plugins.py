@@ -242,6 +242,9 @@ def _validate_class(cls: Any, section: str, base: type, name_attr: str) -> str |
         more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
         return (f"{label} ({name_attr} {name!r}): example does not validate against "
                 f"Params: {where}: {_one_line(first.get('msg', ''))}{more}")
+    except Exception as exc:  # a validator of the plugin's own that breaks
+        return (f"{label} ({name_attr} {name!r}): validating the example raised "
+                f"{_describe_exception(exc)}")
     if section == "measures":
         variables = getattr(cls, "design_variables", {})
         if not isinstance(variables, dict):

@@ -62,7 +62,7 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
-from .errors import ProjectError
+from .errors import PluginError, ProjectError
 
 __all__ = [
     "dump_yaml",
@@ -1604,6 +1604,14 @@ def _check_params(
         instance = model.model_validate(data)
     except ValidationError as exc:
         problems.extend(_param_problems(model, exc.errors()))
+    except Exception as exc:
+        # pydantic turns a validator's ValueError or AssertionError into a
+        # validation error; anything else is a bug in the plugin's model.
+        raise PluginError(
+            f"the parameter model {model.__module__}.{model.__qualname__} failed while "
+            f"validating: {type(exc).__name__}: {exc}; this is a bug in the plugin, "
+            "not in the project"
+        ) from exc
     else:
         if not problems:
             return instance, []

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -25,6 +26,8 @@ from .plugin_helpers import write_distribution
 # Every method calls _step(NAME) first; FAULT chooses which one misbehaves.
 PLUGIN = '''
 import math
+
+from pydantic import field_validator
 
 from rockfall_design import (
     Barrier,
@@ -50,6 +53,14 @@ def _step(method):
 class BoomNetParams(MeasureParams):
     height_m: float = 3.0
     capacity_kj: float = 500.0
+
+    @field_validator("height_m")
+    @classmethod
+    def _height(cls, value):
+        # The example has 3.0: only "validator_example" breaks registration.
+        if (FAULT == "validator" and value == 4.0) or FAULT == "validator_example":
+            _step(FAULT)
+        return value
 
 
 class BoomNet(ProtectiveMeasure):
@@ -306,3 +317,25 @@ def test_a_measure_that_does_not_fit_is_bad_input_or_infeasible(install, capsys)
     assert code == ExitCode.CHECK_FAILED, out.err
     (alt,) = json.loads(out.out)["alternatives"]
     assert "does not fit here" in alt["reason"]
+
+
+@pytest.mark.parametrize("command", ["simulate", "check"])
+def test_a_parameter_validator_that_raises_is_a_fault(install, capsys, command):
+    # pydantic passes on what a validator raises unless it is a ValueError or
+    # an AssertionError: that is a bug in the plugin's model, not bad input.
+    _, path = install("validator", "check")
+    Path(path).write_text(CHECK.replace("height_m: 3,", "height_m: 4,"))
+    code = run(command, path)
+    err = capsys.readouterr().err
+    assert_one_line_fault(code, err, "BoomNetParams", "RuntimeError", "boom in validator")
+
+
+def test_a_validator_that_rejects_the_example_leaves_the_plugin_out(install, capsys):
+    """Found at registration: the plugin is reported as not loaded, the rest load."""
+    dist, _ = install("validator_example", "check")
+    assert main(["plugins", "--json"]) == 0
+    listing = json.loads(capsys.readouterr().out)
+    assert "boom_net" not in json.dumps(listing["measures"])
+    (failure,) = [f for f in listing["failures"] if "boom_net" in json.dumps(f)]
+    assert "boom in validator_example" in json.dumps(failure)
+    assert "fence" in json.dumps(listing["measures"])
