@@ -291,15 +291,13 @@ def _table_writers(files: OutputSet, out: Path) -> Any:
 
 def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
     """The project, seed and rock count recorded in a summary.json, for --repeat."""
-    import yaml
-
-    from .project import load_project_text
+    from .project import dump_yaml, load_project_text
 
     path: Path = args.repeat
     try:
         recorded = json.loads(path.read_text(encoding="utf-8"))
         run = recorded["run"]
-        text = yaml.safe_dump(run["project"], sort_keys=False)
+        text = dump_yaml(run["project"])
         seed, rocks = int(run["seed"]), int(run["rocks"])
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise InputError(f"{path}: not a summary.json with a run record ({exc})") from None

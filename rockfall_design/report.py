@@ -301,7 +301,7 @@ def alternatives_table(result: Any) -> Any:
 
 def design_yaml(best: Any, project_file: Any) -> str:
     """The project with the chosen measures, as YAML that ``check`` accepts."""
-    import yaml
+    from .project import dump_yaml
 
     ev = best.evaluation
     data = ev.study.project.resolved_dict()
@@ -316,7 +316,8 @@ def design_yaml(best: Any, project_file: Any) -> str:
         "# The design: section is left out (its catalogue paths are relative to the\n"
         "# original project); check this file with: rockfall-design check design.yaml\n"
     )
-    return head + yaml.safe_dump(data, sort_keys=False, allow_unicode=True)
+    # dump_yaml quotes a name the project loader would read as a number (1e3).
+    return head + dump_yaml(data)
 
 
 # ---- figures -----------------------------------------------------------------

@@ -172,3 +172,21 @@ def test_check_fails_a_design_whose_rocks_are_unresolved(tmp_path, capsys):
     path.write_text(text)
     assert main(["check", str(path), "--rocks", "40", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["protect"]["unresolved"] == 0
+
+
+def test_repeat_reads_back_names_that_look_like_numbers(tmp_path, capsys):
+    """A material named '1e3' is written back quoted, so --repeat reads the same project."""
+    from .test_bad_input import STANDARD
+
+    text = STANDARD.replace("  talus:\n", "  '1e3':\n").replace("materials: talus ",
+                                                                 "materials: '1e3' ")
+    path = tmp_path / "p.yaml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    assert main(["simulate", str(path), "--rocks", "30", "--out", str(out), "--json"]) == 0
+    first = json.loads(capsys.readouterr().out)
+    assert main(["simulate", "--repeat", str(out / "summary.json"), "--json"]) == 0
+    captured = capsys.readouterr()
+    assert "identical" in captured.err, captured.err
+    again = json.loads(captured.out)
+    assert again["project_hash"] == first["project_hash"]
