@@ -33,6 +33,20 @@ PROJECTS = ROOT / "projects"
 STARTUP_S = 180.0
 
 
+@pytest.fixture(autouse=True)
+def _ctrl_c_raises():
+    """Ctrl-C raises KeyboardInterrupt here, as in a user's terminal.
+
+    A test run started as a background job of a non-interactive shell (as CI
+    may be) inherits SIGINT ignored, and Python keeps it so; main() then
+    rightly leaves it ignored. The in-process tests restore Python's default
+    for their duration; the subprocess tests do the same in the child.
+    """
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 def _previous_set(directory: Path, names: list[str]) -> dict[str, bytes]:
     """Fill ``directory`` with a complete set of files of known content, as a run had left."""
     directory.mkdir(parents=True, exist_ok=True)
