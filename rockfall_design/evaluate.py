@@ -21,7 +21,7 @@ from .engine import Section, barrier_table, core
 from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from .plugins import call_plugin
 from .safety import Check, SafetyConcept
-from .simulation import Study, reaches_protected_zone, run_study, section_from_project
+from .simulation import Study, protected_zone_counts, run_study, section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
     from .measures import ProtectiveMeasure
@@ -281,14 +281,14 @@ class Evaluation:
         if p is None:
             return None
         r = self.study.result
-        reaching = reaches_protected_zone(r.max_x, r.status, p.x)
-        fraction = int(reaching.sum()) / r.n if r.n else 0.0
+        reaching, unresolved = protected_zone_counts(r.max_x, r.status, p.x)
+        fraction = reaching / r.n if r.n else 0.0
         allowed = float(getattr(p, "allowed_fraction", 0.0))
         return {
             "x": float(p.x),
-            "reaching": int(reaching.sum()),
+            "reaching": reaching,
             "fraction": fraction,
-            "unresolved": int((reaching & (r.max_x < p.x)).sum()),
+            "unresolved": unresolved,
             "allowed_fraction": allowed,
             "ok": fraction <= allowed,
         }

@@ -1665,11 +1665,12 @@ class _Loader(yaml.SafeLoader):
 
 
 _Loader.add_constructor("tag:yaml.org,2002:timestamp", yaml.SafeLoader.construct_yaml_str)
-_Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
-    list("-+0123456789"),
-)
+# ``1e3`` is a float (YAML 1.2), not a string as in PyYAML's YAML 1.1: the
+# loader reads it so, and the dumper (below) must quote a string spelt so.
+_YAML12_FLOAT = ("tag:yaml.org,2002:float",
+                 re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+                 list("-+0123456789"))
+_Loader.add_implicit_resolver(*_YAML12_FLOAT)
 
 
 
@@ -1691,11 +1692,7 @@ class _Dumper(yaml.SafeDumper):
 
 
 _Dumper.add_representer(str, _Dumper.represent_str)
-_Dumper.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
-    list("-+0123456789"),
-)
+_Dumper.add_implicit_resolver(*_YAML12_FLOAT)
 
 
 def dump_yaml(data: Any) -> str:

@@ -53,6 +53,7 @@ __all__ = [
     "section_from_project",
     "engine_settings",
     "draw_releases",
+    "protected_zone_counts",
     "reaches_protected_zone",
     "run_study",
     "STATISTICS",
@@ -422,7 +423,7 @@ class Study:
         crossings = np.isfinite(a["passing_height_m"]).sum(axis=0)
         stop_block = _stat_block(r.x_end[r.status == STOPPED])
         protect = self.project.protect
-        reaching = None if protect is None else _reaching(r.max_x, r.status, protect.x)
+        reaching = None if protect is None else protected_zone_counts(r.max_x, r.status, protect.x)
         return _summary(self, r.events_total, crossings, blocks, stop_block, reaching)
 
 
@@ -507,8 +508,12 @@ def reaches_protected_zone(max_x: np.ndarray, status: np.ndarray, x: float) -> n
     return (max_x >= x) | (status == UNRESOLVED)
 
 
-def _reaching(max_x: np.ndarray, status: np.ndarray, x: float) -> tuple[int, int]:
-    """(rocks counted as reaching x, unresolved paths among them that had not reached it)."""
+def protected_zone_counts(max_x: np.ndarray, status: np.ndarray, x: float) -> tuple[int, int]:
+    """(rocks counted as reaching x, unresolved paths among them that had not reached it).
+
+    The counts behind ``protect.reaching`` and ``protect.unresolved`` of the
+    summaries of ``simulate`` and ``check``; see :func:`reaches_protected_zone`.
+    """
     short = (status == UNRESOLVED) & (max_x < x)
     return int(reaches_protected_zone(max_x, status, x).sum()), int(short.sum())
 
@@ -689,7 +694,7 @@ class StreamedStudy:
         self._counts += part.status_counts()
         protect = self.project.protect
         if protect is not None:
-            n_reach, n_unresolved = _reaching(r.max_x, r.status, protect.x)
+            n_reach, n_unresolved = protected_zone_counts(r.max_x, r.status, protect.x)
             self.reaching += n_reach
             self.reaching_unresolved += n_unresolved
         self.events += r.events_total
