@@ -14,6 +14,12 @@ except PackageNotFoundError:  # running from a source tree that is not installed
 
 from .costs import CostModel, CostParams
 from .hookspecs import hookimpl
+from .judge.bounds import (
+    fraction_upper_bound,
+    quantile_upper_bound,
+    rocks_to_bound_quantile,
+    rocks_to_show_fraction,
+)
 from .measures import (
     Barrier,
     BarrierBehaviour,
@@ -40,4 +46,8 @@ __all__ = [
     "ProtectiveMeasure",
     "SafetyConcept",
     "SafetyParams",
+    "fraction_upper_bound",
+    "quantile_upper_bound",
+    "rocks_to_bound_quantile",
+    "rocks_to_show_fraction",
 ]

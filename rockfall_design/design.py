@@ -135,7 +135,10 @@ class DesignSpec:
         a fraction of the rocks; exactly one is set.
     fresh_rocks, fresh_seed : int or None
         Rocks and seed of the independent re-check; None: the optimiser's
-        defaults (max(search rocks, rocks.count); the run's seed + 1000003).
+        defaults (twice the rocks that decided the design; the run's seed +
+        1000003). The re-check never has fewer than twice the deciding rocks.
+    max_rocks : int
+        Most rocks a design near a limit is decided with.
     length_m : float
         Length of slope to protect (m).
     candidates : tuple of CandidateSpec
@@ -155,6 +158,7 @@ class DesignSpec:
     candidates: tuple[CandidateSpec, ...]
     cost_model: CostModel
     products: dict[str, dict[str, Product]]
+    max_rocks: int = 50_000
 
 
 def _fmt(value: Any) -> str:
@@ -233,6 +237,7 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
         candidates=candidates,
         cost_model=cost_model,
         products=catalogue,
+        max_rocks=design.max_rocks,
     )
 
 

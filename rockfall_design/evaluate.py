@@ -18,10 +18,12 @@ import numpy as np
 
 from .design import resolve_design
 from .engine import Section, barrier_table, core
+from .judge.bounds import fraction_upper_bound
+from .judge.outcomes import Judgement, RockFates, judge_measures
 from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from .plugins import call_plugin
-from .safety import Check, SafetyConcept
-from .simulation import Study, protected_zone_counts, run_study, section_from_project
+from .safety import DEFAULT_CONFIDENCE, Check, SafetyConcept
+from .simulation import Study, run_study, section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
     from .measures import ProtectiveMeasure
@@ -270,27 +272,38 @@ class Evaluation:
     results: list[MeasureResult]
     checks: list[list[Check]]
     concept: SafetyConcept
-    _held: list[np.ndarray]
-    _outcome: list[np.ndarray]
-    _meeting: list[np.ndarray]
+    judgement: Judgement
+
+    @property
+    def confidence(self) -> float:
+        """One-sided confidence of the bounds (``safety.confidence``)."""
+        return float(getattr(self.concept.params, "confidence", DEFAULT_CONFIDENCE))
 
     @property
     def protect(self) -> dict[str, Any] | None:
-        """Rocks reaching the protected zone and whether that is within what is allowed."""
+        """Rocks reaching the protected zone and whether that is within what is allowed.
+
+        ``upper_fraction`` is the Clopper-Pearson upper bound of the fraction
+        at :attr:`confidence`; ``ok_with_confidence`` compares it with the
+        allowed fraction.
+        """
         p = self.study.project.protect
         if p is None:
             return None
-        r = self.study.result
-        reaching, unresolved = protected_zone_counts(r.max_x, r.status, p.x)
-        fraction = reaching / r.n if r.n else 0.0
+        n = self.study.result.n
+        reaching, unresolved = self.judgement.reaching, self.judgement.unresolved
+        fraction = reaching / n if n else 0.0
         allowed = float(getattr(p, "allowed_fraction", 0.0))
+        upper = fraction_upper_bound(reaching, n, self.confidence)
         return {
             "x": float(p.x),
             "reaching": reaching,
             "fraction": fraction,
+            "upper_fraction": upper,
             "unresolved": unresolved,
             "allowed_fraction": allowed,
             "ok": fraction <= allowed,
+            "ok_with_confidence": upper <= allowed,
         }
 
     @property
@@ -299,6 +312,31 @@ class Evaluation:
         checks_ok = all(c.ok for cs in self.checks for c in cs)
         prot = self.protect
         return checks_ok and (prot is None or prot["ok"])
+
+    @property
+    def holds_with_confidence(self) -> bool:
+        """``ok`` with every design value and the residual replaced by its upper bound."""
+        checks_ok = all(c.holds_with_confidence for cs in self.checks for c in cs)
+        prot = self.protect
+        return checks_ok and (prot is None or prot["ok_with_confidence"])
+
+    def failures_with_confidence(self) -> list[str]:
+        """One line per check (and residual) that fails with the bounds in place."""
+        out = []
+        for p, cs in zip(self.placed, self.checks, strict=True):
+            for c in cs:
+                if not c.holds_with_confidence:
+                    unit = "" if c.unit == "-" else f" {c.unit}"
+                    value = "no bound" if c.bound is None else f"{c.bound:.2f}{unit}"
+                    out.append(f"{p.label}: {c.name} with {100 * self.confidence:g} % "
+                               f"confidence {value}, target {c.target:.2f}{unit} ({c.detail})")
+        prot = self.protect
+        if prot is not None and not prot["ok_with_confidence"]:
+            out.append(
+                f"{prot['reaching']} of {self.study.result.n:,} rocks reach the protected zone "
+                f"at x >= {prot['x']:g} m: upper bound {100 * prot['upper_fraction']:.3f} % at "
+                f"{100 * self.confidence:g} %, allowed {100 * prot['allowed_fraction']:.3f} %")
+        return out
 
     def failures(self) -> list[str]:
         """One line per failed check, for reports."""
@@ -333,7 +371,7 @@ class Evaluation:
         """
         r = self.study.result
         out = np.full(r.n, -1, dtype=np.int64)
-        for res, held in zip(self.results, self._held, strict=True):
+        for res, held in zip(self.results, self.judgement.held, strict=True):
             out[held & (out < 0)] = res.index
         return out
 
@@ -344,7 +382,8 @@ class Evaluation:
         r = self.study.result
         frames = []
         names = {int(v): v.name.lower() for v in Outcome}
-        for res, out, rec in zip(self.results, self._outcome, self._meeting, strict=True):
+        for p, res, out in zip(self.placed, self.results, self.judgement.outcomes, strict=True):
+            rec = self._meeting(p)
             frames.append(
                 pd.DataFrame(
                     {
@@ -395,63 +434,38 @@ class Evaluation:
             out["protect"] = prot
         out["ok"] = self.ok
         out["failures"] = self.failures()
+        out["confidence"] = self.confidence
+        out["holds_with_confidence"] = self.holds_with_confidence
         return out
 
+    def _meeting(self, p: PlacedMeasure) -> np.ndarray:
+        """(n, 3) record of each rock's first meeting of a barrier (NaN for edits)."""
+        r = self.study.result
+        if not isinstance(p.footprint, Barrier):
+            return np.full((r.n, 3), np.nan)
+        _, owners = _barrier_rows(self.placed)
+        return r.barrier_meeting[:, owners.index(p.index), :3]
 
-def _measure_results(placed: Sequence[PlacedMeasure], owners: list[int], study: Study):
-    """MeasureResult of every measure, with per-rock outcome, meeting record and 'held' mask."""
+
+def _judge_run(placed: Sequence[PlacedMeasure], owners: list[int], study: Study,
+               protect_x: float | None) -> Judgement:
+    """Judge the exact run: barrier outcomes and meetings as the engine recorded them."""
     r = study.result
-    n = r.n
-    results, helds, outcomes, meetings = [], [], [], []
+    outcomes: list[np.ndarray | None] = []
+    meetings: list[np.ndarray | None] = []
     for p in placed:
-        fp = p.footprint
-        res = MeasureResult(measure=p.measure, index=p.index, n_rocks=n)
-        if isinstance(fp, Barrier):
+        if isinstance(p.footprint, Barrier):
             b = owners.index(p.index)
-            out = r.barrier_outcome[:, b]
-            met = out != Outcome.NOT_MET
-            res.met = int(met.sum())
-            res.passed_over = int((out == Outcome.PASSED_OVER).sum())
-            res.broken_through = int((out == Outcome.BROKEN_THROUGH).sum())
-            res.rebounded = int((out == Outcome.REBOUNDED).sum())
-            res.passed_through_gap = int((out == Outcome.PASSED_THROUGH_GAP).sum())
-            held = out == Outcome.CAUGHT
-            if fp.behaviour == BarrierBehaviour.RIGID:
-                # A wall holds the rocks it returned that stay upslope of it.
-                held = (
-                    (out == Outcome.REBOUNDED)
-                    & (r.max_x <= fp.x)
-                    & (r.status != core.EXIT_DOWNSLOPE)
-                )
-            res.caught = int(held.sum())
-            outcomes.append(out.copy())
-            meetings.append(r.barrier_meeting[:, b, :3].copy())
-            rec = r.barrier_meeting[met, b]
-            res.passing_height_m = rec[:, core.BM_H]
-            res.velocity_ms = rec[:, core.BM_V]
-            res.energy_kj = rec[:, core.BM_E] / 1e3
-            res.mass_kg = r.mass[met]
-            res.radius_m = r.radius[met]
+            rec = r.barrier_meeting[:, b, :3].astype(float)
+            rec[:, core.BM_E] /= 1e3  # J -> kJ
+            outcomes.append(r.barrier_outcome[:, b].copy())
+            meetings.append(rec)
         else:
-            met = r.max_x >= fp.catch_from
-            inside = (
-                (r.status == core.STOPPED) & (r.x_end >= fp.catch_from) & (r.x_end <= fp.catch_to)
-            )
-            held = met & inside
-            res.met = int(met.sum())
-            res.caught = int(held.sum())
-            res.passed_over = res.met - res.caught
-            res.mass_kg = r.mass[met]
-            res.radius_m = r.radius[met]
-            res.reach_m = r.max_x[met] - fp.catch_from
-            out = np.where(
-                held, Outcome.CAUGHT, np.where(met, Outcome.PASSED_OVER, Outcome.NOT_MET)
-            ).astype(np.int8)
-            outcomes.append(out)
-            meetings.append(np.full((n, 3), np.nan))
-        results.append(res)
-        helds.append(held)
-    return results, helds, outcomes, meetings
+            outcomes.append(None)
+            meetings.append(None)
+    fates = RockFates(max_x=r.max_x, x_end=r.x_end, status=r.status, mass=r.mass,
+                      radius=r.radius)
+    return judge_measures(placed, outcomes, meetings, fates, protect_x)
 
 
 def validate_project(project: Project, registry: Registry) -> None:
@@ -526,17 +540,16 @@ def evaluate_design(
     bars, owners = _barrier_rows(placed)
     study = run_study(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
                       progress=progress, section=section, barriers=bars)
-    results, held, outcome, meeting = _measure_results(placed, owners, study)
-    checks = [call_plugin(registry, concept, "checks", res) for res in results]
+    protect = project.protect
+    judgement = _judge_run(placed, owners, study, None if protect is None else protect.x)
+    checks = [call_plugin(registry, concept, "checks", res) for res in judgement.results]
     return Evaluation(
         study=study,
         original_section=bare,
         placed=placed,
-        results=results,
+        results=judgement.results,
         checks=checks,
         concept=concept,
-        _held=held,
-        _outcome=outcome,
-        _meeting=meeting,
+        judgement=judgement,
     )
 

@@ -1,45 +1,56 @@
-"""Least-cost design: search the measures of ``design.candidates`` with scipy.
+"""Least-cost design: the cheapest admissible design of every family, proven on fresh rocks.
 
-How a candidate design is judged, fast and with common random numbers:
+How it works, with common random numbers (every design sees the same rocks):
 
-1. One run of the rocks on the bare slope keeps, at dense stations along every
-   barrier candidate's range, each rock's passing height, energy and speed at
-   its first passage downslope, and at restart stations upslope of every
-   ground-edit candidate, each rock's full state (``engine.run_ensemble``).
-2. Barriers (fence, wall, boulder row) do not change the ground, so the rocks
-   a barrier meets, and how high and how fast, are read from that table; a
-   barrier upslope takes the rocks it stops out of what the next one sees.
-   Profile edits (ditch, berm) need a new run, but only of the rocks that pass
-   the restart station just upslope of the edit, resumed there from their
-   saved state with their own random streams: every candidate sees the same
-   rocks (cached per edit geometry).
-3. The project's safety concept checks each measure on these results; the
-   cost model prices it. Infeasible designs cost a penalty that grows with how
-   far they miss their targets, so ``scipy.optimize.differential_evolution``
-   (with integrality for products, heights and options) walks towards the
-   cheapest feasible design of every family of measures (each type alone,
-   pairs, the same type twice, up to ``design.max_measures``).
+1. One run of the search rocks on the bare slope keeps, at stations every
+   :data:`STATION_STEP_M` along every barrier candidate's range, each rock's
+   passing height, energy and speed at its first passage downslope, and at
+   restart stations upslope of every ground-edit candidate each rock's full
+   state (``engine.run_ensemble``).
+2. Screening (:class:`Screening`) judges a design on those rocks through the
+   one judgement (:mod:`rockfall_design.judge.outcomes`): barriers from the
+   table, ground edits by a run of only the rocks that pass the restart
+   station just upslope of the edit, resumed from their saved state.
+3. Search. Catalogue choices (products and heights, options) are discrete
+   and few: they are enumerated, in increasing order of cost. Barrier
+   positions are enumerated on the station grid: for each combination of
+   catalogue choices the rocks reaching the protected zone are counted for
+   every combination of stations at once (bit sets), and the combinations
+   within the residual target are screened in full. Ground edits (ditch,
+   berm), whose every geometry costs a run, are searched with
+   ``scipy.optimize.differential_evolution`` over their lattice, the
+   barriers beside them enumerated exactly for each geometry.
+4. Decision (:func:`decide`). Designs that pass the screening, or miss it
+   within its margin (``Screening.violation``),
+   are evaluated exactly in order of cost; a design is admitted only when
+   every check and the residual hold with their upper confidence bounds
+   (``safety.confidence``). While a design holds on the point values but not
+   with the bounds, the rocks are doubled, up to ``design.max_rocks``.
+5. Verification. The first admitted design of a family is checked on fresh
+   rocks: an independent seed and at least twice the rocks that decided it.
+   If it fails there, the next design in order of cost is decided: a family
+   is never dropped because its first candidate failed.
 
-The screening is exact for what it models; what it leaves out (a rock that
-breaks through a barrier goes on with its bare-slope path, which overstates
-what reaches the next one; a rock rolling back upslope into a barrier) is
-settled by the exact check: the best design of every family is run through
-``evaluate_design`` with the search rocks and again with fresh, independent
-rocks, and the report says whether it holds on each.
+What the screening leaves out (a rock that breaks through a barrier goes on
+with its bare-slope path and full energy; a rock returned by a wall stays
+upslope of it; the gap passage of a boulder row is drawn from another
+stream) is settled by the exact decision, which is why designs that miss the
+screening by a small margin are decided exactly too.
 
 A design that does not fit (a measure's ``footprint`` raises ValueError, two
 measures stand in one place) or that the cost model has no price for (its
-``cost`` raises KeyError or ValueError) is infeasible, and the reason is
-reported. Any other failure of plugin code is a
-:class:`~rockfall_design.errors.PluginError` that stops the search (exit 3):
-it is never taken for an infeasible design.
+``cost`` raises KeyError or ValueError) is not part of the design space.
+Any other failure of plugin code is a
+:class:`~rockfall_design.errors.PluginError` that stops the search (exit 3).
 """
 
 from __future__ import annotations
 
+import heapq
 import itertools
 import math
 import time
+from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -49,17 +60,26 @@ from scipy.optimize import differential_evolution
 
 from .engine import Releases, Section, core, run_ensemble
 from .errors import ProjectError
-from .evaluate import Evaluation, edited_section, evaluate_design, place_measures
-from .measures import Barrier, BarrierBehaviour, MeasureResult, ProfileEdit
-from .plugins import call_plugin
-from .safety import Check
-from .simulation import (
-    draw_releases,
-    engine_key,
-    engine_settings,
-    reaches_protected_zone,
-    section_from_project,
+from .evaluate import (
+    MIN_BARRIER_SPACING_M,
+    Evaluation,
+    PlacedMeasure,
+    edited_section,
+    evaluate_design,
+    place_measures,
 )
+from .judge.bounds import fraction_upper_bound
+from .judge.outcomes import (
+    Judgement,
+    RockFates,
+    barrier_outcomes,
+    judge_measures,
+    reaches_protected_zone,
+)
+from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
+from .plugins import call_plugin
+from .safety import DEFAULT_CONFIDENCE, Check
+from .simulation import draw_releases, engine_key, engine_settings, section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
     from .design import CandidateSpec, DesignSpec
@@ -67,7 +87,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .plugins import Registry
     from .project import Project
 
-__all__ = ["Alternative", "OptimisationResult", "Screening", "optimise", "families"]
+__all__ = ["Alternative", "Decision", "OptimisationResult", "Screening", "decide", "families",
+           "optimise"]
 
 #: Spacing (m) of the stations where barrier candidates may stand.
 STATION_STEP_M = 0.5
@@ -77,6 +98,18 @@ RANGE_STEPS = 100
 EDIT_STEP_M = 0.25
 #: Spacing (m) of the restart stations upslope of ground-edit candidates.
 RESTART_STEP_M = 2.0
+#: Continuous parameters of a barrier candidate take BARRIER_RANGE_STEPS + 1 values.
+BARRIER_RANGE_STEPS = 10
+#: A check missed by at most this relative amount in screening is decided exactly.
+CHECK_MARGIN = 0.03
+#: Placements of one combination of catalogue choices screened in full, fewest through first.
+MAX_SCREENS_PER_LEVEL = 80
+#: Designs decided exactly that only came within the screening's margin, per family.
+MAX_NEAR_PER_FAMILY = 2
+#: Designs of one combination of catalogue choices decided exactly, at most.
+MAX_EXACT_PER_LEVEL = 3
+#: Exact decisions (each a run of the rocks) of one family, at most.
+MAX_EXACT_PER_FAMILY = 12
 
 
 # ---- the search space of one family -------------------------------------------------
@@ -206,6 +239,7 @@ class ScreenResult:
     residual: int
     reason: str = ""
     labels: list[str] = field(default_factory=list)
+    near: bool = False
 
 
 @dataclass
@@ -274,6 +308,10 @@ class Screening:
         if spec.residual_fraction is not None:
             allowed = int(math.floor(spec.residual_fraction * self.n + 1e-9))
         self.allowed_residual = int(allowed or 0)
+        self.allowed_fraction = (spec.residual_fraction if spec.residual_fraction is not None
+                                 else self.allowed_residual / max(self.n, 1))
+        self.max_rocks = max(self.n, int(spec.max_rocks))
+        self.confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
         # Stations: every barrier candidate's range at STATION_STEP_M; restart
         # stations upslope of every edit candidate's range.
         x0, x1 = self.section.x[0], self.section.x[-1]
@@ -315,6 +353,7 @@ class Screening:
         self.penalty_floor = 1e3 + 1e5 * spec.max_measures * max(1.0, spec.length_m)
         self.evaluations = 0
         self.edit_runs = 0
+        self.edit_rocks = 0
 
     def _is_edit(self, ci: int) -> bool:
         """Does candidate ``ci`` edit the ground? (Judged from a mid-range design.)"""
@@ -414,6 +453,7 @@ class Screening:
             t.x_end[idx] = res.x_end
             t.status[idx] = res.status
         self.edit_runs += 1
+        self.edit_rocks += int(idx.size)
         if len(self._edit_cache) > 256:
             self._edit_cache.clear()
         self._edit_cache[key] = t
@@ -421,7 +461,7 @@ class Screening:
 
     # -- one design -----------------------------------------------------------------
     def screen(self, measures: Sequence[ProtectiveMeasure]) -> ScreenResult:
-        """Judge a design on the search rocks (see the module docs)."""
+        """Judge a design on the search rocks, through the one judgement (see module docs)."""
         self.evaluations += 1
         try:
             placed = place_measures(self.project, self.registry, measures, self.section)
@@ -435,61 +475,9 @@ class Screening:
             table = self._table_for(edits, edited)
         except ValueError as exc:
             return ScreenResult(math.inf, False, math.inf, [], [], self.n, reason=str(exc))
-        alive = np.ones(self.n, dtype=bool)
-        results: list[MeasureResult | None] = [None] * len(placed)
-        order = sorted(range(len(placed)), key=lambda i: _start(placed[i].footprint))
-        for i in order:
-            p = placed[i]
-            fp = p.footprint
-            res = MeasureResult(measure=p.measure, index=i, n_rocks=self.n)
-            if isinstance(fp, Barrier):
-                j = int(np.argmin(np.abs(self.grid - fp.x)))
-                h, e_kj, v = table.column(j)
-                met = alive & np.isfinite(h)
-                over = met & (h > fp.height_m)
-                gap = np.zeros(self.n, dtype=bool)
-                if fp.behaviour == BarrierBehaviour.BLOCKS:
-                    pgap = np.clip((fp.gap_m - 2.0 * self.radius) / fp.spacing_m, 0.0, 1.0)
-                    gap = met & ~over & (self.u_gap < pgap)
-                hit = met & ~over & ~gap
-                broken = hit & (e_kj > fp.capacity_kj)
-                held = hit & ~broken
-                res.met, res.passed_over = int(met.sum()), int(over.sum())
-                res.passed_through_gap, res.broken_through = int(gap.sum()), int(broken.sum())
-                res.caught = int(held.sum())
-                if fp.behaviour == BarrierBehaviour.RIGID:
-                    res.rebounded = res.caught
-                res.passing_height_m = h[met]
-                res.energy_kj = e_kj[met]
-                res.velocity_ms = v[met]
-                res.mass_kg = self.mass[met]
-                res.radius_m = self.radius[met]
-                alive &= ~held
-            else:
-                met = alive & (table.max_x >= fp.catch_from)
-                inside = (table.status == core.STOPPED) & (table.x_end >= fp.catch_from) & (
-                    table.x_end <= fp.catch_to)
-                held = met & inside
-                res.met, res.caught = int(met.sum()), int(held.sum())
-                res.passed_over = res.met - res.caught
-                res.mass_kg = self.mass[met]
-                res.radius_m = self.radius[met]
-                res.reach_m = table.max_x[met] - fp.catch_from
-                alive &= ~held
-            results[i] = res
-        residual = int((alive & reaches_protected_zone(table.max_x, table.status,
-                                                       self.protect_x)).sum())
-        checks = [call_plugin(self.registry, self.concept, "checks", res) for res in results]
-        violation = 0.0
-        for cs in checks:
-            for c in cs:
-                if not c.ok:
-                    if c.value is None or not math.isfinite(c.value):
-                        violation += 1.0
-                    else:
-                        violation += abs(c.value - c.target) / max(abs(c.target), 1e-9)
-        if residual > self.allowed_residual:
-            violation += 1.0 + (residual - self.allowed_residual) / max(self.n, 1) * 100.0
+        judgement, approx = self.judge(placed, table)
+        checks = [call_plugin(self.registry, self.concept, "checks", res)
+                  for res in judgement.results]
         labels = [p.label for p in placed]
         try:
             cost = self.cost([p.measure for p in placed])
@@ -497,23 +485,507 @@ class Screening:
             # The cost model's contract: no price for a measure skips the design.
             why = exc.args[0] if exc.args else type(exc).__name__
             return ScreenResult(
-                math.inf, False, math.inf, checks, results, residual, labels=labels,
+                math.inf, False, math.inf, checks, judgement.results, judgement.reaching,
+                labels=labels,
                 reason=f"cost model {self.spec.cost_model.name!r} has no price for this "
                        f"design: {why}")
-        return ScreenResult(cost, violation == 0.0, violation, checks, results, residual,
-                            labels=labels)
+        violation, near = self.violation(checks, judgement.reaching, approx)
+        return ScreenResult(cost, violation == 0.0, violation, checks, judgement.results,
+                            judgement.reaching, labels=labels, near=near)
+
+    def judge(self, placed: Sequence[PlacedMeasure], table: _Table) -> tuple[Judgement, int]:
+        """The design's outcomes on the search rocks, by the one judgement.
+
+        Barriers are met in the order of their stations; a rock a barrier
+        stops (caught, or returned by a rigid one) ends its path there, so the
+        measures downslope of it never meet it. A rock that passes a barrier
+        goes on along its path of the table (bare or edited ground).
+
+        Returns the judgement and how many of the rocks counted as reaching
+        the protected zone the screening only approximates: they broke through
+        a barrier (the exact run lets them go on with the surplus energy
+        only), passed a row of blocks (its gap draws come from another stream)
+        or met a barrier downslope of such a passage.
+        """
+        fates = RockFates(max_x=table.max_x.copy(), x_end=table.x_end.copy(),
+                          status=table.status.copy(), mass=self.mass, radius=self.radius)
+        alive = np.ones(self.n, dtype=bool)
+        approx = np.zeros(self.n, dtype=bool)
+        outcomes: list[np.ndarray | None] = [None] * len(placed)
+        meetings: list[np.ndarray | None] = [None] * len(placed)
+        for i in sorted(range(len(placed)), key=lambda k: _start(placed[k].footprint)):
+            fp = placed[i].footprint
+            if not isinstance(fp, Barrier):
+                continue
+            j = self.station(fp.x)
+            h, e_kj, v = table.column(j)
+            out = barrier_outcomes(fp, h, e_kj, self.radius, self.u_gap, alive)
+            stopped = (out == Outcome.CAUGHT) | (out == Outcome.REBOUNDED)
+            approx |= out == Outcome.BROKEN_THROUGH
+            if fp.behaviour == BarrierBehaviour.BLOCKS:
+                approx |= out != Outcome.NOT_MET
+            fates.max_x[stopped] = np.minimum(fates.max_x[stopped], fp.x)
+            fates.x_end[stopped] = fp.x
+            fates.status[stopped] = np.where(out[stopped] == Outcome.CAUGHT, core.CAUGHT,
+                                             core.STOPPED)
+            alive &= ~stopped
+            outcomes[i] = out
+            meetings[i] = np.column_stack([h, v, e_kj])
+        judgement = judge_measures(placed, outcomes, meetings, fates, self.protect_x)
+        uncertain = int((approx & reaches_protected_zone(fates.max_x, fates.status,
+                                                         self.protect_x)).sum())
+        return judgement, uncertain
+
+    def station(self, x: float) -> int:
+        """Index of the table station at ``x`` (m)."""
+        return int(np.argmin(np.abs(self.grid - x)))
+
+    def violation(
+        self, checks: Sequence[Sequence[Check]], residual: int, uncertain: int = 0
+    ) -> tuple[float, bool]:
+        """How far a design misses its targets on the point values (0: it meets them).
+
+        Returns the summed relative shortfall and whether the design lies
+        within the screening margin, so that it is decided exactly before it
+        may be rejected: the residual without the ``uncertain`` rocks (whose
+        paths the screening only approximates) is within the target, and
+        where such rocks exist, every failed check misses by at most
+        :data:`CHECK_MARGIN`. Without them the screening is the exact run's
+        judgement on the same rocks, and there is no margin.
+        """
+        violation, near = 0.0, uncertain > 0
+        for cs in checks:
+            for c in cs:
+                if c.ok and not _check_may_hold(c, self.n, self.max_rocks):
+                    # Holds on the point value, but not with confidence even with
+                    # design.max_rocks rocks: the exact decision would say the same.
+                    violation += 1e-3
+                    near = False
+                    continue
+                if c.ok:
+                    continue
+                if c.value is None or not math.isfinite(c.value):
+                    violation += 1.0
+                    near = False
+                else:
+                    miss = abs(c.value - c.target) / max(abs(c.target), 1e-9)
+                    violation += miss
+                    near &= miss <= CHECK_MARGIN
+        if residual > self.allowed_residual:
+            violation += 1.0 + (residual - self.allowed_residual) / max(self.n, 1) * 100.0
+            near &= residual - uncertain <= self.allowed_residual
+        elif not _fraction_may_hold(residual, self.n, self.allowed_fraction, self.max_rocks,
+                                    self.confidence):
+            violation += 1e-3
+            near = False
+        return violation, near and violation > 0.0
 
 
 def _start(fp: Barrier | ProfileEdit) -> float:
     return fp.x if isinstance(fp, Barrier) else fp.x_start
 
 
-# ---- the search -----------------------------------------------------------------
+# ---- the search space: barrier options, enumerated ----------------------------------
+
+
+@dataclass
+class _Option:
+    """One barrier of one candidate: its parameters, measure, footprint and cost."""
+
+    ci: int
+    params: dict[str, Any]
+    measure: ProtectiveMeasure
+    footprint: Barrier
+    cost: float
+    label: str
+
+
+def _lattice(lo: float, hi: float, step: float) -> np.ndarray:
+    """lo, lo + step, ... up to hi (inclusive within round-off)."""
+    if hi <= lo or step <= 0:
+        return np.array([float(lo)])
+    return lo + step * np.arange(math.floor((hi - lo) / step + 1e-9) + 1)
+
+
+def _discrete_choices(c: CandidateSpec) -> list[dict[str, Any]]:
+    """Every catalogue choice of a candidate: product and height, options, range lattice."""
+    axes: list[list[dict[str, Any]]] = []
+    if c.products:
+        axes.append([{"product": p.name, "height": h} for p in c.products for h in p.heights])
+    for name, opts in c.options.items():
+        axes.append([{name: o} for o in opts])
+    for name, (lo, hi) in c.ranges.items():
+        axes.append([{name: float(v)} for v in _lattice(lo, hi, (hi - lo) / BARRIER_RANGE_STEPS)])
+    out = []
+    for combo in itertools.product(*axes):
+        d: dict[str, Any] = {}
+        for part in combo:
+            d.update(part)
+        out.append(d)
+    return out
+
+
+class _BarrierSlots:
+    """The barrier options of every barrier candidate, built and priced once per run."""
+
+    def __init__(self, screen: Screening) -> None:
+        self.screen = screen
+        self.options: dict[int, list[_Option]] = {}
+        self.skipped: dict[int, Counter] = {}
+        self._masks: dict[tuple[int, int, int], np.ndarray] = {}
+        self._alone: dict[tuple[int, int, int], bool] = {}
+
+    def of(self, ci: int) -> list[_Option]:
+        """Options of candidate ``ci`` (every catalogue choice at every grid station)."""
+        if ci in self.options:
+            return self.options[ci]
+        sc = self.screen
+        c = sc.spec.candidates[ci]
+        out: list[_Option] = []
+        skipped: Counter = Counter()
+        for d in _discrete_choices(c):
+            for x in _lattice(*c.x_range, STATION_STEP_M):
+                params = {**d, "x": float(x)}
+                try:
+                    (m,) = sc.measures([(ci, params)])
+                    fp = call_plugin(sc.registry, m, "footprint", sc.section)
+                    call_plugin(sc.registry, m, "design_properties")
+                except ValueError as exc:
+                    # Does not fit here: not part of the space.
+                    skipped[f"does not fit: {exc}"] += 1
+                    continue
+                try:
+                    cost = sc.cost([m])
+                except (KeyError, ValueError) as exc:
+                    # The cost model's contract: no price skips the design.
+                    why = exc.args[0] if exc.args else type(exc).__name__
+                    skipped[f"cost model {sc.spec.cost_model.name!r} has no price for this "
+                            f"design: {why}"] += 1
+                    continue
+                if not isinstance(fp, Barrier):
+                    continue
+                out.append(_Option(ci, params, m, fp, cost,
+                                   call_plugin(sc.registry, m, "label")))
+        self.options[ci] = out
+        self.skipped[ci] = skipped
+        return out
+
+    def first_ok(self, ci: int, k: int, table: _Table, table_id: int) -> bool:
+        """Does option k pass its checks as the first barrier the rocks meet?
+
+        The first barrier of a design meets every rock that crosses its station
+        on the table, so these are exactly its checks in any design in which no
+        other barrier stands upslope of it (edits upslope are in the table).
+        """
+        sc = self.screen
+        o = self.options[ci][k]
+        j = sc.station(o.footprint.x)
+        key = (ci, k, 0 if (table.rows is None or j < table.first_col) else table_id)
+        hit = self._alone.get(key)
+        if hit is None:
+            h, e_kj, v = table.column(j)
+            out = barrier_outcomes(o.footprint, h, e_kj, sc.radius, sc.u_gap,
+                                   np.ones(sc.n, dtype=bool))
+            placed = PlacedMeasure(0, o.measure, o.footprint, o.label)
+            fates = RockFates(max_x=table.max_x, x_end=table.x_end, status=table.status,
+                              mass=sc.mass, radius=sc.radius)
+            (res,) = judge_measures([placed], [out], [np.column_stack([h, v, e_kj])], fates,
+                                    None).results
+            checks = call_plugin(sc.registry, sc.concept, "checks", res)
+            hit = all(c.ok and _check_may_hold(c, sc.n, sc.max_rocks) for c in checks)
+            self._alone[key] = hit
+        return hit
+
+    def stop_mask(self, ci: int, k: int, table: _Table, table_id: int) -> np.ndarray:
+        """Packed bits, (2, bytes): the rocks option k would stop (catch or return) if it
+        met them first, and those it would let through only approximately (broken
+        through, or any rock meeting a row of blocks)."""
+        sc = self.screen
+        o = self.options[ci][k]
+        j = sc.station(o.footprint.x)
+        # Stations upslope of an edit's restart see the bare table: share those masks.
+        key = (ci, k, 0 if (table.rows is None or j < table.first_col) else table_id)
+        hit = self._masks.get(key)
+        if hit is None:
+            h, e_kj, _ = table.column(j)
+            out = barrier_outcomes(o.footprint, h, e_kj, sc.radius, sc.u_gap,
+                                   np.ones(sc.n, dtype=bool))
+            unsure = out == Outcome.BROKEN_THROUGH
+            if o.footprint.behaviour == BarrierBehaviour.BLOCKS:
+                unsure = out != Outcome.NOT_MET
+            hit = np.stack([np.packbits((out == Outcome.CAUGHT) | (out == Outcome.REBOUNDED)),
+                            np.packbits(unsure)])
+            if len(self._masks) > 200_000:
+                self._masks.clear()
+            self._masks[key] = hit
+        return hit
+
+
+@dataclass
+class _Screened:
+    """A design that passed the screening (or missed it within the margin)."""
+
+    cost: float
+    measures: list[ProtectiveMeasure]
+    result: ScreenResult
+    level: tuple
+
+
+@dataclass
+class _Tally:
+    """What the designs of a family that were ruled out failed on (for the report)."""
+
+    reasons: Counter = field(default_factory=Counter)
+    designs: int = 0
+    capped_levels: int = 0
+    best_fail: ScreenResult | None = None
+    best_fail_measures: list[ProtectiveMeasure] = field(default_factory=list)
+    min_residual: int | None = None
+
+    def fail(self, sr: ScreenResult, measures: Sequence[ProtectiveMeasure]) -> None:
+        names = [c.name for cs in sr.checks for c in cs if not c.ok]
+        if sr.reason:
+            names = ["does not fit"]
+        for nm in names:
+            self.reasons[nm] += 1
+        if sr.residual > 0 and not names:
+            self.reasons["residual"] += 1
+        if self.best_fail is None or sr.violation < self.best_fail.violation:
+            self.best_fail, self.best_fail_measures = sr, list(measures)
+
+
+def _popcount(a: np.ndarray) -> np.ndarray:
+    """Set bits along the last axis of a uint8 array."""
+    return np.bitwise_count(a).sum(axis=-1, dtype=np.int64)
+
+
+def _level_combos(levels: list[np.ndarray]) -> Any:
+    """Tuples of level indices, one per slot, in increasing order of summed cost."""
+    start = tuple(0 for _ in levels)
+    heap = [(float(sum(lv[0] for lv in levels)), start)]
+    seen = {start}
+    while heap:
+        cost, idx = heapq.heappop(heap)
+        yield cost, idx
+        for s in range(len(levels)):
+            if idx[s] + 1 < len(levels[s]):
+                nxt = idx[:s] + (idx[s] + 1,) + idx[s + 1:]
+                if nxt not in seen:
+                    seen.add(nxt)
+                    c = cost - levels[s][idx[s]] + levels[s][idx[s] + 1]
+                    heapq.heappush(heap, (c, nxt))
+
+
+def _barrier_designs(
+    screen: Screening,
+    slots: _BarrierSlots,
+    barrier_cis: Sequence[int],
+    fixed: Sequence[ProtectiveMeasure],
+    fixed_cost: float,
+    table: _Table,
+    table_id: int,
+    tally: _Tally,
+    cost_limit: float = math.inf,
+) -> Any:
+    """Designs of ``fixed`` measures plus one barrier per ``barrier_cis``, cheapest first.
+
+    Every combination of the barriers' catalogue choices and grid stations is
+    considered. Catalogue choices are taken in increasing order of cost; for
+    each, the rocks reaching the protected zone are counted for every
+    combination of stations at once (bit sets of the rocks each barrier would
+    stop, judged by :func:`~rockfall_design.judge.outcomes.barrier_outcomes`);
+    the combinations within the residual target (plus the screening margin)
+    are screened in full, fewest reaching first, and those that pass (or
+    miss within the margin) are yielded as :class:`_Screened`, in order of
+    cost. Yields nothing more once the cost exceeds ``cost_limit``.
+    """
+    fixed = list(fixed)
+    if not barrier_cis:
+        if fixed_cost <= cost_limit:
+            sr = screen.screen(fixed)
+            tally.designs += 1
+            if sr.feasible or sr.near:
+                yield _Screened(sr.cost, fixed, sr, ())
+            else:
+                tally.fail(sr, fixed)
+        return
+    opts = [slots.of(ci) for ci in barrier_cis]
+    if any(not o for o in opts):
+        return
+    costs = [np.array([o.cost for o in op]) for op in opts]
+    levels = [np.unique(c) for c in costs]
+    members = [[np.flatnonzero(c == lv) for lv in lvs] for c, lvs in zip(costs, levels,
+                                                                          strict=True)]
+    reach = np.packbits(reaches_protected_zone(table.max_x, table.status, screen.protect_x))
+    edits = [call_plugin(screen.registry, m, "footprint", screen.section) for m in fixed]
+    stretches = [(e.x_start, e.x_end) for e in edits if isinstance(e, ProfileEdit)]
+    # Residual of the rocks whose fate the table knows for sure: a design that
+    # misses only through rocks breaking through is screened in full and, within
+    # the margin, decided exactly.
+    limit = screen.allowed_residual
+    for level_cost, idx in _level_combos(levels):
+        total = fixed_cost + level_cost
+        if total > cost_limit:
+            return
+        ks = [members[s][idx[s]] for s in range(len(opts))]
+        xs = [np.array([opts[s][k].footprint.x for k in ks[s]]) for s in range(len(opts))]
+        # Residual for every combination of stations: (n1, n2, ..., bytes).
+        free = np.broadcast_to(reach, reach.shape)
+        valid = np.ones((), dtype=bool)
+        for s in range(len(opts)):
+            m = np.stack([slots.stop_mask(barrier_cis[s], k, table, table_id) for k in ks[s]])
+            shape = [1] * len(opts) + [m.shape[-1]]
+            shape[s] = m.shape[0]
+            # Rocks it stops, and those whose further path the screening approximates.
+            free = free & ~(m[:, 0] | m[:, 1]).reshape(shape)
+            xshape = [1] * len(opts)
+            xshape[s] = len(ks[s])
+            xv = xs[s].reshape(xshape)
+            ok_x = np.ones(xshape, dtype=bool)
+            for lo, hi in stretches:
+                ok_x &= ~((xv > lo + 1e-6) & (xv < hi - 1e-6))
+            valid = valid & ok_x
+            for t in range(s):
+                xt = xs[t].reshape([len(ks[t]) if u == t else 1 for u in range(len(opts))])
+                valid = valid & (np.abs(xv - xt) >= MIN_BARRIER_SPACING_M)
+                if barrier_cis[t] == barrier_cis[s]:
+                    valid = valid & (xt < xv)  # one order of two barriers of one candidate
+        # The first barrier a rock meets judges every rock that crosses it: its own
+        # checks decide, whatever stands downslope.
+        xb = np.stack(np.broadcast_arrays(*[
+            xs[s].reshape([len(ks[s]) if u == s else 1 for u in range(len(opts))])
+            for s in range(len(opts))]))
+        first = np.argmin(xb, axis=0)
+        first_ok = np.zeros(first.shape, dtype=bool)
+        for s in range(len(opts)):
+            oks = np.array([slots.first_ok(barrier_cis[s], k, table, table_id) for k in ks[s]])
+            sel = first == s
+            first_ok[sel] = np.broadcast_to(
+                oks.reshape([len(ks[s]) if u == s else 1 for u in range(len(opts))]),
+                first.shape)[sel]
+        tally.reasons["first barrier's checks"] += int((valid & ~first_ok).sum())
+        valid = valid & first_ok
+        residual = _popcount(free)
+        n_comb = int(np.prod([len(k) for k in ks]))
+        tally.designs += n_comb
+        residual = np.where(valid, residual, np.iinfo(np.int64).max)
+        rmin = int(residual.min())
+        if rmin < np.iinfo(np.int64).max:
+            tally.min_residual = rmin if tally.min_residual is None else min(tally.min_residual,
+                                                                            rmin)
+        cand = np.flatnonzero((residual <= limit).ravel())
+        tally.reasons["residual"] += int((valid & (residual > limit)).sum())
+        if cand.size == 0:
+            continue
+        order = cand[np.argsort(residual.ravel()[cand], kind="stable")]
+        if order.size > MAX_SCREENS_PER_LEVEL:
+            tally.capped_levels += 1
+            order = order[:MAX_SCREENS_PER_LEVEL]
+        found: list[_Screened] = []
+        passed = 0
+        for flat in order:
+            pos = np.unravel_index(flat, residual.shape)
+            ms = fixed + [opts[s][ks[s][pos[s]]].measure for s in range(len(opts))]
+            sr = screen.screen(ms)
+            if sr.feasible or sr.near:
+                found.append(_Screened(sr.cost, ms, sr, (table_id,) + tuple(idx)))
+                passed += sr.feasible
+                if passed >= MAX_EXACT_PER_LEVEL:
+                    break  # more than the decisions this combination gets
+            else:
+                tally.fail(sr, ms)
+        # Within one level of cost, designs that pass come before those within the margin.
+        found.sort(key=lambda d: (d.cost, not d.result.feasible, d.result.violation,
+                                  d.result.residual))
+        yield from found
+
+
+# ---- deciding and verifying, with rocks added where they decide something ----------
+
+
+@dataclass
+class Decision:
+    """The exact evaluation of one design: admitted with confidence, or why not."""
+
+    admitted: bool
+    rocks: int
+    evaluation: Evaluation
+    reason: str = ""
+    exact_runs: int = 1
+
+
+def decide(
+    project: Project,
+    registry: Registry,
+    measures: Sequence[ProtectiveMeasure],
+    concept: Any,
+    *,
+    rocks: int,
+    seed: int,
+    max_rocks: int,
+) -> Decision:
+    """Evaluate a design exactly; admit it only when it holds with the confidence bounds.
+
+    While the design holds on the point values but not with the bounds, the
+    rocks are doubled (the first rocks stay the same: every rock has its own
+    random stream), up to ``max_rocks``: rocks are added where they decide
+    something.
+    """
+    n, runs = int(rocks), 0
+    while True:
+        ev = evaluate_design(project, registry, measures, concept, rocks=n, seed=seed)
+        runs += 1
+        if ev.holds_with_confidence:
+            return Decision(True, n, ev, exact_runs=runs)
+        if not ev.ok:
+            return Decision(False, n, ev, "; ".join(ev.failures()), runs)
+        if n >= max_rocks or not _may_hold_with(ev, max_rocks):
+            why = "; ".join(ev.failures_with_confidence())
+            more = ("even with" if n >= max_rocks else "and would not with")
+            return Decision(False, n, ev, f"holds on the point values of {n:,} rocks but not "
+                                          f"with {100 * ev.confidence:g} % confidence, {more} "
+                                          f"{max_rocks:,} rocks (design.max_rocks): {why}", runs)
+        n = min(2 * n, int(max_rocks))
+
+
+def _may_hold_with(ev: Evaluation, rocks: int) -> bool:
+    """Could more rocks (up to ``rocks``) make a design that holds on points hold with bounds?"""
+    prot = ev.protect
+    if prot is not None and not _fraction_may_hold(prot["reaching"], ev.study.result.n,
+                                                   prot["allowed_fraction"], rocks,
+                                                   ev.confidence):
+        return False
+    n = ev.study.result.n
+    return all(_check_may_hold(c, n, rocks) for cs in ev.checks for c in cs if c.ok)
+
+
+def _fraction_may_hold(reaching: int, n: int, allowed: float, rocks: int,
+                       confidence: float) -> bool:
+    """The Clopper-Pearson bound of the observed fraction, with ``rocks`` rocks, is allowed."""
+    return fraction_upper_bound(round(reaching / max(n, 1) * rocks), rocks,
+                                confidence) <= allowed
+
+
+def _check_may_hold(c: Check, n: int, rocks: int) -> bool:
+    """Could a check that holds on its point value hold with its bound with ``rocks`` rocks?
+
+    The gap between an order-statistic bound and the point value shrinks
+    about as 1/sqrt(n) (the spread of a sample quantile); a check without a
+    bound (too few rocks met the measure) may be bounded with more rocks.
+    """
+    if c.holds_with_confidence or c.bound is None or c.value is None:
+        return True
+    predicted = c.value + (c.bound - c.value) * math.sqrt(n / rocks)
+    # It holds when the value stays on the side of the target it is on now.
+    return (c.value >= c.target) == (predicted >= c.target)
+
+
+# ---- families and the result --------------------------------------------------------
 
 
 @dataclass
 class Alternative:
-    """The best design of one family, screened and then checked exactly."""
+    """The cheapest admissible design of one family, decided exactly and verified."""
 
     name: str
     family: tuple[int, ...]
@@ -528,8 +1000,19 @@ class Alternative:
     fresh_failures: list[str] = field(default_factory=list)
     reason: str = ""
     evaluations: int = 0
+    exact_evaluations: int = 0
     wall_s: float = 0.0
     evaluation: Evaluation | None = None
+    decision_rocks: int | None = None
+    fresh_rocks: int | None = None
+    fresh_seed: int | None = None
+    proof: str = ""
+    dominated: str = ""
+
+    @property
+    def holds(self) -> bool:
+        """Admitted with confidence, verified on fresh rocks, not dominated."""
+        return self.feasible and bool(self.holds_on_fresh_rocks) and not self.dominated
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -541,9 +1024,15 @@ class Alternative:
             "holds_on_fresh_rocks": self.holds_on_fresh_rocks,
             "checks": self.checks,
             "residual": self.residual,
+            "decision_rocks": self.decision_rocks,
             "fresh_residual": self.fresh_residual,
+            "fresh_rocks": self.fresh_rocks,
+            "fresh_seed": self.fresh_seed,
             "reason": self.reason,
+            "proof": self.proof,
+            "dominated": self.dominated or None,
             "evaluations": self.evaluations,
+            "exact_evaluations": self.exact_evaluations,
         }
 
 
@@ -560,55 +1049,144 @@ class OptimisationResult:
     evaluations: int
     edit_runs: int
     currency: str = ""
+    search_rocks: int = 0
+    confidence: float = 0.95
+    exact_evaluations: int = 0
+    rocks_simulated: int = 0
 
     def summary(self) -> dict[str, Any]:
         return {
             "rocks": self.rocks,
             "seed": self.seed,
+            "search_rocks": self.search_rocks,
             "fresh_rocks": self.fresh_rocks,
             "fresh_seed": self.fresh_seed,
+            "confidence": self.confidence,
             "runtime_s": round(self.wall_s, 3),
             "designs_evaluated": self.evaluations,
+            "exact_evaluations": self.exact_evaluations,
+            "rocks_simulated": self.rocks_simulated,
             "edit_runs": self.edit_runs,
             "currency": self.currency,
             "alternatives": [a.as_dict() for a in self.alternatives],
             "best": None if self.best is None else self.best.name,
+            "proof": "" if self.best is None else self.best.proof,
             "reason": self.reason,
         }
 
 
-def _search_family(screen: Screening, fam: tuple[int, ...], seed: int) -> tuple[Any, Any]:
+def _edit_designs(
+    screen: Screening,
+    slots: _BarrierSlots,
+    fam: tuple[int, ...],
+    tally: _Tally,
+    seed: int,
+) -> list[_Screened]:
+    """Designs of a family with ground edits: scipy over the edits, barriers enumerated.
+
+    Every ground edit costs a run of the rocks below its restart station, so
+    the edits' stations, options and continuous parameters (on a lattice, so
+    that the search comes back to geometries it has run) are searched with
+    ``scipy.optimize.differential_evolution``; for each edit geometry the
+    family's barriers are enumerated exactly on its table
+    (:func:`_barrier_designs`). Every design that passed the screening on
+    the way is kept, cheapest first, for the exact decision.
+    """
     cands = screen.spec.candidates
-    variables = _variables(cands, fam, screen.edit_candidates)
-    has_edit = any(i in screen.edit_candidates for i in fam)
+    edit_slots = tuple(ci for ci in fam if ci in screen.edit_candidates)
+    barrier_cis = [ci for ci in fam if ci not in screen.edit_candidates]
+    variables = _variables(cands, edit_slots, screen.edit_candidates)
     big = screen.penalty_floor
+    seen: dict[tuple, float] = {}
+    kept: dict[tuple, _Screened] = {}
 
     def objective(vec: np.ndarray) -> float:
-        decoded = _decode(cands, fam, variables, vec)
+        decoded = _decode(cands, edit_slots, variables, vec)
+        key = tuple((ci, tuple(sorted(p.items()))) for ci, p in decoded)
+        if key in seen:
+            return seen[key]
         try:
-            measures = screen.measures(decoded)
-        except ValueError:
-            return 4.0 * big
-        r = screen.screen(measures)
-        if r.feasible:
-            return r.cost
-        if not math.isfinite(r.violation):
-            return 4.0 * big
-        return big + min(r.cost, big) + big * min(r.violation, 2.0) / 2.0
+            edits = screen.measures(decoded)
+            # Placing first: a geometry that does not fit is out of the space
+            # before the cost model is asked to price it.
+            placed = place_measures(screen.project, screen.registry, edits, screen.section)
+            fixed_cost = screen.cost(edits)
+            edited = edited_section(screen.project, screen.section, placed)
+            table = screen._table_for([p.footprint for p in placed], edited)
+        except (KeyError, ValueError, ProjectError) as exc:
+            tally.reasons["does not fit"] += 1
+            tally.reasons.setdefault("_why", exc)
+            seen[key] = 4.0 * big
+            return seen[key]
+        first = next(iter(_barrier_designs(screen, slots, barrier_cis, edits, fixed_cost, table,
+                                           id(table), tally)), None)
+        if first is None:
+            value = big + fixed_cost
+        else:
+            kept[key + tuple((m.kind, m.x) for m in first.measures)] = first
+            value = first.cost if first.result.feasible else big + first.cost
+        seen[key] = value
+        return value
 
     bounds = [(v.low, v.high) for v in variables]
     integrality = np.array([v.integer for v in variables])
-    dims = len(variables)
-    # Designs with ground edits cost a run each (of the rocks below the restart
-    # station); barriers alone are read from the table.
-    popsize = 4 if has_edit else (15 if len(fam) == 1 else 10)
-    maxiter = 12 if has_edit else (80 if len(fam) == 1 else 50)
-    res = differential_evolution(
-        objective, bounds, integrality=integrality, seed=seed, popsize=popsize,
-        maxiter=maxiter, tol=1e-3, mutation=(0.5, 1.0), recombination=0.7, polish=False,
-        init="sobol" if dims > 1 else "latinhypercube",
+    differential_evolution(
+        objective, bounds, integrality=integrality, seed=seed, popsize=6, maxiter=12,
+        tol=1e-3, mutation=(0.5, 1.0), recombination=0.7, polish=False,
+        init="sobol" if len(variables) > 1 else "latinhypercube",
     )
-    return res, _decode(cands, fam, variables, res.x)
+    return sorted(kept.values(), key=lambda d: (d.cost, not d.result.feasible))
+
+
+def _cause(screen: Screening, slots: _BarrierSlots, fam: tuple[int, ...], tally: _Tally) -> str:
+    """Why no design of a family meets the targets, with numbers."""
+    cands = screen.spec.candidates
+    n, allowed = screen.n, screen.allowed_residual
+    reach = reaches_protected_zone(screen.bare.max_x, screen.bare.status, screen.protect_x)
+    if not any(ci in screen.edit_candidates for ci in fam):
+        # Rocks that never cross any station where the family's barriers may stand.
+        crossing = np.zeros(n, dtype=bool)
+        for ci in fam:
+            lo, hi = cands[ci].x_range
+            cols = (screen.grid >= lo - 1e-9) & (screen.grid <= hi + 1e-9)
+            crossing |= np.isfinite(screen.bare.h[:, cols]).any(axis=1)
+        missed = int((reach & ~crossing).sum())
+        if missed > allowed:
+            lo = min(cands[ci].x_range[0] for ci in fam)
+            hi = max(cands[ci].x_range[1] for ci in fam)
+            below = screen.releases.x[reach & ~crossing]
+            where = (f"rocks released below x = {hi:g} m never meet a barrier in {lo:g}-{hi:g} m"
+                     if below.size and float(below.min()) > hi else
+                     f"rocks that never cross {lo:g}-{hi:g} m")
+            return (f"{where}: {missed:,} of {n:,} ({100 * missed / n:.2f} %) reach the "
+                    f"protected zone at x >= {screen.protect_x:g} m, "
+                    f"{100 * screen.allowed_fraction:.2f} % allowed")
+    if tally.min_residual is not None and tally.min_residual > allowed:
+        return (f"every design of this family lets at least {tally.min_residual:,} of {n:,} "
+                f"rocks ({100 * tally.min_residual / n:.2f} %) reach the protected zone at "
+                f"x >= {screen.protect_x:g} m, {100 * screen.allowed_fraction:.2f} % allowed")
+    if tally.best_fail is not None:
+        return "the design that comes closest still fails: " + _why(tally.best_fail)
+    skipped: Counter = Counter()
+    for ci in fam:
+        skipped.update(slots.skipped.get(ci, {}))
+    if skipped:
+        why, count = skipped.most_common(1)[0]
+        return f"no design of this family is in the space: {why} ({count:,} designs)"
+    why = tally.reasons.get("_why")
+    return f"no design of this family fits on the section{': ' + str(why) if why else ''}"
+
+
+def _proof(alt: Alternative, tally: _Tally, n: int, currency: str) -> str:
+    """What was proven about a family's chosen design."""
+    top = ", ".join(f"{k} ({v:,})" for k, v in tally.reasons.most_common(4)
+                    if not k.startswith("_"))
+    capped = (f"; in {tally.capped_levels} catalogue combinations only the "
+              f"{MAX_SCREENS_PER_LEVEL} placements with fewest rocks through were screened"
+              if tally.capped_levels else "")
+    return (f"cheapest of {tally.designs:,} designs in the space ({alt.exact_evaluations} "
+            f"evaluated exactly); every cheaper design fails on {n:,} rocks: "
+            f"{top or 'none cheaper'}{capped}")
 
 
 def optimise(
@@ -619,7 +1197,7 @@ def optimise(
     seed: int | None = None,
     progress: Callable[[str, int, int], None] | None = None,
 ) -> OptimisationResult:
-    """Search every family of candidate measures for its cheapest admissible design.
+    """The cheapest design of every family of candidate measures that holds, proven on fresh rocks.
 
     Parameters
     ----------
@@ -630,6 +1208,18 @@ def optimise(
         Search rocks and seed (default: the project's).
     progress : callable, optional
         Called as ``progress(stage, done, total)``.
+
+    Notes
+    -----
+    Each family's designs are screened cheapest first (see
+    :func:`_barrier_designs`, :func:`_edit_designs`); those that pass the
+    screening, or miss it within its margin, are decided exactly in order of
+    cost (:func:`decide`: admitted only with the confidence bounds, rocks
+    doubled while that is undecided) and the first admitted one is verified
+    on fresh rocks: an independent seed and at least twice the rocks that
+    decided it. A design that fails there is not chosen; the next one in
+    order of cost is decided. The best design overall is the cheapest family
+    design that holds.
     """
     from .design import resolve_design
     from .evaluate import build_concept
@@ -637,8 +1227,10 @@ def optimise(
     t0 = time.perf_counter()
     spec = resolve_design(project, registry)
     concept = build_concept(project, registry)
+    confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
+    max_rocks = max(n, int(spec.max_rocks))
     # The design's residual target becomes the protected zone's allowance, so
     # that the exact checks, the fresh rocks and `check` of design.yaml agree.
     allowed = spec.residual_fraction
@@ -647,74 +1239,100 @@ def optimise(
     project = project.model_copy(
         update={"protect": project.protect.model_copy(update={"allowed_fraction": allowed})}
     )
-    fresh_n = int(spec.fresh_rocks) if spec.fresh_rocks else n
-    fresh_n = max(fresh_n, n)
     fresh_seed = int(spec.fresh_seed) if spec.fresh_seed is not None else s + 1000003
     screen = Screening(project, registry, spec, concept, rocks=n, seed=s)
+    slots = _BarrierSlots(screen)
     fams = families(spec.candidates, spec.max_measures)
     alternatives: list[Alternative] = []
+    exact_total, simulated = 0, n
+    currency = getattr(spec.cost_model.params, "currency", "")
     for fi, fam in enumerate(fams):
         if progress:
             progress("search", fi, len(fams))
-        alt = Alternative(name=family_name(spec.candidates, fam), family=fam)
-        ev0 = screen.evaluations
         ft = time.perf_counter()
-        res, decoded = _search_family(screen, fam, seed=int(
-            np.random.SeedSequence([s, fi]).generate_state(1)[0]))
-        alt.evaluations = screen.evaluations - ev0
-        try:
-            alt.measures = sorted(screen.measures(decoded), key=lambda m: m.x)
-            sr = screen.screen(alt.measures)
-        except ValueError as exc:
-            alt.reason = f"no design of this family fits: {exc}"
-            alternatives.append(alt)
-            continue
-        alt.cost = sr.cost
-        alt.screened_feasible = sr.feasible
-        alt.wall_s = time.perf_counter() - ft
-        if not sr.feasible:
-            alt.reason = _why(sr)
-        alternatives.append(alt)
-
-    # Exact checks of every family's best: the search rocks, then fresh ones.
-    for ai, alt in enumerate(alternatives):
-        if progress:
-            progress("check", ai, len(alternatives))
-        if not alt.measures or not alt.screened_feasible:
-            # Nothing admissible to confirm; the screening said why.
-            continue
-        ev = evaluate_design(project, registry, alt.measures, concept, rocks=n, seed=s)
-        alt.evaluation = ev
-        alt.feasible = ev.ok
-        alt.checks = [c.as_dict() for cs in ev.checks for c in cs]
-        alt.residual = ev.protect["reaching"] if ev.protect else None
-        if alt.screened_feasible and not ev.ok:
-            alt.reason = "passes the screening but not the exact check: " + "; ".join(
-                ev.failures())
-        elif not alt.screened_feasible and not alt.reason:
-            alt.reason = "; ".join(ev.failures())
-        if alt.feasible:
-            fresh = evaluate_design(project, registry, alt.measures, concept, rocks=fresh_n,
+        ev0 = screen.evaluations
+        alt = Alternative(name=family_name(spec.candidates, fam), family=fam)
+        tally = _Tally()
+        fam_seed = int(np.random.SeedSequence([s, fi]).generate_state(1)[0])
+        if any(ci in screen.edit_candidates for ci in fam):
+            designs: Any = iter(_edit_designs(screen, slots, fam, tally, fam_seed))
+        else:
+            designs = _barrier_designs(screen, slots, list(fam), [], 0.0, screen.bare, 0, tally)
+        per_level: Counter = Counter()
+        last_reason = ""
+        decisions = near = 0
+        for d in designs:
+            if decisions >= MAX_EXACT_PER_FAMILY:
+                last_reason = (f"{last_reason}; stopped after {MAX_EXACT_PER_FAMILY} exact "
+                               "evaluations of this family")
+                break
+            if per_level[d.level] >= MAX_EXACT_PER_LEVEL:
+                continue
+            if not d.result.feasible:
+                if near >= MAX_NEAR_PER_FAMILY:
+                    tally.reasons["within the screening margin, not decided"] += 1
+                    continue
+                near += 1
+            per_level[d.level] += 1
+            decisions += 1
+            alt.screened_feasible = alt.screened_feasible or d.result.feasible
+            dec = decide(project, registry, d.measures, concept, rocks=n, seed=s,
+                         max_rocks=max_rocks)
+            alt.exact_evaluations += dec.exact_runs
+            simulated += sum(min(n * 2**k, max_rocks) for k in range(dec.exact_runs))
+            if not dec.admitted:
+                tally.reasons["exact: " + (dec.reason.split(":")[0][:60] or "fails")] += 1
+                last_reason = dec.reason
+                continue
+            fresh_n = max(2 * dec.rocks, int(spec.fresh_rocks or 0))
+            fresh = evaluate_design(project, registry, d.measures, concept, rocks=fresh_n,
                                     seed=fresh_seed)
+            alt.exact_evaluations += 1
+            simulated += fresh_n
+            alt.measures = sorted(d.measures, key=lambda m: m.x)
+            alt.cost = d.cost
+            alt.evaluation = dec.evaluation
+            alt.feasible = True
+            alt.decision_rocks = dec.rocks
+            alt.checks = [c.as_dict() for cs in dec.evaluation.checks for c in cs]
+            alt.residual = dec.evaluation.protect["reaching"] if dec.evaluation.protect else None
             alt.holds_on_fresh_rocks = fresh.ok
+            alt.fresh_rocks, alt.fresh_seed = fresh_n, fresh_seed
             alt.fresh_residual = fresh.protect["reaching"] if fresh.protect else None
             alt.fresh_failures = fresh.failures()
-    feasible = [a for a in alternatives if a.feasible]
-    robust = [a for a in feasible if a.holds_on_fresh_rocks]
-    # The cheapest design that also holds on fresh rocks; only if none does, the
-    # cheapest on the search rocks (and the report warns).
-    pool = robust or feasible
+            if fresh.ok:
+                alt.proof = _proof(alt, tally, n, currency)
+                idle = [r.measure.label() for r in dec.evaluation.results if r.caught == 0]
+                if idle and len(d.measures) > 1:
+                    alt.dominated = (f"{', '.join(idle)} holds no rock: dominated by the same "
+                                     "design without it")
+                break
+            # Not chosen: it fits the noise of the search rocks. Decide the next one.
+            tally.reasons["fails on fresh rocks"] += 1
+            last_reason = ("the cheapest admitted design fails on fresh rocks: "
+                           + "; ".join(fresh.failures()))
+            alt.feasible = False
+        alt.evaluations = screen.evaluations - ev0
+        alt.wall_s = time.perf_counter() - ft
+        if not alt.holds_on_fresh_rocks:
+            alt.reason = last_reason or _cause(screen, slots, fam, tally)
+            if not alt.feasible:
+                alt.reason = _cause(screen, slots, fam, tally) if not last_reason else last_reason
+        exact_total += alt.exact_evaluations
+        alternatives.append(alt)
+    pool = [a for a in alternatives if a.holds]
     best = min(pool, key=lambda a: a.cost) if pool else None
-    reason = ""
-    if best is None:
-        reason = "no family of candidate measures meets every target; see each family's reason"
-    elif not robust:
-        reason = "no admissible design holds on the fresh rocks; the cheapest is shown"
+    reason = "" if best is not None else (
+        "no family of candidate measures has a design that holds with "
+        f"{100 * confidence:g} % confidence and on fresh rocks; see each family's reason")
     return OptimisationResult(
-        alternatives=alternatives, best=best, reason=reason, rocks=n, seed=s,
-        fresh_rocks=fresh_n, fresh_seed=fresh_seed, wall_s=time.perf_counter() - t0,
-        evaluations=screen.evaluations, edit_runs=screen.edit_runs,
-        currency=getattr(spec.cost_model.params, "currency", ""),
+        alternatives=alternatives, best=best, reason=reason,
+        rocks=best.decision_rocks if best is not None else n, seed=s,
+        fresh_rocks=best.fresh_rocks if best is not None else 2 * n,
+        fresh_seed=fresh_seed, wall_s=time.perf_counter() - t0,
+        evaluations=screen.evaluations, edit_runs=screen.edit_runs, currency=currency,
+        search_rocks=n, confidence=confidence, exact_evaluations=exact_total,
+        rocks_simulated=simulated + screen.edit_rocks,
     )
 
 
@@ -725,7 +1343,8 @@ def _why(sr: ScreenResult) -> str:
     for label, cs in zip(sr.labels, sr.checks, strict=True):
         for c in cs:
             if not c.ok:
-                parts.append(f"{label}: {c.name} {c.detail}")
+                value = "-" if c.value is None else f"{c.value:.2f}"
+                parts.append(f"{label}: {c.name} {value} < target {c.target:.2f} ({c.detail})")
     if not parts:
         parts.append(f"{sr.residual} rocks reach the protected zone")
-    return "best design found still fails: " + "; ".join(parts)
+    return "; ".join(parts)

@@ -1145,8 +1145,13 @@ class Design(_Model):
     )
     fresh_rocks: Annotated[Integer, Field(ge=1)] | None = Field(
         None,
-        description="Rocks of the independent re-check of the best design; default: "
-        "max(rocks of the search, rocks.count).",
+        description="Rocks of the independent re-check of a family's chosen design; at least "
+        "(and by default) twice the rocks that decided it.",
+    )
+    max_rocks: Annotated[Integer, Field(ge=1, le=2_000_000)] = Field(
+        50_000,
+        description="Most rocks a design near a limit is decided with: while it holds on the "
+        "point values but not with the confidence bounds, its rocks are doubled up to this.",
     )
     fresh_seed: Annotated[Integer, Field(ge=0)] | None = Field(
         None, description="Seed of the re-check; default: the run's seed + 1000003."

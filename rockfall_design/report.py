@@ -299,13 +299,16 @@ def alternatives_table(result: Any) -> Any:
     return pd.DataFrame(rows)
 
 
-def design_yaml(best: Any, project_file: Any) -> str:
+def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -> str:
     """The project with the chosen measures, as YAML that ``check`` accepts."""
     from .project import dump_yaml
 
     ev = best.evaluation
     data = ev.study.project.resolved_dict()
     data.pop("design", None)
+    # The rocks that decided the design (the exact run that admitted it).
+    data["rocks"]["count"] = int(ev.study.result.n)
+    data["rocks"]["seed"] = int(ev.study.seed)
     data["measures"] = [
         {"type": m.kind, **m.params.model_dump(mode="json")} for m in best.measures
     ]
@@ -313,6 +316,12 @@ def design_yaml(best: Any, project_file: Any) -> str:
     head = (
         f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
         f"cost {best.cost:,.0f}.\n"
+        f"# rocks: below are the rocks that decided it (seed {ev.study.seed}, "
+        f"{ev.study.result.n} rocks; search: {search_rocks} rocks).\n"
+        f"# verification: seed {best.fresh_seed}, {best.fresh_rocks} rocks: "
+        f"{'holds' if best.holds_on_fresh_rocks else 'FAILS'}; reproduce with\n"
+        f"#   rockfall-design check design.yaml --seed {best.fresh_seed} "
+        f"--rocks {best.fresh_rocks}\n"
         "# The design: section is left out (its catalogue paths are relative to the\n"
         "# original project); check this file with: rockfall-design check design.yaml\n"
     )

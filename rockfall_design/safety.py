@@ -17,17 +17,33 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, Field
 
 from .measures import MeasureResult
 
-__all__ = ["Check", "SafetyConcept", "SafetyParams"]
+__all__ = ["Check", "SafetyConcept", "SafetyParams", "DEFAULT_CONFIDENCE"]
+
+#: One-sided confidence of the bounds on design values (``safety.confidence``).
+DEFAULT_CONFIDENCE = 0.95
 
 
 class SafetyParams(BaseModel):
-    """Base of a safety concept's parameter model (strict)."""
+    """Base of a safety concept's parameter model (strict).
+
+    Every concept inherits ``confidence``: the one-sided confidence of the
+    upper bounds its design values are reported with (and with which the
+    optimiser admits a design).
+    """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
+
+    confidence: float = Field(
+        DEFAULT_CONFIDENCE,
+        ge=0.5,
+        le=0.9999,
+        description="One-sided confidence of the upper bounds of the design values and of "
+        "the residual (-), e.g. 0.95.",
+    )
 
 
 @dataclass(frozen=True)
@@ -50,6 +66,16 @@ class Check:
         Unit of value and target ("-" for a factor).
     detail : str
         One line explaining how value and target were obtained.
+    bound : float or None
+        The value computed with the one-sided upper confidence bounds of the
+        design values (``safety.confidence``) in place of their point
+        estimates; None when there is nothing to bound (no rock met the
+        measure) or the sample is too small to bound it (``detail`` says how
+        many rocks it needs).
+    ok_with_confidence : bool or None
+        Whether the check holds with the bound in place of the value. None
+        means the concept does not report bounds: the optimiser then admits
+        on ``ok`` and the report says so.
     """
 
     name: str
@@ -58,6 +84,13 @@ class Check:
     ok: bool
     unit: str = "-"
     detail: str = ""
+    bound: float | None = None
+    ok_with_confidence: bool | None = None
+
+    @property
+    def holds_with_confidence(self) -> bool:
+        """``ok_with_confidence``, or ``ok`` for a concept that reports no bounds."""
+        return self.ok if self.ok_with_confidence is None else self.ok_with_confidence
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -67,6 +100,8 @@ class Check:
             "ok": self.ok,
             "unit": self.unit,
             "detail": self.detail,
+            "bound": self.bound,
+            "ok_with_confidence": self.ok_with_confidence,
         }
 
 

@@ -38,6 +38,7 @@ from .engine.core import (
     UNRESOLVED,
 )
 from .histograms import LinearHistogram, LogHistogram
+from .judge.outcomes import protected_zone_counts, reaches_protected_zone
 
 if TYPE_CHECKING:  # pragma: no cover
     from .project import Project
@@ -486,36 +487,6 @@ def _summary(
             "unresolved": int(n_unresolved),
         }
     return out
-
-
-def reaches_protected_zone(max_x: np.ndarray, status: np.ndarray, x: float) -> np.ndarray:
-    """Which rocks count as reaching the protected zone at ``x`` (m).
-
-    A rock reaches it when its centre got to ``x``; a path that ended
-    unresolved (at the event limit) short of ``x`` counts too, because an
-    unfinished path is no evidence that the rock would have stopped short:
-    the design is judged on the safe side, and the report says how many.
-
-    Parameters
-    ----------
-    max_x : ndarray
-        Farthest x (m) each rock's centre reached.
-    status : ndarray
-        How each path ended (``engine.core`` status codes).
-    x : float
-        Start of the protected zone (m).
-    """
-    return (max_x >= x) | (status == UNRESOLVED)
-
-
-def protected_zone_counts(max_x: np.ndarray, status: np.ndarray, x: float) -> tuple[int, int]:
-    """(rocks counted as reaching x, unresolved paths among them that had not reached it).
-
-    The counts behind ``protect.reaching`` and ``protect.unresolved`` of the
-    summaries of ``simulate`` and ``check``; see :func:`reaches_protected_zone`.
-    """
-    short = (status == UNRESOLVED) & (max_x < x)
-    return int(reaches_protected_zone(max_x, status, x).sum()), int(short.sum())
 
 
 def _pct_label(q: float) -> str:

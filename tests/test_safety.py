@@ -147,6 +147,7 @@ def test_default_parameters():
         "energy_factor": 1.0,
         "reach_factor": 1.0,
         "statistic": "max",
+        "confidence": 0.95,
     }
     assert Uni11211Concept.Params().model_dump() == {
         "gamma_tr": 1.02,
@@ -157,6 +158,7 @@ def test_default_parameters():
         "f_min_m": 0.5,
         "percentile": 95.0,
         "reach_factor": 1.0,
+        "confidence": 0.95,
     }
 
 
@@ -252,9 +254,13 @@ def test_spang_reach_factor():
     assert not check.ok
     (check,) = spang(reach_factor=1.5).checks(result(width_m=4.0, reaches=reaches))
     assert check.target == 1.5 and not check.ok
-    # the statistic is for heights and energies only: the reach is always the maximum
+    # The reach takes the concept's statistic too (the maximum grows with the sample):
+    # p95 of [0.5, 1.0, 2.0, 3.2] by linear interpolation is 2.0 + 0.85 * 1.2 = 3.02 m.
     (check,) = spang(statistic="p95").checks(result(width_m=4.0, reaches=reaches))
-    assert_allclose(check.value, 4.0 / 3.2, rtol=RTOL)
+    assert_allclose(check.value, 4.0 / 3.02, rtol=RTOL)
+    # Four rocks cannot bound a p95 (59 are needed at 95 %): no bound, not admitted.
+    assert check.bound is None and check.ok_with_confidence is False
+    assert "needs at least 59 rocks" in check.detail
 
 
 # --------------------------------------------------------------------------------------
@@ -279,10 +285,13 @@ def test_uni11211_default_design_values():
     assert height.target == 4.0 and height.ok and height.unit == "m"
     assert height.detail == (
         "h_d + f = 3.08 m with h_d = p95 passing height 2.00 m x gamma_F 1.04, "
-        "f = max(0.5 m, d_d/2 = 1.00 m), over 21 rocks; nominal height 4.00 m"
+        "f = max(0.5 m, d_d/2 = 1.00 m), over 21 rocks; nominal height 4.00 m; "
+        "21 rocks cannot bound the p95 at 95 % confidence: it needs at least 59 rocks "
+        "at the measure"
     )
     assert energy.detail.startswith("E_d = 1/2 m_d v_d^2 = 441.6 kJ with m_d = p95 mass 2000.0 kg")
-    assert energy.detail.endswith("limit 600.0 kJ / gamma_E 1.2 = 500.0 kJ")
+    assert "limit 600.0 kJ / gamma_E 1.2 = 500.0 kJ" in energy.detail
+    assert energy.bound is None and energy.ok_with_confidence is False
 
 
 def test_uni11211_minimum_freeboard():
@@ -344,7 +353,8 @@ def test_uni11211_height_verdict(height_m, ok):
 def test_uni11211_reach_factor():
     (check,) = uni().checks(result(width_m=4.0, reaches=[0.5, 3.2, 2.0]))
     assert check.name == "reach_factor"
-    assert_allclose(check.value, 4.0 / 3.2, rtol=RTOL)
+    # the concept's percentile (p95 of [0.5, 2.0, 3.2] = 2.0 + 0.9 * 1.2 = 3.08 m)
+    assert_allclose(check.value, 4.0 / 3.08, rtol=RTOL)
     assert check.ok
     (check,) = uni(reach_factor=1.3).checks(result(width_m=4.0, reaches=[0.5, 3.2, 2.0]))
     assert not check.ok

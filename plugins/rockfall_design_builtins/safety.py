@@ -12,7 +12,7 @@ see ``ProtectiveMeasure.design_properties``):
 
 * ``spang`` -- the safety factors of Spang & Rautenstrauch (1988): provided
   height, capacity and width divided by the critical height, the design
-  energy and the maximum reach of the rocks;
+  energy and the reach of the rocks (each the concept's statistic);
 * ``uni11211`` -- the limit-state check of UNI 11211-4 for net fences, with
   partial factors on the trajectory, the slope survey, the block volume and
   unit weight, and the product's energy capacity.
@@ -27,7 +27,15 @@ Conventions shared by both:
   factor is undefined: ``value = None``, ``ok = True``;
 * percentiles are ``numpy.percentile`` with linear interpolation between
   order statistics (Hyndman & Fan type 7), over the rocks that met the
-  measure, each rock counted once.
+  measure, each rock counted once;
+* every check also carries ``bound``: its value with the one-sided upper
+  confidence bound (``confidence``, default 0.95; distribution-free, from
+  order statistics) of each percentile in place of the percentile, and
+  ``ok_with_confidence``. A sample too small to bound a percentile gives
+  ``bound = None`` and ``ok_with_confidence = False``, and the detail says how
+  many rocks it needs. The ``max`` statistic is the sample's own maximum:
+  it has no distribution-free bound, grows with the sample, and is its own
+  ``bound``.
 
 Units: m, m/s, kg, kJ.
 """
@@ -39,7 +47,15 @@ from typing import Any, ClassVar, Literal
 import numpy as np
 from pydantic import ConfigDict, Field
 
-from rockfall_design import Check, MeasureResult, SafetyConcept, SafetyParams, hookimpl
+from rockfall_design import (
+    Check,
+    MeasureResult,
+    SafetyConcept,
+    SafetyParams,
+    hookimpl,
+    quantile_upper_bound,
+    rocks_to_bound_quantile,
+)
 
 __all__ = [
     "SpangConcept",
@@ -77,6 +93,20 @@ def _statistic(values: np.ndarray, statistic: str) -> float:
     return float(np.percentile(values, float(statistic[1:])))
 
 
+def _statistic_bound(values: np.ndarray, statistic: str, confidence: float) -> float | None:
+    """Upper confidence bound of ``statistic`` (the maximum bounds itself); None: too few."""
+    if statistic == "max" or float(statistic[1:]) >= 100.0:
+        return float(np.max(values))
+    return quantile_upper_bound(values, float(statistic[1:]) / 100.0, confidence)
+
+
+def _too_few(statistic: str, n: int, confidence: float) -> str:
+    """Why a percentile cannot be bounded: how many rocks it needs."""
+    need = rocks_to_bound_quantile(float(statistic[1:]) / 100.0, confidence)
+    return (f"{_rocks(n)} cannot bound the {statistic} at {100 * confidence:g} % confidence: "
+            f"it needs at least {need} rocks at the measure")
+
+
 def _label(percentile: float) -> str:
     """``95.0`` -> ``"p95"``, ``97.5`` -> ``"p97.5"``."""
     return f"p{percentile:g}"
@@ -100,28 +130,50 @@ def _factor_check(
     statistic: str,
     quantity: str,
     target: float,
+    confidence: float,
 ) -> Check:
     """``provided / statistic(values)`` compared with ``target`` (ok if >= target).
 
-    The detail reads e.g. "4.00 m / max passing height 1.62 m over 812 rocks".
+    The detail reads e.g. "4.00 m / p95 passing height 1.62 m (upper bound
+    1.70 m at 95 %) over 812 rocks". ``bound`` is ``provided`` over the upper
+    confidence bound of the statistic: the factor that holds with confidence.
     """
     values = np.asarray(values, dtype=float)
     if values.size == 0:
-        return Check(name, None, target, True, "-", _NO_ROCK)
+        return Check(name, None, target, True, "-", _NO_ROCK, None, True)
     demand = _statistic(values, statistic)
+    upper = _statistic_bound(values, statistic, confidence)
+    bound_text = ("" if statistic == "max" or upper is None else
+                  f" (upper bound {_num(upper, unit)} at {100 * confidence:g} %)")
     detail = (
-        f"{_num(provided, unit)} / {statistic} {quantity} {_num(demand, unit)} "
+        f"{_num(provided, unit)} / {statistic} {quantity} {_num(demand, unit)}{bound_text} "
         f"over {_rocks(values.size)}"
     )
+    if upper is None:
+        detail = f"{detail}; {_too_few(statistic, values.size, confidence)}"
     if not demand > 0.0:
-        return Check(name, None, target, True, "-", f"{detail}: factor undefined, no demand")
+        # No demand at the point value; with confidence only if the bound has none too.
+        no_demand = upper is not None and not upper > 0.0
+        return Check(name, None, target, True, "-", f"{detail}: factor undefined, no demand",
+                     None, no_demand or (None if upper is None else provided / upper >= target))
     factor = provided / demand
-    return Check(name, factor, target, bool(factor >= target), "-", detail)
+    if upper is None:
+        return Check(name, factor, target, bool(factor >= target), "-", detail, None, False)
+    f_bound = provided / upper
+    return Check(name, factor, target, bool(factor >= target), "-", detail, f_bound,
+                 bool(f_bound >= target))
 
 
-def _reach_check(result: MeasureResult, width_m: float, target: float) -> Check:
-    """Berm (or ditch) factor: width / maximum reach of the rocks on it."""
-    return _factor_check("reach_factor", width_m, "m", result.reach_m, "max", "reach", target)
+def _reach_check(
+    result: MeasureResult, width_m: float, target: float, statistic: str, confidence: float
+) -> Check:
+    """Berm (or ditch) factor: width / ``statistic`` of the reach of the rocks on it.
+
+    The statistic is the concept's (not the maximum, which grows with the
+    number of rocks until every ditch fails).
+    """
+    return _factor_check("reach_factor", width_m, "m", result.reach_m, statistic, "reach",
+                         target, confidence)
 
 
 # ---------------------------------------------------------------------------
@@ -144,7 +196,8 @@ class SpangConcept(SafetyConcept):
         of the rocks' total kinetic energies there; holds if >=
         ``energy_factor``.
     ``reach_factor`` (``width_m`` present, berms and ditches)
-        Width over the maximum reach of the rocks beyond the upslope edge;
+        Width over the ``statistic`` of the reach of the rocks beyond the
+        upslope edge (the paper's maximum grows with the number of rocks);
         holds if >= ``reach_factor`` (values above 1 are normally
         uneconomic).
 
@@ -162,7 +215,7 @@ class SpangConcept(SafetyConcept):
 
         F_h = \\frac{h_{nom}}{S(h_i)}, \\qquad
         F_E = \\frac{E_{cap}}{S(E_i)}, \\qquad
-        F_b = \\frac{b}{\\max_i r_i}
+        F_b = \\frac{b}{S(r_i)}
 
     References
     ----------
@@ -193,7 +246,8 @@ class SpangConcept(SafetyConcept):
         reach_factor: float = Field(
             1.0,
             gt=0.0,
-            description="Target of berm or ditch width / maximum reach of the rocks (-).",
+            description="Target of berm or ditch width / reach of the rocks (the statistic "
+            "of the concept) (-).",
         )
         statistic: Literal["max", "p95", "p99"] = Field(
             "max",
@@ -207,6 +261,7 @@ class SpangConcept(SafetyConcept):
         "energy_factor": 1.0,
         "reach_factor": 1.0,
         "statistic": "max",
+        "confidence": 0.95,
     }
 
     params: Params
@@ -240,6 +295,7 @@ class SpangConcept(SafetyConcept):
                     params.statistic,
                     "passing height",
                     params.height_factor,
+                    params.confidence,
                 )
             )
         capacity_kj = _finite_property(properties, "capacity_kj")
@@ -253,11 +309,13 @@ class SpangConcept(SafetyConcept):
                     params.statistic,
                     "energy",
                     params.energy_factor,
+                    params.confidence,
                 )
             )
         width_m = _finite_property(properties, "width_m")
         if width_m is not None:
-            checks.append(_reach_check(result, width_m, params.reach_factor))
+            checks.append(_reach_check(result, width_m, params.reach_factor, params.statistic,
+                                       params.confidence))
         return checks
 
 
@@ -281,7 +339,7 @@ class Uni11211Concept(SafetyConcept):
         nominal height :math:`h_{nom} \\ge h_d + f`. Value :math:`h_d + f`,
         target :math:`h_{nom}` (m).
     ``reach_factor`` (``width_m`` present)
-        Width over the maximum reach, as in ``spang``.
+        Width over the ``percentile`` of the reach, as in ``spang``.
 
     Parameters
     ----------
@@ -374,7 +432,8 @@ class Uni11211Concept(SafetyConcept):
         reach_factor: float = Field(
             1.0,
             gt=0.0,
-            description="Target of berm or ditch width / maximum reach of the rocks (-).",
+            description="Target of berm or ditch width / reach of the rocks (the statistic "
+            "of the concept) (-).",
         )
 
     example: ClassVar[dict[str, Any]] = {
@@ -386,6 +445,7 @@ class Uni11211Concept(SafetyConcept):
         "f_min_m": 0.5,
         "percentile": 95.0,
         "reach_factor": 1.0,
+        "confidence": 0.95,
     }
 
     params: Params
@@ -416,7 +476,8 @@ class Uni11211Concept(SafetyConcept):
             checks.append(self._height_check(result, height_m))
         width_m = _finite_property(properties, "width_m")
         if width_m is not None:
-            checks.append(_reach_check(result, width_m, params.reach_factor))
+            checks.append(_reach_check(result, width_m, params.reach_factor,
+                                       _label(params.percentile), params.confidence))
         return checks
 
     @property
@@ -430,27 +491,45 @@ class Uni11211Concept(SafetyConcept):
         speeds = np.asarray(result.velocity_ms, dtype=float)
         masses = np.asarray(result.mass_kg, dtype=float)
         if speeds.size == 0 or masses.size == 0:
-            return Check("design_energy", None, target, True, "kJ", _NO_ROCK)
+            return Check("design_energy", None, target, True, "kJ", _NO_ROCK, None, True)
         p = _label(params.percentile)
         speed = float(np.percentile(speeds, params.percentile))
         mass = float(np.percentile(masses, params.percentile))
-        v_d = speed * self.gamma_f
-        m_d = mass * params.gamma_volf * params.gamma_gamma
-        e_d = 0.5 * m_d * v_d**2 / 1000.0
+        e_d = self._design_energy(mass, speed)
         detail = (
             f"E_d = 1/2 m_d v_d^2 = {_num(e_d, 'kJ')} with m_d = {p} mass {mass:.1f} kg "
             f"x {params.gamma_volf:g} x {params.gamma_gamma:g}, v_d = {p} speed "
             f"{_num(speed, 'm/s')} x gamma_F {self.gamma_f:.4g}, over {_rocks(speeds.size)}; "
             f"limit {_num(capacity_kj, 'kJ')} / gamma_E {params.gamma_e:g} = {_num(target, 'kJ')}"
         )
-        return Check("design_energy", e_d, target, bool(e_d <= target), "kJ", detail)
+        speed_b = _statistic_bound(speeds, p, params.confidence)
+        mass_b = _statistic_bound(masses, p, params.confidence)
+        if speed_b is None or mass_b is None:
+            detail = f"{detail}; {_too_few(p, speeds.size, params.confidence)}"
+            return Check("design_energy", e_d, target, bool(e_d <= target), "kJ", detail,
+                         None, False)
+        e_b = self._design_energy(mass_b, speed_b)
+        detail = f"{detail}; with the {100 * params.confidence:g} % bounds {_num(e_b, 'kJ')}"
+        return Check("design_energy", e_d, target, bool(e_d <= target), "kJ", detail, e_b,
+                     bool(e_b <= target))
+
+    def _design_energy(self, mass_kg: float, speed_ms: float) -> float:
+        """E_d (kJ) from a characteristic mass (kg) and speed (m/s)."""
+        params = self.params
+        m_d = mass_kg * params.gamma_volf * params.gamma_gamma
+        v_d = speed_ms * self.gamma_f
+        return 0.5 * m_d * v_d**2 / 1000.0
+
+    def _required_height(self, height_m: float, radius_m: float) -> float:
+        """h_d + f (m) from a characteristic passing height and radius (m)."""
+        return height_m * self.gamma_f + max(self.params.f_min_m, radius_m)
 
     def _height_check(self, result: MeasureResult, height_m: float) -> Check:
         params = self.params
         heights = np.asarray(result.passing_height_m, dtype=float)
         radii = np.asarray(result.radius_m, dtype=float)
         if heights.size == 0:
-            return Check("design_height", None, height_m, True, "m", _NO_ROCK)
+            return Check("design_height", None, height_m, True, "m", _NO_ROCK, None, True)
         p = _label(params.percentile)
         height = float(np.percentile(heights, params.percentile))
         h_d = height * self.gamma_f
@@ -463,7 +542,16 @@ class Uni11211Concept(SafetyConcept):
             f"d_d/2 = {_num(d_d / 2.0, 'm')}), over {_rocks(heights.size)}; "
             f"nominal height {_num(height_m, 'm')}"
         )
-        return Check("design_height", required, height_m, bool(height_m >= required), "m", detail)
+        height_b = _statistic_bound(heights, p, params.confidence)
+        radius_b = _statistic_bound(radii, p, params.confidence) if radii.size else 0.0
+        if height_b is None or radius_b is None:
+            detail = f"{detail}; {_too_few(p, heights.size, params.confidence)}"
+            return Check("design_height", required, height_m, bool(height_m >= required), "m",
+                         detail, None, False)
+        required_b = self._required_height(height_b, radius_b)
+        detail = f"{detail}; with the {100 * params.confidence:g} % bounds {_num(required_b, 'm')}"
+        return Check("design_height", required, height_m, bool(height_m >= required), "m",
+                     detail, required_b, bool(height_m >= required_b))
 
 
 @hookimpl
