@@ -22,10 +22,11 @@ How it works, with common random numbers (every design sees the same rocks):
    barriers beside them enumerated exactly for each geometry.
 4. Decision (:func:`decide`). Designs that pass the screening, or miss it
    within its margin (``Screening.violation``),
-   are evaluated exactly in order of cost; a design is admitted only when
+   are evaluated exactly in order of cost, once each, with rocks planned
+   from the screening (more where a design is near a limit, up to
+   ``design.max_rocks``: :func:`plan_rocks`); a design is admitted only when
    every check and the residual hold with their upper confidence bounds
-   (``safety.confidence``). While a design holds on the point values but not
-   with the bounds, the rocks are doubled, up to ``design.max_rocks``.
+   (``safety.confidence``).
 5. Verification. The first admitted design of a family is checked on fresh
    rocks: an independent seed and at least twice the rocks that decided it.
    If it fails there, the next design in order of cost is decided: a family
@@ -537,8 +538,11 @@ class Screening:
         return judgement, uncertain
 
     def station(self, x: float) -> int:
-        """Index of the table station at ``x`` (m)."""
-        return int(np.argmin(np.abs(self.grid - x)))
+        """Index of the table station nearest ``x`` (m)."""
+        k = int(np.searchsorted(self.grid, x))
+        if k > 0 and (k == self.grid.size or x - self.grid[k - 1] <= self.grid[k] - x):
+            k -= 1
+        return k
 
     def violation(
         self, checks: Sequence[Sequence[Check]], residual: int, uncertain: int = 0
@@ -598,6 +602,7 @@ class _Option:
     footprint: Barrier
     cost: float
     label: str
+    j: int  # station of the table
 
 
 def _lattice(lo: float, hi: float, step: float) -> np.ndarray:
@@ -626,14 +631,20 @@ def _discrete_choices(c: CandidateSpec) -> list[dict[str, Any]]:
 
 
 class _BarrierSlots:
-    """The barrier options of every barrier candidate, built and priced once per run."""
+    """The barrier options of every barrier candidate, built and priced once per run.
+
+    Per table (bare, or edited by a ground edit) and option, lazily: which
+    rocks it lets on for sure (neither stopped nor broken through, see
+    :meth:`passes`) and whether its checks hold as the first barrier the
+    rocks meet (:meth:`first_ok`).
+    """
 
     def __init__(self, screen: Screening) -> None:
         self.screen = screen
         self.options: dict[int, list[_Option]] = {}
         self.skipped: dict[int, Counter] = {}
-        self._masks: dict[tuple[int, int, int], np.ndarray] = {}
-        self._alone: dict[tuple[int, int, int], bool] = {}
+        self._rows: dict[tuple[int, int, int], np.ndarray] = {}
+        self._alone: dict[tuple[int, int], np.ndarray] = {}
 
     def of(self, ci: int) -> list[_Option]:
         """Options of candidate ``ci`` (every catalogue choice at every grid station)."""
@@ -665,60 +676,78 @@ class _BarrierSlots:
                 if not isinstance(fp, Barrier):
                     continue
                 out.append(_Option(ci, params, m, fp, cost,
-                                   call_plugin(sc.registry, m, "label")))
+                                   call_plugin(sc.registry, m, "label"), sc.station(fp.x)))
         self.options[ci] = out
         self.skipped[ci] = skipped
         return out
 
-    def first_ok(self, ci: int, k: int, table: _Table, table_id: int) -> bool:
-        """Does option k pass its checks as the first barrier the rocks meet?
+    @staticmethod
+    def _table_key(j: int, table: _Table, table_id: int) -> int:
+        # Stations upslope of an edit's restart see the bare table: share them.
+        return 0 if (table.rows is None or j < table.first_col) else table_id
+
+    def _outcome(self, o: _Option, table: _Table) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                           np.ndarray]:
+        sc = self.screen
+        h, e_kj, v = table.column(o.j)
+        out = barrier_outcomes(o.footprint, h, e_kj, sc.radius, sc.u_gap,
+                               np.ones(sc.n, dtype=bool))
+        return out, h, e_kj, v
+
+    def passes(self, ci: int, ks: np.ndarray, table: _Table, table_id: int) -> np.ndarray:
+        """(len(ks), rocks) float32: 1 where option k lets the rock on for sure.
+
+        A rock it stops (catches or returns) is 0, and so is one whose further
+        path the screening only approximates (broken through; any rock at a
+        row of blocks, whose gap draws come from another stream).
+        """
+        opts = self.options[ci]
+        out = np.empty((len(ks), self.screen.n), dtype=np.float32)
+        for i, k in enumerate(ks):
+            key = (ci, int(k), self._table_key(opts[k].j, table, table_id))
+            row = self._rows.get(key)
+            if row is None:
+                o = opts[k]
+                oc = self._outcome(o, table)[0]
+                row = (oc == Outcome.NOT_MET) | (oc == Outcome.PASSED_OVER) | (
+                    oc == Outcome.PASSED_THROUGH_GAP)
+                if o.footprint.behaviour == BarrierBehaviour.BLOCKS:
+                    row = oc == Outcome.NOT_MET
+                if len(self._rows) > 100_000:
+                    self._rows.clear()
+                self._rows[key] = row
+            out[i] = row
+        return out
+
+    def first_ok(self, ci: int, ks: np.ndarray, table: _Table, table_id: int) -> np.ndarray:
+        """Do options ks pass their checks as the first barrier the rocks meet?
 
         The first barrier of a design meets every rock that crosses its station
         on the table, so these are exactly its checks in any design in which no
         other barrier stands upslope of it (edits upslope are in the table).
+        Checks that hold on the point values but could not hold with the
+        confidence bounds even with ``design.max_rocks`` rocks count as failed.
         """
         sc = self.screen
-        o = self.options[ci][k]
-        j = sc.station(o.footprint.x)
-        key = (ci, k, 0 if (table.rows is None or j < table.first_col) else table_id)
-        hit = self._alone.get(key)
-        if hit is None:
-            h, e_kj, v = table.column(j)
-            out = barrier_outcomes(o.footprint, h, e_kj, sc.radius, sc.u_gap,
-                                   np.ones(sc.n, dtype=bool))
-            placed = PlacedMeasure(0, o.measure, o.footprint, o.label)
-            fates = RockFates(max_x=table.max_x, x_end=table.x_end, status=table.status,
-                              mass=sc.mass, radius=sc.radius)
-            (res,) = judge_measures([placed], [out], [np.column_stack([h, v, e_kj])], fates,
-                                    None).results
-            checks = call_plugin(sc.registry, sc.concept, "checks", res)
-            hit = all(c.ok and _check_may_hold(c, sc.n, sc.max_rocks) for c in checks)
-            self._alone[key] = hit
-        return hit
-
-    def stop_mask(self, ci: int, k: int, table: _Table, table_id: int) -> np.ndarray:
-        """Packed bits, (2, bytes): the rocks option k would stop (catch or return) if it
-        met them first, and those it would let through only approximately (broken
-        through, or any rock meeting a row of blocks)."""
-        sc = self.screen
-        o = self.options[ci][k]
-        j = sc.station(o.footprint.x)
-        # Stations upslope of an edit's restart see the bare table: share those masks.
-        key = (ci, k, 0 if (table.rows is None or j < table.first_col) else table_id)
-        hit = self._masks.get(key)
-        if hit is None:
-            h, e_kj, _ = table.column(j)
-            out = barrier_outcomes(o.footprint, h, e_kj, sc.radius, sc.u_gap,
-                                   np.ones(sc.n, dtype=bool))
-            unsure = out == Outcome.BROKEN_THROUGH
-            if o.footprint.behaviour == BarrierBehaviour.BLOCKS:
-                unsure = out != Outcome.NOT_MET
-            hit = np.stack([np.packbits((out == Outcome.CAUGHT) | (out == Outcome.REBOUNDED)),
-                            np.packbits(unsure)])
-            if len(self._masks) > 200_000:
-                self._masks.clear()
-            self._masks[key] = hit
-        return hit
+        opts = self.options[ci]
+        out = np.empty(len(ks), dtype=bool)
+        for i, k in enumerate(ks):
+            o = opts[k]
+            tk = self._table_key(o.j, table, table_id)
+            arr = self._alone.get((ci, tk))
+            if arr is None:
+                arr = self._alone[(ci, tk)] = np.full(len(opts), -1, dtype=np.int8)
+            if arr[k] < 0:
+                oc, h, e_kj, v = self._outcome(o, table)
+                placed = PlacedMeasure(0, o.measure, o.footprint, o.label)
+                fates = RockFates(max_x=table.max_x, x_end=table.x_end, status=table.status,
+                                  mass=sc.mass, radius=sc.radius)
+                (res,) = judge_measures([placed], [oc], [np.column_stack([h, v, e_kj])],
+                                        fates, None).results
+                checks = call_plugin(sc.registry, sc.concept, "checks", res)
+                arr[k] = all(c.ok and _check_may_hold(c, sc.n, sc.max_rocks) for c in checks)
+            out[i] = bool(arr[k])
+        return out
 
 
 @dataclass
@@ -741,6 +770,7 @@ class _Tally:
     best_fail: ScreenResult | None = None
     best_fail_measures: list[ProtectiveMeasure] = field(default_factory=list)
     min_residual: int | None = None
+    over_limit: float | None = None  # cost of the first design past the cost limit
 
     def fail(self, sr: ScreenResult, measures: Sequence[ProtectiveMeasure]) -> None:
         names = [c.name for cs in sr.checks for c in cs if not c.ok]
@@ -754,9 +784,18 @@ class _Tally:
             self.best_fail, self.best_fail_measures = sr, list(measures)
 
 
-def _popcount(a: np.ndarray) -> np.ndarray:
-    """Set bits along the last axis of a uint8 array."""
-    return np.bitwise_count(a).sum(axis=-1, dtype=np.int64)
+def _through(reach: np.ndarray, passes: Sequence[np.ndarray]) -> np.ndarray:
+    """Rocks through every barrier for each combination of options: (n1, n2, ...).
+
+    ``sum_r reach[r] * P1[a, r] * P2[b, r] * ...``: one matrix product for
+    one or two barriers (float32 counts are exact below 2**24 rocks).
+    """
+    first = passes[0] * reach
+    if len(passes) == 1:
+        return np.rint(first.sum(axis=1)).astype(np.int64)
+    if len(passes) == 2:
+        return np.rint(first @ passes[1].T).astype(np.int64)
+    return np.stack([_through(first[a], list(passes[1:])) for a in range(first.shape[0])])
 
 
 def _level_combos(levels: list[np.ndarray]) -> Any:
@@ -816,68 +855,78 @@ def _barrier_designs(
     levels = [np.unique(c) for c in costs]
     members = [[np.flatnonzero(c == lv) for lv in lvs] for c, lvs in zip(costs, levels,
                                                                           strict=True)]
-    reach = np.packbits(reaches_protected_zone(table.max_x, table.status, screen.protect_x))
+    reach = reaches_protected_zone(table.max_x, table.status, screen.protect_x).astype(
+        np.float32)
     edits = [call_plugin(screen.registry, m, "footprint", screen.section) for m in fixed]
     stretches = [(e.x_start, e.x_end) for e in edits if isinstance(e, ProfileEdit)]
-    # Residual of the rocks whose fate the table knows for sure: a design that
-    # misses only through rocks breaking through is screened in full and, within
-    # the margin, decided exactly.
+    # Rocks through for sure (the table knows their fate) must be within the
+    # target, and within what design.max_rocks rocks could show with confidence;
+    # a design that misses only through rocks breaking through is screened in
+    # full and, within the margin, decided exactly.
     limit = screen.allowed_residual
+    while limit >= 0 and not _fraction_may_hold(limit, screen.n, screen.allowed_fraction,
+                                                screen.max_rocks, screen.confidence):
+        limit -= 1
+    k_slots = len(opts)
     for level_cost, idx in _level_combos(levels):
         total = fixed_cost + level_cost
         if total > cost_limit:
+            tally.over_limit = total if tally.over_limit is None else min(tally.over_limit, total)
             return
-        ks = [members[s][idx[s]] for s in range(len(opts))]
-        xs = [np.array([opts[s][k].footprint.x for k in ks[s]]) for s in range(len(opts))]
-        # Residual for every combination of stations: (n1, n2, ..., bytes).
-        free = np.broadcast_to(reach, reach.shape)
-        valid = np.ones((), dtype=bool)
-        for s in range(len(opts)):
-            m = np.stack([slots.stop_mask(barrier_cis[s], k, table, table_id) for k in ks[s]])
-            shape = [1] * len(opts) + [m.shape[-1]]
-            shape[s] = m.shape[0]
-            # Rocks it stops, and those whose further path the screening approximates.
-            free = free & ~(m[:, 0] | m[:, 1]).reshape(shape)
-            xshape = [1] * len(opts)
-            xshape[s] = len(ks[s])
-            xv = xs[s].reshape(xshape)
-            ok_x = np.ones(xshape, dtype=bool)
+        ks = [members[s][idx[s]] for s in range(k_slots)]
+
+        def shaped(a: np.ndarray, s: int) -> np.ndarray:
+            return a.reshape([a.shape[0] if u == s else 1 for u in range(k_slots)])
+
+        xs = [np.array([opts[s][k].footprint.x for k in ks[s]]) for s in range(k_slots)]
+        valid = np.ones([len(k) for k in ks], dtype=bool)
+        for s in range(k_slots):
+            xv = shaped(xs[s], s)
             for lo, hi in stretches:
-                ok_x &= ~((xv > lo + 1e-6) & (xv < hi - 1e-6))
-            valid = valid & ok_x
+                valid &= ~((xv > lo + 1e-6) & (xv < hi - 1e-6))
             for t in range(s):
-                xt = xs[t].reshape([len(ks[t]) if u == t else 1 for u in range(len(opts))])
-                valid = valid & (np.abs(xv - xt) >= MIN_BARRIER_SPACING_M)
+                xt = shaped(xs[t], t)
+                valid &= np.abs(xv - xt) >= MIN_BARRIER_SPACING_M
                 if barrier_cis[t] == barrier_cis[s]:
-                    valid = valid & (xt < xv)  # one order of two barriers of one candidate
+                    valid &= xt < xv  # one order of two barriers of one candidate
+        n_comb = int(valid.size)
+        tally.designs += n_comb
         # The first barrier a rock meets judges every rock that crosses it: its own
         # checks decide, whatever stands downslope.
-        xb = np.stack(np.broadcast_arrays(*[
-            xs[s].reshape([len(ks[s]) if u == s else 1 for u in range(len(opts))])
-            for s in range(len(opts))]))
+        xb = np.stack(np.broadcast_arrays(*[shaped(xs[s], s) for s in range(k_slots)]))
         first = np.argmin(xb, axis=0)
-        first_ok = np.zeros(first.shape, dtype=bool)
-        for s in range(len(opts)):
-            oks = np.array([slots.first_ok(barrier_cis[s], k, table, table_id) for k in ks[s]])
-            sel = first == s
-            first_ok[sel] = np.broadcast_to(
-                oks.reshape([len(ks[s]) if u == s else 1 for u in range(len(opts))]),
-                first.shape)[sel]
+        alone = [slots.first_ok(barrier_cis[s], ks[s], table, table_id)
+                 for s in range(k_slots)]
+        first_ok = np.zeros(valid.shape, dtype=bool)
+        all_ok = np.ones(valid.shape, dtype=bool)
+        for s in range(k_slots):
+            ok_s = np.broadcast_to(shaped(alone[s], s), valid.shape)
+            first_ok |= (first == s) & ok_s
+            all_ok &= ok_s
         tally.reasons["first barrier's checks"] += int((valid & ~first_ok).sum())
-        valid = valid & first_ok
-        residual = _popcount(free)
-        n_comb = int(np.prod([len(k) for k in ks]))
-        tally.designs += n_comb
-        residual = np.where(valid, residual, np.iinfo(np.int64).max)
+        valid &= first_ok
+        if not valid.any():
+            continue
+        # Count only over the options that appear in some admissible placement.
+        used = [np.flatnonzero(valid.any(axis=tuple(u for u in range(k_slots) if u != s)))
+                for s in range(k_slots)]
+        sub = _through(reach, [slots.passes(barrier_cis[s], ks[s][used[s]], table, table_id)
+                               for s in range(k_slots)])
+        big = np.iinfo(np.int64).max
+        residual = np.full(valid.shape, big, dtype=np.int64)
+        residual[np.ix_(*used)] = sub
+        residual = np.where(valid, residual, big)
         rmin = int(residual.min())
-        if rmin < np.iinfo(np.int64).max:
+        if rmin < big:
             tally.min_residual = rmin if tally.min_residual is None else min(tally.min_residual,
                                                                             rmin)
-        cand = np.flatnonzero((residual <= limit).ravel())
-        tally.reasons["residual"] += int((valid & (residual > limit)).sum())
+        ok = residual <= limit
+        tally.reasons["residual"] += int((valid & ~ok).sum())
+        cand = np.flatnonzero(ok.ravel())
         if cand.size == 0:
             continue
-        order = cand[np.argsort(residual.ravel()[cand], kind="stable")]
+        # Placements whose every barrier holds on its own first, then fewest through.
+        order = cand[np.lexsort((residual.ravel()[cand], ~all_ok.ravel()[cand]))]
         if order.size > MAX_SCREENS_PER_LEVEL:
             tally.capped_levels += 1
             order = order[:MAX_SCREENS_PER_LEVEL]
@@ -885,7 +934,7 @@ def _barrier_designs(
         passed = 0
         for flat in order:
             pos = np.unravel_index(flat, residual.shape)
-            ms = fixed + [opts[s][ks[s][pos[s]]].measure for s in range(len(opts))]
+            ms = fixed + [opts[s][ks[s][pos[s]]].measure for s in range(k_slots)]
             sr = screen.screen(ms)
             if sr.feasible or sr.near:
                 found.append(_Screened(sr.cost, ms, sr, (table_id,) + tuple(idx)))
@@ -911,7 +960,6 @@ class Decision:
     rocks: int
     evaluation: Evaluation
     reason: str = ""
-    exact_runs: int = 1
 
 
 def decide(
@@ -922,41 +970,61 @@ def decide(
     *,
     rocks: int,
     seed: int,
-    max_rocks: int,
 ) -> Decision:
-    """Evaluate a design exactly; admit it only when it holds with the confidence bounds.
+    """Evaluate a design exactly, once, with ``rocks`` rocks; admit it only with the bounds.
 
-    While the design holds on the point values but not with the bounds, the
-    rocks are doubled (the first rocks stay the same: every rock has its own
-    random stream), up to ``max_rocks``: rocks are added where they decide
-    something.
+    One look at one sample: a design is admitted when every check and the
+    residual hold with their upper confidence bounds (``safety.confidence``).
+    Looking again with more rocks until it passes would admit designs that
+    do not hold more often than ``1 - confidence``; instead, the number of
+    rocks is planned beforehand (:func:`plan_rocks`).
     """
-    n, runs = int(rocks), 0
-    while True:
-        ev = evaluate_design(project, registry, measures, concept, rocks=n, seed=seed)
-        runs += 1
-        if ev.holds_with_confidence:
-            return Decision(True, n, ev, exact_runs=runs)
-        if not ev.ok:
-            return Decision(False, n, ev, "; ".join(ev.failures()), runs)
-        if n >= max_rocks or not _may_hold_with(ev, max_rocks):
-            why = "; ".join(ev.failures_with_confidence())
-            more = ("even with" if n >= max_rocks else "and would not with")
-            return Decision(False, n, ev, f"holds on the point values of {n:,} rocks but not "
-                                          f"with {100 * ev.confidence:g} % confidence, {more} "
-                                          f"{max_rocks:,} rocks (design.max_rocks): {why}", runs)
-        n = min(2 * n, int(max_rocks))
+    ev = evaluate_design(project, registry, measures, concept, rocks=rocks, seed=seed)
+    if ev.holds_with_confidence:
+        return Decision(True, rocks, ev)
+    if not ev.ok:
+        return Decision(False, rocks, ev, "; ".join(ev.failures()))
+    why = "; ".join(ev.failures_with_confidence())
+    return Decision(False, rocks, ev, f"holds on the point values of {rocks:,} rocks but not "
+                                      f"with {100 * ev.confidence:g} % confidence: {why}")
 
 
-def _may_hold_with(ev: Evaluation, rocks: int) -> bool:
-    """Could more rocks (up to ``rocks``) make a design that holds on points hold with bounds?"""
-    prot = ev.protect
-    if prot is not None and not _fraction_may_hold(prot["reaching"], ev.study.result.n,
-                                                   prot["allowed_fraction"], rocks,
-                                                   ev.confidence):
-        return False
-    n = ev.study.result.n
-    return all(_check_may_hold(c, n, rocks) for cs in ev.checks for c in cs if c.ok)
+#: Planned rocks leave this share of a design's margin to the confidence bound.
+PLAN_CUSHION = 0.7
+
+
+def plan_rocks(sr: ScreenResult, screen: Screening) -> int:
+    """Rocks with which a screened design is to be decided: more where it is near a limit.
+
+    From the screening on ``n`` rocks: a check that holds on its point value
+    ``v`` but not with its bound ``b`` (target ``t``) needs about
+    ``n ((b - v) / (PLAN_CUSHION (v - t)))**2`` rocks (the gap between an
+    order-statistic bound and the point value shrinks as 1/sqrt(n)); a
+    check with too few rocks at the measure to be bounded needs more rocks
+    there; the residual needs the rocks with which the Clopper-Pearson bound
+    of the observed fraction (plus a third) stays within the allowed one.
+    Rounded up to a multiple of ``n``, at most ``design.max_rocks``.
+    """
+    n, cap = screen.n, screen.max_rocks
+    need = float(n)
+    for cs, res in zip(sr.checks, sr.results, strict=True):
+        for c in cs:
+            if c.holds_with_confidence or not c.ok:
+                continue
+            if c.bound is None or c.value is None:
+                need = max(need, 4.0 * n if res.met else float(cap))
+                continue
+            margin = abs(c.value - c.target)
+            gap = abs(c.bound - c.value)
+            need = max(need, float(cap) if margin <= 0 else n * (gap / (PLAN_CUSHION * margin))**2)
+    f = sr.residual / max(n, 1)
+    if fraction_upper_bound(sr.residual, n, screen.confidence) > screen.allowed_fraction:
+        m = n
+        while m < cap and fraction_upper_bound(math.ceil(1.34 * f * m), m,
+                                               screen.confidence) > screen.allowed_fraction:
+            m *= 2
+        need = max(need, float(m))
+    return int(min(cap, n * math.ceil(min(need, cap) / n - 1e-9)))
 
 
 def _fraction_may_hold(reaching: int, n: int, allowed: float, rocks: int,
@@ -1053,6 +1121,7 @@ class OptimisationResult:
     confidence: float = 0.95
     exact_evaluations: int = 0
     rocks_simulated: int = 0
+    safety: Any = None  # the project's safety concept, as stated (its confidence)
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -1081,6 +1150,7 @@ def _edit_designs(
     fam: tuple[int, ...],
     tally: _Tally,
     seed: int,
+    cost_limit: float = math.inf,
 ) -> list[_Screened]:
     """Designs of a family with ground edits: scipy over the edits, barriers enumerated.
 
@@ -1111,15 +1181,20 @@ def _edit_designs(
             # before the cost model is asked to price it.
             placed = place_measures(screen.project, screen.registry, edits, screen.section)
             fixed_cost = screen.cost(edits)
+            if fixed_cost > cost_limit:
+                # Dearer than a design that already holds: not worth a run.
+                tally.over_limit = min(tally.over_limit or math.inf, fixed_cost)
+                seen[key] = big + fixed_cost
+                return seen[key]
             edited = edited_section(screen.project, screen.section, placed)
             table = screen._table_for([p.footprint for p in placed], edited)
         except (KeyError, ValueError, ProjectError) as exc:
             tally.reasons["does not fit"] += 1
-            tally.reasons.setdefault("_why", exc)
+            tally.reasons.setdefault("_why", getattr(exc, "message", None) or str(exc))
             seen[key] = 4.0 * big
             return seen[key]
         first = next(iter(_barrier_designs(screen, slots, barrier_cis, edits, fixed_cost, table,
-                                           id(table), tally)), None)
+                                           id(table), tally, cost_limit)), None)
         if first is None:
             value = big + fixed_cost
         else:
@@ -1135,7 +1210,8 @@ def _edit_designs(
         tol=1e-3, mutation=(0.5, 1.0), recombination=0.7, polish=False,
         init="sobol" if len(variables) > 1 else "latinhypercube",
     )
-    return sorted(kept.values(), key=lambda d: (d.cost, not d.result.feasible))
+    return sorted((d for d in kept.values() if d.cost <= cost_limit),
+                  key=lambda d: (d.cost, not d.result.feasible))
 
 
 def _cause(screen: Screening, slots: _BarrierSlots, fam: tuple[int, ...], tally: _Tally) -> str:
@@ -1167,6 +1243,8 @@ def _cause(screen: Screening, slots: _BarrierSlots, fam: tuple[int, ...], tally:
                 f"x >= {screen.protect_x:g} m, {100 * screen.allowed_fraction:.2f} % allowed")
     if tally.best_fail is not None:
         return "the design that comes closest still fails: " + _why(tally.best_fail)
+    if tally.over_limit is not None and tally.designs == 0:
+        return f"its cheapest design costs {tally.over_limit:,.0f}"
     skipped: Counter = Counter()
     for ci in fam:
         skipped.update(slots.skipped.get(ci, {}))
@@ -1187,6 +1265,87 @@ def _proof(alt: Alternative, tally: _Tally, n: int, currency: str) -> str:
     return (f"cheapest of {tally.designs:,} designs in the space ({alt.exact_evaluations} "
             f"evaluated exactly); every cheaper design fails on {n:,} rocks: "
             f"{top or 'none cheaper'}{capped}")
+
+
+def _settle(
+    alt: Alternative,
+    designs: Any,
+    tally: _Tally,
+    project: Project,
+    registry: Registry,
+    concept: Any,
+    screen: Screening,
+    spec: DesignSpec,
+    *,
+    seed: int,
+    fresh_seed: int,
+) -> int:
+    """Decide a family's screened designs in order of cost until one holds; fill ``alt``.
+
+    Returns the rocks simulated. The first design admitted with confidence
+    and holding on fresh rocks is the family's; one that fails on fresh rocks
+    is not chosen and the next is decided. A design in which a measure holds
+    no rock is dominated by the same design without it: the family is
+    reported as such (that design belongs to a smaller family).
+    """
+    per_level: Counter = Counter()
+    decisions = near = simulated = 0
+    for d in designs:
+        if decisions >= MAX_EXACT_PER_FAMILY:
+            alt.reason = (f"{alt.reason}; stopped after {MAX_EXACT_PER_FAMILY} exact "
+                          "decisions of this family")
+            break
+        if per_level[d.level] >= MAX_EXACT_PER_LEVEL:
+            continue
+        if not d.result.feasible:
+            if near >= MAX_NEAR_PER_FAMILY:
+                tally.reasons["within the screening margin, not decided"] += 1
+                continue
+            near += 1
+        per_level[d.level] += 1
+        decisions += 1
+        alt.screened_feasible = alt.screened_feasible or d.result.feasible
+        planned = plan_rocks(d.result, screen)
+        dec = decide(project, registry, d.measures, concept, rocks=planned, seed=seed)
+        alt.exact_evaluations += 1
+        simulated += planned
+        if not dec.admitted:
+            tally.reasons["exact: " + (dec.reason.split(":")[0][:60] or "fails")] += 1
+            alt.reason = dec.reason
+            continue
+        idle = [r.measure.label() for r in dec.evaluation.results if r.caught == 0]
+        if idle and len(d.measures) > 1:
+            alt.measures = sorted(d.measures, key=lambda m: m.x)
+            alt.cost = d.cost
+            alt.dominated = (f"its cheapest admitted design ({d.cost:,.0f}) has "
+                             f"{', '.join(idle)} holding no rock: dominated by the same design "
+                             "without it")
+            alt.reason = alt.dominated
+            return simulated
+        fresh_n = max(2 * dec.rocks, int(spec.fresh_rocks or 0))
+        fresh = evaluate_design(project, registry, d.measures, concept, rocks=fresh_n,
+                                seed=fresh_seed)
+        alt.exact_evaluations += 1
+        simulated += fresh_n
+        alt.measures = sorted(d.measures, key=lambda m: m.x)
+        alt.cost = d.cost
+        alt.evaluation = dec.evaluation
+        alt.decision_rocks = dec.rocks
+        alt.checks = [c.as_dict() for cs in dec.evaluation.checks for c in cs]
+        alt.residual = dec.evaluation.protect["reaching"] if dec.evaluation.protect else None
+        alt.holds_on_fresh_rocks = fresh.ok
+        alt.fresh_rocks, alt.fresh_seed = fresh_n, fresh_seed
+        alt.fresh_residual = fresh.protect["reaching"] if fresh.protect else None
+        alt.fresh_failures = fresh.failures()
+        alt.feasible = True  # admitted with confidence on the deciding rocks
+        if fresh.ok:
+            alt.reason = ""
+            return simulated
+        # Not chosen: it fits the noise of the search rocks. Decide the next one.
+        tally.reasons["fails on fresh rocks"] += 1
+        alt.reason = ("the cheapest admitted design fails on fresh rocks: "
+                      + "; ".join(fresh.failures()))
+    return simulated
 
 
 def optimise(
@@ -1226,11 +1385,11 @@ def optimise(
 
     t0 = time.perf_counter()
     spec = resolve_design(project, registry)
-    concept = build_concept(project, registry)
-    confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
+    stated = build_concept(project, registry)
+    confidence = float(getattr(stated.params, "confidence", DEFAULT_CONFIDENCE))
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
-    max_rocks = max(n, int(spec.max_rocks))
+    concept = stated
     # The design's residual target becomes the protected zone's allowance, so
     # that the exact checks, the fresh rocks and `check` of design.yaml agree.
     allowed = spec.residual_fraction
@@ -1246,80 +1405,41 @@ def optimise(
     alternatives: list[Alternative] = []
     exact_total, simulated = 0, n
     currency = getattr(spec.cost_model.params, "currency", "")
-    for fi, fam in enumerate(fams):
+    # Families with fewer measures first: the cheapest design that holds so far
+    # bounds what the later families need to look at (a dearer design cannot be
+    # the answer), and the report says so for a family cut short by it.
+    order = sorted(range(len(fams)), key=lambda i: (len(fams[i]), i))
+    found: dict[int, Alternative] = {}
+    limit = math.inf
+    for done, fi in enumerate(order):
+        fam = fams[fi]
         if progress:
-            progress("search", fi, len(fams))
+            progress("search", done, len(fams))
         ft = time.perf_counter()
         ev0 = screen.evaluations
         alt = Alternative(name=family_name(spec.candidates, fam), family=fam)
         tally = _Tally()
         fam_seed = int(np.random.SeedSequence([s, fi]).generate_state(1)[0])
         if any(ci in screen.edit_candidates for ci in fam):
-            designs: Any = iter(_edit_designs(screen, slots, fam, tally, fam_seed))
+            designs: Any = iter(_edit_designs(screen, slots, fam, tally, fam_seed, limit))
         else:
-            designs = _barrier_designs(screen, slots, list(fam), [], 0.0, screen.bare, 0, tally)
-        per_level: Counter = Counter()
-        last_reason = ""
-        decisions = near = 0
-        for d in designs:
-            if decisions >= MAX_EXACT_PER_FAMILY:
-                last_reason = (f"{last_reason}; stopped after {MAX_EXACT_PER_FAMILY} exact "
-                               "evaluations of this family")
-                break
-            if per_level[d.level] >= MAX_EXACT_PER_LEVEL:
-                continue
-            if not d.result.feasible:
-                if near >= MAX_NEAR_PER_FAMILY:
-                    tally.reasons["within the screening margin, not decided"] += 1
-                    continue
-                near += 1
-            per_level[d.level] += 1
-            decisions += 1
-            alt.screened_feasible = alt.screened_feasible or d.result.feasible
-            dec = decide(project, registry, d.measures, concept, rocks=n, seed=s,
-                         max_rocks=max_rocks)
-            alt.exact_evaluations += dec.exact_runs
-            simulated += sum(min(n * 2**k, max_rocks) for k in range(dec.exact_runs))
-            if not dec.admitted:
-                tally.reasons["exact: " + (dec.reason.split(":")[0][:60] or "fails")] += 1
-                last_reason = dec.reason
-                continue
-            fresh_n = max(2 * dec.rocks, int(spec.fresh_rocks or 0))
-            fresh = evaluate_design(project, registry, d.measures, concept, rocks=fresh_n,
-                                    seed=fresh_seed)
-            alt.exact_evaluations += 1
-            simulated += fresh_n
-            alt.measures = sorted(d.measures, key=lambda m: m.x)
-            alt.cost = d.cost
-            alt.evaluation = dec.evaluation
-            alt.feasible = True
-            alt.decision_rocks = dec.rocks
-            alt.checks = [c.as_dict() for cs in dec.evaluation.checks for c in cs]
-            alt.residual = dec.evaluation.protect["reaching"] if dec.evaluation.protect else None
-            alt.holds_on_fresh_rocks = fresh.ok
-            alt.fresh_rocks, alt.fresh_seed = fresh_n, fresh_seed
-            alt.fresh_residual = fresh.protect["reaching"] if fresh.protect else None
-            alt.fresh_failures = fresh.failures()
-            if fresh.ok:
-                alt.proof = _proof(alt, tally, n, currency)
-                idle = [r.measure.label() for r in dec.evaluation.results if r.caught == 0]
-                if idle and len(d.measures) > 1:
-                    alt.dominated = (f"{', '.join(idle)} holds no rock: dominated by the same "
-                                     "design without it")
-                break
-            # Not chosen: it fits the noise of the search rocks. Decide the next one.
-            tally.reasons["fails on fresh rocks"] += 1
-            last_reason = ("the cheapest admitted design fails on fresh rocks: "
-                           + "; ".join(fresh.failures()))
-            alt.feasible = False
+            designs = _barrier_designs(screen, slots, list(fam), [], 0.0, screen.bare, 0, tally,
+                                       cost_limit=limit)
+        simulated += _settle(alt, designs, tally, project, registry, concept, screen, spec,
+                             seed=s, fresh_seed=fresh_seed)
         alt.evaluations = screen.evaluations - ev0
         alt.wall_s = time.perf_counter() - ft
-        if not alt.holds_on_fresh_rocks:
-            alt.reason = last_reason or _cause(screen, slots, fam, tally)
-            if not alt.feasible:
-                alt.reason = _cause(screen, slots, fam, tally) if not last_reason else last_reason
+        if not alt.holds_on_fresh_rocks and not alt.dominated:
+            alt.reason = alt.reason or _cause(screen, slots, fam, tally)
+            if math.isfinite(limit):
+                alt.reason = (f"no design of this family cheaper than the best so far "
+                              f"({limit:,.0f} {currency}) holds: {alt.reason}")
+        elif alt.holds:
+            alt.proof = _proof(alt, tally, n, currency)
+            limit = min(limit, alt.cost)
         exact_total += alt.exact_evaluations
-        alternatives.append(alt)
+        found[fi] = alt
+    alternatives = [found[i] for i in range(len(fams))]
     pool = [a for a in alternatives if a.holds]
     best = min(pool, key=lambda a: a.cost) if pool else None
     reason = "" if best is not None else (
@@ -1331,7 +1451,7 @@ def optimise(
         fresh_rocks=best.fresh_rocks if best is not None else 2 * n,
         fresh_seed=fresh_seed, wall_s=time.perf_counter() - t0,
         evaluations=screen.evaluations, edit_runs=screen.edit_runs, currency=currency,
-        search_rocks=n, confidence=confidence, exact_evaluations=exact_total,
+        search_rocks=n, confidence=confidence, exact_evaluations=exact_total, safety=stated,
         rocks_simulated=simulated + screen.edit_rocks,
     )
 

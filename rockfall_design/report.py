@@ -299,7 +299,8 @@ def alternatives_table(result: Any) -> Any:
     return pd.DataFrame(rows)
 
 
-def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -> str:
+def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
+                safety: Any = None) -> str:
     """The project with the chosen measures, as YAML that ``check`` accepts."""
     from .project import dump_yaml
 
@@ -312,7 +313,10 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -
     data["measures"] = [
         {"type": m.kind, **m.params.model_dump(mode="json")} for m in best.measures
     ]
-    data["safety"] = {"concept": ev.concept.name, **ev.concept.params.model_dump(mode="json")}
+    # The safety concept as the project states it (the optimiser's looks use a
+    # stricter confidence each, see optimise()).
+    concept = safety if safety is not None else ev.concept
+    data["safety"] = {"concept": concept.name, **concept.params.model_dump(mode="json")}
     head = (
         f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
         f"cost {best.cost:,.0f}.\n"

@@ -87,7 +87,7 @@ def test_small_problem_optimum_known_by_enumeration(registry, seed):
                 m = build_candidate_measure(cand, registry,
                                             {"x": float(x), "product": prod.name, "height": h})
                 dec = decide(proj, registry, [m], concept, rocks=res.search_rocks,
-                             seed=res.seed, max_rocks=spec.max_rocks)
+                             seed=res.seed)
                 if not dec.admitted:
                     continue
                 admitted += 1

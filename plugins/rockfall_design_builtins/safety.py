@@ -86,11 +86,25 @@ def _finite_property(properties: dict[str, float], key: str) -> float | None:
     return value if np.isfinite(value) else None
 
 
+def _percentile(values: np.ndarray, q: float) -> float:
+    """``numpy.percentile(values, q)`` (linear, type 7) of a non-empty array, by partition.
+
+    The optimiser asks for thousands of percentiles; a partial sort around the
+    two order statistics it needs is several times faster than a full one.
+    """
+    v = np.asarray(values, dtype=float).ravel()
+    h = (v.size - 1) * q / 100.0
+    lo = int(np.floor(h))
+    hi = min(lo + 1, v.size - 1)
+    part = np.partition(v, (lo, hi)) if hi != lo else np.partition(v, lo)
+    return float(part[lo] + (h - lo) * (part[hi] - part[lo]))
+
+
 def _statistic(values: np.ndarray, statistic: str) -> float:
     """``max`` or the ``pNN`` percentile (linear interpolation) of a non-empty array."""
     if statistic == "max":
         return float(np.max(values))
-    return float(np.percentile(values, float(statistic[1:])))
+    return _percentile(values, float(statistic[1:]))
 
 
 def _statistic_bound(values: np.ndarray, statistic: str, confidence: float) -> float | None:
@@ -493,8 +507,8 @@ class Uni11211Concept(SafetyConcept):
         if speeds.size == 0 or masses.size == 0:
             return Check("design_energy", None, target, True, "kJ", _NO_ROCK, None, True)
         p = _label(params.percentile)
-        speed = float(np.percentile(speeds, params.percentile))
-        mass = float(np.percentile(masses, params.percentile))
+        speed = _percentile(speeds, params.percentile)
+        mass = _percentile(masses, params.percentile)
         e_d = self._design_energy(mass, speed)
         detail = (
             f"E_d = 1/2 m_d v_d^2 = {_num(e_d, 'kJ')} with m_d = {p} mass {mass:.1f} kg "
@@ -531,9 +545,9 @@ class Uni11211Concept(SafetyConcept):
         if heights.size == 0:
             return Check("design_height", None, height_m, True, "m", _NO_ROCK, None, True)
         p = _label(params.percentile)
-        height = float(np.percentile(heights, params.percentile))
+        height = _percentile(heights, params.percentile)
         h_d = height * self.gamma_f
-        d_d = 2.0 * float(np.percentile(radii, params.percentile)) if radii.size else 0.0
+        d_d = 2.0 * _percentile(radii, params.percentile) if radii.size else 0.0
         freeboard = max(params.f_min_m, d_d / 2.0)
         required = h_d + freeboard
         detail = (
