@@ -6,6 +6,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from rockfall_design.cli import main
 from rockfall_design.errors import ProjectError
@@ -417,3 +419,56 @@ def test_without_ezdxf_the_message_names_the_extra(tmp_path, monkeypatch):
     path.write_text(DXF_PROJECT)
     err = error_of(path)
     assert err.key == "slope.dxf" and "[dxf]" in err.message and "ezdxf" in err.message
+
+
+# ---- hostile files: an error line, never a traceback ---------------------------------
+
+_CELL = st.one_of(st.sampled_from(["0", "1e3", "-5", "nan", "inf", "", " ", "x", "y",
+                                   "material", "talus", "rock", "#", '"', "1_0", "1,5"]),
+                  st.text(max_size=6))
+_CSV_TEXT = st.one_of(
+    st.text(max_size=200),
+    st.lists(st.lists(_CELL, max_size=4).map(",".join), max_size=8).map("\n".join),
+)
+
+
+@settings(max_examples=150, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(text=_CSV_TEXT)
+def test_any_csv_text_loads_or_fails_in_one_line(tmp_path, text):
+    path = write(tmp_path, csv=None)
+    (tmp_path / "section.csv").write_text(text, encoding="utf-8", errors="surrogatepass")
+    try:
+        load_project(path)
+    except ProjectError as exc:
+        assert "\n" not in str(exc)
+
+
+@settings(max_examples=100, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(text=st.one_of(st.text(max_size=120), st.sampled_from([
+    "rock: 1", "rock: [1, 2]", "rock: {restitution: .nan, friction: 1}", "? [a]\n: 1",
+    "a: &x {b: *x}", "rock: !!python/object:os.system {}", "- 1", "1", "null", "''",
+])))
+def test_any_library_text_loads_or_fails_in_one_line(tmp_path, text):
+    path = write(tmp_path, LIBRARY_PROJECT, csv=None, library="{}")
+    (tmp_path / "lib" / "materials.yaml").write_text(text, encoding="utf-8",
+                                                     errors="surrogatepass")
+    try:
+        load_project(path)
+    except ProjectError as exc:
+        assert "\n" not in str(exc)
+
+
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.binary(max_size=300) | st.text(max_size=300).map(str.encode))
+def test_any_dxf_bytes_load_or_fail_in_one_line(tmp_path, data):
+    pytest.importorskip("ezdxf", reason="ezdxf (the [dxf] extra) is not installed")
+    (tmp_path / "section.dxf").write_bytes(data)
+    path = tmp_path / "project.yaml"
+    path.write_text(DXF_PROJECT)
+    try:
+        load_project(path)
+    except ProjectError as exc:
+        assert "\n" not in str(exc)
