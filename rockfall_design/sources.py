@@ -257,15 +257,7 @@ def _survey_slope(slope: dict, materials: Any, where: _Where, base_dir: Path) ->
                 f"{section.shown} has a material column: give the materials there or "
                 "here, not both",
             )
-        segment_names = names[:-1]  # the last point starts no segment
-        if isinstance(materials, dict):
-            for i, name in enumerate(segment_names):
-                if name not in materials:
-                    hint = _did_you_mean(name, materials) or (
-                        f"; defined: {', '.join(map(str, materials))}"
-                    )
-                    raise section.error(i, "material", f"undefined material {name!r}{hint}")
-        chosen: Any = segment_names
+        chosen: Any = names[:-1]  # the last point starts no segment
     elif "materials" in slope:
         chosen = slope["materials"]
     else:
@@ -279,10 +271,24 @@ def _survey_slope(slope: dict, materials: Any, where: _Where, base_dir: Path) ->
             f"no materials for the section of {section.shown}: give {how} (one name for "
             "every segment, or a list with one name per segment)",
         )
+    problems = []
     try:
         Slope.model_validate({"points": section.points, "materials": chosen})
     except ValidationError as exc:
-        raise _slope_error(exc, section, where, names is not None) from None
+        problems.append(_slope_error(exc, section, where, names is not None))
+    if names is not None and isinstance(materials, dict):
+        # Names from the file are checked here, where their lines are known
+        # (the project's own check would point at slope: in the project file).
+        for i, name in enumerate(chosen):
+            if name not in materials:
+                hint = _did_you_mean(name, materials) or (
+                    f"; defined: {', '.join(map(str, materials))}"
+                )
+                problems.append(section.error(i, "material", f"undefined material {name!r}{hint}"))
+                break
+    if problems:
+        # The problem earliest in the file, as for a project file.
+        raise min(problems, key=lambda e: (e.file != section.shown, e.line or 0)) from None
     return {"points": [list(p) for p in section.points], "materials": chosen}
 
 

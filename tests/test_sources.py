@@ -165,6 +165,15 @@ def test_csv_errors_name_the_csv_file_line_and_column(tmp_path, old, new, needle
     assert fragment in err.message
 
 
+def test_csv_reports_its_earliest_problem(tmp_path):
+    csv = SECTION_CSV.replace("30,60,rock", "30,60,rok").replace("80,20", "50,20")
+    err = error_of(write(tmp_path, csv=csv))
+    assert (err.line, err.key) == (line_of(csv, "rok"), "material")
+    csv = SECTION_CSV.replace("30,60,rock", "30,60,rok").replace("30,60", "-1,60")
+    err = error_of(write(tmp_path, csv=csv))
+    assert (err.line, err.key) == (line_of(csv, "-1,60"), "x")
+
+
 def test_csv_with_too_few_points_or_no_rows(tmp_path):
     err = error_of(write(tmp_path, csv="x,y,material\n0,10,rock\n"))
     assert str(err) == f"{tmp_path / 'section.csv'}: expected at least 2 points, got 1"
