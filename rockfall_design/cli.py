@@ -48,23 +48,34 @@ _positive_int = _int_at_least(1, "number")
 _seed = _int_at_least(0, "seed")
 
 
-def _add_run_options(p: argparse.ArgumentParser, repeatable: bool = False) -> None:
+def _add_run_options(
+    p: argparse.ArgumentParser,
+    *,
+    project: str,
+    rocks: str,
+    seed: str,
+    out: str,
+    plot: str,
+    json_: str,
+    repeatable: bool = False,
+) -> None:
+    """The options every run command has; each command says what they do for it.
+
+    The help texts differ because the commands write different files and
+    JSON (tests/test_cli_help.py runs each command to hold them to it).
+    """
     if repeatable:
-        p.add_argument("project", type=Path, nargs="?", help="project file (YAML)")
+        p.add_argument("project", type=Path, nargs="?", help=project)
         p.add_argument("--repeat", type=Path, metavar="SUMMARY",
                        help="repeat the run recorded in a summary.json (its resolved project, "
                        "seed and rock count) instead of reading a project file")
     else:
-        p.add_argument("project", type=Path, help="project file (YAML)")
-    p.add_argument("--rocks", type=_positive_int, metavar="N",
-                   help="number of rocks (default: rocks.count of the project)")
-    p.add_argument("--seed", type=_seed, metavar="S",
-                   help="random seed (default: rocks.seed of the project)")
-    p.add_argument("--out", type=Path, metavar="DIR",
-                   help="write rocks.csv, crossings.csv and summary.json into DIR")
-    p.add_argument("--plot", type=Path, metavar="DIR", help="write PNG figures into DIR")
-    p.add_argument("--json", action="store_true",
-                   help="print one JSON object on stdout instead of the report")
+        p.add_argument("project", type=Path, help=project)
+    p.add_argument("--rocks", type=_positive_int, metavar="N", help=rocks)
+    p.add_argument("--seed", type=_seed, metavar="S", help=seed)
+    p.add_argument("--out", type=Path, metavar="DIR", help=out)
+    p.add_argument("--plot", type=Path, metavar="DIR", help=plot)
+    p.add_argument("--json", action="store_true", help=json_)
 
 
 def _add_block_option(p: argparse.ArgumentParser) -> None:
@@ -83,7 +94,21 @@ def build_parser() -> argparse.ArgumentParser:
         description="Simulate the rocks of a project: where they go, how high and how fast "
         "they pass the analysis stations, and where they stop.",
     )
-    _add_run_options(sim, repeatable=True)
+    _add_run_options(
+        sim,
+        project="project file (YAML)",
+        rocks="number of rocks (default: rocks.count of the project, or the count that "
+        "--repeat reads)",
+        seed="random seed (default: rocks.seed of the project, or the seed that --repeat "
+        "reads)",
+        out="write rocks.csv (one row per rock), crossings.csv (one row per rock and "
+        "station) and summary.json (the summary and the run record that --repeat reads) "
+        "into DIR",
+        plot="draw profile.png (the section, rock paths and rest positions), envelopes.png "
+        "(passing height and energy along x) and stops.png (rest positions) into DIR",
+        json_="print the summary as one JSON object on stdout instead of the report",
+        repeatable=True,
+    )
     _add_block_option(sim)
     sim.set_defaults(func=cmd_simulate)
     chk = sub.add_parser(
@@ -94,7 +119,19 @@ def build_parser() -> argparse.ArgumentParser:
         "targets, and how many rocks still reach the protected zone. Exit code 0 when "
         "every check holds, 1 when one fails.",
     )
-    _add_run_options(chk)
+    _add_run_options(
+        chk,
+        project="project file (YAML) with the measures: to check",
+        rocks="number of rocks (default: rocks.count of the project)",
+        seed="random seed (default: rocks.seed of the project)",
+        out="write rocks.csv (one row per rock, with the measure that caught it), "
+        "crossings.csv (one row per rock and station), measures.csv (one row per rock and "
+        "measure) and summary.json (the summary and the run record) into DIR",
+        plot="draw profile.png (the section with the measures, rock paths and rest "
+        "positions), envelopes.png and stops.png into DIR",
+        json_="print the summary with measures, protect, ok and failures as one JSON object "
+        "on stdout instead of the report",
+    )
     _add_block_option(chk)
     chk.set_defaults(func=cmd_check)
     opt = sub.add_parser(
@@ -106,7 +143,21 @@ def build_parser() -> argparse.ArgumentParser:
         "that meets every safety check and the residual target, check each family's best "
         "exactly and on fresh rocks, and compare them.",
     )
-    _add_run_options(opt)
+    _add_run_options(
+        opt,
+        project="project file (YAML) with a design: section",
+        rocks="number of rocks every design is searched and checked with (default: "
+        "rocks.count of the project; the fresh rocks are at least as many)",
+        seed="random seed of those rocks (default: rocks.seed of the project; the fresh "
+        "rocks use another seed)",
+        out="write design.yaml (the project with the chosen measures, for check; removed "
+        "when no design is admissible), alternatives.csv (one row per family of measures) "
+        "and summary.json (the summary and the run record) into DIR",
+        plot="draw profile.png, envelopes.png and stops.png of the chosen design into DIR "
+        "(none when no design is admissible)",
+        json_="print the alternatives and the best design as one JSON object on stdout "
+        "instead of the report",
+    )
     _add_block_option(opt)
     opt.set_defaults(func=cmd_optimise)
     plg = sub.add_parser(
@@ -116,7 +167,8 @@ def build_parser() -> argparse.ArgumentParser:
         "each name, and every plugin that failed to load (with the reason).",
     )
     plg.add_argument("--json", action="store_true",
-                     help="print one JSON object on stdout instead of tables")
+                     help="print the measures, safety concepts, cost models and failed "
+                     "plugins as one JSON object on stdout instead of tables")
     _add_block_option(plg)
     plg.set_defaults(func=cmd_plugins)
     return parser

@@ -2207,7 +2207,8 @@ def load_project_text(
     source
         Name used in error messages and stored as :attr:`Project.source`.
     base_dir
-        Directory that catalogue files of ``design:`` are relative to; by
+        Directory that catalogue files of ``design:``, a survey file of
+        ``slope:`` and a materials library are relative to; by
         default the directory of ``source`` (the current directory for
         ``"<string>"``).
 
@@ -2233,6 +2234,11 @@ def load_project_text(
             f"expected a mapping of top-level keys (name, slope, materials, rocks, ...), "
             f"got {_describe(data)}",
         )
+    base = Path(source).parent if base_dir is None else Path(base_dir)
+    # A slope from a survey file and materials from a library become inline data here.
+    from .sources import resolve_inputs
+
+    data = resolve_inputs(data, lines, source, base)
     try:
         project = Project.model_validate(data)
     except ValidationError as exc:
@@ -2242,7 +2248,7 @@ def load_project_text(
     project._source = source
     project._lines = lines
     if project.design is not None:
-        _attach_catalogues(project, Path(source).parent if base_dir is None else Path(base_dir))
+        _attach_catalogues(project, base)
     return project
 
 

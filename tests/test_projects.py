@@ -10,11 +10,12 @@ import pytest
 from rockfall_design.cli import main
 from rockfall_design.project import load_project
 
-# Catalogue files (products, prices) live beside the projects but are not projects.
+# Catalogue files (products, prices) and the materials library live beside the
+# projects but are not projects.
 PROJECTS = sorted(
     p
     for p in (Path(__file__).resolve().parents[1] / "projects").glob("*.yaml")
-    if not p.name.startswith("catalogue_")
+    if not p.name.startswith("catalogue_") and p.name != "materials.yaml"
 )
 
 
