@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter
 
 from .engine import G
 from .engine.core import (
@@ -360,8 +361,10 @@ def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = N
         reason = no_stop_reason(counts)
         title = f"no rock came to rest on the section: {reason}"
         a1.text(0.5, 0.5, f"No rock came to rest on the section:\n{reason}.",
-                transform=a1.transAxes, ha="center", va="center", fontsize=11)
+                transform=a1.transAxes, ha="center", va="center", fontsize=11, zorder=5,
+                bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "#999999"})
         a1.set_ylim(0, 1)
+        a1.set_yticks([])
     a1.set_ylabel("rocks at rest (per bin)")
     a1.set_title(f"{study.project.name}: {title}")
     _marks(a1, study)
@@ -437,7 +440,8 @@ def alternatives_figure(
         ax.barh(i, width, color=color, hatch=hatch, edgecolor="#566573", height=0.6)
         note = []
         if a.get("residual") is not None:
-            note.append(f"residual {a['residual']} rocks")
+            k = int(a["residual"])
+            note.append(f"{k} {'rock' if k == 1 else 'rocks'} reach the protected zone")
         if a.get("feasible"):
             bind = _binding(a.get("checks") or [])
             if bind:
@@ -446,7 +450,7 @@ def alternatives_figure(
                 note.append("fails on fresh rocks")
         else:
             reason = str(a.get("reason") or "not admissible")
-            note.append(reason if len(reason) <= 90 else reason[:87] + "...")
+            note.append(reason if len(reason) <= 70 else reason[:67] + "...")
         head = "" if cost is None else f"{cost:,.0f} {currency}".strip()
         text = "   ".join(([head] if head else []) + note)
         ax.text(width + 0.01 * top, i, text, va="center", fontsize=8)
@@ -454,7 +458,8 @@ def alternatives_figure(
                   [("* " if best is not None and a.get("name") == best else "") +
                    str(a.get("name", "?")) for a in rows], fontsize=9)
     ax.invert_yaxis()
-    ax.set_xlim(0, top * 1.9)
+    ax.set_xlim(0, top * 2.3)
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}"))
     ax.set_xlabel(f"cost ({currency})" if currency else "cost")
     ax.grid(axis="x", alpha=0.3)
     head = "cheapest design of each family; * chosen, hatched: not admissible"

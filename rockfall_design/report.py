@@ -274,26 +274,13 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
 
 
 def alternatives_table(result: Any) -> Any:
-    import pandas as pd
+    """alternatives.csv: one row per family, one column per check, rounded numbers.
 
-    rows = []
-    for a in result.alternatives:
-        rows.append({
-            "family": a.name,
-            "chosen": result.best is a,
-            "feasible": a.feasible,
-            "holds_on_fresh_rocks": a.holds_on_fresh_rocks,
-            "cost": a.cost if np.isfinite(a.cost) else None,
-            "residual": a.residual,
-            "fresh_residual": a.fresh_residual,
-            "measures": "; ".join(m.label() for m in a.measures),
-            "checks": "; ".join(
-                f"{c['name']}={c['value']}/{c['target']}:{'ok' if c['ok'] else 'fails'}"
-                for c in a.checks),
-            "reason": a.reason,
-            "designs_screened": a.evaluations,
-        })
-    return pd.DataFrame(rows)
+    See :func:`rockfall_design.tables.alternatives_frame`.
+    """
+    from .tables import alternatives_frame
+
+    return alternatives_frame(result.summary())
 
 
 def design_yaml(best: Any, project_file: Any) -> str:
