@@ -48,6 +48,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .simulation import StreamedStudy, Study
 
 __all__ = [
+    "RockfallFigure",
     "FIGURE_FORMATS",
     "CAPTIONS",
     "DEFAULT_MIN_ROCKS_ENVELOPE",
@@ -81,6 +82,24 @@ CAPTIONS = {
     "(admissible ones coloured, the chosen one marked), with the rocks still reaching the "
     "protected zone and the check that binds or fails.",
 }
+
+
+
+class RockfallFigure(Figure):
+    """A matplotlib Figure that shows itself in a notebook without pyplot.
+
+    IPython displays a plain Figure as an image only once pyplot has set up
+    its inline backend; a figure built without pyplot (as here, to leave the
+    backend alone) would show as ``<Figure size ...>``. ``_repr_png_`` lets
+    IPython draw it either way; when the inline backend is active, its own
+    formatter for Figures takes precedence, so a figure is never shown twice.
+    """
+
+    def _repr_png_(self) -> bytes:
+        buf = io.BytesIO()
+        self.savefig(buf, format="png", dpi=100, bbox_inches="tight")
+        return buf.getvalue()
+
 
 _GROUND_FILL = "#d9cfc1"
 _GROUND_LINE = "#5b4a36"
@@ -208,7 +227,7 @@ def profile_figure(study: Study | StreamedStudy, evaluation: Evaluation | None =
     -------
     matplotlib.figure.Figure
     """
-    fig = Figure(figsize=(11, 5.5), layout="constrained")
+    fig = RockfallFigure(figsize=(11, 5.5), layout="constrained")
     ax = fig.add_subplot()
     _ground(ax, study.section)
     for k, tr in enumerate(study.trajectories):
@@ -266,7 +285,7 @@ def envelopes_figure(
     def masked(col: str) -> np.ndarray:
         return np.where(enough, env[col].to_numpy(dtype=float), np.nan)
 
-    fig = Figure(figsize=(11, 8), layout="constrained")
+    fig = RockfallFigure(figsize=(11, 8), layout="constrained")
     a1, a2, a3 = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [3, 3, 1.4]})
     pcts = [c for c in env.columns if c.startswith("height_p")]
     a1.plot(x, masked("height_max_m"), color="k", lw=1.4, label="max")
@@ -342,7 +361,7 @@ def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = N
     """
     counts = study.status_counts()
     n_stopped = int(counts[STOPPED])
-    fig = Figure(figsize=(11, 6), layout="constrained")
+    fig = RockfallFigure(figsize=(11, 6), layout="constrained")
     a1, a2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1]})
     sec = study.section
     bins = np.linspace(sec.x[0], sec.x[-1], 81)
@@ -423,7 +442,7 @@ def alternatives_figure(
                                                math.inf if a.get("cost") is None
                                                else a["cost"]))
     n = max(len(rows), 1)
-    fig = Figure(figsize=(11, 1.2 + 0.55 * n), layout="constrained")
+    fig = RockfallFigure(figsize=(11, 1.2 + 0.55 * n), layout="constrained")
     ax = fig.add_subplot()
     costs = [a.get("cost") for a in rows]
     finite = [c for c in costs if c is not None]
