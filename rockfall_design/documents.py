@@ -82,8 +82,13 @@ def _inputs(project: Any, command: str) -> list[Table]:
     size = next(((q, r[q]) for q in ("radius", "volume", "mass") if r.get(q) is not None),
                 ("size", None))
     unit = {"radius": "m", "volume": "m3", "mass": "kg"}.get(size[0], "")
+    dist = size[1]
+    if isinstance(dist, dict):  # {lognormal: [a, b]} -> "lognormal 0.6, 0.4"
+        dist = "; ".join(f"{k} " + ", ".join(f"{v:g}" for v in (vals if isinstance(vals, list)
+                                                               else [vals]))
+                         for k, vals in dist.items())
     rows = [["density (kg/m3)", _num(r["density"], "m")],
-            [f"{size[0]} ({unit})", str(size[1])]]
+            [f"{size[0]} ({unit})", str(dist)]]
     for i, z in enumerate(r["release"]):
         rows.append([f"release zone {i + 1}",
                      f"x {z['x'][0]:g} to {z['x'][1]:g} m, height {z['height']:g} m, velocity "
@@ -139,7 +144,7 @@ def _run_table(result: Any, summary: Mapping[str, Any]) -> Table:
     rows.append(["engine", f"exact events (flight parabolas, impacts, rolling and sliding in "
                  f"closed form); v_contact {e.v_contact:g} m/s, v_stop {e.v_stop:g} m/s, "
                  f"max_events {e.max_events:,}"])
-    return Table("Method and run", ["item", "value"], rows)
+    return Table("", ["item", "value"], rows)
 
 
 def _stations_table(summary: Mapping[str, Any]) -> Table | None:
@@ -256,7 +261,7 @@ def _alternatives_table(summary: Mapping[str, Any]) -> Table:
                      _num(a.get("cost"), "cost") if a.get("feasible")
                      else f"({_num(a.get('cost'), 'cost')})",
                      "; ".join(measure_text(m) for m in a.get("measures") or []) or "-",
-                     _num(a.get("residual")),
+                     _num(a.get("residual"), "count"),
                      "-" if fresh is None else ("holds" if fresh else "FAILS"),
                      *(values.get(n, "") for n, _ in names),
                      str(a.get("reason") or "")])

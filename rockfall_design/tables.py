@@ -37,7 +37,8 @@ def round_value(value: Any, unit: str = "-") -> Any:
     value : float or None
     unit : str
         ``"-"`` (a factor: 0.01), ``"m"`` (0.01 m), ``"kJ"`` (1 kJ),
-        ``"m/s"`` (0.1), ``"cost"`` (whole currency units); other units 0.001.
+        ``"m/s"`` (0.1), ``"cost"`` (whole currency units), ``"count"`` (whole
+        numbers); other units 0.001.
 
     Returns
     -------
@@ -47,7 +48,7 @@ def round_value(value: Any, unit: str = "-") -> Any:
         return value
     if not math.isfinite(value):
         return value
-    if unit == "cost":
+    if unit in ("cost", "count"):
         return int(round(value))
     digits = _DECIMALS.get(unit, 3)
     return int(round(value)) if digits == 0 else round(float(value), digits)
