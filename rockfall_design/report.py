@@ -26,6 +26,31 @@ __all__ = [
 ]
 
 
+#: The widest a report printed to a pipe or a file is made (characters).
+MAX_FILE_WIDTH = 200
+
+
+def fitted_console(renderable: Any, file: Any = None) -> Console:
+    """A console as wide as the report's output can show it.
+
+    On a terminal, rich measures the terminal and tables shrink or wrap their
+    cells to fit it. Printed to a pipe or a file there is no width to fit and
+    rich would fall back to 80 columns, wrapping every long line; there the
+    console is as wide as the content needs (at least 80 columns, at most
+    :data:`MAX_FILE_WIDTH`), unless ``COLUMNS`` says otherwise.
+    """
+    import os
+
+    from rich.measure import Measurement
+
+    console = Console(file=file)
+    if console.is_terminal or os.environ.get("COLUMNS"):
+        return console
+    wide = Console(file=file, width=MAX_FILE_WIDTH)
+    need = Measurement.get(wide, wide.options, renderable).maximum
+    return Console(file=file, width=max(80, min(MAX_FILE_WIDTH, need)))
+
+
 def _fmt(v: float | None, digits: int = 2) -> str:
     return "-" if v is None else f"{v:,.{digits}f}"
 
@@ -123,8 +148,8 @@ def simulation_renderable(summary: dict[str, Any]) -> Group:
 
 
 def print_simulation(summary: dict[str, Any], console: Console | None = None) -> None:
-    console = console or Console()
-    console.print(Panel(simulation_renderable(summary), title="rockfall-design simulate"))
+    panel = Panel(simulation_renderable(summary), title="rockfall-design simulate")
+    (console or fitted_console(panel)).print(panel)
 
 
 def _value(v: float | None, unit: str) -> str:
@@ -196,8 +221,8 @@ def check_renderable(summary: dict[str, Any]) -> Group:
 
 
 def print_check(summary: dict[str, Any], console: Console | None = None) -> None:
-    console = console or Console()
-    console.print(Panel(check_renderable(summary), title="rockfall-design check"))
+    panel = Panel(check_renderable(summary), title="rockfall-design check")
+    (console or fitted_console(panel)).print(panel)
 
 
 def _measure_short(m: Any) -> str:
@@ -230,7 +255,6 @@ def _factors(alt: Any) -> str:
 
 def print_optimise(result: Any, project: Any, console: Console | None = None) -> None:
     """The optimiser's comparison of alternatives, the chosen one marked."""
-    console = console or Console()
     cur = result.currency or ""
     tab = Table(show_edge=False, title="Alternatives (cheapest design of each family)",
                 title_justify="left", caption="factors: h height, e energy, r reach "
@@ -270,7 +294,8 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
     for a in order:
         if not a.feasible and a.reason:
             parts.append(Text(f"  {a.name}: {a.reason}", style="dim"))
-    console.print(Panel(Group(*parts), title="rockfall-design optimise"))
+    panel = Panel(Group(*parts), title="rockfall-design optimise")
+    (console or fitted_console(panel)).print(panel)
 
 
 def alternatives_table(result: Any) -> Any:

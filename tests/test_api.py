@@ -234,3 +234,19 @@ def test_plot_format_writes_each_format(tmp_path, capsys):
         main(["simulate", str(STANDARD), "--plot", str(figs), "--plot-format", "gif"])
     assert exc.value.code == 2
     assert "png, svg, pdf" in capsys.readouterr().err
+
+
+def test_terminal_report_is_not_wrapped_at_80_columns_in_a_pipe(capsys, monkeypatch):
+    from rockfall_design.report import print_check
+
+    c = rd.check(QUARRY, rocks=100, seed=7)
+    monkeypatch.delenv("COLUMNS", raising=False)
+    print_check(c.summary)
+    lines = capsys.readouterr().out.splitlines()
+    detail = c.summary["measures"][0]["checks"][0]["detail"]
+    assert any(detail in line for line in lines)  # one line, not wrapped
+    assert max(len(line) for line in lines) > 80
+    # A width the user asks for is kept.
+    monkeypatch.setenv("COLUMNS", "70")
+    print_check(c.summary)
+    assert max(len(line) for line in capsys.readouterr().out.splitlines()) <= 70
