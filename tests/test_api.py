@@ -250,3 +250,30 @@ def test_terminal_report_is_not_wrapped_at_80_columns_in_a_pipe(capsys, monkeypa
     monkeypatch.setenv("COLUMNS", "70")
     print_check(c.summary)
     assert max(len(line) for line in capsys.readouterr().out.splitlines()) <= 70
+
+
+def test_no_pyplot_and_no_backend_switch_in_a_fresh_process():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, matplotlib\n"
+        "matplotlib.use('svg')\n"
+        "import rockfall_design as rd\n"
+        f"r = rd.check({str(QUARRY)!r}, rocks=30, seed=1)\n"
+        "figs = [r.plot(), r.plot('envelopes'), r.plot('stops')]\n"
+        "assert figs[0]._repr_png_().startswith(b'\\x89PNG')\n"
+        "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot was imported'\n"
+        "assert matplotlib.get_backend() == 'svg', matplotlib.get_backend()\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
+
+
+def test_progress_callbacks():
+    done: list[int] = []
+    rd.simulate(STANDARD, rocks=50, progress=done.append)
+    assert done and done[-1] == 50
+    stages: list[str] = []
+    rd.optimise(PROJECTS / "design_ditch_or_fence.yaml", rocks=200,
+                progress=lambda stage, k, n: stages.append(stage))
+    assert {"search", "check"} <= set(stages)
