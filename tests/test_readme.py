@@ -42,3 +42,15 @@ def test_readme_plugin_example_installs_and_checks(tmp_path, monkeypatch, capsys
     (m,) = s["measures"]
     assert m["type"] == "catch_net" and m["met"] > 0
     assert m["caught"] + m["passed_over"] + m["broken_through"] == m["met"]
+
+
+def test_readme_from_python_block_runs(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    source = _block_after("## From Python", "python")
+    (tmp_path / "projects").symlink_to(ROOT / "projects")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    exec(compile(source, "README.md", "exec"), namespace)  # noqa: S102
+    assert isinstance(namespace["r"].plot(), Figure)
+    assert (tmp_path / "report" / "report.html").is_file()
