@@ -23,6 +23,12 @@ try:
 except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0+unknown"
 
+# The submodule rockfall_design.optimise shares its name with the function
+# optimise below. Importing a submodule for the first time sets the package's
+# attribute of that name to the module, so it is imported here first: the
+# function then takes the name for good, and later imports of the submodule
+# (``from rockfall_design.optimise import ...``) find it in sys.modules.
+from . import optimise as _optimise_module  # noqa: F401  isort: skip
 from .api import (
     CheckResult,
     OptimiseResult,

@@ -100,10 +100,10 @@ def load_project(path: str | os.PathLike[str], *, registry: Registry | None = No
     return project
 
 
-def _project(project: Any) -> Project:
-    """A Project from a Project or a path."""
+def _project(project: Any, registry: Registry | None = None) -> Project:
+    """A Project from a Project or a path (validated with ``registry``)."""
     if isinstance(project, str | os.PathLike):
-        return load_project(project)
+        return load_project(project, registry=registry)
     return project
 
 
@@ -585,7 +585,7 @@ def check(
     """
     from .evaluate import evaluate
 
-    p = _project(project)
+    p = _project(project, registry)
     n = _count(p, rocks)
     ev = _call(progress, n, evaluate, project=p, registry=registry or default_registry(),
                rocks=n, seed=seed, n_trajectories=trajectories)
@@ -629,7 +629,7 @@ def optimise(
     """
     from .optimise import optimise as _optimise
 
-    p = _project(project)
+    p = _project(project, registry)
     if p.design is None:
         raise p.error_at((), "the project has no design: section to optimise "
                              "(see the README, 'Designing protection')")

@@ -221,14 +221,17 @@ REPORT_FILES = ("report.html", "report.md")
 
 def _figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet) -> None:
     """The --plot figures and the --report documents of an API result, in the output set."""
+    if not (args.plot or args.report):
+        return
+    figures = result.figures()  # drawn once for both
     if args.plot:
         from .figures import save_figures
 
-        save_figures(result.figures(), args.plot, args.plot_format, files)
+        save_figures(figures, args.plot, args.plot_format, files)
     if args.report:
         from .documents import write_report
 
-        write_report(result, args.report, outputs=files)
+        write_report(result, args.report, outputs=files, figures=figures)
 
 
 def _warn_failures(registry: Any) -> None:

@@ -144,7 +144,9 @@ def alternatives_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
             if k in ("name", "measures", "checks", "evaluations") or k in row:
                 continue
             if v is None or isinstance(v, str | int | float | bool):
-                row[k] = round_value(v, "-") if isinstance(v, float) else v
+                # A number of unknown meaning keeps 4 significant digits: a
+                # small fraction must not round to 0.
+                row[k] = float(f"{v:.4g}") if isinstance(v, float) and math.isfinite(v) else v
         row["reason"] = a.get("reason", "")
         row["designs_screened"] = a.get("evaluations")
         row["checks"] = "; ".join(

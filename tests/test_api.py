@@ -130,7 +130,7 @@ def test_alternatives_tolerate_new_keys():
     row = f.iloc[0]
     assert row["cost"] == 1235 and row["design_energy"] == 813
     assert row["design_energy_bound"] == 850 and row["height_factor"] == 2.05
-    assert row["new_key"] == 0.12 and "nested" not in f
+    assert row["new_key"] == 0.1235 and "nested" not in f
     assert row["measures"] == "fence 3 m 1,000 kJ @ 10 m"
 
 
@@ -260,6 +260,9 @@ def test_no_pyplot_and_no_backend_switch_in_a_fresh_process():
         "import sys, matplotlib\n"
         "matplotlib.use('svg')\n"
         "import rockfall_design as rd\n"
+        "from rockfall_design.optimise import optimise as search  # the submodule\n"
+        "assert rd.optimise is not search and callable(rd.optimise)\n"
+        "assert rd.optimise.__module__ == 'rockfall_design.api'\n"
         f"r = rd.check({str(QUARRY)!r}, rocks=30, seed=1)\n"
         "figs = [r.plot(), r.plot('envelopes'), r.plot('stops')]\n"
         "assert figs[0]._repr_png_().startswith(b'\\x89PNG')\n"
