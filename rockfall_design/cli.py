@@ -469,9 +469,10 @@ def cmd_plugins(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(plugins_json(registry), allow_nan=False) + "\n")
     else:
-        from rich.console import Console
+        from .report import fitted_console
 
-        Console().print(plugins_table(registry))
+        table = plugins_table(registry)
+        fitted_console(table).print(table)
     return int(ExitCode.OK)
 
 
