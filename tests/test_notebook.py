@@ -17,12 +17,21 @@ def test_the_walkthrough_notebook_runs():
         NotebookClient = None
     if NotebookClient is not None:
         nb = nbformat.read(NOTEBOOK, as_version=4)
+        # Around the reader's cells: the kernel's backend (inline) is the same after them.
+        nb.cells.insert(0, nbformat.v4.new_code_cell(
+            "import matplotlib\n_backend_before = matplotlib.get_backend()"))
+        nb.cells.append(nbformat.v4.new_code_cell(
+            "assert matplotlib.get_backend() == _backend_before, "
+            "(_backend_before, matplotlib.get_backend())\n"
+            "print('backend', _backend_before)"))
         # A real kernel, started in examples/ as Jupyter would.
         NotebookClient(nb, timeout=600, kernel_name="python3",
                        resources={"metadata": {"path": str(NOTEBOOK.parent)}}).execute()
         errors = [o for c in nb.cells if c.cell_type == "code"
                   for o in c.get("outputs", []) if o.get("output_type") == "error"]
         assert not errors
+        last = nb.cells[-1]["outputs"][0]["text"]
+        assert "inline" in last  # the kernel's inline backend, left as it was
         figures = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
                    if "image/png" in o.get("data", {})]
         assert len(figures) >= 4  # envelopes, profile, alternatives, chosen design
