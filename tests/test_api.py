@@ -178,9 +178,13 @@ def test_envelopes_only_where_enough_rocks_pass(tmp_path):
 def test_report_of_optimise_is_self_contained(tmp_path, capsys):
     out = tmp_path / "report"
     code = main(["optimise", str(PROJECTS / "design_ditch_or_fence.yaml"), "--rocks", "400",
-                 "--report", str(out), "--json"])
+                 "--report", str(out), "--out", str(tmp_path / "o"), "--json"])
     assert code in (0, 1)
     summary = json.loads(capsys.readouterr().out)
+    csv = pd.read_csv(tmp_path / "o" / "alternatives.csv")
+    assert len(csv) == len(summary["alternatives"])
+    assert {"family", "cost", "residual", "checks"} <= set(csv.columns)
+    assert {c["name"] for a in summary["alternatives"] for c in a["checks"]} <= set(csv.columns)
     html = (out / "report.html").read_text(encoding="utf-8")
     md = (out / "report.md").read_text(encoding="utf-8")
     # Self-contained: no file or URL is loaded from outside the page.
