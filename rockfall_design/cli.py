@@ -45,6 +45,18 @@ def _int_at_least(low: int, what: str):
 
 
 _positive_int = _int_at_least(1, "number")
+
+
+def _formats(text: str) -> tuple[str, ...]:
+    """An argparse type: 'png,svg' -> ('png', 'svg'), each a known figure format."""
+    from .figures import FIGURE_FORMATS
+
+    out = tuple(dict.fromkeys(f.strip().lower() for f in text.split(",") if f.strip()))
+    bad = [f for f in out if f not in FIGURE_FORMATS]
+    if bad or not out:
+        raise argparse.ArgumentTypeError(
+            f"expected formats among {', '.join(FIGURE_FORMATS)}, got {text!r}")
+    return out
 _seed = _int_at_least(0, "seed")
 
 
@@ -75,6 +87,12 @@ def _add_run_options(
     p.add_argument("--seed", type=_seed, metavar="S", help=seed)
     p.add_argument("--out", type=Path, metavar="DIR", help=out)
     p.add_argument("--plot", type=Path, metavar="DIR", help=plot)
+    p.add_argument("--plot-format", type=_formats, default=("png",), metavar="FMT[,FMT]",
+                   help="file formats of the --plot figures: png, svg, pdf, comma-separated "
+                   "(default: png)")
+    p.add_argument("--report", type=Path, metavar="DIR",
+                   help="write DIR/report.html (self-contained: figures inline as SVG) and "
+                   "DIR/report.md (its Markdown twin, figures beside it as SVG)")
     p.add_argument("--json", action="store_true", help=json_)
 
 
@@ -146,15 +164,17 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run_options(
         opt,
         project="project file (YAML) with a design: section",
-        rocks="number of rocks every design is searched and checked with (default: "
-        "rocks.count of the project; the fresh rocks are at least as many)",
-        seed="random seed of those rocks (default: rocks.seed of the project; the fresh "
-        "rocks use another seed)",
+        rocks="number of rocks every design is searched with (default: rocks.count of the "
+        "project); a design near a limit is decided with more, up to design.max_rocks, and "
+        "checked on fresh rocks, at least twice those that decided it",
+        seed="random seed of the search and of the decision (default: rocks.seed of the "
+        "project; the fresh rocks use another seed)",
         out="write design.yaml (the project with the chosen measures, for check; removed "
         "when no design is admissible), alternatives.csv (one row per family of measures) "
         "and summary.json (the summary and the run record) into DIR",
-        plot="draw profile.png, envelopes.png and stops.png of the chosen design into DIR "
-        "(none when no design is admissible)",
+        plot="draw alternatives.png (every family's cost or reason) and profile.png, "
+        "envelopes.png and stops.png of the chosen design into DIR (only alternatives.png "
+        "when no design is admissible)",
         json_="print the alternatives and the best design as one JSON object on stdout "
         "instead of the report",
     )
@@ -234,14 +254,37 @@ def _progress(console_needed: bool, total: int):
 
 
 def _run(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:
-    """Call ``run(project, rocks=..., seed=..., ...)`` with a progress bar if interactive."""
+    """Call the API's ``run(project, rocks=..., seed=..., ...)``, with a progress bar if
+    interactive, keeping the paths of the first rocks when a figure will need them."""
+    from .api import DEFAULT_TRAJECTORIES
+
     n = args.rocks or project.rocks.count
-    kw.update(rocks=n, seed=args.seed, n_trajectories=60 if args.plot else 0)
+    drawn = args.plot or args.report
+    kw.update(rocks=n, seed=args.seed, trajectories=DEFAULT_TRAJECTORIES if drawn else 0)
     prog, callback = _progress(sys.stderr.isatty() and n >= 20_000, n)
     if prog is None:
-        return run(project, **kw)
+        return run(project, progress=False, **kw)
     with prog:
         return run(project, progress=callback, **kw)
+
+
+#: The files of --report DIR.
+REPORT_FILES = ("report.html", "report.md")
+
+
+def _figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet) -> None:
+    """The --plot figures and the --report documents of an API result, in the output set."""
+    if not (args.plot or args.report):
+        return
+    figures = result.figures()  # drawn once for both
+    if args.plot:
+        from .figures import save_figures
+
+        save_figures(figures, args.plot, args.plot_format, files)
+    if args.report:
+        from .documents import write_report
+
+        write_report(result, args.report, outputs=files, figures=figures)
 
 
 def _warn_failures(registry: Any) -> None:
@@ -266,9 +309,10 @@ def _plugins_for(project: Any, args: argparse.Namespace) -> Any:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    from .api import SimulationResult, run_simulation
     from .outputs import OutputSet
     from .project import load_project
-    from .simulation import simulate, study_memory
+    from .simulation import study_memory
 
     recorded = None
     if getattr(args, "repeat", None):
@@ -286,16 +330,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                   "Use fewer analysis.envelope_points or analysis.stations.")
     with OutputSet() as files:
         _reserve(files, args.out, ("rocks.csv", "crossings.csv", "summary.json"))
+        _reserve(files, args.report, REPORT_FILES)
         on_chunk = _table_writers(files, args.out) if args.out else None
-        study = _run(simulate, project, args, on_chunk=on_chunk)
-        summary = study.summary()
+        study = _run(run_simulation, project, args, on_chunk=on_chunk)
+        result = SimulationResult(project, study)
+        summary = result.summary
         if args.out:
             files.write_json(args.out / "summary.json",
                              {**summary, "run": run_record(study, args)})
-        if args.plot:
-            from .report import plot_study
-
-            plot_study(study, args.plot, outputs=files)
+        _figures_and_report(result, args, files)
     if recorded is not None:
         same = _comparable(summary) == _comparable(recorded)
         sys.stderr.write(
@@ -370,7 +413,7 @@ def _comparable(summary: dict[str, Any]) -> dict[str, Any]:
 
 def cmd_check(args: argparse.Namespace) -> int:
     """Evaluate the project's measures; exit 0 if every check holds, else 1."""
-    from .evaluate import evaluate
+    from .api import check
     from .outputs import OutputSet
     from .project import load_project
 
@@ -381,24 +424,21 @@ def cmd_check(args: argparse.Namespace) -> int:
                      len(project.analysis.stations))
     with OutputSet() as files:
         _reserve(files, args.out, ("rocks.csv", "crossings.csv", "measures.csv", "summary.json"))
-        evaluation = _run(evaluate, project, args, registry=registry)
-        summary = evaluation.summary()
+        _reserve(files, args.report, REPORT_FILES)
+        result = _run(check, project, args, registry=registry)
+        evaluation = result.evaluation
+        summary = result.summary
         study = evaluation.study
         if args.out:
             out: Path = args.out
-            rocks = study.rocks_table()
-            rocks["caught_by_measure"] = evaluation.caught_by_measure()
-            files.write_csv(out / "rocks.csv", rocks)
+            files.write_csv(out / "rocks.csv", result.rocks)
             files.write_csv(out / "crossings.csv", study.crossings_table())
             files.write_csv(out / "measures.csv", evaluation.outcomes_table())
             record = run_record(study, args)
             record["project"] = evaluation.resolved_project().resolved_dict()
             record["project_hash"] = evaluation.resolved_project().resolved_hash()
             files.write_json(out / "summary.json", {**summary, "run": record})
-        if args.plot:
-            from .report import plot_study
-
-            plot_study(study, args.plot, evaluation, outputs=files)
+        _figures_and_report(result, args, files)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
@@ -410,10 +450,10 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 def cmd_optimise(args: argparse.Namespace) -> int:
     """Least-cost design; exit 0 with a design, 1 if no family meets the targets."""
-    from .optimise import optimise
+    from .api import optimise
     from .outputs import OutputSet
     from .project import load_project
-    from .report import alternatives_table, design_yaml, print_optimise
+    from .report import design_yaml, print_optimise
 
     project = load_project(args.project)
     if project.design is None:
@@ -424,13 +464,16 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     _in_memory_guard(n, project.analysis.envelope_points + 400, len(project.analysis.stations))
     with OutputSet() as files:
         _reserve(files, args.out, ("design.yaml", "alternatives.csv", "summary.json"))
+        _reserve(files, args.report, REPORT_FILES)
         prog, callback = _stage_progress(sys.stderr.isatty())
         if prog is None:
-            result = optimise(project, registry, rocks=n, seed=args.seed)
+            report = optimise(project, rocks=n, seed=args.seed, registry=registry)
         else:
             with prog:
-                result = optimise(project, registry, rocks=n, seed=args.seed, progress=callback)
-        summary = result.summary()
+                report = optimise(project, rocks=n, seed=args.seed, registry=registry,
+                                  progress=callback)
+        result = report.result
+        summary = report.summary
         if args.out:
             out: Path = args.out
             if result.best is not None:
@@ -441,22 +484,14 @@ def cmd_optimise(args: argparse.Namespace) -> int:
                 # A design.yaml of an earlier run must not sit beside a
                 # summary that says there is no design.
                 files.remove(out / "design.yaml")
-            files.write_csv(out / "alternatives.csv", alternatives_table(result))
+            files.write_csv(out / "alternatives.csv", report.alternatives)
             record = {"command": "optimise", "version": __version__, "seed": result.seed,
                       "rocks": result.rocks, "project_file": str(args.project),
                       "project_hash": project.resolved_hash(),
                       "project": project.resolved_dict()}
             files.write_json(out / "summary.json", {**summary, "run": record})
-        if args.plot and result.best is not None and result.best.evaluation is not None:
-            from .evaluate import evaluate_design
-            from .report import plot_study
-
-            # The same rocks again, keeping a sample of paths for the figure.
-            best = result.best.evaluation
-            ev = evaluate_design(best.study.project, registry, result.best.measures,
-                                 best.concept, rocks=result.rocks, seed=result.seed,
-                                 n_trajectories=60)
-            plot_study(ev.study, args.plot, ev, outputs=files)
+        # The chosen design's figures run its rocks again, keeping a sample of paths.
+        _figures_and_report(report, args, files)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
@@ -489,9 +524,10 @@ def cmd_plugins(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(plugins_json(registry), allow_nan=False) + "\n")
     else:
-        from rich.console import Console
+        from .report import fitted_console
 
-        Console().print(plugins_table(registry))
+        table = plugins_table(registry)
+        fitted_console(table).print(table)
     return int(ExitCode.OK)
 
 

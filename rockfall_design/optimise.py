@@ -1427,6 +1427,8 @@ def optimise(
                                        cost_limit=limit)
         simulated += _settle(alt, designs, tally, project, registry, concept, screen, spec,
                              seed=s, fresh_seed=fresh_seed)
+        if progress:
+            progress("check", done + 1, len(fams))
         alt.evaluations = screen.evaluations - ev0
         alt.wall_s = time.perf_counter() - ft
         if not alt.holds_on_fresh_rocks and not alt.dominated:

@@ -692,6 +692,11 @@ class Analysis(_Model):
     envelope_points: Annotated[Integer, Field(ge=2)] = Field(
         201, description="Number of envelope stations spread along the section."
     )
+    min_rocks_envelope: Annotated[Integer, Field(ge=1)] = Field(
+        30,
+        description="Fewest rocks that must pass a point of the section for the figures to "
+        "draw the envelopes there (a percentile of a handful of rocks says little).",
+    )
 
 
 class Protect(_Model):

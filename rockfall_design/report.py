@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -12,8 +11,6 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from .engine import G
-from .engine.core import EXIT_DOWNSLOPE, STOPPED, T_MODE, T_T, T_VX, T_VY, T_X, T_Y
 from .outputs import OutputSet
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -27,6 +24,31 @@ __all__ = [
     "design_yaml",
     "plot_study",
 ]
+
+
+#: The widest a report printed to a pipe or a file is made (characters).
+MAX_FILE_WIDTH = 200
+
+
+def fitted_console(renderable: Any, file: Any = None) -> Console:
+    """A console as wide as the report's output can show it.
+
+    On a terminal, rich measures the terminal and tables shrink or wrap their
+    cells to fit it. Printed to a pipe or a file there is no width to fit and
+    rich would fall back to 80 columns, wrapping every long line; there the
+    console is as wide as the content needs (at least 80 columns, at most
+    :data:`MAX_FILE_WIDTH`), unless ``COLUMNS`` says otherwise.
+    """
+    import os
+
+    from rich.measure import Measurement
+
+    console = Console(file=file)
+    if console.is_terminal or os.environ.get("COLUMNS"):
+        return console
+    wide = Console(file=file, width=MAX_FILE_WIDTH)
+    need = Measurement.get(wide, wide.options, renderable).maximum
+    return Console(file=file, width=max(80, min(MAX_FILE_WIDTH, need)))
 
 
 def _fmt(v: float | None, digits: int = 2) -> str:
@@ -126,8 +148,8 @@ def simulation_renderable(summary: dict[str, Any]) -> Group:
 
 
 def print_simulation(summary: dict[str, Any], console: Console | None = None) -> None:
-    console = console or Console()
-    console.print(Panel(simulation_renderable(summary), title="rockfall-design simulate"))
+    panel = Panel(simulation_renderable(summary), title="rockfall-design simulate")
+    (console or fitted_console(panel)).print(panel)
 
 
 def _value(v: float | None, unit: str) -> str:
@@ -199,8 +221,8 @@ def check_renderable(summary: dict[str, Any]) -> Group:
 
 
 def print_check(summary: dict[str, Any], console: Console | None = None) -> None:
-    console = console or Console()
-    console.print(Panel(check_renderable(summary), title="rockfall-design check"))
+    panel = Panel(check_renderable(summary), title="rockfall-design check")
+    (console or fitted_console(panel)).print(panel)
 
 
 def _measure_short(m: Any) -> str:
@@ -233,7 +255,6 @@ def _factors(alt: Any) -> str:
 
 def print_optimise(result: Any, project: Any, console: Console | None = None) -> None:
     """The optimiser's comparison of alternatives, the chosen one marked."""
-    console = console or Console()
     cur = result.currency or ""
     tab = Table(show_edge=False, title="Alternatives (cheapest design of each family)",
                 title_justify="left", caption="factors: h height, e energy, r reach "
@@ -273,30 +294,18 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
     for a in order:
         if not a.feasible and a.reason:
             parts.append(Text(f"  {a.name}: {a.reason}", style="dim"))
-    console.print(Panel(Group(*parts), title="rockfall-design optimise"))
+    panel = Panel(Group(*parts), title="rockfall-design optimise")
+    (console or fitted_console(panel)).print(panel)
 
 
 def alternatives_table(result: Any) -> Any:
-    import pandas as pd
+    """alternatives.csv: one row per family, one column per check, rounded numbers.
 
-    rows = []
-    for a in result.alternatives:
-        rows.append({
-            "family": a.name,
-            "chosen": result.best is a,
-            "feasible": a.feasible,
-            "holds_on_fresh_rocks": a.holds_on_fresh_rocks,
-            "cost": a.cost if np.isfinite(a.cost) else None,
-            "residual": a.residual,
-            "fresh_residual": a.fresh_residual,
-            "measures": "; ".join(m.label() for m in a.measures),
-            "checks": "; ".join(
-                f"{c['name']}={c['value']}/{c['target']}:{'ok' if c['ok'] else 'fails'}"
-                for c in a.checks),
-            "reason": a.reason,
-            "designs_screened": a.evaluations,
-        })
-    return pd.DataFrame(rows)
+    See :func:`rockfall_design.tables.alternatives_frame`.
+    """
+    from .tables import alternatives_frame
+
+    return alternatives_frame(result.summary())
 
 
 def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
@@ -336,240 +345,21 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
 # ---- figures -----------------------------------------------------------------
 
 
-def _trajectory_xy(tr: np.ndarray, pts_per_flight: int = 24) -> tuple[np.ndarray, np.ndarray]:
-    """Centre positions along a recorded path: parabolas in flight, lines in contact."""
-    xs: list[np.ndarray] = []
-    ys: list[np.ndarray] = []
-    for i in range(len(tr) - 1):
-        a = tr[i]
-        if a[T_MODE] == 0:  # flight
-            t = np.linspace(0.0, tr[i + 1, T_T] - a[T_T], pts_per_flight)
-            xs.append(a[T_X] + a[T_VX] * t)
-            ys.append(a[T_Y] + a[T_VY] * t - 0.5 * G * t**2)
-        else:
-            xs.append(np.array([a[T_X], tr[i + 1, T_X]]))
-            ys.append(np.array([a[T_Y], tr[i + 1, T_Y]]))
-    if not xs:
-        return tr[:, T_X], tr[:, T_Y]
-    return np.concatenate(xs), np.concatenate(ys)
-
-
-def _ground(ax, study: Study) -> None:
-    sec = study.section
-    ymin = sec.y.min() - 0.05 * max(np.ptp(sec.y), 1.0)
-    ax.fill_between(sec.x, sec.y, ymin, color="#d9cfc1", zorder=1)
-    ax.plot(sec.x, sec.y, color="#5b4a36", lw=1.5, zorder=3, label="ground")
-    ax.set_ylim(bottom=ymin)
-
-
-def _marks(ax, study: Study, label: bool = True) -> None:
-    for j, xs in enumerate(study.stations):
-        ax.axvline(
-            xs,
-            color="#1f5fa8",
-            ls="--",
-            lw=0.9,
-            zorder=2,
-            label="analysis station" if (label and j == 0) else None,
-        )
-    if study.project.protect is not None:
-        ax.axvspan(
-            study.project.protect.x,
-            study.section.x[-1],
-            color="#e8a0a0",
-            alpha=0.25,
-            zorder=0,
-            label="protected zone" if label else None,
-        )
-
-
-def _save(fig, path: Path, outputs: OutputSet) -> None:
-    def writer(fh: io.BufferedWriter) -> None:
-        fig.savefig(fh, format="png", dpi=150, bbox_inches="tight")
-
-    outputs.write_with(path, writer)
-
-
-def _draw_measures(ax, evaluation: Any, label: bool = True) -> None:
-    """Barriers as bars of their height; edited ground over the original (dashed)."""
-    from .measures import Barrier
-
-    sec0 = evaluation.original_section
-    ax.plot(
-        sec0.x,
-        sec0.y,
-        color="#5b4a36",
-        lw=0.9,
-        ls="--",
-        zorder=3,
-        label="original ground" if label else None,
-    )
-    first = True
-    for p in evaluation.placed:
-        fp = p.footprint
-        if isinstance(fp, Barrier):
-            yg = evaluation.study.section.ground_height(fp.x)
-            ax.plot(
-                [fp.x, fp.x],
-                [yg, yg + fp.height_m],
-                color="#1e8449",
-                lw=3.0,
-                zorder=6,
-                solid_capstyle="butt",
-                label="barrier" if (label and first) else None,
-            )
-            first = False
-            ax.annotate(
-                p.measure.kind,
-                (fp.x, yg + fp.height_m),
-                textcoords="offset points",
-                xytext=(3, 4),
-                fontsize=7,
-                color="#1e8449",
-            )
-        else:
-            ax.axvspan(fp.catch_from, fp.catch_to, color="#1e8449", alpha=0.12, zorder=0)
-            ax.annotate(
-                p.measure.kind,
-                (fp.catch_from, evaluation.study.section.ground_height(fp.catch_from)),
-                textcoords="offset points",
-                xytext=(0, 8),
-                fontsize=7,
-                color="#1e8449",
-            )
-
-
 def plot_study(
     study: Study | StreamedStudy,
     directory: str | Path,
     evaluation: Any = None,
     outputs: OutputSet | None = None,
+    formats: tuple[str, ...] = ("png",),
 ) -> list[Path]:
-    """Write profile.png, envelopes.png and stops.png into ``directory``.
+    """Write profile, envelopes and stops figures into ``directory``, in each format.
 
     With an ``evaluation`` (from ``check``) the measures are drawn too. The
     figures join the output set ``outputs`` of the command they belong to
     and land when it commits; without one they land together on return.
-    Returns the paths written.
+    The figures are built by :mod:`rockfall_design.figures` (no pyplot, no
+    backend switch). Returns the paths written.
     """
-    if outputs is None:
-        with OutputSet() as own:
-            return plot_study(study, directory, evaluation, own)
-    import matplotlib
+    from .figures import save_figures, study_figures
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out = Path(directory)
-    written: list[Path] = []
-    name = study.project.name
-    counts = study.status_counts()
-    n_stopped = int(counts[STOPPED])
-
-    # 1. Profile with a sample of trajectories.
-    fig, ax = plt.subplots(figsize=(11, 5.5))
-    _ground(ax, study)
-    for k, tr in enumerate(study.trajectories):
-        x, y = _trajectory_xy(tr)
-        ax.plot(
-            x,
-            y,
-            lw=0.6,
-            alpha=0.55,
-            color="#c0392b",
-            zorder=4,
-            label="rock centre paths" if k == 0 else None,
-        )
-    rest_x, rest_y = study.rest_positions()
-    if rest_x.size:
-        ax.plot(
-            rest_x,
-            rest_y,
-            "k.",
-            ms=2,
-            alpha=0.4,
-            zorder=5,
-            label="rest positions" if rest_x.size == n_stopped
-            else f"rest positions (first {rest_x.size:,} of {n_stopped:,})",
-        )
-    _marks(ax, study)
-    if evaluation is not None:
-        _draw_measures(ax, evaluation)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("elevation (m)")
-    ax.set_title(f"{name}: slope section and {len(study.trajectories)} of {study.n:,} paths")
-    ax.set_aspect("equal", adjustable="box")
-    ax.legend(loc="upper right", fontsize=8)
-    ax.grid(alpha=0.3)
-    p = out / "profile.png"
-    _save(fig, p, outputs)
-    plt.close(fig)
-    written.append(p)
-
-    # 2. Envelopes of passing height and energy along x.
-    env = study.envelopes()
-    pcts = [c for c in env.columns if c.startswith("height_p")]
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(11, 7), sharex=True)
-    a1.plot(env["x_m"], env["height_max_m"], color="k", lw=1.4, label="max")
-    a2.plot(env["x_m"], env["energy_max_kj"], color="k", lw=1.4, label="max")
-    colors = plt.cm.viridis(np.linspace(0.15, 0.85, max(len(pcts), 1)))
-    for c, col in zip(colors, pcts, strict=False):
-        q = col[len("height_p") : -len("_m")].replace("_", ".")
-        a1.plot(env["x_m"], env[col], color=c, lw=1.0, label=f"p{q}")
-        a2.plot(
-            env["x_m"],
-            env[col.replace("height", "energy")[:-2] + "_kj"],
-            color=c,
-            lw=1.0,
-            label=f"p{q}",
-        )
-    for ax in (a1, a2):
-        _marks(ax, study, label=False)
-        if evaluation is not None:
-            for p in evaluation.placed:
-                ax.axvline(
-                    p.footprint.x if hasattr(p.footprint, "height_m") else p.footprint.catch_from,
-                    color="#1e8449",
-                    lw=1.2,
-                    alpha=0.8,
-                )
-        ax.grid(alpha=0.3)
-        ax.legend(loc="upper right", fontsize=8)
-    a1.set_ylabel("passing height of the\nrock centre above ground (m)")
-    a2.set_ylabel("total kinetic energy (kJ)")
-    a2.set_xlabel("x (m)")
-    a1.set_title(f"{name}: envelopes over {study.n:,} rocks (first passage downslope)")
-    p = out / "envelopes.png"
-    _save(fig, p, outputs)
-    plt.close(fig)
-    written.append(p)
-
-    # 3. Where rocks stop.
-    fig, (a1, a2) = plt.subplots(
-        2, 1, figsize=(11, 6), sharex=True, gridspec_kw={"height_ratios": [2, 1]}
-    )
-    sec = study.section
-    bins = np.linspace(sec.x[0], sec.x[-1], 81)
-    if n_stopped:
-        a1.bar(bins[:-1], study.stop_counts(80), width=np.diff(bins), align="edge",
-               color="#7f8c8d", edgecolor="white")
-    outs = int(counts[EXIT_DOWNSLOPE])
-    a1.set_ylabel("rocks at rest")
-    a1.set_title(
-        f"{name}: rest positions of {n_stopped:,} rocks; "
-        f"{outs:,} left the section downslope"
-    )
-    _marks(a1, study)
-    a1.grid(alpha=0.3)
-    if study.project.protect is not None or len(study.stations):
-        a1.legend(loc="upper left", fontsize=8)
-    _ground(a2, study)
-    if evaluation is not None:
-        _draw_measures(a2, evaluation, label=False)
-    a2.set_xlabel("x (m)")
-    a2.set_ylabel("elevation (m)")
-    p = out / "stops.png"
-    _save(fig, p, outputs)
-    plt.close(fig)
-    written.append(p)
-    return written
+    return save_figures(study_figures(study, evaluation), directory, formats, outputs)

@@ -29,6 +29,8 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--plot": ["profile.png", "envelopes.png", "stops.png", "DIR"],
         "--json": ["JSON", "stdout"],
         "--block": ["plugin"],
+        "--plot-format": ["png", "svg", "pdf", "--plot"],
+        "--report": ["report.html", "report.md", "DIR"],
     },
     "check": {
         "project": ["project file", "measures:"],
@@ -39,6 +41,8 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--plot": ["profile.png", "measures", "envelopes.png", "stops.png", "DIR"],
         "--json": ["JSON", "stdout", "measures", "protect", "ok", "failures"],
         "--block": ["plugin"],
+        "--plot-format": ["png", "svg", "pdf", "--plot"],
+        "--report": ["report.html", "report.md", "DIR"],
     },
     "optimise": {
         "project": ["project file", "design:"],
@@ -46,10 +50,12 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--seed": ["random seed", "rocks.seed", "fresh"],
         "--out": ["design.yaml", "chosen measures", "no design is admissible",
                   "alternatives.csv", "summary.json", "DIR"],
-        "--plot": ["profile.png", "envelopes.png", "stops.png", "chosen design",
-                   "no design is admissible", "DIR"],
+        "--plot": ["alternatives.png", "profile.png", "envelopes.png", "stops.png",
+                   "chosen design", "no design is admissible", "DIR"],
         "--json": ["JSON", "stdout", "alternatives", "best"],
         "--block": ["plugin"],
+        "--plot-format": ["png", "svg", "pdf", "--plot"],
+        "--report": ["report.html", "report.md", "DIR"],
     },
     "plugins": {
         "--json": ["JSON", "stdout", "measures", "safety concepts", "cost models", "failed"],
@@ -127,12 +133,15 @@ def test_out_and_plot_write_the_files_their_help_names(command, project, rocks, 
                  "--out", str(out), "--plot", str(plot), "--json"])
     summary = json.loads(capsys.readouterr().out)
     assert code in (0, 1)
-    assert summary["rocks"] == int(rocks) and summary["seed"] == 5  # --rocks and --seed
+    # --rocks and --seed (optimise: the search's rocks; "rocks" are those that decided)
+    rocks_key = "search_rocks" if command == "optimise" else "rocks"
+    assert summary[rocks_key] == int(rocks) and summary["seed"] == 5
     written = {p.name for p in out.iterdir()}
     drawn = {p.name for p in plot.iterdir()} if plot.exists() else set()
     if command == "optimise" and summary["best"] is None:
-        # as the help says: no design.yaml and no figures without an admissible design
-        assert "design.yaml" not in written and not drawn
+        # as the help says: no design.yaml, and only alternatives.png, without an
+        # admissible design
+        assert "design.yaml" not in written and drawn == {"alternatives.png"}
         written.add("design.yaml")
         drawn = named_files(command, "--plot", capsys, monkeypatch)
     assert written == named_files(command, "--out", capsys, monkeypatch)

@@ -127,3 +127,14 @@ def test_physics_reference_covers_the_model_and_the_design_values():
                    "r ds/dt   = 5/2 g cos β (μ sgn σ − μ_r sgn s)",   # resistance while slipping
                    "|u| ≤ 7/2 μ p_n", "Clopper", "Binomial(n, q)"):
         assert needle in text, needle
+
+def test_readme_from_python_block_runs(tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    source = _block_after("## From Python", "python")
+    (tmp_path / "projects").symlink_to(ROOT / "projects")
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    exec(compile(source, "README.md", "exec"), namespace)  # noqa: S102
+    assert isinstance(namespace["r"].plot(), Figure)
+    assert (tmp_path / "report" / "report.html").is_file()

@@ -1,0 +1,640 @@
+"""The public Python API: load a project, simulate, check, optimise; tables and figures.
+
+>>> import rockfall_design as rd
+>>> p = rd.load_project("projects/design_two_zones.yaml")   # doctest: +SKIP
+>>> r = rd.optimise(p, rocks=2000, seed=1)                  # doctest: +SKIP
+>>> r.best["name"], r.alternatives, r.plot()                # doctest: +SKIP
+
+The functions do what the commands of the same name do, and the CLI is a
+layer over them: ``.summary`` of a result is the dict that ``--json``
+prints. Tables are pandas DataFrames; figures are
+:class:`matplotlib.figure.Figure` objects built without pyplot, so nothing
+here chooses or switches matplotlib's backend (a notebook's inline figures
+stay as they were).
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Callable
+from functools import cached_property
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import pandas as pd
+
+from .errors import InputError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
+    from .evaluate import Evaluation
+    from .optimise import OptimisationResult
+    from .plugins import Registry
+    from .project import Project
+    from .simulation import StreamedStudy, Study
+
+__all__ = [
+    "load_project",
+    "simulate",
+    "check",
+    "optimise",
+    "SimulationResult",
+    "CheckResult",
+    "OptimiseResult",
+    "DEFAULT_TRAJECTORIES",
+]
+
+#: Rock paths kept for the profile figure (the first rocks of the run).
+DEFAULT_TRAJECTORIES = 60
+
+
+_REGISTRIES: dict[tuple[str, ...], Registry] = {}
+
+
+def default_registry(block: tuple[str, ...] = ()) -> Registry:
+    """The installed plugins, loaded once per process (per set of blocked names).
+
+    A plugin that fails to load is named in a :class:`UserWarning`; the
+    others are used.
+    """
+    from .plugins import load_registry
+
+    key = tuple(sorted(block))
+    if key not in _REGISTRIES:
+        registry = load_registry(blocked=key)
+        for f in registry.failures:
+            warnings.warn(f"plugin {f.plugin!r} was not loaded: {f.reason}", stacklevel=3)
+        _REGISTRIES[key] = registry
+    return _REGISTRIES[key]
+
+
+def load_project(path: str | os.PathLike[str], *, registry: Registry | None = None) -> Project:
+    """Read a project file and validate all of it, the plugins' sections included.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The YAML project file.
+    registry : Registry, optional
+        The plugins to validate ``measures:``, ``safety:`` and ``design:``
+        with (default: the installed ones).
+
+    Returns
+    -------
+    Project
+        The validated, normalised project (pydantic model; ``p.rocks.count``,
+        ``p.analysis.stations``, ``p.resolved_dict()``, ...).
+
+    Raises
+    ------
+    ProjectError
+        The file is not a valid project: one line ``file:line: key.path: message``.
+    """
+    from .evaluate import validate_project
+    from .project import load_project as _load
+
+    project = _load(path)
+    validate_project(project, registry or default_registry())
+    return project
+
+
+def _project(project: Any, registry: Registry | None = None) -> Project:
+    """A Project from a Project or a path (validated with ``registry``)."""
+    if isinstance(project, str | os.PathLike):
+        return load_project(project, registry=registry)
+    return project
+
+
+def _progress_callback(progress: bool | Callable[..., None], total: int,
+                       stages: bool = False) -> tuple[Any, Any]:
+    """(context manager or None, callback or None) for ``progress``.
+
+    True shows a rich progress bar on stderr; a callable is called as the
+    engine reports (``done`` rocks, or ``stage, done, total`` for the
+    optimiser); False shows nothing.
+    """
+    if callable(progress):
+        return None, progress
+    if not progress:
+        return None, None
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    bar = Progress("[progress.description]{task.description}", BarColumn(),
+                   MofNCompleteColumn(), TimeElapsedColumn(),
+                   console=Console(stderr=True), transient=True)
+    if not stages:
+        task = bar.add_task("rocks", total=total)
+        return bar, (lambda done: bar.update(task, completed=done))
+    tasks: dict[str, Any] = {}
+
+    def staged(stage: str, done: int, of: int) -> None:
+        if stage not in tasks:
+            tasks[stage] = bar.add_task(stage, total=of)
+        bar.update(tasks[stage], completed=done, total=of)
+
+    return bar, staged
+
+
+def _call(progress: bool | Callable[..., None], total: int, fn: Callable[..., Any],
+          stages: bool = False, **kw: Any) -> Any:
+    bar, callback = _progress_callback(progress, total, stages)
+    if callback is not None:
+        kw["progress"] = callback
+    if bar is None:
+        return fn(**kw)
+    with bar:
+        return fn(**kw)
+
+
+# ---- results --------------------------------------------------------------------
+
+
+def _stations_frame(summary: dict[str, Any]) -> pd.DataFrame:
+    """One row per analysis station: crossings and the statistics of each quantity."""
+    rows = []
+    for s in summary.get("stations", []):
+        row: dict[str, Any] = {"x_m": s["x"], "crossings": s["crossings"]}
+        for key, block in s.items():
+            if not isinstance(block, dict):
+                continue
+            base, _, unit = key.rpartition("_")
+            for stat, value in block.items():
+                row[f"{base}_{stat}_{unit}"] = value
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+class SimulationResult:
+    """What ``simulate`` found: summary, tables and figures of a run.
+
+    Attributes
+    ----------
+    project : Project
+    study : Study or StreamedStudy
+        The run itself (engine-level; prefer the tables below).
+    """
+
+    #: The command whose ``--json`` :attr:`summary` matches.
+    command = "simulate"
+
+    def __init__(self, project: Project, study: Study | StreamedStudy,
+                 rocks_tables: list[pd.DataFrame] | None = None) -> None:
+        self.project = project
+        self.study = study
+        self._rocks_tables = rocks_tables
+        self._evaluation: Evaluation | None = None
+
+    def __repr__(self) -> str:
+        return (f"<{type(self).__name__} {self.project.name!r}: {self.study.n:,} rocks, "
+                f"seed {self.study.seed}>")
+
+    @property
+    def seed(self) -> int:
+        """The seed of the run."""
+        return int(self.study.seed)
+
+    @property
+    def n_rocks(self) -> int:
+        """The number of rocks of the run."""
+        return int(self.study.n)
+
+    @cached_property
+    def summary(self) -> dict[str, Any]:
+        """The JSON-ready summary: the same dict as ``rockfall-design simulate --json``."""
+        return self.study.summary()
+
+    @property
+    def streamed(self) -> bool:
+        """True for a run of more than ``EXACT_ROCKS`` rocks (statistics from histograms)."""
+        from .simulation import StreamedStudy
+
+        return isinstance(self.study, StreamedStudy)
+
+    @cached_property
+    def rocks(self) -> pd.DataFrame:
+        """One row per rock: size, release, how and where its path ended (m, kg, s)."""
+        if self.streamed:
+            if self._rocks_tables is None:
+                raise ValueError("the per-rock table of this streamed run was not kept")
+            return pd.concat(self._rocks_tables, ignore_index=True)
+        return self.study.rocks_table()
+
+    @property
+    def crossings(self) -> pd.DataFrame:
+        """One row per rock and analysis station (first passage downslope; m, m/s, kJ)."""
+        if self.streamed:
+            raise ValueError(
+                f"a run of more than {self._exact_rocks():,} rocks is streamed and does not keep "
+                "its crossings; use fewer rocks, or rockfall-design simulate --out DIR, which "
+                "writes crossings.csv as the run goes")
+        return self.study.crossings_table()
+
+    @staticmethod
+    def _exact_rocks() -> int:
+        from .simulation import EXACT_ROCKS
+
+        return EXACT_ROCKS
+
+    @cached_property
+    def stations(self) -> pd.DataFrame:
+        """One row per analysis station: rocks passing and the statistics of height (m),
+        speed (m/s) and energies (kJ), columns such as ``passing_height_p95_m``."""
+        return _stations_frame(self.summary)
+
+    @property
+    def envelopes(self) -> pd.DataFrame:
+        """Envelopes along x of passing height (m) and energy (kJ), and rocks passing."""
+        return self.study.envelopes()
+
+    # ---- figures ---------------------------------------------------------
+    def plot_profile(self) -> Figure:
+        """The slope section with a sample of paths, stations and measures."""
+        from .figures import profile_figure
+
+        return profile_figure(self.study, self._evaluation)
+
+    def plot_envelopes(self, min_rocks: int | None = None) -> Figure:
+        """Envelopes of height and energy where at least ``min_rocks`` rocks pass.
+
+        ``min_rocks`` defaults to the project's ``analysis.min_rocks_envelope``.
+        """
+        from .figures import envelopes_figure
+
+        return envelopes_figure(self.study, self._evaluation, min_rocks)
+
+    def plot_stops(self) -> Figure:
+        """Where the rocks come to rest (says why when none does)."""
+        from .figures import stops_figure
+
+        return stops_figure(self.study, self._evaluation)
+
+    def figures(self) -> dict[str, Figure]:
+        """Every figure of the result, by name (the file names of ``--plot``)."""
+        return {"profile": self.plot_profile(), "envelopes": self.plot_envelopes(),
+                "stops": self.plot_stops()}
+
+    def plot(self, which: str = "profile") -> Figure:
+        """One figure by name: ``profile``, ``envelopes`` or ``stops``.
+
+        Returns a :class:`matplotlib.figure.Figure` (shown by a notebook
+        when it is a cell's value; ``fig.savefig(path)`` writes it).
+        """
+        methods = {"profile": self.plot_profile, "envelopes": self.plot_envelopes,
+                   "stops": self.plot_stops}
+        if which not in methods:
+            raise ValueError(f"unknown figure {which!r}; choose one of {', '.join(methods)}")
+        return methods[which]()
+
+    def save_figures(self, directory: str | os.PathLike[str],
+                     formats: tuple[str, ...] = ("png",)) -> list[Path]:
+        """Write every figure into ``directory`` as NAME.FORMAT (png, svg, pdf)."""
+        from .figures import save_figures
+
+        return save_figures(self.figures(), directory, formats)
+
+    def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
+        """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
+        from .documents import write_report
+
+        return write_report(self, directory)
+
+
+class CheckResult(SimulationResult):
+    """What ``check`` found: the run with the measures, and each measure's checks.
+
+    Attributes
+    ----------
+    evaluation : Evaluation
+        The design evaluated on the rocks (engine-level; prefer the tables).
+    """
+
+    command = "check"
+
+    def __init__(self, project: Project, evaluation: Evaluation) -> None:
+        super().__init__(project, evaluation.study)
+        self.evaluation = evaluation
+        self._evaluation = evaluation
+
+    @cached_property
+    def summary(self) -> dict[str, Any]:
+        """The JSON-ready summary: the same dict as ``rockfall-design check --json``."""
+        return self.evaluation.summary()
+
+    @property
+    def ok(self) -> bool:
+        """True when every check holds and the residual is within what is allowed."""
+        return bool(self.summary["ok"])
+
+    @property
+    def failures(self) -> list[str]:
+        """One line per failed check."""
+        return list(self.summary.get("failures", []))
+
+    @cached_property
+    def rocks(self) -> pd.DataFrame:
+        """One row per rock, with ``caught_by_measure`` (index in ``measures:``, -1 none)."""
+        rocks = self.study.rocks_table()
+        rocks["caught_by_measure"] = self.evaluation.caught_by_measure()
+        return rocks
+
+    @cached_property
+    def measures(self) -> pd.DataFrame:
+        """One row per measure: rocks met, caught, over, through; a column per check."""
+        from .tables import measures_frame
+
+        return measures_frame(self.summary)
+
+    @cached_property
+    def checks(self) -> pd.DataFrame:
+        """One row per safety check: value, confidence bound (if any), target, verdict."""
+        from .tables import checks_frame
+
+        return checks_frame(self.summary)
+
+    @property
+    def outcomes(self) -> pd.DataFrame:
+        """One row per rock and measure: the outcome of the first meeting and its values."""
+        return self.evaluation.outcomes_table()
+
+
+class OptimiseResult:
+    """What ``optimise`` found: the alternatives, the chosen design and its figures.
+
+    Built from the optimiser's result through its summary, ``best`` and
+    ``alternatives`` only, so it does not depend on how the search works.
+
+    Attributes
+    ----------
+    project : Project
+    result : OptimisationResult
+        The optimiser's own result object.
+    """
+
+    command = "optimise"
+
+    def __init__(self, project: Project, result: OptimisationResult,
+                 registry: Registry) -> None:
+        self.project = project
+        self.result = result
+        self._registry = registry
+
+    def __repr__(self) -> str:
+        best = self.best
+        chosen = "no admissible design" if best is None else f"chosen {best['name']!r}"
+        return f"<OptimiseResult {self.project.name!r}: {chosen}>"
+
+    @cached_property
+    def summary(self) -> dict[str, Any]:
+        """The JSON-ready summary: the same dict as ``rockfall-design optimise --json``."""
+        return self.result.summary()
+
+    @property
+    def seed(self) -> int:
+        return int(self.summary["seed"])
+
+    @property
+    def n_rocks(self) -> int:
+        return int(self.summary["rocks"])
+
+    @property
+    def ok(self) -> bool:
+        """True when a design meets every target."""
+        return self.result.best is not None
+
+    @cached_property
+    def best(self) -> dict[str, Any] | None:
+        """The chosen design (name, measures, cost, checks, residual, ...), None if none."""
+        return None if self.result.best is None else self.result.best.as_dict()
+
+    @cached_property
+    def alternatives(self) -> pd.DataFrame:
+        """One row per family: cost (currency units), residual, a column per check, reason."""
+        from .tables import alternatives_frame
+
+        return alternatives_frame(self.summary)
+
+    @cached_property
+    def design(self) -> CheckResult | None:
+        """The chosen design checked again on the search rocks, with paths for the figures.
+
+        None when no design meets the targets. The design's residual target
+        is the protected zone's allowance, as in the optimiser.
+        """
+        best = self.best
+        if best is None:
+            return None
+        from .evaluate import evaluate
+
+        project = self.design_project()
+        ev = evaluate(project, self._registry, rocks=self.n_rocks, seed=self.seed,
+                      n_trajectories=DEFAULT_TRAJECTORIES)
+        return CheckResult(project, ev)
+
+    def design_project(self) -> Project:
+        """The project with the chosen measures in ``measures:``, as ``check`` would read it."""
+        best = self.best
+        if best is None:
+            raise ValueError(f"no design to check: {self.summary.get('reason', '')}")
+        p = self.project
+        d = p.design
+        allowed = d.residual_fraction
+        if allowed is None:
+            allowed = (d.residual_count or 0) / max(self.n_rocks, 1)
+        protect = p.protect.model_copy(update={"allowed_fraction": allowed})
+        return p.model_copy(update={"measures": [dict(m) for m in best["measures"]],
+                                    "protect": protect})
+
+    # ---- figures ---------------------------------------------------------
+    def plot_alternatives(self) -> Figure:
+        """A bar per family: cost, residual and the check that binds or fails."""
+        from .figures import alternatives_figure
+
+        s = self.summary
+        return alternatives_figure(s["alternatives"], s.get("best"), s.get("currency", ""),
+                                   self.project.name)
+
+    def figures(self) -> dict[str, Figure]:
+        """The alternatives figure, and the chosen design's profile, envelopes and stops."""
+        out = {"alternatives": self.plot_alternatives()}
+        if self.design is not None:
+            out.update(self.design.figures())
+        return out
+
+    def plot(self, which: str = "alternatives") -> Figure:
+        """One figure by name: ``alternatives``, or the chosen design's ``profile``,
+        ``envelopes`` or ``stops``."""
+        if which == "alternatives":
+            return self.plot_alternatives()
+        if self.design is None:
+            raise ValueError(f"no design to draw: {self.summary.get('reason', '')}")
+        return self.design.plot(which)
+
+    def save_figures(self, directory: str | os.PathLike[str],
+                     formats: tuple[str, ...] = ("png",)) -> list[Path]:
+        """Write every figure into ``directory`` as NAME.FORMAT (png, svg, pdf)."""
+        from .figures import save_figures
+
+        return save_figures(self.figures(), directory, formats)
+
+    def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
+        """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
+        from .documents import write_report
+
+        return write_report(self, directory)
+
+
+# ---- the functions --------------------------------------------------------------
+
+
+def simulate(
+    project: Project | str | os.PathLike[str],
+    *,
+    rocks: int | None = None,
+    seed: int | None = None,
+    progress: bool | Callable[[int], None] = False,
+    trajectories: int = DEFAULT_TRAJECTORIES,
+) -> SimulationResult:
+    """Simulate the rocks of a project on the bare slope (``rockfall-design simulate``).
+
+    Parameters
+    ----------
+    project : Project or path
+        From :func:`load_project`, or the path of a project file.
+    rocks : int, optional
+        Number of rocks (default: ``rocks.count`` of the project).
+    seed : int, optional
+        Random seed (default: ``rocks.seed`` of the project). The same seed
+        and count give the same rocks.
+    progress : bool or callable
+        True: a progress bar on stderr; a callable is called with the number
+        of rocks done.
+    trajectories : int
+        Paths of the first rocks kept for :meth:`SimulationResult.plot_profile`.
+
+    Returns
+    -------
+    SimulationResult
+        ``.summary`` (as ``--json``), ``.rocks`` (one row per rock),
+        ``.stations``, ``.crossings``, ``.envelopes``, ``.plot()``.
+    """
+    from .simulation import EXACT_ROCKS
+
+    p = _project(project)
+    n = _count(p, rocks)
+    tables: list[pd.DataFrame] | None = None
+    on_chunk = None
+    if n > EXACT_ROCKS:
+        # A streamed run keeps statistics only; the per-rock rows are small
+        # enough to keep for a DataFrame (not the crossings: rows x stations).
+        tables = []
+
+        def on_chunk(part: Any) -> None:
+            tables.append(part.rocks_table())
+
+    study = run_simulation(p, rocks=n, seed=seed, progress=progress,
+                           trajectories=trajectories, on_chunk=on_chunk)
+    return SimulationResult(p, study, tables)
+
+
+def run_simulation(project: Project, *, rocks: int | None, seed: int | None,
+                   progress: bool | Callable[[int], None], trajectories: int,
+                   on_chunk: Callable[[Study], None] | None = None) -> Study | StreamedStudy:
+    """The run behind :func:`simulate` (and the CLI, which streams its tables to files)."""
+    from .simulation import simulate as _simulate
+
+    n = _count(project, rocks)
+    return _call(progress, n, _simulate, project=project, rocks=n, seed=seed,
+                 n_trajectories=trajectories, on_chunk=on_chunk)
+
+
+def _count(project: Project, rocks: int | None) -> int:
+    n = int(project.rocks.count if rocks is None else rocks)
+    if n < 1:
+        raise InputError(f"the number of rocks must be at least 1, got {n}")
+    return n
+
+
+def check(
+    project: Project | str | os.PathLike[str],
+    *,
+    rocks: int | None = None,
+    seed: int | None = None,
+    progress: bool | Callable[[int], None] = False,
+    trajectories: int = DEFAULT_TRAJECTORIES,
+    registry: Registry | None = None,
+) -> CheckResult:
+    """Check the project's measures against its safety concept (``rockfall-design check``).
+
+    Parameters
+    ----------
+    project : Project or path
+    rocks, seed, progress, trajectories
+        As :func:`simulate`.
+    registry : Registry, optional
+        The plugins (default: the installed ones).
+
+    Returns
+    -------
+    CheckResult
+        ``.ok``, ``.summary`` (as ``--json``), ``.measures`` and ``.checks``
+        (DataFrames), ``.rocks`` (with ``caught_by_measure``), ``.crossings``,
+        ``.plot()``.
+    """
+    from .evaluate import evaluate
+
+    p = _project(project, registry)
+    n = _count(p, rocks)
+    ev = _call(progress, n, evaluate, project=p, registry=registry or default_registry(),
+               rocks=n, seed=seed, n_trajectories=trajectories)
+    return CheckResult(p, ev)
+
+
+def optimise(
+    project: Project | str | os.PathLike[str],
+    *,
+    rocks: int | None = None,
+    seed: int | None = None,
+    progress: bool | Callable[[str, int, int], None] = False,
+    registry: Registry | None = None,
+) -> OptimiseResult:
+    """Find the least-cost design of every family (``rockfall-design optimise``).
+
+    Parameters
+    ----------
+    project : Project or path
+        With a ``design:`` section.
+    rocks, seed : int, optional
+        Search rocks and seed (default: the project's).
+    progress : bool or callable
+        True: progress bars on stderr; a callable is called as
+        ``progress(stage, done, total)``.
+    registry : Registry, optional
+        The plugins (default: the installed ones).
+
+    Returns
+    -------
+    OptimiseResult
+        ``.best`` (dict, None without an admissible design),
+        ``.alternatives`` (DataFrame), ``.summary`` (as ``--json``),
+        ``.design`` (the chosen design as a :class:`CheckResult`),
+        ``.plot()`` (the alternatives compared).
+
+    Raises
+    ------
+    ProjectError
+        The project has no ``design:`` section.
+    """
+    from .optimise import optimise as _optimise
+
+    p = _project(project, registry)
+    if p.design is None:
+        raise p.error_at((), "the project has no design: section to optimise "
+                             "(see the README, 'Designing protection')")
+    reg = registry or default_registry()
+    n = _count(p, rocks)
+    result = _call(progress, n, _optimise, stages=True, project=p, registry=reg, rocks=n,
+                   seed=seed)
+    return OptimiseResult(p, result, reg)
