@@ -165,8 +165,9 @@ def build_parser() -> argparse.ArgumentParser:
         opt,
         project="project file (YAML) with a design: section",
         rocks="number of rocks every design is searched with (default: rocks.count of the "
-        "project); a design near a limit is decided with more, up to design.max_rocks, and "
-        "checked on fresh rocks, at least twice those that decided it",
+        "project; at least the rocks that can show the residual target); a design near a "
+        "limit is decided with more, up to design.max_rocks, and checked on fresh rocks, at "
+        "least twice those that decided it",
         seed="random seed of the search and of the decision (default: rocks.seed of the "
         "project; the fresh rocks use another seed)",
         out="write design.yaml (the project with the chosen measures, for check; removed "

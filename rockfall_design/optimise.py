@@ -69,7 +69,7 @@ from .evaluate import (
     evaluate_design,
     place_measures,
 )
-from .judge.bounds import fraction_upper_bound
+from .judge.bounds import fraction_upper_bound, rocks_to_show_fraction
 from .judge.outcomes import (
     Judgement,
     RockFates,
@@ -101,16 +101,19 @@ EDIT_STEP_M = 0.25
 RESTART_STEP_M = 2.0
 #: Continuous parameters of a barrier candidate take BARRIER_RANGE_STEPS + 1 values.
 BARRIER_RANGE_STEPS = 10
-#: A check missed by at most this relative amount in screening is decided exactly.
-CHECK_MARGIN = 0.03
 #: Placements of one combination of catalogue choices screened in full, fewest through first.
 MAX_SCREENS_PER_LEVEL = 80
 #: Designs decided exactly that only came within the screening's margin, per family.
-MAX_NEAR_PER_FAMILY = 2
+MAX_NEAR_PER_FAMILY = 6
 #: Designs of one combination of catalogue choices decided exactly, at most.
 MAX_EXACT_PER_LEVEL = 3
+#: The search runs at least this many times the rocks that show the residual target.
+SEARCH_FACTOR = 1
+#: Designs the screening could not judge (too few rocks at a measure) that may fail
+#: exactly before the family's other such designs are no longer decided.
+MAX_UNJUDGED_FAILURES = 3
 #: Exact decisions (each a run of the rocks) of one family, at most.
-MAX_EXACT_PER_FAMILY = 12
+MAX_EXACT_PER_FAMILY = 40
 
 
 # ---- the search space of one family -------------------------------------------------
@@ -241,6 +244,16 @@ class ScreenResult:
     reason: str = ""
     labels: list[str] = field(default_factory=list)
     near: bool = False
+    approximate: bool = False  # some rock's path only approximated (see Screening.judge)
+
+
+@dataclass
+class _Approx:
+    """Where a screening rests on rocks whose paths it approximates (see Screening.judge)."""
+
+    reaching: int  # approximated rocks among those counted as reaching the protected zone
+    any: bool  # any approximated rock at all
+    touched: list[bool]  # per measure: met by approximated rocks from upslope
 
 
 @dataclass
@@ -490,11 +503,18 @@ class Screening:
                 labels=labels,
                 reason=f"cost model {self.spec.cost_model.name!r} has no price for this "
                        f"design: {why}")
+        approximate = approx.any
         violation, near = self.violation(checks, judgement.reaching, approx)
-        return ScreenResult(cost, violation == 0.0, violation, checks, judgement.results,
-                            judgement.reaching, labels=labels, near=near)
+        # The screening admits only what it judged exactly (no rock whose path it
+        # approximates); a design that passes with such rocks, or misses within
+        # the margin, is left to the exact decision.
+        feasible = violation == 0.0 and not approximate
+        near = near or (violation == 0.0 and approximate)
+        return ScreenResult(cost, feasible, violation, checks, judgement.results,
+                            judgement.reaching, labels=labels, near=near,
+                            approximate=approximate)
 
-    def judge(self, placed: Sequence[PlacedMeasure], table: _Table) -> tuple[Judgement, int]:
+    def judge(self, placed: Sequence[PlacedMeasure], table: _Table) -> tuple[Judgement, _Approx]:
         """The design's outcomes on the search rocks, by the one judgement.
 
         Barriers are met in the order of their stations; a rock a barrier
@@ -502,16 +522,17 @@ class Screening:
         measures downslope of it never meet it. A rock that passes a barrier
         goes on along its path of the table (bare or edited ground).
 
-        Returns the judgement and how many of the rocks counted as reaching
-        the protected zone the screening only approximates: they broke through
-        a barrier (the exact run lets them go on with the surplus energy
-        only), passed a row of blocks (its gap draws come from another stream)
-        or met a barrier downslope of such a passage.
+        Returns the judgement and where it rests on rocks whose paths the
+        screening only approximates (:class:`_Approx`): rocks that broke
+        through a barrier (the exact run lets them go on with the surplus
+        energy only), were returned by a rigid one (they may come back over
+        it), or met a row of blocks (its gap draws come from another stream).
         """
         fates = RockFates(max_x=table.max_x.copy(), x_end=table.x_end.copy(),
                           status=table.status.copy(), mass=self.mass, radius=self.radius)
         alive = np.ones(self.n, dtype=bool)
         approx = np.zeros(self.n, dtype=bool)
+        upstream: list[tuple[float, np.ndarray]] = []  # (station, rocks approximated there)
         outcomes: list[np.ndarray | None] = [None] * len(placed)
         meetings: list[np.ndarray | None] = [None] * len(placed)
         for i in sorted(range(len(placed)), key=lambda k: _start(placed[k].footprint)):
@@ -522,9 +543,11 @@ class Screening:
             h, e_kj, v = table.column(j)
             out = barrier_outcomes(fp, h, e_kj, self.radius, self.u_gap, alive)
             stopped = (out == Outcome.CAUGHT) | (out == Outcome.REBOUNDED)
-            approx |= out == Outcome.BROKEN_THROUGH
+            here = (out == Outcome.BROKEN_THROUGH) | (out == Outcome.REBOUNDED)
             if fp.behaviour == BarrierBehaviour.BLOCKS:
-                approx |= out != Outcome.NOT_MET
+                here = out != Outcome.NOT_MET
+            approx |= here
+            upstream.append((fp.x, here))
             fates.max_x[stopped] = np.minimum(fates.max_x[stopped], fp.x)
             fates.x_end[stopped] = fp.x
             fates.status[stopped] = np.where(out[stopped] == Outcome.CAUGHT, core.CAUGHT,
@@ -533,9 +556,19 @@ class Screening:
             outcomes[i] = out
             meetings[i] = np.column_stack([h, v, e_kj])
         judgement = judge_measures(placed, outcomes, meetings, fates, self.protect_x)
+        # A measure's checks rest on approximated rocks when such rocks, from a
+        # barrier upslope of it, met it.
+        touched = []
+        for p, out in zip(placed, judgement.outcomes, strict=True):
+            start = _start(p.footprint)
+            before = np.zeros(self.n, dtype=bool)
+            for x, m in upstream:
+                if x < start:
+                    before |= m
+            touched.append(bool((before & (out != Outcome.NOT_MET)).any()))
         uncertain = int((approx & reaches_protected_zone(fates.max_x, fates.status,
                                                          self.protect_x)).sum())
-        return judgement, uncertain
+        return judgement, _Approx(uncertain, bool(approx.any()), touched)
 
     def station(self, x: float) -> int:
         """Index of the table station nearest ``x`` (m)."""
@@ -545,43 +578,41 @@ class Screening:
         return k
 
     def violation(
-        self, checks: Sequence[Sequence[Check]], residual: int, uncertain: int = 0
+        self, checks: Sequence[Sequence[Check]], residual: int, approx: _Approx | None = None
     ) -> tuple[float, bool]:
-        """How far a design misses its targets on the point values (0: it meets them).
+        """How far a design misses its targets (0: it meets them), and whether within the margin.
 
-        Returns the summed relative shortfall and whether the design lies
-        within the screening margin, so that it is decided exactly before it
-        may be rejected: the residual without the ``uncertain`` rocks (whose
-        paths the screening only approximates) is within the target, and
-        where such rocks exist, every failed check misses by at most
-        :data:`CHECK_MARGIN`. Without them the screening is the exact run's
-        judgement on the same rocks, and there is no margin.
+        A check that holds on its point value but could not hold with its
+        confidence bound even with ``design.max_rocks`` rocks (and likewise
+        the residual) counts as a small miss. The second value says whether
+        every miss may be the screening's approximation, so that the design
+        is decided exactly before it may be rejected (the margin): each
+        failed check belongs to a measure that rocks with approximated paths
+        met (``approx.touched``), and the residual misses only through such
+        rocks. Elsewhere the screening is the exact run's judgement of the
+        same rocks.
         """
-        violation, near = 0.0, uncertain > 0
-        for cs in checks:
+        touched = approx.touched if approx is not None else [False] * len(checks)
+        uncertain = approx.reaching if approx is not None else 0
+        violation, near = 0.0, approx is not None and approx.any
+        for cs, t in zip(checks, touched, strict=True):
             for c in cs:
-                if c.ok and not _check_may_hold(c, self.n, self.max_rocks):
-                    # Holds on the point value, but not with confidence even with
-                    # design.max_rocks rocks: the exact decision would say the same.
-                    violation += 1e-3
-                    near = False
+                if c.ok and _check_may_hold(c, self.n, self.max_rocks):
                     continue
+                near &= t
                 if c.ok:
-                    continue
-                if c.value is None or not math.isfinite(c.value):
+                    violation += 1e-3  # holds on the point value, never with confidence
+                elif c.value is None or not math.isfinite(c.value):
                     violation += 1.0
-                    near = False
                 else:
-                    miss = abs(c.value - c.target) / max(abs(c.target), 1e-9)
-                    violation += miss
-                    near &= miss <= CHECK_MARGIN
+                    violation += abs(c.value - c.target) / max(abs(c.target), 1e-9)
         if residual > self.allowed_residual:
             violation += 1.0 + (residual - self.allowed_residual) / max(self.n, 1) * 100.0
             near &= residual - uncertain <= self.allowed_residual
         elif not _fraction_may_hold(residual, self.n, self.allowed_fraction, self.max_rocks,
                                     self.confidence):
             violation += 1e-3
-            near = False
+            near &= uncertain > 0
         return violation, near and violation > 0.0
 
 
@@ -771,6 +802,8 @@ class _Tally:
     best_fail_measures: list[ProtectiveMeasure] = field(default_factory=list)
     min_residual: int | None = None
     over_limit: float | None = None  # cost of the first design past the cost limit
+    why: str = ""  # why the first design that did not fit did not
+    searched: bool = False  # ground edits searched by scipy, not enumerated
 
     def fail(self, sr: ScreenResult, measures: Sequence[ProtectiveMeasure]) -> None:
         names = [c.name for cs in sr.checks for c in cs if not c.ok]
@@ -844,7 +877,8 @@ def _barrier_designs(
             sr = screen.screen(fixed)
             tally.designs += 1
             if sr.feasible or sr.near:
-                yield _Screened(sr.cost, fixed, sr, ())
+                # Each geometry its own level: MAX_EXACT_PER_LEVEL counts per geometry.
+                yield _Screened(sr.cost, fixed, sr, (table_id,))
             else:
                 tally.fail(sr, fixed)
         return
@@ -970,23 +1004,54 @@ def decide(
     *,
     rocks: int,
     seed: int,
+    max_rocks: int | None = None,
 ) -> Decision:
-    """Evaluate a design exactly, once, with ``rocks`` rocks; admit it only with the bounds.
+    """Evaluate a design exactly with ``rocks`` rocks; admit it only with the bounds.
 
-    One look at one sample: a design is admitted when every check and the
+    One look that can admit: a design is admitted when every check and the
     residual hold with their upper confidence bounds (``safety.confidence``).
     Looking again with more rocks until it passes would admit designs that
-    do not hold more often than ``1 - confidence``; instead, the number of
-    rocks is planned beforehand (:func:`plan_rocks`).
+    do not hold more often than ``1 - confidence``, so the number of rocks is
+    planned beforehand (:func:`plan_rocks`). The one exception: when all
+    that keeps a design from being admitted is a check that too few rocks
+    met to be bounded at all (no bound, so that look could not admit), it
+    is run again with the rocks that bring enough there, up to
+    ``max_rocks``.
     """
-    ev = evaluate_design(project, registry, measures, concept, rocks=rocks, seed=seed)
-    if ev.holds_with_confidence:
-        return Decision(True, rocks, ev)
-    if not ev.ok:
-        return Decision(False, rocks, ev, "; ".join(ev.failures()))
-    why = "; ".join(ev.failures_with_confidence())
-    return Decision(False, rocks, ev, f"holds on the point values of {rocks:,} rocks but not "
-                                      f"with {100 * ev.confidence:g} % confidence: {why}")
+    cap = int(max_rocks or rocks)
+    while True:
+        ev = evaluate_design(project, registry, measures, concept, rocks=rocks, seed=seed)
+        if ev.holds_with_confidence:
+            return Decision(True, rocks, ev)
+        if not ev.ok:
+            return Decision(False, rocks, ev, "; ".join(ev.failures()))
+        more = _rocks_to_bound(ev, rocks, cap)
+        if more is None:
+            why = "; ".join(ev.failures_with_confidence())
+            return Decision(False, rocks, ev, f"holds on the point values of {rocks:,} rocks "
+                                              f"but not with {100 * ev.confidence:g} % "
+                                              f"confidence: {why}")
+        rocks = more
+
+
+def _rocks_to_bound(ev: Evaluation, rocks: int, cap: int) -> int | None:
+    """More rocks for a design held back only by checks too few rocks met to be bounded.
+
+    None when the look could have admitted the design (a bound failed, or
+    the residual's did) or no more rocks are allowed.
+    """
+    prot = ev.protect
+    if rocks >= cap or (prot is not None and not prot["ok_with_confidence"]):
+        return None
+    need = 0.0
+    for res, cs in zip(ev.results, ev.checks, strict=True):
+        for c in cs:
+            if c.holds_with_confidence:
+                continue
+            if c.bound is not None or c.rocks_needed is None or not res.met:
+                return None
+            need = max(need, rocks * 1.3 * c.rocks_needed / res.met)
+    return int(min(cap, rocks * math.ceil(need / rocks))) if need > rocks else None
 
 
 #: Planned rocks leave this share of a design's margin to the confidence bound.
@@ -1012,7 +1077,9 @@ def plan_rocks(sr: ScreenResult, screen: Screening) -> int:
             if c.holds_with_confidence or not c.ok:
                 continue
             if c.bound is None or c.value is None:
-                need = max(need, 4.0 * n if res.met else float(cap))
+                # Too few rocks met the measure: enough of them to bound it.
+                at = max(res.met, 1)
+                need = max(need, 1.3 * n * (c.rocks_needed or 4 * at) / at)
                 continue
             margin = abs(c.value - c.target)
             gap = abs(c.bound - c.value)
@@ -1041,8 +1108,10 @@ def _check_may_hold(c: Check, n: int, rocks: int) -> bool:
     about as 1/sqrt(n) (the spread of a sample quantile); a check without a
     bound (too few rocks met the measure) may be bounded with more rocks.
     """
-    if c.holds_with_confidence or c.bound is None or c.value is None:
+    if c.holds_with_confidence or c.value is None:
         return True
+    if c.bound is None:
+        return rocks > n  # unbounded with n rocks: more rocks may bound it
     predicted = c.value + (c.bound - c.value) * math.sqrt(n / rocks)
     # It holds when the value stays on the side of the target it is on now.
     return (c.value >= c.target) == (predicted >= c.target)
@@ -1163,6 +1232,7 @@ def _edit_designs(
     the way is kept, cheapest first, for the exact decision.
     """
     cands = screen.spec.candidates
+    tally.searched = True
     edit_slots = tuple(ci for ci in fam if ci in screen.edit_candidates)
     barrier_cis = [ci for ci in fam if ci not in screen.edit_candidates]
     variables = _variables(cands, edit_slots, screen.edit_candidates)
@@ -1190,7 +1260,7 @@ def _edit_designs(
             table = screen._table_for([p.footprint for p in placed], edited)
         except (KeyError, ValueError, ProjectError) as exc:
             tally.reasons["does not fit"] += 1
-            tally.reasons.setdefault("_why", getattr(exc, "message", None) or str(exc))
+            tally.why = tally.why or getattr(exc, "message", None) or str(exc)
             seen[key] = 4.0 * big
             return seen[key]
         first = next(iter(_barrier_designs(screen, slots, barrier_cis, edits, fixed_cost, table,
@@ -1251,18 +1321,18 @@ def _cause(screen: Screening, slots: _BarrierSlots, fam: tuple[int, ...], tally:
     if skipped:
         why, count = skipped.most_common(1)[0]
         return f"no design of this family is in the space: {why} ({count:,} designs)"
-    why = tally.reasons.get("_why")
-    return f"no design of this family fits on the section{': ' + str(why) if why else ''}"
+    return f"no design of this family fits on the section{': ' + tally.why if tally.why else ''}"
 
 
 def _proof(alt: Alternative, tally: _Tally, n: int, currency: str) -> str:
     """What was proven about a family's chosen design."""
-    top = ", ".join(f"{k} ({v:,})" for k, v in tally.reasons.most_common(4)
-                    if not k.startswith("_"))
+    top = ", ".join(f"{k} ({v:,})" for k, v in tally.reasons.most_common(4))
     capped = (f"; in {tally.capped_levels} catalogue combinations only the "
               f"{MAX_SCREENS_PER_LEVEL} placements with fewest rocks through were screened"
               if tally.capped_levels else "")
-    return (f"cheapest of {tally.designs:,} designs in the space ({alt.exact_evaluations} "
+    space = ("designs the search over its ground edits evaluated"
+             if tally.searched else "designs in the space")
+    return (f"cheapest of {tally.designs:,} {space} ({alt.exact_evaluations} "
             f"evaluated exactly); every cheaper design fails on {n:,} rocks: "
             f"{top or 'none cheaper'}{capped}")
 
@@ -1289,13 +1359,21 @@ def _settle(
     reported as such (that design belongs to a smaller family).
     """
     per_level: Counter = Counter()
-    decisions = near = simulated = 0
+    decisions = near = simulated = unjudged_failures = 0
     for d in designs:
         if decisions >= MAX_EXACT_PER_FAMILY:
             alt.reason = (f"{alt.reason}; stopped after {MAX_EXACT_PER_FAMILY} exact "
                           "decisions of this family")
             break
         if per_level[d.level] >= MAX_EXACT_PER_LEVEL:
+            continue
+        # Too few rocks met one of its measures in the screening to bound its
+        # checks: the screening could not judge it. After a few such designs
+        # failed exactly, the rest of them are not decided (and said so).
+        unjudged = any(c.bound is None and c.value is not None
+                       for cs in d.result.checks for c in cs)
+        if unjudged and unjudged_failures >= MAX_UNJUDGED_FAILURES:
+            tally.reasons["too few rocks at a measure to judge in the screening, not decided"] += 1
             continue
         if not d.result.feasible:
             if near >= MAX_NEAR_PER_FAMILY:
@@ -1306,12 +1384,14 @@ def _settle(
         decisions += 1
         alt.screened_feasible = alt.screened_feasible or d.result.feasible
         planned = plan_rocks(d.result, screen)
-        dec = decide(project, registry, d.measures, concept, rocks=planned, seed=seed)
+        dec = decide(project, registry, d.measures, concept, rocks=planned, seed=seed,
+                     max_rocks=screen.max_rocks)
         alt.exact_evaluations += 1
-        simulated += planned
+        simulated += dec.rocks
         if not dec.admitted:
             tally.reasons["exact: " + (dec.reason.split(":")[0][:60] or "fails")] += 1
             alt.reason = dec.reason
+            unjudged_failures += unjudged
             continue
         idle = [r.measure.label() for r in dec.evaluation.results if r.caught == 0]
         if idle and len(d.measures) > 1:
@@ -1399,6 +1479,11 @@ def optimise(
         update={"protect": project.protect.model_copy(update={"allowed_fraction": allowed})}
     )
     fresh_seed = int(spec.fresh_seed) if spec.fresh_seed is not None else s + 1000003
+    # A search that cannot see the residual target decides nothing: it needs the
+    # rocks with which none reaching would show the target with confidence.
+    needed = rocks_to_show_fraction(allowed, confidence) if allowed > 0 else None
+    if needed is not None:
+        n = max(n, min(int(spec.max_rocks), SEARCH_FACTOR * needed))
     screen = Screening(project, registry, spec, concept, rocks=n, seed=s)
     slots = _BarrierSlots(screen)
     fams = families(spec.candidates, spec.max_measures)

@@ -76,6 +76,10 @@ class Check:
         Whether the check holds with the bound in place of the value. None
         means the concept does not report bounds: the optimiser then admits
         on ``ok`` and the report says so.
+    rocks_needed : int or None
+        When the sample is too small to bound the value: how many rocks must
+        meet the measure for it to be bounded (the optimiser runs more rocks
+        before it decides).
     """
 
     name: str
@@ -86,6 +90,7 @@ class Check:
     detail: str = ""
     bound: float | None = None
     ok_with_confidence: bool | None = None
+    rocks_needed: int | None = None
 
     @property
     def holds_with_confidence(self) -> bool:
@@ -102,6 +107,7 @@ class Check:
             "detail": self.detail,
             "bound": self.bound,
             "ok_with_confidence": self.ok_with_confidence,
+            "rocks_needed": self.rocks_needed,
         }
 
 

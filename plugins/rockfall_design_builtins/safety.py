@@ -114,9 +114,14 @@ def _statistic_bound(values: np.ndarray, statistic: str, confidence: float) -> f
     return quantile_upper_bound(values, float(statistic[1:]) / 100.0, confidence)
 
 
+def _needed(statistic: str, confidence: float) -> int:
+    """Rocks at a measure that bound its ``statistic`` at ``confidence``."""
+    return rocks_to_bound_quantile(float(statistic[1:]) / 100.0, confidence)
+
+
 def _too_few(statistic: str, n: int, confidence: float) -> str:
     """Why a percentile cannot be bounded: how many rocks it needs."""
-    need = rocks_to_bound_quantile(float(statistic[1:]) / 100.0, confidence)
+    need = _needed(statistic, confidence)
     return (f"{_rocks(n)} cannot bound the {statistic} at {100 * confidence:g} % confidence: "
             f"it needs at least {need} rocks at the measure")
 
@@ -172,7 +177,8 @@ def _factor_check(
                      None, no_demand or (None if upper is None else provided / upper >= target))
     factor = provided / demand
     if upper is None:
-        return Check(name, factor, target, bool(factor >= target), "-", detail, None, False)
+        return Check(name, factor, target, bool(factor >= target), "-", detail, None, False,
+                     _needed(statistic, confidence))
     f_bound = provided / upper
     return Check(name, factor, target, bool(factor >= target), "-", detail, f_bound,
                  bool(f_bound >= target))
@@ -521,7 +527,7 @@ class Uni11211Concept(SafetyConcept):
         if speed_b is None or mass_b is None:
             detail = f"{detail}; {_too_few(p, speeds.size, params.confidence)}"
             return Check("design_energy", e_d, target, bool(e_d <= target), "kJ", detail,
-                         None, False)
+                         None, False, _needed(p, params.confidence))
         e_b = self._design_energy(mass_b, speed_b)
         detail = f"{detail}; with the {100 * params.confidence:g} % bounds {_num(e_b, 'kJ')}"
         return Check("design_energy", e_d, target, bool(e_d <= target), "kJ", detail, e_b,
@@ -561,7 +567,7 @@ class Uni11211Concept(SafetyConcept):
         if height_b is None or radius_b is None:
             detail = f"{detail}; {_too_few(p, heights.size, params.confidence)}"
             return Check("design_height", required, height_m, bool(height_m >= required), "m",
-                         detail, None, False)
+                         detail, None, False, _needed(p, params.confidence))
         required_b = self._required_height(height_b, radius_b)
         detail = f"{detail}; with the {100 * params.confidence:g} % bounds {_num(required_b, 'm')}"
         return Check("design_height", required, height_m, bool(height_m >= required), "m",
