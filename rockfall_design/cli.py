@@ -29,8 +29,8 @@ class _Parser(argparse.ArgumentParser):
         self.exit(int(ExitCode.BAD_INPUT), f"{self.prog}: error: {message} (see --help)\n")
 
 
-def _int_at_least(low: int, what: str):
-    """An argparse type: a whole number >= ``low`` ("expected a {what} >= {low}")."""
+def _int_at_least(low: int, what: str, high: int | None = None):
+    """An argparse type: a whole number >= ``low`` ("expected a {what} >= {low}"), <= ``high``."""
 
     def parse(text: str) -> int:
         try:
@@ -39,12 +39,17 @@ def _int_at_least(low: int, what: str):
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
         if v < low:
             raise argparse.ArgumentTypeError(f"expected a {what} >= {low}, got {v}")
+        if high is not None and v > high:
+            raise argparse.ArgumentTypeError(f"expected a {what} <= {high:,}, got {v:,}")
         return v
 
     return parse
 
 
-_positive_int = _int_at_least(1, "number")
+# The project's limit (rockfall_design.project.MAX_ROCKS), here without
+# importing pydantic for every --help.
+_MAX_ROCKS = 1_000_000_000
+_positive_int = _int_at_least(1, "number", _MAX_ROCKS)
 _seed = _int_at_least(0, "seed")
 
 
@@ -299,6 +304,8 @@ def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
         run = recorded["run"]
         text = dump_yaml(run["project"])
         seed, rocks = int(run["seed"]), int(run["rocks"])
+        if not (seed >= 0 and 1 <= rocks <= _MAX_ROCKS):
+            raise ValueError("seed or rock count out of range")
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise InputError(f"{path}: not a summary.json with a run record ({exc})") from None
     if run.get("version") != __version__:

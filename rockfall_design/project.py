@@ -319,8 +319,31 @@ MAX_COORDINATE_M = 1e6
 #: avalanche, far beyond the blocks this model is for. Size distributions are
 #: truncated here, so that no draw from a long tail overflows the energies.
 MAX_RADIUS_M = 25.0
+#: Smallest rock radius (m): 1 cm, gravel. Below it the model is no longer one
+#: of rockfall, and far below (1e-300 m) mass and spin leave float64's range.
+#: Size distributions are cut off here too (draws below are raised to it).
+MIN_RADIUS_M = 0.01
 #: Largest rock density (kg/m3), above any rock's (ores reach about 5,000).
 MAX_DENSITY = 20_000.0
+#: Smallest rock density (kg/m3), below any rock's (pumice is about 250).
+MIN_DENSITY = 100.0
+#: Most rocks in one run (rocks.count, --rocks, design.fresh_rocks): a streamed
+#: run of a billion rocks takes about six hours on one core.
+MAX_ROCKS = 1_000_000_000
+#: Most analysis stations: each adds a column per rock and its histograms.
+MAX_STATIONS = 1_000
+#: Most percentiles of the envelopes.
+MAX_PERCENTILES = 100
+#: Most envelope points: each adds two values per rock (or two histograms).
+MAX_ENVELOPE_POINTS = 10_000
+#: Smallest chord angle (deg) of the centre path's arcs: every convex vertex
+#: becomes up to 180 / max_chord_deg edges, for every rock size.
+MIN_CHORD_DEG = 0.5
+#: Most measures in one design of the optimiser.
+MAX_DESIGN_MEASURES = 10
+#: Most families (multisets of candidates) the optimiser searches: at about
+#: four seconds a family on 10,000 rocks, an hour's work.
+MAX_FAMILIES = 1_000
 #: Largest release speed (m/s) in x or y: a free fall of 500 m ends at 99 m/s.
 MAX_RELEASE_SPEED = 100.0
 #: Largest release spin (rad/s).
@@ -611,10 +634,12 @@ class Rocks(_Model):
     and :attr:`size_quantity` give it without looking at all three.
     """
 
-    count: Annotated[Integer, Field(ge=1)] = Field(1000, description="Number of rocks.")
+    count: Annotated[Integer, Field(ge=1, le=MAX_ROCKS)] = Field(
+        1000, description="Number of rocks, at most 1,000,000,000."
+    )
     seed: Annotated[Integer, Field(ge=0)] = Field(0, description="Random seed (reproducible).")
-    density: Annotated[Positive, Field(le=MAX_DENSITY)] = Field(
-        2650.0, description="Rock density (kg/m3), at most 20,000."
+    density: Annotated[Number, Field(ge=MIN_DENSITY, le=MAX_DENSITY)] = Field(
+        2650.0, description="Rock density (kg/m3), 100..20,000."
     )
     radius: SizeField = Field(None, description="Rock radius (m): a number or a distribution.")
     volume: SizeField = Field(None, description="Rock volume (m3): a number or a distribution.")
@@ -635,18 +660,36 @@ class Rocks(_Model):
                 f"give only one of radius, volume, mass; got {' and '.join(given)}",
                 (given[1],),
             )
-        spec, top = self.size, self.max_size
+        spec, top, bottom = self.size, self.max_size, self.min_size
+        unit = {"radius": "m", "volume": "m3", "mass": "kg"}[self.size_quantity]
         # The smallest size the distribution must be able to exceed: its fixed
         # value, its maximum, or its mean or median (a tail beyond is cut off).
         least = spec.b if spec.kind == "uniform" else spec.a
         if least > top:
-            unit = {"radius": "m", "volume": "m3", "mass": "kg"}[self.size_quantity]
             raise _fail(
                 f"expected sizes up to {_fmt(float(f'{top:.6g}'))} {unit} (a sphere of "
                 f"{MAX_RADIUS_M:g} m radius), got {_fmt(least)}",
                 (self.size_quantity,),
             )
+        # And the size it must reach at least: its fixed value, its minimum,
+        # its mean or median (a tail below is cut off).
+        if spec.a < bottom:
+            raise _fail(
+                f"expected sizes of at least {_fmt(float(f'{bottom:.6g}'))} {unit} (a sphere "
+                f"of {MIN_RADIUS_M:g} m radius), got {_fmt(spec.a)}",
+                (self.size_quantity,),
+            )
         return self
+
+    @property
+    def min_size(self) -> float:
+        """The smallest size a rock may have, in the units of :attr:`size_quantity`.
+
+        A sphere of :data:`MIN_RADIUS_M`; draws below it are raised to it.
+        """
+        volume = 4.0 / 3.0 * math.pi * MIN_RADIUS_M**3
+        return {"radius": MIN_RADIUS_M, "volume": volume,
+                "mass": volume * self.density}[self.size_quantity]
 
     @property
     def max_size(self) -> float:
@@ -680,17 +723,22 @@ class Rocks(_Model):
 class Analysis(_Model):
     """What to evaluate along the section."""
 
-    stations: Annotated[list[Number], BeforeValidator(_as_list)] = Field(
-        default_factory=list, description="Stations x (m) where crossings are recorded."
+    stations: Annotated[
+        list[Number], Field(max_length=MAX_STATIONS), BeforeValidator(_as_list)
+    ] = Field(
+        default_factory=list,
+        description="Stations x (m) where crossings are recorded; at most 1,000.",
     )
     percentiles: Annotated[
-        list[Annotated[Number, Field(gt=0.0, lt=100.0)]], BeforeValidator(_as_list)
+        list[Annotated[Number, Field(gt=0.0, lt=100.0)]],
+        Field(max_length=MAX_PERCENTILES),
+        BeforeValidator(_as_list),
     ] = Field(
         default_factory=lambda: [50.0, 95.0, 99.0],
         description="Percentiles (%) of height and energy reported, each in (0, 100).",
     )
-    envelope_points: Annotated[Integer, Field(ge=2)] = Field(
-        201, description="Number of envelope stations spread along the section."
+    envelope_points: Annotated[Integer, Field(ge=2, le=MAX_ENVELOPE_POINTS)] = Field(
+        201, description="Number of envelope stations spread along the section, 2..10,000."
     )
 
 
@@ -715,8 +763,8 @@ class EngineConfig(_Model):
         10000, description="Maximum number of events (impacts, phase changes) per rock, "
         "10..10,000,000."
     )
-    max_chord_deg: Annotated[Positive, Field(le=30.0)] = Field(
-        5.0, description="Maximum angle (deg) between trajectory chords and the arc."
+    max_chord_deg: Annotated[Number, Field(ge=MIN_CHORD_DEG, le=30.0)] = Field(
+        5.0, description="Maximum angle (deg) between trajectory chords and the arc, 0.5..30."
     )
 
 
@@ -1120,8 +1168,8 @@ class Design(_Model):
     and :attr:`cost_params` / :attr:`costs_locator`.
     """
 
-    max_measures: Annotated[Integer, Field(ge=1)] = Field(
-        2, description="Largest number of measures in one design."
+    max_measures: Annotated[Integer, Field(ge=1, le=MAX_DESIGN_MEASURES)] = Field(
+        2, description="Largest number of measures in one design, 1..10."
     )
     residual: Annotated[
         Any,
@@ -1143,7 +1191,7 @@ class Design(_Model):
         0,
         description="Rocks allowed to reach the protected zone: a count, or {fraction: F}.",
     )
-    fresh_rocks: Annotated[Integer, Field(ge=1)] | None = Field(
+    fresh_rocks: Annotated[Integer, Field(ge=1, le=MAX_ROCKS)] | None = Field(
         None,
         description="Rocks of the independent re-check of the best design; default: "
         "max(rocks of the search, rocks.count).",
@@ -1167,6 +1215,21 @@ class Design(_Model):
     _products_locator: "Locator | None" = PrivateAttr(default=None)
     _cost_params: dict | None = PrivateAttr(default=None)
     _costs_locator: "Locator | None" = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _check_families(self) -> "Design":
+        # The optimiser searches every multiset of 1..max_measures candidates:
+        # C(n + m, m) - 1 families, each a search of its own.
+        n, m = len(self.candidates), self.max_measures
+        count = math.comb(n + m, m) - 1
+        if count > MAX_FAMILIES:
+            raise _fail(
+                f"{n} candidates with max_measures {m} make {count:,} families of designs to "
+                f"search, at most {MAX_FAMILIES:,} are allowed: lower max_measures or "
+                "merge candidates",
+                ("max_measures",),
+            )
+        return self
 
     @property
     def residual_count(self) -> int | None:

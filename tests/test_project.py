@@ -430,7 +430,7 @@ def test_unknown_distribution():
 
 def test_zero_density():
     text = edit("  density: 2650\n", "  density: 0\n")
-    assert_error(text, line_of(text, "density"), "rocks.density", "expected a number > 0, got 0")
+    assert_error(text, line_of(text, "density"), "rocks.density", "expected a number >= 100, got 0")
 
 
 def test_zero_count():
