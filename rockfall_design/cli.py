@@ -300,7 +300,9 @@ def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
 
     path: Path = args.repeat
     try:
-        recorded = json.loads(path.read_text(encoding="utf-8"))
+        from .inputs import read_text
+
+        recorded = json.loads(read_text(path))
         run = recorded["run"]
         text = dump_yaml(run["project"])
         seed, rocks = int(run["seed"]), int(run["rocks"])

@@ -34,6 +34,8 @@ Units are SI throughout: m, m/s, rad/s, kg, m3, kg/m3; angles in degrees
 where the key says ``_deg``.
 """
 
+import contextlib
+import contextvars
 import copy
 import difflib
 import hashlib
@@ -43,7 +45,7 @@ import os
 import re
 import types
 import typing
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
@@ -63,6 +65,7 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from .errors import PluginError, ProjectError
+from .inputs import read_text
 
 __all__ = [
     "dump_yaml",
@@ -115,10 +118,29 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
+#: False while data from a file that the project names (a catalogue, a price
+#: file) is checked: the path may point at any file, so its values are not
+#: repeated in messages, only its file, line and key path.
+_QUOTE_VALUES: contextvars.ContextVar[bool] = contextvars.ContextVar("quote", default=True)
+
+
+@contextlib.contextmanager
+def _unquoted() -> Iterator[None]:
+    """Within the block, :func:`_describe` names a value's type, never the value."""
+    token = _QUOTE_VALUES.set(False)
+    try:
+        yield
+    finally:
+        _QUOTE_VALUES.reset(token)
+
+
 def _describe(value: Any) -> str:
     """A short, one-line description of a YAML value for "got ..." messages."""
     if value is None:
         return "null"
+    if not _QUOTE_VALUES.get() and isinstance(value, bool | int | float | str):
+        return "a boolean" if isinstance(value, bool) else (
+            "a string" if isinstance(value, str) else "a number")
     if isinstance(value, bool):
         return f"{_fmt(value)} (a boolean)"
     if isinstance(value, int | float):
@@ -1599,10 +1621,14 @@ class Locator:
         Key path of the data's root in that file.
     """
 
-    def __init__(self, source: str, lines: dict, prefix: Sequence[str | int] = ()) -> None:
+    def __init__(
+        self, source: str, lines: dict, prefix: Sequence[str | int] = (), *, quote: bool = True
+    ) -> None:
         self.source = source
         self._lines = lines
         self.prefix = tuple(prefix)
+        #: False for a file the project names: its values are not quoted in messages.
+        self.quote = quote
 
     def __repr__(self) -> str:
         return f"Locator({self.source!r}, prefix={self.prefix!r})"
@@ -1641,7 +1667,8 @@ class Locator:
             raise self.error_at(path, f"expected a mapping of key: value, got {_describe(data)}")
         dropped = set(drop)
         data = {key: value for key, value in data.items() if key not in dropped}
-        instance, problems = _check_params(model, data)
+        with contextlib.nullcontext() if self.quote else _unquoted():
+            instance, problems = _check_params(model, data)
         if instance is not None:
             return instance
         # unknown keys first (a misspelt key also makes a required one "missing"),
@@ -1706,6 +1733,7 @@ def params_problem(model: type[BaseModel], data: Mapping[str, Any]) -> tuple[tup
 
 _MERGE_TAG = "tag:yaml.org,2002:merge"
 _MAX_NODES = 200_000  # guards against alias bombs ("billion laughs")
+_MAX_MERGED = 10_000  # entries that merge keys (<<) may copy, in the whole file
 
 
 class _Loader(yaml.SafeLoader):
@@ -1813,8 +1841,63 @@ def _line_of(path: tuple, lines: _Lines) -> int | None:
     return None
 
 
+def _check_merges(root: yaml.Node, source: str) -> None:
+    """Refuse merge keys (``<<``) that would expand to more than :data:`_MAX_MERGED` entries.
+
+    PyYAML flattens a merge by copying the merged mapping's entries, merges
+    within it included, once per reference: ten levels of mappings merging
+    ten aliases of the level above fit in a kilobyte and expand to 10**10
+    entries (a "billion laughs" made of merge keys; the loader would hang).
+    The count here is what that flattening copies, with every mapping's
+    flattened size computed once, so it costs time in proportion to the file.
+    """
+    sizes: dict[int, int] = {}  # id(mapping node) -> entries once flattened
+    total = [0]
+
+    def flattened(node: yaml.MappingNode, busy: frozenset) -> int:
+        if id(node) in sizes:
+            return sizes[id(node)]
+        if id(node) in busy:
+            raise ProjectError(source, node.start_mark.line + 1, "",
+                               "recursive alias: a value contains itself")
+        size = 0
+        for key_node, value_node in node.value:
+            if key_node.tag != _MERGE_TAG:
+                size += 1
+                continue
+            merged = value_node.value if isinstance(value_node, yaml.SequenceNode) else [value_node]
+            for item in merged:
+                if isinstance(item, yaml.MappingNode):
+                    n = flattened(item, busy | {id(node)})
+                    size += n
+                    total[0] += n
+                    if total[0] > _MAX_MERGED:
+                        raise ProjectError(
+                            source, key_node.start_mark.line + 1, "",
+                            f"merge keys (<<) would copy more than {_MAX_MERGED:,} entries "
+                            "(an alias bomb?); write the values out or merge less",
+                        )
+        sizes[id(node)] = size
+        return size
+
+    seen: set[int] = set()
+    stack = [root]
+    while stack:  # every node once, aliases included, without recursion
+        node = stack.pop()
+        if id(node) in seen:
+            continue
+        seen.add(id(node))
+        if isinstance(node, yaml.MappingNode):
+            flattened(node, frozenset())
+            for key_node, value_node in node.value:
+                stack.extend((key_node, value_node))
+        elif isinstance(node, yaml.SequenceNode):
+            stack.extend(node.value)
+
+
 def _map_lines(loader: _Loader, root: yaml.Node, source: str) -> _Lines:
     """Walk the node tree: key path -> line, rejecting duplicate and non-scalar keys."""
+    _check_merges(root, source)
     lines: _Lines = {}
     budget = [_MAX_NODES]
 
@@ -2284,12 +2367,14 @@ def load_project_text(
     if data is None:
         raise ProjectError(source, 1, "", "the project file is empty")
     if not isinstance(data, dict):
+        with _unquoted():  # not a project file at all: its content is not repeated
+            got = _describe(data)
         raise ProjectError(
             source,
             _line_of((), lines),
             "",
             f"expected a mapping of top-level keys (name, slope, materials, rocks, ...), "
-            f"got {_describe(data)}",
+            f"got {got}",
         )
     try:
         project = Project.model_validate(data)
@@ -2313,7 +2398,7 @@ def _catalogue_file(
         path = base_dir / path
     shown = os.fspath(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_text(path)
     except UnicodeDecodeError as exc:
         raise project.error_at(
             at, f"cannot read the {what} {shown}: not UTF-8 text ({exc.reason})"
@@ -2342,10 +2427,11 @@ def _attach_catalogues(project: Project, base_dir: Path) -> None:
             project, design.products, base_dir, ("design", "products"), "product catalogue"
         )
         try:
-            design._catalogue = _check_products(data)
+            with _unquoted():
+                design._catalogue = _check_products(data)
         except PydanticCustomError as exc:
             raise _custom_error(exc, shown, lines) from None
-        design._products_locator = Locator(shown, lines)
+        design._products_locator = Locator(shown, lines, quote=False)
     else:
         design._catalogue = design.products or {}
         design._products_locator = Locator(project.source, project._lines, ("design", "products"))
@@ -2353,18 +2439,16 @@ def _attach_catalogues(project: Project, base_dir: Path) -> None:
         shown, data, lines = _catalogue_file(
             project, design.costs.file, base_dir, ("design", "costs", "file"), "cost file"
         )
-        if not isinstance(data, dict):
-            raise ProjectError(
-                shown,
-                _line_of((), lines),
-                "",
-                f"expected a mapping of the cost model's parameters, got {_describe(data)}",
-            )
         try:
-            design._cost_params = _raw(data, number_keys=True)
+            with _unquoted():
+                if not isinstance(data, dict):
+                    raise _fail(
+                        f"expected a mapping of the cost model's parameters, got {_describe(data)}"
+                    )
+                design._cost_params = _raw(data, number_keys=True)
         except PydanticCustomError as exc:
             raise _custom_error(exc, shown, lines) from None
-        design._costs_locator = Locator(shown, lines)
+        design._costs_locator = Locator(shown, lines, quote=False)
     else:
         design._cost_params = design.costs.params
         design._costs_locator = Locator(
@@ -2393,7 +2477,7 @@ def load_project(path: str | os.PathLike[str]) -> Project:
     """
     source = os.fspath(path)
     try:
-        text = Path(source).read_text(encoding="utf-8")
+        text = read_text(source)
     except UnicodeDecodeError as exc:
         raise ProjectError(
             source, None, "", f"cannot read file: not UTF-8 text ({exc.reason})"

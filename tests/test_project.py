@@ -1820,7 +1820,8 @@ def test_locator_validate_params_on_a_catalogue_file(tmp_path):
         design.costs_locator.validate_params((), Prices, design.cost_params)
     assert str(info.value) == (
         f"{tmp_path / 'catalogue_costs.yaml'}:4: barrier_per_m.fence.RX-100.x: "
-        "invalid key: expected a number, got string 'x'"
+        # a file the project names is never quoted: the key path says where
+        "invalid key: expected a number, got a string"
     )
     costs = "fixed_per_measure: -1\nbarier_per_m: {}\n"
     design = load_project(_design_files(tmp_path, PRODUCTS, costs)).design
