@@ -239,6 +239,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                   "Use fewer analysis.envelope_points or analysis.stations.")
     with OutputSet() as files:
         _reserve(files, args.out, ("rocks.csv", "crossings.csv", "summary.json"))
+        _reserve(files, args.plot, _FIGURES)
         on_chunk = _table_writers(files, args.out) if args.out else None
         study = _run(simulate, project, args, on_chunk=on_chunk)
         summary = study.summary()
@@ -263,6 +264,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
         print_simulation(summary)
     return int(ExitCode.OK)
+
+
+#: The figures of --plot (report.plot_study writes all three).
+_FIGURES = ("profile.png", "envelopes.png", "stops.png")
 
 
 def _reserve(files: OutputSet, out: Path | None, names: Sequence[str]) -> None:
@@ -338,6 +343,7 @@ def cmd_check(args: argparse.Namespace) -> int:
                      len(project.analysis.stations))
     with OutputSet() as files:
         _reserve(files, args.out, ("rocks.csv", "crossings.csv", "measures.csv", "summary.json"))
+        _reserve(files, args.plot, _FIGURES)
         evaluation = _run(evaluate, project, args, registry=registry)
         summary = evaluation.summary()
         study = evaluation.study
@@ -381,6 +387,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     _in_memory_guard(n, project.analysis.envelope_points + 400, len(project.analysis.stations))
     with OutputSet() as files:
         _reserve(files, args.out, ("design.yaml", "alternatives.csv", "summary.json"))
+        _reserve(files, args.plot, _FIGURES)
         prog, callback = _stage_progress(sys.stderr.isatty())
         if prog is None:
             result = optimise(project, registry, rocks=n, seed=args.seed)
@@ -412,6 +419,11 @@ def cmd_optimise(args: argparse.Namespace) -> int:
                                  best.concept, rocks=result.rocks, seed=result.seed,
                                  n_trajectories=60)
             plot_study(ev.study, args.plot, ev, outputs=files)
+        elif args.plot:
+            # Figures of an earlier run's design must not stay beside a
+            # result that has none.
+            for name in _FIGURES:
+                files.remove(args.plot / name)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
