@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from . import __version__
-from .errors import ExitCode, InputError, RockfallError
+from .errors import ExitCode, InputError, Interrupted, RockfallError
 
 if TYPE_CHECKING:  # pragma: no cover
     from .outputs import OutputSet
@@ -475,10 +475,12 @@ def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-class _Interrupted(KeyboardInterrupt):
+class _Interrupted(Interrupted):
     """The ``KeyboardInterrupt`` that SIGINT and SIGTERM raise while a command runs.
 
-    A subclass on purpose: CPython records an exact ``KeyboardInterrupt``
+    An :class:`~rockfall_design.errors.Interrupted`, so that plugin code
+    cannot pass for a real Ctrl-C by raising ``KeyboardInterrupt``. A subclass
+    of ``KeyboardInterrupt`` on purpose: CPython records an exact ``KeyboardInterrupt``
     that passes through an ``exec()`` of a string (numba compiles that way)
     as unhandled, and ``python -m rockfall_design`` then ends by SIGINT at
     exit, even though :func:`main` handled it, instead of with exit code 130.

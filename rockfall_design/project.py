@@ -43,6 +43,7 @@ import json
 import math
 import os
 import re
+import sys
 import types
 import typing
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -64,7 +65,7 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
-from .errors import PluginError, ProjectError
+from .errors import Interrupted, PluginError, ProjectError
 from .inputs import read_text
 
 __all__ = [
@@ -1691,12 +1692,17 @@ def _check_params(
     problems: list[tuple[tuple, str, int]] = []  # (location, message, rank)
     _strict_problems(model, data, (), problems)
     try:
-        instance = model.model_validate(data)
+        # A plugin's validators are plugin code: what they print goes to stderr.
+        with contextlib.redirect_stdout(sys.stderr):
+            instance = model.model_validate(data)
     except ValidationError as exc:
         problems.extend(_param_problems(model, exc.errors()))
-    except Exception as exc:
+    except BaseException as exc:
         # pydantic turns a validator's ValueError or AssertionError into a
-        # validation error; anything else is a bug in the plugin's model.
+        # validation error; anything else is a bug in the plugin's model
+        # (SystemExit too), unless it is a real Ctrl-C.
+        if isinstance(exc, Interrupted):
+            raise
         raise PluginError(
             f"the parameter model {model.__module__}.{model.__qualname__} failed while "
             f"validating: {type(exc).__name__}: {exc}; this is a bug in the plugin, "
