@@ -263,6 +263,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         from .report import print_simulation
 
         print_simulation(summary)
+    if recorded is not None and not same:
+        # A repeat is a check of reproducibility: results that differ fail it.
+        return int(ExitCode.CHECK_FAILED)
     return int(ExitCode.OK)
 
 
@@ -487,9 +490,15 @@ class _Interrupted(Interrupted):
     """
 
 
+#: True once the command has ended and the process is on its way out.
+_exiting = [False]
+
+
 def _on_signal(signum: int, frame: Any) -> None:
     # SIGTERM is treated like Ctrl-C, so that the command's output set is
     # discarded and the previous results stay as they were.
+    if _exiting[0]:
+        return  # the command is over, its output complete: nothing to stop
     raise _Interrupted(signum)
 
 
@@ -522,8 +531,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write(f"{PROG}: interrupted; {what}\n")
         return int(ExitCode.INTERRUPTED)
     finally:
+        # Set first, without a call: a signal from here on cannot raise.
+        _exiting[0] = True
         for s, handler in previous.items():
-            signal.signal(s, handler)
+            # Run as the program (no argv), the process exits next: a Ctrl-C
+            # now would only print a traceback from the interpreter's exit.
+            signal.signal(s, signal.SIG_IGN if argv is None else handler)
+        _exiting[0] = False
 
 
 if __name__ == "__main__":  # pragma: no cover
