@@ -1760,6 +1760,61 @@ class _Loader(yaml.SafeLoader):
                 None, None, f"invalid value: {exc}", node.start_mark
             ) from exc
 
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        # Counted as they are composed: a large file of small values is
+        # refused after _MAX_NODES of them, not after building them all.
+        self._composed = getattr(self, "_composed", 0) + 1
+        if self._composed > _MAX_NODES:
+            raise _TooManyValues(self.peek_event().start_mark)
+        return super().compose_node(parent, index)
+
+
+class _TooManyValues(yaml.YAMLError):
+    """More than _MAX_NODES values in a file, found while it is read (at ``mark``)."""
+
+    def __init__(self, mark: Any) -> None:
+        super().__init__(f"more than {_MAX_NODES} values")
+        self.mark = mark
+
+
+#: Above this size (characters) a file is parsed by libyaml, where PyYAML has
+#: it: the pure-Python scanner takes about half a second per megabyte, so a
+#: file near the size limit (RF_MAX_FILE_MB) would take minutes.
+_LIBYAML_FROM = 1_000_000
+
+if getattr(yaml, "__with_libyaml__", False):
+    from yaml.cyaml import CParser
+
+    class _CLoader(CParser, _Loader):  # type: ignore[misc]
+        """:class:`_Loader` with libyaml's parser and composer (same constructors, resolvers)."""
+
+        def __init__(self, stream: str) -> None:
+            CParser.__init__(self, stream)
+            yaml.constructor.SafeConstructor.__init__(self)
+            yaml.resolver.Resolver.__init__(self)
+
+else:  # pragma: no cover - PyYAML without libyaml
+    _CLoader = None
+
+
+def _count_values(text: str) -> None:
+    """Refuse a file of more than _MAX_NODES values before libyaml composes them all.
+
+    libyaml's composer builds every node before the line map can count
+    them; its events are counted here first, one at a time.
+    """
+    parser = CParser(text)
+    try:
+        count = 0
+        while parser.check_event():
+            event = parser.get_event()
+            if isinstance(event, yaml.NodeEvent):
+                count += 1
+                if count > _MAX_NODES:
+                    raise _TooManyValues(event.start_mark)
+    finally:
+        parser.dispose()
+
 
 _Loader.add_constructor("tag:yaml.org,2002:timestamp", yaml.SafeLoader.construct_yaml_str)
 # ``1e3`` is a float (YAML 1.2), not a string as in PyYAML's YAML 1.1: the
@@ -1979,7 +2034,11 @@ def _map_lines(loader: _Loader, root: yaml.Node, source: str) -> _Lines:
 
 def _parse_yaml(text: str, source: str) -> tuple[Any, _Lines]:
     try:
-        loader = _Loader(text)
+        if _CLoader is not None and len(text) > _LIBYAML_FROM:
+            _count_values(text)
+            loader = _CLoader(text)
+        else:
+            loader = _Loader(text)
         try:
             root = loader.get_single_node()
             if root is None:
@@ -1988,6 +2047,11 @@ def _parse_yaml(text: str, source: str) -> tuple[Any, _Lines]:
             data = loader.construct_document(root)
         finally:
             loader.dispose()
+    except _TooManyValues as exc:
+        raise ProjectError(
+            source, exc.mark.line + 1 if exc.mark is not None else None, "",
+            f"the file has more than {_MAX_NODES} values",
+        ) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         problem = " ".join(p for p in (exc.context, exc.problem) if p) or "invalid YAML"

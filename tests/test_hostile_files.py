@@ -211,3 +211,43 @@ def test_a_project_path_at_an_unrelated_file_is_not_quoted(tmp_path, capsys):
     path.write_text(f"{SECRET}\n")
     err = one_line_error(capsys, "simulate", str(path))
     assert SECRET not in err and "expected a mapping of top-level keys" in err
+
+
+# --------------------------------------------------------------------------------------
+# large files under the limit: bounded work whatever they hold
+# --------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("values", [300_000, 3_000_000], ids=["pure-python", "libyaml"])
+def test_a_file_of_many_values_is_refused_as_it_is_read(values):
+    """Counted while parsed: before, a 48 MB list took minutes and gigabytes."""
+    text = "name: x\nl: [" + "1, " * values + "1]\n"
+    with pytest.raises(ProjectError, match="more than 200000 values"):
+        load_project_text(text, "many.yaml")
+
+
+def test_a_large_file_reads_as_the_small_one():
+    """Over 1 MB, libyaml parses: the same project, the same line numbers."""
+    from rockfall_design import project as project_module
+
+    text = (PROJECTS / "quarry_road.yaml").read_text(encoding="utf-8")
+    padded = text + "# padding\n" * 120_000
+    assert len(padded) > project_module._LIBYAML_FROM
+    assert (load_project_text(padded).resolved_dict()
+            == load_project_text(text).resolved_dict())
+    bad = text.replace("  seed: 7\n", "  seed: 7\n  seed: 8\n")
+    assert bad != text
+    for source in (bad, bad + "# padding\n" * 120_000):
+        with pytest.raises(ProjectError) as info:
+            load_project_text(source, "q.yaml")
+        assert str(info.value).startswith(
+            f"q.yaml:{bad.splitlines().index('  seed: 8') + 1}: rocks.seed: duplicate key")
+
+
+def test_a_file_of_one_long_comment_near_the_limit_is_read_quickly(tmp_path):
+    """Pure-Python scanning would take half a minute here; the guard is a timeout."""
+    path = tmp_path / "c.yaml"
+    path.write_text("name: x\n" + ("#" + "c" * 98 + "\n") * 400_000)  # 40 MB
+    proc = run_cli("simulate", str(path))
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
+    assert "slope: required key is missing" in proc.stderr
