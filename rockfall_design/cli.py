@@ -502,6 +502,56 @@ def _on_signal(signum: int, frame: Any) -> None:
     raise _Interrupted(signum)
 
 
+class _StdoutFailed(InputError):
+    """Standard output could not be written (a full disk, a closed pipe): exit code 2."""
+
+
+class _GuardedStdout:
+    """``sys.stdout`` while a command runs: a failing write is one line, not a traceback.
+
+    The report or the JSON may go to a file on a full disk (``> /dev/full``)
+    or a pipe whose reader has gone; the error is raised as
+    :class:`_StdoutFailed` naming the OS error.
+    """
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def _guard(self, method: str, *args: Any) -> Any:
+        try:
+            return getattr(self._stream, method)(*args)
+        except OSError as exc:
+            raise _StdoutFailed(
+                f"cannot write to standard output: {exc.strerror or type(exc).__name__}"
+            ) from None
+
+    def write(self, text: str) -> int:
+        return self._guard("write", text)
+
+    def writelines(self, lines: Any) -> None:
+        self._guard("writelines", lines)
+
+    def flush(self) -> None:
+        self._guard("flush")
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
+def _silence_stdout() -> None:
+    """After stdout failed: send what is left in its buffer to /dev/null at exit.
+
+    Otherwise the interpreter's final flush fails again and prints a second
+    message ("Exception ignored ...") and exits with code 120.
+    """
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # not a real file (a test's capture)
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rockfall-design`` console script."""
     from .outputs import committed_sets
@@ -514,9 +564,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         # An ignored SIGINT (a background job of a non-interactive shell) stays so.
         handled.append(signal.SIGINT)
     previous = {s: signal.signal(s, _on_signal) for s in handled}
+    stdout = sys.stdout
+    sys.stdout = _GuardedStdout(stdout)
     try:
-        return int(args.func(args))
+        code = int(args.func(args))
+        sys.stdout.flush()  # here, where a failure can still be reported
+        return code
     except RockfallError as exc:
+        if isinstance(exc, _StdoutFailed):
+            sys.stdout = stdout
+            _silence_stdout()
         msg = " ".join(str(exc).split("\n"))
         sys.stderr.write(f"{PROG}: error: {msg}\n")
         return int(exc.exit_code)
@@ -533,6 +590,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         # Set first, without a call: a signal from here on cannot raise.
         _exiting[0] = True
+        sys.stdout = stdout
         for s, handler in previous.items():
             # Run as the program (no argv), the process exits next: a Ctrl-C
             # now would only print a traceback from the interpreter's exit.

@@ -192,3 +192,16 @@ def test_optimise_without_a_design_removes_earlier_figures(tmp_path, capsys):
     s = json.loads(capsys.readouterr().out)
     assert code == 1 and s["best"] is None
     assert sorted(p.name for p in plot.iterdir()) == ["mine.txt"]
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+@pytest.mark.parametrize("argv", [["simulate", str(STANDARD), "--rocks", "5", "--json"],
+                                  ["simulate", str(STANDARD), "--rocks", "5"],
+                                  ["plugins"]], ids=["json", "report", "plugins"])
+def test_a_full_disk_on_standard_output_is_one_line(argv):
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "rockfall_design", *argv], stdout=full,
+                              stderr=subprocess.PIPE, text=True, timeout=300)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr == ("rockfall-design: error: cannot write to standard output: "
+                           "No space left on device\n")
