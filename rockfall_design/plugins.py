@@ -212,8 +212,13 @@ def plugin_code() -> Iterator[None]:
       ``KeyboardInterrupt`` that the plugin raises itself: see
       :func:`is_real_interrupt`.
     """
-    swap = (threading.current_thread() is threading.main_thread()
-            and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+    if threading.current_thread() is not threading.main_thread():
+        # sys.stdout and the signal handlers are the process's: swapping them
+        # from two threads at once could leave them swapped. (The program
+        # calls plugins from the main thread only.)
+        yield
+        return
+    swap = signal.getsignal(signal.SIGINT) is signal.default_int_handler
     if swap:
         signal.signal(signal.SIGINT, _raise_interrupted)
     try:
