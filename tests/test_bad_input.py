@@ -416,3 +416,13 @@ def test_rocks_option_is_bounded(capsys):
     assert info.value.code == 2
     err = capsys.readouterr().err
     assert "<= 1,000,000,000" in err and "Traceback" not in err
+
+
+def test_a_ditch_too_shallow_for_float64_is_bad_input_not_a_plugin_fault(tmp_path, capsys):
+    """depth 1e-300 gave coinciding vertices: the footprint check blamed the built-in plugin."""
+    text = STANDARD.replace(*with_measures("{type: ditch, x: 100, width: 6, depth: 1e-300}"))
+    path = tmp_path / "p.yaml"
+    path.write_text(text, encoding="utf-8")
+    code, err = run("check", path, capsys)
+    assert code == 2 and err.count("\n") == 1, err
+    assert "measures[0]" in err and "too small to shape the ground" in err
