@@ -925,8 +925,9 @@ def _parse_residual(value: Any) -> Any:
 class Site(_Model):
     """The site: how much slope the measures span."""
 
-    length_m: Positive = Field(
-        description="Length of slope to protect, along the contour (m): what the measures span."
+    length_m: Annotated[Positive, Field(le=MAX_COORDINATE_M)] = Field(
+        description="Length of slope to protect, along the contour (m): what the measures "
+        "span; at most 1,000 km (costs scale with it; 1e300 overflowed the optimiser)."
     )
 
 

@@ -426,3 +426,13 @@ def test_a_ditch_too_shallow_for_float64_is_bad_input_not_a_plugin_fault(tmp_pat
     code, err = run("check", path, capsys)
     assert code == 2 and err.count("\n") == 1, err
     assert "measures[0]" in err and "too small to shape the ground" in err
+
+
+def test_a_site_longer_than_the_limit_is_refused(tmp_path, capsys):
+    """length_m 1e300 overflowed the optimiser's costs (a RuntimeWarning, then exit 0)."""
+    design = (ROOT / "projects" / "design_two_zones.yaml").read_text(encoding="utf-8")
+    path = tmp_path / "d.yaml"
+    path.write_text(design.replace("site: {length_m: 200}", "site: {length_m: 1e300}"))
+    code, err = run("optimise", path, capsys)
+    assert code == 2 and err.count("\n") == 1, err
+    assert "design.site.length_m: expected a number <= 1000000, got 1e+300" in err
