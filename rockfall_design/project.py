@@ -2102,7 +2102,9 @@ def _message(error: dict) -> str:
         noun = (
             "an integer" if isinstance(bound, int) and not isinstance(bound, bool) else "a number"
         )
-        return f"expected {noun} {op} {_fmt(ctx[name])}, got {_describe(value)}"
+        # (In a file the project names, the value is not repeated.)
+        got = f", got {_describe(value)}" if _QUOTE_VALUES.get() else ""
+        return f"expected {noun} {op} {_fmt(ctx[name])}{got}"
     if kind == "too_short":
         if isinstance(value, str):
             return "must not be empty"

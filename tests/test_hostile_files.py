@@ -251,3 +251,14 @@ def test_a_file_of_one_long_comment_near_the_limit_is_read_quickly(tmp_path):
     proc = run_cli("simulate", str(path))
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr
     assert "slope: required key is missing" in proc.stderr
+
+
+def test_a_price_that_would_make_an_infinite_cost_is_bad_input(tmp_path, capsys):
+    """1e308 per metre made a cost of inf, reported as a bug of the built-in cost model."""
+    prices = (PROJECTS / "catalogue_costs.yaml").read_text(encoding="utf-8")
+    assert prices.count("RX-100: {3: 520,") == 1
+    path = design_project(tmp_path, "file: catalogue_costs.yaml", "file: prices.yaml")
+    (tmp_path / "prices.yaml").write_text(prices.replace("RX-100: {3: 520,", "RX-100: {3: 1e308,"))
+    err = one_line_error(capsys, "optimise", str(path), "--rocks", "10")
+    assert f"{tmp_path / 'prices.yaml'}:" in err and "barrier_per_m.fence.RX-100.3" in err
+    assert err.rstrip().endswith("expected a number <= 1000000000")  # the value not repeated
