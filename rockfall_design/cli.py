@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from . import __version__
-from .errors import ExitCode, InputError, RockfallError
+from .errors import ExitCode, InputError, Interrupted, RockfallError
 
 if TYPE_CHECKING:  # pragma: no cover
     from .outputs import OutputSet
@@ -29,8 +29,8 @@ class _Parser(argparse.ArgumentParser):
         self.exit(int(ExitCode.BAD_INPUT), f"{self.prog}: error: {message} (see --help)\n")
 
 
-def _int_at_least(low: int, what: str):
-    """An argparse type: a whole number >= ``low`` ("expected a {what} >= {low}")."""
+def _int_at_least(low: int, what: str, high: int | None = None):
+    """An argparse type: a whole number >= ``low`` ("expected a {what} >= {low}"), <= ``high``."""
 
     def parse(text: str) -> int:
         try:
@@ -39,12 +39,17 @@ def _int_at_least(low: int, what: str):
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
         if v < low:
             raise argparse.ArgumentTypeError(f"expected a {what} >= {low}, got {v}")
+        if high is not None and v > high:
+            raise argparse.ArgumentTypeError(f"expected a {what} <= {high:,}, got {v:,}")
         return v
 
     return parse
 
 
-_positive_int = _int_at_least(1, "number")
+# The project's limit (rockfall_design.project.MAX_ROCKS), here without
+# importing pydantic for every --help.
+_MAX_ROCKS = 1_000_000_000
+_positive_int = _int_at_least(1, "number", _MAX_ROCKS)
 
 
 def _formats(text: str) -> tuple[str, ...]:
@@ -332,6 +337,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     with OutputSet() as files:
         _reserve(files, args.out, ("rocks.csv", "crossings.csv", "summary.json"))
         _reserve(files, args.report, REPORT_FILES)
+        _reserve(files, args.plot, _figure_files(_FIGURES, args))
         on_chunk = _table_writers(files, args.out) if args.out else None
         study = _run(run_simulation, project, args, on_chunk=on_chunk)
         result = SimulationResult(project, study)
@@ -353,7 +359,20 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         from .report import print_simulation
 
         print_simulation(summary)
+    if recorded is not None and not same:
+        # A repeat is a check of reproducibility: results that differ fail it.
+        return int(ExitCode.CHECK_FAILED)
     return int(ExitCode.OK)
+
+
+#: The figures of --plot (report.plot_study writes all three).
+#: The figures of a run (``--plot``), one file per --plot-format each.
+_FIGURES = ("profile", "envelopes", "stops")
+
+
+def _figure_files(stems: Sequence[str], args: argparse.Namespace) -> list[str]:
+    """File names of the figures ``stems`` in every format of ``--plot-format``."""
+    return [f"{stem}.{fmt}" for stem in stems for fmt in args.plot_format]
 
 
 def _reserve(files: OutputSet, out: Path | None, names: Sequence[str]) -> None:
@@ -391,10 +410,14 @@ def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
 
     path: Path = args.repeat
     try:
-        recorded = json.loads(path.read_text(encoding="utf-8"))
+        from .inputs import read_text
+
+        recorded = json.loads(read_text(path))
         run = recorded["run"]
         text = dump_yaml(run["project"])
         seed, rocks = int(run["seed"]), int(run["rocks"])
+        if not (seed >= 0 and 1 <= rocks <= _MAX_ROCKS):
+            raise ValueError("seed or rock count out of range")
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise InputError(f"{path}: not a summary.json with a run record ({exc})") from None
     if run.get("version") != __version__:
@@ -426,6 +449,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     with OutputSet() as files:
         _reserve(files, args.out, ("rocks.csv", "crossings.csv", "measures.csv", "summary.json"))
         _reserve(files, args.report, REPORT_FILES)
+        _reserve(files, args.plot, _figure_files(_FIGURES, args))
         result = _run(check, project, args, registry=registry)
         evaluation = result.evaluation
         summary = result.summary
@@ -466,6 +490,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     with OutputSet() as files:
         _reserve(files, args.out, ("design.yaml", "alternatives.csv", "summary.json"))
         _reserve(files, args.report, REPORT_FILES)
+        _reserve(files, args.plot, _figure_files(_FIGURES, args))
         prog, callback = _stage_progress(sys.stderr.isatty())
         if prog is None:
             report = optimise(project, rocks=n, seed=args.seed, registry=registry)
@@ -491,6 +516,11 @@ def cmd_optimise(args: argparse.Namespace) -> int:
                       "project_hash": project.resolved_hash(),
                       "project": project.resolved_dict()}
             files.write_json(out / "summary.json", {**summary, "run": record})
+        if args.plot and result.best is None:
+            # Figures of an earlier run's design must not stay beside a
+            # result that has none.
+            for name in _figure_files(_FIGURES, args):
+                files.remove(args.plot / name)
         # The chosen design's figures run its rocks again, keeping a sample of paths.
         _figures_and_report(report, args, files)
     if args.json:
@@ -545,20 +575,78 @@ def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-class _Interrupted(KeyboardInterrupt):
+class _Interrupted(Interrupted):
     """The ``KeyboardInterrupt`` that SIGINT and SIGTERM raise while a command runs.
 
-    A subclass on purpose: CPython records an exact ``KeyboardInterrupt``
+    An :class:`~rockfall_design.errors.Interrupted`, so that plugin code
+    cannot pass for a real Ctrl-C by raising ``KeyboardInterrupt``. A subclass
+    of ``KeyboardInterrupt`` on purpose: CPython records an exact ``KeyboardInterrupt``
     that passes through an ``exec()`` of a string (numba compiles that way)
     as unhandled, and ``python -m rockfall_design`` then ends by SIGINT at
     exit, even though :func:`main` handled it, instead of with exit code 130.
     """
 
 
+#: True once the command has ended and the process is on its way out.
+_exiting = [False]
+
+
 def _on_signal(signum: int, frame: Any) -> None:
     # SIGTERM is treated like Ctrl-C, so that the command's output set is
     # discarded and the previous results stay as they were.
+    if _exiting[0]:
+        return  # the command is over, its output complete: nothing to stop
     raise _Interrupted(signum)
+
+
+class _StdoutFailed(InputError):
+    """Standard output could not be written (a full disk, a closed pipe): exit code 2."""
+
+
+class _GuardedStdout:
+    """``sys.stdout`` while a command runs: a failing write is one line, not a traceback.
+
+    The report or the JSON may go to a file on a full disk (``> /dev/full``)
+    or a pipe whose reader has gone; the error is raised as
+    :class:`_StdoutFailed` naming the OS error.
+    """
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def _guard(self, method: str, *args: Any) -> Any:
+        try:
+            return getattr(self._stream, method)(*args)
+        except OSError as exc:
+            raise _StdoutFailed(
+                f"cannot write to standard output: {exc.strerror or type(exc).__name__}"
+            ) from None
+
+    def write(self, text: str) -> int:
+        return self._guard("write", text)
+
+    def writelines(self, lines: Any) -> None:
+        self._guard("writelines", lines)
+
+    def flush(self) -> None:
+        self._guard("flush")
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
+def _silence_stdout() -> None:
+    """After stdout failed: send what is left in its buffer to /dev/null at exit.
+
+    Otherwise the interpreter's final flush fails again and prints a second
+    message ("Exception ignored ...") and exits with code 120.
+    """
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # not a real file (a test's capture)
+        pass
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -573,9 +661,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         # An ignored SIGINT (a background job of a non-interactive shell) stays so.
         handled.append(signal.SIGINT)
     previous = {s: signal.signal(s, _on_signal) for s in handled}
+    stdout = sys.stdout
+    sys.stdout = _GuardedStdout(stdout)
     try:
-        return int(args.func(args))
+        code = int(args.func(args))
+        sys.stdout.flush()  # here, where a failure can still be reported
+        return code
     except RockfallError as exc:
+        if isinstance(exc, _StdoutFailed):
+            sys.stdout = stdout
+            _silence_stdout()
         msg = " ".join(str(exc).split("\n"))
         sys.stderr.write(f"{PROG}: error: {msg}\n")
         return int(exc.exit_code)
@@ -590,8 +685,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write(f"{PROG}: interrupted; {what}\n")
         return int(ExitCode.INTERRUPTED)
     finally:
+        # Set first, without a call: a signal from here on cannot raise.
+        _exiting[0] = True
+        sys.stdout = stdout
         for s, handler in previous.items():
-            signal.signal(s, handler)
+            # Run as the program (no argv), the process exits next: a Ctrl-C
+            # now would only print a traceback from the interpreter's exit.
+            signal.signal(s, signal.SIG_IGN if argv is None else handler)
+        _exiting[0] = False
 
 
 if __name__ == "__main__":  # pragma: no cover

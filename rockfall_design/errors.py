@@ -12,6 +12,7 @@ import enum
 __all__ = [
     "ExitCode",
     "InputError",
+    "Interrupted",
     "PluginError",
     "ProjectError",
     "RockfallError",
@@ -71,6 +72,17 @@ def _rebuild(cls: type, state: dict) -> "RockfallError":
     Exception.__init__(err, state.get("message", ""))
     err.__dict__.update(state)
     return err
+
+
+class Interrupted(KeyboardInterrupt):
+    """The ``KeyboardInterrupt`` of a real signal: raised by the program's signal handlers.
+
+    The command line's SIGINT and SIGTERM handlers raise it, and so does the
+    SIGINT handler that :func:`~rockfall_design.plugins.call_plugin` puts in
+    place of Python's default one while plugin code runs. A plain
+    ``KeyboardInterrupt`` (or ``SystemExit``) that plugin code raises itself
+    is a plugin fault; this one stops the run (exit code 130).
+    """
 
 
 class InputError(RockfallError):

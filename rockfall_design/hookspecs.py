@@ -89,15 +89,35 @@ the contract:
 * ``cost`` raises ``KeyError`` or ``ValueError``: the catalogue has no price
   for the measure. The optimiser skips the design and reports why.
 
-Anything else raised, and a return value of the wrong kind, is a fault of the
-plugin: the run stops with exit code 3 (``ExitCode.PLUGIN_FAULT``) and one
-line naming the measure kind, safety concept or cost model, the distribution
-that provides it, the method and the exception (type, message, file:line).
-What must come back: ``footprint`` a :class:`Barrier` or
-:class:`ProfileEdit`; ``design_properties`` and ``quantities`` a dict of str
-to number, never NaN (``inf`` is allowed, e.g. "no capacity given");
-``label`` a str; ``checks`` a list of :class:`Check`; ``cost`` a finite
-number >= 0.
+Anything else raised (``SystemExit`` and ``KeyboardInterrupt`` included:
+only a real Ctrl-C, a signal the process receives, stops the run as an
+interrupt), and a return value of the wrong kind, is a fault of the plugin:
+the run stops with exit code 3 (``ExitCode.PLUGIN_FAULT``) and one line
+naming the measure kind, safety concept or cost model, the distribution that
+provides it, the method and the exception (type, message, file:line). The
+same at load time leaves the plugin out, reported by
+``rockfall-design plugins``. What must come back: ``footprint`` a
+:class:`Barrier` or :class:`ProfileEdit`; ``design_properties`` and
+``quantities`` a dict of str to number, never NaN (``inf`` is allowed, e.g.
+"no capacity given"); ``label`` a str; ``checks`` a list of :class:`Check`;
+``cost`` a finite number >= 0.
+
+Every field of a footprint is checked before the engine sees it
+(``rockfall_design.plugins.footprint_problem``): a :class:`Barrier` needs a
+finite ``x`` on the section, ``height_m`` > 0, ``capacity_kj`` >= 0 (``inf``
+for none given), a :class:`BarrierBehaviour`, ``restitution`` in 0..1,
+``gap_m`` >= 0 and ``spacing_m`` > 0 with the gap no wider than the
+spacing; a :class:`ProfileEdit` a finite stretch ``x_start`` < ``x_end``,
+``points`` of shape (k, 2), k >= 2, finite, x strictly increasing from
+``x_start`` to ``x_end`` and meeting the ground at both, a finite catch range
+``catch_from`` <= ``catch_to`` on the section and a ``material`` name or
+None. A bad field is a fault of the plugin (exit code 3), not of the
+project; a station off the section is the project's only when the measure's
+own ``x`` is off it too.
+
+While plugin code runs, ``sys.stdout`` is the program's stderr: what a
+plugin prints never mixes with ``--json`` output. (Output written to file
+descriptor 1 directly, from C code say, is not redirected.)
 
 A measure's ``design_properties()`` and ``label()`` are asked for by the
 program before any safety concept or report sees the measure, so a measure

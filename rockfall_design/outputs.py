@@ -10,6 +10,13 @@ before that removes every temporary file and touches no target, so a reader
 finds either the complete previous results or the complete new ones, never a
 torn file nor a mix of old and new files.
 
+A file system that fails is reported the same way, whatever the stage: a
+full disk (ENOSPC), a file-size limit (EFBIG), a target that is a directory
+or any other refusal raises :class:`OutputError` (exit code 2), one line
+naming the file and the operating system's reason. If the failure comes in
+the middle of the commit, the files already renamed are put back: the old
+targets were moved aside, not overwritten, until the last rename succeeded.
+
 The single-file helpers (:func:`write_text`, :func:`write_json`,
 :func:`write_csv`, :func:`write_with`, :func:`atomic_writer`) are output sets
 of one file.
@@ -19,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import io
 import json
 import os
 import signal
@@ -33,6 +41,7 @@ from typing import IO, Any, Literal
 from .errors import InputError
 
 __all__ = [
+    "OutputError",
     "OutputSet",
     "atomic_writer",
     "committed_sets",
@@ -59,6 +68,50 @@ def committed_sets() -> int:
     otherwise no file was changed.
     """
     return _committed
+
+
+class OutputError(InputError):
+    """A result file could not be written: ``cannot write FILE: REASON``.
+
+    Exit code 2 (:attr:`~rockfall_design.errors.ExitCode.BAD_INPUT`): the
+    place the results go to is the user's to fix (free space, a size limit,
+    permissions, a directory where a file should go).
+    """
+
+    def __init__(self, target: Path, exc: OSError | str, done: str = "no file was changed") -> None:
+        reason = exc if isinstance(exc, str) else (exc.strerror or type(exc).__name__)
+        super().__init__(f"cannot write {target}: {reason}; {done}")
+        self.target = target
+
+
+class _TargetFile(io.FileIO):
+    """The raw temporary file of a target: a failing write names the target.
+
+    Writes go through :func:`os.write`, so that a test can make the disk
+    "full" by patching it, and an :class:`OSError` (ENOSPC, EFBIG, EIO, ...)
+    becomes an :class:`OutputError` naming the file the user asked for, not
+    the temporary one, wherever the write happens (in pandas, matplotlib,
+    at a flush).
+    """
+
+    def __init__(self, path: Path, target: Path) -> None:
+        super().__init__(path, "w")
+        self.target = target
+
+    def write(self, data: Any) -> int:
+        try:
+            return os.write(self.fileno(), data)
+        except OSError as exc:
+            raise OutputError(self.target, exc) from None
+
+
+def _open_target(path: Path, target: Path, mode: str) -> IO[Any]:
+    """``path`` opened for writing in ``mode`` ("w" or "wb"), its writes guarded."""
+    buffered = io.BufferedWriter(_TargetFile(path, target))
+    if "b" in mode:
+        return buffered
+    # newline="": lines are written as given (the CSV writers give "\n").
+    return io.TextIOWrapper(buffered, encoding="utf-8", newline="")
 
 
 @contextlib.contextmanager
@@ -124,7 +177,8 @@ def _discard(entries: dict[Path, _Entry], created: list[Path]) -> None:
     """
     for entry in entries.values():
         if entry.fh is not None:
-            with contextlib.suppress(OSError):
+            # Closing flushes, which fails again on a full disk: the file goes anyway.
+            with contextlib.suppress(Exception):
                 entry.fh.close()
         if entry.tmp is not None:
             with contextlib.suppress(FileNotFoundError):
@@ -149,11 +203,13 @@ class OutputSet:
     interrupt that arrives then is delivered right after the last rename.
 
     A directory that a target needs is created when the file is reserved or
-    opened, and removed again on discard if it is still empty. If the
-    operating system refuses a rename in the middle of the commit (say, a
-    target that is a directory), the files renamed before it stay renamed
-    and the rest are removed: the set is atomic against interrupts and
-    errors up to the commit, not against a failing file system.
+    opened, and removed again on discard if it is still empty; a target that
+    is a directory is refused then, before the command's work. At the commit
+    each old target is first moved aside, beside itself; if the operating
+    system refuses a rename half-way, every file renamed so far is put back
+    (the new ones return to their temporary names and are removed, the old
+    ones to their places), and :class:`OutputError` says which file failed.
+    Only once every rename has succeeded are the old files deleted.
 
     Examples
     --------
@@ -266,6 +322,9 @@ class OutputSet:
         RuntimeError
             If a reserved file was never written: committing the rest would
             leave the old file beside new ones.
+        OutputError
+            If a file cannot be synced or renamed into place; every target
+            is then as it was before the commit.
         """
         global _committed
         try:
@@ -275,18 +334,18 @@ class OutputSet:
             for entry in self._entries.values():
                 _finish(entry)
             with _signals_held():
-                for entry in self._entries.values():
-                    if entry.tmp is None:
-                        with contextlib.suppress(FileNotFoundError):
-                            os.unlink(entry.target)
-                    else:
-                        os.replace(entry.tmp, entry.target)
+                backups = _swap_in(list(self._entries.values()))
                 if self._entries:
                     _committed += 1
                 # Nothing is left to clean up: the entries are in place and
                 # the directories made for them are theirs.
                 self._finalizer.detach()
                 self.committed = True
+                # The old files, no longer needed; still with the signals
+                # held, or an interrupt noted meanwhile would leave them.
+                for backup in backups:
+                    with contextlib.suppress(OSError):
+                        os.unlink(backup)
         except BaseException:
             self.discard()
             raise
@@ -307,6 +366,8 @@ class OutputSet:
             raise ValueError(f"{key} is already in this output set")
         # Held so that no interrupt can fall between creating the temporary
         # file (or a directory) and recording it, which would leave it behind.
+        if key.is_dir():
+            raise OutputError(key, "it is a directory", "nothing was written")
         with _signals_held():
             try:
                 missing = [d for d in (key.parent, *key.parent.parents) if not d.exists()]
@@ -319,7 +380,7 @@ class OutputSet:
                 # mkstemp makes the file 0600; give it the mode open() would.
                 os.chmod(name, 0o666 & ~_umask())
             except OSError as exc:
-                raise InputError(f"cannot write {key}: {exc.strerror or exc}") from None
+                raise OutputError(key, exc, "nothing was written") from None
         return entry
 
     def _open(self, path: str | os.PathLike[str], mode: str) -> _Entry:
@@ -328,13 +389,10 @@ class OutputSet:
             entry = self._reserve(path)
         elif entry.state != "reserved":
             raise ValueError(f"{entry.target} is already written in this output set")
-        text = "b" not in mode
-        entry.fh = open(  # closed by _finish or _discard
-            entry.tmp,  # type: ignore[arg-type]
-            mode,
-            encoding="utf-8" if text else None,
-            newline="" if text else None,
-        )
+        try:
+            entry.fh = _open_target(entry.tmp, entry.target, mode)  # type: ignore[arg-type]
+        except OSError as exc:
+            raise OutputError(entry.target, exc) from None
         entry.state = "open"
         return entry
 
@@ -352,10 +410,58 @@ def _finish(entry: _Entry) -> None:
     """Flush, sync to disk and close an open entry's file."""
     if entry.fh is None:
         return
-    entry.fh.flush()
-    os.fsync(entry.fh.fileno())
-    entry.fh.close()
+    try:
+        entry.fh.flush()
+        os.fsync(entry.fh.fileno())
+        entry.fh.close()
+    except OSError as exc:  # e.g. EIO, or ENOSPC reported only at the sync
+        raise OutputError(entry.target, exc) from None
     entry.fh, entry.state = None, "ready"
+
+
+def _swap_in(entries: list[_Entry]) -> list[Path]:
+    """Rename every entry into place, keeping the old targets aside; all or none.
+
+    Returns the old targets' new names (to be deleted once the commit is
+    complete). If a rename fails, the ones done are undone in reverse order
+    and :class:`OutputError` names the file that failed.
+    """
+    undo: list[tuple[str, Path, Path]] = []  # (what, moved from, moved to)
+    backups: list[Path] = []
+    current: Path | None = None
+    try:
+        for entry in entries:
+            current = entry.target
+            if os.path.lexists(entry.target):
+                if entry.target.is_dir() and not entry.target.is_symlink():
+                    raise IsADirectoryError(21, "it is a directory")
+                # A unique name beside the target, then the old file onto it.
+                fd, name = tempfile.mkstemp(prefix=f".{entry.target.name}.", suffix=".old",
+                                            dir=entry.target.parent)
+                os.close(fd)
+                backup = Path(name)
+                try:
+                    os.replace(entry.target, backup)
+                except OSError:
+                    os.unlink(backup)
+                    raise
+                undo.append(("old", entry.target, backup))
+                backups.append(backup)
+            if entry.tmp is not None:
+                os.replace(entry.tmp, entry.target)
+                undo.append(("new", entry.tmp, entry.target))
+    except OSError as exc:
+        problems = []
+        for _what, source, moved_to in reversed(undo):
+            try:
+                os.replace(moved_to, source)
+            except OSError as again:  # pragma: no cover - a file system failing twice
+                problems.append(f"{source}: {again.strerror or again}")
+        done = "no file was changed"
+        if problems:  # pragma: no cover
+            done = "could not restore " + ", ".join(problems)
+        raise OutputError(current if current is not None else Path("?"), exc, done) from None
+    return backups
 
 
 def _key(path: str | os.PathLike[str]) -> Path:

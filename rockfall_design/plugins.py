@@ -15,6 +15,7 @@ the command line uses; tests build fresh registries with
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import functools
 import importlib.metadata
@@ -24,19 +25,23 @@ import math
 import numbers
 import re
 import reprlib
+import signal
+import sys
+import threading
 import traceback
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from importlib.metadata import EntryPoint
 from typing import Any
 
+import numpy as np
 import pluggy
 from pydantic import BaseModel, ValidationError
 
 from . import hookspecs
 from .costs import CostModel
-from .errors import PluginError
-from .measures import Barrier, ProfileEdit, ProtectiveMeasure
+from .errors import Interrupted, PluginError
+from .measures import Barrier, BarrierBehaviour, ProfileEdit, ProtectiveMeasure
 from .safety import Check, SafetyConcept
 
 __all__ = [
@@ -44,6 +49,9 @@ __all__ = [
     "Registry",
     "UnknownNameError",
     "call_plugin",
+    "footprint_problem",
+    "is_real_interrupt",
+    "plugin_code",
     "default_registry",
     "load_registry",
     "plugins_json",
@@ -187,6 +195,45 @@ def _describe_exception(exc: BaseException) -> str:
     return text
 
 
+def _raise_interrupted(signum: int, frame: Any) -> None:
+    raise Interrupted(signum)
+
+
+@contextlib.contextmanager
+def plugin_code() -> Iterator[None]:
+    """The block runs plugin code: its output goes to stderr, a real Ctrl-C is marked.
+
+    - ``sys.stdout`` is stderr within the block, so that a plugin that
+      prints cannot break ``--json`` (one JSON document on stdout).
+    - Where Python's default SIGINT handler is in place (the program used
+      as a library, on the main thread), it is swapped for one that raises
+      :class:`~rockfall_design.errors.Interrupted`, as the command line's
+      handler does. A real Ctrl-C is then told apart from a
+      ``KeyboardInterrupt`` that the plugin raises itself: see
+      :func:`is_real_interrupt`.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        # sys.stdout and the signal handlers are the process's: swapping them
+        # from two threads at once could leave them swapped. (The program
+        # calls plugins from the main thread only.)
+        yield
+        return
+    swap = signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    if swap:
+        signal.signal(signal.SIGINT, _raise_interrupted)
+    try:
+        with contextlib.redirect_stdout(sys.stderr):
+            yield
+    finally:
+        if swap:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def is_real_interrupt(exc: BaseException) -> bool:
+    """Whether ``exc``, raised while plugin code ran, is a real signal, not the plugin's own."""
+    return isinstance(exc, Interrupted)
+
+
 def _dist_name(ep: EntryPoint) -> str | None:
     dist = getattr(ep, "dist", None)
     if dist is None:
@@ -234,7 +281,8 @@ def _validate_class(cls: Any, section: str, base: type, name_attr: str) -> str |
         return (f"{label} ({name_attr} {name!r}): example must not contain {selector!r} "
                 "(it holds the parameters only)")
     try:
-        params.model_validate(example)
+        with plugin_code():
+            params.model_validate(example)
     except ValidationError as exc:
         errs = exc.errors()
         first = errs[0] if errs else {"loc": (), "msg": str(exc)}
@@ -242,7 +290,9 @@ def _validate_class(cls: Any, section: str, base: type, name_attr: str) -> str |
         more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
         return (f"{label} ({name_attr} {name!r}): example does not validate against "
                 f"Params: {where}: {_one_line(first.get('msg', ''))}{more}")
-    except Exception as exc:  # a validator of the plugin's own that breaks
+    except BaseException as exc:  # a validator of the plugin's own that breaks
+        if is_real_interrupt(exc):
+            raise
         return (f"{label} ({name_attr} {name!r}): validating the example raised "
                 f"{_describe_exception(exc)}")
     if section == "measures":
@@ -330,8 +380,11 @@ def load_registry(
                  "rename the entry point")
             return
         try:
-            obj = obtain()
-        except Exception as exc:
+            with plugin_code():
+                obj = obtain()
+        except BaseException as exc:  # SystemExit at import time too
+            if is_real_interrupt(exc):
+                raise
             log.debug("plugin %s failed to import", name, exc_info=True)
             fail(name, dist, f"import failed: {_describe_exception(exc)}")
             return
@@ -393,8 +446,11 @@ def load_registry(
                      f"{hook_name} must be a plain hook, not a wrapper")
                 continue
             try:
-                result = impl.function()
-            except Exception as exc:
+                with plugin_code():
+                    result = impl.function()
+            except BaseException as exc:
+                if is_real_interrupt(exc):
+                    raise
                 log.debug("hook %s of plugin %s raised", hook_name, plugin.name,
                           exc_info=True)
                 fail(plugin.name, plugin.distribution,
@@ -523,6 +579,9 @@ class _Contract:
     raises: tuple[type[Exception], ...] = ()
     returns: Callable[[Any], bool] | None = None
     expected: str = ""
+    #: ``problem(value, plugin, args)``: what is wrong with an accepted value's
+    #: content (one line), or None.
+    problem: Callable[[Any, Any, tuple], str | None] | None = None
 
 
 _NUMBER_DICT = _Contract((), _is_number_dict, "a dict of str to number (not NaN)")
@@ -533,7 +592,7 @@ _CONTRACTS: dict[tuple[str, str], _Contract] = {
     # ValueError: the measure does not fit on the section (bad input, exit 2).
     ("measure", "footprint"): _Contract(
         (ValueError,), lambda v: isinstance(v, Barrier | ProfileEdit),
-        "a Barrier or a ProfileEdit"),
+        "a Barrier or a ProfileEdit", lambda v, m, args: footprint_problem(v, m, *args)),
     ("measure", "design_properties"): _NUMBER_DICT,
     ("measure", "quantities"): _NUMBER_DICT,
     ("measure", "label"): _Contract((), lambda v: isinstance(v, str), "a str"),
@@ -595,14 +654,19 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
     contract = _CONTRACTS[(key, method)]
     provider = registry.provider.get((key, name))
     who = f"{_NOUN[key]} {name!r}" + (f" (from {provider})" if provider else "")
-    fn = plugin if method == "__init__" else getattr(plugin, method)
     try:
-        value = fn(*args)
+        with plugin_code():
+            fn = plugin if method == "__init__" else getattr(plugin, method)
+            value = fn(*args)
     except (*contract.raises, PluginError):
         # The contract's own exceptions mean something to the caller; a
         # PluginError comes from a nested call that already named its plugin.
         raise
-    except Exception as exc:
+    except BaseException as exc:
+        # SystemExit, KeyboardInterrupt and the like are faults as well when
+        # the plugin raises them; only a real Ctrl-C stops the run.
+        if is_real_interrupt(exc):
+            raise
         raise PluginError(
             f"{who} failed in {method}(): {_describe_exception(exc)}; "
             "this is a bug in the plugin, not in the project"
@@ -613,7 +677,125 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
             f"{who}: {method}() returned {type(value).__name__} {shown}, "
             f"expected {contract.expected}; this is a bug in the plugin, not in the project"
         )
+    why = contract.problem(value, plugin, args) if contract.problem is not None else None
+    if why is not None:
+        raise PluginError(
+            f"{who}: {method}() returned {type(value).__name__} with {why}; "
+            "this is a bug in the plugin, not in the project"
+        )
     return value
+
+
+# ---------------------------------------------------------------------------
+# what a footprint may hand to the engine
+
+
+def _number(value: Any, name: str, low: float, high: float = math.inf, *,
+            low_open: bool = False, allow_inf: bool = False) -> str | None:
+    """Why ``value`` is not a real number in [low, high] (or (low, high]), or None."""
+    if not _is_number(value):
+        return f"{name} = {reprlib.repr(value)}: expected a number"
+    v = float(value)
+    if math.isnan(v) or (math.isinf(v) and not (allow_inf and v > 0)):
+        return f"{name} = {v}: expected a finite number"
+    if v < low or (low_open and v == low) or v > high:
+        bounds = f"{'>' if low_open else '>='} {low:g}" + (
+            f" and <= {high:g}" if math.isfinite(high) else "")
+        return f"{name} = {v:g}: expected a number {bounds}"
+    return None
+
+
+def _x_problem(x: float, name: str, measure: Any, section: Any) -> str | None:
+    """A station outside the section is the plugin's fault when the measure's own x is inside.
+
+    (When the measure's ``x`` is outside too, it is the project's:
+    :func:`~rockfall_design.evaluate.place_measures` says so.)
+    """
+    x0, x1 = float(section.x[0]), float(section.x[-1])
+    if x0 <= x <= x1:
+        return None
+    own = getattr(getattr(measure, "params", None), "x", None)
+    if _is_number(own) and x0 <= float(own) <= x1:
+        return (f"{name} = {x:g} m: outside the section ({x0:g} to {x1:g} m), although the "
+                f"measure's x = {float(own):g} m is on it")
+    return None
+
+
+def footprint_problem(fp: Barrier | ProfileEdit, measure: Any, section: Any) -> str | None:
+    """What is wrong with a footprint's fields, or None: every value the engine will use.
+
+    A barrier needs a finite ``x`` on the section, a finite ``height_m`` > 0
+    (a NaN height would catch every rock), ``capacity_kj`` >= 0 (``inf``
+    for none given), a :class:`BarrierBehaviour`, ``restitution`` in 0..1,
+    ``gap_m`` >= 0 and ``spacing_m`` > 0 with the gap no wider than the
+    spacing. A profile edit needs a finite stretch ``x_start`` < ``x_end``,
+    points of shape (k, 2), k >= 2, finite, x strictly increasing from
+    ``x_start`` to ``x_end`` and meeting the ground there, a finite catch
+    range ``catch_from`` <= ``catch_to`` on the section, and a material
+    name or None.
+    """
+    if isinstance(fp, Barrier):
+        why = (_number(fp.x, "x", -math.inf)
+               or _number(fp.height_m, "height_m", 0.0, low_open=True)
+               or _number(fp.capacity_kj, "capacity_kj", 0.0, allow_inf=True))
+        if why:
+            return why
+        b = fp.behaviour
+        if isinstance(b, bool) or not isinstance(b, int) or b not in set(BarrierBehaviour):
+            names = ", ".join(m.name for m in BarrierBehaviour)
+            return f"behaviour = {reprlib.repr(b)}: expected a BarrierBehaviour ({names})"
+        why = (_number(fp.restitution, "restitution", 0.0, 1.0)
+               or _number(fp.gap_m, "gap_m", 0.0)
+               or _number(fp.spacing_m, "spacing_m", 0.0, low_open=True))
+        if why:
+            return why
+        if fp.gap_m > fp.spacing_m:
+            return (f"gap_m = {fp.gap_m:g} wider than spacing_m = {fp.spacing_m:g}: "
+                    "the gaps lie between the blocks")
+        return _x_problem(float(fp.x), "x", measure, section)
+    why = (_number(fp.x_start, "x_start", -math.inf)
+           or _number(fp.x_end, "x_end", -math.inf)
+           or _number(fp.catch_from, "catch_from", -math.inf)
+           or _number(fp.catch_to, "catch_to", -math.inf))
+    if why:
+        return why
+    if not fp.x_start < fp.x_end:
+        return f"x_start = {fp.x_start:g} not below x_end = {fp.x_end:g}"
+    if not fp.catch_from <= fp.catch_to:
+        return f"catch_from = {fp.catch_from:g} above catch_to = {fp.catch_to:g}"
+    if fp.material is not None and (not isinstance(fp.material, str) or not fp.material):
+        return f"material = {reprlib.repr(fp.material)}: expected a material name or None"
+    try:
+        points = np.asarray(fp.points, dtype=float)
+    except (TypeError, ValueError):
+        return f"points = {reprlib.repr(fp.points)}: expected an array of [x, y] (m)"
+    if points.ndim != 2 or points.shape[1] != 2 or points.shape[0] < 2:
+        return f"points of shape {points.shape}: expected (k, 2) with k >= 2"
+    if not np.isfinite(points).all():
+        return "points that are not all finite"
+    if not (np.diff(points[:, 0]) > 0).all():
+        return "points whose x does not increase strictly"
+    scale = max(1.0, float(np.abs(points).max()))
+    tol = 1e-9 * scale
+    if abs(points[0, 0] - fp.x_start) > tol or abs(points[-1, 0] - fp.x_end) > tol:
+        return (f"points from x = {points[0, 0]:g} to {points[-1, 0]:g} m: expected them to "
+                f"run from x_start = {fp.x_start:g} to x_end = {fp.x_end:g} m")
+    x0, x1 = float(section.x[0]), float(section.x[-1])
+    for name, x in (("x_start", fp.x_start), ("x_end", fp.x_end)):
+        why = _x_problem(float(x), name, measure, section)
+        if why:
+            return why
+    if x0 <= fp.x_start and fp.x_end <= x1:  # else place_measures reports the project's x
+        ground = np.interp([fp.x_start, fp.x_end], section.x, section.y)
+        off = np.abs(points[[0, -1], 1] - ground)
+        if (off > 1e-6 * max(1.0, float(np.abs(ground).max()))).any():
+            return (f"points that do not meet the ground at x_start and x_end (y = "
+                    f"{points[0, 1]:g} and {points[-1, 1]:g} m, ground {ground[0]:g} and "
+                    f"{ground[1]:g} m)")
+        if fp.catch_from < x0 or fp.catch_to > x1:
+            return (f"catch range [{fp.catch_from:g}, {fp.catch_to:g}] m: outside the "
+                    f"section ({x0:g} to {x1:g} m)")
+    return None
 
 
 # ---------------------------------------------------------------------------

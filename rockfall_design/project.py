@@ -34,6 +34,8 @@ Units are SI throughout: m, m/s, rad/s, kg, m3, kg/m3; angles in degrees
 where the key says ``_deg``.
 """
 
+import contextlib
+import contextvars
 import copy
 import difflib
 import hashlib
@@ -41,9 +43,10 @@ import json
 import math
 import os
 import re
+import sys
 import types
 import typing
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
@@ -62,7 +65,8 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
-from .errors import PluginError, ProjectError
+from .errors import Interrupted, PluginError, ProjectError
+from .inputs import read_text
 
 __all__ = [
     "dump_yaml",
@@ -115,10 +119,29 @@ def _fmt(value: Any) -> str:
     return str(value)
 
 
+#: False while data from a file that the project names (a catalogue, a price
+#: file) is checked: the path may point at any file, so its values are not
+#: repeated in messages, only its file, line and key path.
+_QUOTE_VALUES: contextvars.ContextVar[bool] = contextvars.ContextVar("quote", default=True)
+
+
+@contextlib.contextmanager
+def _unquoted() -> Iterator[None]:
+    """Within the block, :func:`_describe` names a value's type, never the value."""
+    token = _QUOTE_VALUES.set(False)
+    try:
+        yield
+    finally:
+        _QUOTE_VALUES.reset(token)
+
+
 def _describe(value: Any) -> str:
     """A short, one-line description of a YAML value for "got ..." messages."""
     if value is None:
         return "null"
+    if not _QUOTE_VALUES.get() and isinstance(value, bool | int | float | str):
+        return "a boolean" if isinstance(value, bool) else (
+            "a string" if isinstance(value, str) else "a number")
     if isinstance(value, bool):
         return f"{_fmt(value)} (a boolean)"
     if isinstance(value, int | float):
@@ -319,8 +342,31 @@ MAX_COORDINATE_M = 1e6
 #: avalanche, far beyond the blocks this model is for. Size distributions are
 #: truncated here, so that no draw from a long tail overflows the energies.
 MAX_RADIUS_M = 25.0
+#: Smallest rock radius (m): 1 cm, gravel. Below it the model is no longer one
+#: of rockfall, and far below (1e-300 m) mass and spin leave float64's range.
+#: Size distributions are cut off here too (draws below are raised to it).
+MIN_RADIUS_M = 0.01
 #: Largest rock density (kg/m3), above any rock's (ores reach about 5,000).
 MAX_DENSITY = 20_000.0
+#: Smallest rock density (kg/m3), below any rock's (pumice is about 250).
+MIN_DENSITY = 100.0
+#: Most rocks in one run (rocks.count, --rocks, design.fresh_rocks): a streamed
+#: run of a billion rocks takes about six hours on one core.
+MAX_ROCKS = 1_000_000_000
+#: Most analysis stations: each adds a column per rock and its histograms.
+MAX_STATIONS = 1_000
+#: Most percentiles of the envelopes.
+MAX_PERCENTILES = 100
+#: Most envelope points: each adds two values per rock (or two histograms).
+MAX_ENVELOPE_POINTS = 10_000
+#: Smallest chord angle (deg) of the centre path's arcs: every convex vertex
+#: becomes up to 180 / max_chord_deg edges, for every rock size.
+MIN_CHORD_DEG = 0.5
+#: Most measures in one design of the optimiser.
+MAX_DESIGN_MEASURES = 10
+#: Most families (multisets of candidates) the optimiser searches: at about
+#: four seconds a family on 10,000 rocks, an hour's work.
+MAX_FAMILIES = 1_000
 #: Largest release speed (m/s) in x or y: a free fall of 500 m ends at 99 m/s.
 MAX_RELEASE_SPEED = 100.0
 #: Largest release spin (rad/s).
@@ -611,10 +657,12 @@ class Rocks(_Model):
     and :attr:`size_quantity` give it without looking at all three.
     """
 
-    count: Annotated[Integer, Field(ge=1)] = Field(1000, description="Number of rocks.")
+    count: Annotated[Integer, Field(ge=1, le=MAX_ROCKS)] = Field(
+        1000, description="Number of rocks, at most 1,000,000,000."
+    )
     seed: Annotated[Integer, Field(ge=0)] = Field(0, description="Random seed (reproducible).")
-    density: Annotated[Positive, Field(le=MAX_DENSITY)] = Field(
-        2650.0, description="Rock density (kg/m3), at most 20,000."
+    density: Annotated[Number, Field(ge=MIN_DENSITY, le=MAX_DENSITY)] = Field(
+        2650.0, description="Rock density (kg/m3), 100..20,000."
     )
     radius: SizeField = Field(None, description="Rock radius (m): a number or a distribution.")
     volume: SizeField = Field(None, description="Rock volume (m3): a number or a distribution.")
@@ -635,18 +683,36 @@ class Rocks(_Model):
                 f"give only one of radius, volume, mass; got {' and '.join(given)}",
                 (given[1],),
             )
-        spec, top = self.size, self.max_size
+        spec, top, bottom = self.size, self.max_size, self.min_size
+        unit = {"radius": "m", "volume": "m3", "mass": "kg"}[self.size_quantity]
         # The smallest size the distribution must be able to exceed: its fixed
         # value, its maximum, or its mean or median (a tail beyond is cut off).
         least = spec.b if spec.kind == "uniform" else spec.a
         if least > top:
-            unit = {"radius": "m", "volume": "m3", "mass": "kg"}[self.size_quantity]
             raise _fail(
                 f"expected sizes up to {_fmt(float(f'{top:.6g}'))} {unit} (a sphere of "
                 f"{MAX_RADIUS_M:g} m radius), got {_fmt(least)}",
                 (self.size_quantity,),
             )
+        # And the size it must reach at least: its fixed value, its minimum,
+        # its mean or median (a tail below is cut off).
+        if spec.a < bottom:
+            raise _fail(
+                f"expected sizes of at least {_fmt(float(f'{bottom:.6g}'))} {unit} (a sphere "
+                f"of {MIN_RADIUS_M:g} m radius), got {_fmt(spec.a)}",
+                (self.size_quantity,),
+            )
         return self
+
+    @property
+    def min_size(self) -> float:
+        """The smallest size a rock may have, in the units of :attr:`size_quantity`.
+
+        A sphere of :data:`MIN_RADIUS_M`; draws below it are raised to it.
+        """
+        volume = 4.0 / 3.0 * math.pi * MIN_RADIUS_M**3
+        return {"radius": MIN_RADIUS_M, "volume": volume,
+                "mass": volume * self.density}[self.size_quantity]
 
     @property
     def max_size(self) -> float:
@@ -680,17 +746,22 @@ class Rocks(_Model):
 class Analysis(_Model):
     """What to evaluate along the section."""
 
-    stations: Annotated[list[Number], BeforeValidator(_as_list)] = Field(
-        default_factory=list, description="Stations x (m) where crossings are recorded."
+    stations: Annotated[
+        list[Number], Field(max_length=MAX_STATIONS), BeforeValidator(_as_list)
+    ] = Field(
+        default_factory=list,
+        description="Stations x (m) where crossings are recorded; at most 1,000.",
     )
     percentiles: Annotated[
-        list[Annotated[Number, Field(gt=0.0, lt=100.0)]], BeforeValidator(_as_list)
+        list[Annotated[Number, Field(gt=0.0, lt=100.0)]],
+        Field(max_length=MAX_PERCENTILES),
+        BeforeValidator(_as_list),
     ] = Field(
         default_factory=lambda: [50.0, 95.0, 99.0],
         description="Percentiles (%) of height and energy reported, each in (0, 100).",
     )
-    envelope_points: Annotated[Integer, Field(ge=2)] = Field(
-        201, description="Number of envelope stations spread along the section."
+    envelope_points: Annotated[Integer, Field(ge=2, le=MAX_ENVELOPE_POINTS)] = Field(
+        201, description="Number of envelope stations spread along the section, 2..10,000."
     )
     min_rocks_envelope: Annotated[Integer, Field(ge=1)] = Field(
         30,
@@ -720,8 +791,8 @@ class EngineConfig(_Model):
         10000, description="Maximum number of events (impacts, phase changes) per rock, "
         "10..10,000,000."
     )
-    max_chord_deg: Annotated[Positive, Field(le=30.0)] = Field(
-        5.0, description="Maximum angle (deg) between trajectory chords and the arc."
+    max_chord_deg: Annotated[Number, Field(ge=MIN_CHORD_DEG, le=30.0)] = Field(
+        5.0, description="Maximum angle (deg) between trajectory chords and the arc, 0.5..30."
     )
 
 
@@ -859,8 +930,9 @@ def _parse_residual(value: Any) -> Any:
 class Site(_Model):
     """The site: how much slope the measures span."""
 
-    length_m: Positive = Field(
-        description="Length of slope to protect, along the contour (m): what the measures span."
+    length_m: Annotated[Positive, Field(le=MAX_COORDINATE_M)] = Field(
+        description="Length of slope to protect, along the contour (m): what the measures "
+        "span; at most 1,000 km (costs scale with it; 1e300 overflowed the optimiser)."
     )
 
 
@@ -1125,8 +1197,8 @@ class Design(_Model):
     and :attr:`cost_params` / :attr:`costs_locator`.
     """
 
-    max_measures: Annotated[Integer, Field(ge=1)] = Field(
-        2, description="Largest number of measures in one design."
+    max_measures: Annotated[Integer, Field(ge=1, le=MAX_DESIGN_MEASURES)] = Field(
+        2, description="Largest number of measures in one design, 1..10."
     )
     residual: Annotated[
         Any,
@@ -1148,7 +1220,7 @@ class Design(_Model):
         0,
         description="Rocks allowed to reach the protected zone: a count, or {fraction: F}.",
     )
-    fresh_rocks: Annotated[Integer, Field(ge=1)] | None = Field(
+    fresh_rocks: Annotated[Integer, Field(ge=1, le=MAX_ROCKS)] | None = Field(
         None,
         description="Rocks of the independent re-check of a family's chosen design; at least "
         "(and by default) twice the rocks that decided it.",
@@ -1177,6 +1249,21 @@ class Design(_Model):
     _products_locator: "Locator | None" = PrivateAttr(default=None)
     _cost_params: dict | None = PrivateAttr(default=None)
     _costs_locator: "Locator | None" = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _check_families(self) -> "Design":
+        # The optimiser searches every multiset of 1..max_measures candidates:
+        # C(n + m, m) - 1 families, each a search of its own.
+        n, m = len(self.candidates), self.max_measures
+        count = math.comb(n + m, m) - 1
+        if count > MAX_FAMILIES:
+            raise _fail(
+                f"{n} candidates with max_measures {m} make {count:,} families of designs to "
+                f"search, at most {MAX_FAMILIES:,} are allowed: lower max_measures or "
+                "merge candidates",
+                ("max_measures",),
+            )
+        return self
 
     @property
     def residual_count(self) -> int | None:
@@ -1546,10 +1633,14 @@ class Locator:
         Key path of the data's root in that file.
     """
 
-    def __init__(self, source: str, lines: dict, prefix: Sequence[str | int] = ()) -> None:
+    def __init__(
+        self, source: str, lines: dict, prefix: Sequence[str | int] = (), *, quote: bool = True
+    ) -> None:
         self.source = source
         self._lines = lines
         self.prefix = tuple(prefix)
+        #: False for a file the project names: its values are not quoted in messages.
+        self.quote = quote
 
     def __repr__(self) -> str:
         return f"Locator({self.source!r}, prefix={self.prefix!r})"
@@ -1588,7 +1679,8 @@ class Locator:
             raise self.error_at(path, f"expected a mapping of key: value, got {_describe(data)}")
         dropped = set(drop)
         data = {key: value for key, value in data.items() if key not in dropped}
-        instance, problems = _check_params(model, data)
+        with contextlib.nullcontext() if self.quote else _unquoted():
+            instance, problems = _check_params(model, data)
         if instance is not None:
             return instance
         # unknown keys first (a misspelt key also makes a required one "missing"),
@@ -1611,12 +1703,17 @@ def _check_params(
     problems: list[tuple[tuple, str, int]] = []  # (location, message, rank)
     _strict_problems(model, data, (), problems)
     try:
-        instance = model.model_validate(data)
+        # A plugin's validators are plugin code: what they print goes to stderr.
+        with contextlib.redirect_stdout(sys.stderr):
+            instance = model.model_validate(data)
     except ValidationError as exc:
         problems.extend(_param_problems(model, exc.errors()))
-    except Exception as exc:
+    except BaseException as exc:
         # pydantic turns a validator's ValueError or AssertionError into a
-        # validation error; anything else is a bug in the plugin's model.
+        # validation error; anything else is a bug in the plugin's model
+        # (SystemExit too), unless it is a real Ctrl-C.
+        if isinstance(exc, Interrupted):
+            raise
         raise PluginError(
             f"the parameter model {model.__module__}.{model.__qualname__} failed while "
             f"validating: {type(exc).__name__}: {exc}; this is a bug in the plugin, "
@@ -1653,6 +1750,7 @@ def params_problem(model: type[BaseModel], data: Mapping[str, Any]) -> tuple[tup
 
 _MERGE_TAG = "tag:yaml.org,2002:merge"
 _MAX_NODES = 200_000  # guards against alias bombs ("billion laughs")
+_MAX_MERGED = 10_000  # entries that merge keys (<<) may copy, in the whole file
 
 
 class _Loader(yaml.SafeLoader):
@@ -1672,6 +1770,61 @@ class _Loader(yaml.SafeLoader):
             raise yaml.constructor.ConstructorError(
                 None, None, f"invalid value: {exc}", node.start_mark
             ) from exc
+
+    def compose_node(self, parent: Any, index: Any) -> Any:
+        # Counted as they are composed: a large file of small values is
+        # refused after _MAX_NODES of them, not after building them all.
+        self._composed = getattr(self, "_composed", 0) + 1
+        if self._composed > _MAX_NODES:
+            raise _TooManyValues(self.peek_event().start_mark)
+        return super().compose_node(parent, index)
+
+
+class _TooManyValues(yaml.YAMLError):
+    """More than _MAX_NODES values in a file, found while it is read (at ``mark``)."""
+
+    def __init__(self, mark: Any) -> None:
+        super().__init__(f"more than {_MAX_NODES} values")
+        self.mark = mark
+
+
+#: Above this size (characters) a file is parsed by libyaml, where PyYAML has
+#: it: the pure-Python scanner takes about half a second per megabyte, so a
+#: file near the size limit (RF_MAX_FILE_MB) would take minutes.
+_LIBYAML_FROM = 1_000_000
+
+if getattr(yaml, "__with_libyaml__", False):
+    from yaml.cyaml import CParser
+
+    class _CLoader(CParser, _Loader):  # type: ignore[misc]
+        """:class:`_Loader` with libyaml's parser and composer (same constructors, resolvers)."""
+
+        def __init__(self, stream: str) -> None:
+            CParser.__init__(self, stream)
+            yaml.constructor.SafeConstructor.__init__(self)
+            yaml.resolver.Resolver.__init__(self)
+
+else:  # pragma: no cover - PyYAML without libyaml
+    _CLoader = None
+
+
+def _count_values(text: str) -> None:
+    """Refuse a file of more than _MAX_NODES values before libyaml composes them all.
+
+    libyaml's composer builds every node before the line map can count
+    them; its events are counted here first, one at a time.
+    """
+    parser = CParser(text)
+    try:
+        count = 0
+        while parser.check_event():
+            event = parser.get_event()
+            if isinstance(event, yaml.NodeEvent):
+                count += 1
+                if count > _MAX_NODES:
+                    raise _TooManyValues(event.start_mark)
+    finally:
+        parser.dispose()
 
 
 _Loader.add_constructor("tag:yaml.org,2002:timestamp", yaml.SafeLoader.construct_yaml_str)
@@ -1760,8 +1913,63 @@ def _line_of(path: tuple, lines: _Lines) -> int | None:
     return None
 
 
+def _check_merges(root: yaml.Node, source: str) -> None:
+    """Refuse merge keys (``<<``) that would expand to more than :data:`_MAX_MERGED` entries.
+
+    PyYAML flattens a merge by copying the merged mapping's entries, merges
+    within it included, once per reference: ten levels of mappings merging
+    ten aliases of the level above fit in a kilobyte and expand to 10**10
+    entries (a "billion laughs" made of merge keys; the loader would hang).
+    The count here is what that flattening copies, with every mapping's
+    flattened size computed once, so it costs time in proportion to the file.
+    """
+    sizes: dict[int, int] = {}  # id(mapping node) -> entries once flattened
+    total = [0]
+
+    def flattened(node: yaml.MappingNode, busy: frozenset) -> int:
+        if id(node) in sizes:
+            return sizes[id(node)]
+        if id(node) in busy:
+            raise ProjectError(source, node.start_mark.line + 1, "",
+                               "recursive alias: a value contains itself")
+        size = 0
+        for key_node, value_node in node.value:
+            if key_node.tag != _MERGE_TAG:
+                size += 1
+                continue
+            merged = value_node.value if isinstance(value_node, yaml.SequenceNode) else [value_node]
+            for item in merged:
+                if isinstance(item, yaml.MappingNode):
+                    n = flattened(item, busy | {id(node)})
+                    size += n
+                    total[0] += n
+                    if total[0] > _MAX_MERGED:
+                        raise ProjectError(
+                            source, key_node.start_mark.line + 1, "",
+                            f"merge keys (<<) would copy more than {_MAX_MERGED:,} entries "
+                            "(an alias bomb?); write the values out or merge less",
+                        )
+        sizes[id(node)] = size
+        return size
+
+    seen: set[int] = set()
+    stack = [root]
+    while stack:  # every node once, aliases included, without recursion
+        node = stack.pop()
+        if id(node) in seen:
+            continue
+        seen.add(id(node))
+        if isinstance(node, yaml.MappingNode):
+            flattened(node, frozenset())
+            for key_node, value_node in node.value:
+                stack.extend((key_node, value_node))
+        elif isinstance(node, yaml.SequenceNode):
+            stack.extend(node.value)
+
+
 def _map_lines(loader: _Loader, root: yaml.Node, source: str) -> _Lines:
     """Walk the node tree: key path -> line, rejecting duplicate and non-scalar keys."""
+    _check_merges(root, source)
     lines: _Lines = {}
     budget = [_MAX_NODES]
 
@@ -1837,7 +2045,11 @@ def _map_lines(loader: _Loader, root: yaml.Node, source: str) -> _Lines:
 
 def _parse_yaml(text: str, source: str) -> tuple[Any, _Lines]:
     try:
-        loader = _Loader(text)
+        if _CLoader is not None and len(text) > _LIBYAML_FROM:
+            _count_values(text)
+            loader = _CLoader(text)
+        else:
+            loader = _Loader(text)
         try:
             root = loader.get_single_node()
             if root is None:
@@ -1846,6 +2058,11 @@ def _parse_yaml(text: str, source: str) -> tuple[Any, _Lines]:
             data = loader.construct_document(root)
         finally:
             loader.dispose()
+    except _TooManyValues as exc:
+        raise ProjectError(
+            source, exc.mark.line + 1 if exc.mark is not None else None, "",
+            f"the file has more than {_MAX_NODES} values",
+        ) from None
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         problem = " ".join(p for p in (exc.context, exc.problem) if p) or "invalid YAML"
@@ -1895,7 +2112,9 @@ def _message(error: dict) -> str:
         noun = (
             "an integer" if isinstance(bound, int) and not isinstance(bound, bool) else "a number"
         )
-        return f"expected {noun} {op} {_fmt(ctx[name])}, got {_describe(value)}"
+        # (In a file the project names, the value is not repeated.)
+        got = f", got {_describe(value)}" if _QUOTE_VALUES.get() else ""
+        return f"expected {noun} {op} {_fmt(ctx[name])}{got}"
     if kind == "too_short":
         if isinstance(value, str):
             return "must not be empty"
@@ -2232,12 +2451,14 @@ def load_project_text(
     if data is None:
         raise ProjectError(source, 1, "", "the project file is empty")
     if not isinstance(data, dict):
+        with _unquoted():  # not a project file at all: its content is not repeated
+            got = _describe(data)
         raise ProjectError(
             source,
             _line_of((), lines),
             "",
             f"expected a mapping of top-level keys (name, slope, materials, rocks, ...), "
-            f"got {_describe(data)}",
+            f"got {got}",
         )
     base = Path(source).parent if base_dir is None else Path(base_dir)
     # A slope from a survey file and materials from a library become inline data here.
@@ -2266,7 +2487,7 @@ def _catalogue_file(
         path = base_dir / path
     shown = os.fspath(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_text(path)
     except UnicodeDecodeError as exc:
         raise project.error_at(
             at, f"cannot read the {what} {shown}: not UTF-8 text ({exc.reason})"
@@ -2295,10 +2516,11 @@ def _attach_catalogues(project: Project, base_dir: Path) -> None:
             project, design.products, base_dir, ("design", "products"), "product catalogue"
         )
         try:
-            design._catalogue = _check_products(data)
+            with _unquoted():
+                design._catalogue = _check_products(data)
         except PydanticCustomError as exc:
             raise _custom_error(exc, shown, lines) from None
-        design._products_locator = Locator(shown, lines)
+        design._products_locator = Locator(shown, lines, quote=False)
     else:
         design._catalogue = design.products or {}
         design._products_locator = Locator(project.source, project._lines, ("design", "products"))
@@ -2306,18 +2528,16 @@ def _attach_catalogues(project: Project, base_dir: Path) -> None:
         shown, data, lines = _catalogue_file(
             project, design.costs.file, base_dir, ("design", "costs", "file"), "cost file"
         )
-        if not isinstance(data, dict):
-            raise ProjectError(
-                shown,
-                _line_of((), lines),
-                "",
-                f"expected a mapping of the cost model's parameters, got {_describe(data)}",
-            )
         try:
-            design._cost_params = _raw(data, number_keys=True)
+            with _unquoted():
+                if not isinstance(data, dict):
+                    raise _fail(
+                        f"expected a mapping of the cost model's parameters, got {_describe(data)}"
+                    )
+                design._cost_params = _raw(data, number_keys=True)
         except PydanticCustomError as exc:
             raise _custom_error(exc, shown, lines) from None
-        design._costs_locator = Locator(shown, lines)
+        design._costs_locator = Locator(shown, lines, quote=False)
     else:
         design._cost_params = design.costs.params
         design._costs_locator = Locator(
@@ -2346,7 +2566,7 @@ def load_project(path: str | os.PathLike[str]) -> Project:
     """
     source = os.fspath(path)
     try:
-        text = Path(source).read_text(encoding="utf-8")
+        text = read_text(source)
     except UnicodeDecodeError as exc:
         raise ProjectError(
             source, None, "", f"cannot read file: not UTF-8 text ({exc.reason})"

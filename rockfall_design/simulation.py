@@ -117,7 +117,13 @@ def engine_key(seed: int) -> int:
 
 
 def _draw_size(
-    kind: str, a: float, b: float, n: int, rng: np.random.Generator, upper: float = np.inf
+    kind: str,
+    a: float,
+    b: float,
+    n: int,
+    rng: np.random.Generator,
+    upper: float = np.inf,
+    lower: float = 0.0,
 ) -> np.ndarray:
     """Draw n values of a size quantity (radius m, volume m^3 or mass kg).
 
@@ -125,7 +131,15 @@ def _draw_size(
     (0, ``upper``]: one uniform per rock keeps the draws of the first rocks
     independent of n. Where the cut-off lies beyond float precision of the
     CDF (every realistic case) the draws are those of the whole distribution.
+    Draws below ``lower`` are raised to it: a clip rather than a truncation,
+    so that every draw above it stays bit for bit what it was.
     """
+    return np.maximum(_draw_size_unclipped(kind, a, b, n, rng, upper), lower)
+
+
+def _draw_size_unclipped(
+    kind: str, a: float, b: float, n: int, rng: np.random.Generator, upper: float
+) -> np.ndarray:
     if kind == "fixed":
         return np.full(n, float(a))
     u = rng.random(n)
@@ -188,7 +202,8 @@ class ReleaseStream:
         u = self._x_rng.random(n)
         x = lo + (hi - lo) * u
         spec = rocks.size
-        q = _draw_size(spec.kind, spec.a, spec.b, n, self._size_rng, rocks.max_size)
+        q = _draw_size(spec.kind, spec.a, spec.b, n, self._size_rng, rocks.max_size,
+                       rocks.min_size)
         rho = float(rocks.density)
         if rocks.size_quantity == "radius":
             radius = q

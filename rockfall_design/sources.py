@@ -63,10 +63,6 @@ __all__ = ["MAX_SURVEY_POINTS", "resolve_inputs"]
 #: section, and would only slow every rock down.
 MAX_SURVEY_POINTS = 100_000
 
-#: Largest file a project may refer to (bytes): far above any section or
-#: library, small enough that a wrong path cannot fill the memory.
-MAX_FILE_BYTES = 32 * 2**20
-
 #: The columns a survey CSV may have, in the order they are reported.
 CSV_COLUMNS = ("x", "y", "material")
 
@@ -140,7 +136,13 @@ def _resolve(relative: str, base_dir: Path) -> Path:
 
 
 def _check_file(path: Path, where: _Where, at: tuple, what: str) -> None:
-    """A regular file of a sane size: not a directory, a device or a pipe to read for ever."""
+    """A regular file within the size limit of every file read (``RF_MAX_FILE_MB``).
+
+    Not a directory, a device or a pipe to read for ever. The DXF reader
+    opens the file itself, so this is checked before it is handed over.
+    """
+    from .inputs import max_file_bytes
+
     try:
         info = path.stat()
     except OSError as exc:
@@ -148,18 +150,23 @@ def _check_file(path: Path, where: _Where, at: tuple, what: str) -> None:
         raise where.error(at, f"cannot read the {what} {os.fspath(path)}: {reason}") from None
     if not stat.S_ISREG(info.st_mode):
         raise where.error(at, f"cannot read the {what} {os.fspath(path)}: not a regular file")
-    if info.st_size > MAX_FILE_BYTES:
+    limit = max_file_bytes()
+    if info.st_size > limit:
         raise where.error(
-            at, f"the {what} {os.fspath(path)} is larger than {MAX_FILE_BYTES // 2**20} MiB"
+            at, f"the {what} {os.fspath(path)} is larger than {limit / 1e6:g} MB, the largest "
+            "file read (set RF_MAX_FILE_MB to change it)"
         )
 
 
 def _read_text(path: Path, where: _Where, at: tuple, what: str) -> str:
     """A referenced text file; a file that cannot be read is the project's error."""
+    from .inputs import read_text
+
     _check_file(path, where, at, what)
     try:
-        # utf-8-sig: spreadsheet programs start their CSV exports with a BOM.
-        return path.read_text(encoding="utf-8-sig")
+        # The one reader of every input file (size limit checked as it reads);
+        # a BOM stripped: spreadsheet programs start their CSV exports with one.
+        return read_text(path).removeprefix("\ufeff")
     except UnicodeDecodeError as exc:
         raise where.error(
             at, f"cannot read the {what} {os.fspath(path)}: not UTF-8 text ({exc.reason})"

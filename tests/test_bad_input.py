@@ -104,8 +104,8 @@ CASES: dict[str, Case] = {
                         ("expected a number > 0", "got 0")),
     "negative radius": Case("radius: 0.5 ", "radius: -0.5 ", "rocks.radius",
                             ("expected a number > 0", "got -0.5")),
-    "zero density": Case("density: 2650 ", "density: 0 ", "rocks.density", ("> 0",)),
-    "negative density": Case("density: 2650 ", "density: -2650 ", "rocks.density", ("> 0",)),
+    "zero density": Case("density: 2650 ", "density: 0 ", "rocks.density", (">= 100", "got 0")),
+    "negative density": Case("density: 2650 ", "density: -2650 ", "rocks.density", (">= 100",)),
     "zero count": Case("count: 1000", "count: 0", "rocks.count",
                        ("expected an integer >= 1", "got 0")),
     "negative count": Case("count: 1000", "count: -5", "rocks.count", (">= 1",)),
@@ -200,6 +200,31 @@ CASES: dict[str, Case] = {
                        "{type: wall, x: 99.8, height: 3, capacity_kj: 500}"),
         "measures[1].x", ("stands inside berm",), line_of="x: 99.8",
         commands=("simulate", "check")),
+    # -- numbers that size memory or work, each with its limit in the message -----
+    "bound: chord angle that would make millions of edges": Case(
+        "protect:\n", "engine: {max_chord_deg: 1e-9}\nprotect:\n", "engine.max_chord_deg",
+        (">= 0.5", "got 1e-09"), line_of="max_chord_deg"),
+    "bound: chord angle that underflows": Case(
+        "protect:\n", "engine: {max_chord_deg: 1e-300}\nprotect:\n", "engine.max_chord_deg",
+        (">= 0.5",), line_of="max_chord_deg"),
+    "bound: rock count": Case("count: 1000", "count: 1e300", "rocks.count",
+                              ("<= 1000000000", "got 1e+300")),
+    "bound: radius far below a gravel grain": Case(
+        "radius: 0.5 ", "radius: 1e-300 ", "rocks.radius", ("at least 0.01 m", "got 1e-300")),
+    "bound: mass of a grain of dust": Case(
+        "radius: 0.5 ", "mass: {lognormal: [1e-9, 1]} ", "rocks.mass",
+        ("at least 0.0111003 kg", "got 1e-09")),
+    "bound: density of no rock": Case(
+        "density: 2650 ", "density: 1e-300 ", "rocks.density", (">= 100", "got 1e-300")),
+    "bound: stations": Case(
+        "stations: [80]", "stations: [" + ", ".join(["80"] * 1001) + "]",
+        "analysis.stations", ("at most 1000", "got 1001")),
+    "bound: envelope points": Case(
+        "stations: [80]", "stations: [80]\n  envelope_points: 1e12",
+        "analysis.envelope_points", ("<= 10000",), line_of="envelope_points"),
+    "bound: percentiles": Case(
+        "stations: [80]", "stations: [80]\n  percentiles: [" + ", ".join(["50"] * 101) + "]",
+        "analysis.percentiles", ("at most 100",), line_of="percentiles"),
     # -- NaN and infinity, wherever a number goes ----------------------------------------
     "NaN in a material": Case("friction: 0.58", "friction: .nan",
                               "materials.talus.friction", ("must be finite", ".nan")),
@@ -350,3 +375,64 @@ def test_every_command_checks_the_whole_file(command, tmp_path, capsys):
     assert code == 2 and err.count("\n") == 1, err
     assert err.startswith(f"rockfall-design: error: {path}:{line}: design.candidates[0].type: ")
     assert "did you mean 'fence'" in err
+
+
+def test_the_optimiser_refuses_more_families_than_it_can_search(tmp_path, capsys):
+    """max_measures 1e300 used to allocate gigabytes; a merely large one is a days-long run."""
+    design = (ROOT / "projects" / "design_two_zones.yaml").read_text(encoding="utf-8")
+    assert design.count("  max_measures: 2") == 1 and design.endswith("x: [113, 280]\n")
+    path = tmp_path / "design_two_zones.yaml"
+    # Two candidates with max_measures 10: 65 families, within the limit; six: 8,007.
+    for value, more, fragments in (
+        ("1e300", 0, ("<= 10", "got 1e+300")),
+        ("10", 4, ("6 candidates with max_measures 10 make 8,007 families", "at most 1,000")),
+    ):
+        text = design.replace("  max_measures: 2", f"  max_measures: {value}")
+        path.write_text(text + "    - type: fence\n      x: [30, 40]\n" * more)
+        code, err = run("optimise", path, capsys)
+        assert code == 2 and err.count("\n") == 1, err
+        line = text.splitlines().index(f"  max_measures: {value}") + 1
+        assert err.startswith(f"rockfall-design: error: {path}:{line}: design.max_measures: ")
+        for fragment in fragments:
+            assert fragment in err, err
+
+
+def test_draws_below_the_smallest_rock_are_raised_to_it():
+    """A normal size with a wide spread reaches towards 0; those draws become 1 cm rocks."""
+    from rockfall_design.project import MIN_RADIUS_M, load_project_text
+    from rockfall_design.simulation import draw_releases
+
+    project = load_project_text(STANDARD.replace("radius: 0.5 ", "radius: {normal: [0.05, 0.1]} "))
+    radius = draw_releases(project, 2000, 1).radius
+    assert radius.min() == MIN_RADIUS_M and (radius > MIN_RADIUS_M).sum() > 1000
+
+
+def test_rocks_option_is_bounded(capsys):
+    with pytest.raises(SystemExit) as info:
+        main(["simulate", "x.yaml", "--rocks", "1e300"])
+    assert info.value.code == 2
+    with pytest.raises(SystemExit) as info:
+        main(["simulate", "x.yaml", "--rocks", "1000000001"])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "<= 1,000,000,000" in err and "Traceback" not in err
+
+
+def test_a_ditch_too_shallow_for_float64_is_bad_input_not_a_plugin_fault(tmp_path, capsys):
+    """depth 1e-300 gave coinciding vertices: the footprint check blamed the built-in plugin."""
+    text = STANDARD.replace(*with_measures("{type: ditch, x: 100, width: 6, depth: 1e-300}"))
+    path = tmp_path / "p.yaml"
+    path.write_text(text, encoding="utf-8")
+    code, err = run("check", path, capsys)
+    assert code == 2 and err.count("\n") == 1, err
+    assert "measures[0]" in err and "too small to shape the ground" in err
+
+
+def test_a_site_longer_than_the_limit_is_refused(tmp_path, capsys):
+    """length_m 1e300 overflowed the optimiser's costs (a RuntimeWarning, then exit 0)."""
+    design = (ROOT / "projects" / "design_two_zones.yaml").read_text(encoding="utf-8")
+    path = tmp_path / "d.yaml"
+    path.write_text(design.replace("site: {length_m: 200}", "site: {length_m: 1e300}"))
+    code, err = run("optimise", path, capsys)
+    assert code == 2 and err.count("\n") == 1, err
+    assert "design.site.length_m: expected a number <= 1000000, got 1e+300" in err

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import shutil
 import subprocess
 import sys
@@ -28,7 +29,10 @@ def run_json(capsys, *args: str) -> dict:
 
 def test_json_has_the_documented_keys(capsys):
     s = run_json(capsys, str(STANDARD), "--rocks", "200")
-    assert s["rocks"] == 200 and s["seed"] == 42 and s["runtime_s"] >= 0
+    # (runtime_s >= 0 alone could not fail: a duration is never negative.)
+    assert s["rocks"] == 200 and s["seed"] == 42
+    assert isinstance(s["runtime_s"], float) and math.isfinite(s["runtime_s"])
+    assert s["version"] and len(s["project_hash"]) == 64 and s["events"] > 200
     assert set(s["stops"]) >= {"x", "out_of_section", "unresolved"}
     assert set(s["stops"]["x"]) == {"mean", "p50", "p95", "max"}
     (st,) = s["stations"]
@@ -135,3 +139,42 @@ def test_repeat_reproduces_a_recorded_run_exactly(tmp_path, capsys):
     for s in (first, again):
         s.pop("runtime_s")
     assert again == first
+
+
+def test_repeat_exits_1_when_the_results_differ(tmp_path, capsys):
+    out = tmp_path / "first"
+    assert main(["simulate", str(STANDARD), "--rocks", "40", "--out", str(out), "--json"]) == 0
+    capsys.readouterr()
+    summary = out / "summary.json"
+    recorded = json.loads(summary.read_text())
+    recorded["stations"][0]["crossings"] += 1  # as another version or machine might
+    summary.write_text(json.dumps(recorded))
+    assert main(["simulate", "--repeat", str(summary), "--json"]) == 1
+    captured = capsys.readouterr()
+    assert "DIFFER" in captured.err and json.loads(captured.out)["rocks"] == 40
+
+
+def test_ctrl_c_right_at_exit_prints_no_traceback():
+    """Once the command is over, the process exits: a Ctrl-C then changes nothing."""
+    script = (
+        "import os, signal, sys\n"
+        "from rockfall_design.cli import main\n"
+        "sys.argv = ['rockfall-design', 'plugins', '--json']\n"
+        "code = main()\n"
+        "os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C as the program ends\n"
+        "sys.exit(code)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=120, check=False)
+    assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
+    assert json.loads(proc.stdout)["measures"]
+
+
+def test_a_signal_after_the_command_is_ignored():
+    from rockfall_design import cli
+
+    cli._exiting[0] = True
+    try:
+        assert cli._on_signal(2, None) is None
+    finally:
+        cli._exiting[0] = False

@@ -15,7 +15,7 @@ from rockfall_design.engine import EngineSettings, Material, core
 
 from .engine_helpers import one_rock, run_one, section
 from .plugin_helpers import write_distribution
-from .test_project import EXAMPLE, mutated_projects
+from .test_project import EXAMPLE, EXAMPLE_DATA, mutated_projects
 
 MAT = Material(restitution=0.35, friction=0.55, rolling_resistance=0.3, roughness_deg=5,
                sd_restitution=0.05, sd_friction=0.05)
@@ -90,8 +90,63 @@ def test_mutated_project_files_run_or_fail_with_one_line(tmp_path_factory, capsy
     assert code in (0, 2), out.err
     if code == 2:
         assert out.err.count("\n") == 1 and "Traceback" not in out.err
+        # The message names the file and a key the mutation touched (or one that
+        # depends on it, such as a release on a mutated slope).
+        err = _project_error(path)
+        assert err is not None and str(err) in out.err, out.err
+        assert err.file == str(path) and err.line is not None, out.err
+        mutated = _mutated_keys(EXAMPLE_DATA, data)
+        assert any(_related(err.key, key) for key in mutated), (err.key, mutated)
     else:
         assert json.loads(out.out)["rocks"] == 3
+
+
+#: Keys whose errors a mutation elsewhere may cause: the section's extent
+#: places the releases, stations and protection; the materials name the slope's.
+_DEPENDS = {"slope": ("rocks.release", "analysis.stations", "protect.x"),
+            "materials": ("slope.materials",), "rocks": ("rocks",)}
+
+
+def _key(path: tuple) -> str:
+    return "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in path).lstrip(".")
+
+
+def _mutated_keys(base, data, path: tuple = ()) -> list[str]:
+    """Key paths where ``data`` differs from ``base`` (deleted, replaced or changed)."""
+    if isinstance(base, dict) and isinstance(data, dict):
+        keys = [k for k in base if k not in data] + [k for k in data if k not in base]
+        out = [_key(path + (k,)) for k in keys]
+        for k in base.keys() & data.keys():
+            out += _mutated_keys(base[k], data[k], path + (k,))
+        return out
+    if isinstance(base, list) and isinstance(data, list) and len(base) == len(data):
+        return [k for i, (b, d) in enumerate(zip(base, data, strict=True))
+                for k in _mutated_keys(b, d, path + (i,))]
+    same = type(base) is type(data) and base == data
+    return [] if same else [_key(path)]
+
+
+def _related(error_key: str, mutated: str) -> bool:
+    def under(a: str, b: str) -> bool:  # a is b or inside it
+        return a == b or a.startswith(b + ".") or a.startswith(b + "[")
+
+    top = mutated.split(".")[0].split("[")[0]
+    return (under(error_key, mutated) or under(mutated, error_key)
+            or any(under(error_key, dep) for dep in _DEPENDS.get(top, ())))
+
+
+def _project_error(path):
+    """The error the loader and the whole-file validation give for ``path``, if any."""
+    from rockfall_design.errors import ProjectError
+    from rockfall_design.evaluate import validate_project
+    from rockfall_design.plugins import default_registry
+    from rockfall_design.project import load_project
+
+    try:
+        validate_project(load_project(path), default_registry())
+    except ProjectError as err:
+        return err
+    return None
 
 
 RAISING = '''

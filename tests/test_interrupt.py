@@ -203,7 +203,8 @@ def _signal_on_first_replace(monkeypatch, signum: int, directory: Path,
     renamed: list[Path] = []
 
     def replace(src, dst) -> None:
-        mine = Path(dst).parent == directory
+        # (The commit first moves each old file aside, to a name ending .old.)
+        mine = Path(dst).parent == directory and not Path(dst).name.endswith(".old")
         if mine and not renamed:
             send(signum)
         real_replace(src, dst)

@@ -29,6 +29,8 @@ import math
 
 from pydantic import field_validator
 
+import numpy as np
+
 from rockfall_design import (
     Barrier,
     BarrierBehaviour,
@@ -36,6 +38,7 @@ from rockfall_design import (
     CostModel,
     CostParams,
     MeasureParams,
+    ProfileEdit,
     ProtectiveMeasure,
     SafetyConcept,
     SafetyParams,
@@ -43,11 +46,28 @@ from rockfall_design import (
 )
 
 FAULT = {fault!r}
+EXC = {exc}
+
+if FAULT == "print":
+    print("chatty plugin: imported")
 
 
 def _step(method):
+    if FAULT == "print":
+        print(f"chatty plugin: in {{method}}")
     if FAULT == method:
-        raise RuntimeError(f"boom in {{method}}")
+        raise EXC(f"boom in {{method}}")
+
+
+def _fields(kind, fields):
+    """The footprint's fields, one replaced as FAULT says: 'barrier:height_m=math.nan'."""
+    if FAULT.startswith(kind + ":"):
+        name, value = FAULT[len(kind) + 1:].split("=", 1)
+        fields[name] = eval(value, {{"math": math, "np": np, "BarrierBehaviour": BarrierBehaviour}})
+    return fields
+
+
+_step("import")
 
 
 class BoomNetParams(MeasureParams):
@@ -78,8 +98,22 @@ class BoomNet(ProtectiveMeasure):
         _step("footprint")
         if FAULT == "misfit":
             raise ValueError("boom_net does not fit here")
-        return Barrier(x=self.params.x, height_m=self.params.height_m,
-                       capacity_kj=self.params.capacity_kj, behaviour=BarrierBehaviour.NET)
+        if FAULT == "sigint":  # a real Ctrl-C while plugin code runs
+            import os
+            import signal
+            import time
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(10)  # the handler interrupts the sleep
+        x = self.params.x
+        if FAULT.startswith("edit:"):
+            g = section.ground_height
+            return ProfileEdit(**_fields("edit", dict(
+                x_start=x, x_end=x + 4.0, catch_from=x, catch_to=x + 4.0, material=None,
+                points=np.array([[x, g(x)], [x + 2.0, g(x + 2.0) - 1.0], [x + 4.0, g(x + 4.0)]]),
+            )))
+        return Barrier(**_fields("barrier", dict(
+            x=x, height_m=self.params.height_m, capacity_kj=self.params.capacity_kj,
+            behaviour=BarrierBehaviour.NET)))
 
     def design_properties(self):
         _step("design_properties")
@@ -137,6 +171,7 @@ class BoomCost(CostModel):
 
 @hookimpl
 def rockfall_design_measures():
+    _step("hook")
     return [BoomNet]
 
 
@@ -212,10 +247,10 @@ def install(tmp_path, monkeypatch):
     # Modules are cached by name: a new name per install, all forgotten afterwards.
     names: list[str] = []
 
-    def install(fault: str, command: str) -> tuple[str, str]:
+    def install(fault: str, command: str, exc: str = "RuntimeError") -> tuple[str, str]:
         module = f"boom_plugin_{len(names)}"
         names.append(module)
-        write_distribution(tmp_path, module, PLUGIN.format(fault=fault), "boom",
+        write_distribution(tmp_path, module, PLUGIN.format(fault=fault, exc=exc), "boom",
                            dist_name="boom-plugins")
         monkeypatch.syspath_prepend(str(tmp_path))
         path = tmp_path / f"{command}.yaml"
@@ -339,3 +374,136 @@ def test_a_validator_that_rejects_the_example_leaves_the_plugin_out(install, cap
     (failure,) = [f for f in listing["failures"] if "boom_net" in json.dumps(f)]
     assert "boom in validator_example" in json.dumps(failure)
     assert "fence" in json.dumps(listing["measures"])
+
+
+# ---------------------------------------------------------------------------
+# hardening, round 2: what a plugin raises beyond Exception, what it returns,
+# what it prints
+
+
+@pytest.mark.parametrize("exc", ["SystemExit", "KeyboardInterrupt", "BaseException",
+                                 "GeneratorExit"])
+@pytest.mark.parametrize(("command", "fault", "name", "method"), [
+    pytest.param("check", "footprint", "boom_net", "footprint()", id="check-footprint"),
+    pytest.param("check", "checks", "boom_concept", "checks()", id="check-checks"),
+    pytest.param("optimise", "cost", "boom_cost", "cost()", id="optimise-cost"),
+    pytest.param("check", "validator", "BoomNetParams", "validating", id="check-validator"),
+])
+def test_a_plugin_raising_a_base_exception_is_a_fault_not_an_exit(install, capsys, exc,
+                                                                  command, fault, name, method):
+    """SystemExit from a plugin used to end the program with its code; KeyboardInterrupt
+    passed for a Ctrl-C (exit 130). Both are the plugin's fault: exit 3, one line."""
+    dist, path = install(fault, command, exc)
+    if fault == "validator":
+        Path(path).write_text(CHECK.replace("height_m: 3,", "height_m: 4,"))
+    code = run(command, path)
+    err = capsys.readouterr().err
+    assert_one_line_fault(code, err, name, exc, f"boom in {fault}")
+    if fault != "validator":
+        assert dist in err and method in err
+
+
+@pytest.mark.parametrize("exc", ["SystemExit", "KeyboardInterrupt"])
+@pytest.mark.parametrize("fault", ["import", "hook"])
+def test_a_plugin_raising_a_base_exception_at_load_is_left_out(install, capsys, exc, fault):
+    dist, _ = install(fault, "check", exc)
+    assert main(["plugins", "--json"]) == 0
+    out = capsys.readouterr()
+    listing = json.loads(out.out)
+    (failure,) = [f for f in listing["failures"] if f["distribution"] == dist]
+    assert exc in failure["reason"] and "boom in" in failure["reason"]
+    assert "fence" in json.dumps(listing["measures"])
+
+
+@pytest.mark.parametrize(("fault", "needles"), [
+    ("barrier:height_m=math.nan", ("height_m = nan", "expected a finite number")),
+    ("barrier:height_m=-1.0", ("height_m = -1", "> 0")),
+    ("barrier:height_m=True", ("height_m = True", "expected a number")),
+    ("barrier:x=math.nan", ("x = nan",)),
+    ("barrier:x=1e300", ("x = 1e+300 m: outside the section", "measure's x = 100 m")),
+    ("barrier:capacity_kj=math.nan", ("capacity_kj = nan",)),
+    ("barrier:capacity_kj=-5.0", ("capacity_kj = -5", ">= 0")),
+    ("barrier:behaviour=7", ("behaviour = 7", "expected a BarrierBehaviour")),
+    ("barrier:behaviour='net'", ("behaviour = 'net'",)),
+    ("barrier:restitution=1.5", ("restitution = 1.5", "<= 1")),
+    ("barrier:gap_m=math.inf", ("gap_m = inf",)),
+    ("barrier:spacing_m=0.0", ("spacing_m = 0", "> 0")),
+    ("barrier:gap_m=2.0", ("gap_m = 2 wider than spacing_m = 1",)),
+    ("edit:points=np.array([[1.0, 2.0, 3.0]])", ("points of shape (1, 3)",)),
+    ("edit:points='ground'", ("points = 'ground'",)),
+    ("edit:points=np.array([[100.0, math.nan], [104.0, 0.0]])", ("not all finite",)),
+    ("edit:points=np.array([[100.0, 20.0], [99.0, 0.0], [104.0, 0.0]])",
+     ("x does not increase strictly",)),
+    ("edit:points=np.array([[100.0, 500.0], [104.0, 500.0]])", ("do not meet the ground",)),
+    ("edit:x_end=math.inf", ("x_end = inf",)),
+    ("edit:x_end=90.0", ("x_start = 100 not below x_end = 90",)),
+    ("edit:catch_to=math.nan", ("catch_to = nan",)),
+    ("edit:catch_from=110.0", ("catch_from = 110 above catch_to = 104",)),
+    ("edit:material=3", ("material = 3",)),
+])
+def test_a_footprint_with_a_bad_field_is_the_plugins_fault(install, capsys, fault, needles):
+    """Every field the engine uses is checked; a NaN height must never catch every rock."""
+    dist, path = install(fault, "check")
+    code = run("check", path)
+    err = capsys.readouterr().err
+    assert_one_line_fault(code, err, "measure 'boom_net'", dist, "footprint() returned",
+                          "bug in the plugin", *needles)
+
+
+def test_a_bad_footprint_is_a_fault_in_the_optimiser_too(install, capsys):
+    dist, path = install("barrier:height_m=math.nan", "optimise")
+    code = run("optimise", path)
+    err = capsys.readouterr().err
+    assert_one_line_fault(code, err, "measure 'boom_net'", dist, "height_m = nan")
+
+
+def test_a_measure_whose_own_x_is_off_the_section_is_the_projects_fault(install, capsys):
+    _, path = install("", "check")
+    Path(path).write_text(CHECK.replace("x: 100,", "x: 900,"))
+    assert run("check", path) == ExitCode.BAD_INPUT
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "measures[0].x" in err and "outside the section" in err
+
+
+@pytest.mark.parametrize("command", ["check", "optimise"])
+def test_a_plugin_that_prints_cannot_break_json(install, capsys, command):
+    _, path = install("print", command)
+    code = run(command, path, "--json")
+    out = capsys.readouterr()
+    assert code == ExitCode.OK, out.err
+    json.loads(out.out)  # one JSON document, nothing else
+    assert out.out.count("\n") == 1
+    assert "chatty plugin: imported" in out.err and "chatty plugin: in footprint" in out.err
+
+
+@pytest.fixture
+def default_sigint():
+    """Python's own SIGINT handler, even where the test run inherited SIGINT ignored."""
+    import signal
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_a_real_ctrl_c_in_plugin_code_stops_the_run(install, capsys, default_sigint):
+    _, path = install("sigint", "check")
+    assert run("check", path) == ExitCode.INTERRUPTED
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "interrupted" in err and "Traceback" not in err
+
+
+def test_a_real_ctrl_c_in_plugin_code_reaches_a_library_caller(install, default_sigint):
+    """Used as a library, with Python's default handler, too: not a plugin fault."""
+    import signal
+
+    from rockfall_design.errors import Interrupted
+    from rockfall_design.evaluate import evaluate
+    from rockfall_design.plugins import load_registry
+    from rockfall_design.project import load_project
+
+    _, path = install("sigint", "check")
+    project = load_project(path)
+    with pytest.raises(Interrupted):
+        evaluate(project, load_registry(), rocks=5)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

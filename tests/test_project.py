@@ -291,7 +291,8 @@ def test_resolved_dict_round_trips_through_yaml():
 
 def test_resolved_hash_is_stable_and_sensitive():
     first = load_project_text(EXAMPLE).resolved_hash()
-    assert len(first) == 64 and int(first, 16) >= 0
+    # (int(first, 16) >= 0 could not fail: it raised or held.) A sha256 in hex:
+    assert len(first) == 64 and set(first) <= set("0123456789abcdef")
     assert load_project_text(EXAMPLE).resolved_hash() == first
     # the same project written differently (defaults spelt out or not, 1 vs 1.0)
     spelt = edit("  density: 2650\n", "  density: 2650.0\n")
@@ -430,7 +431,7 @@ def test_unknown_distribution():
 
 def test_zero_density():
     text = edit("  density: 2650\n", "  density: 0\n")
-    assert_error(text, line_of(text, "density"), "rocks.density", "expected a number > 0, got 0")
+    assert_error(text, line_of(text, "density"), "rocks.density", "expected a number >= 100, got 0")
 
 
 def test_zero_count():
@@ -723,7 +724,8 @@ def _check_one(text: str) -> None:
         assert "\n" not in message and "\r" not in message
         assert message.startswith("fuzz.yaml")
     else:
-        assert isinstance(project, Project)
+        # (isinstance(project, Project) could not fail: that is all it returns.)
+        assert project.source == "fuzz.yaml" and project.locator.line(()) is not None
         resolved = project.resolved_dict()
         json.dumps(resolved, allow_nan=False)
         assert load_project_text(yaml.safe_dump(resolved)).resolved_dict() == resolved
@@ -1820,7 +1822,8 @@ def test_locator_validate_params_on_a_catalogue_file(tmp_path):
         design.costs_locator.validate_params((), Prices, design.cost_params)
     assert str(info.value) == (
         f"{tmp_path / 'catalogue_costs.yaml'}:4: barrier_per_m.fence.RX-100.x: "
-        "invalid key: expected a number, got string 'x'"
+        # a file the project names is never quoted: the key path says where
+        "invalid key: expected a number, got a string"
     )
     costs = "fixed_per_measure: -1\nbarier_per_m: {}\n"
     design = load_project(_design_files(tmp_path, PRODUCTS, costs)).design

@@ -114,6 +114,15 @@ def _check_stretch(section: SectionLike, x_start: float, x_end: float, what: str
         )
 
 
+def _check_vertices(points: np.ndarray, what: str) -> None:
+    """New ground vertices must advance in x: a measure too small for float64 has none."""
+    if not (np.diff(points[:, 0]) > 0).all():
+        raise ValueError(
+            f"{what} is too small to shape the ground: its vertices at x = "
+            f"{points[0, 0]:g} to {points[-1, 0]:g} m coincide (make it wider or deeper)"
+        )
+
+
 def cut_and_fill(
     x_old: np.ndarray, y_old: np.ndarray, x_new: np.ndarray, y_new: np.ndarray
 ) -> tuple[float, float]:
@@ -565,6 +574,7 @@ class Ditch(ProtectiveMeasure):
                 f"{p.width:g} m width (make it wider or shallower, or the sides steeper)"
             )
         points = np.array([[x_a, y_a], [x_a + run_u, y_0], [x_b - run_d, y_0], [x_b, y_b]])
+        _check_vertices(points, "the ditch")
         return ProfileEdit(
             x_start=x_a,
             x_end=x_b,
@@ -706,6 +716,7 @@ class Berm(ProtectiveMeasure):
         x_c, y_c, y_b = self._geometry(section)
         x_b = p.x + p.width
         points = np.array([[x_c, y_c], [p.x, y_b], [x_b, y_b]])
+        _check_vertices(points, "the berm")
         return ProfileEdit(
             x_start=x_c,
             x_end=x_b,
