@@ -1,0 +1,483 @@
+"""Least-cost design: the cheapest admissible design of every family, proven on fresh rocks.
+
+How it works, with common random numbers (every design sees the same rocks):
+
+1. One run of the search rocks on the bare slope keeps, at stations every
+   :data:`STATION_STEP_M` along every barrier candidate's range, each rock's
+   passing height, energy and speed at its first passage downslope, and at
+   restart stations upslope of every ground-edit candidate each rock's full
+   state (``engine.run_ensemble``).
+2. Screening (:class:`Screening`) judges a design on those rocks through the
+   one judgement (:mod:`rockfall_design.judge.outcomes`): barriers from the
+   table, ground edits by a run of only the rocks that pass the restart
+   station just upslope of the edit, resumed from their saved state.
+3. Search. Catalogue choices (products and heights, options) are discrete
+   and few: they are enumerated, in increasing order of cost. Barrier
+   positions are enumerated on the station grid: for each combination of
+   catalogue choices the rocks reaching the protected zone are counted for
+   every combination of stations at once (bit sets), and the combinations
+   within the residual target are screened in full. Ground edits (ditch,
+   berm), whose every geometry costs a run, are searched with
+   ``scipy.optimize.differential_evolution`` over their lattice, the
+   barriers beside them enumerated exactly for each geometry.
+4. Decision (:func:`decide`). Designs that pass the screening, or miss it
+   within its margin (``Screening.violation``),
+   are evaluated exactly in order of cost, once each, with rocks planned
+   from the screening (more where a design is near a limit, up to
+   ``design.max_rocks``: :func:`plan_rocks`); a design is admitted only when
+   every check and the residual hold with their upper confidence bounds
+   (``safety.confidence``).
+5. Verification. The first admitted design of a family is checked on fresh
+   rocks: an independent seed and at least twice the rocks that decided it.
+   If it fails there, the next design in order of cost is decided: a family
+   is never dropped because its first candidate failed.
+
+What the screening leaves out (a rock that breaks through a barrier goes on
+with its bare-slope path and full energy; a rock returned by a wall stays
+upslope of it; the gap passage of a boulder row is drawn from another
+stream) is settled by the exact decision, which is why designs that miss the
+screening by a small margin are decided exactly too.
+
+A design that does not fit (a measure's ``footprint`` raises ValueError, two
+measures stand in one place) or that the cost model has no price for (its
+``cost`` raises KeyError or ValueError) is not part of the design space.
+Any other failure of plugin code is a
+:class:`~rockfall_design.errors.PluginError` that stops the search (exit 3).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..evaluate import Evaluation, evaluate_design
+from ..judge.bounds import rocks_to_show_fraction
+from ..judge.outcomes import reaches_protected_zone
+from ..safety import DEFAULT_CONFIDENCE
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..design import DesignSpec
+    from ..measures import ProtectiveMeasure
+    from ..plugins import Registry
+    from ..project import Project
+
+from .decide import Decision, decide, plan_rocks
+from .screening import RESTART_STEP_M, Screening, ScreenResult
+from .search import (
+    MAX_EXACT_PER_LEVEL,
+    MAX_SCREENS_PER_LEVEL,
+    _barrier_designs,
+    _BarrierSlots,
+    _edit_designs,
+    _Tally,
+)
+from .space import (
+    BARRIER_RANGE_STEPS,
+    EDIT_STEP_M,
+    RANGE_STEPS,
+    STATION_STEP_M,
+    candidate_name,
+    families,
+    family_name,
+)
+
+__all__ = [
+    "BARRIER_RANGE_STEPS",
+    "EDIT_STEP_M",
+    "RANGE_STEPS",
+    "RESTART_STEP_M",
+    "STATION_STEP_M",
+    "Alternative",
+    "Decision",
+    "OptimisationResult",
+    "ScreenResult",
+    "Screening",
+    "candidate_name",
+    "decide",
+    "families",
+    "family_name",
+    "optimise",
+    "plan_rocks",
+]
+
+#: Designs decided exactly that only came within the screening's margin, per family.
+MAX_NEAR_PER_FAMILY = 6
+#: The search runs at least this many times the rocks that show the residual target.
+SEARCH_FACTOR = 1
+#: Designs the screening could not judge (too few rocks at a measure) that may fail
+#: exactly before the family's other such designs are no longer decided.
+MAX_UNJUDGED_FAILURES = 3
+#: Exact decisions (each a run of the rocks) of one family, at most.
+MAX_EXACT_PER_FAMILY = 40
+
+
+@dataclass
+class Alternative:
+    """The cheapest admissible design of one family, decided exactly and verified."""
+
+    name: str
+    family: tuple[int, ...]
+    measures: list[ProtectiveMeasure] = field(default_factory=list)
+    cost: float = math.inf
+    screened_feasible: bool = False
+    feasible: bool = False
+    holds_on_fresh_rocks: bool | None = None
+    checks: list[dict[str, Any]] = field(default_factory=list)
+    residual: int | None = None
+    fresh_residual: int | None = None
+    fresh_failures: list[str] = field(default_factory=list)
+    reason: str = ""
+    evaluations: int = 0
+    exact_evaluations: int = 0
+    wall_s: float = 0.0
+    evaluation: Evaluation | None = None
+    decision_rocks: int | None = None
+    fresh_rocks: int | None = None
+    fresh_seed: int | None = None
+    proof: str = ""
+    dominated: str = ""
+
+    @property
+    def holds(self) -> bool:
+        """Admitted with confidence, verified on fresh rocks, not dominated."""
+        return self.feasible and bool(self.holds_on_fresh_rocks) and not self.dominated
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "measures": [{"type": m.kind, **m.params.model_dump(mode="json")}
+                         for m in self.measures],
+            "cost": None if not math.isfinite(self.cost) else round(self.cost, 2),
+            "feasible": self.feasible,
+            "holds_on_fresh_rocks": self.holds_on_fresh_rocks,
+            "checks": self.checks,
+            "residual": self.residual,
+            "decision_rocks": self.decision_rocks,
+            "fresh_residual": self.fresh_residual,
+            "fresh_rocks": self.fresh_rocks,
+            "fresh_seed": self.fresh_seed,
+            "reason": self.reason,
+            "proof": self.proof,
+            "dominated": self.dominated or None,
+            "evaluations": self.evaluations,
+            "exact_evaluations": self.exact_evaluations,
+        }
+
+
+@dataclass
+class OptimisationResult:
+    alternatives: list[Alternative]
+    best: Alternative | None
+    reason: str
+    rocks: int
+    seed: int
+    fresh_rocks: int
+    fresh_seed: int
+    wall_s: float
+    evaluations: int
+    edit_runs: int
+    currency: str = ""
+    search_rocks: int = 0
+    confidence: float = 0.95
+    exact_evaluations: int = 0
+    rocks_simulated: int = 0
+    safety: Any = None  # the project's safety concept, as stated (its confidence)
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "rocks": self.rocks,
+            "seed": self.seed,
+            "search_rocks": self.search_rocks,
+            "fresh_rocks": self.fresh_rocks,
+            "fresh_seed": self.fresh_seed,
+            "confidence": self.confidence,
+            "runtime_s": round(self.wall_s, 3),
+            "designs_evaluated": self.evaluations,
+            "exact_evaluations": self.exact_evaluations,
+            "rocks_simulated": self.rocks_simulated,
+            "edit_runs": self.edit_runs,
+            "currency": self.currency,
+            "alternatives": [a.as_dict() for a in self.alternatives],
+            "best": None if self.best is None else self.best.name,
+            "proof": "" if self.best is None else self.best.proof,
+            "reason": self.reason,
+        }
+
+
+def _cause(screen: Screening, slots: _BarrierSlots, fam: tuple[int, ...], tally: _Tally) -> str:
+    """Why no design of a family meets the targets, with numbers."""
+    cands = screen.spec.candidates
+    n, allowed = screen.n, screen.allowed_residual
+    reach = reaches_protected_zone(screen.bare.max_x, screen.bare.status, screen.protect_x)
+    if not any(ci in screen.edit_candidates for ci in fam):
+        # Rocks that never cross any station where the family's barriers may stand.
+        crossing = np.zeros(n, dtype=bool)
+        for ci in fam:
+            lo, hi = cands[ci].x_range
+            cols = (screen.grid >= lo - 1e-9) & (screen.grid <= hi + 1e-9)
+            crossing |= np.isfinite(screen.bare.h[:, cols]).any(axis=1)
+        missed = int((reach & ~crossing).sum())
+        if missed > allowed:
+            lo = min(cands[ci].x_range[0] for ci in fam)
+            hi = max(cands[ci].x_range[1] for ci in fam)
+            below = screen.releases.x[reach & ~crossing]
+            where = (f"rocks released below x = {hi:g} m never meet a barrier in {lo:g}-{hi:g} m"
+                     if below.size and float(below.min()) > hi else
+                     f"rocks that never cross {lo:g}-{hi:g} m")
+            return (f"{where}: {missed:,} of {n:,} ({100 * missed / n:.2f} %) reach the "
+                    f"protected zone at x >= {screen.protect_x:g} m, "
+                    f"{100 * screen.allowed_fraction:.2f} % allowed")
+    if tally.min_residual is not None and tally.min_residual > allowed:
+        return (f"every design of this family lets at least {tally.min_residual:,} of {n:,} "
+                f"rocks ({100 * tally.min_residual / n:.2f} %) reach the protected zone at "
+                f"x >= {screen.protect_x:g} m, {100 * screen.allowed_fraction:.2f} % allowed")
+    if tally.best_fail is not None:
+        return "the design that comes closest still fails: " + _why(tally.best_fail)
+    if tally.over_limit is not None and tally.designs == 0:
+        return f"its cheapest design costs {tally.over_limit:,.0f}"
+    skipped: Counter = Counter()
+    for ci in fam:
+        skipped.update(slots.skipped.get(ci, {}))
+    if skipped:
+        why, count = skipped.most_common(1)[0]
+        return f"no design of this family is in the space: {why} ({count:,} designs)"
+    return f"no design of this family fits on the section{': ' + tally.why if tally.why else ''}"
+
+
+def _proof(alt: Alternative, tally: _Tally, n: int, currency: str) -> str:
+    """What was proven about a family's chosen design."""
+    top = ", ".join(f"{k} ({v:,})" for k, v in tally.reasons.most_common(4))
+    capped = (f"; in {tally.capped_levels} catalogue combinations only the "
+              f"{MAX_SCREENS_PER_LEVEL} placements with fewest rocks through were screened"
+              if tally.capped_levels else "")
+    space = ("designs the search over its ground edits evaluated"
+             if tally.searched else "designs in the space")
+    return (f"cheapest of {tally.designs:,} {space} ({alt.exact_evaluations} "
+            f"evaluated exactly); every cheaper design fails on {n:,} rocks: "
+            f"{top or 'none cheaper'}{capped}")
+
+
+def _settle(
+    alt: Alternative,
+    designs: Any,
+    tally: _Tally,
+    project: Project,
+    registry: Registry,
+    concept: Any,
+    screen: Screening,
+    spec: DesignSpec,
+    *,
+    seed: int,
+    fresh_seed: int,
+) -> int:
+    """Decide a family's screened designs in order of cost until one holds; fill ``alt``.
+
+    Returns the rocks simulated. The first design admitted with confidence
+    and holding on fresh rocks is the family's; one that fails on fresh rocks
+    is not chosen and the next is decided. A design in which a measure holds
+    no rock is dominated by the same design without it: the family is
+    reported as such (that design belongs to a smaller family).
+    """
+    per_level: Counter = Counter()
+    decisions = near = simulated = unjudged_failures = 0
+    for d in designs:
+        if decisions >= MAX_EXACT_PER_FAMILY:
+            alt.reason = (f"{alt.reason}; stopped after {MAX_EXACT_PER_FAMILY} exact "
+                          "decisions of this family")
+            break
+        if per_level[d.level] >= MAX_EXACT_PER_LEVEL:
+            continue
+        # Too few rocks met one of its measures in the screening to bound its
+        # checks: the screening could not judge it. After a few such designs
+        # failed exactly, the rest of them are not decided (and said so).
+        unjudged = any(c.bound is None and c.value is not None
+                       for cs in d.result.checks for c in cs)
+        if unjudged and unjudged_failures >= MAX_UNJUDGED_FAILURES:
+            tally.reasons["too few rocks at a measure to judge in the screening, not decided"] += 1
+            continue
+        if not d.result.feasible:
+            if near >= MAX_NEAR_PER_FAMILY:
+                tally.reasons["within the screening margin, not decided"] += 1
+                continue
+            near += 1
+        per_level[d.level] += 1
+        decisions += 1
+        alt.screened_feasible = alt.screened_feasible or d.result.feasible
+        planned = plan_rocks(d.result, screen)
+        dec = decide(project, registry, d.measures, concept, rocks=planned, seed=seed,
+                     max_rocks=screen.max_rocks)
+        alt.exact_evaluations += 1
+        simulated += dec.rocks
+        if not dec.admitted:
+            tally.reasons["exact: " + (dec.reason.split(":")[0][:60] or "fails")] += 1
+            alt.reason = dec.reason
+            unjudged_failures += unjudged
+            continue
+        idle = [r.measure.label() for r in dec.evaluation.results if r.caught == 0]
+        if idle and len(d.measures) > 1:
+            alt.measures = sorted(d.measures, key=lambda m: m.x)
+            alt.cost = d.cost
+            alt.dominated = (f"its cheapest admitted design ({d.cost:,.0f}) has "
+                             f"{', '.join(idle)} holding no rock: dominated by the same design "
+                             "without it")
+            alt.reason = alt.dominated
+            return simulated
+        fresh_n = max(2 * dec.rocks, int(spec.fresh_rocks or 0))
+        fresh = evaluate_design(project, registry, d.measures, concept, rocks=fresh_n,
+                                seed=fresh_seed)
+        alt.exact_evaluations += 1
+        simulated += fresh_n
+        alt.measures = sorted(d.measures, key=lambda m: m.x)
+        alt.cost = d.cost
+        alt.evaluation = dec.evaluation
+        alt.decision_rocks = dec.rocks
+        alt.checks = [c.as_dict() for cs in dec.evaluation.checks for c in cs]
+        alt.residual = dec.evaluation.protect["reaching"] if dec.evaluation.protect else None
+        alt.holds_on_fresh_rocks = fresh.ok
+        alt.fresh_rocks, alt.fresh_seed = fresh_n, fresh_seed
+        alt.fresh_residual = fresh.protect["reaching"] if fresh.protect else None
+        alt.fresh_failures = fresh.failures()
+        alt.feasible = True  # admitted with confidence on the deciding rocks
+        if fresh.ok:
+            alt.reason = ""
+            return simulated
+        # Not chosen: it fits the noise of the search rocks. Decide the next one.
+        tally.reasons["fails on fresh rocks"] += 1
+        alt.reason = ("the cheapest admitted design fails on fresh rocks: "
+                      + "; ".join(fresh.failures()))
+    return simulated
+
+
+def optimise(
+    project: Project,
+    registry: Registry,
+    *,
+    rocks: int | None = None,
+    seed: int | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
+) -> OptimisationResult:
+    """The cheapest design of every family of candidate measures that holds, proven on fresh rocks.
+
+    Parameters
+    ----------
+    project : Project
+        With a ``design:`` section.
+    registry : Registry
+    rocks, seed : int, optional
+        Search rocks and seed (default: the project's).
+    progress : callable, optional
+        Called as ``progress(stage, done, total)``.
+
+    Notes
+    -----
+    Each family's designs are screened cheapest first (see
+    :func:`_barrier_designs`, :func:`_edit_designs`); those that pass the
+    screening, or miss it within its margin, are decided exactly in order of
+    cost (:func:`decide`: admitted only with the confidence bounds, rocks
+    doubled while that is undecided) and the first admitted one is verified
+    on fresh rocks: an independent seed and at least twice the rocks that
+    decided it. A design that fails there is not chosen; the next one in
+    order of cost is decided. The best design overall is the cheapest family
+    design that holds.
+    """
+    from ..design import resolve_design
+    from ..evaluate import build_concept
+
+    t0 = time.perf_counter()
+    spec = resolve_design(project, registry)
+    stated = build_concept(project, registry)
+    confidence = float(getattr(stated.params, "confidence", DEFAULT_CONFIDENCE))
+    n = int(project.rocks.count if rocks is None else rocks)
+    s = int(project.rocks.seed if seed is None else seed)
+    concept = stated
+    # The design's residual target becomes the protected zone's allowance, so
+    # that the exact checks, the fresh rocks and `check` of design.yaml agree.
+    allowed = spec.residual_fraction
+    if allowed is None:
+        allowed = (spec.residual_count or 0) / max(n, 1)
+    project = project.model_copy(
+        update={"protect": project.protect.model_copy(update={"allowed_fraction": allowed})}
+    )
+    fresh_seed = int(spec.fresh_seed) if spec.fresh_seed is not None else s + 1000003
+    # A search that cannot see the residual target decides nothing: it needs the
+    # rocks with which none reaching would show the target with confidence.
+    needed = rocks_to_show_fraction(allowed, confidence) if allowed > 0 else None
+    if needed is not None:
+        n = max(n, min(int(spec.max_rocks), SEARCH_FACTOR * needed))
+    screen = Screening(project, registry, spec, concept, rocks=n, seed=s)
+    slots = _BarrierSlots(screen)
+    fams = families(spec.candidates, spec.max_measures)
+    alternatives: list[Alternative] = []
+    exact_total, simulated = 0, n
+    currency = getattr(spec.cost_model.params, "currency", "")
+    # Families with fewer measures first: the cheapest design that holds so far
+    # bounds what the later families need to look at (a dearer design cannot be
+    # the answer), and the report says so for a family cut short by it.
+    order = sorted(range(len(fams)), key=lambda i: (len(fams[i]), i))
+    found: dict[int, Alternative] = {}
+    limit = math.inf
+    for done, fi in enumerate(order):
+        fam = fams[fi]
+        if progress:
+            progress("search", done, len(fams))
+        ft = time.perf_counter()
+        ev0 = screen.evaluations
+        alt = Alternative(name=family_name(spec.candidates, fam), family=fam)
+        tally = _Tally()
+        fam_seed = int(np.random.SeedSequence([s, fi]).generate_state(1)[0])
+        if any(ci in screen.edit_candidates for ci in fam):
+            designs: Any = iter(_edit_designs(screen, slots, fam, tally, fam_seed, limit))
+        else:
+            designs = _barrier_designs(screen, slots, list(fam), [], 0.0, screen.bare, 0, tally,
+                                       cost_limit=limit)
+        simulated += _settle(alt, designs, tally, project, registry, concept, screen, spec,
+                             seed=s, fresh_seed=fresh_seed)
+        if progress:
+            progress("check", done + 1, len(fams))
+        alt.evaluations = screen.evaluations - ev0
+        alt.wall_s = time.perf_counter() - ft
+        if not alt.holds_on_fresh_rocks and not alt.dominated:
+            alt.reason = alt.reason or _cause(screen, slots, fam, tally)
+            if math.isfinite(limit):
+                alt.reason = (f"no design of this family cheaper than the best so far "
+                              f"({limit:,.0f} {currency}) holds: {alt.reason}")
+        elif alt.holds:
+            alt.proof = _proof(alt, tally, n, currency)
+            limit = min(limit, alt.cost)
+        exact_total += alt.exact_evaluations
+        found[fi] = alt
+    alternatives = [found[i] for i in range(len(fams))]
+    pool = [a for a in alternatives if a.holds]
+    best = min(pool, key=lambda a: a.cost) if pool else None
+    reason = "" if best is not None else (
+        "no family of candidate measures has a design that holds with "
+        f"{100 * confidence:g} % confidence and on fresh rocks; see each family's reason")
+    return OptimisationResult(
+        alternatives=alternatives, best=best, reason=reason,
+        rocks=best.decision_rocks if best is not None else n, seed=s,
+        fresh_rocks=best.fresh_rocks if best is not None else 2 * n,
+        fresh_seed=fresh_seed, wall_s=time.perf_counter() - t0,
+        evaluations=screen.evaluations, edit_runs=screen.edit_runs, currency=currency,
+        search_rocks=n, confidence=confidence, exact_evaluations=exact_total, safety=stated,
+        rocks_simulated=simulated + screen.edit_rocks,
+    )
+
+
+def _why(sr: ScreenResult) -> str:
+    if sr.reason:
+        return sr.reason
+    parts = []
+    for label, cs in zip(sr.labels, sr.checks, strict=True):
+        for c in cs:
+            if not c.ok:
+                value = "-" if c.value is None else f"{c.value:.2f}"
+                parts.append(f"{label}: {c.name} {value} < target {c.target:.2f} ({c.detail})")
+    if not parts:
+        parts.append(f"{sr.residual} rocks reach the protected zone")
+    return "; ".join(parts)

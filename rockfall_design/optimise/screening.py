@@ -1,0 +1,471 @@
+"""Screening: every candidate design judged on the same search rocks, fast.
+
+One run of the search rocks on the bare slope keeps, at the table stations
+(every :data:`~rockfall_design.optimise.space.STATION_STEP_M` along every
+barrier candidate's range), each rock's passing height, energy and speed at
+its first passage downslope, and at restart stations upslope of every
+ground-edit candidate each rock's full state. A design is judged through the
+one judgement (:mod:`rockfall_design.judge.outcomes`): barriers from the
+table, ground edits by a run of only the rocks that pass the restart station
+just upslope of the edit, resumed from their saved state.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..engine import Releases, Section, core, run_ensemble
+from ..errors import ProjectError
+from ..evaluate import (
+    PlacedMeasure,
+    edited_section,
+    place_measures,
+)
+from ..judge.bounds import fraction_upper_bound
+from ..judge.outcomes import (
+    Judgement,
+    RockFates,
+    barrier_outcomes,
+    judge_measures,
+    reaches_protected_zone,
+)
+from ..measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
+from ..plugins import call_plugin
+from ..safety import DEFAULT_CONFIDENCE, Check
+from ..simulation import draw_releases, engine_key, engine_settings, section_from_project
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..design import DesignSpec
+    from ..measures import ProtectiveMeasure
+    from ..plugins import Registry
+    from ..project import Project
+
+from .space import STATION_STEP_M, _decode, _variables
+
+#: Spacing (m) of the restart stations upslope of ground-edit candidates.
+RESTART_STEP_M = 2.0
+
+
+# ---- screening --------------------------------------------------------------------
+
+
+@dataclass
+class ScreenResult:
+    """One design judged on the search rocks.
+
+    ``labels`` are the measures' labels, in the order of ``results``;
+    ``reason`` says why a design that could not be judged is infeasible.
+    """
+
+    cost: float
+    feasible: bool
+    violation: float
+    checks: list[list[Check]]
+    results: list[MeasureResult]
+    residual: int
+    reason: str = ""
+    labels: list[str] = field(default_factory=list)
+    near: bool = False
+    approximate: bool = False  # some rock's path only approximated (see Screening.judge)
+
+
+@dataclass
+class _Approx:
+    """Where a screening rests on rocks whose paths it approximates (see Screening.judge)."""
+
+    reaching: int  # approximated rocks among those counted as reaching the protected zone
+    any: bool  # any approximated rock at all
+    touched: list[bool]  # per measure: met by approximated rocks from upslope
+
+
+@dataclass
+class _Table:
+    """Per rock: first downslope passage at the table stations, and how its path ended.
+
+    A table for an edited section shares the bare table and overlays only what
+    changed: the rows of the resumed rocks at the stations downslope of the
+    restart station.
+    """
+
+    h: np.ndarray  # (N, S) m
+    e_kj: np.ndarray  # (N, S) kJ
+    v: np.ndarray  # (N, S) m/s
+    max_x: np.ndarray
+    x_end: np.ndarray
+    status: np.ndarray
+    rows: np.ndarray | None = None  # resumed rocks
+    first_col: int = 0  # first overlaid station
+    oh: np.ndarray | None = None  # (len(rows), S - first_col)
+    oe: np.ndarray | None = None
+    ov: np.ndarray | None = None
+
+    def column(self, j: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Passing height (m), energy (kJ) and speed (m/s) of every rock at station j."""
+        if self.rows is None or j < self.first_col:
+            return self.h[:, j], self.e_kj[:, j], self.v[:, j]
+        k = j - self.first_col
+        h, e, v = self.h[:, j].copy(), self.e_kj[:, j].copy(), self.v[:, j].copy()
+        h[self.rows] = self.oh[:, k]
+        e[self.rows] = self.oe[:, k]
+        v[self.rows] = self.ov[:, k]
+        return h, e, v
+
+
+class Screening:
+    """Fast, common-random-number evaluation of candidate designs (see module docs)."""
+
+    def __init__(
+        self,
+        project: Project,
+        registry: Registry,
+        spec: DesignSpec,
+        concept: Any,
+        *,
+        rocks: int,
+        seed: int,
+        progress: Callable[[str], None] | None = None,
+    ) -> None:
+        from ..design import build_candidate_measure
+
+        self.project = project
+        self.registry = registry
+        self.spec = spec
+        self.concept = concept
+        self.n = int(rocks)
+        self.seed = int(seed)
+        self._build = build_candidate_measure
+        self._measure_cache: dict[tuple, Any] = {}
+        self.section = section_from_project(project)
+        self.releases = draw_releases(project, self.n, self.seed)
+        self.key = engine_key(self.seed)
+        self.settings = engine_settings(project)
+        self.protect_x = float(project.protect.x)
+        allowed = spec.residual_count
+        if spec.residual_fraction is not None:
+            allowed = int(math.floor(spec.residual_fraction * self.n + 1e-9))
+        self.allowed_residual = int(allowed or 0)
+        self.allowed_fraction = (spec.residual_fraction if spec.residual_fraction is not None
+                                 else self.allowed_residual / max(self.n, 1))
+        self.max_rocks = max(self.n, int(spec.max_rocks))
+        self.confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
+        # Stations: every barrier candidate's range at STATION_STEP_M; restart
+        # stations upslope of every edit candidate's range.
+        x0, x1 = self.section.x[0], self.section.x[-1]
+        sts, restarts = [], [np.zeros(0)]
+        r_max = float(np.max(self.releases.radius))
+        self.margin = 2.0 * r_max + 0.5
+        self.edit_candidates = {i for i, c in enumerate(spec.candidates) if self._is_edit(i)}
+        for i, c in enumerate(spec.candidates):
+            lo, hi = c.x_range
+            sts.append(np.arange(lo, hi + 1e-9, STATION_STEP_M))
+            if i in self.edit_candidates:
+                # Profile edits may start upslope of their x (a berm's cut face).
+                lo_r = max(x0, lo - 30.0 - self.margin)
+                restarts.append(np.arange(lo_r, hi + 1e-9, RESTART_STEP_M))
+        self.grid = np.unique(np.clip(np.concatenate(sts + [np.array([self.protect_x])]), x0, x1))
+        self.restart_x = np.unique(np.clip(np.concatenate(restarts), x0, x1))
+        t0 = time.perf_counter()
+        bare = run_ensemble(
+            self.section, self.releases, key=self.key, grid=self.grid,
+            restart_stations=self.restart_x, settings=self.settings, record_speed=True,
+        )
+        self.bare_runtime_s = time.perf_counter() - t0
+        cols = np.searchsorted(bare.grid, self.grid)
+        self.bare = _Table(
+            h=bare.grid_height[:, cols].astype(float),
+            e_kj=bare.grid_energy[:, cols].astype(float) / 1e3,
+            v=bare.grid_speed[:, cols].astype(float),
+            max_x=bare.max_x, x_end=bare.x_end, status=bare.status,
+        )
+        self.restart_state = bare.restart_state
+        self.restart_rng = bare.restart_rng
+        self.mass = bare.mass
+        self.radius = bare.radius
+        # One uniform per rock for the gaps of a boulder row (common to all designs).
+        self.u_gap = np.random.default_rng(np.random.SeedSequence([self.seed, 7919])).random(
+            self.n)
+        self._edit_cache: dict[tuple, _Table] = {}
+        # A cost above any design's: infeasible designs cost at least this much.
+        self.penalty_floor = 1e3 + 1e5 * spec.max_measures * max(1.0, spec.length_m)
+        self.evaluations = 0
+        self.edit_runs = 0
+        self.edit_rocks = 0
+
+    def _is_edit(self, ci: int) -> bool:
+        """Does candidate ``ci`` edit the ground? (Judged from a mid-range design.)"""
+        c = self.spec.candidates[ci]
+        variables = _variables(self.spec.candidates, (ci,))
+        mid = [0.5 * (v.low + v.high) if not v.integer else 0 for v in variables]
+        try:
+            (m,) = self.measures(_decode(self.spec.candidates, (ci,), variables, mid))
+            footprint = call_plugin(self.registry, m, "footprint", self.section)
+        except ValueError:
+            # Cannot tell from the middle of its range: treat it as the costly kind.
+            return c.kind in ("ditch", "berm")
+        return isinstance(footprint, ProfileEdit)
+
+    # -- measures -----------------------------------------------------------------
+    def measures(self, decoded: Sequence[tuple[int, dict[str, Any]]]) -> list[ProtectiveMeasure]:
+        """The measures of a decoded design, built once per set of parameters.
+
+        Raises
+        ------
+        ValueError
+            The values are not valid for a measure (see ``build_candidate_measure``).
+        PluginError
+            A measure's class failed to instantiate or to label itself.
+        """
+        cands = self.spec.candidates
+        out = []
+        for ci, p in decoded:
+            key = (ci, tuple(sorted(p.items())))
+            m = self._measure_cache.get(key)
+            if m is None:
+                if len(self._measure_cache) > 20000:
+                    self._measure_cache.clear()
+                m = self._build(cands[ci], self.registry, p)
+                # The report labels the designs it lists itself, also those that
+                # never got as far as place_measures: a faulty label() shows here.
+                call_plugin(self.registry, m, "label")
+                self._measure_cache[key] = m
+            out.append(m)
+        return out
+
+    def cost(self, measures: Sequence[ProtectiveMeasure]) -> float:
+        """Cost of a design (currency units).
+
+        Raises
+        ------
+        KeyError or ValueError
+            From the cost model: it has no price for one of the measures.
+        """
+        model, total = self.spec.cost_model, 0.0
+        for m in measures:
+            q = call_plugin(self.registry, m, "quantities", self.section)
+            total += float(call_plugin(self.registry, model, "cost", m, q, self.spec.length_m))
+        return total
+
+    # -- tables -------------------------------------------------------------------
+    def _table_for(self, edits: Sequence[ProfileEdit], edited: Section | None) -> _Table:
+        if not edits:
+            return self.bare
+        key = tuple((round(e.x_start, 6), round(e.x_end, 6),
+                     tuple(np.round(np.asarray(e.points, float).ravel(), 6)), e.material)
+                    for e in edits)
+        hit = self._edit_cache.get(key)
+        if hit is not None:
+            return hit
+        first = min(e.x_start for e in edits)
+        q = np.searchsorted(self.restart_x, first - self.margin, side="right") - 1
+        if q < 0:
+            raise ValueError("no restart station upslope of the edit")
+        xs = self.restart_x[q]
+        state = self.restart_state[:, q]
+        go = np.isfinite(state[:, core.RS_X])
+        idx = np.flatnonzero(go)
+        t = _Table(h=self.bare.h, e_kj=self.bare.e_kj, v=self.bare.v,
+                   max_x=self.bare.max_x.copy(), x_end=self.bare.x_end.copy(),
+                   status=self.bare.status.copy())
+        if idx.size:
+            sub = Releases(
+                radius=self.releases.radius[idx], density=self.releases.density,
+                x=self.releases.x[idx], height=self.releases.height[idx],
+                vx=self.releases.vx[idx], vy=self.releases.vy[idx],
+                spin=self.releases.spin[idx], spin_rolling=self.releases.spin_rolling[idx],
+            )
+            first = int(np.searchsorted(self.grid, xs, side="right"))
+            res = run_ensemble(
+                edited, sub, key=self.key, grid=self.grid[first:], settings=self.settings,
+                record_speed=True,
+                resume=(np.ones(idx.size, bool), state[idx], self.restart_rng[idx, q]),
+            )
+            cols = np.searchsorted(res.grid, self.grid[first:])
+            t.rows = idx
+            t.first_col = first
+            t.oh = res.grid_height[:, cols].astype(float)
+            t.oe = res.grid_energy[:, cols].astype(float) / 1e3
+            t.ov = res.grid_speed[:, cols].astype(float)
+            t.max_x[idx] = res.max_x
+            t.x_end[idx] = res.x_end
+            t.status[idx] = res.status
+        self.edit_runs += 1
+        self.edit_rocks += int(idx.size)
+        if len(self._edit_cache) > 256:
+            self._edit_cache.clear()
+        self._edit_cache[key] = t
+        return t
+
+    # -- one design -----------------------------------------------------------------
+    def screen(self, measures: Sequence[ProtectiveMeasure]) -> ScreenResult:
+        """Judge a design on the search rocks, through the one judgement (see module docs)."""
+        self.evaluations += 1
+        try:
+            placed = place_measures(self.project, self.registry, measures, self.section)
+        except ProjectError as exc:
+            # A measure that does not fit, or two in one place: an infeasible
+            # design, not an error. A PluginError (a fault) goes on up.
+            return ScreenResult(math.inf, False, math.inf, [], [], self.n, reason=exc.message)
+        edits = [p.footprint for p in placed if isinstance(p.footprint, ProfileEdit)]
+        edited = edited_section(self.project, self.section, placed) if edits else None
+        try:
+            table = self._table_for(edits, edited)
+        except ValueError as exc:
+            return ScreenResult(math.inf, False, math.inf, [], [], self.n, reason=str(exc))
+        judgement, approx = self.judge(placed, table)
+        checks = [call_plugin(self.registry, self.concept, "checks", res)
+                  for res in judgement.results]
+        labels = [p.label for p in placed]
+        try:
+            cost = self.cost([p.measure for p in placed])
+        except (KeyError, ValueError) as exc:
+            # The cost model's contract: no price for a measure skips the design.
+            why = exc.args[0] if exc.args else type(exc).__name__
+            return ScreenResult(
+                math.inf, False, math.inf, checks, judgement.results, judgement.reaching,
+                labels=labels,
+                reason=f"cost model {self.spec.cost_model.name!r} has no price for this "
+                       f"design: {why}")
+        approximate = approx.any
+        violation, near = self.violation(checks, judgement.reaching, approx)
+        # The screening admits only what it judged exactly (no rock whose path it
+        # approximates); a design that passes with such rocks, or misses within
+        # the margin, is left to the exact decision.
+        feasible = violation == 0.0 and not approximate
+        near = near or (violation == 0.0 and approximate)
+        return ScreenResult(cost, feasible, violation, checks, judgement.results,
+                            judgement.reaching, labels=labels, near=near,
+                            approximate=approximate)
+
+    def judge(self, placed: Sequence[PlacedMeasure], table: _Table) -> tuple[Judgement, _Approx]:
+        """The design's outcomes on the search rocks, by the one judgement.
+
+        Barriers are met in the order of their stations; a rock a barrier
+        stops (caught, or returned by a rigid one) ends its path there, so the
+        measures downslope of it never meet it. A rock that passes a barrier
+        goes on along its path of the table (bare or edited ground).
+
+        Returns the judgement and where it rests on rocks whose paths the
+        screening only approximates (:class:`_Approx`): rocks that broke
+        through a barrier (the exact run lets them go on with the surplus
+        energy only), were returned by a rigid one (they may come back over
+        it), or met a row of blocks (its gap draws come from another stream).
+        """
+        fates = RockFates(max_x=table.max_x.copy(), x_end=table.x_end.copy(),
+                          status=table.status.copy(), mass=self.mass, radius=self.radius)
+        alive = np.ones(self.n, dtype=bool)
+        approx = np.zeros(self.n, dtype=bool)
+        upstream: list[tuple[float, np.ndarray]] = []  # (station, rocks approximated there)
+        outcomes: list[np.ndarray | None] = [None] * len(placed)
+        meetings: list[np.ndarray | None] = [None] * len(placed)
+        for i in sorted(range(len(placed)), key=lambda k: _start(placed[k].footprint)):
+            fp = placed[i].footprint
+            if not isinstance(fp, Barrier):
+                continue
+            j = self.station(fp.x)
+            h, e_kj, v = table.column(j)
+            out = barrier_outcomes(fp, h, e_kj, self.radius, self.u_gap, alive)
+            stopped = (out == Outcome.CAUGHT) | (out == Outcome.REBOUNDED)
+            here = (out == Outcome.BROKEN_THROUGH) | (out == Outcome.REBOUNDED)
+            if fp.behaviour == BarrierBehaviour.BLOCKS:
+                here = out != Outcome.NOT_MET
+            approx |= here
+            upstream.append((fp.x, here))
+            fates.max_x[stopped] = np.minimum(fates.max_x[stopped], fp.x)
+            fates.x_end[stopped] = fp.x
+            fates.status[stopped] = np.where(out[stopped] == Outcome.CAUGHT, core.CAUGHT,
+                                             core.STOPPED)
+            alive &= ~stopped
+            outcomes[i] = out
+            meetings[i] = np.column_stack([h, v, e_kj])
+        judgement = judge_measures(placed, outcomes, meetings, fates, self.protect_x)
+        # A measure's checks rest on approximated rocks when such rocks, from a
+        # barrier upslope of it, met it.
+        touched = []
+        for p, out in zip(placed, judgement.outcomes, strict=True):
+            start = _start(p.footprint)
+            before = np.zeros(self.n, dtype=bool)
+            for x, m in upstream:
+                if x < start:
+                    before |= m
+            touched.append(bool((before & (out != Outcome.NOT_MET)).any()))
+        uncertain = int((approx & reaches_protected_zone(fates.max_x, fates.status,
+                                                         self.protect_x)).sum())
+        return judgement, _Approx(uncertain, bool(approx.any()), touched)
+
+    def station(self, x: float) -> int:
+        """Index of the table station nearest ``x`` (m)."""
+        k = int(np.searchsorted(self.grid, x))
+        if k > 0 and (k == self.grid.size or x - self.grid[k - 1] <= self.grid[k] - x):
+            k -= 1
+        return k
+
+    def violation(
+        self, checks: Sequence[Sequence[Check]], residual: int, approx: _Approx | None = None
+    ) -> tuple[float, bool]:
+        """How far a design misses its targets (0: it meets them), and whether within the margin.
+
+        A check that holds on its point value but could not hold with its
+        confidence bound even with ``design.max_rocks`` rocks (and likewise
+        the residual) counts as a small miss. The second value says whether
+        every miss may be the screening's approximation, so that the design
+        is decided exactly before it may be rejected (the margin): each
+        failed check belongs to a measure that rocks with approximated paths
+        met (``approx.touched``), and the residual misses only through such
+        rocks. Elsewhere the screening is the exact run's judgement of the
+        same rocks.
+        """
+        touched = approx.touched if approx is not None else [False] * len(checks)
+        uncertain = approx.reaching if approx is not None else 0
+        violation, near = 0.0, approx is not None and approx.any
+        for cs, t in zip(checks, touched, strict=True):
+            for c in cs:
+                if c.ok and _check_may_hold(c, self.n, self.max_rocks):
+                    continue
+                near &= t
+                if c.ok:
+                    violation += 1e-3  # holds on the point value, never with confidence
+                elif c.value is None or not math.isfinite(c.value):
+                    violation += 1.0
+                else:
+                    violation += abs(c.value - c.target) / max(abs(c.target), 1e-9)
+        if residual > self.allowed_residual:
+            violation += 1.0 + (residual - self.allowed_residual) / max(self.n, 1) * 100.0
+            near &= residual - uncertain <= self.allowed_residual
+        elif not _fraction_may_hold(residual, self.n, self.allowed_fraction, self.max_rocks,
+                                    self.confidence):
+            violation += 1e-3
+            near &= uncertain > 0
+        return violation, near and violation > 0.0
+
+
+def _start(fp: Barrier | ProfileEdit) -> float:
+    return fp.x if isinstance(fp, Barrier) else fp.x_start
+
+
+def _fraction_may_hold(reaching: int, n: int, allowed: float, rocks: int,
+                       confidence: float) -> bool:
+    """The Clopper-Pearson bound of the observed fraction, with ``rocks`` rocks, is allowed."""
+    return fraction_upper_bound(round(reaching / max(n, 1) * rocks), rocks,
+                                confidence) <= allowed
+
+
+def _check_may_hold(c: Check, n: int, rocks: int) -> bool:
+    """Could a check that holds on its point value hold with its bound with ``rocks`` rocks?
+
+    The gap between an order-statistic bound and the point value shrinks
+    about as 1/sqrt(n) (the spread of a sample quantile); a check without a
+    bound (too few rocks met the measure) may be bounded with more rocks.
+    """
+    if c.holds_with_confidence or c.value is None:
+        return True
+    if c.bound is None:
+        return rocks > n  # unbounded with n rocks: more rocks may bound it
+    predicted = c.value + (c.bound - c.value) * math.sqrt(n / rocks)
+    # It holds when the value stays on the side of the target it is on now.
+    return (c.value >= c.target) == (predicted >= c.target)

@@ -1,0 +1,441 @@
+"""Search: a family's designs, cheapest first, screened.
+
+Catalogue choices in increasing order of cost; for each, every combination
+of barrier stations at once (the rocks each barrier lets on for sure, one
+matrix product), the first barrier's own checks as a filter, full screening
+of the rest (:func:`_barrier_designs`). Ground edits by
+``scipy.optimize.differential_evolution`` over their lattice, the barriers
+beside them enumerated for each geometry (:func:`_edit_designs`).
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from scipy.optimize import differential_evolution
+
+from ..errors import ProjectError
+from ..evaluate import (
+    MIN_BARRIER_SPACING_M,
+    PlacedMeasure,
+    edited_section,
+    place_measures,
+)
+from ..judge.outcomes import (
+    RockFates,
+    barrier_outcomes,
+    judge_measures,
+    reaches_protected_zone,
+)
+from ..measures import Barrier, BarrierBehaviour, Outcome, ProfileEdit
+from ..plugins import call_plugin
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..measures import ProtectiveMeasure
+
+from .screening import Screening, ScreenResult, _check_may_hold, _fraction_may_hold, _Table
+from .space import STATION_STEP_M, _decode, _discrete_choices, _lattice, _Option, _variables
+
+#: Placements of one combination of catalogue choices screened in full, fewest through first.
+MAX_SCREENS_PER_LEVEL = 80
+#: Designs of one combination of catalogue choices decided exactly, at most.
+MAX_EXACT_PER_LEVEL = 3
+
+
+class _BarrierSlots:
+    """The barrier options of every barrier candidate, built and priced once per run.
+
+    Per table (bare, or edited by a ground edit) and option, lazily: which
+    rocks it lets on for sure (neither stopped nor broken through, see
+    :meth:`passes`) and whether its checks hold as the first barrier the
+    rocks meet (:meth:`first_ok`).
+    """
+
+    def __init__(self, screen: Screening) -> None:
+        self.screen = screen
+        self.options: dict[int, list[_Option]] = {}
+        self.skipped: dict[int, Counter] = {}
+        self._rows: dict[tuple[int, int, int], np.ndarray] = {}
+        self._alone: dict[tuple[int, int], np.ndarray] = {}
+
+    def of(self, ci: int) -> list[_Option]:
+        """Options of candidate ``ci`` (every catalogue choice at every grid station)."""
+        if ci in self.options:
+            return self.options[ci]
+        sc = self.screen
+        c = sc.spec.candidates[ci]
+        out: list[_Option] = []
+        skipped: Counter = Counter()
+        for d in _discrete_choices(c):
+            for x in _lattice(*c.x_range, STATION_STEP_M):
+                params = {**d, "x": float(x)}
+                try:
+                    (m,) = sc.measures([(ci, params)])
+                    fp = call_plugin(sc.registry, m, "footprint", sc.section)
+                    call_plugin(sc.registry, m, "design_properties")
+                except ValueError as exc:
+                    # Does not fit here: not part of the space.
+                    skipped[f"does not fit: {exc}"] += 1
+                    continue
+                try:
+                    cost = sc.cost([m])
+                except (KeyError, ValueError) as exc:
+                    # The cost model's contract: no price skips the design.
+                    why = exc.args[0] if exc.args else type(exc).__name__
+                    skipped[f"cost model {sc.spec.cost_model.name!r} has no price for this "
+                            f"design: {why}"] += 1
+                    continue
+                if not isinstance(fp, Barrier):
+                    continue
+                out.append(_Option(ci, params, m, fp, cost,
+                                   call_plugin(sc.registry, m, "label"), sc.station(fp.x)))
+        self.options[ci] = out
+        self.skipped[ci] = skipped
+        return out
+
+    @staticmethod
+    def _table_key(j: int, table: _Table, table_id: int) -> int:
+        # Stations upslope of an edit's restart see the bare table: share them.
+        return 0 if (table.rows is None or j < table.first_col) else table_id
+
+    def _outcome(self, o: _Option, table: _Table) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                           np.ndarray]:
+        sc = self.screen
+        h, e_kj, v = table.column(o.j)
+        out = barrier_outcomes(o.footprint, h, e_kj, sc.radius, sc.u_gap,
+                               np.ones(sc.n, dtype=bool))
+        return out, h, e_kj, v
+
+    def passes(self, ci: int, ks: np.ndarray, table: _Table, table_id: int) -> np.ndarray:
+        """(len(ks), rocks) float32: 1 where option k lets the rock on for sure.
+
+        A rock it stops (catches or returns) is 0, and so is one whose further
+        path the screening only approximates (broken through; any rock at a
+        row of blocks, whose gap draws come from another stream).
+        """
+        opts = self.options[ci]
+        out = np.empty((len(ks), self.screen.n), dtype=np.float32)
+        for i, k in enumerate(ks):
+            key = (ci, int(k), self._table_key(opts[k].j, table, table_id))
+            row = self._rows.get(key)
+            if row is None:
+                o = opts[k]
+                oc = self._outcome(o, table)[0]
+                row = (oc == Outcome.NOT_MET) | (oc == Outcome.PASSED_OVER) | (
+                    oc == Outcome.PASSED_THROUGH_GAP)
+                if o.footprint.behaviour == BarrierBehaviour.BLOCKS:
+                    row = oc == Outcome.NOT_MET
+                if len(self._rows) > 100_000:
+                    self._rows.clear()
+                self._rows[key] = row
+            out[i] = row
+        return out
+
+    def first_ok(self, ci: int, ks: np.ndarray, table: _Table, table_id: int) -> np.ndarray:
+        """Do options ks pass their checks as the first barrier the rocks meet?
+
+        The first barrier of a design meets every rock that crosses its station
+        on the table, so these are exactly its checks in any design in which no
+        other barrier stands upslope of it (edits upslope are in the table).
+        Checks that hold on the point values but could not hold with the
+        confidence bounds even with ``design.max_rocks`` rocks count as failed.
+        """
+        sc = self.screen
+        opts = self.options[ci]
+        out = np.empty(len(ks), dtype=bool)
+        for i, k in enumerate(ks):
+            o = opts[k]
+            tk = self._table_key(o.j, table, table_id)
+            arr = self._alone.get((ci, tk))
+            if arr is None:
+                arr = self._alone[(ci, tk)] = np.full(len(opts), -1, dtype=np.int8)
+            if arr[k] < 0:
+                oc, h, e_kj, v = self._outcome(o, table)
+                placed = PlacedMeasure(0, o.measure, o.footprint, o.label)
+                fates = RockFates(max_x=table.max_x, x_end=table.x_end, status=table.status,
+                                  mass=sc.mass, radius=sc.radius)
+                (res,) = judge_measures([placed], [oc], [np.column_stack([h, v, e_kj])],
+                                        fates, None).results
+                checks = call_plugin(sc.registry, sc.concept, "checks", res)
+                arr[k] = all(c.ok and _check_may_hold(c, sc.n, sc.max_rocks) for c in checks)
+            out[i] = bool(arr[k])
+        return out
+
+
+@dataclass
+class _Screened:
+    """A design that passed the screening (or missed it within the margin)."""
+
+    cost: float
+    measures: list[ProtectiveMeasure]
+    result: ScreenResult
+    level: tuple
+
+
+@dataclass
+class _Tally:
+    """What the designs of a family that were ruled out failed on (for the report)."""
+
+    reasons: Counter = field(default_factory=Counter)
+    designs: int = 0
+    capped_levels: int = 0
+    best_fail: ScreenResult | None = None
+    best_fail_measures: list[ProtectiveMeasure] = field(default_factory=list)
+    min_residual: int | None = None
+    over_limit: float | None = None  # cost of the first design past the cost limit
+    why: str = ""  # why the first design that did not fit did not
+    searched: bool = False  # ground edits searched by scipy, not enumerated
+
+    def fail(self, sr: ScreenResult, measures: Sequence[ProtectiveMeasure]) -> None:
+        names = [c.name for cs in sr.checks for c in cs if not c.ok]
+        if sr.reason:
+            names = ["does not fit"]
+        for nm in names:
+            self.reasons[nm] += 1
+        if sr.residual > 0 and not names:
+            self.reasons["residual"] += 1
+        if self.best_fail is None or sr.violation < self.best_fail.violation:
+            self.best_fail, self.best_fail_measures = sr, list(measures)
+
+
+def _through(reach: np.ndarray, passes: Sequence[np.ndarray]) -> np.ndarray:
+    """Rocks through every barrier for each combination of options: (n1, n2, ...).
+
+    ``sum_r reach[r] * P1[a, r] * P2[b, r] * ...``: one matrix product for
+    one or two barriers (float32 counts are exact below 2**24 rocks).
+    """
+    first = passes[0] * reach
+    if len(passes) == 1:
+        return np.rint(first.sum(axis=1)).astype(np.int64)
+    if len(passes) == 2:
+        return np.rint(first @ passes[1].T).astype(np.int64)
+    return np.stack([_through(first[a], list(passes[1:])) for a in range(first.shape[0])])
+
+
+def _level_combos(levels: list[np.ndarray]) -> Any:
+    """Tuples of level indices, one per slot, in increasing order of summed cost."""
+    start = tuple(0 for _ in levels)
+    heap = [(float(sum(lv[0] for lv in levels)), start)]
+    seen = {start}
+    while heap:
+        cost, idx = heapq.heappop(heap)
+        yield cost, idx
+        for s in range(len(levels)):
+            if idx[s] + 1 < len(levels[s]):
+                nxt = idx[:s] + (idx[s] + 1,) + idx[s + 1:]
+                if nxt not in seen:
+                    seen.add(nxt)
+                    c = cost - levels[s][idx[s]] + levels[s][idx[s] + 1]
+                    heapq.heappush(heap, (c, nxt))
+
+
+def _barrier_designs(
+    screen: Screening,
+    slots: _BarrierSlots,
+    barrier_cis: Sequence[int],
+    fixed: Sequence[ProtectiveMeasure],
+    fixed_cost: float,
+    table: _Table,
+    table_id: int,
+    tally: _Tally,
+    cost_limit: float = math.inf,
+) -> Any:
+    """Designs of ``fixed`` measures plus one barrier per ``barrier_cis``, cheapest first.
+
+    Every combination of the barriers' catalogue choices and grid stations is
+    considered. Catalogue choices are taken in increasing order of cost; for
+    each, the rocks reaching the protected zone are counted for every
+    combination of stations at once (bit sets of the rocks each barrier would
+    stop, judged by :func:`~rockfall_design.judge.outcomes.barrier_outcomes`);
+    the combinations within the residual target (plus the screening margin)
+    are screened in full, fewest reaching first, and those that pass (or
+    miss within the margin) are yielded as :class:`_Screened`, in order of
+    cost. Yields nothing more once the cost exceeds ``cost_limit``.
+    """
+    fixed = list(fixed)
+    if not barrier_cis:
+        if fixed_cost <= cost_limit:
+            sr = screen.screen(fixed)
+            tally.designs += 1
+            if sr.feasible or sr.near:
+                # Each geometry its own level: MAX_EXACT_PER_LEVEL counts per geometry.
+                yield _Screened(sr.cost, fixed, sr, (table_id,))
+            else:
+                tally.fail(sr, fixed)
+        return
+    opts = [slots.of(ci) for ci in barrier_cis]
+    if any(not o for o in opts):
+        return
+    costs = [np.array([o.cost for o in op]) for op in opts]
+    levels = [np.unique(c) for c in costs]
+    members = [[np.flatnonzero(c == lv) for lv in lvs] for c, lvs in zip(costs, levels,
+                                                                          strict=True)]
+    reach = reaches_protected_zone(table.max_x, table.status, screen.protect_x).astype(
+        np.float32)
+    edits = [call_plugin(screen.registry, m, "footprint", screen.section) for m in fixed]
+    stretches = [(e.x_start, e.x_end) for e in edits if isinstance(e, ProfileEdit)]
+    # Rocks through for sure (the table knows their fate) must be within the
+    # target, and within what design.max_rocks rocks could show with confidence;
+    # a design that misses only through rocks breaking through is screened in
+    # full and, within the margin, decided exactly.
+    limit = screen.allowed_residual
+    while limit >= 0 and not _fraction_may_hold(limit, screen.n, screen.allowed_fraction,
+                                                screen.max_rocks, screen.confidence):
+        limit -= 1
+    k_slots = len(opts)
+    for level_cost, idx in _level_combos(levels):
+        total = fixed_cost + level_cost
+        if total > cost_limit:
+            tally.over_limit = total if tally.over_limit is None else min(tally.over_limit, total)
+            return
+        ks = [members[s][idx[s]] for s in range(k_slots)]
+
+        def shaped(a: np.ndarray, s: int) -> np.ndarray:
+            return a.reshape([a.shape[0] if u == s else 1 for u in range(k_slots)])
+
+        xs = [np.array([opts[s][k].footprint.x for k in ks[s]]) for s in range(k_slots)]
+        valid = np.ones([len(k) for k in ks], dtype=bool)
+        for s in range(k_slots):
+            xv = shaped(xs[s], s)
+            for lo, hi in stretches:
+                valid &= ~((xv > lo + 1e-6) & (xv < hi - 1e-6))
+            for t in range(s):
+                xt = shaped(xs[t], t)
+                valid &= np.abs(xv - xt) >= MIN_BARRIER_SPACING_M
+                if barrier_cis[t] == barrier_cis[s]:
+                    valid &= xt < xv  # one order of two barriers of one candidate
+        n_comb = int(valid.size)
+        tally.designs += n_comb
+        # The first barrier a rock meets judges every rock that crosses it: its own
+        # checks decide, whatever stands downslope.
+        xb = np.stack(np.broadcast_arrays(*[shaped(xs[s], s) for s in range(k_slots)]))
+        first = np.argmin(xb, axis=0)
+        alone = [slots.first_ok(barrier_cis[s], ks[s], table, table_id)
+                 for s in range(k_slots)]
+        first_ok = np.zeros(valid.shape, dtype=bool)
+        all_ok = np.ones(valid.shape, dtype=bool)
+        for s in range(k_slots):
+            ok_s = np.broadcast_to(shaped(alone[s], s), valid.shape)
+            first_ok |= (first == s) & ok_s
+            all_ok &= ok_s
+        tally.reasons["first barrier's checks"] += int((valid & ~first_ok).sum())
+        valid &= first_ok
+        if not valid.any():
+            continue
+        # Count only over the options that appear in some admissible placement.
+        used = [np.flatnonzero(valid.any(axis=tuple(u for u in range(k_slots) if u != s)))
+                for s in range(k_slots)]
+        sub = _through(reach, [slots.passes(barrier_cis[s], ks[s][used[s]], table, table_id)
+                               for s in range(k_slots)])
+        big = np.iinfo(np.int64).max
+        residual = np.full(valid.shape, big, dtype=np.int64)
+        residual[np.ix_(*used)] = sub
+        residual = np.where(valid, residual, big)
+        rmin = int(residual.min())
+        if rmin < big:
+            tally.min_residual = rmin if tally.min_residual is None else min(tally.min_residual,
+                                                                            rmin)
+        ok = residual <= limit
+        tally.reasons["residual"] += int((valid & ~ok).sum())
+        cand = np.flatnonzero(ok.ravel())
+        if cand.size == 0:
+            continue
+        # Placements whose every barrier holds on its own first, then fewest through.
+        order = cand[np.lexsort((residual.ravel()[cand], ~all_ok.ravel()[cand]))]
+        if order.size > MAX_SCREENS_PER_LEVEL:
+            tally.capped_levels += 1
+            order = order[:MAX_SCREENS_PER_LEVEL]
+        found: list[_Screened] = []
+        passed = 0
+        for flat in order:
+            pos = np.unravel_index(flat, residual.shape)
+            ms = fixed + [opts[s][ks[s][pos[s]]].measure for s in range(k_slots)]
+            sr = screen.screen(ms)
+            if sr.feasible or sr.near:
+                found.append(_Screened(sr.cost, ms, sr, (table_id,) + tuple(idx)))
+                passed += sr.feasible
+                if passed >= MAX_EXACT_PER_LEVEL:
+                    break  # more than the decisions this combination gets
+            else:
+                tally.fail(sr, ms)
+        # Within one level of cost, designs that pass come before those within the margin.
+        found.sort(key=lambda d: (d.cost, not d.result.feasible, d.result.violation,
+                                  d.result.residual))
+        yield from found
+
+
+def _edit_designs(
+    screen: Screening,
+    slots: _BarrierSlots,
+    fam: tuple[int, ...],
+    tally: _Tally,
+    seed: int,
+    cost_limit: float = math.inf,
+) -> list[_Screened]:
+    """Designs of a family with ground edits: scipy over the edits, barriers enumerated.
+
+    Every ground edit costs a run of the rocks below its restart station, so
+    the edits' stations, options and continuous parameters (on a lattice, so
+    that the search comes back to geometries it has run) are searched with
+    ``scipy.optimize.differential_evolution``; for each edit geometry the
+    family's barriers are enumerated exactly on its table
+    (:func:`_barrier_designs`). Every design that passed the screening on
+    the way is kept, cheapest first, for the exact decision.
+    """
+    cands = screen.spec.candidates
+    tally.searched = True
+    edit_slots = tuple(ci for ci in fam if ci in screen.edit_candidates)
+    barrier_cis = [ci for ci in fam if ci not in screen.edit_candidates]
+    variables = _variables(cands, edit_slots, screen.edit_candidates)
+    big = screen.penalty_floor
+    seen: dict[tuple, float] = {}
+    kept: dict[tuple, _Screened] = {}
+
+    def objective(vec: np.ndarray) -> float:
+        decoded = _decode(cands, edit_slots, variables, vec)
+        key = tuple((ci, tuple(sorted(p.items()))) for ci, p in decoded)
+        if key in seen:
+            return seen[key]
+        try:
+            edits = screen.measures(decoded)
+            # Placing first: a geometry that does not fit is out of the space
+            # before the cost model is asked to price it.
+            placed = place_measures(screen.project, screen.registry, edits, screen.section)
+            fixed_cost = screen.cost(edits)
+            if fixed_cost > cost_limit:
+                # Dearer than a design that already holds: not worth a run.
+                tally.over_limit = min(tally.over_limit or math.inf, fixed_cost)
+                seen[key] = big + fixed_cost
+                return seen[key]
+            edited = edited_section(screen.project, screen.section, placed)
+            table = screen._table_for([p.footprint for p in placed], edited)
+        except (KeyError, ValueError, ProjectError) as exc:
+            tally.reasons["does not fit"] += 1
+            tally.why = tally.why or getattr(exc, "message", None) or str(exc)
+            seen[key] = 4.0 * big
+            return seen[key]
+        first = next(iter(_barrier_designs(screen, slots, barrier_cis, edits, fixed_cost, table,
+                                           id(table), tally, cost_limit)), None)
+        if first is None:
+            value = big + fixed_cost
+        else:
+            kept[key + tuple((m.kind, m.x) for m in first.measures)] = first
+            value = first.cost if first.result.feasible else big + first.cost
+        seen[key] = value
+        return value
+
+    bounds = [(v.low, v.high) for v in variables]
+    integrality = np.array([v.integer for v in variables])
+    differential_evolution(
+        objective, bounds, integrality=integrality, seed=seed, popsize=6, maxiter=12,
+        tol=1e-3, mutation=(0.5, 1.0), recombination=0.7, polish=False,
+        init="sobol" if len(variables) > 1 else "latinhypercube",
+    )
+    return sorted((d for d in kept.values() if d.cost <= cost_limit),
+                  key=lambda d: (d.cost, not d.result.feasible))
