@@ -91,8 +91,14 @@ def test_fence_or_ditch_each_within_one_percent_of_the_grid(registry):
             best = min(best, r.cost)
     assert math.isfinite(best)
     assert best <= alts["ditch"].cost <= 1.01 * best
-    # And the optimiser's choice is the cheaper of the two.
-    assert res.best is alts["ditch"] and alts["ditch"].cost < alts["fence"].cost
+    # And the optimiser's choice is the cheaper of the two that hold on fresh
+    # rocks. Since issue 14 (rolling resistance acts while a rock slips: the
+    # physics changed) the ditch that 300 search rocks admit no longer holds
+    # on fresh rocks, so here the fence is chosen; with 1,000 rocks the ditch
+    # holds and wins (test_chosen_design_checked_with_another_seed).
+    assert alts["ditch"].cost < alts["fence"].cost
+    robust = [a for a in (alts["ditch"], alts["fence"]) if a.holds_on_fresh_rocks]
+    assert robust and res.best is min(robust, key=lambda a: a.cost)
 
 
 def test_same_seed_same_result(registry):
@@ -120,14 +126,16 @@ def test_two_smaller_fences_beat_one_heavy_fence_at_the_toe(registry):
 
 def test_chosen_design_checked_with_another_seed(tmp_path, capsys):
     proj = PROJECTS / "design_ditch_or_fence.yaml"
-    code = main(["optimise", str(proj), "--rocks", "600", "--out", str(tmp_path), "--json"])
+    # 1,000 rocks, not 600, since issue 14 changed the physics: with 600 the
+    # cheap ditch the search finds does not hold on fresh rocks.
+    code = main(["optimise", str(proj), "--rocks", "1000", "--out", str(tmp_path), "--json"])
     s = json.loads(capsys.readouterr().out)
     assert code == 0 and s["best"] == "ditch"
     (best,) = [a for a in s["alternatives"] if a["name"] == s["best"]]
     assert {"name", "measures", "cost", "feasible", "holds_on_fresh_rocks", "checks"} <= set(best)
     design = tmp_path / "design.yaml"
     assert (tmp_path / "alternatives.csv").stat().st_size > 0
-    code = main(["check", str(design), "--rocks", "600", "--seed", str(s["fresh_seed"]), "--json"])
+    code = main(["check", str(design), "--rocks", "1000", "--seed", str(s["fresh_seed"]), "--json"])
     chk = json.loads(capsys.readouterr().out)
     # check on the fresh rocks agrees with what the optimiser reported.
     assert chk["ok"] is best["holds_on_fresh_rocks"]
