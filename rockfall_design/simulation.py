@@ -19,8 +19,6 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
-from scipy import stats as sps
 
 from . import __version__
 from .engine import EngineSettings, EnsembleResult, Material, Releases, Section, run_ensemble
@@ -40,7 +38,13 @@ from .engine.core import (
 from .histograms import LinearHistogram, LogHistogram
 
 if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
     from .project import Project
+
+# pandas and scipy are imported where a table or a size distribution needs
+# them: together they cost more than a second at start-up, and `simulate`
+# with a fixed rock size writes no table unless asked (issue 14).
 
 __all__ = [
     "Study",
@@ -130,16 +134,20 @@ def _draw_size(
     u = rng.random(n)
     if kind == "uniform":
         return a + (b - a) * u
+    # The standard normal CDF and its inverse (what scipy.stats.norm.cdf/ppf
+    # evaluate), from scipy.special, which imports in a fraction of the time.
+    from scipy.special import ndtr, ndtri
+
     if kind == "normal":
         if b <= 0.0:
             return np.full(n, float(a))
-        lo, hi = sps.norm.cdf(-a / b), sps.norm.cdf((upper - a) / b)
-        return np.minimum(a + b * sps.norm.ppf(lo + (hi - lo) * u), upper)
+        lo, hi = ndtr(-a / b), ndtr((upper - a) / b)
+        return np.minimum(a + b * ndtri(lo + (hi - lo) * u), upper)
     if kind == "lognormal":
         if b <= 0.0:
             return np.full(n, float(a))
-        hi = sps.norm.cdf(np.log(upper / a) / b)
-        return np.minimum(a * np.exp(b * sps.norm.ppf(hi * u)), upper)
+        hi = ndtr(np.log(upper / a) / b)
+        return np.minimum(a * np.exp(b * ndtri(hi * u)), upper)
     raise ValueError(f"unknown size distribution {kind!r}")
 
 
@@ -310,6 +318,8 @@ class Study:
     # ---- per-rock and per-crossing tables ------------------------------------
     def rocks_table(self) -> pd.DataFrame:
         """One row per rock: size, release, how and where its path ended."""
+        import pandas as pd
+
         r = self.result
         stopped = r.status == STOPPED
         return pd.DataFrame(
@@ -356,6 +366,8 @@ class Study:
 
     def crossings_table(self) -> pd.DataFrame:
         """One row per rock and station (first downslope passage)."""
+        import pandas as pd
+
         r = self.result
         a = self.crossing_arrays()
         n, u = r.n, r.stations.size
@@ -385,6 +397,8 @@ class Study:
         ``energy_*_kj``. Statistics are over the rocks that pass each station
         downslope; NaN where none does.
         """
+        import pandas as pd
+
         if "env" in self._cache:
             return self._cache["env"]
         r = self.result
@@ -720,6 +734,8 @@ class StreamedStudy:
     # ---- statistics ------------------------------------------------------
     def envelopes(self) -> pd.DataFrame:
         """As :meth:`Study.envelopes`, from the histograms."""
+        import pandas as pd
+
         out: dict[str, np.ndarray] = {
             "x_m": self.grid,
             "ground_m": self.section.ground_height(self.grid),
