@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ._jit import CACHE
 from .rng import next_normal, next_uniform, truncated_normal
 
 G = 9.81
@@ -107,7 +108,7 @@ C_H, C_VX, C_VY, C_W, C_T = 0, 1, 2, 3, 4
 N_CROSS_COLS = 5
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def locate(px: np.ndarray, x: float, vx: float) -> int:
     """Index of the centre-path piece under ``x``, on the side ``vx`` moves to."""
     npc = px.shape[0] - 1
@@ -122,13 +123,13 @@ def locate(px: np.ndarray, x: float, vx: float) -> int:
     return k
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def path_height(px: np.ndarray, py: np.ndarray, k: int, x: float) -> float:
     """Height (m) of piece ``k`` of the centre path at ``x``."""
     return py[k] + (py[k + 1] - py[k]) * (x - px[k]) / (px[k + 1] - px[k])
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def next_landing(px, py, x0, y0, vx, vy, k):
     """Time and piece of the next contact of a free flight with the centre path.
 
@@ -197,7 +198,7 @@ def next_landing(px, py, x0, y0, vx, vy, k):
         return False, t, k
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng):
     """Velocity and spin after an impact on ground of outward normal (nx, ny).
 
@@ -288,7 +289,7 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng):
     return vn2 * mx + vt2 * tx, vn2 * my + vt2 * ty, w2
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _draw(mats, mat, rng, drawn):
     """Draw this contact's e, mu and mu_r for material ``mat`` into ``drawn``."""
     drawn[0] = truncated_normal(rng, mats[mat, M_E], mats[mat, M_SD_E], 0.0, 1.0)
@@ -296,7 +297,7 @@ def _draw(mats, mat, rng, drawn):
     drawn[2] = truncated_normal(rng, mats[mat, M_MUR], mats[mat, M_SD_MUR], 0.0, np.inf)
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _unit_tangent(px, py, k):
     dx = px[k + 1] - px[k]
     dy = py[k + 1] - py[k]
@@ -304,7 +305,7 @@ def _unit_tangent(px, py, k):
     return dx / ln, dy / ln
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn):
     """Impact on piece ``k``, then decide between flight and contact.
 
@@ -346,7 +347,7 @@ SLIP_TOL = 1e-9
 """Slip sigma = v - r s (m/s), or spin r s (m/s), within which it counts as zero."""
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _contact_accel(sinb, cosb, v, s, mu, mur, r):
     """Accelerations of a rock in contact, moving along a piece.
 
@@ -422,7 +423,7 @@ def _contact_accel(sinb, cosb, v, s, mu, mur, r):
     return a, a - rds, rds / r, sg, s_zero
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
     """Choose piece and direction for a rock at (almost) zero speed.
 
@@ -456,7 +457,7 @@ def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
     return best_k, best_d
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
     """Record the first downslope passage of station ``j``; True if it was the first.
 
@@ -478,7 +479,7 @@ def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _traj_row(traj, n, x, y, vx, vy, w, t, mode):
     """Append the state at an event to ``traj`` if there is room; the new count."""
     if n >= traj.shape[0]:
@@ -493,7 +494,7 @@ def _traj_row(traj, n, x, y, vx, vy, w, t, mode):
     return n + 1
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _record_restart(q, srec, srng, rng, drawn, ctx, mode, xs, yabs, vx, vy, w, t):
     """The full state of a rock at the first passage of restart station row ``q``.
 
@@ -516,7 +517,7 @@ def _record_restart(q, srec, srng, rng, drawn, ctx, mode, xs, yabs, vx, vy, w, t
     srng[q] = rng[0]
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _barrier_hit(bars, j, h, vx, vy, w, r, m, rng):
     """What barrier ``j`` does to a rock reaching its station.
 
@@ -569,7 +570,7 @@ def _barrier_hit(bars, j, h, vx, vy, w, r, m, rng):
     return O_CAUGHT, 0.0, 0.0, 0.0
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _meet(bar_out, bar_rec, j, code, h, vx, vy, w, t, m, r):
     """Record the first meeting of barrier ``j``."""
     if bar_out[j] != O_NOT_MET:
@@ -581,7 +582,7 @@ def _meet(bar_out, bar_rec, j, code, h, vx, vy, w, t, m, r):
     bar_rec[j, BM_T] = t
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def simulate_rock(
     px,
     py,
