@@ -90,6 +90,7 @@ def section_from_project(project: Project) -> Section:
                 velocity_scaling=m.velocity_scaling,
                 velocity_scaling_k=m.velocity_scaling_k,
                 roughness_deg=m.roughness_deg,
+                roughness_height_m=m.roughness_height_m,
                 sd_restitution=m.scatter.restitution,
                 sd_friction=m.scatter.friction,
                 sd_rolling_resistance=m.scatter.rolling_resistance,

@@ -41,7 +41,8 @@ M_ROUGH = 7  #: standard deviation of the tilt of the impact normal (rad)
 M_SD_E = 8  #: standard deviation of e / Rn
 M_SD_MU = 9  #: standard deviation of mu
 M_SD_MUR = 10  #: standard deviation of mu_r
-N_MAT_COLS = 11
+M_ROUGH_H = 11  #: roughness height h_r (m): one-sided tilt up to atan(h_r / r)
+N_MAT_COLS = 12
 
 MODEL_SPANG = 0
 MODEL_RN_RT = 1
@@ -199,7 +200,7 @@ def next_landing(px, py, x0, y0, vx, vy, k):
 
 
 @njit(cache=CACHE)
-def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng):
+def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt_max=0.0):
     """Velocity and spin after an impact on ground of outward normal (nx, ny).
 
     Parameters
@@ -228,6 +229,9 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng):
         Standard deviation of the tilt of the impact normal (rad).
     rng : ndarray of uint64, shape (1,)
         The rock's random stream (for the tilt).
+    tilt_max : float
+        Largest one-sided tilt of the normal (rad), atan(h_r / r) for a
+        roughness height h_r; 0 for none.
 
     Returns
     -------
@@ -248,12 +252,30 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng):
 
     A tilted normal that would make the rock arrive from below is drawn again
     (at most 64 times, then the untilted normal is used).
+
+    Roughness as a height (PlatRock's convention, PHYSICS.md "Options"): the
+    normal also turns by an angle drawn uniformly from [0, ``tilt_max``],
+    always against the tangential velocity, as if the rock met the face of an
+    asperity of height h_r turned towards it; larger rocks (larger r) feel a
+    smaller tilt. Turning against the motion makes the arrival steeper, so it
+    never makes the rock arrive from below.
     """
     mx = nx
     my = ny
+    # One-sided tilt: counter-clockwise turns the normal towards -t, against
+    # a rock moving along +t (t = (n_y, -n_x)).
+    th_h = 0.0
+    if tilt_max > 0.0:
+        vt0 = vx * ny - vy * nx
+        if vt0 != 0.0:
+            th_h = tilt_max * next_uniform(rng) * (1.0 if vt0 > 0.0 else -1.0)
+            c = np.cos(th_h)
+            s = np.sin(th_h)
+            mx = c * nx - s * ny
+            my = s * nx + c * ny
     if rough > 0.0:
         for _ in range(64):
-            th = rough * next_normal(rng)
+            th = th_h + rough * next_normal(rng)
             c = np.cos(th)
             s = np.sin(th)
             ax = c * nx - s * ny
@@ -335,6 +357,7 @@ def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
         mats[mat, M_VSK],
         mats[mat, M_ROUGH],
         rng,
+        np.arctan(mats[mat, M_ROUGH_H] / r),
     )
     vn = vx * nx + vy * ny
     if vn >= v_contact:

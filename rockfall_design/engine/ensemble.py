@@ -77,6 +77,9 @@ class Material:
         K of that scaling (m/s).
     roughness_deg : float
         Standard deviation of the tilt of the impact normal (degrees).
+    roughness_height_m : float
+        Roughness as a height h_r (m), PlatRock's convention: the normal tilts
+        against the motion by an angle uniform in [0, atan(h_r / r)].
     sd_restitution, sd_friction, sd_rolling_resistance : float
         Standard deviations of the per-impact draws.
     """
@@ -92,6 +95,7 @@ class Material:
     sd_restitution: float = 0.0
     sd_friction: float = 0.0
     sd_rolling_resistance: float = 0.0
+    roughness_height_m: float = 0.0
 
     def row(self) -> np.ndarray:
         """This material as a row of the engine's material table."""
@@ -107,6 +111,7 @@ class Material:
         out[core.M_SD_E] = self.sd_restitution
         out[core.M_SD_MU] = self.sd_friction
         out[core.M_SD_MUR] = self.sd_rolling_resistance
+        out[core.M_ROUGH_H] = self.roughness_height_m
         return out
 
 
