@@ -434,8 +434,8 @@ def _contact_accel(sinb, cosb, v, s, mu, mur, r):
         sg = -1.0
     s_zero = abs(r * s) <= SLIP_TOL
     if s_zero:
-        if mu <= mur:
-            # The resistance moment holds the spin at zero.
+        if mu * sg <= mur:
+            # The resistance moment holds the spin at zero (PHYSICS.md).
             ss = 0.0
         else:
             ss = sg
