@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -642,7 +643,10 @@ def study_memory(project: Project, rocks: int) -> int:
     # fresh count array of the same size (np.bincount).
     histograms = 8 * n_log * (2 * s + len(_STATION_QUANTITIES) * u) + 8 * _STOP_BUCKETS
     adding = probe.ADD_TEMPORARY_BYTES + 8 * n_log * s
-    return chunk_rocks(project) * per_rock + histograms + adding + 16 * REST_SAMPLE
+    # The engine computes the next chunk while this one is being added: its
+    # float32 envelope values and crossings are held too.
+    ahead = chunk_rocks(project) * (8 * s + 40 * u + 200)
+    return chunk_rocks(project) * per_rock + ahead + histograms + adding + 16 * REST_SAMPLE
 
 
 @dataclass
@@ -822,23 +826,39 @@ def simulate(
     stream = ReleaseStream(project, s)
     out: StreamedStudy | None = None
     t0 = time.perf_counter()
-    for first in range(0, n, size):
-        m = min(size, n - first)
-        releases = stream.draw(m)
+
+    def compute(first: int, releases: Releases) -> EnsembleResult:
         chunk_progress = None if progress is None else (lambda k, f=first: progress(f + k))
-        result = run_ensemble(
+        return run_ensemble(
             section, releases, key=key, stations=stations, grid=grid, settings=settings,
             n_trajectories=n_trajectories if first == 0 else 0, progress=chunk_progress,
             first_index=first,
         )
-        part = Study(project=project, result=result, releases=releases, seed=s,
-                     runtime_s=0.0, section=section, first_rock=first)
-        if out is None:
-            out = StreamedStudy(project=project, seed=s, section=section,
-                                stations=result.stations, grid=result.grid, chunk=size)
-        out.add(part)
-        if on_chunk is not None:
-            on_chunk(part)
+
+    # The engine runs the next chunk (on its own threads, without the GIL)
+    # while this thread adds the last one to the histograms: the two take
+    # comparable time, so overlapping them saves about a third of a large run.
+    # Releases are drawn here, in rock order, so the rocks are those of a run
+    # in one piece.
+    firsts = list(range(0, n, size))
+    with ThreadPoolExecutor(max_workers=1) as ahead:
+        releases = stream.draw(min(size, n))
+        pending = ahead.submit(compute, 0, releases)
+        for i, first in enumerate(firsts):
+            result = pending.result()
+            current = releases
+            if i + 1 < len(firsts):
+                nxt = firsts[i + 1]
+                releases = stream.draw(min(size, n - nxt))
+                pending = ahead.submit(compute, nxt, releases)
+            part = Study(project=project, result=result, releases=current, seed=s,
+                         runtime_s=0.0, section=section, first_rock=first)
+            if out is None:
+                out = StreamedStudy(project=project, seed=s, section=section,
+                                    stations=result.stations, grid=result.grid, chunk=size)
+            out.add(part)
+            if on_chunk is not None:
+                on_chunk(part)
     assert out is not None  # n >= 1
     out.runtime_s = time.perf_counter() - t0
     return out
