@@ -315,6 +315,12 @@ class Material(_Model):
         description="Slope roughness: standard deviation of the random tilt of the impact "
         "normal (deg), drawn per impact.",
     )
+    roughness_height_m: Annotated[NonNegative, Field(le=25.0)] = Field(
+        0.0,
+        description="Slope roughness as a height h_r (m), for values calibrated in PlatRock "
+        "or PyRockfall: per impact the normal tilts against the motion by an angle drawn "
+        "uniformly in [0, atan(h_r / r)], r the rock radius; 0..25.",
+    )
     scatter: Annotated[Scatter, BeforeValidator(_none_as_empty)] = Field(
         default_factory=Scatter, description="Standard deviations of the parameters."
     )

@@ -6,7 +6,9 @@ The rock is in one of two modes:
   path (one quadratic per piece walked);
 * CONTACT: rolling, sliding, or rolling with sliding on one straight piece
   of the centre path, with constant accelerations between events (end of the
-  piece, speed reaching zero, slip reaching zero), all closed forms.
+  piece, speed reaching zero, slip reaching zero, spin reaching zero), all
+  closed forms. Rolling resistance opposes the spin whether or not the
+  contact slips, and no event ever has zero length (see ``_contact_accel``).
 
 Impacts apply Newton restitution with Coulomb friction and spin (``spang``) or
 the lumped-mass law (``rn_rt``). There is no time step anywhere.
@@ -21,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ._jit import CACHE
 from .rng import next_normal, next_uniform, truncated_normal
 
 G = 9.81
@@ -38,7 +41,8 @@ M_ROUGH = 7  #: standard deviation of the tilt of the impact normal (rad)
 M_SD_E = 8  #: standard deviation of e / Rn
 M_SD_MU = 9  #: standard deviation of mu
 M_SD_MUR = 10  #: standard deviation of mu_r
-N_MAT_COLS = 11
+M_ROUGH_H = 11  #: roughness height h_r (m): one-sided tilt up to atan(h_r / r)
+N_MAT_COLS = 12
 
 MODEL_SPANG = 0
 MODEL_RN_RT = 1
@@ -105,7 +109,7 @@ C_H, C_VX, C_VY, C_W, C_T = 0, 1, 2, 3, 4
 N_CROSS_COLS = 5
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def locate(px: np.ndarray, x: float, vx: float) -> int:
     """Index of the centre-path piece under ``x``, on the side ``vx`` moves to."""
     npc = px.shape[0] - 1
@@ -120,13 +124,13 @@ def locate(px: np.ndarray, x: float, vx: float) -> int:
     return k
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def path_height(px: np.ndarray, py: np.ndarray, k: int, x: float) -> float:
     """Height (m) of piece ``k`` of the centre path at ``x``."""
     return py[k] + (py[k + 1] - py[k]) * (x - px[k]) / (px[k + 1] - px[k])
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def next_landing(px, py, x0, y0, vx, vy, k):
     """Time and piece of the next contact of a free flight with the centre path.
 
@@ -195,8 +199,8 @@ def next_landing(px, py, x0, y0, vx, vy, k):
         return False, t, k
 
 
-@njit(cache=True)
-def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng):
+@njit(cache=CACHE)
+def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt_max=0.0):
     """Velocity and spin after an impact on ground of outward normal (nx, ny).
 
     Parameters
@@ -225,6 +229,9 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng):
         Standard deviation of the tilt of the impact normal (rad).
     rng : ndarray of uint64, shape (1,)
         The rock's random stream (for the tilt).
+    tilt_max : float
+        Largest one-sided tilt of the normal (rad), atan(h_r / r) for a
+        roughness height h_r; 0 for none.
 
     Returns
     -------
@@ -239,18 +246,36 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng):
     * spang, stick (|u| <= 7/2 mu p_n): v_t' = (5 v_t - 2 r w) / 7,
       w' = -v_t' / r;
     * spang, slip: v_t' = v_t - mu p_n sgn(u), w' = w - 5/2 mu p_n sgn(u) / r;
-    * rn_rt: v_n' = -Rn v_n, v_t' = Rt v_t and w' = Rt w, so that a rolling
-      rock stays rolling and no energy is gained (the lumped-mass law has no
-      spin; scaling the spin like the tangential velocity is our choice).
+    * rn_rt: v_n' = -Rn v_n, v_t' = Rt v_t and w' = Rt w (PHYSICS.md,
+      "Lumped-mass law"): the spin scales with the tangential speed, so a
+      rolling rock stays rolling and no energy is gained.
 
     A tilted normal that would make the rock arrive from below is drawn again
     (at most 64 times, then the untilted normal is used).
+
+    Roughness as a height (PlatRock's convention, PHYSICS.md "Options"): the
+    normal also turns by an angle drawn uniformly from [0, ``tilt_max``],
+    always against the tangential velocity, as if the rock met the face of an
+    asperity of height h_r turned towards it; larger rocks (larger r) feel a
+    smaller tilt. Turning against the motion makes the arrival steeper, so it
+    never makes the rock arrive from below.
     """
     mx = nx
     my = ny
+    # One-sided tilt: counter-clockwise turns the normal towards -t, against
+    # a rock moving along +t (t = (n_y, -n_x)).
+    th_h = 0.0
+    if tilt_max > 0.0:
+        vt0 = vx * ny - vy * nx
+        if vt0 != 0.0:
+            th_h = tilt_max * next_uniform(rng) * (1.0 if vt0 > 0.0 else -1.0)
+            c = np.cos(th_h)
+            s = np.sin(th_h)
+            mx = c * nx - s * ny
+            my = s * nx + c * ny
     if rough > 0.0:
         for _ in range(64):
-            th = rough * next_normal(rng)
+            th = th_h + rough * next_normal(rng)
             c = np.cos(th)
             s = np.sin(th)
             ax = c * nx - s * ny
@@ -286,7 +311,7 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng):
     return vn2 * mx + vt2 * tx, vn2 * my + vt2 * ty, w2
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _draw(mats, mat, rng, drawn):
     """Draw this contact's e, mu and mu_r for material ``mat`` into ``drawn``."""
     drawn[0] = truncated_normal(rng, mats[mat, M_E], mats[mat, M_SD_E], 0.0, 1.0)
@@ -294,7 +319,7 @@ def _draw(mats, mat, rng, drawn):
     drawn[2] = truncated_normal(rng, mats[mat, M_MUR], mats[mat, M_SD_MUR], 0.0, np.inf)
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _unit_tangent(px, py, k):
     dx = px[k + 1] - px[k]
     dy = py[k + 1] - py[k]
@@ -302,7 +327,7 @@ def _unit_tangent(px, py, k):
     return dx / ln, dy / ln
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn):
     """Impact on piece ``k``, then decide between flight and contact.
 
@@ -332,6 +357,7 @@ def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
         mats[mat, M_VSK],
         mats[mat, M_ROUGH],
         rng,
+        np.arctan(mats[mat, M_ROUGH_H] / r),
     )
     vn = vx * nx + vy * ny
     if vn >= v_contact:
@@ -340,18 +366,24 @@ def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
     return vt * tx, vt * ty, w, CONTACT, seg
 
 
-@njit(cache=True)
-def _contact_accel(sinb, cosb, sigma, mu, mur, r):
+SLIP_TOL = 1e-9
+"""Slip sigma = v - r s (m/s), or spin r s (m/s), within which it counts as zero."""
+
+
+@njit(cache=CACHE)
+def _contact_accel(sinb, cosb, v, s, mu, mur, r):
     """Accelerations of a rock in contact, moving along a piece.
 
     Parameters
     ----------
     sinb, cosb : float
         Sine and cosine of the piece angle, beta > 0 where the motion goes downhill.
-    sigma : float
-        Slip v - r s (m/s), s the spin in the rolling sense.
-    mu, mu_r : float
-        Friction and rolling-resistance coefficients.
+    v : float
+        Speed along the piece (m/s), >= 0.
+    s : float
+        Spin (rad/s) in the rolling sense: rolling without slip is v = r s.
+    mu, mur : float
+        Friction and rolling-resistance coefficients (-).
     r : float
         Radius (m).
 
@@ -360,34 +392,61 @@ def _contact_accel(sinb, cosb, sigma, mu, mur, r):
     a : float
         dv/dt (m/s^2).
     dsig : float
-        d(sigma)/dt (m/s^2); 0 while the rock rolls without slip.
+        d(sigma)/dt (m/s^2) of the slip sigma = v - r s; 0 while rolling.
     ds : float
-        ds/dt (rad/s^2) of the spin; nan while rolling (then s = v / r).
+        ds/dt (rad/s^2); nan while the rock rolls without slip (then s = v / r).
+    sig_sign : float
+        Sense of the slip this phase has (+1 or -1; 0 while rolling). A slip
+        within ``SLIP_TOL`` of zero is zero, and this is the sense it starts in.
+    s_zero : bool
+        True if the spin counts as zero at the start of the phase.
 
     Notes
     -----
-    Rolling without slip (sigma = 0, tan beta <= (7 mu - 5 mu_r) / 2):
-    a = 5/7 g (sin beta - mu_r cos beta). With slip:
-    a = g (sin beta - mu cos beta sgn sigma), r ds/dt = 5/2 mu g cos beta sgn sigma.
-    Between the two limits, (7 mu - 5 mu_r) / 2 < tan beta <= 7/2 mu, the slip
-    can neither grow nor vanish: the rock keeps sigma = 0 with friction at its
-    Coulomb limit, a = g (sin beta - mu cos beta), which dissipates energy at
-    the rate m v g (7/5 mu cos beta - 2/5 sin beta) >= 0.
+    PHYSICS.md, "Motion in contact". Rolling without slip holds while
+    -(7 mu + 5 mu_r) / 2 <= tan beta <= (7 mu - 5 mu_r) / 2, with
+    a = 5/7 g (sin beta - mu_r cos beta). With slip, the rolling-resistance
+    moment mu_r N r still opposes the spin:
+
+        dv/dt   = g (sin beta - mu cos beta sgn sigma),
+        r ds/dt = 5/2 g cos beta (mu sgn sigma - mu_r sgn s),
+        d(sigma)/dt = g cos beta (tan beta - 7/2 mu sgn sigma + 5/2 mu_r sgn s).
+
+    A slip within tolerance of zero on a piece that cannot hold rolling
+    starts in the sense d(sigma)/dt gives: above the upper limit the rate with
+    sgn sigma = +1 is positive, below the lower one the rate with -1 is
+    negative, so the slip leaves zero at once and no event of zero length
+    follows. A spin of zero is held by the resistance moment while
+    mu sgn(sigma) <= mu_r; otherwise friction turns it in the sense of sgn sigma.
     """
-    eps = 1e-9
-    if abs(sigma) <= eps:
-        if 2.0 * sinb <= (7.0 * mu - 5.0 * mur) * cosb:
-            return 5.0 / 7.0 * G * (sinb - mur * cosb), 0.0, np.nan
-        if sinb - 3.5 * mu * cosb <= 0.0:
-            return G * (sinb - mu * cosb), 0.0, np.nan
+    sigma = v - r * s
+    if abs(sigma) <= SLIP_TOL:
+        # Both bounds, times 2 cos beta (cos beta > 0 on every piece).
+        lo = -(7.0 * mu + 5.0 * mur) * cosb
+        hi = (7.0 * mu - 5.0 * mur) * cosb
+        if lo <= 2.0 * sinb <= hi:
+            return 5.0 / 7.0 * G * (sinb - mur * cosb), 0.0, np.nan, 0.0, False
+        # Spin ahead of speed below the lower limit, behind it above the upper.
+        sg = 1.0 if 2.0 * sinb > hi else -1.0
+    elif sigma > 0.0:
         sg = 1.0
     else:
-        sg = 1.0 if sigma > 0.0 else -1.0
+        sg = -1.0
+    s_zero = abs(r * s) <= SLIP_TOL
+    if s_zero:
+        if mu * sg <= mur:
+            # The resistance moment holds the spin at zero (PHYSICS.md).
+            ss = 0.0
+        else:
+            ss = sg
+    else:
+        ss = 1.0 if s > 0.0 else -1.0
     a = G * (sinb - mu * cosb * sg)
-    return a, G * (sinb - 3.5 * mu * cosb * sg), 2.5 * mu * G * cosb * sg / r
+    rds = 0.0 if (s_zero and ss == 0.0) else 2.5 * G * cosb * (mu * sg - mur * ss)
+    return a, a - rds, rds / r, sg, s_zero
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
     """Choose piece and direction for a rock at (almost) zero speed.
 
@@ -413,7 +472,7 @@ def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
         sinb = -dirn * ty
         cosb = tx
         s = -w * dirn
-        a = _contact_accel(sinb, cosb, -r * s, mu, mur, r)[0]
+        a = _contact_accel(sinb, cosb, 0.0, s, mu, mur, r)[0]
         if a > best_a:
             best_a = a
             best_k = kk
@@ -421,7 +480,7 @@ def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
     return best_k, best_d
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
     """Record the first downslope passage of station ``j``; True if it was the first.
 
@@ -443,7 +502,7 @@ def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _traj_row(traj, n, x, y, vx, vy, w, t, mode):
     """Append the state at an event to ``traj`` if there is room; the new count."""
     if n >= traj.shape[0]:
@@ -458,7 +517,7 @@ def _traj_row(traj, n, x, y, vx, vy, w, t, mode):
     return n + 1
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _record_restart(q, srec, srng, rng, drawn, ctx, mode, xs, yabs, vx, vy, w, t):
     """The full state of a rock at the first passage of restart station row ``q``.
 
@@ -481,7 +540,7 @@ def _record_restart(q, srec, srng, rng, drawn, ctx, mode, xs, yabs, vx, vy, w, t
     srng[q] = rng[0]
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _barrier_hit(bars, j, h, vx, vy, w, r, m, rng):
     """What barrier ``j`` does to a rock reaching its station.
 
@@ -534,7 +593,7 @@ def _barrier_hit(bars, j, h, vx, vy, w, r, m, rng):
     return O_CAUGHT, 0.0, 0.0, 0.0
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _meet(bar_out, bar_rec, j, code, h, vx, vy, w, t, m, r):
     """Record the first meeting of barrier ``j``."""
     if bar_out[j] != O_NOT_MET:
@@ -546,7 +605,7 @@ def _meet(bar_out, bar_rec, j, code, h, vx, vy, w, t, m, r):
     bar_rec[j, BM_T] = t
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def simulate_rock(
     px,
     py,
@@ -857,16 +916,20 @@ def simulate_rock(
         sinb = -dy
         cosb = tx
         s = -w * dirn
-        sigma = v - r * s
-        a, dsig, dsp = _contact_accel(sinb, cosb, sigma, mu, mur, r)
+        a, dsig, dsp, _, s_zero = _contact_accel(sinb, cosb, v, s, mu, mur, r)
         rolling = np.isnan(dsp)
-        if rolling:
+        sigma = v - r * s
+        if rolling or abs(sigma) <= SLIP_TOL:
+            # Zero slip has no event of its own: it rolls, or the slip has
+            # already been given the sense in which it grows.
             sigma = 0.0
+        if s_zero and not rolling:
+            s = 0.0
         if dirn > 0:
             dist = np.hypot(px[k + 1] - x, py[k + 1] - y)
         else:
             dist = np.hypot(x - px[k], y - py[k])
-        # Event times: end of piece, speed zero, slip zero.
+        # Event times: end of piece, speed zero, slip zero, spin zero.
         t_end = np.inf
         if dist <= 0.0:
             t_end = 0.0
@@ -879,6 +942,7 @@ def simulate_rock(
                 t_end = 2.0 * dist / (v + np.sqrt(disc))
         t_zero = v / -a if a < 0.0 else np.inf
         t_slip = -sigma / dsig if (not rolling and sigma * dsig < 0.0) else np.inf
+        t_spin = -s / dsp if (not rolling and s * dsp < 0.0) else np.inf
         ev = 0
         tm = t_end
         if t_zero < tm:
@@ -887,6 +951,9 @@ def simulate_rock(
         if t_slip < tm:
             ev = 2
             tm = t_slip
+        if t_spin < tm:
+            ev = 3
+            tm = t_spin
         if tm == np.inf:
             status = STOPPED
             break
@@ -898,10 +965,10 @@ def simulate_rock(
         v1 = v + a * tm
         if v1 < 0.0 or ev == 1:
             v1 = 0.0
-        if rolling:
+        if rolling or ev == 2:
             s1 = v1 / r
-        elif ev == 2:
-            s1 = v1 / r
+        elif ev == 3:
+            s1 = 0.0
         else:
             s1 = s + dsp * tm
         if ev == 0:

@@ -8,13 +8,16 @@ the same path whatever batch it runs in and whatever the other rocks do.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 
 from . import core
+from ._jit import CACHE, compile_notice
 from .profile import centre_path
 from .rng import stream_start
 
@@ -28,7 +31,25 @@ __all__ = [
     "rock_mass",
     "barrier_table",
     "STATUS_NAMES",
+    "default_threads",
 ]
+
+THREADS_ENV = "ROCKFALL_DESIGN_THREADS"
+"""Environment variable that sets the number of engine threads (default: every core)."""
+
+
+def default_threads() -> int:
+    """Threads the engine runs on: ``ROCKFALL_DESIGN_THREADS``, else the usable cores."""
+    env = os.environ.get(THREADS_ENV, "").strip()
+    if env:
+        try:
+            return max(1, int(env))
+        except ValueError:
+            pass
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
 
 STATUS_NAMES = core.STATUS_NAMES
 
@@ -56,6 +77,9 @@ class Material:
         K of that scaling (m/s).
     roughness_deg : float
         Standard deviation of the tilt of the impact normal (degrees).
+    roughness_height_m : float
+        Roughness as a height h_r (m), PlatRock's convention: the normal tilts
+        against the motion by an angle uniform in [0, atan(h_r / r)].
     sd_restitution, sd_friction, sd_rolling_resistance : float
         Standard deviations of the per-impact draws.
     """
@@ -71,6 +95,7 @@ class Material:
     sd_restitution: float = 0.0
     sd_friction: float = 0.0
     sd_rolling_resistance: float = 0.0
+    roughness_height_m: float = 0.0
 
     def row(self) -> np.ndarray:
         """This material as a row of the engine's material table."""
@@ -86,6 +111,7 @@ class Material:
         out[core.M_SD_E] = self.sd_restitution
         out[core.M_SD_MU] = self.sd_friction
         out[core.M_SD_MUR] = self.sd_rolling_resistance
+        out[core.M_ROUGH_H] = self.roughness_height_m
         return out
 
 
@@ -296,7 +322,10 @@ class EnsembleResult:
         return int(self.n_events.sum())
 
 
-@njit(cache=True)
+# nogil: batches of rocks run on several Python threads at once; every rock
+# writes only its own rows, and draws from its own stream, so the results do
+# not depend on how the rocks are shared among threads.
+@njit(cache=CACHE, nogil=True)
 def _run_batch(
     gx,
     gy,
@@ -442,6 +471,7 @@ def run_ensemble(
     batch_size: int = 4096,
     progress: Callable[[int], None] | None = None,
     first_index: int = 0,
+    threads: int | None = None,
 ) -> EnsembleResult:
     """Simulate every rock of ``releases`` on ``section``.
 
@@ -483,6 +513,9 @@ def run_ensemble(
         Index of the first rock of ``releases`` in the whole run: rock ``i``
         draws from the random stream of rock ``first_index + i``, so a run cut
         into chunks gives exactly the rocks of the run in one piece.
+    threads : int, optional
+        Threads that run batches at once (default :func:`default_threads`).
+        The results are bit-identical whatever the number.
 
     Returns
     -------
@@ -552,12 +585,12 @@ def run_ensemble(
     k64 = np.uint64(int(key) % (1 << 64))
     max_chord = float(np.radians(settings.max_chord_deg))
 
-    for a in range(0, n, batch_size):
-        b = min(a + batch_size, n)
+    def batch_args(a: int, b: int) -> tuple:
+        """The arguments of the compiled call for rocks a..b-1 (views, no copies)."""
         sl = slice(a, b)
         t0 = min(a, ntr)
         t1 = min(b, ntr)
-        _run_batch(
+        return (
             section.x,
             section.y,
             section.segment_material,
@@ -601,8 +634,43 @@ def run_ensemble(
             states0[sl],
             rngs0[sl],
         )
-        if progress is not None:
-            progress(b)
+
+    def run(a: int, b: int) -> int:
+        _run_batch(*batch_args(a, b))
+        return b - a
+
+    spans = [(a, min(a + batch_size, n)) for a in range(0, n, batch_size)]
+    n_done = 0
+    if spans:
+        # The first batch runs alone if it compiles the kernel (said on stderr).
+        compiled = compile_notice(_run_batch, batch_args(*spans[0]))
+        if compiled is not None:
+            n_done += run(*spans[0])
+            compiled()
+            if progress is not None:
+                progress(n_done)
+            spans = spans[1:]
+    nthreads = min(len(spans), threads if threads is not None else default_threads())
+    if nthreads <= 1:
+        for a, b in spans:
+            n_done += run(a, b)
+            if progress is not None:
+                progress(n_done)
+    else:
+        with ThreadPoolExecutor(max_workers=nthreads) as pool:
+            pending = {pool.submit(run, a, b) for a, b in spans}
+            try:
+                while pending:
+                    finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for f in finished:
+                        n_done += f.result()
+                    if progress is not None:
+                        progress(n_done)
+            except BaseException:
+                # An interrupt or a failing callback: start no further batch.
+                for f in pending:
+                    f.cancel()
+                raise
 
     return EnsembleResult(
         radius=radius,

@@ -25,11 +25,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ._jit import CACHE
+
 #: Relative tolerance used to merge breakpoints and collinear pieces.
 _EPS_X = 1e-12
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def ground_height(gx: np.ndarray, gy: np.ndarray, x: float) -> float:
     """Height of the ground at ``x`` (m), linear between vertices.
 
@@ -44,7 +46,7 @@ def ground_height(gx: np.ndarray, gy: np.ndarray, x: float) -> float:
     return gy[k] + (gy[k + 1] - gy[k]) * (x - gx[k]) / (gx[k + 1] - gx[k])
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _arc_edges(t1x, t1y, t2x, t2y, max_chord):
     """Angles of the two normals at a vertex and the number of polygon corners."""
     phi1 = np.arctan2(t1x, -t1y)
@@ -53,7 +55,7 @@ def _arc_edges(t1x, t1y, t2x, t2y, max_chord):
     return phi1, phi2, m
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _raw_pieces(gx, gy, seg_id, r, max_chord):
     """Offset segments and circumscribed vertex arcs of an extended profile.
 
@@ -122,25 +124,25 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord):
     return xa, ya, xb, yb, sid
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _grow(a, cap):
     b = np.empty(cap, dtype=a.dtype)
     b[: a.shape[0]] = a
     return b
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _line_at(xa, ya, xb, yb, i, x):
     """Value of the line through piece i at x (extrapolated)."""
     return ya[i] + (yb[i] - ya[i]) * (x - xa[i]) / (xb[i] - xa[i])
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _slope(xa, ya, xb, yb, i):
     return (yb[i] - ya[i]) / (xb[i] - xa[i])
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def centre_path(gx, gy, seg_mat, r, max_chord):
     """Centre path of a sphere of radius ``r`` on the ground polyline.
 
