@@ -252,7 +252,7 @@ def _cause(screen: Screening, slots: _BarrierSlots, fam: tuple[int, ...], tally:
 
 def _proof(alt: Alternative, tally: _Tally, n: int, currency: str) -> str:
     """What was proven about a family's chosen design."""
-    top = ", ".join(f"{k} ({v:,})" for k, v in tally.reasons.most_common(4))
+    top = ", ".join(f"{k} ({v:,})" for k, v in tally.reasons.most_common(4) if v)
     capped = (f"; in {tally.capped_levels} catalogue combinations only the "
               f"{MAX_SCREENS_PER_LEVEL} placements with fewest rocks through were screened"
               if tally.capped_levels else "")
