@@ -317,20 +317,34 @@ class Screening:
             table = self._table_for(edits, edited)
         except ValueError as exc:
             return ScreenResult(math.inf, False, math.inf, [], [], self.n, reason=str(exc))
-        judgement, approx = self.judge(placed, table)
-        checks = [call_plugin(self.registry, self.concept, "checks", res)
-                  for res in judgement.results]
-        labels = [p.label for p in placed]
         try:
             cost = self.cost([p.measure for p in placed])
         except (KeyError, ValueError) as exc:
             # The cost model's contract: no price for a measure skips the design.
             why = exc.args[0] if exc.args else type(exc).__name__
             return ScreenResult(
-                math.inf, False, math.inf, checks, judgement.results, judgement.reaching,
-                labels=labels,
+                math.inf, False, math.inf, [], [], self.n, labels=[p.label for p in placed],
                 reason=f"cost model {self.spec.cost_model.name!r} has no price for this "
                        f"design: {why}")
+        return self._verdict(placed, table, cost)
+
+    def screen_placed(self, placed: Sequence[PlacedMeasure], table: _Table,
+                      cost: float) -> ScreenResult:
+        """Judge measures already placed and priced on ``table`` (the search's fast path).
+
+        The search builds, places and prices every barrier option once, and
+        keeps only placements that fit (spacing, not inside a ground edit); a
+        design of them needs only the judgement and the safety checks.
+        """
+        self.evaluations += 1
+        return self._verdict(placed, table, cost)
+
+    def _verdict(self, placed: Sequence[PlacedMeasure], table: _Table,
+                 cost: float) -> ScreenResult:
+        judgement, approx = self.judge(placed, table)
+        checks = [call_plugin(self.registry, self.concept, "checks", res)
+                  for res in judgement.results]
+        labels = [p.label for p in placed]
         approximate = approx.any
         violation, near = self.violation(checks, judgement.reaching, approx)
         # The screening admits only what it judged exactly (no rock whose path it

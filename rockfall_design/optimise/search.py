@@ -355,8 +355,15 @@ def _barrier_designs(
         passed = 0
         for flat in order:
             pos = np.unravel_index(flat, residual.shape)
-            ms = fixed + [opts[s][ks[s][pos[s]]].measure for s in range(k_slots)]
-            sr = screen.screen(ms)
+            chosen = [opts[s][ks[s][pos[s]]] for s in range(k_slots)]
+            ms = fixed + [o.measure for o in chosen]
+            if fixed:
+                sr = screen.screen(ms)
+            else:
+                # Built, placed and priced once per option; their spacing is checked above.
+                placed = [PlacedMeasure(i, o.measure, o.footprint, o.label)
+                          for i, o in enumerate(chosen)]
+                sr = screen.screen_placed(placed, table, sum(o.cost for o in chosen))
             if sr.feasible or sr.near:
                 found.append(_Screened(sr.cost, ms, sr, (table_id,) + tuple(idx)))
                 passed += sr.feasible
