@@ -264,21 +264,24 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
                       (f"cost {cur}" if cur else "cost", "right"), ("measures", "left"),
                       ("factors", "left"), ("res.", "right"), ("fresh", "left")):
         tab.add_column(col, justify=just)
-    order = sorted(result.alternatives, key=lambda a: (not a.feasible, a.cost))
+    order = sorted(result.alternatives, key=lambda a: (not a.holds, a.cost))
     for a in order:
         star = "*" if result.best is a else ""
-        style = "bold green" if result.best is a else ("" if a.feasible else "dim")
+        style = "bold green" if result.best is a else ("" if a.holds else "dim")
         fresh = "-" if a.holds_on_fresh_rocks is None else (
             "yes" if a.holds_on_fresh_rocks else "NO")
         cost = "-" if not np.isfinite(a.cost) else f"{a.cost:,.0f}"
-        tab.add_row(star, a.name, cost if a.feasible else f"({cost})",
+        tab.add_row(star, a.name, cost if a.holds else f"({cost})",
                     "\n".join(_measure_short(m) for m in a.measures) or "-", _factors(a) or "-",
                     "-" if a.residual is None else f"{a.residual}", fresh, style=style)
     parts: list[Any] = [
         Text.assemble((project.name, "bold"),
-                      f"   search: {result.rocks:,} rocks, seed {result.seed}; fresh check: "
-                      f"{result.fresh_rocks:,} rocks, seed {result.fresh_seed}; "
-                      f"{result.evaluations:,} designs screened, {result.edit_runs} ground "
+                      f"   search: {result.search_rocks or result.rocks:,} rocks, seed "
+                      f"{result.seed}; chosen design decided with {result.rocks:,} rocks, "
+                      f"checked on {result.fresh_rocks:,} fresh rocks (seed "
+                      f"{result.fresh_seed}); {100 * result.confidence:g} % confidence; "
+                      f"{result.evaluations:,} designs screened, "
+                      f"{result.exact_evaluations} evaluated exactly, {result.edit_runs} ground "
                       f"edits simulated, {result.wall_s:.1f} s"),
         Text(""), tab, Text(""),
     ]
@@ -286,13 +289,15 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
         b = result.best
         parts.append(Text(f"Chosen: {b.name}, {b.cost:,.0f} {cur}: "
                           + "; ".join(m.label() for m in b.measures), style="bold green"))
+        if b.proof:
+            parts.append(Text(f"Proven: {b.proof}"))
         if b.holds_on_fresh_rocks is False:
             parts.append(Text("Warning: the chosen design does not hold on the fresh rocks: "
                               + "; ".join(b.fresh_failures), style="bold yellow"))
     else:
         parts.append(Text(f"No admissible design: {result.reason}", style="bold red"))
     for a in order:
-        if not a.feasible and a.reason:
+        if (not a.holds or a.dominated) and a.reason:
             parts.append(Text(f"  {a.name}: {a.reason}", style="dim"))
     panel = Panel(Group(*parts), title="rockfall-design optimise")
     (console or fitted_console(panel)).print(panel)
