@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from rockfall_design.cli import main
 from rockfall_design.design import build_candidate_measure, resolve_design
@@ -67,12 +69,13 @@ def _lattice(lo: float, hi: float, step: float) -> np.ndarray:
     return lo + step * np.arange(math.floor((hi - lo) / step + 1e-9) + 1)
 
 
-@pytest.mark.parametrize("seed", [3, 8])
-def test_small_problem_optimum_known_by_enumeration(registry, seed):
-    """The chosen design is the cheapest of the whole space that holds with confidence and on
-    fresh rocks, found here by deciding every design of the space exactly."""
-    project = _small_problem(seed)
-    res = optimise(project, registry)
+def _holding_costs(project, registry, res) -> tuple[list[float], int]:
+    """Cost of every design of the (one-candidate) space that holds on the optimiser's rocks.
+
+    Every design is decided exactly with the search rocks and seed (one look,
+    ``design.max_rocks`` equal to them) and, if admitted, checked on the fresh
+    rocks as the optimiser does.
+    """
     spec = resolve_design(project, registry)
     concept = build_concept(project, registry)
     # The optimiser's own project: its residual target is the protected zone's allowance.
@@ -95,7 +98,10 @@ def test_small_problem_optimum_known_by_enumeration(registry, seed):
                                         seed=res.fresh_seed)
                 if fresh.ok:
                     holding.append(screen.cost([m]))
-    assert admitted > 0  # the space has designs that hold: the test compares something
+    return holding, admitted
+
+
+def _assert_cheapest(res, holding: list[float]) -> None:
     if not holding:
         assert res.best is None
         return
@@ -104,6 +110,35 @@ def test_small_problem_optimum_known_by_enumeration(registry, seed):
     assert res.best.cost == pytest.approx(min(holding), rel=1e-12)
     assert res.best.holds_on_fresh_rocks and res.best.feasible
     assert "cheapest of" in res.best.proof
+
+
+@pytest.mark.parametrize("seed", [3, 8])
+def test_small_problem_optimum_known_by_enumeration(registry, seed):
+    """The chosen design is the cheapest of the whole space that holds with confidence and on
+    fresh rocks, found here by deciding every design of the space exactly."""
+    project = _small_problem(seed)
+    res = optimise(project, registry)
+    holding, admitted = _holding_costs(project, registry, res)
+    assert admitted > 0  # the space has designs that hold: the test compares something
+    _assert_cheapest(res, holding)
+
+
+@given(seed=st.integers(0, 10_000), lo=st.sampled_from([50.0, 56.0, 62.0, 70.0]),
+       products=st.sampled_from([("RX-050",), ("RX-050", "RX-100"), ("RX-100", "RX-150")]),
+       allowed=st.sampled_from([0.02, 0.05]))
+@settings(max_examples=6, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+def test_chosen_design_never_dearer_than_any_that_holds(registry, seed, lo, products, allowed):
+    text = (SMALL.replace("SEED", str(seed))
+            .replace("PRODUCTS", str(PROJECTS / "catalogue_products.yaml"))
+            .replace("COSTS", str(PROJECTS / "catalogue_costs.yaml"))
+            .replace("x: [58, 64]", f"x: [{lo:g}, {lo + 4:g}]")
+            .replace("[RX-050, RX-100, RX-150]", "[" + ", ".join(products) + "]")
+            .replace("fraction: 0.02", f"fraction: {allowed}"))
+    project = load_project_text(text, "small.yaml")
+    res = optimise(project, registry)
+    holding, _ = _holding_costs(project, registry, res)
+    _assert_cheapest(res, holding)
 
 
 def test_same_seed_same_result(registry):
