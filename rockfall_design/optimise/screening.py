@@ -198,17 +198,25 @@ class Screening:
         self.edit_rocks = 0
 
     def _is_edit(self, ci: int) -> bool:
-        """Does candidate ``ci`` edit the ground? (Judged from a mid-range design.)"""
-        c = self.spec.candidates[ci]
-        variables = _variables(self.spec.candidates, (ci,))
-        mid = [0.5 * (v.low + v.high) if not v.integer else 0 for v in variables]
-        try:
-            (m,) = self.measures(_decode(self.spec.candidates, (ci,), variables, mid))
-            footprint = call_plugin(self.registry, m, "footprint", self.section)
-        except ValueError:
-            # Cannot tell from the middle of its range: treat it as the costly kind.
-            return c.kind in ("ditch", "berm")
-        return isinstance(footprint, ProfileEdit)
+        """Does candidate ``ci`` edit the ground? Asked of its own footprint, never its name.
+
+        Designs across its space (the middle, then the far ends of every
+        range and the last of every option) are tried until one fits; a
+        candidate none of whose designs fits has no designs at all, and is
+        searched (and reported) as a barrier.
+        """
+        cands = self.spec.candidates
+        variables = _variables(cands, (ci,))
+        probes = [[0.5 * (v.low + v.high) if not v.integer else 0 for v in variables],
+                  [v.high for v in variables], [v.low for v in variables]]
+        for vec in probes:
+            try:
+                (m,) = self.measures(_decode(cands, (ci,), variables, vec))
+                footprint = call_plugin(self.registry, m, "footprint", self.section)
+            except ValueError:
+                continue
+            return isinstance(footprint, ProfileEdit)
+        return False
 
     # -- measures -----------------------------------------------------------------
     def measures(self, decoded: Sequence[tuple[int, dict[str, Any]]]) -> list[ProtectiveMeasure]:
