@@ -65,8 +65,8 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
-from .errors import Interrupted, PluginError, ProjectError
-from .inputs import read_text
+from ..errors import Interrupted, PluginError, ProjectError
+from ..inputs import read_text
 
 __all__ = [
     "dump_yaml",
@@ -2468,7 +2468,7 @@ def load_project_text(
         )
     base = Path(source).parent if base_dir is None else Path(base_dir)
     # A slope from a survey file and materials from a library become inline data here.
-    from .sources import resolve_inputs
+    from ..sources import resolve_inputs
 
     data = resolve_inputs(data, lines, source, base)
     try:
