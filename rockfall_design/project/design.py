@@ -1,0 +1,434 @@
+"""Design: the ``design:`` section, what the least-cost optimiser may build.
+
+Candidates, the allowed residual, the site, the product catalogue and the
+cost model's parameters (inline or in files the project names); shapes are
+checked here, the plugins resolve them later.
+"""
+
+import math
+from typing import Annotated, Any
+
+from pydantic import BeforeValidator, Field, PrivateAttr, WithJsonSchema, model_validator
+
+from .fields import Fraction, Integer, Positive, String, _as_number, _check_typed_item, _Model, _raw
+from .locator import Locator
+from .messages import _describe, _did_you_mean, _fail, _fmt
+from .schema import MAX_COORDINATE_M, MAX_DESIGN_MEASURES, MAX_FAMILIES, MAX_ROCKS
+
+# --------------------------------------------------------------------------------------
+# The design section (least-cost optimiser): shapes checked here, plugins resolve it later
+# --------------------------------------------------------------------------------------
+
+
+class ResidualFraction(_Model):
+    """``residual: {fraction: F}``: the fraction of rocks allowed in the protected zone."""
+
+    fraction: Fraction = Field(
+        description="Fraction of the rocks allowed to reach the protected zone (-), 0..1."
+    )
+
+
+def _parse_residual(value: Any) -> Any:
+    """``residual``: a count of rocks (integer >= 0) or ``{fraction: F}``."""
+    forms = "a count of rocks (an integer >= 0) or {fraction: F}"
+    if isinstance(value, ResidualFraction):
+        return value
+    if isinstance(value, dict):
+        for key in value:
+            if key != "fraction":
+                hint = _did_you_mean(key, ["fraction"]) if isinstance(key, str) else ""
+                raise _fail(f"unknown key {key!r}{hint}; expected {forms}", (key,))
+        if "fraction" not in value:
+            raise _fail(f"required key 'fraction' is missing; expected {forms}")
+        fraction = _as_number(value["fraction"], ("fraction",))
+        if not 0.0 <= fraction <= 1.0:
+            raise _fail(f"expected a number in 0..1, got {_fmt(fraction)}", ("fraction",))
+        return ResidualFraction(fraction=fraction)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise _fail(f"expected {forms}, got {_describe(value)}")
+    if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
+        raise _fail(f"expected {forms}, got {_describe(value)}")
+    if value < 0:
+        raise _fail(f"expected {forms}, got {_fmt(value)}")
+    return int(value)
+
+
+class Site(_Model):
+    """The site: how much slope the measures span."""
+
+    length_m: Annotated[Positive, Field(le=MAX_COORDINATE_M)] = Field(
+        description="Length of slope to protect, along the contour (m): what the measures "
+        "span; at most 1,000 km (costs scale with it; 1e300 overflowed the optimiser)."
+    )
+
+
+_CATALOGUE_FORM = "measure type -> product name -> {capacity_kj: E, heights: [h, ...]}"
+
+
+def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
+    """A product catalogue, normalised: ``{kind: {name: {capacity_kj, heights, ...}}}``.
+
+    ``capacity_kj`` (kJ) is a number > 0, ``heights`` (m) a non-empty list of
+    distinct numbers > 0; other keys of a product are kept as plain data.
+    """
+    if not isinstance(value, dict):
+        raise _fail(f"expected a mapping {_CATALOGUE_FORM}, got {_describe(value)}")
+    catalogue: dict[str, dict[str, dict[str, Any]]] = {}
+    for kind, table in value.items():
+        if not isinstance(kind, str) or not kind.strip():
+            raise _fail(f"expected the name of a measure type, got {_describe(kind)}", (kind,))
+        if not isinstance(table, dict):
+            raise _fail(
+                f"expected a mapping of product name -> {{capacity_kj: E, heights: [h, ...]}}, "
+                f"got {_describe(table)}",
+                (kind,),
+            )
+        products: dict[str, dict[str, Any]] = {}
+        for name, entry in table.items():
+            where = (kind, name)
+            if not isinstance(name, str) or not name.strip():
+                raise _fail(
+                    f"expected a product name, got {_describe(name)} (quote names such as '100')",
+                    where,
+                )
+            if not isinstance(entry, dict):
+                raise _fail(
+                    f"expected a mapping {{capacity_kj: E, heights: [h, ...]}}, "
+                    f"got {_describe(entry)}",
+                    where,
+                )
+            for key in ("capacity_kj", "heights"):
+                if key not in entry:
+                    what = "energy class (kJ)" if key == "capacity_kj" else "heights (m)"
+                    raise _fail(f"required key {key!r} is missing (the product's {what})", where)
+            capacity = _as_number(entry["capacity_kj"], where + ("capacity_kj",))
+            if capacity <= 0:
+                raise _fail(
+                    f"expected a number > 0, got {_fmt(capacity)}", where + ("capacity_kj",)
+                )
+            heights_raw = entry["heights"]
+            if not isinstance(heights_raw, list | tuple) or not heights_raw:
+                raise _fail(
+                    f"expected a non-empty list of heights (m), got {_describe(heights_raw)}",
+                    where + ("heights",),
+                )
+            heights: list[float] = []
+            for j, item in enumerate(heights_raw):
+                h = _as_number(item, where + ("heights", j))
+                if h <= 0:
+                    raise _fail(f"expected a number > 0, got {_fmt(h)}", where + ("heights", j))
+                if h in heights:
+                    raise _fail(f"height {_fmt(h)} is listed twice", where + ("heights", j))
+                heights.append(h)
+            rest = {k: v for k, v in entry.items() if k not in ("capacity_kj", "heights")}
+            products[name] = {
+                "capacity_kj": capacity,
+                "heights": heights,
+                **_raw(rest, where),
+            }
+        catalogue[kind] = products
+    return catalogue
+
+
+def _parse_products(value: Any) -> Any:
+    """``design.products``: a catalogue file (a path) or an inline catalogue."""
+    if value is None:
+        return None
+    if isinstance(value, str):
+        if not value.strip():
+            raise _fail("must not be empty (a catalogue file, e.g. catalogue_products.yaml)")
+        return value
+    if not isinstance(value, dict):
+        raise _fail(
+            f"expected a catalogue file (a path) or a mapping {_CATALOGUE_FORM}, "
+            f"got {_describe(value)}"
+        )
+    return _check_products(value)
+
+
+def _parse_cost_params(value: Any) -> Any:
+    if value is None:
+        return None
+    if not isinstance(value, dict):
+        raise _fail(f"expected a mapping of the cost model's parameters, got {_describe(value)}")
+    return _raw(value, number_keys=True)
+
+
+class DesignCosts(_Model):
+    """``design.costs``: the cost model and its parameters (a file or inline)."""
+
+    model: Annotated[String, Field(min_length=1)] = Field(
+        "unit_prices", description="Name of the cost-model plugin."
+    )
+    file: Annotated[String, Field(min_length=1)] | None = Field(
+        None, description="YAML file of the cost model's parameters, relative to the project."
+    )
+    params: Annotated[Any, BeforeValidator(_parse_cost_params)] = Field(
+        None, description="The cost model's parameters, inline (instead of file)."
+    )
+
+    @model_validator(mode="after")
+    def _one_source(self) -> "DesignCosts":
+        if self.file is None and self.params is None:
+            raise _fail(
+                "give the cost model's parameters: file: PATH (a YAML file) or params: {...}"
+            )
+        if self.file is not None and self.params is not None:
+            raise _fail("give only one of file and params", ("params",))
+        return self
+
+
+_VALUE_FORMS = "a value (fixed), a range [min, max] or {options: [a, b, ...]}"
+
+
+def _check_options(value: Any, subpath: tuple) -> list:
+    if set(value) != {"options"}:
+        extra = next((k for k in value if k != "options"), None)
+        if extra is not None:
+            hint = _did_you_mean(extra, ["options"]) if isinstance(extra, str) else ""
+            raise _fail(
+                f"unknown key {extra!r}{hint}; expected {{options: [...]}}", subpath + (extra,)
+            )
+        raise _fail("required key 'options' is missing: expected {options: [...]}", subpath)
+    options = value["options"]
+    where = subpath + ("options",)
+    if not isinstance(options, list | tuple) or not options:
+        raise _fail(f"expected a non-empty list of options, got {_describe(options)}", where)
+    seen: list = []
+    for k, item in enumerate(options):
+        if item is None or not isinstance(item, bool | int | float | str):
+            raise _fail(
+                f"expected a number, string or boolean, got {_describe(item)}", where + (k,)
+            )
+        _raw(item, where + (k,))
+        if any(type(item) is type(s) and item == s for s in seen):
+            raise _fail(f"option {_fmt(item)} is listed twice", where + (k,))
+        seen.append(item)
+    return list(options)
+
+
+def _check_candidate_value(value: Any, subpath: tuple) -> Any:
+    """A candidate parameter: a fixed value, a range [min, max] or {options: [...]}."""
+    if isinstance(value, list | tuple):
+        if len(value) != 2:
+            raise _fail(
+                f"expected a range [min, max] of two numbers, got {_describe(value)}; "
+                "for a choice write {options: [...]}",
+                subpath,
+            )
+        for k, item in enumerate(value):
+            if isinstance(item, bool) or not isinstance(item, int | float):
+                raise _fail(
+                    f"a range [min, max] needs numbers, got {_describe(item)}; "
+                    "for a choice write {options: [...]}",
+                    subpath + (k,),
+                )
+        low, high = _as_number(value[0], subpath + (0,)), _as_number(value[1], subpath + (1,))
+        if not low < high:
+            raise _fail(
+                f"expected a range [min, max] with min < max, got [{_fmt(low)}, {_fmt(high)}]; "
+                "for a fixed value give the number",
+                subpath,
+            )
+        return list(value)
+    if isinstance(value, dict):
+        return {"options": _check_options(value, subpath)}
+    if value is None or not isinstance(value, bool | int | float | str):
+        raise _fail(f"expected {_VALUE_FORMS}, got {_describe(value)}", subpath)
+    return _raw(value, subpath)
+
+
+def _check_product_choice(value: Any, subpath: tuple) -> Any:
+    """``product``: a name, a list of names or {options: [names]}."""
+    names = value
+    where = subpath
+    if isinstance(value, dict):
+        names = _check_options(value, subpath)
+        where = subpath + ("options",)
+    elif isinstance(value, str):
+        names = [value]
+    elif not isinstance(value, list | tuple) or not value:
+        raise _fail(
+            f"expected a product name or a non-empty list of names, got {_describe(value)}",
+            subpath,
+        )
+    for k, name in enumerate(names):
+        at = where if isinstance(value, str) else where + (k,)
+        if not isinstance(name, str) or not name.strip():
+            raise _fail(f"expected a product name, got {_describe(name)}", at)
+        if name in names[:k]:
+            raise _fail(f"product {name!r} is listed twice", at)
+    return _raw(value, subpath)
+
+
+def _parse_candidates(value: Any) -> list[dict[str, Any]]:
+    """``design.candidates``: a non-empty list of mappings with ``type`` and ``x: [min, max]``."""
+    if not isinstance(value, list | tuple) or not value:
+        raise _fail(
+            "expected a non-empty list of candidate measures (mappings such as "
+            f"{{type: fence, x: [60, 110]}}), got {_describe(value)}"
+        )
+    candidates = []
+    for i, item in enumerate(value):
+        _check_typed_item(
+            item, i, "a candidate measure (a mapping such as {type: fence, x: [60, 110]})"
+        )
+        if "x" not in item:
+            raise _fail(
+                "required key 'x' is missing (the station range [min, max] (m) where the "
+                "optimiser may place the measure)",
+                (i,),
+            )
+        x = item["x"]
+        if not isinstance(x, list | tuple) or len(x) != 2:
+            raise _fail(
+                f"expected a station range [min, max] (m), got {_describe(x)}; the optimiser "
+                "places the measure within it",
+                (i, "x"),
+            )
+        low, high = _as_number(x[0], (i, "x", 0)), _as_number(x[1], (i, "x", 1))
+        if not low < high:
+            raise _fail(
+                f"expected a station range [min, max] with min < max, "
+                f"got [{_fmt(low)}, {_fmt(high)}]",
+                (i, "x"),
+            )
+        candidate: dict[str, Any] = {"type": item["type"], "x": [x[0], x[1]]}
+        for key, item_value in item.items():
+            if key in ("type", "x"):
+                continue
+            if not isinstance(key, str):
+                raise _fail(f"keys must be names, got {_describe(key)}", (i, key))
+            if key == "product":
+                candidate[key] = _check_product_choice(item_value, (i, key))
+            else:
+                candidate[key] = _check_candidate_value(item_value, (i, key))
+        candidates.append(candidate)
+    return candidates
+
+
+class Design(_Model):
+    """``design:``, what the least-cost optimiser may build and how it checks a design.
+
+    Candidate parameters are kept raw (the measure plugins are loaded later,
+    see :func:`rockfall_design.design.resolve_design`), their shapes checked:
+    ``x`` is a station range ``[min, max]`` (m) inside the section; any other
+    value is fixed (a number, string or boolean), a range ``[a, b]`` of
+    numbers with a < b (a continuous design variable) or ``{options: [...]}``
+    (a discrete one); ``product`` is a catalogue name or a list of names.
+
+    The product catalogue and the cost model's parameters may come from files
+    (paths relative to the project file); :func:`load_project` reads them and
+    keeps their line numbers: :attr:`catalogue` / :attr:`products_locator`
+    and :attr:`cost_params` / :attr:`costs_locator`.
+    """
+
+    max_measures: Annotated[Integer, Field(ge=1, le=MAX_DESIGN_MEASURES)] = Field(
+        2, description="Largest number of measures in one design, 1..10."
+    )
+    residual: Annotated[
+        Any,
+        BeforeValidator(_parse_residual),
+        WithJsonSchema(
+            {
+                "anyOf": [
+                    {"type": "integer", "minimum": 0},
+                    {
+                        "type": "object",
+                        "properties": {"fraction": {"type": "number", "minimum": 0, "maximum": 1}},
+                        "required": ["fraction"],
+                        "additionalProperties": False,
+                    },
+                ]
+            }
+        ),
+    ] = Field(
+        0,
+        description="Rocks allowed to reach the protected zone: a count, or {fraction: F}.",
+    )
+    fresh_rocks: Annotated[Integer, Field(ge=1, le=MAX_ROCKS)] | None = Field(
+        None,
+        description="Rocks of the independent re-check of a family's chosen design; at least "
+        "(and by default) twice the rocks that decided it.",
+    )
+    max_rocks: Annotated[Integer, Field(ge=1, le=2_000_000)] = Field(
+        50_000,
+        description="Most rocks a design near a limit is decided with: while it holds on the "
+        "point values but not with the confidence bounds, its rocks are doubled up to this.",
+    )
+    fresh_seed: Annotated[Integer, Field(ge=0)] | None = Field(
+        None, description="Seed of the re-check; default: the run's seed + 1000003."
+    )
+    site: Site = Field(description="The site: length of slope to protect.")
+    products: Annotated[Any, BeforeValidator(_parse_products)] = Field(
+        None,
+        description="Product catalogue: a YAML file relative to the project file, or inline "
+        f"({_CATALOGUE_FORM}).",
+    )
+    costs: DesignCosts = Field(description="Cost model and its parameters.")
+    candidates: Annotated[list[dict[str, Any]], BeforeValidator(_parse_candidates)] = Field(
+        description="Measures the optimiser may use: mappings with 'type', 'x': [min, max] "
+        "and the measure's parameters (fixed, [min, max] or {options: [...]})."
+    )
+
+    _catalogue: dict | None = PrivateAttr(default=None)
+    _products_locator: "Locator | None" = PrivateAttr(default=None)
+    _cost_params: dict | None = PrivateAttr(default=None)
+    _costs_locator: "Locator | None" = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _check_families(self) -> "Design":
+        # The optimiser searches every multiset of 1..max_measures candidates:
+        # C(n + m, m) - 1 families, each a search of its own.
+        n, m = len(self.candidates), self.max_measures
+        count = math.comb(n + m, m) - 1
+        if count > MAX_FAMILIES:
+            raise _fail(
+                f"{n} candidates with max_measures {m} make {count:,} families of designs to "
+                f"search, at most {MAX_FAMILIES:,} are allowed: lower max_measures or "
+                "merge candidates",
+                ("max_measures",),
+            )
+        return self
+
+    @property
+    def residual_count(self) -> int | None:
+        """Allowed number of rocks in the protected zone, or None if a fraction is given."""
+        return self.residual if isinstance(self.residual, int) else None
+
+    @property
+    def residual_fraction(self) -> float | None:
+        """Allowed fraction of the rocks in the protected zone, or None if a count is given."""
+        return self.residual.fraction if isinstance(self.residual, ResidualFraction) else None
+
+    @property
+    def catalogue(self) -> dict[str, dict[str, dict[str, Any]]]:
+        """The product catalogue: ``{kind: {name: {capacity_kj, heights, ...}}}`` ({} if none)."""
+        if self._catalogue is not None:
+            return self._catalogue
+        if isinstance(self.products, str):
+            raise RuntimeError("the product catalogue file is read by load_project/_text")
+        return self.products or {}
+
+    @property
+    def products_locator(self) -> "Locator":
+        """Where the catalogue's nodes are: key paths start at the catalogue's top level."""
+        if self._products_locator is not None:
+            return self._products_locator
+        return Locator("<string>", {}, ("design", "products"))
+
+    @property
+    def cost_params(self) -> dict[str, Any]:
+        """The cost model's raw parameters (from ``costs.file`` or ``costs.params``)."""
+        if self._cost_params is not None:
+            return self._cost_params
+        if self.costs.params is None:
+            raise RuntimeError("the cost parameter file is read by load_project/_text")
+        return self.costs.params
+
+    @property
+    def costs_locator(self) -> "Locator":
+        """Where the cost parameters' nodes are: key paths start at the parameters' mapping."""
+        if self._costs_locator is not None:
+            return self._costs_locator
+        return Locator("<string>", {}, ("design", "costs", "params"))

@@ -1,0 +1,217 @@
+"""Fields: the strict scalar types every section is made of, and the base model.
+
+Numbers must be finite YAML numbers, booleans true or false, strings
+strings; unknown keys are rejected with "did you mean". The plugin sections
+(``measures:``, ``safety:``) and the plugin parts of the design section are
+kept raw here, as plain data with finite numbers, until their plugins are
+loaded.
+"""
+
+import math
+from collections.abc import Callable
+from typing import Annotated, Any
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic_core import PydanticCustomError
+
+from .messages import _describe, _did_you_mean, _fail, _fmt
+
+# --------------------------------------------------------------------------------------
+# Strict scalars and the base model
+# --------------------------------------------------------------------------------------
+
+
+def _as_number(value: Any, subpath: tuple = ()) -> float:
+    """``value`` as a finite float; bools, strings and None are rejected."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise _fail(f"expected a number, got {_describe(value)}", subpath)
+    try:
+        number = float(value)
+    except OverflowError:
+        raise _fail("number is too large", subpath) from None
+    if not math.isfinite(number):
+        raise _fail(f"must be finite, got {_fmt(number)}", subpath)
+    return number
+
+
+def _as_integer(value: Any) -> int:
+    """``value`` as an int; integral floats (``1000.0``) are accepted, bools are not."""
+    if isinstance(value, float) and not isinstance(value, bool):
+        if not math.isfinite(value):
+            raise _fail(f"must be finite, got {_fmt(value)}")
+        if value.is_integer():
+            return int(value)
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise _fail(f"expected an integer, got {_describe(value)}")
+    return value
+
+
+def _as_string(value: Any) -> str:
+    if not isinstance(value, str):
+        raise _fail(f"expected a string, got {_describe(value)}")
+    return value
+
+
+def _as_bool(value: Any) -> bool:
+    if not isinstance(value, bool):
+        raise _fail(f"expected true or false, got {_describe(value)}")
+    return value
+
+
+def _as_list(value: Any) -> list:
+    if isinstance(value, tuple):
+        return list(value)
+    if not isinstance(value, list):
+        raise _fail(f"expected a list, got {_describe(value)}")
+    return value
+
+
+def _pair(what: str) -> Callable[[Any], tuple[float, float]]:
+    """Validator for a ``[a, b]`` pair of finite numbers, ``what`` naming it in messages."""
+
+    def check(value: Any) -> tuple[float, float]:
+        if not isinstance(value, list | tuple) or len(value) != 2:
+            raise _fail(f"expected a pair {what}, got {_describe(value)}")
+        return (_as_number(value[0], (0,)), _as_number(value[1], (1,)))
+
+    return check
+
+
+def _choice(*options: str) -> Callable[[Any], str]:
+    def check(value: Any) -> str:
+        if value not in options or not isinstance(value, str):
+            hint = _did_you_mean(value, options) if isinstance(value, str) else ""
+            raise _fail(f"expected one of {', '.join(options)}, got {_describe(value)}{hint}")
+        return value
+
+    return check
+
+
+def _none_as_empty(value: Any) -> Any:
+    """An empty section (``analysis:`` with nothing under it) means "all defaults"."""
+    return {} if value is None else value
+
+
+Number = Annotated[float, BeforeValidator(_as_number)]
+Integer = Annotated[int, BeforeValidator(_as_integer)]
+String = Annotated[str, BeforeValidator(_as_string)]
+Boolean = Annotated[bool, BeforeValidator(_as_bool)]
+Fraction = Annotated[Number, Field(ge=0.0, le=1.0)]
+NonNegative = Annotated[Number, Field(ge=0.0)]
+Positive = Annotated[Number, Field(gt=0.0)]
+
+
+class _Model(BaseModel):
+    """Base of every section: unknown keys are rejected with "did you mean"."""
+
+    model_config = ConfigDict(extra="forbid", validate_default=False)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _check_mapping_and_keys(cls, data: Any) -> Any:
+        if isinstance(data, cls):
+            return data
+        if not isinstance(data, dict):
+            raise _fail(f"expected a mapping of key: value, got {_describe(data)}")
+        fields = list(cls.model_fields)
+        for key in data:
+            if key not in cls.model_fields:
+                if isinstance(key, str):
+                    hint = _did_you_mean(key, fields) or f"; expected one of {', '.join(fields)}"
+                else:
+                    hint = f"; keys must be names, expected one of {', '.join(fields)}"
+                raise _fail(f"unknown key {key!r}{hint}", (key,))
+        return data
+
+
+# --------------------------------------------------------------------------------------
+# Plugin sections: measures and safety, kept raw until the plugins are loaded
+# --------------------------------------------------------------------------------------
+
+
+def _raw(value: Any, subpath: tuple = (), *, number_keys: bool = False) -> Any:
+    """Plain YAML data for a plugin, checked and copied.
+
+    Accepts null, booleans, strings, integers, finite floats, lists and
+    mappings with string keys (recursively); NaN and infinities, non-string
+    keys and other YAML types (``!!binary``, ``!!set``) are rejected at the
+    offending node. With ``number_keys``, finite numbers are accepted as keys
+    too (a price table by height, ``{2: 350, 3: 420}``).
+    """
+    if value is None or isinstance(value, bool | str | int):
+        return value
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise _fail(f"must be finite, got {_fmt(value)}", subpath)
+        return value
+    if isinstance(value, list | tuple):
+        return [_raw(item, subpath + (i,), number_keys=number_keys) for i, item in enumerate(value)]
+    if isinstance(value, dict):
+        copied = {}
+        for key, item in value.items():
+            number = isinstance(key, int | float) and not isinstance(key, bool)
+            if number and number_keys:
+                if not math.isfinite(key):
+                    raise _fail(f"keys must be finite, got {_fmt(key)}", subpath + (key,))
+            elif not isinstance(key, str):
+                raise _fail(f"keys must be names, got {_describe(key)}", subpath + (key,))
+            copied[key] = _raw(item, subpath + (key,), number_keys=number_keys)
+        return copied
+    raise _fail(f"unsupported value: {_describe(value)}", subpath)
+
+
+
+def _check_typed_item(item: Any, i: int, expected: str) -> None:
+    """An entry of ``measures:`` or ``design.candidates``: a mapping with a string ``type``."""
+    if not isinstance(item, dict):
+        raise _fail(f"expected {expected}, got {_describe(item)}", (i,))
+    if "type" not in item:
+        raise _fail("required key 'type' is missing (the kind of measure, e.g. fence)", (i,))
+    kind = item["type"]
+    if not isinstance(kind, str):
+        raise _fail(f"expected the name of a measure type, got {_describe(kind)}", (i, "type"))
+    if not kind.strip():
+        raise _fail("must not be empty (the kind of measure, e.g. fence)", (i, "type"))
+
+def _parse_measures(value: Any) -> list[dict[str, Any]]:
+    """``measures:``: a list of mappings, each with a non-empty string ``type``."""
+    if value is None:
+        return []
+    if not isinstance(value, list | tuple):
+        raise _fail(f"expected a list of measures (mappings with a type), got {_describe(value)}")
+    measures = []
+    for i, item in enumerate(value):
+        _check_typed_item(item, i, "a measure (a mapping such as {type: fence, x: 70, ...})")
+        measures.append(_raw(item, (i,)))
+    return measures
+
+
+_DEFAULT_CONCEPT = "spang"
+
+
+def _parse_safety(value: Any) -> dict[str, Any]:
+    """``safety:``: a mapping with a string ``concept`` (default spang), listed first."""
+    if value is None:
+        return {"concept": _DEFAULT_CONCEPT}
+    if not isinstance(value, dict):
+        raise _fail(
+            f"expected a mapping (concept: NAME and its parameters), got {_describe(value)}"
+        )
+    concept = value.get("concept", _DEFAULT_CONCEPT)
+    if not isinstance(concept, str):
+        raise _fail(
+            f"expected the name of a safety concept, got {_describe(concept)}", ("concept",)
+        )
+    if not concept.strip():
+        raise _fail("must not be empty (the name of a safety concept, e.g. spang)", ("concept",))
+    rest = _raw({k: v for k, v in value.items() if k != "concept"})
+    return {"concept": concept, **rest}
+
+
+def _plain_copy(value: Any, what: str) -> Any:
+    """:func:`_raw` for data a program passes in: problems are a ValueError (a bug)."""
+    try:
+        return _raw(value)
+    except PydanticCustomError as exc:
+        where = "".join(f"[{p!r}]" for p in (exc.context or {}).get("subpath", ()))
+        raise ValueError(f"{what}{where}: {exc.message()}") from None
