@@ -61,7 +61,12 @@ Rules for every registered class
 * ``summary``: one line shown by ``rockfall-design plugins``.
 * ``Params``: a pydantic model, subclass of :class:`MeasureParams`,
   :class:`SafetyParams` or :class:`CostParams`; put units in field names
-  (``height_m``, ``capacity_kj``) or descriptions.
+  (``height_m``, ``capacity_kj``) and in each field's metadata,
+  ``Field(2.0, gt=0, json_schema_extra={"unit": "m"})`` (``{"unit": None}``
+  for a name or a flag). Without that metadata the unit is read from the
+  trailing parentheses of the description (``"height of the net (m)"``).
+  ``rockfall-design plugins --json`` lists every field with its type, unit,
+  default, bounds and options.
 * ``example``: a complete, valid parameter set (``Params(**example)`` must
   succeed); for a measure without ``type``, for a safety concept without
   ``concept``.

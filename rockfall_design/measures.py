@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, Field
 
 if TYPE_CHECKING:  # pragma: no cover
     from .engine import Section
@@ -52,7 +52,7 @@ class MeasureParams(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
-    x: float
+    x: float = Field(json_schema_extra={"unit": "m"})
     """Station of the measure (m): its x, or the upslope edge of an edited stretch."""
 
 

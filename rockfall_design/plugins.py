@@ -46,6 +46,7 @@ from .safety import Check, SafetyConcept
 
 __all__ = [
     "PluginFailure",
+    "PluginOrigin",
     "Registry",
     "UnknownNameError",
     "call_plugin",
@@ -80,6 +81,27 @@ class PluginFailure:
     plugin: str
     distribution: str | None
     reason: str
+
+
+@dataclass(frozen=True)
+class PluginOrigin:
+    """Where a registered measure, safety concept or cost model comes from.
+
+    Attributes
+    ----------
+    plugin : str
+        The plugin's name (its entry-point name, or the name given to
+        ``load_registry(extra_plugins=...)``).
+    distribution : str or None
+        The distribution that ships it; None for a plugin registered without
+        one (``extra_plugins``).
+    version : str or None
+        That distribution's version; None if unknown.
+    """
+
+    plugin: str
+    distribution: str | None
+    version: str | None
 
 
 class UnknownNameError(KeyError):
@@ -130,6 +152,8 @@ class Registry:
         Plugins, hooks and classes that were left out, and why.
     blocked : list of str
         The names blocked by the caller (entry-point or distribution names).
+    origins : dict of (str, str) to PluginOrigin
+        Same keys as ``provider``: the plugin, distribution and version.
     """
 
     measures: dict[str, type[ProtectiveMeasure]] = field(default_factory=dict)
@@ -138,6 +162,7 @@ class Registry:
     provider: dict[tuple[str, str], str] = field(default_factory=dict)
     failures: list[PluginFailure] = field(default_factory=list)
     blocked: list[str] = field(default_factory=list)
+    origins: dict[tuple[str, str], PluginOrigin] = field(default_factory=dict)
 
     def measure(self, kind: str) -> type[ProtectiveMeasure]:
         """The measure class of ``kind``; :class:`UnknownNameError` (a KeyError) if none."""
@@ -234,6 +259,16 @@ def is_real_interrupt(exc: BaseException) -> bool:
     return isinstance(exc, Interrupted)
 
 
+def _dist_version(ep: EntryPoint) -> str | None:
+    dist = getattr(ep, "dist", None)
+    if dist is None:
+        return None
+    try:
+        return dist.version or None
+    except Exception:  # pragma: no cover - broken metadata
+        return None
+
+
 def _dist_name(ep: EntryPoint) -> str | None:
     dist = getattr(ep, "dist", None)
     if dist is None:
@@ -248,6 +283,7 @@ def _dist_name(ep: EntryPoint) -> str | None:
 class _Plugin:
     name: str
     distribution: str | None
+    version: str | None = None
 
     @property
     def provider(self) -> str:
@@ -369,7 +405,8 @@ def load_registry(
     def fail(plugin: str, dist: str | None, reason: str) -> None:
         failures.append(PluginFailure(plugin, dist, _one_line(reason)))
 
-    def register(name: str, dist: str | None, obtain: Callable[[], object]) -> None:
+    def register(name: str, dist: str | None, obtain: Callable[[], object],
+                 version: str | None = None) -> None:
         if _normalise(name) in blocked_norm or (dist and _normalise(dist) in blocked_norm):
             pm.set_blocked(name)
             return
@@ -424,10 +461,10 @@ def load_registry(
                 fail(name, dist, "implements no rockfall_design hook "
                      f"({', '.join(_hook_names())})")
             return
-        plugins[name] = _Plugin(name, dist)
+        plugins[name] = _Plugin(name, dist, version)
 
     for ep in _entry_points(entry_points):
-        register(ep.name, _dist_name(ep), ep.load)
+        register(ep.name, _dist_name(ep), ep.load, _dist_version(ep))
     for name, obj in extra_plugins:
         register(str(name), None, lambda obj=obj: obj)
 
@@ -489,11 +526,14 @@ def load_registry(
 
     tables: dict[str, dict[str, type]] = {}
     provider: dict[tuple[str, str], str] = {}
+    origins: dict[tuple[str, str], PluginOrigin] = {}
     for section, _what, _hook, _base, _attr, key in _SECTIONS:
         tables[section] = {}
         for name, [(plugin, cls)] in sorted(found[section].items()):
             tables[section][name] = cls
             provider[(key, name)] = plugin.provider
+            origins[(key, name)] = PluginOrigin(plugin.name, plugin.distribution,
+                                                plugin.version)
 
     return Registry(
         measures=tables["measures"],
@@ -502,6 +542,7 @@ def load_registry(
         provider=provider,
         failures=sorted(failures, key=lambda f: (f.plugin, f.distribution or "", f.reason)),
         blocked=blocked_names,
+        origins=origins,
     )
 
 
@@ -802,7 +843,7 @@ def footprint_problem(fp: Barrier | ProfileEdit, measure: Any, section: Any) -> 
 # rendering
 
 
-def _parameters(cls: type) -> list[str]:
+def _parameter_names(cls: type) -> list[str]:
     params = cls.Params  # type: ignore[attr-defined]
     try:
         return list(params.model_json_schema().get("properties", {}))
@@ -810,19 +851,61 @@ def _parameters(cls: type) -> list[str]:
         return list(params.model_fields)
 
 
+def _parameter_list(cls: type) -> list[dict[str, Any]]:
+    """The described parameters of a class; an empty list if its model cannot be read."""
+    from .parameters import describe_parameters
+
+    try:
+        return describe_parameters(cls.Params)  # type: ignore[attr-defined]
+    except Exception:  # pragma: no cover - a model pydantic itself cannot describe
+        log.debug("cannot describe the parameters of %r", cls, exc_info=True)
+        return []
+
+
+def _design_variables(cls: type) -> list[dict[str, Any]]:
+    """A measure's design variables as ``{name, low, high}``; NaN (the project's) as None."""
+    out = []
+    for name, bounds in (getattr(cls, "design_variables", None) or {}).items():
+        low, high = (float(b) for b in bounds)
+        out.append({"name": name,
+                    "low": None if math.isnan(low) else low,
+                    "high": None if math.isnan(high) else high})
+    return out
+
+
 def plugins_json(registry: Registry) -> dict[str, Any]:
-    """The registry as plain JSON-able data (``rockfall-design plugins --json``)."""
+    """The registry as plain JSON-able data (``rockfall-design plugins --json``).
+
+    Each measure, safety concept and cost model has its name (``kind`` or
+    ``name``), ``summary``, ``provider`` (the distribution, else the plugin
+    name), ``plugin``, ``distribution`` and ``version`` (None without a
+    distribution), ``parameter_names`` (the field names), and
+    ``parameters``: one object per field of its ``Params`` with ``name``,
+    ``type``, ``unit``, ``default``, ``required``, ``minimum``,
+    ``maximum``, ``exclusive_minimum``, ``exclusive_maximum``, ``options``
+    and ``description`` (see :func:`rockfall_design.parameters.describe_parameters`).
+    A measure also has ``design_variables``: ``{name, low, high}`` with None
+    for a bound the project supplies.
+    """
     out: dict[str, Any] = {}
     for section, _what, _hook, _base, name_attr, key in _SECTIONS:
-        out[section] = [
-            {
+        entries = []
+        for name, cls in getattr(registry, section).items():
+            origin = registry.origins.get((key, name))
+            entry: dict[str, Any] = {
                 name_attr: name,
                 "summary": str(getattr(cls, "summary", "") or ""),
                 "provider": registry.provider.get((key, name), ""),
-                "parameters": _parameters(cls),
+                "plugin": origin.plugin if origin else None,
+                "distribution": origin.distribution if origin else None,
+                "version": origin.version if origin else None,
+                "parameters": _parameter_list(cls),
+                "parameter_names": _parameter_names(cls),
             }
-            for name, cls in getattr(registry, section).items()
-        ]
+            if section == "measures":
+                entry["design_variables"] = _design_variables(cls)
+            entries.append(entry)
+        out[section] = entries
     out["blocked"] = list(registry.blocked)
     out["failures"] = [
         {"plugin": f.plugin, "distribution": f.distribution, "reason": f.reason}
@@ -844,13 +927,17 @@ def plugins_table(registry: Registry):
         table = Table(title=titles[section], title_justify="left", expand=False)
         table.add_column(name_attr, style="bold")
         table.add_column("summary")
+        table.add_column("parameters (unit)")
         table.add_column("provider", style="dim")
         entries = getattr(registry, section)
         for name, cls in entries.items():
-            table.add_row(name, str(getattr(cls, "summary", "") or ""),
+            shown = ", ".join(
+                p["name"] + (f" ({p['unit']})" if p["unit"] not in (None, "") else "")
+                for p in _parameter_list(cls))
+            table.add_row(name, str(getattr(cls, "summary", "") or ""), shown,
                           registry.provider.get((key, name), ""))
         if not entries:
-            table.add_row(Text("(none)", style="dim"), "", "")
+            table.add_row(Text("(none)", style="dim"), "", "", "")
         parts.append(table)
     if not any(getattr(registry, section[0]) for section in _SECTIONS):
         parts.append(Text(

@@ -42,7 +42,7 @@ class SafetyParams(BaseModel):
         ge=0.5,
         le=0.9999,
         description="One-sided confidence of the upper bounds of the design values and of "
-        "the residual (-), e.g. 0.95.",
+        "the residual (-), e.g. 0.95.", json_schema_extra={"unit": "-"},
     )
 
 

@@ -450,8 +450,12 @@ def test_plugins_json_and_table():
     ])
     data = plugins_json(reg)
     json.dumps(data)
-    assert data["measures"] == [{"kind": "fence", "summary": "fence for tests",
-                                 "provider": "p", "parameters": ["x", "height_m"]}]
+    [fence] = data["measures"]
+    assert {k: fence[k] for k in ("kind", "summary", "provider", "parameter_names")} == {
+        "kind": "fence", "summary": "fence for tests", "provider": "p",
+        "parameter_names": ["x", "height_m"]}
+    assert [p["name"] for p in fence["parameters"]] == ["x", "height_m"]
+    assert fence["distribution"] is None and fence["version"] is None
     assert data["safety_concepts"] == [] and data["cost_models"] == []
     assert data["blocked"] == ["gone"]
     assert data["failures"][0]["plugin"] == "raising"
@@ -470,7 +474,9 @@ def test_cli_plugins_json_shows_third_party_and_failure(third_party, capsys):
     data = json.loads(capsys.readouterr().out)
     net = next(m for m in data["measures"] if m["kind"] == "test_net")
     assert net["provider"] == "thirdparty-rockfall"
-    assert net["parameters"] == ["x", "height_m", "capacity_kj"]
+    assert net["parameter_names"] == ["x", "height_m", "capacity_kj"]
+    assert [p["name"] for p in net["parameters"]] == ["x", "height_m", "capacity_kj"]
+    assert net["distribution"] == "thirdparty-rockfall" and net["version"] == "1.0"
     broken = next(f for f in data["failures"] if f["plugin"] == "broken")
     assert broken["distribution"] == "broken-rockfall" and "boom" in broken["reason"]
 

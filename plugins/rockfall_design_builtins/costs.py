@@ -27,26 +27,35 @@ class UnitPricesParams(CostParams):
 
     model_config = ConfigDict(allow_inf_nan=False)
 
-    currency: str = Field(default="EUR", description="Currency of every price (e.g. EUR).")
+    currency: str = Field(
+        default="EUR", description="Currency of every price (e.g. EUR).",
+        json_schema_extra={"unit": None},
+    )
     fixed_per_measure: _Price = Field(
-        description="Fixed cost of each measure (currency): mobilisation, design, access."
+        description="Fixed cost of each measure (currency): mobilisation, design, access.",
+        json_schema_extra={"unit": "currency"},
     )
     barrier_per_m: dict[str, dict[str, dict[_Height, _Price]]] = Field(
         default_factory=dict,
         description="Barriers (fence, wall): measure type -> product name -> height (m) -> "
-        "price per running metre (currency/m).",
+        "price per running metre (currency/m).", json_schema_extra={"unit": "currency/m"},
     )
-    excavation_per_m3: _Price = Field(description="Excavation of ditches and berms (currency/m^3).")
+    excavation_per_m3: _Price = Field(
+        description="Excavation of ditches and berms (currency/m^3).",
+        json_schema_extra={"unit": "currency/m^3"},
+    )
     fill_per_m3: _Price = Field(
-        default=0.0, description="Fill placed by ditches and berms (currency/m^3)."
+        default=0.0, description="Fill placed by ditches and berms (currency/m^3).",
+        json_schema_extra={"unit": "currency/m^3"},
     )
     boulder_per_m3: _Price = Field(
-        description="Blocks of a boulder row, supplied and placed (currency/m^3 of block)."
+        description="Blocks of a boulder row, supplied and placed (currency/m^3 of block).",
+        json_schema_extra={"unit": "currency/m^3"},
     )
     other_per_m: dict[str, _Price] = Field(
         default_factory=dict,
         description="Other measure types (e.g. a third party's): measure type -> price per "
-        "running metre (currency/m).",
+        "running metre (currency/m).", json_schema_extra={"unit": "currency/m"},
     )
 
 

@@ -185,13 +185,18 @@ def _edit_volumes(section: SectionLike, edit: ProfileEdit) -> tuple[float, float
 class FenceParams(_Params):
     """Parameters of a flexible rockfall fence."""
 
-    x: float = Field(description="Station of the fence (m).")
-    height: float = Field(gt=0, description="Nominal height of the fence (m).")
+    x: float = Field(description="Station of the fence (m).", json_schema_extra={"unit": "m"})
+    height: float = Field(
+        gt=0, description="Nominal height of the fence (m).",
+        json_schema_extra={"unit": "m"},
+    )
     capacity_kj: float = Field(
-        gt=0, description="Energy capacity of the product (kJ): its MEL energy class."
+        gt=0, description="Energy capacity of the product (kJ): its MEL energy class.",
+        json_schema_extra={"unit": "kJ"},
     )
     product: str | None = Field(
-        default=None, description="Catalogue name of the product (for reports), optional."
+        default=None, description="Catalogue name of the product (for reports), optional.",
+        json_schema_extra={"unit": None},
     )
 
 
@@ -259,20 +264,29 @@ class Fence(ProtectiveMeasure):
 class WallParams(_Params):
     """Parameters of a rigid protection wall."""
 
-    x: float = Field(description="Station of the wall (m).")
-    height: float = Field(gt=0, description="Height of the wall above the ground (m).")
-    capacity_kj: float = Field(gt=0, description="Energy the wall can take before it fails (kJ).")
+    x: float = Field(description="Station of the wall (m).", json_schema_extra={"unit": "m"})
+    height: float = Field(
+        gt=0, description="Height of the wall above the ground (m).",
+        json_schema_extra={"unit": "m"},
+    )
+    capacity_kj: float = Field(
+        gt=0, description="Energy the wall can take before it fails (kJ).",
+        json_schema_extra={"unit": "kJ"},
+    )
     restitution: float = Field(
         default=0.2,
         ge=0,
         le=1,
         description="Coefficient of restitution of the rebound, horizontal (-), 0..1.",
+        json_schema_extra={"unit": "-"},
     )
     thickness: float = Field(
-        default=1.0, gt=0, description="Mean thickness of the wall (m), for costing."
+        default=1.0, gt=0, description="Mean thickness of the wall (m), for costing.",
+        json_schema_extra={"unit": "m"},
     )
     product: str | None = Field(
-        default=None, description="Catalogue name of the wall type (for costing), if any."
+        default=None, description="Catalogue name of the wall type (for costing), if any.",
+        json_schema_extra={"unit": None},
     )
 
 
@@ -356,20 +370,24 @@ class Wall(ProtectiveMeasure):
 class BoulderRowParams(_Params):
     """Parameters of a row of cubic blocks with gaps."""
 
-    x: float = Field(description="Station of the row (m).")
+    x: float = Field(description="Station of the row (m).", json_schema_extra={"unit": "m"})
     block_size: float = Field(
-        gt=0, description="Edge of the cubic blocks (m); also the row's height."
+        gt=0, description="Edge of the cubic blocks (m); also the row's height.",
+        json_schema_extra={"unit": "m"},
     )
     gap_ratio: float = Field(
         ge=0,
         lt=1,
         description="Open fraction of the row's length (-), 0 <= g < 1: gap = g * spacing.",
+        json_schema_extra={"unit": "-"},
     )
     capacity_kj: float = Field(
-        gt=0, description="Energy a block can take before it is displaced (kJ)."
+        gt=0, description="Energy a block can take before it is displaced (kJ).",
+        json_schema_extra={"unit": "kJ"},
     )
     density: float = Field(
-        default=2650.0, gt=0, description="Density of the blocks (kg/m^3), for costing."
+        default=2650.0, gt=0, description="Density of the blocks (kg/m^3), for costing.",
+        json_schema_extra={"unit": "kg/m^3"},
     )
 
 
@@ -483,18 +501,30 @@ _MATERIAL_DESCRIPTION = (
 class DitchParams(_Params):
     """Parameters of a trapezoidal catch ditch."""
 
-    x: float = Field(description="Station of the ditch's upslope edge (m).")
-    width: float = Field(gt=0, description="Top width of the ditch along x (m).")
+    x: float = Field(
+        description="Station of the ditch's upslope edge (m).",
+        json_schema_extra={"unit": "m"},
+    )
+    width: float = Field(
+        gt=0, description="Top width of the ditch along x (m).",
+        json_schema_extra={"unit": "m"},
+    )
     depth: float = Field(
-        gt=0, description="Depth of the bottom below the lower of the two edges (m)."
+        gt=0, description="Depth of the bottom below the lower of the two edges (m).",
+        json_schema_extra={"unit": "m"},
     )
     upslope_side_deg: float = Field(
-        default=45.0, ge=10, le=80, description="Slope of the upslope side (degrees), 10..80."
+        default=45.0, ge=10, le=80, description="Slope of the upslope side (degrees), 10..80.",
+        json_schema_extra={"unit": "deg"},
     )
     downslope_side_deg: float = Field(
-        default=45.0, ge=10, le=80, description="Slope of the downslope side (degrees), 10..80."
+        default=45.0, ge=10, le=80, description="Slope of the downslope side (degrees), 10..80.",
+        json_schema_extra={"unit": "deg"},
     )
-    material: str | None = Field(default=None, description=_MATERIAL_DESCRIPTION)
+    material: str | None = Field(
+        default=None, description=_MATERIAL_DESCRIPTION,
+        json_schema_extra={"unit": None},
+    )
 
 
 class Ditch(ProtectiveMeasure):
@@ -607,16 +637,24 @@ class BermParams(_Params):
     """Parameters of a bench cut into the slope."""
 
     x: float = Field(
-        description="Station of the bench's upslope edge, the foot of the cut face (m)."
+        description="Station of the bench's upslope edge, the foot of the cut face (m).",
+        json_schema_extra={"unit": "m"},
     )
-    width: float = Field(gt=0, description="Width of the bench along x (m).")
+    width: float = Field(
+        gt=0, description="Width of the bench along x (m).",
+        json_schema_extra={"unit": "m"},
+    )
     cut_face_deg: float = Field(
         default=60.0,
         ge=30,
         le=85,
         description="Slope of the cut face above the bench (degrees), 30..85.",
+        json_schema_extra={"unit": "deg"},
     )
-    material: str | None = Field(default=None, description=_MATERIAL_DESCRIPTION)
+    material: str | None = Field(
+        default=None, description=_MATERIAL_DESCRIPTION,
+        json_schema_extra={"unit": None},
+    )
 
 
 class Berm(ProtectiveMeasure):

@@ -258,22 +258,23 @@ class SpangConcept(SafetyConcept):
             2.0,
             gt=0.0,
             description="Target of chosen height / critical height (-); the paper: 2 to 3 "
-            "in normal cases.",
+            "in normal cases.", json_schema_extra={"unit": "-"},
         )
         energy_factor: float = Field(
-            1.0, gt=0.0, description="Target of energy capacity / design energy (-)."
+            1.0, gt=0.0, description="Target of energy capacity / design energy (-).",
+            json_schema_extra={"unit": "-"},
         )
         reach_factor: float = Field(
             1.0,
             gt=0.0,
             description="Target of berm or ditch width / reach of the rocks (the statistic "
-            "of the concept) (-).",
+            "of the concept) (-).", json_schema_extra={"unit": "-"},
         )
         statistic: Literal["max", "p95", "p99"] = Field(
             "max",
             description="Statistic of the passing heights and energies of the rocks that "
             "met the measure giving the critical height and the design energy: the "
-            "maximum or the 95th/99th percentile.",
+            "maximum or the 95th/99th percentile.", json_schema_extra={"unit": None},
         )
 
     example: ClassVar[dict[str, Any]] = {
@@ -414,46 +415,49 @@ class Uni11211Concept(SafetyConcept):
             ge=1.0,
             description="Partial factor on the trajectory simulation (-): 1.02 for "
             "simulations calibrated by back-analysis, 1.10 otherwise.",
+            json_schema_extra={"unit": "-"},
         )
         gamma_dp: float = Field(
             1.02,
             ge=1.0,
             description="Partial factor on the quality of the slope survey (-): 1.02 for a "
-            "high-quality survey, 1.10 for a low-quality one.",
+            "high-quality survey, 1.10 for a low-quality one.", json_schema_extra={"unit": "-"},
         )
         gamma_volf: float = Field(
             1.02,
             ge=1.0,
             description="Partial factor on the precision of the block-volume survey (-): "
-            "1.02 for a precise survey, 1.10 otherwise.",
+            "1.02 for a precise survey, 1.10 otherwise.", json_schema_extra={"unit": "-"},
         )
         gamma_gamma: float = Field(
-            1.0, ge=1.0, description="Partial factor on the unit weight of the rock (-)."
+            1.0, ge=1.0, description="Partial factor on the unit weight of the rock (-).",
+            json_schema_extra={"unit": "-"},
         )
         gamma_e: float = Field(
             1.2,
             ge=1.0,
             description="Partial factor on the energy capacity of the product (-), applied "
-            "to the capacity (MEL-based).",
+            "to the capacity (MEL-based).", json_schema_extra={"unit": "-"},
         )
         f_min_m: float = Field(
             0.5,
             ge=0.0,
             description="Minimum freeboard between the design passing height and the top "
             "(m); the freeboard is also at least half the design block.",
+            json_schema_extra={"unit": "m"},
         )
         percentile: float = Field(
             95.0,
             gt=0.0,
             le=100.0,
             description="Percentile (%) of speeds, passing heights, masses and radii of the "
-            "rocks that met the measure taken as design values.",
+            "rocks that met the measure taken as design values.", json_schema_extra={"unit": "%"},
         )
         reach_factor: float = Field(
             1.0,
             gt=0.0,
             description="Target of berm or ditch width / reach of the rocks (the statistic "
-            "of the concept) (-).",
+            "of the concept) (-).", json_schema_extra={"unit": "-"},
         )
 
     example: ClassVar[dict[str, Any]] = {
