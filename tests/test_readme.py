@@ -44,6 +44,21 @@ def test_readme_plugin_example_installs_and_checks(tmp_path, monkeypatch, capsys
     assert m["caught"] + m["passed_over"] + m["broken_through"] == m["met"]
 
 
+def test_readme_plugin_test_example_passes(tmp_path, monkeypatch):
+    """The README's "Testing a plugin" example, run against the README's catch net."""
+    import rockfall_design.api as api
+    from rockfall_design.testing import tiny_slope
+
+    source = _block_after("`rockfall_catchnet/__init__.py`", "python")
+    write_distribution(tmp_path, "rockfall_catchnet", source, "catchnet",
+                       dist_name="rockfall-catchnet")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(api, "_REGISTRIES", {})  # the installed plugins, with the net
+    namespace: dict = {}
+    exec(_block_after("### Testing a plugin", "python"), namespace)
+    namespace["test_catch_net_holds_slow_rocks_only"](tiny_slope)
+
+
 def _quick_start_blocks() -> list[str]:
     """The bash blocks of the "Quick start" section, as .ci/run reads them."""
     section = README[README.index("## Quick start"):]
