@@ -16,36 +16,19 @@ The public API is what this module exports:
 >>> r.best, r.alternatives, r.plot()                        # doctest: +SKIP
 """
 
+import sys
+import types
+from importlib import import_module
 from importlib.metadata import PackageNotFoundError, version
+from typing import TYPE_CHECKING, Any
 
 try:
     __version__ = version("rockfall-design")
 except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0+unknown"
 
-# The submodule rockfall_design.optimise shares its name with the function
-# optimise below. Importing a submodule for the first time sets the package's
-# attribute of that name to the module, so it is imported here first: the
-# function then takes the name for good, and later imports of the submodule
-# (``from rockfall_design.optimise import ...``) find it in sys.modules.
-from . import optimise as _optimise_module  # noqa: F401  isort: skip
-from .api import (
-    CheckResult,
-    OptimiseResult,
-    SimulationResult,
-    check,
-    load_project,
-    optimise,
-    simulate,
-)
 from .costs import CostModel, CostParams
 from .hookspecs import hookimpl
-from .judge.bounds import (
-    fraction_upper_bound,
-    quantile_upper_bound,
-    rocks_to_bound_quantile,
-    rocks_to_show_fraction,
-)
 from .measures import (
     Barrier,
     BarrierBehaviour,
@@ -56,6 +39,67 @@ from .measures import (
     ProtectiveMeasure,
 )
 from .safety import Check, SafetyConcept, SafetyParams
+
+# The engineer's functions and the statistics helpers are imported on first
+# use (PEP 562), so that importing the package, or a module of it such as
+# rockfall_design.testing (which pytest loads in every run through its
+# pytest11 entry point), does not import the engine, numba, scipy and pandas.
+_LAZY: dict[str, str] = {
+    **dict.fromkeys(("CheckResult", "OptimiseResult", "SimulationResult", "check",
+                     "load_project", "optimise", "simulate"), ".api"),
+    **dict.fromkeys(("fraction_upper_bound", "quantile_upper_bound",
+                     "rocks_to_bound_quantile", "rocks_to_show_fraction"), ".judge.bounds"),
+}
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .api import (
+        CheckResult,
+        OptimiseResult,
+        SimulationResult,
+        check,
+        load_project,
+        optimise,
+        simulate,
+    )
+    from .judge.bounds import (
+        fraction_upper_bound,
+        quantile_upper_bound,
+        rocks_to_bound_quantile,
+        rocks_to_show_fraction,
+    )
+
+
+def __getattr__(name: str) -> Any:
+    where = _LAZY.get(name)
+    if where is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(where, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
+class _Package(types.ModuleType):
+    """The package module: the name ``optimise`` belongs to the function.
+
+    The submodule ``rockfall_design.optimise`` shares its name with the
+    function :func:`optimise`. Importing a submodule sets the package's
+    attribute of that name to the module; that one assignment is declined
+    here, so ``rockfall_design.optimise`` is always the function, and the
+    submodule is found in ``sys.modules`` (``from rockfall_design.optimise
+    import ...``).
+    """
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name == "optimise" and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
 
 __all__ = [
     "__version__",

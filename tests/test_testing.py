@@ -123,3 +123,17 @@ def test_broken_plugin_is_an_assertion_with_its_reason():
     broken = types.SimpleNamespace(rockfall_design_measure=hookimpl(lambda: []))
     with pytest.raises(AssertionError, match="unknown hook rockfall_design_measure"):
         make_registry(broken)
+
+
+def test_import_is_light():
+    """pytest imports the module in every run (pytest11): no engine, numba, pandas, scipy."""
+    import subprocess
+    import sys
+
+    code = ("import sys, rockfall_design.testing\n"
+            "heavy = ('numba', 'pandas', 'scipy', 'rockfall_design.engine', "
+            "'rockfall_design.evaluate', 'rockfall_design.api')\n"
+            "print([m for m in heavy if m in sys.modules])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert out.strip() == "[]"
