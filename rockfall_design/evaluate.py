@@ -10,7 +10,7 @@ the project's safety concept.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -320,16 +320,20 @@ class Evaluation:
         prot = self.protect
         return checks_ok and (prot is None or prot["ok_with_confidence"])
 
+    def _failed_checks(self, holds: Callable[[Check], bool]) -> Iterator[tuple[str, Check, str]]:
+        """(measure label, check, " unit" or "") of every check that ``holds`` rejects."""
+        for p, cs in zip(self.placed, self.checks, strict=True):
+            for c in cs:
+                if not holds(c):
+                    yield p.label, c, "" if c.unit == "-" else f" {c.unit}"
+
     def failures_with_confidence(self) -> list[str]:
         """One line per check (and residual) that fails with the bounds in place."""
         out = []
-        for p, cs in zip(self.placed, self.checks, strict=True):
-            for c in cs:
-                if not c.holds_with_confidence:
-                    unit = "" if c.unit == "-" else f" {c.unit}"
-                    value = "no bound" if c.bound is None else f"{c.bound:.2f}{unit}"
-                    out.append(f"{p.label}: {c.name} with {100 * self.confidence:g} % "
-                               f"confidence {value}, target {c.target:.2f}{unit} ({c.detail})")
+        for label, c, unit in self._failed_checks(lambda c: c.holds_with_confidence):
+            value = "no bound" if c.bound is None else f"{c.bound:.2f}{unit}"
+            out.append(f"{label}: {c.name} with {100 * self.confidence:g} % "
+                       f"confidence {value}, target {c.target:.2f}{unit} ({c.detail})")
         prot = self.protect
         if prot is not None and not prot["ok_with_confidence"]:
             out.append(
@@ -341,15 +345,10 @@ class Evaluation:
     def failures(self) -> list[str]:
         """One line per failed check, for reports."""
         out = []
-        for p, cs in zip(self.placed, self.checks, strict=True):
-            for c in cs:
-                if not c.ok:
-                    unit = "" if c.unit == "-" else f" {c.unit}"
-                    value = "-" if c.value is None else f"{c.value:.2f}{unit}"
-                    out.append(
-                        f"{p.label}: {c.name} {value} does not meet its target "
-                        f"{c.target:.2f}{unit} ({c.detail})"
-                    )
+        for label, c, unit in self._failed_checks(lambda c: c.ok):
+            value = "-" if c.value is None else f"{c.value:.2f}{unit}"
+            out.append(f"{label}: {c.name} {value} does not meet its target "
+                       f"{c.target:.2f}{unit} ({c.detail})")
         prot = self.protect
         if prot is not None and not prot["ok"]:
             unresolved = (
