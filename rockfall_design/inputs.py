@@ -21,7 +21,14 @@ import stat
 
 from .errors import InputError
 
-__all__ = ["DEFAULT_MAX_FILE_MB", "MAX_FILE_ENV", "UnreadableFile", "max_file_bytes", "read_text"]
+__all__ = [
+    "DEFAULT_MAX_FILE_MB",
+    "MAX_FILE_ENV",
+    "UnreadableFile",
+    "max_file_bytes",
+    "read_named_text",
+    "read_text",
+]
 
 #: Environment variable with the largest file (in MB, 10**6 bytes) the program reads.
 MAX_FILE_ENV = "RF_MAX_FILE_MB"
@@ -118,3 +125,30 @@ def read_text(path: str | os.PathLike[str]) -> str:
     finally:
         os.close(fd)
     return b"".join(chunks).decode("utf-8")
+
+
+def read_named_text(path: str | os.PathLike[str], what: str) -> str:
+    """:func:`read_text` of a file a project refers to, a failure said in one line.
+
+    Parameters
+    ----------
+    path : path
+        The file.
+    what : str
+        What it is, for the message ("product catalogue", "survey section").
+
+    Raises
+    ------
+    ValueError
+        "cannot read the WHAT PATH: REASON" (not UTF-8, not a regular file,
+        over the size limit, no such file, ...); the caller places it at the
+        key that names the file.
+    """
+    shown = os.fspath(path)
+    try:
+        return read_text(path)
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"cannot read the {what} {shown}: not UTF-8 text ({exc.reason})") from None
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise ValueError(f"cannot read the {what} {shown}: {reason}") from None

@@ -160,20 +160,15 @@ def _check_file(path: Path, where: _Where, at: tuple, what: str) -> None:
 
 def _read_text(path: Path, where: _Where, at: tuple, what: str) -> str:
     """A referenced text file; a file that cannot be read is the project's error."""
-    from .inputs import read_text
+    from .inputs import read_named_text
 
     _check_file(path, where, at, what)
     try:
         # The one reader of every input file (size limit checked as it reads);
         # a BOM stripped: spreadsheet programs start their CSV exports with one.
-        return read_text(path).removeprefix("\ufeff")
-    except UnicodeDecodeError as exc:
-        raise where.error(
-            at, f"cannot read the {what} {os.fspath(path)}: not UTF-8 text ({exc.reason})"
-        ) from None
-    except OSError as exc:
-        reason = exc.strerror or type(exc).__name__
-        raise where.error(at, f"cannot read the {what} {os.fspath(path)}: {reason}") from None
+        return read_named_text(path, what).removeprefix("\ufeff")
+    except ValueError as exc:
+        raise where.error(at, str(exc)) from None
 
 
 # ---- materials library -------------------------------------------------------------

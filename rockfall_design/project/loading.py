@@ -17,7 +17,7 @@ from pydantic import ValidationError
 from pydantic_core import PydanticCustomError
 
 from ..errors import ProjectError
-from ..inputs import read_text
+from ..inputs import read_named_text, read_text
 from .design import _check_products
 from .fields import _raw
 from .locator import Locator
@@ -398,14 +398,9 @@ def _catalogue_file(
         path = base_dir / path
     shown = os.fspath(path)
     try:
-        text = read_text(path)
-    except UnicodeDecodeError as exc:
-        raise project.error_at(
-            at, f"cannot read the {what} {shown}: not UTF-8 text ({exc.reason})"
-        ) from exc
-    except OSError as exc:
-        reason = exc.strerror or type(exc).__name__
-        raise project.error_at(at, f"cannot read the {what} {shown}: {reason}") from exc
+        text = read_named_text(path, what)
+    except ValueError as exc:
+        raise project.error_at(at, str(exc)) from None
     data, lines = _parse_yaml(text, shown)
     if data is None:
         raise ProjectError(shown, 1, "", f"the {what} is empty")
