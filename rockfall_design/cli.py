@@ -504,8 +504,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
             out: Path = args.out
             if result.best is not None:
                 files.write_text(out / "design.yaml", design_yaml(result.best, args.project,
-                                                                  result.search_rocks,
-                                                                  result.safety))
+                                                                  result.search_rocks))
             else:
                 # A design.yaml of an earlier run must not sit beside a
                 # summary that says there is no design.

@@ -313,8 +313,7 @@ def alternatives_table(result: Any) -> Any:
     return alternatives_frame(result.summary())
 
 
-def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
-                safety: Any = None) -> str:
+def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -> str:
     """The project with the chosen measures, as YAML that ``check`` accepts."""
     from .project import dump_yaml
 
@@ -327,10 +326,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
     data["measures"] = [
         {"type": m.kind, **m.params.model_dump(mode="json")} for m in best.measures
     ]
-    # The safety concept as the project states it (the optimiser's looks use a
-    # stricter confidence each, see optimise()).
-    concept = safety if safety is not None else ev.concept
-    data["safety"] = {"concept": concept.name, **concept.params.model_dump(mode="json")}
+    data["safety"] = {"concept": ev.concept.name, **ev.concept.params.model_dump(mode="json")}
     head = (
         f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
         f"cost {best.cost:,.0f}.\n"

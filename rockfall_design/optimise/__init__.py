@@ -187,7 +187,6 @@ class OptimisationResult:
     confidence: float = 0.95
     exact_evaluations: int = 0
     rocks_simulated: int = 0
-    safety: Any = None  # the project's safety concept, as stated (its confidence)
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -379,8 +378,8 @@ def optimise(
     Each family's designs are screened cheapest first (see
     :func:`_barrier_designs`, :func:`_edit_designs`); those that pass the
     screening, or miss it within its margin, are decided exactly in order of
-    cost (:func:`decide`: admitted only with the confidence bounds, rocks
-    doubled while that is undecided) and the first admitted one is verified
+    cost (:func:`decide`: admitted only with the confidence bounds, with the
+    rocks :func:`plan_rocks` plans) and the first admitted one is verified
     on fresh rocks: an independent seed and at least twice the rocks that
     decided it. A design that fails there is not chosen; the next one in
     order of cost is decided. The best design overall is the cheapest family
@@ -391,11 +390,10 @@ def optimise(
 
     t0 = time.perf_counter()
     spec = resolve_design(project, registry)
-    stated = build_concept(project, registry)
-    confidence = float(getattr(stated.params, "confidence", DEFAULT_CONFIDENCE))
+    concept = build_concept(project, registry)
+    confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
-    concept = stated
     # The design's residual target becomes the protected zone's allowance, so
     # that the exact checks, the fresh rocks and `check` of design.yaml agree.
     allowed = spec.residual_fraction
@@ -464,7 +462,7 @@ def optimise(
         fresh_rocks=best.fresh_rocks if best is not None else 2 * n,
         fresh_seed=fresh_seed, wall_s=time.perf_counter() - t0,
         evaluations=screen.evaluations, edit_runs=screen.edit_runs, currency=currency,
-        search_rocks=n, confidence=confidence, exact_evaluations=exact_total, safety=stated,
+        search_rocks=n, confidence=confidence, exact_evaluations=exact_total,
         rocks_simulated=simulated + screen.edit_rocks,
     )
 

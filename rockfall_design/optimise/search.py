@@ -186,13 +186,12 @@ class _Tally:
     designs: int = 0
     capped_levels: int = 0
     best_fail: ScreenResult | None = None
-    best_fail_measures: list[ProtectiveMeasure] = field(default_factory=list)
     min_residual: int | None = None
     over_limit: float | None = None  # cost of the first design past the cost limit
     why: str = ""  # why the first design that did not fit did not
     searched: bool = False  # ground edits searched by scipy, not enumerated
 
-    def fail(self, sr: ScreenResult, measures: Sequence[ProtectiveMeasure]) -> None:
+    def fail(self, sr: ScreenResult) -> None:
         names = [c.name for cs in sr.checks for c in cs if not c.ok]
         if sr.reason:
             names = ["does not fit"]
@@ -201,7 +200,7 @@ class _Tally:
         if sr.residual > 0 and not names:
             self.reasons["residual"] += 1
         if self.best_fail is None or sr.violation < self.best_fail.violation:
-            self.best_fail, self.best_fail_measures = sr, list(measures)
+            self.best_fail = sr
 
 
 def _through(reach: np.ndarray, passes: Sequence[np.ndarray]) -> np.ndarray:
@@ -267,7 +266,7 @@ def _barrier_designs(
                 # Each geometry its own level: MAX_EXACT_PER_LEVEL counts per geometry.
                 yield _Screened(sr.cost, fixed, sr, (table_id,))
             else:
-                tally.fail(sr, fixed)
+                tally.fail(sr)
         return
     opts = [slots.of(ci) for ci in barrier_cis]
     if any(not o for o in opts):
@@ -370,7 +369,7 @@ def _barrier_designs(
                 if passed >= MAX_EXACT_PER_LEVEL:
                     break  # more than the decisions this combination gets
             else:
-                tally.fail(sr, ms)
+                tally.fail(sr)
         # Within one level of cost, designs that pass come before those within the margin.
         found.sort(key=lambda d: (d.cost, not d.result.feasible, d.result.violation,
                                   d.result.residual))

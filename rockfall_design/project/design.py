@@ -353,8 +353,9 @@ class Design(_Model):
     )
     max_rocks: Annotated[Integer, Field(ge=1, le=2_000_000)] = Field(
         50_000,
-        description="Most rocks a design near a limit is decided with: while it holds on the "
-        "point values but not with the confidence bounds, its rocks are doubled up to this.",
+        description="Most rocks a design near a limit is decided with: the rocks of its one "
+        "exact evaluation are planned from the screening, more the nearer it is to a limit, "
+        "up to this.",
     )
     fresh_seed: Annotated[Integer, Field(ge=0)] | None = Field(
         None, description="Seed of the re-check; default: the run's seed + 1000003."
