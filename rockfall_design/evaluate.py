@@ -16,10 +16,10 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .design import resolve_design
 from .engine import Section, barrier_table, core
 from .judge.bounds import fraction_upper_bound
 from .judge.outcomes import Judgement, RockFates, judge_measures
+from .judge.plan import plan_for
 from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from .plugins import call_plugin
 from .safety import DEFAULT_CONFIDENCE, Check, SafetyConcept
@@ -484,12 +484,7 @@ def validate_project(project: Project, registry: Registry) -> None:
     PluginError
         Exit code 3, if a plugin misbehaves.
     """
-    measures = build_measures(project, registry)
-    build_concept(project, registry)
-    bare = section_from_project(project)
-    edited_section(project, bare, place_measures(project, registry, measures, bare))
-    if project.design is not None:
-        resolve_design(project, registry)
+    plan_for(project, registry)
 
 
 def evaluate(
@@ -515,10 +510,10 @@ def evaluate(
     progress : callable, optional
         Called with the number of rocks done.
     """
-    measures = build_measures(project, registry)
-    concept = build_concept(project, registry)
-    return evaluate_design(project, registry, measures, concept, rocks=rocks, seed=seed,
-                           n_trajectories=n_trajectories, progress=progress)
+    plan = plan_for(project, registry)
+    return _evaluate_placed(project, registry, plan.bare, list(plan.placed), plan.section,
+                            plan.concept, rocks=rocks, seed=seed,
+                            n_trajectories=n_trajectories, progress=progress)
 
 
 def evaluate_design(
@@ -536,6 +531,24 @@ def evaluate_design(
     bare = section_from_project(project)
     placed = place_measures(project, registry, measures, bare)
     section = edited_section(project, bare, placed)
+    return _evaluate_placed(project, registry, bare, placed, section, concept, rocks=rocks,
+                            seed=seed, n_trajectories=n_trajectories, progress=progress)
+
+
+def _evaluate_placed(
+    project: Project,
+    registry: Registry,
+    bare: Section,
+    placed: list[PlacedMeasure],
+    section: Section,
+    concept: SafetyConcept,
+    *,
+    rocks: int | None,
+    seed: int | None,
+    n_trajectories: int,
+    progress: Callable[[int], None] | None,
+) -> Evaluation:
+    """Run the rocks against measures already placed on ``bare`` (``section``: edited)."""
     bars, owners = _barrier_rows(placed)
     study = run_study(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
                       progress=progress, section=section, barriers=bars)

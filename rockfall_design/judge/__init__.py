@@ -5,5 +5,7 @@
 * :mod:`~rockfall_design.judge.outcomes` -- the one place where a rock counts
   as held by a measure, and where the rocks reaching the protected zone are
   counted. ``check`` (the exact run) and the optimiser's screening both judge
-  through it.
+  through it;
+* :mod:`~rockfall_design.judge.plan` -- the project resolved against its
+  plugins (measures placed, safety concept, design section), once per command.
 """

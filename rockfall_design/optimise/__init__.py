@@ -386,11 +386,13 @@ def optimise(
     design that holds.
     """
     from ..design import resolve_design
-    from ..evaluate import build_concept
+    from ..judge.plan import plan_for
 
     t0 = time.perf_counter()
-    spec = resolve_design(project, registry)
-    concept = build_concept(project, registry)
+    plan = plan_for(project, registry)
+    # Without a design section, resolve_design says so at the project's line.
+    spec = plan.design if plan.design is not None else resolve_design(project, registry)
+    concept = plan.concept
     confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)

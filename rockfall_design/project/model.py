@@ -73,6 +73,8 @@ class Project(_Model):
     _lines: dict = PrivateAttr(default_factory=dict)
     #: (measures, safety) as resolved by the plugins, for resolved_dict
     _resolved_plugins: tuple | None = PrivateAttr(default=None)
+    #: the plan resolved against the plugins (rockfall_design.judge.plan.plan_for)
+    _plan: Any = PrivateAttr(default=None)
 
     @property
     def source(self) -> str:

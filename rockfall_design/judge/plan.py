@@ -1,0 +1,106 @@
+"""The plan of a run: a project resolved against its plugins, once per command.
+
+Every command validates the whole project file against the plugins (the
+measures' parameters and footprints, the safety concept, the design
+section) before it runs a rock. What that validation builds is the plan:
+the measures and their footprints on the bare section, the edited section,
+the safety concept and, for a project with a ``design:`` section, the
+resolved design. :func:`plan_for` builds it once and keeps it with the
+project, so the run that follows uses the same objects instead of asking
+the plugins again (a plugin is asked for a measure's footprint once per
+command, and a misbehaving one fails before any rock runs).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..design import DesignSpec
+    from ..engine import Section
+    from ..evaluate import PlacedMeasure
+    from ..measures import ProtectiveMeasure
+    from ..plugins import Registry
+    from ..project import Project
+    from ..safety import SafetyConcept
+
+__all__ = ["Plan", "plan_for"]
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A project resolved against its plugins.
+
+    Attributes
+    ----------
+    project : Project
+    registry : Registry
+        The plugins it was resolved with.
+    measures : tuple of ProtectiveMeasure
+        The project's ``measures:``, in file order.
+    placed : tuple of PlacedMeasure
+        Their footprints on :attr:`bare`, checked for fit and overlap.
+    concept : SafetyConcept
+        The project's safety concept.
+    bare : Section
+        The slope section as the project gives it.
+    section : Section
+        The section with the measures' profile edits applied.
+    design : DesignSpec or None
+        The resolved ``design:`` section; None without one.
+    """
+
+    project: Project
+    registry: Registry
+    measures: tuple[ProtectiveMeasure, ...]
+    placed: tuple[PlacedMeasure, ...]
+    concept: SafetyConcept
+    bare: Section
+    section: Section
+    design: DesignSpec | None
+
+    @property
+    def protect_x(self) -> float | None:
+        """Station of the protected zone (m); None without ``protect:``."""
+        protect = self.project.protect
+        return None if protect is None else float(protect.x)
+
+
+def plan_for(project: Project, registry: Registry) -> Plan:
+    """The plan of ``project`` with ``registry``, built on the first call and then kept.
+
+    The plan is kept on the project object for the registry it was built
+    with (by identity): another registry (e.g. one with a plugin blocked),
+    or a copy of the project with other measures, gets its own plan.
+
+    Raises
+    ------
+    ProjectError
+        Exit code 2, located at the offending key (see
+        :func:`rockfall_design.evaluate.validate_project`).
+    PluginError
+        Exit code 3, if a plugin misbehaves.
+    """
+    cached = project._plan
+    # A copy (model_copy) carries its original's private attributes, so the
+    # plan must be this very project's.
+    if cached is not None and cached.project is project and cached.registry is registry:
+        return cached
+    # Imported here: the judgement sits downstream of the project and the
+    # plugins, and `rockfall_design.judge` stays cheap to import.
+    from ..design import resolve_design
+    from ..evaluate import build_concept, build_measures, edited_section, place_measures
+    from ..simulation import section_from_project
+
+    measures = build_measures(project, registry)
+    concept = build_concept(project, registry)
+    bare = section_from_project(project)
+    placed = place_measures(project, registry, measures, bare)
+    section = edited_section(project, bare, placed)
+    design = resolve_design(project, registry) if project.design is not None else None
+    plan = Plan(project=project, registry=registry, measures=tuple(measures),
+                placed=tuple(placed), concept=concept, bare=bare, section=section,
+                design=design)
+    project._plan = plan
+    return plan
