@@ -14,9 +14,13 @@ because a deliberate change of the physics changes it too.
 from __future__ import annotations
 
 import argparse
+import atexit
 import hashlib
 import json
+import os
+import shutil
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -129,6 +133,12 @@ def record() -> dict[str, str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    # numba's cache knows a function by its own file only: a kernel cached
+    # before a callee in another module changed would run the old callee. A
+    # fresh cache makes every comparison compile what the sources say (~30 s).
+    cache = tempfile.mkdtemp(prefix="rockfall-golden-")
+    atexit.register(shutil.rmtree, cache, True)
+    os.environ["NUMBA_CACHE_DIR"] = cache
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--write", action="store_true", help="store the hashes as the reference")
     args = ap.parse_args(argv)
