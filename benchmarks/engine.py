@@ -1,6 +1,7 @@
 """Engine speed and memory, and PyRockfall 0.1.2 on the same slope, side by side.
 
     python benchmarks/engine.py [--rocks 100000 1000000] [--pyrockfall-python PATH]
+    PYTHONPATH=OTHER_TREE python benchmarks/engine.py --kernel-only   # compare two engines
 
 The reference case is projects/benchmark.yaml (the standard slope with an
 rn_rt talus and roughness, one analysis station). For each number of rocks:
@@ -105,7 +106,20 @@ def main() -> None:
     ap.add_argument("--rocks", type=int, nargs="+", default=[100_000, 1_000_000])
     ap.add_argument("--pyrockfall-python", default=sys.executable)
     ap.add_argument("--pyrockfall-rocks", type=int, default=10_000)
+    ap.add_argument("--kernel-only", action="store_true",
+                    help="only the kernel figures (to compare two versions of the engine "
+                         "in one session, e.g. with PYTHONPATH set to another tree)")
     args = ap.parse_args()
+    if args.kernel_only:
+        import rockfall_design
+
+        print(f"engine from {Path(rockfall_design.__file__).parent}")
+        for n in sorted(args.rocks):
+            for threads in (None, 1):
+                t, events, nthreads = kernel(n, threads)
+                print(f"  kernel, {n:,} rocks, {nthreads} threads: {t:7.2f} s  "
+                      f"{n / t:>10,.0f} rocks/s  {events / t:>12,.0f} events/s")
+        return
 
     # Compile (or load the cache) once, so that no figure below includes it.
     run_child([sys.executable, "-m", "rockfall_design", "simulate", str(PROJECT),

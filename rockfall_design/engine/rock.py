@@ -52,104 +52,40 @@ from .contact import SLIP_TOL, _contact_accel, _start_from_rest
 from .flight import _unit_tangent, locate, next_landing, path_height
 from .impact import _collide, _draw
 from .recording import _record, _record_restart, _traj_row
+from .records import REL_H, REL_M, REL_R, REL_ROLLING, REL_VX, REL_VY, REL_W, REL_X
 
 
 @njit(cache=CACHE)
-def simulate_rock(
-    px,
-    py,
-    pseg,
-    seg_mat,
-    mats,
-    settings,
-    r,
-    m,
-    x0,
-    h0,
-    vx0,
-    vy0,
-    w0,
-    spin_rolling,
-    rng,
-    st_x,
-    st_yg,
-    st_user,
-    grid_h,
-    grid_e,
-    cross,
-    traj,
-    bars,
-    bar_out,
-    bar_rec,
-    grid_v,
-    st_srow,
-    srec,
-    srng,
-    resume,
-    state0,
-):
+def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0):
     """Follow one rock from its release to the end of its path.
 
     Parameters
     ----------
-    px, py : ndarray of float
-        Centre path of this rock's radius (m), see ``profile.centre_path``.
-    pseg : ndarray of int
-        Ground segment under each piece of the centre path.
-    seg_mat : ndarray of int
-        Material index of each ground segment.
-    mats : ndarray of float, shape (n_materials, N_MAT_COLS)
-        Material table (columns ``M_*``).
+    path : Path
+        The ground this rock meets: centre path of its radius, the ground
+        segment under each piece, the material of each segment, the material
+        table (``records.Path``).
     settings : ndarray of float, shape (N_SETTINGS,)
         ``v_contact`` (m/s), ``v_stop`` (m/s), ``max_events``.
-    r, m : float
-        Radius (m) and mass (kg).
-    x0 : float
-        Release x of the centre (m).
-    h0 : float
-        Clearance above the centre path at release (m); 0 = on the ground.
-    vx0, vy0 : float
-        Initial velocity (m/s).
-    w0 : float
-        Initial angular velocity (rad/s), ignored if ``spin_rolling``.
-    spin_rolling : bool
-        Start with the spin of rolling without slip along the ground.
+    rock : ndarray of float, shape (N_REL_COLS,)
+        The rock's row of the release table (columns ``REL_*``): radius (m),
+        mass (kg), release x (m), clearance above the centre path (m),
+        initial velocity (m/s), spin (rad/s), whether it starts rolling.
     rng : ndarray of uint64, shape (1,)
         The rock's random stream.
-    st_x, st_yg : ndarray of float, shape (S,)
-        Stations (m), sorted, and the ground height there (m).
-    st_user : ndarray of int, shape (S,)
-        Row of ``cross`` for each station, or -1 (envelope-only station).
-    grid_h, grid_e : ndarray of float, shape (S,)
-        Out: passing height (m) and total kinetic energy (J) at the first
-        downslope passage of each station; must come in as NaN.
-    cross : ndarray of float, shape (U, N_CROSS_COLS)
-        Out: detail of the first downslope passage of each user station.
-    traj : ndarray of float, shape (T, N_TRAJ_COLS)
-        Out: the state at each event (T may be 0 to record nothing).
+    stations : Stations
+        Stations (m), sorted, the ground height there (m), and the rows of
+        ``out.cross`` and ``out.srec`` they write to (``records.Stations``).
     bars : ndarray of float, shape (B, N_BARRIER_COLS)
         Barriers (columns ``BR_*``), sorted by x; B may be 0.
-    bar_out : ndarray of int8, shape (B,)
-        Out: outcome of the first meeting with each barrier (``O_*``); must
-        come in as ``O_NOT_MET``.
-    bar_rec : ndarray of float, shape (B, N_BMEET_COLS)
-        Out: passing height (m), speed (m/s), total kinetic energy (J) and
-        time (s) of that first meeting.
-    grid_v : ndarray of float, shape (S,)
-        Out: speed (m/s) at the first downslope passage of each station.
-    st_srow : ndarray of int, shape (S,)
-        Row of ``srec`` for each restart station, or -1.
-    srec : ndarray of float, shape (R, N_RESTART_COLS)
-        Out: the rock's full state at the first downslope passage of each
-        restart station (columns ``RS_*``); must come in as NaN.
-    srng : ndarray of uint64, shape (R,)
-        Out: the rock's random stream there.
+    out : RockOut
+        What the rock writes (``records.RockOut``, whose docstring says how
+        each array must come in).
     resume : bool
-        Start from ``state0`` (a row of ``srec``, with ``rng`` set to the
-        matching ``srng``) instead of the release.
+        Start from ``state0`` (a row of a restart record, with ``rng`` set to
+        the matching stream) instead of the release.
     state0 : ndarray of float, shape (N_RESTART_COLS,)
         The state to resume from.
-
     Returns
     -------
     status : int
@@ -169,6 +105,32 @@ def simulate_rock(
     caught_by : int
         Barrier row that caught the rock, or -1.
     """
+    px = path.px
+    py = path.py
+    pseg = path.pseg
+    seg_mat = path.seg_mat
+    mats = path.mats
+    r = rock[REL_R]
+    m = rock[REL_M]
+    x0 = rock[REL_X]
+    h0 = rock[REL_H]
+    vx0 = rock[REL_VX]
+    vy0 = rock[REL_VY]
+    w0 = rock[REL_W]
+    spin_rolling = rock[REL_ROLLING] > 0.5
+    st_x = stations.x
+    st_yg = stations.yg
+    st_user = stations.user
+    st_srow = stations.srow
+    grid_h = out.grid_h
+    grid_e = out.grid_e
+    grid_v = out.grid_v
+    cross = out.cross
+    traj = out.traj
+    bar_out = out.bar_out
+    bar_rec = out.bar_rec
+    srec = out.srec
+    srng = out.srng
     v_contact = settings[S_V_CONTACT]
     v_stop = settings[S_V_STOP]
     max_events = int(settings[S_MAX_EVENTS])
