@@ -384,15 +384,19 @@ def plugins_table(registry: Registry) -> Group:
         table.add_column("summary")
         table.add_column("parameters (unit)")
         table.add_column("provider", style="dim")
+        # The entry point: the name that --block takes for this one.
+        table.add_column("plugin", style="dim")
         entries = getattr(registry, section)
         for name, cls in entries.items():
             shown = ", ".join(
                 p["name"] + (f" ({p['unit']})" if p["unit"] not in (None, "") else "")
                 for p in _parameter_list(cls))
+            origin = registry.origins.get((key, name))
             table.add_row(name, str(getattr(cls, "summary", "") or ""), shown,
-                          registry.provider.get((key, name), ""))
+                          registry.provider.get((key, name), ""),
+                          origin.plugin if origin else "")
         if not entries:
-            table.add_row(Text("(none)", style="dim"), "", "", "")
+            table.add_row(Text("(none)", style="dim"), "", "", "", "")
         parts.append(table)
     if not any(getattr(registry, section[0]) for section in _SECTIONS):
         parts.append(Text(
