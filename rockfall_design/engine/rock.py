@@ -86,10 +86,11 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         the matching stream) instead of the release.
     state0 : ndarray of float, shape (N_RESTART_COLS,)
         The state to resume from.
+
     Returns
     -------
     status : int
-        How the path ended (``STOPPED``, ``EXIT_*``, ``UNRESOLVED``).
+        How the path ended (``STOPPED``, ``EXIT_*``, ``UNRESOLVED``, ``CAUGHT``).
     x, y : float
         Final position of the centre (m).
     n_impacts : int
@@ -101,10 +102,12 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
     t : float
         Duration of the path (s).
     n_traj : int
-        Number of rows written to ``traj``.
+        Number of rows written to ``out.traj``.
     caught_by : int
         Barrier row that caught the rock, or -1.
     """
+    # The records unpacked once into the names the loop below uses (a field
+    # read of a named tuple compiles to nothing; the loop is unchanged).
     px = path.px
     py = path.py
     pseg = path.pseg
