@@ -1,6 +1,7 @@
 """Engine speed and memory, and PyRockfall 0.1.2 on the same slope, side by side.
 
     python benchmarks/engine.py [--rocks 100000 1000000] [--pyrockfall-python PATH]
+    PYTHONPATH=OTHER_TREE python benchmarks/engine.py --kernel-only   # compare two engines
 
 The reference case is projects/benchmark.yaml (the standard slope with an
 rn_rt talus and roughness, one analysis station). For each number of rocks:
@@ -92,6 +93,39 @@ def kernel(n: int, threads: int | None) -> tuple[float, int, int]:
     return time.perf_counter() - t0, events, threads or default_threads()
 
 
+def kernel_cpu(n: int, repeats: int = 5) -> tuple[float, int]:
+    """Least CPU time (s) of ``repeats`` one-thread kernel runs of n rocks, and their events.
+
+    CPU time of one thread, and the least of several runs, because wall time
+    on a machine shared with other work varies by tens of percent from run to
+    run; this is the figure to compare two versions of the engine by.
+    """
+    from rockfall_design.engine import run_ensemble
+    from rockfall_design.project import load_project
+    from rockfall_design.simulation import (
+        draw_releases,
+        engine_key,
+        engine_settings,
+        section_from_project,
+    )
+
+    project = load_project(PROJECT)
+    seed = project.rocks.seed
+    section = section_from_project(project)
+    releases = draw_releases(project, n, seed)
+    grid = __import__("numpy").linspace(section.x[0], section.x[-1],
+                                        int(project.analysis.envelope_points))
+    kw = dict(key=engine_key(seed), stations=list(project.analysis.stations), grid=grid,
+              settings=engine_settings(project), threads=1)
+    run_ensemble(section, draw_releases(project, 100, seed), **kw)  # compiled and warm
+    best, events = float("inf"), 0
+    for _ in range(repeats):
+        t0 = time.process_time()
+        events = run_ensemble(section, releases, **kw).events_total
+        best = min(best, time.process_time() - t0)
+    return best, events
+
+
 def has_pyrockfall(python: str) -> bool:
     code = "import importlib.util, sys; sys.exit(importlib.util.find_spec('pyrockfall') is None)"
     try:
@@ -105,7 +139,24 @@ def main() -> None:
     ap.add_argument("--rocks", type=int, nargs="+", default=[100_000, 1_000_000])
     ap.add_argument("--pyrockfall-python", default=sys.executable)
     ap.add_argument("--pyrockfall-rocks", type=int, default=10_000)
+    ap.add_argument("--kernel-only", action="store_true",
+                    help="only the kernel figures (to compare two versions of the engine "
+                         "in one session, e.g. with PYTHONPATH set to another tree)")
     args = ap.parse_args()
+    if args.kernel_only:
+        import rockfall_design
+
+        print(f"engine from {Path(rockfall_design.__file__).parent}")
+        for n in sorted(args.rocks):
+            for threads in (None, 1):
+                t, events, nthreads = kernel(n, threads)
+                print(f"  kernel, {n:,} rocks, {nthreads} threads: {t:7.2f} s  "
+                      f"{n / t:>10,.0f} rocks/s  {events / t:>12,.0f} events/s")
+        n = min(args.rocks)
+        t, events = kernel_cpu(n)
+        print(f"  kernel, {n:,} rocks, 1 thread, least CPU time of 5: {t:7.3f} s  "
+              f"{n / t:>10,.0f} rocks/s  {events / t:>12,.0f} events/s")
+        return
 
     # Compile (or load the cache) once, so that no figure below includes it.
     run_child([sys.executable, "-m", "rockfall_design", "simulate", str(PROJECT),

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from .costs import CostModel
-from .plugins import call_plugin
+from .plugins import guard
 from .project import params_problem
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -251,7 +251,7 @@ def _resolve_cost_model(project: Project, registry: Registry) -> CostModel:
             ("design", "costs", "model"), name, registry.cost_models, "cost model"
         )
     params = design.costs_locator.validate_params((), cls.Params, design.cost_params)
-    return call_plugin(registry, cls, "__init__", params)
+    return guard(registry).instantiate(cls, params)
 
 
 def _resolve_candidate(
@@ -560,4 +560,4 @@ def build_candidate_measure(
         loc, message = problem
         where = ".".join(str(p) for p in loc)
         raise ValueError(f"{label}: {where + ': ' if where else ''}{message}")
-    return call_plugin(registry, cls, "__init__", cls.Params.model_validate(values))
+    return guard(registry).instantiate(cls, cls.Params.model_validate(values))

@@ -21,7 +21,7 @@ from .judge.bounds import fraction_upper_bound
 from .judge.outcomes import Judgement, RockFates, judge_measures
 from .judge.plan import plan_for
 from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
-from .plugins import call_plugin
+from .plugins import guard
 from .safety import DEFAULT_CONFIDENCE, Check, SafetyConcept
 from .simulation import Study, run_study, section_from_project
 
@@ -82,7 +82,7 @@ def build_measures(project: Project, registry: Registry) -> list[ProtectiveMeasu
                 ("measures", i, "type"), kind, registry.measures, "measure type"
             )
         params = project.validate_params(("measures", i), cls.Params, raw, drop=("type",))
-        out.append(call_plugin(registry, cls, "__init__", params))
+        out.append(guard(registry).instantiate(cls, params))
     return out
 
 
@@ -96,7 +96,7 @@ def build_concept(project: Project, registry: Registry) -> SafetyConcept:
             ("safety", "concept"), name, registry.safety_concepts, "safety concept"
         )
     params = project.validate_params(("safety",), cls.Params, raw, drop=("concept",))
-    return call_plugin(registry, cls, "__init__", params)
+    return guard(registry).instantiate(cls, params)
 
 
 def place_measures(
@@ -108,8 +108,8 @@ def place_measures(
     """Footprints of the measures on the bare section, checked for fit and overlap.
 
     Every measure's footprint, design properties and label are asked for
-    here, through :func:`~rockfall_design.plugins.call_plugin`, before any
-    safety concept or report uses the measure: a measure that misbehaves is
+    here, through the guarded proxy :func:`~rockfall_design.plugins.guard`,
+    before any safety concept or report uses the measure: one that misbehaves is
     named as itself, not as the safety concept that reads
     ``result.measure.design_properties()``.
 
@@ -125,12 +125,13 @@ def place_measures(
     placed = []
     for i, m in enumerate(measures):
         try:
-            fp = call_plugin(registry, m, "footprint", section)
+            fp = guard(registry).measure(m).footprint(section)
         except ValueError as exc:
             # A measure that does not fit the section is the user's to fix.
             raise project.error_at(("measures", i), str(exc)) from None
-        call_plugin(registry, m, "design_properties")
-        placed.append(PlacedMeasure(i, m, fp, call_plugin(registry, m, "label")))
+        guarded = guard(registry).measure(m)
+        guarded.design_properties()
+        placed.append(PlacedMeasure(i, m, fp, guarded.label()))
     edits = sorted(
         (p for p in placed if isinstance(p.footprint, ProfileEdit)),
         key=lambda p: p.footprint.x_start,
@@ -554,7 +555,7 @@ def _evaluate_placed(
                       progress=progress, section=section, barriers=bars)
     protect = project.protect
     judgement = _judge_run(placed, owners, study, None if protect is None else protect.x)
-    checks = [call_plugin(registry, concept, "checks", res) for res in judgement.results]
+    checks = [guard(registry).concept(concept).checks(res) for res in judgement.results]
     return Evaluation(
         study=study,
         original_section=bare,

@@ -14,6 +14,7 @@ from rich.text import Text
 from .outputs import OutputSet
 
 if TYPE_CHECKING:  # pragma: no cover
+    from .plugins import Registry
     from .simulation import StreamedStudy, Study
 
 __all__ = [
@@ -23,6 +24,7 @@ __all__ = [
     "alternatives_table",
     "design_yaml",
     "plot_study",
+    "plugins_table",
 ]
 
 
@@ -364,3 +366,55 @@ def plot_study(
     from .figures import save_figures, study_figures
 
     return save_figures(study_figures(study, evaluation), directory, formats, outputs)
+
+
+# ---- the plugins command ------------------------------------------------------
+
+
+def plugins_table(registry: Registry) -> Group:
+    """The registry as rich tables (``rockfall-design plugins``)."""
+    from .plugins.listing import _SECTIONS, _parameter_list
+
+    titles = {"measures": "Measures", "safety_concepts": "Safety concepts",
+              "cost_models": "Cost models"}
+    parts: list[Any] = []
+    for section, _what, _hook, _base, name_attr, key in _SECTIONS:
+        table = Table(title=titles[section], title_justify="left", expand=False)
+        table.add_column(name_attr, style="bold")
+        table.add_column("summary")
+        table.add_column("parameters (unit)")
+        table.add_column("provider", style="dim")
+        # The entry point: the name that --block takes for this one.
+        table.add_column("plugin", style="dim")
+        entries = getattr(registry, section)
+        for name, cls in entries.items():
+            shown = ", ".join(
+                p["name"] + (f" ({p['unit']})" if p["unit"] not in (None, "") else "")
+                for p in _parameter_list(cls))
+            origin = registry.origins.get((key, name))
+            table.add_row(name, str(getattr(cls, "summary", "") or ""), shown,
+                          registry.provider.get((key, name), ""),
+                          origin.plugin if origin else "")
+        if not entries:
+            table.add_row(Text("(none)", style="dim"), "", "", "", "")
+        parts.append(table)
+    if not any(getattr(registry, section[0]) for section in _SECTIONS):
+        parts.append(Text(
+            "No plugin provides anything. The built-in plugins are found through the "
+            "entry points of the installed distribution: is rockfall-design installed "
+            "(pip install -e .)?", style="yellow"))
+    if registry.blocked:
+        table = Table(title="Blocked", title_justify="left")
+        table.add_column("name")
+        for name in registry.blocked:
+            table.add_row(name)
+        parts.append(table)
+    if registry.failures:
+        table = Table(title="Failures", title_justify="left")
+        table.add_column("plugin", style="bold")
+        table.add_column("distribution")
+        table.add_column("reason", style="red")
+        for f in registry.failures:
+            table.add_row(f.plugin, f.distribution or "-", f.reason)
+        parts.append(table)
+    return Group(*parts)

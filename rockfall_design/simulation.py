@@ -4,11 +4,11 @@ Data flow: ``Project`` -> engine inputs (section, per-rock releases drawn
 from the seed) -> :func:`rockfall_design.engine.run_ensemble` -> ``Study``
 (the run, its record and its statistics as tables and JSON-ready dicts).
 
-Random numbers: one ``np.random.SeedSequence(seed)`` is split into
-independent child sequences, one per quantity (engine streams, zone, x
-within the zone, rock size). Each quantity is drawn for all rocks at once
-from its own generator, so the first N rocks of a larger run are exactly the
-rocks of a run of N: a run can be cut short or extended and stay comparable.
+The jobs live in rooms of their own, whose names this module re-exports:
+``releases`` (the engine's inputs: section, settings, rocks drawn from the
+seed), ``summary`` (the JSON summary), ``streamed`` (statistics of runs too
+large to keep). Here: the in-memory :class:`Study`, :func:`run_study`, and
+:func:`simulate`, which chooses between an exact and a streamed run.
 """
 
 from __future__ import annotations
@@ -21,23 +21,24 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import __version__
-from .engine import EngineSettings, EnsembleResult, Material, Releases, Section, run_ensemble
-from .engine.core import (
-    C_H,
-    C_T,
-    C_VX,
-    C_VY,
-    C_W,
-    CAUGHT,
-    EXIT_DOWNSLOPE,
-    EXIT_UPSLOPE,
-    STATUS_NAMES,
-    STOPPED,
-    UNRESOLVED,
-)
-from .histograms import LinearHistogram, LogHistogram
+from .engine import EnsembleResult, Releases, Section, run_ensemble
+from .engine.columns import C_H, C_T, C_VX, C_VY, C_W, STATUS_NAMES, STOPPED
+from .histograms import LogHistogram
 from .judge.outcomes import protected_zone_counts, reaches_protected_zone
+
+# Re-exported, with private names that tests and older code reach for here.
+from .releases import (  # noqa: F401
+    _SEED_SIZE,
+    ReleaseStream,
+    _children,
+    _draw_size,
+    draw_releases,
+    engine_key,
+    engine_settings,
+    section_from_project,
+)
+from .streamed import _STOP_BUCKETS, REST_SAMPLE, STREAM_REL_ERROR, StreamedStudy
+from .summary import _STATION_QUANTITIES, STATISTICS, _pct_label, _stat_block, _summary
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -64,213 +65,6 @@ __all__ = [
     "run_study",
     "STATISTICS",
 ]
-
-#: The statistics reported for every station quantity, in this order.
-STATISTICS = ("mean", "p50", "p95", "p99", "max")
-
-# Child sequences of the run's SeedSequence, by purpose. Never reorder: that
-# would change every result for a given seed.
-_SEED_ENGINE, _SEED_ZONE, _SEED_X, _SEED_SIZE = range(4)
-_N_SEED_CHILDREN = 4
-
-
-def section_from_project(project: Project) -> Section:
-    """The engine's slope section (ground polyline and materials) of a project."""
-    names = list(project.materials)
-    mats = []
-    for name in names:
-        m = project.materials[name]
-        mats.append(
-            Material(
-                impact_model=m.impact_model,
-                restitution=m.restitution,
-                friction=m.friction,
-                rolling_resistance=m.rolling_resistance,
-                tangential_restitution=(
-                    m.tangential_restitution if m.tangential_restitution is not None else 1.0
-                ),
-                velocity_scaling=m.velocity_scaling,
-                velocity_scaling_k=m.velocity_scaling_k,
-                roughness_deg=m.roughness_deg,
-                roughness_height_m=m.roughness_height_m,
-                sd_restitution=m.scatter.restitution,
-                sd_friction=m.scatter.friction,
-                sd_rolling_resistance=m.scatter.rolling_resistance,
-            )
-        )
-    pts = np.asarray(project.slope.points, dtype=float)
-    seg_mat = np.array([names.index(n) for n in project.slope.materials], dtype=np.int64)
-    return Section(pts[:, 0], pts[:, 1], seg_mat, tuple(mats))
-
-
-def engine_settings(project: Project) -> EngineSettings:
-    e = project.engine
-    return EngineSettings(
-        v_contact=e.v_contact,
-        v_stop=e.v_stop,
-        max_events=e.max_events,
-        max_chord_deg=e.max_chord_deg,
-    )
-
-
-def _children(seed: int) -> list[np.random.SeedSequence]:
-    return np.random.SeedSequence(int(seed)).spawn(_N_SEED_CHILDREN)
-
-
-def engine_key(seed: int) -> int:
-    """The 64-bit key of the engine's per-rock random streams for ``seed``."""
-    return int(_children(seed)[_SEED_ENGINE].generate_state(1, np.uint64)[0])
-
-
-def _draw_size(
-    kind: str,
-    a: float,
-    b: float,
-    n: int,
-    rng: np.random.Generator,
-    upper: float = np.inf,
-    lower: float = 0.0,
-) -> np.ndarray:
-    """Draw n values of a size quantity (radius m, volume m^3 or mass kg).
-
-    Normal and lognormal sizes are drawn by inverting their CDF, truncated to
-    (0, ``upper``]: one uniform per rock keeps the draws of the first rocks
-    independent of n. Where the cut-off lies beyond float precision of the
-    CDF (every realistic case) the draws are those of the whole distribution.
-    Draws below ``lower`` are raised to it: a clip rather than a truncation,
-    so that every draw above it stays bit for bit what it was.
-    """
-    return np.maximum(_draw_size_unclipped(kind, a, b, n, rng, upper), lower)
-
-
-def _draw_size_unclipped(
-    kind: str, a: float, b: float, n: int, rng: np.random.Generator, upper: float
-) -> np.ndarray:
-    if kind == "fixed":
-        return np.full(n, float(a))
-    u = rng.random(n)
-    if kind == "uniform":
-        return a + (b - a) * u
-    # The standard normal CDF and its inverse (what scipy.stats.norm.cdf/ppf
-    # evaluate), from scipy.special, which imports in a fraction of the time.
-    from scipy.special import ndtr, ndtri
-
-    if kind == "normal":
-        if b <= 0.0:
-            return np.full(n, float(a))
-        lo, hi = ndtr(-a / b), ndtr((upper - a) / b)
-        return np.minimum(a + b * ndtri(lo + (hi - lo) * u), upper)
-    if kind == "lognormal":
-        if b <= 0.0:
-            return np.full(n, float(a))
-        hi = ndtr(np.log(upper / a) / b)
-        return np.minimum(a * np.exp(b * ndtri(hi * u)), upper)
-    raise ValueError(f"unknown size distribution {kind!r}")
-
-
-class ReleaseStream:
-    """Draws the size and release conditions of a run's rocks, a chunk at a time.
-
-    Each quantity has its own generator, consumed in rock order, so drawing
-    the rocks in chunks gives exactly the rocks drawn all at once.
-
-    Parameters
-    ----------
-    project : Project
-    seed : int
-        Seed of the run.
-    """
-
-    def __init__(self, project: Project, seed: int) -> None:
-        ch = _children(seed)
-        self._rocks = project.rocks
-        zones = self._rocks.release
-        w = np.array([z.weight for z in zones], dtype=float)
-        self._p = w / w.sum()
-        self._zone_rng = np.random.default_rng(ch[_SEED_ZONE])
-        self._x_rng = np.random.default_rng(ch[_SEED_X])
-        self._size_rng = np.random.default_rng(ch[_SEED_SIZE])
-        self.drawn = 0
-
-    def draw(self, n: int) -> Releases:
-        """The next ``n`` rocks.
-
-        Returns
-        -------
-        Releases
-            Radius (m), density (kg/m^3), release x (m), clearance (m),
-            velocity (m/s), spin (rad/s) and zone index of each rock.
-        """
-        rocks = self._rocks
-        zones = rocks.release
-        if len(zones) == 1:
-            zone = np.zeros(n, dtype=np.int64)
-        else:
-            zone = self._zone_rng.choice(len(zones), size=n, p=self._p)
-        lo = np.array([z.x[0] for z in zones])[zone]
-        hi = np.array([z.x[1] for z in zones])[zone]
-        u = self._x_rng.random(n)
-        x = lo + (hi - lo) * u
-        spec = rocks.size
-        q = _draw_size(spec.kind, spec.a, spec.b, n, self._size_rng, rocks.max_size,
-                       rocks.min_size)
-        rho = float(rocks.density)
-        if rocks.size_quantity == "radius":
-            radius = q
-        else:
-            volume = q if rocks.size_quantity == "volume" else q / rho
-            radius = np.cbrt(3.0 * volume / (4.0 * np.pi))
-        height = np.array([z.height for z in zones], dtype=float)[zone]
-        vel = np.array([z.velocity for z in zones], dtype=float).reshape(-1, 2)[zone]
-        rolling = np.array([z.spin == "rolling" for z in zones])[zone]
-        spin = np.array([0.0 if z.spin == "rolling" else float(z.spin) for z in zones])[zone]
-        self.drawn += n
-        return Releases(
-            radius=radius,
-            density=rho,
-            x=x,
-            height=height,
-            vx=vel[:, 0].copy(),
-            vy=vel[:, 1].copy(),
-            spin=spin,
-            spin_rolling=rolling,
-            zone=zone,
-        )
-
-
-def draw_releases(project: Project, n: int, seed: int) -> Releases:
-    """Draw the size and release conditions of ``n`` rocks from ``seed``.
-
-    Parameters
-    ----------
-    project : Project
-    n : int
-        Number of rocks.
-    seed : int
-        Seed of the run.
-
-    Returns
-    -------
-    Releases
-        See :meth:`ReleaseStream.draw`.
-    """
-    return ReleaseStream(project, seed).draw(n)
-
-
-def _stat_block(values: np.ndarray) -> dict[str, float | None]:
-    """mean, p50, p95, p99, max of the finite values (None if there are none)."""
-    v = np.asarray(values, dtype=float)
-    v = v[np.isfinite(v)]
-    if v.size == 0:
-        return {k: None for k in STATISTICS}
-    p = np.percentile(v, [50, 95, 99])
-    return {
-        "mean": float(v.mean()),
-        "p50": float(p[0]),
-        "p95": float(p[1]),
-        "p99": float(p[2]),
-        "max": float(v.max()),
-    }
 
 
 @dataclass
@@ -459,72 +253,6 @@ class Study:
         return _summary(self, r.events_total, crossings, blocks, stop_block, reaching)
 
 
-# Per station: summary key -> (crossing array, divisor to the reported unit).
-_STATION_QUANTITIES: dict[str, tuple[str, float]] = {
-    "passing_height_m": ("passing_height_m", 1.0),
-    "velocity_ms": ("velocity_ms", 1.0),
-    "energy_kj": ("energy_j", 1e3),
-    "translational_energy_kj": ("translational_energy_j", 1e3),
-    "rotational_energy_kj": ("rotational_energy_j", 1e3),
-}
-
-
-def _summary(
-    study: Study | StreamedStudy,
-    events: int,
-    crossings: np.ndarray,
-    blocks: dict[str, list[dict[str, float | None]]],
-    stop_block: dict[str, float | None],
-    reaching: tuple[int, int] | None,
-) -> dict[str, Any]:
-    """The summary dict, the same for an exact and a streamed study.
-
-    ``reaching`` is (rocks counted as reaching the protected zone, how many of
-    them are unresolved paths counted so), None without a protected zone.
-    """
-    counts = study.status_counts()
-    stations = []
-    for j, xs in enumerate(study.stations):
-        st: dict[str, Any] = {"x": float(xs), "crossings": int(crossings[j])}
-        st.update({key: blocks[key][j] for key in _STATION_QUANTITIES})
-        stations.append(st)
-    out: dict[str, Any] = {
-        "project": study.project.name,
-        "version": __version__,
-        "rocks": int(study.n),
-        "seed": int(study.seed),
-        "project_hash": study.project.resolved_hash(),
-        "runtime_s": round(float(study.runtime_s), 6),
-        "events": int(events),
-        "statistics": dict(study.statistics),
-        "stops": {
-            "x": {k: stop_block[k] for k in ("mean", "p50", "p95", "max")},
-            "stopped": int(counts[STOPPED]),
-            "out_of_section": int(counts[EXIT_DOWNSLOPE] + counts[EXIT_UPSLOPE]),
-            "exit_downslope": int(counts[EXIT_DOWNSLOPE]),
-            "exit_upslope": int(counts[EXIT_UPSLOPE]),
-            "unresolved": int(counts[UNRESOLVED]),
-            "caught": int(counts[CAUGHT]),
-        },
-        "stations": stations,
-    }
-    protect = study.project.protect
-    if protect is not None:
-        n_reach, n_unresolved = reaching or (0, 0)
-        out["protect"] = {
-            "x": float(protect.x),
-            "reaching": int(n_reach),
-            "fraction": n_reach / study.n if study.n else 0.0,
-            "unresolved": int(n_unresolved),
-        }
-    return out
-
-
-def _pct_label(q: float) -> str:
-    """'95' for 95.0, '99_9' for 99.9 (column-name safe)."""
-    return f"{q:g}".replace(".", "_")
-
-
 def run_study(
     project: Project,
     *,
@@ -591,18 +319,9 @@ def run_study(
 #: fixed count, not the machine's memory, so a run repeats exactly anywhere.
 EXACT_ROCKS = 100_000
 
-#: Relative error of the streamed percentiles of heights, speeds and energies.
-STREAM_REL_ERROR = 0.002
-
-#: Stopped rocks whose rest position is kept for the profile figure.
-REST_SAMPLE = 20_000
-
 # Envelope values (rocks x envelope points) held per chunk: about 100 MB with
 # the temporaries of the statistics.
 _CHUNK_VALUES = 4_000_000
-
-# Buckets of the where-rocks-stop histogram: a multiple of the figure's 80 bins.
-_STOP_BUCKETS = 80 * 820
 
 
 def chunk_rocks(project: Project) -> int:
@@ -633,134 +352,6 @@ def study_memory(project: Project, rocks: int) -> int:
     # float32 envelope values and crossings are held too.
     ahead = chunk_rocks(project) * (8 * s + 40 * u + 200)
     return chunk_rocks(project) * per_rock + ahead + histograms + adding + 16 * REST_SAMPLE
-
-
-@dataclass
-class StreamedStudy:
-    """The statistics of a run too large to keep: accumulated chunk by chunk.
-
-    Answers what :class:`Study` answers for the summary, the envelopes and
-    the figures (not the per-rock tables: those went to ``on_chunk``).
-    Counts, means and maxima are exact; percentiles of heights, speeds and
-    energies within ``STREAM_REL_ERROR`` (relative), of the stop position
-    within half a bucket of the stop histogram.
-    """
-
-    project: Project
-    seed: int
-    section: Section
-    stations: np.ndarray
-    grid: np.ndarray
-    chunk: int
-    n: int = 0
-    runtime_s: float = 0.0
-    events: int = 0
-    reaching: int = 0
-    reaching_unresolved: int = 0
-    trajectories: list[np.ndarray] = field(default_factory=list)
-    _counts: np.ndarray = field(default_factory=lambda: np.zeros(len(STATUS_NAMES), np.int64))
-    _rest_x: list[np.ndarray] = field(default_factory=list)
-    _rest_y: list[np.ndarray] = field(default_factory=list)
-    _station: dict[str, LogHistogram] = field(default_factory=dict)
-    _env_h: LogHistogram | None = None
-    _env_e: LogHistogram | None = None
-    _stops: LinearHistogram | None = None
-
-    def __post_init__(self) -> None:
-        u, s = self.stations.size, self.grid.size
-        self._station = {k: LogHistogram(u, STREAM_REL_ERROR) for k in _STATION_QUANTITIES}
-        self._env_h = LogHistogram(s, STREAM_REL_ERROR)
-        self._env_e = LogHistogram(s, STREAM_REL_ERROR)
-        self._stops = LinearHistogram(self.section.x[0], self.section.x[-1], _STOP_BUCKETS)
-
-    @property
-    def statistics(self) -> dict[str, Any]:
-        return {
-            "method": "histograms",
-            "chunk_rocks": int(self.chunk),
-            "relative_error": STREAM_REL_ERROR,
-            "stop_x_error_m": float(self._stops.width / 2),
-        }
-
-    def add(self, part: Study) -> None:
-        """Add the rocks of one chunk (a :class:`Study` of consecutive rocks)."""
-        r = part.result
-        a = part.crossing_arrays()
-        for key, (arr, scale) in _STATION_QUANTITIES.items():
-            self._station[key].add(a[arr], scale)
-        self._env_h.add(r.grid_height)
-        self._env_e.add(r.grid_energy, 1e3)
-        stopped = r.status == STOPPED
-        self._stops.add(r.x_end[stopped])
-        room = REST_SAMPLE - sum(x.size for x in self._rest_x)
-        if room > 0:
-            self._rest_x.append(r.x_end[stopped][:room].copy())
-            self._rest_y.append(r.y_end[stopped][:room].copy())
-        self._counts += part.status_counts()
-        protect = self.project.protect
-        if protect is not None:
-            n_reach, n_unresolved = protected_zone_counts(r.max_x, r.status, protect.x)
-            self.reaching += n_reach
-            self.reaching_unresolved += n_unresolved
-        self.events += r.events_total
-        self.n += r.n
-        if not self.trajectories:
-            self.trajectories = r.trajectories
-
-    # ---- what the figures need -------------------------------------------
-    def status_counts(self) -> np.ndarray:
-        return self._counts.copy()
-
-    def rest_positions(self) -> tuple[np.ndarray, np.ndarray]:
-        """x and y (m) of the first ``REST_SAMPLE`` rocks to come to rest."""
-        if not self._rest_x:
-            return np.zeros(0), np.zeros(0)
-        return np.concatenate(self._rest_x), np.concatenate(self._rest_y)
-
-    def stop_counts(self, bins: int) -> np.ndarray:
-        if _STOP_BUCKETS % bins:
-            raise ValueError(f"bins must divide {_STOP_BUCKETS}")
-        return self._stops.counts[0].reshape(bins, -1).sum(axis=1)
-
-    # ---- statistics ------------------------------------------------------
-    def envelopes(self) -> pd.DataFrame:
-        """As :meth:`Study.envelopes`, from the histograms."""
-        import pandas as pd
-
-        out: dict[str, np.ndarray] = {
-            "x_m": self.grid,
-            "ground_m": self.section.ground_height(self.grid),
-            "crossings": self._env_h.n.copy(),
-        }
-        for name, hist, unit in (("height", self._env_h, "m"), ("energy", self._env_e, "kj")):
-            out[f"{name}_max_{unit}"] = hist.maximum()
-            for q in self.project.analysis.percentiles:
-                out[f"{name}_p{_pct_label(q)}_{unit}"] = hist.percentile(q)
-        return pd.DataFrame(out)
-
-    def summary(self) -> dict[str, Any]:
-        """As :meth:`Study.summary`, from the histograms."""
-        blocks = {key: _hist_blocks(h) for key, h in self._station.items()}
-        crossings = self._station["passing_height_m"].n
-        stop_block = _hist_blocks(self._stops)[0]
-        reaching = (None if self.project.protect is None
-                    else (self.reaching, self.reaching_unresolved))
-        return _summary(self, self.events, crossings, blocks, stop_block, reaching)
-
-
-def _hist_blocks(h: LogHistogram | LinearHistogram) -> list[dict[str, float | None]]:
-    """The statistics block of each column of a histogram (None where empty)."""
-    cols = {
-        "mean": h.mean(),
-        "p50": h.percentile(50),
-        "p95": h.percentile(95),
-        "p99": h.percentile(99),
-        "max": h.maximum(),
-    }
-    return [
-        {k: (float(v[j]) if h.n[j] > 0 else None) for k, v in cols.items()}
-        for j in range(h.columns)
-    ]
 
 
 def simulate(

@@ -135,3 +135,52 @@ def test_read_only_package_and_home_cache_in_the_temp_dir(tmp_path):
     assert enabled == "True"
     assert Path(where) == tmpdir / f"rockfall-design-numba-{os.getuid()}"
     assert list(Path(where).rglob("rng.stream_start-*.nbi")), list(Path(where).rglob("*"))
+
+
+class _FakeCache:
+    _enabled = True
+
+    def __init__(self, path: Path) -> None:
+        self._cache_path = str(path)
+
+
+class _FakeDispatcher:
+    def __init__(self, path: Path) -> None:
+        self._cache = _FakeCache(path)
+
+
+def test_a_cache_compiled_from_other_engine_sources_is_dropped(tmp_path, monkeypatch):
+    # numba knows a cached function by its own file only; the engine's kernels
+    # call functions of other files, so a change to any engine source must
+    # drop the whole engine cache (and nothing else in that directory).
+    from rockfall_design.engine import _jit
+
+    monkeypatch.setattr(_jit, "CACHE", True)
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "rock.py").write_text("a = 1\n")
+    (src / "contact.py").write_text("b = 1\n")
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    ours = [cache / "rock.simulate_rock-58.py311.nbi", cache / "contact._accel-9.py311.1.nbc"]
+    theirs = cache / "elsewhere.f-1.py311.nbi"
+    for f in (*ours, theirs):
+        f.write_bytes(b"x")
+    disp = _FakeDispatcher(cache)
+    # No mark yet: the cache's sources are unknown, so it goes.
+    assert _jit.drop_stale_cache(disp, src) == 2
+    assert theirs.exists() and not any(f.exists() for f in ours)
+    # Same sources: kept.
+    for f in ours:
+        f.write_bytes(b"x")
+    assert _jit.drop_stale_cache(disp, src) == 0
+    assert all(f.exists() for f in ours)
+    # A callee's file changed (not the caller's): dropped again.
+    (src / "contact.py").write_text("b = 2\n")
+    assert _jit.drop_stale_cache(disp, src) == 2
+    assert not any(f.exists() for f in ours)
+    # Without a cache, or with a dispatcher numba no longer shapes so, nothing happens.
+    monkeypatch.setattr(_jit, "CACHE", False)
+    assert _jit.drop_stale_cache(disp, src) == 0
+    monkeypatch.setattr(_jit, "CACHE", True)
+    assert _jit.drop_stale_cache(object(), src) == 0

@@ -4,8 +4,10 @@ Pure numerics over arrays (numpy and numba). Nothing here imports pluggy,
 pydantic, rich or pandas; the rest of the package builds on this.
 """
 
-# First: it decides where numba caches compiled code, before numba is imported.
-from . import _jit  # noqa: F401, I001
+from pathlib import Path
+
+# _jit first: it decides where numba caches compiled code, before numba is imported.
+from . import _jit, ensemble  # noqa: I001
 from .core import STATUS_NAMES, G
 from .ensemble import (
     EngineSettings,
@@ -17,6 +19,9 @@ from .ensemble import (
     rock_mass,
     run_ensemble,
 )
+
+# Before anything loads from numba's cache: drop it if any engine source changed.
+_jit.drop_stale_cache(ensemble._run_batch, Path(__file__).resolve().parent)
 
 __all__ = [
     "G",

@@ -12,10 +12,15 @@ Where the cache goes, in order:
    container image); numba would otherwise try the user's home and, if that
    is read-only too, refuse to import the engine;
 4. no cache at all, with a one-line notice: every run compiles anew.
+
+Wherever it is, a cache compiled from other engine sources than the ones
+installed is removed first (:func:`drop_stale_cache`).
 """
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
 import os
 import sys
 import tempfile
@@ -169,3 +174,67 @@ def compile_notice(dispatcher: Any, args: Sequence[Any]) -> Callable[[], None] |
         sys.stderr.flush()
 
     return done
+
+
+SOURCES_MARK = "rockfall-design-engine.sha256"
+"""File beside numba's cache files holding the digest of the sources they were compiled from."""
+
+
+def sources_digest(sources_dir: Path) -> str:
+    """SHA-256 of every ``*.py`` file of ``sources_dir`` (names and contents, sorted)."""
+    h = hashlib.sha256()
+    for path in sorted(sources_dir.glob("*.py")):
+        h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def drop_stale_cache(dispatcher: Any, sources_dir: Path) -> int:
+    """Delete the engine's cached machine code if any engine source changed since it was cached.
+
+    numba knows a cached function by its own file only: a function whose
+    callees live in other files (the rock's event loop calls the impact,
+    contact, flight and barrier modules; the batch kernel calls the event
+    loop) would keep running the old callees after one of those files
+    changed. So the digest of all the engine's sources is kept beside the
+    cache, and a cache built from other sources is removed before anything
+    loads from it: the next call compiles afresh.
+
+    Parameters
+    ----------
+    dispatcher : numba dispatcher
+        Any compiled function of the engine (they share one cache directory).
+    sources_dir : Path
+        The engine's source directory.
+
+    Returns
+    -------
+    int
+        Number of cache files removed. Never raises: at worst the check is
+        skipped, as numba's own behaviour was.
+    """
+    try:
+        cache = getattr(dispatcher, "_cache", None)
+        if not CACHE or cache is None or not getattr(cache, "_enabled", False):
+            return 0
+        where = Path(cache._cache_path)
+        digest = sources_digest(sources_dir)
+        mark = where / SOURCES_MARK
+        if mark.is_file() and mark.read_text().strip() == digest:
+            return 0
+        stems = {p.stem for p in sources_dir.glob("*.py")}
+        removed = 0
+        if where.is_dir():
+            for f in where.iterdir():
+                if f.suffix in (".nbi", ".nbc") and f.name.split(".", 1)[0] in stems:
+                    with contextlib.suppress(FileNotFoundError):
+                        f.unlink()
+                        removed += 1
+        where.mkdir(parents=True, exist_ok=True)
+        # Written whole, then renamed: a process starting at the same time
+        # reads the old mark or the new one, never half of one.
+        tmp = where / f".{SOURCES_MARK}.{os.getpid()}"
+        tmp.write_text(digest + "\n")
+        os.replace(tmp, mark)
+        return removed
+    except Exception:  # noqa: BLE001 - the check must never break an import
+        return 0

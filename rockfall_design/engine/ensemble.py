@@ -19,6 +19,23 @@ from numba import njit
 from . import core
 from ._jit import CACHE, compile_notice
 from .profile import centre_path
+from .records import (
+    N_REL_COLS,
+    REL_H,
+    REL_M,
+    REL_R,
+    REL_ROLLING,
+    REL_VX,
+    REL_VY,
+    REL_W,
+    REL_X,
+    BatchOut,
+    Ground,
+    Path,
+    Resume,
+    RockOut,
+    Stations,
+)
 from .rng import stream_start
 
 __all__ = [
@@ -326,132 +343,87 @@ class EnsembleResult:
 # writes only its own rows, and draws from its own stream, so the results do
 # not depend on how the rocks are shared among threads.
 @njit(cache=CACHE, nogil=True)
-def _run_batch(
-    gx,
-    gy,
-    seg_mat,
-    mats,
-    settings,
-    max_chord,
-    key,
-    first_index,
-    radius,
-    mass,
-    x0,
-    h0,
-    vx0,
-    vy0,
-    w0,
-    rolling,
-    st_x,
-    st_yg,
-    st_user,
-    status,
-    x_end,
-    y_end,
-    n_imp,
-    n_ev,
-    max_x,
-    dur,
-    grid_h,
-    grid_e,
-    cross,
-    traj,
-    n_traj,
-    bars,
-    bar_out,
-    bar_rec,
-    caught_by,
-    grid_v,
-    st_srow,
-    srec,
-    srng,
-    resume,
-    states0,
-    rngs0,
-):
-    n = radius.shape[0]
-    nseg = gx.shape[0] - 1
+def _run_batch(ground, settings, max_chord, key, first_index, rel, resume, stations, bars, out):
+    """Run the rocks of one batch (rows of ``rel``) and write their rows of ``out``.
+
+    Parameters
+    ----------
+    ground : Ground
+        The section (``records.Ground``).
+    settings : ndarray of float, shape (N_SETTINGS,)
+    max_chord : float
+        Largest turn (rad) of a chord of the centre path at a convex vertex.
+    key : uint64
+        Key of the run's random streams.
+    first_index : int
+        Index in the whole run of the batch's first rock (its stream).
+    rel : ndarray of float, shape (N, N_REL_COLS)
+        Release table (columns ``records.REL_*``).
+    resume : Resume
+        Which rocks resume, from which state and stream (``records.Resume``).
+    stations : Stations
+        The recorded stations (``records.Stations``).
+    bars : ndarray of float, shape (B, N_BARRIER_COLS)
+        Barrier table, sorted by x.
+    out : BatchOut
+        The batch's rows of every output (``records.BatchOut``).
+    """
+    n = rel.shape[0]
+    nseg = ground.x.shape[0] - 1
     seg_ids = np.arange(nseg)
     r_prev = -1.0
-    px = np.empty(0)
-    py = np.empty(0)
-    pseg = np.empty(0, dtype=np.int64)
-    gh = np.empty(st_x.shape[0])
-    ge = np.empty(st_x.shape[0])
+    path = Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
+                ground.mats)
+    ns = stations.x.shape[0]
+    gh = np.empty(ns)
+    ge = np.empty(ns)
     rng = np.empty(1, dtype=np.uint64)
     empty_traj = np.empty((0, core.N_TRAJ_COLS))
+    ntr = out.traj.shape[0]
     # Serial on purpose: a prange version measured slower here (per-rock
     # allocations), and compiles for much longer.
     for i in range(n):
-        if radius[i] != r_prev:
+        r = rel[i, REL_R]
+        if r != r_prev:
             # Rocks of one size share their centre path.
-            px, py, pseg = centre_path(gx, gy, seg_ids, radius[i], max_chord)
-            r_prev = radius[i]
-        if resume[i]:
-            rng[0] = rngs0[i]
+            px, py, pseg = centre_path(ground.x, ground.y, seg_ids, r, max_chord)
+            path = Path(px, py, pseg, ground.seg_mat, ground.mats)
+            r_prev = r
+        if resume.mask[i]:
+            rng[0] = resume.rngs[i]
         else:
             rng[0] = stream_start(key, first_index + i)
         gh[:] = np.nan
         ge[:] = np.nan
         # Without speed recording grid_v is one scratch row shared by all rocks.
-        gv = grid_v[i] if grid_v.shape[0] == n else grid_v[0]
+        gv = out.grid_v[i] if out.grid_v.shape[0] == n else out.grid_v[0]
         gv[:] = np.nan
-        sr = srec[i]
+        sr = out.srec[i]
         sr[:, :] = np.nan
-        sg = srng[i]
-        cr = cross[i]
+        cr = out.cross[i]
         cr[:, :] = np.nan
-        tr = traj[i] if i < traj.shape[0] else empty_traj
-        bo = bar_out[i]
+        bo = out.bar_out[i]
         bo[:] = core.O_NOT_MET
-        br = bar_rec[i]
+        br = out.bar_rec[i]
         br[:, :] = np.nan
+        rock_out = RockOut(gh, ge, gv, cr, out.traj[i] if i < ntr else empty_traj, bo, br, sr,
+                           out.srng[i])
         st, xe, ye, ni, ne, mx, tt, nt, cb = core.simulate_rock(
-            px,
-            py,
-            pseg,
-            seg_mat,
-            mats,
-            settings,
-            radius[i],
-            mass[i],
-            x0[i],
-            h0[i],
-            vx0[i],
-            vy0[i],
-            w0[i],
-            rolling[i],
-            rng,
-            st_x,
-            st_yg,
-            st_user,
-            gh,
-            ge,
-            cr,
-            tr,
-            bars,
-            bo,
-            br,
-            gv,
-            st_srow,
-            sr,
-            sg,
-            resume[i],
-            states0[i],
+            path, settings, rel[i], rng, stations, bars, rock_out, resume.mask[i],
+            resume.states[i],
         )
-        caught_by[i] = cb
-        status[i] = st
-        x_end[i] = xe
-        y_end[i] = ye
-        n_imp[i] = ni
-        n_ev[i] = ne
-        max_x[i] = mx
-        dur[i] = tt
-        grid_h[i, :] = gh
-        grid_e[i, :] = ge
-        if i < traj.shape[0]:
-            n_traj[i] = nt
+        out.caught_by[i] = cb
+        out.status[i] = st
+        out.x_end[i] = xe
+        out.y_end[i] = ye
+        out.n_imp[i] = ni
+        out.n_ev[i] = ne
+        out.max_x[i] = mx
+        out.dur[i] = tt
+        out.grid_h[i, :] = gh
+        out.grid_e[i, :] = ge
+        if i < ntr:
+            out.n_traj[i] = nt
 
 
 def run_ensemble(
@@ -537,13 +509,14 @@ def run_ensemble(
     st_yg = section.ground_height(grid_all).astype(float)
     radius = np.ascontiguousarray(np.broadcast_to(releases.radius, (n,)), dtype=float)
     mass = np.ascontiguousarray(rock_mass(radius, releases.density) * np.ones(n), dtype=float)
-
-    def arr(a, dtype=float):
-        return np.ascontiguousarray(np.broadcast_to(np.asarray(a, dtype=dtype), (n,)))
-
-    x0, h0 = arr(releases.x), arr(releases.height)
-    vx0, vy0, w0 = arr(releases.vx), arr(releases.vy), arr(releases.spin)
-    rolling = arr(releases.spin_rolling, bool)
+    # The release table: one row per rock, built once (columns records.REL_*).
+    rel = np.empty((n, N_REL_COLS))
+    rel[:, REL_R] = radius
+    rel[:, REL_M] = mass
+    for col, values in ((REL_X, releases.x), (REL_H, releases.height), (REL_VX, releases.vx),
+                        (REL_VY, releases.vy), (REL_W, releases.spin),
+                        (REL_ROLLING, np.asarray(releases.spin_rolling, dtype=bool))):
+        rel[:, col] = np.broadcast_to(np.asarray(values, dtype=float), (n,))
 
     status = np.empty(n, dtype=np.int8)
     x_end = np.empty(n)
@@ -585,55 +558,24 @@ def run_ensemble(
     k64 = np.uint64(int(key) % (1 << 64))
     max_chord = float(np.radians(settings.max_chord_deg))
 
+    ground = Ground(section.x, section.y, section.segment_material, mats)
+    stations_rec = Stations(grid_all, st_yg, st_user, st_srow)
+    resume_rec = Resume(res_mask, states0, rngs0)
+    out = BatchOut(status, x_end, y_end, n_imp, n_ev, max_x, dur, caught_s, grid_h, grid_e,
+                   grid_v, cross, traj, n_traj, bar_out_s, bar_rec_s, srec, srng)
+
     def batch_args(a: int, b: int) -> tuple:
         """The arguments of the compiled call for rocks a..b-1 (views, no copies)."""
         sl = slice(a, b)
-        t0 = min(a, ntr)
-        t1 = min(b, ntr)
-        return (
-            section.x,
-            section.y,
-            section.segment_material,
-            mats,
-            sv,
-            max_chord,
-            k64,
-            int(first_index) + a,
-            radius[sl],
-            mass[sl],
-            x0[sl],
-            h0[sl],
-            vx0[sl],
-            vy0[sl],
-            w0[sl],
-            rolling[sl],
-            grid_all,
-            st_yg,
-            st_user,
-            status[sl],
-            x_end[sl],
-            y_end[sl],
-            n_imp[sl],
-            n_ev[sl],
-            max_x[sl],
-            dur[sl],
-            grid_h[sl],
-            grid_e[sl],
-            cross[sl],
-            traj[t0:t1],
-            n_traj[t0:t1],
-            bars,
-            bar_out_s[sl],
-            bar_rec_s[sl],
-            caught_s[sl],
-            grid_v[sl] if record_speed else grid_v,
-            st_srow,
-            srec[sl],
-            srng[sl],
-            res_mask[sl],
-            states0[sl],
-            rngs0[sl],
+        tr = slice(min(a, ntr), min(b, ntr))
+        rows = BatchOut._make(
+            getattr(out, f)[tr] if f in ("traj", "n_traj")
+            else getattr(out, f) if (f == "grid_v" and not record_speed)
+            else getattr(out, f)[sl]
+            for f in BatchOut._fields
         )
+        return (ground, sv, max_chord, k64, int(first_index) + a, rel[sl],
+                Resume._make(x[sl] for x in resume_rec), stations_rec, bars, rows)
 
     def run(a: int, b: int) -> int:
         _run_batch(*batch_args(a, b))

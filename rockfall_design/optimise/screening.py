@@ -36,7 +36,7 @@ from ..judge.outcomes import (
     reaches_protected_zone,
 )
 from ..measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
-from ..plugins import call_plugin
+from ..plugins import guard
 from ..safety import DEFAULT_CONFIDENCE, Check
 from ..simulation import draw_releases, engine_key, engine_settings, section_from_project
 
@@ -212,7 +212,7 @@ class Screening:
         for vec in probes:
             try:
                 (m,) = self.measures(_decode(cands, (ci,), variables, vec))
-                footprint = call_plugin(self.registry, m, "footprint", self.section)
+                footprint = guard(self.registry).measure(m).footprint(self.section)
             except ValueError:
                 continue
             return isinstance(footprint, ProfileEdit)
@@ -240,7 +240,7 @@ class Screening:
                 m = self._build(cands[ci], self.registry, p)
                 # The report labels the designs it lists itself, also those that
                 # never got as far as place_measures: a faulty label() shows here.
-                call_plugin(self.registry, m, "label")
+                guard(self.registry).measure(m).label()
                 self._measure_cache[key] = m
             out.append(m)
         return out
@@ -255,8 +255,8 @@ class Screening:
         """
         model, total = self.spec.cost_model, 0.0
         for m in measures:
-            q = call_plugin(self.registry, m, "quantities", self.section)
-            total += float(call_plugin(self.registry, model, "cost", m, q, self.spec.length_m))
+            q = guard(self.registry).measure(m).quantities(self.section)
+            total += float(guard(self.registry).cost_model(model).cost(m, q, self.spec.length_m))
         return total
 
     # -- tables -------------------------------------------------------------------
@@ -350,7 +350,7 @@ class Screening:
     def _verdict(self, placed: Sequence[PlacedMeasure], table: _Table,
                  cost: float) -> ScreenResult:
         judgement, approx = self.judge(placed, table)
-        checks = [call_plugin(self.registry, self.concept, "checks", res)
+        checks = [guard(self.registry).concept(self.concept).checks(res)
                   for res in judgement.results]
         labels = [p.label for p in placed]
         approximate = approx.any

@@ -34,7 +34,7 @@ from ..judge.outcomes import (
     reaches_protected_zone,
 )
 from ..measures import Barrier, BarrierBehaviour, Outcome, ProfileEdit
-from ..plugins import call_plugin
+from ..plugins import guard
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..measures import ProtectiveMeasure
@@ -77,8 +77,8 @@ class _BarrierSlots:
                 params = {**d, "x": float(x)}
                 try:
                     (m,) = sc.measures([(ci, params)])
-                    fp = call_plugin(sc.registry, m, "footprint", sc.section)
-                    call_plugin(sc.registry, m, "design_properties")
+                    fp = guard(sc.registry).measure(m).footprint(sc.section)
+                    guard(sc.registry).measure(m).design_properties()
                 except ValueError as exc:
                     # Does not fit here: not part of the space.
                     skipped[f"does not fit: {exc}"] += 1
@@ -94,7 +94,7 @@ class _BarrierSlots:
                 if not isinstance(fp, Barrier):
                     continue
                 out.append(_Option(ci, params, m, fp, cost,
-                                   call_plugin(sc.registry, m, "label"), sc.station(fp.x)))
+                                   guard(sc.registry).measure(m).label(), sc.station(fp.x)))
         self.options[ci] = out
         self.skipped[ci] = skipped
         return out
@@ -162,7 +162,7 @@ class _BarrierSlots:
                                   mass=sc.mass, radius=sc.radius)
                 (res,) = judge_measures([placed], [oc], [np.column_stack([h, v, e_kj])],
                                         fates, None).results
-                checks = call_plugin(sc.registry, sc.concept, "checks", res)
+                checks = guard(sc.registry).concept(sc.concept).checks(res)
                 arr[k] = all(c.ok and _check_may_hold(c, sc.n, sc.max_rocks) for c in checks)
             out[i] = bool(arr[k])
         return out
@@ -277,7 +277,7 @@ def _barrier_designs(
                                                                           strict=True)]
     reach = reaches_protected_zone(table.max_x, table.status, screen.protect_x).astype(
         np.float32)
-    edits = [call_plugin(screen.registry, m, "footprint", screen.section) for m in fixed]
+    edits = [guard(screen.registry).measure(m).footprint(screen.section) for m in fixed]
     stretches = [(e.x_start, e.x_end) for e in edits if isinstance(e, ProfileEdit)]
     # Rocks through for sure (the table knows their fate) must be within the
     # target, and within what design.max_rocks rocks could show with confidence;

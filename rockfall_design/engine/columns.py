@@ -1,0 +1,91 @@
+"""Codes and column layouts of the engine's plain tables.
+
+The engine exchanges only numbers and arrays. Every table it reads or writes
+(materials, settings, barriers, restart states, trajectories, crossings) is a
+float64 array whose columns are named here, and every code it returns (how a
+path ends, what a barrier did) is a small int named here.
+"""
+
+from __future__ import annotations
+
+G = 9.81
+"""Acceleration of gravity (m/s^2)."""
+
+# Columns of the material table (one row per material).
+M_MODEL = 0  #: impact model: 0 = spang, 1 = rn_rt
+M_E = 1  #: e (spang) or Rn (rn_rt), mean
+M_RT = 2  #: Rt (rn_rt)
+M_MU = 3  #: Coulomb friction coefficient mu, mean
+M_MUR = 4  #: rolling-resistance coefficient mu_r, mean
+M_VSCALE = 5  #: 1 = Pfeiffer & Bowen velocity scaling of the normal restitution
+M_VSK = 6  #: K of the velocity scaling (m/s)
+M_ROUGH = 7  #: standard deviation of the tilt of the impact normal (rad)
+M_SD_E = 8  #: standard deviation of e / Rn
+M_SD_MU = 9  #: standard deviation of mu
+M_SD_MUR = 10  #: standard deviation of mu_r
+M_ROUGH_H = 11  #: roughness height h_r (m): one-sided tilt up to atan(h_r / r)
+N_MAT_COLS = 12
+
+MODEL_SPANG = 0
+MODEL_RN_RT = 1
+
+# Columns of the settings vector.
+S_V_CONTACT = 0  #: outgoing normal speed below which the rock stays in contact (m/s)
+S_V_STOP = 1  #: speed below which a rock that can be held is stopped (m/s)
+S_MAX_EVENTS = 2  #: event limit per rock
+N_SETTINGS = 3
+
+# How a path ends.
+RUNNING = 0
+STOPPED = 1
+EXIT_UPSLOPE = 2  #: left the section at its upslope end (x < x_first)
+EXIT_DOWNSLOPE = 3  #: left the section at its downslope end (x > x_last)
+UNRESOLVED = 4  #: reached the event limit
+CAUGHT = 5  #: stopped by a barrier (fence net, block of a boulder row)
+STATUS_NAMES = ("running", "stopped", "exit_upslope", "exit_downslope", "unresolved", "caught")
+
+# Barrier behaviours (see rockfall_design.measures.BarrierBehaviour).
+B_NET = 0
+B_RIGID = 1
+B_BLOCKS = 2
+
+# Columns of the barrier table (one row per barrier, sorted by x).
+BR_X = 0  #: station (m)
+BR_YG = 1  #: ground height at the station (m)
+BR_H = 2  #: height of the top above ground (m)
+BR_CAP = 3  #: energy capacity (J)
+BR_BEH = 4  #: behaviour code
+BR_E = 5  #: restitution of a rigid barrier
+BR_GAP = 6  #: clear gap between blocks (m)
+BR_SPACING = 7  #: block spacing (m)
+N_BARRIER_COLS = 8
+
+# Outcome of a rock's first meeting with a barrier (rockfall_design.measures.Outcome).
+O_NOT_MET = 0
+O_CAUGHT = 1
+O_PASSED_OVER = 2
+O_BROKEN_THROUGH = 3
+O_REBOUNDED = 4
+O_PASSED_THROUGH_GAP = 5
+
+# Columns of a rock's state at the first downslope passage of a restart station,
+# enough to resume the path there exactly as it would have gone on (with the
+# rock's random stream, saved apart as uint64).
+RS_MODE, RS_X, RS_Y, RS_VX, RS_VY, RS_W, RS_T = 0, 1, 2, 3, 4, 5, 6
+RS_SEG, RS_E, RS_MU, RS_MUR, RS_NIMP, RS_NEV, RS_MAXX = 7, 8, 9, 10, 11, 12, 13
+N_RESTART_COLS = 14
+
+# Columns of the record of a rock's first meeting with a barrier.
+BM_H, BM_V, BM_E, BM_T = 0, 1, 2, 3
+N_BMEET_COLS = 4
+
+FLIGHT = 0
+CONTACT = 1
+
+# Columns of a recorded trajectory point.
+T_X, T_Y, T_VX, T_VY, T_W, T_T, T_MODE = 0, 1, 2, 3, 4, 5, 6
+N_TRAJ_COLS = 7
+
+# Columns of the per-station detail record.
+C_H, C_VX, C_VY, C_W, C_T = 0, 1, 2, 3, 4
+N_CROSS_COLS = 5

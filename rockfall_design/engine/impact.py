@@ -1,0 +1,190 @@
+"""Impacts: Newton restitution with Coulomb friction and spin, or the lumped-mass law.
+
+PHYSICS.md, 'Impact'. ``_collide`` draws the material's parameters for the
+impact, applies :func:`impact` and decides between flight and contact.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ._jit import CACHE
+from .columns import (
+    CONTACT,
+    FLIGHT,
+    M_E,
+    M_MODEL,
+    M_MU,
+    M_MUR,
+    M_ROUGH,
+    M_ROUGH_H,
+    M_RT,
+    M_SD_E,
+    M_SD_MU,
+    M_SD_MUR,
+    M_VSCALE,
+    M_VSK,
+    MODEL_SPANG,
+)
+from .flight import _unit_tangent
+from .rng import next_normal, next_uniform, truncated_normal
+
+
+@njit(cache=CACHE)
+def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt_max=0.0):
+    """Velocity and spin after an impact on ground of outward normal (nx, ny).
+
+    Parameters
+    ----------
+    vx, vy : float
+        Velocity before the impact (m/s).
+    w : float
+        Angular velocity before (rad/s), counter-clockwise positive.
+    nx, ny : float
+        Unit outward normal of the ground (centre path piece).
+    r : float
+        Rock radius (m).
+    model : int
+        ``MODEL_SPANG`` or ``MODEL_RN_RT``.
+    e : float
+        Coefficient of restitution e (spang) or Rn (rn_rt), this impact's draw.
+    rt : float
+        Tangential restitution Rt (rn_rt only).
+    mu : float
+        Coulomb friction coefficient, this impact's draw.
+    vscale : bool
+        Apply the Pfeiffer & Bowen (1989) scaling e / (1 + (|v_n| / K)^2).
+    vsk : float
+        K of that scaling (m/s), 9.144 m/s in CRSP.
+    rough : float
+        Standard deviation of the tilt of the impact normal (rad).
+    rng : ndarray of uint64, shape (1,)
+        The rock's random stream (for the tilt).
+    tilt_max : float
+        Largest one-sided tilt of the normal (rad), atan(h_r / r) for a
+        roughness height h_r; 0 for none.
+
+    Returns
+    -------
+    vx, vy, w : float
+        Velocity (m/s) and angular velocity (rad/s) after the impact.
+
+    Notes
+    -----
+    With v_n = v.n < 0, v_t = v.t, slip u = v_t + r w, normal impulse per
+    unit mass p_n = (1 + e)|v_n| (Spang & Rautenstrauch 1988; PHYSICS.md):
+
+    * spang, stick (|u| <= 7/2 mu p_n): v_t' = (5 v_t - 2 r w) / 7,
+      w' = -v_t' / r;
+    * spang, slip: v_t' = v_t - mu p_n sgn(u), w' = w - 5/2 mu p_n sgn(u) / r;
+    * rn_rt: v_n' = -Rn v_n, v_t' = Rt v_t and w' = Rt w (PHYSICS.md,
+      "Lumped-mass law"): the spin scales with the tangential speed, so a
+      rolling rock stays rolling and no energy is gained.
+
+    A tilted normal that would make the rock arrive from below is drawn again
+    (at most 64 times, then the untilted normal is used).
+
+    Roughness as a height (PlatRock's convention, PHYSICS.md "Options"): the
+    normal also turns by an angle drawn uniformly from [0, ``tilt_max``],
+    always against the tangential velocity, as if the rock met the face of an
+    asperity of height h_r turned towards it; larger rocks (larger r) feel a
+    smaller tilt. Turning against the motion makes the arrival steeper, so it
+    never makes the rock arrive from below.
+    """
+    mx = nx
+    my = ny
+    # One-sided tilt: counter-clockwise turns the normal towards -t, against
+    # a rock moving along +t (t = (n_y, -n_x)).
+    th_h = 0.0
+    if tilt_max > 0.0:
+        vt0 = vx * ny - vy * nx
+        if vt0 != 0.0:
+            th_h = tilt_max * next_uniform(rng) * (1.0 if vt0 > 0.0 else -1.0)
+            c = np.cos(th_h)
+            s = np.sin(th_h)
+            mx = c * nx - s * ny
+            my = s * nx + c * ny
+    if rough > 0.0:
+        for _ in range(64):
+            th = th_h + rough * next_normal(rng)
+            c = np.cos(th)
+            s = np.sin(th)
+            ax = c * nx - s * ny
+            ay = s * nx + c * ny
+            if vx * ax + vy * ay < 0.0:
+                mx = ax
+                my = ay
+                break
+    tx = my
+    ty = -mx
+    vn = vx * mx + vy * my
+    vt = vx * tx + vy * ty
+    if vn >= 0.0:
+        return vx, vy, w
+    ee = e
+    if vscale:
+        q = vn / vsk
+        ee = e / (1.0 + q * q)
+    vn2 = -ee * vn
+    if model == MODEL_SPANG:
+        pn = -(1.0 + ee) * vn
+        u = vt + r * w
+        if abs(u) <= 3.5 * mu * pn:
+            vt2 = (5.0 * vt - 2.0 * r * w) / 7.0
+            w2 = -vt2 / r
+        else:
+            sg = 1.0 if u > 0.0 else -1.0
+            vt2 = vt - mu * pn * sg
+            w2 = w - 2.5 * mu * pn * sg / r
+    else:
+        vt2 = rt * vt
+        w2 = rt * w
+    return vn2 * mx + vt2 * tx, vn2 * my + vt2 * ty, w2
+
+
+@njit(cache=CACHE)
+def _draw(mats, mat, rng, drawn):
+    """Draw this contact's e, mu and mu_r for material ``mat`` into ``drawn``."""
+    drawn[0] = truncated_normal(rng, mats[mat, M_E], mats[mat, M_SD_E], 0.0, 1.0)
+    drawn[1] = truncated_normal(rng, mats[mat, M_MU], mats[mat, M_SD_MU], 0.0, np.inf)
+    drawn[2] = truncated_normal(rng, mats[mat, M_MUR], mats[mat, M_SD_MUR], 0.0, np.inf)
+
+
+@njit(cache=CACHE)
+def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn):
+    """Impact on piece ``k``, then decide between flight and contact.
+
+    Draws the material parameters of the piece (per impact), applies
+    :func:`impact`, and returns (vx, vy, w, mode, seg). If the outgoing normal
+    speed against the true piece is below ``v_contact`` the normal component
+    is removed and the rock continues in contact.
+    """
+    seg = pseg[k]
+    mat = seg_mat[seg]
+    _draw(mats, mat, rng, drawn)
+    tx, ty = _unit_tangent(px, py, k)
+    nx = -ty
+    ny = tx
+    vx, vy, w = impact(
+        vx,
+        vy,
+        w,
+        nx,
+        ny,
+        r,
+        int(mats[mat, M_MODEL]),
+        drawn[0],
+        mats[mat, M_RT],
+        drawn[1],
+        mats[mat, M_VSCALE] > 0.5,
+        mats[mat, M_VSK],
+        mats[mat, M_ROUGH],
+        rng,
+        np.arctan(mats[mat, M_ROUGH_H] / r),
+    )
+    vn = vx * nx + vy * ny
+    if vn >= v_contact:
+        return vx, vy, w, FLIGHT, seg
+    vt = vx * tx + vy * ty
+    return vt * tx, vt * ty, w, CONTACT, seg

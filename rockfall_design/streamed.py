@@ -1,0 +1,146 @@
+"""Runs too large to keep: statistics accumulated chunk by chunk from histograms."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .engine.columns import STATUS_NAMES, STOPPED
+from .histograms import LinearHistogram, LogHistogram
+from .judge.outcomes import protected_zone_counts
+from .summary import _STATION_QUANTITIES, _hist_blocks, _pct_label, _summary
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
+    from .engine import Section
+    from .project import Project
+    from .simulation import Study
+
+#: Relative error of the streamed percentiles of heights, speeds and energies.
+STREAM_REL_ERROR = 0.002
+
+#: Stopped rocks whose rest position is kept for the profile figure.
+REST_SAMPLE = 20_000
+
+# Envelope values (rocks x envelope points) held per chunk: about 100 MB with
+# the temporaries of the statistics.
+_CHUNK_VALUES = 4_000_000
+
+# Buckets of the where-rocks-stop histogram: a multiple of the figure's 80 bins.
+_STOP_BUCKETS = 80 * 820
+
+
+@dataclass
+class StreamedStudy:
+    """The statistics of a run too large to keep: accumulated chunk by chunk.
+
+    Answers what :class:`Study` answers for the summary, the envelopes and
+    the figures (not the per-rock tables: those went to ``on_chunk``).
+    Counts, means and maxima are exact; percentiles of heights, speeds and
+    energies within ``STREAM_REL_ERROR`` (relative), of the stop position
+    within half a bucket of the stop histogram.
+    """
+
+    project: Project
+    seed: int
+    section: Section
+    stations: np.ndarray
+    grid: np.ndarray
+    chunk: int
+    n: int = 0
+    runtime_s: float = 0.0
+    events: int = 0
+    reaching: int = 0
+    reaching_unresolved: int = 0
+    trajectories: list[np.ndarray] = field(default_factory=list)
+    _counts: np.ndarray = field(default_factory=lambda: np.zeros(len(STATUS_NAMES), np.int64))
+    _rest_x: list[np.ndarray] = field(default_factory=list)
+    _rest_y: list[np.ndarray] = field(default_factory=list)
+    _station: dict[str, LogHistogram] = field(default_factory=dict)
+    _env_h: LogHistogram | None = None
+    _env_e: LogHistogram | None = None
+    _stops: LinearHistogram | None = None
+
+    def __post_init__(self) -> None:
+        u, s = self.stations.size, self.grid.size
+        self._station = {k: LogHistogram(u, STREAM_REL_ERROR) for k in _STATION_QUANTITIES}
+        self._env_h = LogHistogram(s, STREAM_REL_ERROR)
+        self._env_e = LogHistogram(s, STREAM_REL_ERROR)
+        self._stops = LinearHistogram(self.section.x[0], self.section.x[-1], _STOP_BUCKETS)
+
+    @property
+    def statistics(self) -> dict[str, Any]:
+        return {
+            "method": "histograms",
+            "chunk_rocks": int(self.chunk),
+            "relative_error": STREAM_REL_ERROR,
+            "stop_x_error_m": float(self._stops.width / 2),
+        }
+
+    def add(self, part: Study) -> None:
+        """Add the rocks of one chunk (a :class:`Study` of consecutive rocks)."""
+        r = part.result
+        a = part.crossing_arrays()
+        for key, (arr, scale) in _STATION_QUANTITIES.items():
+            self._station[key].add(a[arr], scale)
+        self._env_h.add(r.grid_height)
+        self._env_e.add(r.grid_energy, 1e3)
+        stopped = r.status == STOPPED
+        self._stops.add(r.x_end[stopped])
+        room = REST_SAMPLE - sum(x.size for x in self._rest_x)
+        if room > 0:
+            self._rest_x.append(r.x_end[stopped][:room].copy())
+            self._rest_y.append(r.y_end[stopped][:room].copy())
+        self._counts += part.status_counts()
+        protect = self.project.protect
+        if protect is not None:
+            n_reach, n_unresolved = protected_zone_counts(r.max_x, r.status, protect.x)
+            self.reaching += n_reach
+            self.reaching_unresolved += n_unresolved
+        self.events += r.events_total
+        self.n += r.n
+        if not self.trajectories:
+            self.trajectories = r.trajectories
+
+    # ---- what the figures need -------------------------------------------
+    def status_counts(self) -> np.ndarray:
+        return self._counts.copy()
+
+    def rest_positions(self) -> tuple[np.ndarray, np.ndarray]:
+        """x and y (m) of the first ``REST_SAMPLE`` rocks to come to rest."""
+        if not self._rest_x:
+            return np.zeros(0), np.zeros(0)
+        return np.concatenate(self._rest_x), np.concatenate(self._rest_y)
+
+    def stop_counts(self, bins: int) -> np.ndarray:
+        if _STOP_BUCKETS % bins:
+            raise ValueError(f"bins must divide {_STOP_BUCKETS}")
+        return self._stops.counts[0].reshape(bins, -1).sum(axis=1)
+
+    # ---- statistics ------------------------------------------------------
+    def envelopes(self) -> pd.DataFrame:
+        """As :meth:`Study.envelopes`, from the histograms."""
+        import pandas as pd
+
+        out: dict[str, np.ndarray] = {
+            "x_m": self.grid,
+            "ground_m": self.section.ground_height(self.grid),
+            "crossings": self._env_h.n.copy(),
+        }
+        for name, hist, unit in (("height", self._env_h, "m"), ("energy", self._env_e, "kj")):
+            out[f"{name}_max_{unit}"] = hist.maximum()
+            for q in self.project.analysis.percentiles:
+                out[f"{name}_p{_pct_label(q)}_{unit}"] = hist.percentile(q)
+        return pd.DataFrame(out)
+
+    def summary(self) -> dict[str, Any]:
+        """As :meth:`Study.summary`, from the histograms."""
+        blocks = {key: _hist_blocks(h) for key, h in self._station.items()}
+        crossings = self._station["passing_height_m"].n
+        stop_block = _hist_blocks(self._stops)[0]
+        reaching = (None if self.project.protect is None
+                    else (self.reaching, self.reaching_unresolved))
+        return _summary(self, self.events, crossings, blocks, stop_block, reaching)

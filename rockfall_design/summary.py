@@ -1,0 +1,115 @@
+"""The JSON summary of a run (``simulate --json``), the same for an exact and a streamed run."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from . import __version__
+from .engine.columns import CAUGHT, EXIT_DOWNSLOPE, EXIT_UPSLOPE, STOPPED, UNRESOLVED
+from .histograms import LinearHistogram, LogHistogram
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .simulation import Study
+    from .streamed import StreamedStudy
+
+#: The statistics reported for every station quantity, in this order.
+STATISTICS = ("mean", "p50", "p95", "p99", "max")
+
+
+def _stat_block(values: np.ndarray) -> dict[str, float | None]:
+    """mean, p50, p95, p99, max of the finite values (None if there are none)."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return {k: None for k in STATISTICS}
+    p = np.percentile(v, [50, 95, 99])
+    return {
+        "mean": float(v.mean()),
+        "p50": float(p[0]),
+        "p95": float(p[1]),
+        "p99": float(p[2]),
+        "max": float(v.max()),
+    }
+
+
+# Per station: summary key -> (crossing array, divisor to the reported unit).
+_STATION_QUANTITIES: dict[str, tuple[str, float]] = {
+    "passing_height_m": ("passing_height_m", 1.0),
+    "velocity_ms": ("velocity_ms", 1.0),
+    "energy_kj": ("energy_j", 1e3),
+    "translational_energy_kj": ("translational_energy_j", 1e3),
+    "rotational_energy_kj": ("rotational_energy_j", 1e3),
+}
+
+
+def _summary(
+    study: Study | StreamedStudy,
+    events: int,
+    crossings: np.ndarray,
+    blocks: dict[str, list[dict[str, float | None]]],
+    stop_block: dict[str, float | None],
+    reaching: tuple[int, int] | None,
+) -> dict[str, Any]:
+    """The summary dict, the same for an exact and a streamed study.
+
+    ``reaching`` is (rocks counted as reaching the protected zone, how many of
+    them are unresolved paths counted so), None without a protected zone.
+    """
+    counts = study.status_counts()
+    stations = []
+    for j, xs in enumerate(study.stations):
+        st: dict[str, Any] = {"x": float(xs), "crossings": int(crossings[j])}
+        st.update({key: blocks[key][j] for key in _STATION_QUANTITIES})
+        stations.append(st)
+    out: dict[str, Any] = {
+        "project": study.project.name,
+        "version": __version__,
+        "rocks": int(study.n),
+        "seed": int(study.seed),
+        "project_hash": study.project.resolved_hash(),
+        "runtime_s": round(float(study.runtime_s), 6),
+        "events": int(events),
+        "statistics": dict(study.statistics),
+        "stops": {
+            "x": {k: stop_block[k] for k in ("mean", "p50", "p95", "max")},
+            "stopped": int(counts[STOPPED]),
+            "out_of_section": int(counts[EXIT_DOWNSLOPE] + counts[EXIT_UPSLOPE]),
+            "exit_downslope": int(counts[EXIT_DOWNSLOPE]),
+            "exit_upslope": int(counts[EXIT_UPSLOPE]),
+            "unresolved": int(counts[UNRESOLVED]),
+            "caught": int(counts[CAUGHT]),
+        },
+        "stations": stations,
+    }
+    protect = study.project.protect
+    if protect is not None:
+        n_reach, n_unresolved = reaching or (0, 0)
+        out["protect"] = {
+            "x": float(protect.x),
+            "reaching": int(n_reach),
+            "fraction": n_reach / study.n if study.n else 0.0,
+            "unresolved": int(n_unresolved),
+        }
+    return out
+
+
+def _pct_label(q: float) -> str:
+    """'95' for 95.0, '99_9' for 99.9 (column-name safe)."""
+    return f"{q:g}".replace(".", "_")
+
+
+def _hist_blocks(h: LogHistogram | LinearHistogram) -> list[dict[str, float | None]]:
+    """The statistics block of each column of a histogram (None where empty)."""
+    cols = {
+        "mean": h.mean(),
+        "p50": h.percentile(50),
+        "p95": h.percentile(95),
+        "p99": h.percentile(99),
+        "max": h.maximum(),
+    }
+    return [
+        {k: (float(v[j]) if h.n[j] > 0 else None) for k, v in cols.items()}
+        for j in range(h.columns)
+    ]
