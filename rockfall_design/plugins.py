@@ -41,7 +41,14 @@ from pydantic import BaseModel, ValidationError
 from . import hookspecs
 from .costs import CostModel
 from .errors import Interrupted, PluginError
-from .measures import Barrier, BarrierBehaviour, ProfileEdit, ProtectiveMeasure
+from .measures import (
+    Barrier,
+    BarrierBehaviour,
+    ProfileEdit,
+    ProtectiveMeasure,
+    Quantity,
+    design_role,
+)
 from .safety import Check, SafetyConcept
 
 __all__ = [
@@ -349,7 +356,49 @@ def _validate_class(cls: Any, section: str, base: type, name_attr: str) -> str |
             if not (math.isnan(low) or math.isnan(high) or low < high):
                 return (f"{label} (kind {name!r}): design variable {var!r} has bounds "
                         f"({low:g}, {high:g}); low must be below high")
+        for var in params.model_fields:
+            try:
+                design_role(params, var)  # the field's own declaration, if any
+            except ValueError as exc:
+                return f"{label} (kind {name!r}): {exc}"
     return None
+
+
+def blocked_provider(registry: Registry, section: str, name: str) -> str | None:
+    """The blocked distribution that provides measure kind (or concept, cost model) ``name``.
+
+    Only for the message of a run that has already failed on an unknown
+    name: the blocked plugins are loaded, guarded and apart from
+    ``registry``, to say which of them provides it.
+
+    Parameters
+    ----------
+    registry
+        The registry of the run (its ``blocked`` names).
+    section
+        ``"measure"``, ``"safety"`` or ``"cost"``.
+    name
+        The unknown name.
+
+    Returns
+    -------
+    str or None
+        The distribution (or plugin) name, or None if no blocked plugin
+        provides it (or none can be loaded).
+    """
+    blocked = {_normalise(b) for b in registry.blocked}
+    if not blocked:
+        return None
+    eps = [ep for ep in _entry_points(None)
+           if _normalise(ep.name) in blocked
+           or (_dist_name(ep) and _normalise(_dist_name(ep) or "") in blocked)]
+    if not eps:
+        return None
+    try:
+        found = load_registry(entry_points=eps)
+    except PluginError:  # two blocked plugins claiming one name: say nothing
+        return None
+    return found.provider.get((section, name))
 
 
 def _entry_points(entry_points: Iterable[EntryPoint] | None) -> list[EntryPoint]:
@@ -598,6 +647,16 @@ def _is_cost(value: Any) -> bool:
     return _is_number(value) and math.isfinite(value) and value >= 0
 
 
+def _is_bill(value: Any) -> bool:
+    # A bill is priced as amount x unit price: an amount must be a finite number >= 0.
+    return isinstance(value, list) and all(
+        isinstance(q, Quantity) and isinstance(q.name, str) and q.name
+        and isinstance(q.unit, str) and _is_number(q.amount) and math.isfinite(q.amount)
+        and q.amount >= 0 and (q.product is None or isinstance(q.product, str))
+        and (q.size is None or (_is_number(q.size) and math.isfinite(q.size)))
+        for q in value)
+
+
 def _is_check_list(value: Any) -> bool:
     return isinstance(value, list) and all(isinstance(c, Check) for c in value)
 
@@ -636,12 +695,17 @@ _CONTRACTS: dict[tuple[str, str], _Contract] = {
         "a Barrier or a ProfileEdit", lambda v, m, args: footprint_problem(v, m, *args)),
     ("measure", "design_properties"): _NUMBER_DICT,
     ("measure", "quantities"): _NUMBER_DICT,
+    ("measure", "bill"): _Contract((), _is_bill, "a list of Quantity (a name, a unit, an "
+                                   "amount that is a finite number >= 0)"),
     ("measure", "label"): _Contract((), lambda v: isinstance(v, str), "a str"),
     ("safety", "__init__"): _Contract(),
     ("safety", "checks"): _Contract((), _is_check_list, "a list of Check"),
     ("cost", "__init__"): _Contract(),
     # KeyError or ValueError: no price for this measure (the optimiser skips the design).
     ("cost", "cost"): _Contract((KeyError, ValueError), _is_cost, "a finite number >= 0"),
+    ("cost", "price"): _Contract((KeyError, ValueError), _is_cost, "a finite number >= 0"),
+    ("cost", "missing_price"): _Contract((), lambda v: v is None or isinstance(v, str),
+                                         "a str or None"),
 }
 
 _NOUN = {"measure": "measure", "safety": "safety concept", "cost": "cost model"}
@@ -669,8 +733,8 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
     method
         ``"__init__"`` (instantiate the class with ``args``), or the name of
         the method: ``footprint``, ``design_properties``, ``quantities``,
-        ``label`` (measures), ``checks`` (safety concepts), ``cost`` (cost
-        models).
+        ``bill``, ``label`` (measures), ``checks`` (safety concepts), ``cost``,
+        ``price``, ``missing_price`` (cost models).
     *args
         Passed on to the method.
 
@@ -684,7 +748,7 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
     ValueError
         From ``footprint`` (the measure does not fit on the section).
     KeyError or ValueError
-        From ``cost`` (the catalogue has no price for the measure).
+        From ``cost`` and ``price`` (the catalogue has no price for the measure).
     PluginError
         Exit code 3: the method raised anything else, or returned what its
         contract does not allow. The one-line message names the measure,
