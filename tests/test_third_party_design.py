@@ -190,3 +190,36 @@ def test_a_quantity_without_a_price_is_found_before_any_search(installed, tmp_pa
     assert f"{path}:{line}: design.costs: candidate design.candidates[1] (ring_net): " \
            "no price for quantity 'ring_net_m2' (m2 per running metre)" in err
     assert "catalogue costs.yaml" in err
+
+
+def test_the_readme_catch_net_is_a_candidate_searched_by_its_own_height(tmp_path, monkeypatch):
+    """The README's catch net, unchanged: its height is its own, not a product's."""
+    import re
+
+    from rockfall_design.design import build_candidate_measure, design_cost
+    from rockfall_design.simulation import section_from_project
+
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    tail = readme[readme.index("`rockfall_catchnet/__init__.py`"):]
+    source = re.search(r"```python\n(.*?)```", tail, re.S).group(1)
+    write_distribution(tmp_path / "site", "rockfall_catchnet", source, "catchnet",
+                       dist_name="rockfall-catchnet")
+    monkeypatch.syspath_prepend(str(tmp_path / "site"))
+    path = _project(tmp_path)
+    text = path.read_text(encoding="utf-8")
+    text = text[:text.index("  candidates:")] + (
+        "  candidates:\n    - type: catch_net\n      x: [100, 145]\n      capacity_kj: 250\n")
+    path.write_text(text, encoding="utf-8")
+    (tmp_path / "costs.yaml").write_text(COSTS + "other_per_m: {catch_net: 350}\n")
+    registry = load_registry()
+    project = load_project(path)
+    spec = resolve_design(project, registry)
+    (net,) = spec.candidates
+    assert (net.products, net.ranges, net.fixed) == ((), {"height": (0.5, 3.0)},
+                                                     {"capacity_kj": 250})
+    heights = sorted({c["height"] for c in _discrete_choices(net)})
+    assert heights[0] == 0.5 and heights[-1] == 3.0 and len(heights) == 11
+    m = build_candidate_measure(net, registry, {"x": 120.0, "height": 1.25})
+    assert m.params.height == 1.25
+    # priced per running metre through other_per_m, as before bills existed
+    assert design_cost(registry, spec, [m], section_from_project(project)) == 15000 + 150 * 350
