@@ -85,7 +85,7 @@ def test_priced_by_the_catalogue_else_by_its_default_price(installed, tmp_path):
     project = load_project(PROJECT)
     section = section_from_project(project)
     spec = resolve_design(project, registry)
-    params = {"x": 120.0, "height": 2.0, "uphill_face_deg": 60.0}
+    params = {"x": 100.0, "height": 2.0, "uphill_face_deg": 60.0}
     got, expected = _fill_cost(spec, registry, section, params, 38.0)  # the catalogue's
     assert got == pytest.approx(expected)
     costs = (ROOT / "projects" / "catalogue_costs.yaml").read_text(encoding="utf-8")
