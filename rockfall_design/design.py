@@ -76,6 +76,7 @@ __all__ = [
     "declared_design",
     "design_cost",
     "resolve_design",
+    "unknown_measure_type",
 ]
 
 #: The conventional field names of the catalogue roles, for plugins that declare none.
@@ -505,12 +506,20 @@ def _declared(registry: Registry, cls: Any, kind: str) -> DeclaredDesign:
         ) from None
 
 
-def _unknown_type(project: Project, registry: Registry, at: tuple, kind: str) -> Exception:
-    """The error for an unknown measure type: naming the blocked plugin that provides it."""
+def unknown_measure_type(
+    project: Project, registry: Registry, at: Sequence[str | int], kind: str
+) -> Exception:
+    """The error for an unknown measure type at key path ``at``.
+
+    When plugins are blocked (``--block``) and one of them provides ``kind``,
+    the message names it ("measure type 'catch_net' is provided by
+    rockfall-catchnet, which is blocked (--block)"); otherwise it is an
+    unknown name with "did you mean".
+    """
     provider = blocked_provider(registry, "measure", kind) if registry.blocked else None
     if provider is not None:
         return project.error_at(
-            at,
+            tuple(at),
             f"measure type {kind!r} is provided by {provider}, which is blocked (--block)",
         )
     return project.unknown_name(at, kind, registry.measures, "measure type")
@@ -529,7 +538,7 @@ def _resolve_candidate(
     kind = raw["type"]
     cls = registry.measures.get(kind)
     if cls is None:
-        raise _unknown_type(project, registry, at + ("type",), kind)
+        raise unknown_measure_type(project, registry, at + ("type",), kind)
     fields = cls.Params.model_fields
     if "x" not in fields:
         raise project.error_at(

@@ -166,6 +166,11 @@ def test_optimise_chooses_it_and_check_accepts_the_design(installed, tmp_path, c
     assert main(["check", str(out / "design.yaml"), "--json"]) == 0
     checked = json.loads(capsys.readouterr().out)
     assert [x["type"] for x in checked["measures"]] == ["ring_net"]
+    # the written design names the plugin it needs when that is blocked
+    assert main(["check", str(out / "design.yaml"), "--block", "ringnet"]) == ExitCode.BAD_INPUT
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "measures[0].type: measure type 'ring_net' is provided " \
+        "by rockfall-ringnet, which is blocked (--block)" in err, err
 
 
 @pytest.mark.parametrize("block", ["rockfall-ringnet", "ringnet"])
