@@ -17,8 +17,9 @@ Each field of a measure's ``Params`` may declare its design role in its
 metadata, ``json_schema_extra={"design": ...}`` (read by
 :func:`~rockfall_design.measures.design_role`; the vocabulary is in
 ``hookspecs.py``): a free variable with bounds or options, or a catalogue
-choice. :func:`declared_design` collects them per measure class. A plugin
-written before these declarations keeps today's conventions: a field named
+choice. :func:`~rockfall_design.declared.declared_design` collects them per
+measure class. A plugin written before these declarations keeps today's
+conventions: a field named
 ``product`` is the catalogue product, ``height`` its height and
 ``capacity_kj`` its energy class, and ``design_variables`` gives bounds.
 
@@ -54,8 +55,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from .costs import CostModel
+from .declared import DeclaredDesign, declared_design
 from .errors import PluginError
-from .measures import design_role
 from .plugins import blocked_provider, call_plugin
 from .project import params_problem
 
@@ -78,104 +79,6 @@ __all__ = [
     "resolve_design",
     "unknown_measure_type",
 ]
-
-#: The conventional field names of the catalogue roles, for plugins that declare none.
-_CONVENTIONAL = {"catalogue": "product", "catalogue_height": "height",
-                 "catalogue_capacity": "capacity_kj"}
-
-
-@dataclass(frozen=True)
-class DeclaredDesign:
-    """A measure class's design variables, as its plugin declares them.
-
-    Attributes
-    ----------
-    product, height, capacity : str or None
-        The fields that take the catalogue product, one of its heights (m)
-        and its energy class (kJ); None where the measure has none (all None
-        for a measure without catalogue products).
-    ranges : dict of str to (float, float)
-        Free continuous variables and their default bounds (declared in the
-        field's metadata).
-    options : dict of str to tuple
-        Free discrete variables and their default options.
-    fallback_bounds : dict of str to (float, float)
-        ``design_variables`` bounds: used for a required parameter the
-        candidate does not give (plugins written before declarations).
-    """
-
-    product: str | None = None
-    height: str | None = None
-    capacity: str | None = None
-    ranges: dict[str, tuple[float, float]] = field(default_factory=dict)
-    options: dict[str, tuple[Any, ...]] = field(default_factory=dict)
-    fallback_bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
-
-
-def declared_design(cls: Any) -> DeclaredDesign:
-    """What measure class ``cls`` declares about its design variables.
-
-    Parameters
-    ----------
-    cls
-        A measure class (its ``Params`` and ``design_variables``).
-
-    Returns
-    -------
-    DeclaredDesign
-
-    Raises
-    ------
-    ValueError
-        If a declaration is malformed, a catalogue role is declared twice, or
-        a height or capacity role is declared without a product field (a
-        fault of the plugin).
-    """
-    model = cls.Params
-    fields = model.model_fields
-    roles = {name: design_role(model, name) for name in fields}
-    ranges: dict[str, tuple[float, float]] = {}
-    options: dict[str, tuple[Any, ...]] = {}
-    catalogue: dict[str, str] = {}
-    for name, role in roles.items():
-        if role is None:
-            continue
-        if role.role == "range":
-            assert role.bounds is not None
-            ranges[name] = role.bounds
-        elif role.role == "options":
-            assert role.options is not None
-            options[name] = role.options
-        else:
-            if role.role in catalogue:
-                raise ValueError(f"{model.__name__}: fields {catalogue[role.role]!r} and "
-                                 f"{name!r} both declare design role {role.role!r}")
-            catalogue[role.role] = name
-    # Today's convention for what is not declared: a field's name gives its role.
-    for role_name, conventional in _CONVENTIONAL.items():
-        if role_name not in catalogue and conventional in fields \
-                and roles.get(conventional) is None:
-            catalogue[role_name] = conventional
-    if "catalogue" not in catalogue:
-        declared = [n for n, r in roles.items() if r is not None and r.role.startswith("catalogue")]
-        if declared:
-            raise ValueError(f"{model.__name__}: field {declared[0]!r} declares a catalogue role "
-                             "but no field declares design role 'catalogue' (the product)")
-        catalogue = {}
-    fallback: dict[str, tuple[float, float]] = {}
-    for name, bounds in (getattr(cls, "design_variables", {}) or {}).items():
-        low, high = (float(b) for b in bounds)
-        if math.isfinite(low) and math.isfinite(high):
-            fallback[name] = (low, high)
-    return DeclaredDesign(
-        product=catalogue.get("catalogue"),
-        height=catalogue.get("catalogue_height"),
-        capacity=catalogue.get("catalogue_capacity"),
-        ranges=ranges,
-        options=options,
-        fallback_bounds=fallback,
-    )
-
 
 @dataclass(frozen=True)
 class Product:
