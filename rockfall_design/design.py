@@ -19,9 +19,9 @@ metadata, ``json_schema_extra={"design": ...}`` (read by
 ``hookspecs.py``): a free variable with bounds or options, or a catalogue
 choice. :func:`~rockfall_design.declared.declared_design` collects them per
 measure class. A plugin written before these declarations keeps today's
-conventions: a field named
-``product`` is the catalogue product, ``height`` its height and
-``capacity_kj`` its energy class, and ``design_variables`` gives bounds.
+conventions: a field named ``product`` is the catalogue product, ``height``
+its height and ``capacity_kj`` its energy class, and ``design_variables``
+gives bounds.
 
 Products
 --------
