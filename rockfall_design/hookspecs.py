@@ -52,6 +52,11 @@ Block it by its entry-point name or its distribution name:
 ``rockfall-design plugins --block myplugin`` shows the registry without it
 (the module is not even imported), and ``load_registry(blocked=["myplugin"])``
 does the same in Python. To remove it for good, uninstall its distribution.
+A project that needs a blocked plugin's measure type fails at that type's
+line (exit code 2), naming the plugin: "measure type 'catch_net' is provided
+by rockfall-catchnet, which is blocked (--block)". To say so, and only then,
+after the run has already failed, the blocked plugins are loaded (guarded)
+apart from the run's registry.
 
 Rules for every registered class
 --------------------------------
