@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from rockfall_design.design import resolve_design
+from rockfall_design.errors import ProjectError
 from rockfall_design.evaluate import build_concept, evaluate_design
 from rockfall_design.optimise import Screening, optimise
 from rockfall_design.plugins import load_registry
@@ -102,6 +103,11 @@ def main() -> None:
     print(f"first call (compile or load numba's cache): {time.perf_counter() - t0:.1f} s")
     for path in args.projects:
         project = load_project(path)
+        try:
+            resolve_design(project, registry)
+        except ProjectError as exc:  # e.g. design_embankment.yaml without its example plugin
+            print(f"\n{path.name}: skipped: {exc}")
+            continue
         t0 = time.perf_counter()
         res = optimise(project, registry)
         wall = time.perf_counter() - t0

@@ -37,6 +37,7 @@ from .measures import (
     Outcome,
     ProfileEdit,
     ProtectiveMeasure,
+    Quantity,
 )
 from .safety import Check, SafetyConcept, SafetyParams
 
@@ -121,6 +122,7 @@ __all__ = [
     "Outcome",
     "ProfileEdit",
     "ProtectiveMeasure",
+    "Quantity",
     "SafetyConcept",
     "SafetyParams",
     "fraction_upper_bound",

@@ -11,21 +11,41 @@ or in a catalogue file.
 :func:`build_candidate_measure` then makes one measure of a candidate from the
 values the optimiser picked (no file lines there: a ValueError).
 
+What a plugin declares
+----------------------
+Each field of a measure's ``Params`` may declare its design role in its
+metadata, ``json_schema_extra={"design": ...}`` (read by
+:func:`~rockfall_design.measures.design_role`; the vocabulary is in
+``hookspecs.py``): a free variable with bounds or options, or a catalogue
+choice. :func:`~rockfall_design.declared.declared_design` collects them per
+measure class. A plugin written before these declarations keeps today's
+conventions: a field named ``product`` is the catalogue product, ``height``
+its height and ``capacity_kj`` its energy class, and ``design_variables``
+gives bounds.
+
 Products
 --------
-A measure whose parameters include ``product`` (fence and wall among the
+A measure with a catalogue product field (fence and wall among the
 built-ins) is always built from a catalogue product: the optimiser picks the
 product among :attr:`CandidateSpec.products` and the height among that
-product's heights; ``capacity_kj`` is the product's energy class, and other
-keys of the product that are parameters of the measure (a wall's
-``thickness``) are set from it. Such a candidate therefore must not give
-``height``, ``capacity_kj`` or those keys itself.
+product's heights; the capacity field is the product's energy class, and
+other keys of the product that are parameters of the measure (a wall's
+``thickness``) are set from it. Such a candidate therefore must not give the
+height, the capacity or those keys itself.
 
 Defaults
 --------
-A required parameter that the candidate does not give becomes a continuous
-range with the plugin's own ``design_variables`` bounds (a ditch's ``width``
-2..20 m) where the plugin declares finite ones; otherwise it is an error.
+A parameter the candidate does not give is searched within the bounds (or
+options) its field declares; a required parameter without a declaration
+becomes a continuous range with the plugin's ``design_variables`` bounds (a
+ditch's ``width`` 2..20 m) where they are finite; otherwise it is an error.
+
+Prices
+------
+Before any search, :func:`resolve_design` prices a sample design of every
+candidate: a quantity of its bill that the cost catalogue does not price at
+all is an error at ``design.costs`` naming the candidate and the quantity
+(:func:`design_cost` prices the designs of the search).
 """
 
 from __future__ import annotations
@@ -35,10 +55,15 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from .costs import CostModel
-from .plugins import guard
+from .declared import DeclaredDesign, declared_design
+from .errors import PluginError
+from .plugins import blocked_provider, guard
 from .project import params_problem
 
 if TYPE_CHECKING:  # pragma: no cover
+    from collections.abc import Sequence
+
+    from .engine import Section
     from .measures import ProtectiveMeasure
     from .plugins import Registry
     from .project import Project
@@ -47,13 +72,13 @@ __all__ = [
     "CandidateSpec",
     "DesignSpec",
     "Product",
+    "DeclaredDesign",
     "build_candidate_measure",
+    "declared_design",
+    "design_cost",
     "resolve_design",
+    "unknown_measure_type",
 ]
-
-#: Parameters a product sets, besides ``product`` itself.
-_FROM_PRODUCT = ("capacity_kj", "height")
-
 
 @dataclass(frozen=True)
 class Product:
@@ -103,6 +128,9 @@ class CandidateSpec:
         required parameter not given, the plugin's design-variable bounds.
     options : dict of str to tuple
         Discrete parameters: name -> the options.
+    declared : DeclaredDesign
+        What the measure's plugin declares: which fields take the catalogue
+        product, height and capacity.
     """
 
     index: int
@@ -112,6 +140,17 @@ class CandidateSpec:
     fixed: dict[str, Any]
     ranges: dict[str, tuple[float, float]]
     options: dict[str, tuple[Any, ...]]
+    declared: DeclaredDesign = field(default_factory=DeclaredDesign, compare=False)
+
+    @property
+    def product_field(self) -> str | None:
+        """The parameter that takes the catalogue product (None without products)."""
+        return self.declared.product if self.products else None
+
+    @property
+    def height_field(self) -> str | None:
+        """The parameter that takes one of the product's heights (m), or None."""
+        return self.declared.height if self.products else None
 
     def product(self, name: str) -> Product:
         """The allowed product ``name``; KeyError if it is not one of :attr:`products`."""
@@ -165,13 +204,14 @@ def _fmt(value: Any) -> str:
     return format(value, ".12g") if isinstance(value, float) else str(value)
 
 
-def _product_params(product: Product, fields: Any) -> dict[str, Any]:
+def _product_params(product: Product, fields: Any, declared: DeclaredDesign) -> dict[str, Any]:
     """Parameters a product sets on a measure with these Params fields (height excluded)."""
-    params: dict[str, Any] = {"product": product.name}
-    if "capacity_kj" in fields:
-        params["capacity_kj"] = product.capacity_kj
+    assert declared.product is not None
+    params: dict[str, Any] = {declared.product: product.name}
+    if declared.capacity is not None:
+        params[declared.capacity] = product.capacity_kj
     for key, value in product.extra.items():
-        if key in fields and key not in ("product", "height"):
+        if key in fields and key not in (declared.product, declared.height):
             params[key] = value
     return params
 
@@ -227,6 +267,7 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
         for i, raw in enumerate(design.candidates)
     )
     cost_model = _resolve_cost_model(project, registry)
+    _check_prices(project, registry, candidates, cost_model)
     return DesignSpec(
         max_measures=design.max_measures,
         residual_count=design.residual_count,
@@ -239,6 +280,108 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
         products=catalogue,
         max_rocks=design.max_rocks,
     )
+
+
+def design_cost(
+    registry: Registry, spec: DesignSpec, measures: Sequence[ProtectiveMeasure], section: Section
+) -> float:
+    """Cost of a design (currency units): its measures' bills, priced by the cost model.
+
+    Parameters
+    ----------
+    registry
+        The plugins.
+    spec
+        The resolved design section (its cost model and length of slope).
+    measures
+        The measures of the design.
+    section
+        The bare slope section the measures stand on.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    KeyError or ValueError
+        From the cost model: it has no price for one of the measures.
+    PluginError
+        A measure's ``bill``/``quantities`` or the cost model broke its contract.
+    """
+    model, total = spec.cost_model, 0.0
+    # A cost model written before bills existed implements cost() only: call
+    # that, so that a fault is named in the method its author wrote.
+    by_bill = type(model).price is not CostModel.price
+    for m in measures:
+        quantities = guard(registry).measure(m).quantities(section)
+        if by_bill:
+            bill = guard(registry).measure(m).bill(section)
+            value = guard(registry).cost_model(model).price(m, bill, quantities,
+                                                             spec.length_m)
+        else:
+            value = guard(registry).cost_model(model).cost(m, quantities, spec.length_m)
+        total += float(value)
+    return total
+
+
+def _sample_params(spec: CandidateSpec) -> list[dict[str, Any]]:
+    """A few designs of a candidate to price before the search (the middle first)."""
+    out = []
+    for t in (0.5, 0.0, 1.0):
+        params: dict[str, Any] = {"x": spec.x_range[0] + t * (spec.x_range[1] - spec.x_range[0])}
+        for name, (low, high) in spec.ranges.items():
+            params[name] = low + t * (high - low)
+        for name, opts in spec.options.items():
+            params[name] = opts[0] if t < 1.0 else opts[-1]
+        if spec.products and spec.product_field is not None:
+            product = spec.products[0]
+            params[spec.product_field] = product.name
+            if spec.height_field is not None:
+                params[spec.height_field] = product.heights[0]
+        out.append(params)
+    return out
+
+
+def _check_prices(
+    project: Project, registry: Registry, candidates: Sequence[CandidateSpec], model: CostModel
+) -> None:
+    """Every candidate's quantities have a price: else an error at ``design.costs``.
+
+    A sample design of each candidate is built, its bill taken on the bare
+    section, and the cost model asked whether it prices every quantity
+    (:meth:`CostModel.missing_price`). A candidate none of whose samples fits
+    on the section is left to the search (which reports designs that do not
+    fit, or have no price).
+    """
+    from .simulation import section_from_project
+
+    design = project.design
+    assert design is not None
+    if type(model).missing_price is CostModel.missing_price:
+        return  # the model says nothing in advance: the search reports what it cannot price
+    section = section_from_project(project)
+    source = (f"catalogue {design.costs.file}" if design.costs.file
+              else "catalogue in design.costs.params")
+    for spec in candidates:
+        for params in _sample_params(spec):
+            try:
+                measure = build_candidate_measure(spec, registry, params)
+                guard(registry).measure(measure).footprint(section)
+            except ValueError:
+                continue  # this sample does not fit: try the next
+            # quantities() first: a fault there is named as such, not as one of
+            # the bill() that the default bill asks it from.
+            guard(registry).measure(measure).quantities(section)
+            bill = guard(registry).measure(measure).bill(section)
+            why = guard(registry).cost_model(model).missing_price(measure, bill)
+            if why:
+                raise project.error_at(
+                    ("design", "costs"),
+                    f"candidate design.candidates[{spec.index}] ({spec.kind}): {why} "
+                    f"({source}, cost model {model.name!r})",
+                )
+            break
 
 
 def _resolve_cost_model(project: Project, registry: Registry) -> CostModel:
@@ -254,6 +397,38 @@ def _resolve_cost_model(project: Project, registry: Registry) -> CostModel:
     return guard(registry).instantiate(cls, params)
 
 
+def _declared(registry: Registry, cls: Any, kind: str) -> DeclaredDesign:
+    """:func:`declared_design`, a malformed declaration being the plugin's fault (exit 3)."""
+    try:
+        return declared_design(cls)
+    except ValueError as exc:
+        provider = registry.provider.get(("measure", kind))
+        who = f"measure {kind!r}" + (f" (from {provider})" if provider else "")
+        raise PluginError(
+            f"{who}: bad design declaration in its Params: {exc}; "
+            "this is a bug in the plugin, not in the project"
+        ) from None
+
+
+def unknown_measure_type(
+    project: Project, registry: Registry, at: Sequence[str | int], kind: str
+) -> Exception:
+    """The error for an unknown measure type at key path ``at``.
+
+    When plugins are blocked (``--block``) and one of them provides ``kind``,
+    the message names it ("measure type 'catch_net' is provided by
+    rockfall-catchnet, which is blocked (--block)"); otherwise it is an
+    unknown name with "did you mean".
+    """
+    provider = blocked_provider(registry, "measure", kind) if registry.blocked else None
+    if provider is not None:
+        return project.error_at(
+            tuple(at),
+            f"measure type {kind!r} is provided by {provider}, which is blocked (--block)",
+        )
+    return project.unknown_name(at, kind, registry.measures, "measure type")
+
+
 def _resolve_candidate(
     project: Project,
     registry: Registry,
@@ -267,7 +442,7 @@ def _resolve_candidate(
     kind = raw["type"]
     cls = registry.measures.get(kind)
     if cls is None:
-        raise project.unknown_name(at + ("type",), kind, registry.measures, "measure type")
+        raise unknown_measure_type(project, registry, at + ("type",), kind)
     fields = cls.Params.model_fields
     if "x" not in fields:
         raise project.error_at(
@@ -277,28 +452,30 @@ def _resolve_candidate(
     for key in raw:
         if key != "type" and key not in fields:
             raise project.unknown_name(at + (key,), key, list(fields), f"{kind} parameter")
+    declared = _declared(registry, cls, kind)
 
     # products
-    uses_products = "product" in fields
+    product_field = declared.product
     products: tuple[Product, ...] = ()
     supplied: set[str] = set()
-    if uses_products:
-        products = _candidate_products(project, i, raw, kind, catalogue)
-        supplied = {"product"} | {k for k in _FROM_PRODUCT if k in fields}
+    if product_field is not None:
+        products = _candidate_products(project, i, raw, kind, catalogue, product_field)
+        supplied = {product_field} | {
+            f for f in (declared.height, declared.capacity) if f is not None}
         for product in products:
-            supplied |= set(_product_params(product, fields))
+            supplied |= set(_product_params(product, fields, declared))
         for key in raw:
-            if key in supplied and key != "product":
-                if key == "height":
+            if key in supplied and key != product_field:
+                if key == declared.height:
                     why = "the optimiser chooses it among the heights of the catalogue products"
-                elif key == "capacity_kj":
+                elif key == declared.capacity:
                     why = "it is the energy class of the catalogue product"
                 else:
                     why = "the catalogue product sets it"
                 raise project.error_at(
                     at + (key,),
                     f"do not give {key} for a {kind} candidate: {why} (design.products); "
-                    "restrict the products with product: [NAME, ...] instead",
+                    f"restrict the products with {product_field}: [NAME, ...] instead",
                 )
 
     # fixed values, ranges, options
@@ -307,7 +484,7 @@ def _resolve_candidate(
     ranges: dict[str, tuple[float, float]] = {}
     options: dict[str, tuple[Any, ...]] = {}
     for key, value in raw.items():
-        if key in ("type", "x", "product"):
+        if key in ("type", "x", product_field):
             continue
         if isinstance(value, list):
             ranges[key] = (float(value[0]), float(value[1]))
@@ -316,17 +493,22 @@ def _resolve_candidate(
         else:
             fixed[key] = value
 
-    # required parameters not given: plugin bounds, or an error
-    variables = getattr(cls, "design_variables", {}) or {}
+    # what the candidate does not give: the plugin's declarations; a required
+    # parameter without one takes design_variables bounds, or is an error
     for name, info in fields.items():
-        if not info.is_required() or name in raw or name in supplied or name == "x":
+        if name in raw or name in supplied or name == "x":
             continue
-        bounds = variables.get(name)
-        if bounds is not None:
-            low, high = (float(b) for b in bounds)
-            if math.isfinite(low) and math.isfinite(high):
-                ranges[name] = (low, high)
-                continue
+        if name in declared.ranges:
+            ranges[name] = declared.ranges[name]
+            continue
+        if name in declared.options:
+            options[name] = declared.options[name]
+            continue
+        if not info.is_required():
+            continue
+        if name in declared.fallback_bounds:
+            ranges[name] = declared.fallback_bounds[name]
+            continue
         about = f" ({info.description.rstrip('.')})" if info.description else ""
         raise project.error_at(
             at,
@@ -339,10 +521,12 @@ def _resolve_candidate(
     base: dict[str, Any] = {k: v for k, v in cls.example.items() if k in fields}
     base.update(fixed)
     base["x"] = x_low
+    for key, opts in options.items():
+        base.setdefault(key, opts[0])
     if products:
-        base.update(_product_params(products[0], fields))
-        if "height" in fields:
-            base["height"] = products[0].heights[0]
+        base.update(_product_params(products[0], fields, declared))
+        if declared.height is not None:
+            base[declared.height] = products[0].heights[0]
 
     def check(values: dict[str, Any], where: tuple) -> None:
         problem = params_problem(cls.Params, {**base, **values})
@@ -358,7 +542,7 @@ def _resolve_candidate(
         raise project.error_at(path, message)
 
     for product in products:
-        _check_product(project, cls, kind, product, base, fields)
+        _check_product(project, cls, kind, product, base, fields, declared)
     check({}, at)
     for key, (low, high) in ranges.items():
         not_numeric = _range_problem(cls.Params, key)
@@ -368,7 +552,7 @@ def _resolve_candidate(
             check({key: value}, at + (key, end) if key in raw else at)
     for key, opts in options.items():
         for k, value in enumerate(opts):
-            check({key: value}, at + (key, "options", k))
+            check({key: value}, at + (key, "options", k) if key in raw else at)
     for end, value in enumerate((x_low, x_high)):
         check({"x": value}, at + ("x", end))
 
@@ -380,6 +564,7 @@ def _resolve_candidate(
         fixed=fixed,
         ranges=ranges,
         options=options,
+        declared=declared,
     )
 
 
@@ -404,13 +589,14 @@ def _candidate_products(
     raw: dict[str, Any],
     kind: str,
     catalogue: dict[str, dict[str, Product]],
+    product_field: str = "product",
 ) -> tuple[Product, ...]:
-    """The products a candidate may use: those it names, or all of its kind."""
+    """The products a candidate may use: those it names (in ``product_field``), or all."""
     design = project.design
     assert design is not None
     at = ("design", "candidates", i)
     table = catalogue.get(kind, {})
-    if "product" not in raw:
+    if product_field not in raw:
         if not table:
             kinds = ", ".join(catalogue) or "none"
             source = (
@@ -422,20 +608,20 @@ def _candidate_products(
             )
             raise project.error_at(
                 at,
-                f"a {kind} candidate needs catalogue products (its product, capacity_kj and "
-                f"height come from them), but {source} has no {kind} products "
+                f"a {kind} candidate needs catalogue products (its {product_field} and what "
+                f"the product sets come from them), but {source} has no {kind} products "
                 f"(measure types in it: {kinds})",
             )
         return tuple(table.values())
-    value = raw["product"]
+    value = raw[product_field]
     if isinstance(value, str):
-        names, paths = [value], [at + ("product",)]
+        names, paths = [value], [at + (product_field,)]
     elif isinstance(value, dict):
         names = list(value["options"])
-        paths = [at + ("product", "options", k) for k in range(len(names))]
+        paths = [at + (product_field, "options", k) for k in range(len(names))]
     else:
         names = list(value)
-        paths = [at + ("product", k) for k in range(len(names))]
+        paths = [at + (product_field, k) for k in range(len(names))]
     chosen = []
     for name, path in zip(names, paths, strict=True):
         if name not in table:
@@ -451,6 +637,7 @@ def _check_product(
     product: Product,
     base: dict[str, Any],
     fields: Any,
+    declared: DeclaredDesign,
 ) -> None:
     """A product the measure rejects is an error in the catalogue, at the product's line.
 
@@ -459,23 +646,25 @@ def _check_product(
     """
     locator = project.design.products_locator  # type: ignore[union-attr]
     at = (kind, product.name)
-    params = {**base, **_product_params(product, fields)}
-    heights = product.heights if "height" in fields else (None,)
+    params = {**base, **_product_params(product, fields, declared)}
+    heights = product.heights if declared.height is not None else (None,)
     for height in heights:
         values = dict(params)
         if height is not None:
-            values["height"] = height
+            values[declared.height] = height
         problem = params_problem(cls.Params, values)
         if problem is None:
             continue
         loc, message = problem
         key = loc[0] if loc else None
-        if key == "height":
+        if key is not None and key == declared.height:
             raw_heights = project.design.catalogue[kind][product.name]["heights"]  # type: ignore[union-attr]
             path = at + ("heights", raw_heights.index(height))
-        elif key == "capacity_kj" or key in product.extra:
+        elif key is not None and key == declared.capacity:
+            path = at + ("capacity_kj",)
+        elif key in product.extra:
             path = at + (key,)
-        elif key == "product":
+        elif key is not None and key == declared.product:
             path = at
         else:
             continue
@@ -494,12 +683,13 @@ def build_candidate_measure(
     registry
         The plugins (the same as given to :func:`resolve_design`).
     params
-        The picked values: ``x`` (m), one value per range and option
-        parameter, and for a candidate with products ``product`` (a name)
-        and, if the measure has it, ``height`` (m, one of the product's
-        heights). The candidate's fixed parameters and the product's
-        ``capacity_kj`` (and other parameters) are added here; a value in
-        ``params`` overrides a fixed one.
+        The picked values, by parameter name: ``x`` (m), one value per range
+        and option parameter, and for a candidate with products its product
+        field (:attr:`CandidateSpec.product_field`, a name) and, if the
+        measure has one, its height field (m, one of the product's heights).
+        The candidate's fixed parameters and the product's capacity (and
+        other parameters) are added here; a value in ``params`` overrides a
+        fixed one.
 
     Returns
     -------
@@ -518,17 +708,20 @@ def build_candidate_measure(
     fields = cls.Params.model_fields
     label = f"candidate {spec.index} ({spec.kind})"
     values: dict[str, Any] = dict(spec.fixed)
+    declared = spec.declared
     if spec.products:
-        name = params.get("product")
+        assert declared.product is not None
+        name = params.get(declared.product)
         if name is None:
-            raise ValueError(f"{label}: needs a product (one of its catalogue products)")
+            raise ValueError(f"{label}: needs a {declared.product} (one of its catalogue "
+                             "products)")
         try:
             product = spec.product(name)
         except KeyError as exc:
             raise ValueError(f"{label}: {exc.args[0]}") from None
-        values.update(_product_params(product, fields))
-        if "height" in fields:
-            height = params.get("height")
+        values.update(_product_params(product, fields, declared))
+        if declared.height is not None:
+            height = params.get(declared.height)
             if height is None:
                 raise ValueError(f"{label}: needs a height (one of {product.heights} m)")
             if not any(

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .design import unknown_measure_type
 from .engine import Section, barrier_table, core
 from .judge.bounds import fraction_upper_bound
 from .judge.outcomes import Judgement, RockFates, judge_measures
@@ -78,9 +79,7 @@ def build_measures(project: Project, registry: Registry) -> list[ProtectiveMeasu
         kind = raw["type"]
         cls = registry.measures.get(kind)
         if cls is None:
-            raise project.unknown_name(
-                ("measures", i, "type"), kind, registry.measures, "measure type"
-            )
+            raise unknown_measure_type(project, registry, ("measures", i, "type"), kind)
         params = project.validate_params(("measures", i), cls.Params, raw, drop=("type",))
         out.append(guard(registry).instantiate(cls, params))
     return out

@@ -41,7 +41,7 @@ which are :data:`hookimpl`, the contracts :class:`ProtectiveMeasure`,
 :class:`MeasureParams`, :class:`SafetyParams` and :class:`CostParams`, and
 the data they exchange (:class:`Barrier`, :class:`BarrierBehaviour`,
 :class:`ProfileEdit`, :class:`MeasureResult`, :class:`Outcome`,
-:class:`Check`). Everything else (``rockfall_design.engine``, ``project``,
+:class:`Check`, :class:`Quantity`). Everything else (``rockfall_design.engine``, ``project``,
 ``plugins``, ...) is internal and may change in any release. Other libraries
 (numpy, pydantic, ...) are fine as dependencies of the plugin's own
 distribution.
@@ -52,6 +52,11 @@ Block it by its entry-point name or its distribution name:
 ``rockfall-design plugins --block myplugin`` shows the registry without it
 (the module is not even imported), and ``load_registry(blocked=["myplugin"])``
 does the same in Python. To remove it for good, uninstall its distribution.
+A project that needs a blocked plugin's measure type fails at that type's
+line (exit code 2), naming the plugin: "measure type 'catch_net' is provided
+by rockfall-catchnet, which is blocked (--block)". To say so, and only then,
+after the run has already failed, the blocked plugins are loaded (guarded)
+apart from the run's registry.
 
 Rules for every registered class
 --------------------------------
@@ -72,27 +77,101 @@ Rules for every registered class
   ``concept``.
 * Measures only: ``design_variables`` maps names of ``Params`` fields to
   default (low, high) bounds with low < high; ``nan`` for a bound that the
-  project (or the optimiser) must supply, e.g. a station range.
+  project (or the optimiser) must supply, e.g. a station range. A field's
+  own design declaration (below) takes precedence.
+* Measures only: ``default_prices`` (optional) maps the names of the
+  measure's own quantities (see "Costs by quantities") to prices the cost
+  catalogue uses when it has none of its own.
 * The class must implement every abstract method of its base.
 
 A class that breaks a rule is reported as a failure of its plugin (naming
 the class) and left out; the plugin's other classes still load.
+
+Design variables: what the optimiser may choose
+-----------------------------------------------
+``rockfall-design optimise`` builds its search space from what each
+measure's ``Params`` declares, plus the ranges the project's
+``design.candidates`` give; it never special-cases a measure or parameter by
+name. A field declares its role in its metadata, under the key ``"design"``
+of ``json_schema_extra`` (beside ``"unit"``):
+
+``{"design": {"bounds": [low, high]}}``
+    A free continuous design variable (a ``float`` field). The optimiser
+    searches it within these bounds unless the candidate fixes it
+    (``spacing: 2.0``), gives its own range (``spacing: [1, 4]``) or options.
+``{"design": {"options": [a, b, ...]}}``
+    A free discrete design variable: one of these values.
+``{"design": "options"}``
+    A free discrete variable over every value of the field's ``Literal``
+    (or ``Enum``) type.
+``{"design": "catalogue"}``
+    The catalogue product (a ``str`` field): the optimiser picks it among
+    the products of the measure's type in ``design.products``; the
+    candidate may restrict them (``product: [RX-100, RX-250]`` for a field
+    named ``product``, ``{options: [...]}`` for any name).
+``{"design": "catalogue_height"}``
+    One of the heights (m) the chosen product comes in.
+``{"design": "catalogue_capacity"}``
+    The chosen product's energy class (``capacity_kj`` of the catalogue, kJ).
+
+A product's other catalogue keys that name fields of ``Params`` (a wall's
+``thickness``) are set from it too. A candidate must not give what the
+product sets. Example::
+
+    class RingNetParams(MeasureParams):
+        height: float = Field(gt=0, json_schema_extra={
+            "unit": "m", "design": {"bounds": [1.0, 6.0]}})
+        rings: int = Field(2, ge=1, le=4, json_schema_extra={
+            "unit": None, "design": {"options": [1, 2, 3, 4]}})
+
+Plugins written without declarations keep the older conventions: a field
+named ``product`` is the catalogue product, ``height`` its height and
+``capacity_kj`` its energy class (unless those fields declare another role),
+and a *required* field the candidate does not give is searched within its
+``design_variables`` bounds. ``rockfall-design plugins --json`` lists each
+parameter's declaration under ``design``.
+
+Costs by quantities
+-------------------
+A measure reports what it takes per running metre of slope as a bill:
+``bill(section)`` returns a list of :class:`Quantity` (``name``, ``amount``
+per running metre, ``unit``, optional ``product`` and ``size``), e.g.
+``Quantity("embankment_fill_m3", 18.5, "m3")``. The built-ins bill
+``fence``/``wall`` (one running metre of their product at their height),
+``excavation_m3``, ``fill_m3`` and ``block_m3``; a plugin may invent any
+name, and ship default prices for its names in ``default_prices``
+(``{"embankment_fill_m3": 35.0}``, currency per unit), which the project's
+cost catalogue overrides (``prices: {embankment_fill_m3: 30}`` for the
+built-in ``unit_prices``). The default ``bill`` names the ``quantities()``
+dict through ``bill_from(quantities)``, and the default ``bill_from`` bills
+one running metre named after the measure's ``kind``: a measure written
+before bills existed is priced as before (``other_per_m`` of
+``unit_prices``).
+
+A cost model prices a bill in ``price(measure, bill, quantities, length_m)``;
+the default calls the older ``cost(measure, quantities, length_m)``. Before
+any search, ``missing_price(measure, bill)`` is asked, with a sample design
+of every candidate, whether each quantity has a price at all: a str (the
+reason) makes the design section an error at ``design.costs`` naming the
+candidate, the quantity and the catalogue (bad input, exit code 2). The
+default says nothing (None).
 
 When plugin code fails at run time
 ----------------------------------
 The program calls into a plugin's classes at set-up and once per design (each
 candidate design of the optimiser included), never per rock: the
 constructors, a measure's ``footprint``, ``design_properties``,
-``quantities`` and ``label``, a safety concept's ``checks`` and a cost
-model's ``cost``. Every such call goes through one guard
-(``rockfall_design.plugins.call_plugin``). Only two exceptions are part of
-the contract:
+``quantities``, ``bill`` and ``label``, a safety concept's ``checks`` and a
+cost model's ``price`` (by default ``cost``) and ``missing_price``. Every
+such call goes through one guard (``rockfall_design.plugins.call_plugin``).
+Only two exceptions are part of the contract:
 
 * ``footprint`` raises ``ValueError``: the measure does not fit on the
   section. ``check`` shows the message at the measure's key path (bad input,
   exit code 2); the optimiser counts the design as infeasible.
-* ``cost`` raises ``KeyError`` or ``ValueError``: the catalogue has no price
-  for the measure. The optimiser skips the design and reports why.
+* ``cost`` or ``price`` raises ``KeyError`` or ``ValueError``: the catalogue
+  has no price for the measure. The optimiser skips the design and reports
+  why.
 
 Anything else raised (``SystemExit`` and ``KeyboardInterrupt`` included:
 only a real Ctrl-C, a signal the process receives, stops the run as an
@@ -104,8 +183,9 @@ same at load time leaves the plugin out, reported by
 ``rockfall-design plugins``. What must come back: ``footprint`` a
 :class:`Barrier` or :class:`ProfileEdit`; ``design_properties`` and
 ``quantities`` a dict of str to number, never NaN (``inf`` is allowed, e.g.
-"no capacity given"); ``label`` a str; ``checks`` a list of :class:`Check`;
-``cost`` a finite number >= 0.
+"no capacity given"); ``bill`` a list of :class:`Quantity` with finite
+amounts >= 0; ``label`` a str; ``checks`` a list of :class:`Check`;
+``cost`` and ``price`` a finite number >= 0; ``missing_price`` a str or None.
 
 Every field of a footprint is checked before the engine sees it
 (``rockfall_design.plugins.footprint_problem``): a :class:`Barrier` needs a
@@ -184,12 +264,13 @@ def rockfall_design_measures() -> list[type[ProtectiveMeasure]]:
       :class:`MeasureParams` subclass; every measure has the station ``x``
       in m) and ``example`` (a valid parameter set *without* ``type``).
       ``design_variables`` (name -> (low, high)) lists what the optimiser
-      may vary.
+      may vary; a field's ``json_schema_extra={"design": ...}`` declares its
+      role more precisely (see "Design variables" above).
     * Implement ``footprint(section)`` (a :class:`Barrier` at a station, or
       a :class:`ProfileEdit` of the ground), ``design_properties()`` (the
       ``height_m``, ``capacity_kj`` and/or ``width_m`` that safety concepts
-      check) and, if the default (the design properties) does not fit,
-      ``quantities(section)`` for costing.
+      check) and, for costing, ``bill(section)`` (named quantities, see
+      "Costs by quantities" above) or ``quantities(section)``.
     * The program instantiates the class itself, with validated parameters:
       ``Measure(Measure.Params(**fields_without_type))``.
     * Raise ``ValueError`` from ``footprint`` when the measure does not fit
@@ -334,10 +415,13 @@ def rockfall_design_cost_models() -> list[type[CostModel]]:
       the field names) and ``example`` (a valid parameter set).
     * Implement ``cost(measure, quantities, length_m)``: the cost of
       ``measure`` over ``length_m`` metres of slope, from its
-      ``quantities`` per running metre. Raise ``KeyError`` or ``ValueError``
-      when the catalogue has no price for that measure (the optimiser skips
-      the design and says why); return a finite number >= 0 otherwise. Any
-      other exception is a plugin fault (exit code 3).
+      ``quantities`` per running metre; or, to price named quantities,
+      ``price(measure, bill, quantities, length_m)`` (and optionally
+      ``missing_price(measure, bill)``), see "Costs by quantities" above.
+      Raise ``KeyError`` or ``ValueError`` when the catalogue has no price
+      for that measure (the optimiser skips the design and says why);
+      return a finite number >= 0 otherwise. Any other exception is a
+      plugin fault (exit code 3).
 
     Examples
     --------

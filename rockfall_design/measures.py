@@ -10,8 +10,12 @@ file), a strict parameter model, an example, and methods that say
 * what its design properties are (:meth:`ProtectiveMeasure.design_properties`),
   which safety concepts check against the rocks' passing heights, energies
   and reach;
-* what quantities it takes per running metre of slope, for costing
-  (:meth:`ProtectiveMeasure.quantities`).
+* what quantities it takes per running metre of slope, for costing: named
+  and priced by name (:meth:`ProtectiveMeasure.bill`, a list of
+  :class:`Quantity`), or as the older free dict
+  (:meth:`ProtectiveMeasure.quantities`);
+* which of its parameters are design variables, in each ``Params`` field's
+  metadata (:data:`DESIGN_KEY`, read by :func:`design_role`).
 
 The engine never calls a measure: the footprints are turned into plain arrays
 once, before the rocks run (``evaluate.py``). A barrier acts on a rock with
@@ -24,7 +28,7 @@ from __future__ import annotations
 import enum
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -40,7 +44,17 @@ __all__ = [
     "MeasureParams",
     "Outcome",
     "MeasureResult",
+    "Quantity",
+    "DESIGN_KEY",
+    "DESIGN_ROLES",
+    "DesignRole",
+    "design_role",
 ]
+
+#: The key of a ``Params`` field's ``json_schema_extra`` that makes it a design variable.
+DESIGN_KEY = "design"
+#: The string values ``json_schema_extra={"design": ...}`` may take (see :func:`design_role`).
+DESIGN_ROLES = ("catalogue", "catalogue_height", "catalogue_capacity", "options")
 
 
 class MeasureParams(BaseModel):
@@ -54,6 +68,147 @@ class MeasureParams(BaseModel):
 
     x: float = Field(json_schema_extra={"unit": "m"})
     """Station of the measure (m): its x, or the upslope edge of an edited stretch."""
+
+
+@dataclass(frozen=True)
+class DesignRole:
+    """What the optimiser may do with one parameter, as its plugin declares it.
+
+    Read from the field's metadata by :func:`design_role`; see the
+    ``DESIGN_KEY`` vocabulary there.
+
+    Attributes
+    ----------
+    role : str
+        ``"range"`` (a free continuous variable within ``bounds``),
+        ``"options"`` (a free discrete variable, one of ``options``),
+        ``"catalogue"`` (the name of a catalogue product),
+        ``"catalogue_height"`` (one of the heights the product comes in, m),
+        ``"catalogue_capacity"`` (the product's energy class, kJ).
+    bounds : (float, float) or None
+        For ``"range"``: default (low, high), in the field's unit.
+    options : tuple or None
+        For ``"options"``: the default options.
+    """
+
+    role: str
+    bounds: tuple[float, float] | None = None
+    options: tuple[Any, ...] | None = None
+
+
+def _literal_options(annotation: Any) -> tuple[Any, ...] | None:
+    """The values of a ``Literal`` or ``Enum`` annotation (``X | None`` too), or None."""
+    import typing
+
+    args = [annotation]
+    if typing.get_origin(annotation) is not None and typing.get_origin(annotation) is not Literal:
+        args = [a for a in typing.get_args(annotation) if a is not type(None)]
+    values: list[Any] = []
+    for a in args:
+        if typing.get_origin(a) is Literal:
+            values += list(typing.get_args(a))
+        elif isinstance(a, type) and issubclass(a, enum.Enum):
+            values += [m.value for m in a]
+        else:
+            return None
+    return tuple(values) or None
+
+
+def design_role(model: type[BaseModel], name: str) -> DesignRole | None:
+    """The design role that field ``name`` of ``model`` declares, or None.
+
+    A field declares it in its metadata, ``Field(..., json_schema_extra=
+    {"design": VALUE})``, where VALUE is
+
+    * ``{"bounds": [low, high]}``: a free continuous design variable, searched
+      within these bounds unless the project's candidate gives a value, a
+      range or options;
+    * ``{"options": [a, b, ...]}``: a free discrete design variable;
+    * ``"options"``: a free discrete variable over every value of the field's
+      ``Literal`` (or ``Enum``) type;
+    * ``"catalogue"``: the catalogue product (a ``str`` field): the optimiser
+      picks it among ``design.products`` of the measure's type;
+    * ``"catalogue_height"``: one of the heights (m) the chosen product comes in;
+    * ``"catalogue_capacity"``: the chosen product's energy class (kJ).
+
+    Parameters
+    ----------
+    model
+        A measure's ``Params``.
+    name
+        A field of it.
+
+    Returns
+    -------
+    DesignRole or None
+        None where the field declares nothing.
+
+    Raises
+    ------
+    ValueError
+        If the declaration is not one of the above (a fault of the plugin).
+    """
+    info = model.model_fields[name]
+    extra = info.json_schema_extra
+    if not isinstance(extra, dict) or DESIGN_KEY not in extra:
+        return None
+    value = extra[DESIGN_KEY]
+    where = f"{model.__name__}.{name}: json_schema_extra {DESIGN_KEY!r}"
+    if value == "options":
+        options = _literal_options(info.annotation)
+        if not options:
+            raise ValueError(f"{where} is 'options' but the field is not a Literal or an Enum")
+        return DesignRole("options", options=options)
+    if value in ("catalogue", "catalogue_height", "catalogue_capacity"):
+        return DesignRole(str(value))
+    if isinstance(value, dict) and set(value) == {"bounds"}:
+        bounds = value["bounds"]
+        try:
+            low, high = (float(b) for b in bounds)
+        except (TypeError, ValueError):
+            raise ValueError(f"{where}: bounds must be [low, high], got {bounds!r}") from None
+        if not low < high:
+            raise ValueError(f"{where}: bounds must be [low, high] with low < high, got {bounds!r}")
+        return DesignRole("range", bounds=(low, high))
+    if isinstance(value, dict) and set(value) == {"options"}:
+        options = value["options"]
+        if not isinstance(options, list | tuple) or not options:
+            raise ValueError(f"{where}: options must be a non-empty list, got {options!r}")
+        return DesignRole("options", options=tuple(options))
+    raise ValueError(
+        f"{where} = {value!r}: expected {{'bounds': [low, high]}}, {{'options': [...]}}, "
+        "'options', 'catalogue', 'catalogue_height' or 'catalogue_capacity'"
+    )
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """A named quantity a measure takes per running metre of slope, for costing.
+
+    Attributes
+    ----------
+    name : str
+        What is priced, e.g. ``"fence"`` (running metres of a fence product),
+        ``"excavation_m3"``, ``"fill_m3"``, ``"block_m3"``, or any name a plugin
+        invents (``"embankment_fill_m3"``). The cost model prices it by this
+        name; a measure may ship default prices for its own names
+        (:attr:`ProtectiveMeasure.default_prices`).
+    amount : float
+        Amount per running metre of slope, in ``unit`` per m (>= 0, finite).
+    unit : str
+        Unit of the amount before "per running metre": ``"m"``, ``"m3"``, ...
+    product : str or None
+        Catalogue product, where the price depends on it.
+    size : float or None
+        Size of the product where the price depends on it (e.g. a fence's
+        height, m).
+    """
+
+    name: str
+    amount: float
+    unit: str
+    product: str | None = None
+    size: float | None = None
 
 
 class BarrierBehaviour(enum.IntEnum):
@@ -218,7 +373,14 @@ class ProtectiveMeasure(ABC):
         and tests.
     design_variables : dict
         Names of the parameters an optimiser may vary, each with its default
-        (low, high) bounds; empty if none.
+        (low, high) bounds; empty if none. A field's own declaration in its
+        metadata (``json_schema_extra={"design": ...}``, see
+        :func:`design_role`) takes precedence.
+    default_prices : dict
+        Prices of the measure's own quantities (:meth:`bill`) by name, in the
+        cost catalogue's currency per unit of the quantity: a number, or a
+        table product -> size -> price. The project's cost catalogue
+        overrides them. Empty by default.
     """
 
     kind: ClassVar[str]
@@ -226,6 +388,7 @@ class ProtectiveMeasure(ABC):
     Params: ClassVar[type[MeasureParams]]
     example: ClassVar[dict[str, Any]] = {}
     design_variables: ClassVar[dict[str, tuple[float, float]]] = {}
+    default_prices: ClassVar[dict[str, Any]] = {}
 
     def __init__(self, params: MeasureParams) -> None:
         self.params = params
@@ -277,3 +440,31 @@ class ProtectiveMeasure(ABC):
         ``blocks_per_m``. The default is the design properties.
         """
         return dict(self.design_properties())
+
+    def bill(self, section: Section) -> list[Quantity]:
+        """Named quantities per running metre of slope, for a cost model to price.
+
+        The default asks :meth:`bill_from` to name the :meth:`quantities`;
+        override either.
+
+        Parameters
+        ----------
+        section : rockfall_design.engine.Section
+            The slope section, as for :meth:`footprint`.
+
+        Returns
+        -------
+        list of Quantity
+            Each with a name, an amount per running metre (finite, >= 0) and
+            its unit; a product and size where the price depends on them.
+        """
+        return self.bill_from(self.quantities(section))
+
+    def bill_from(self, quantities: dict[str, float]) -> list[Quantity]:
+        """The bill, from this measure's own :meth:`quantities` dict.
+
+        The default, for measures written before bills existed: one running
+        metre of the measure, named after its ``kind`` (a cost catalogue
+        prices it per running metre, e.g. ``other_per_m`` of ``unit_prices``).
+        """
+        return [Quantity(name=self.kind, amount=1.0, unit="m")]

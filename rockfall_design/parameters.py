@@ -218,6 +218,24 @@ def _unit(info: FieldInfo, description: str | None) -> str | None:
     return unit_from_description(description)
 
 
+def _design(model: type[BaseModel], name: str) -> dict[str, Any] | None:
+    """The field's declared design role as JSON (see ``measures.design_role``), or None."""
+    from .measures import design_role
+
+    try:
+        role = design_role(model, name)
+    except ValueError:  # a malformed declaration: the registry reports the class
+        return None
+    if role is None:
+        return None
+    out: dict[str, Any] = {"role": role.role}
+    if role.bounds is not None:
+        out["bounds"] = _jsonable(list(role.bounds))
+    if role.options is not None:
+        out["options"] = _jsonable(list(role.options))
+    return out
+
+
 def describe_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
     """One JSON-ready dict per field of a plugin's ``Params`` model, in field order.
 
@@ -236,7 +254,12 @@ def describe_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
         infinity and NaN as the strings ``"inf"``, ``"nan"``); ``required``;
         ``minimum``, ``maximum``, ``exclusive_minimum``, ``exclusive_maximum``
         (None where the field sets none); ``options`` (the values of a
-        ``Literal`` or an ``Enum``, else None); and ``description``.
+        ``Literal`` or an ``Enum``, else None); ``description``; and ``design``
+        (the design role the field declares in its metadata, as
+        ``{"role": "range", "bounds": [low, high]}``, ``{"role": "options",
+        "options": [...]}``, ``{"role": "catalogue"}``,
+        ``{"role": "catalogue_height"}`` or ``{"role": "catalogue_capacity"}``;
+        None for none).
     """
     docstrings: dict[str, str] | None = None
     out = []
@@ -266,6 +289,7 @@ def describe_parameters(model: type[BaseModel]) -> list[dict[str, Any]]:
             **_bounds(list(info.metadata) + nested_meta),
             "options": _jsonable(_options(members)),
             "description": description,
+            "design": _design(model, name),
         }
         out.append(entry)
     return out

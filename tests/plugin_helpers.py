@@ -65,3 +65,32 @@ def write_distribution(
     )
     importlib.invalidate_caches()
     return info
+
+
+#: The example third-party plugin of the repository (a rockfall embankment).
+EMBANKMENT_EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "rockfall-embankment"
+
+
+def install_embankment_example(tmp_path: Path, monkeypatch: object) -> Path:
+    """Install ``examples/rockfall-embankment`` as the distribution rockfall-embankment.
+
+    As ``python -m pip install ./examples/rockfall-embankment`` would, without
+    pip: its package and a dist-info with its entry point, put on ``sys.path``
+    with ``monkeypatch.syspath_prepend``. Cached registries of the API are
+    cleared, so that the helpers of ``rockfall_design.testing`` see it.
+
+    Returns
+    -------
+    Path
+        The directory put on ``sys.path``.
+    """
+    import rockfall_design.api as api
+
+    site = Path(tmp_path) / "site-embankment"
+    source = (EMBANKMENT_EXAMPLE / "rockfall_embankment" / "__init__.py").read_text(
+        encoding="utf-8")
+    write_distribution(site, "rockfall_embankment", source, "embankment",
+                       dist_name="rockfall-embankment")
+    monkeypatch.syspath_prepend(str(site))  # type: ignore[attr-defined]
+    monkeypatch.setattr(api, "_REGISTRIES", {})  # type: ignore[attr-defined]
+    return site

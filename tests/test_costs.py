@@ -117,7 +117,7 @@ def test_other_kinds_per_metre():
         ({"product": None}, {}, "has no product"),
         ({"product": "RX-999"}, {}, "no price for fence product 'RX-999'"),
         ({"height": 5.0}, {}, "at height 5 m (priced heights: 3, 4 m)"),
-        ({}, {"barrier_per_m": {}}, "no barrier_per_m prices for fence"),
+        ({}, {"barrier_per_m": {}}, "no price for measure type 'fence' (quantity 'fence'"),
     ],
 )
 def test_missing_barrier_price_is_a_key_error(fence, prices, fragment):

@@ -170,7 +170,8 @@ def test_resolve_with_inline_catalogues(registry):
         "design:\n"
         "  site: {length_m: 10}\n"
         "  products: {fence: {A: {capacity_kj: 500, heights: [2]}}}\n"
-        "  costs: {params: {fixed_per_measure: 0, excavation_per_m3: 1, boulder_per_m3: 1}}\n"
+        "  costs: {params: {fixed_per_measure: 0, excavation_per_m3: 1, boulder_per_m3: 1,\n"
+        "                   barrier_per_m: {fence: {A: {2: 300}}}}}\n"
         "  candidates: [{type: fence, x: [60, 110]}]\n"
     )
     spec = resolve_design(load_project_text(text), registry)
@@ -430,7 +431,13 @@ def test_integer_parameter_cannot_be_a_range(tmp_path, registry):
     assert (err.line, err.key) == (line_of(text, "rows:"), "design.candidates[3].rows")
     assert "integer parameter" in err.message
     ok = edit("rows: [1, 3]", "rows: {options: [1, 3]}", text)
-    assert resolve(tmp_path, reg, ok).candidates[3].options == {"rows": (1, 3)}
+    costs = COSTS + "other_per_m: {net: 10}\n"  # a running metre of net has a price
+    assert resolve(tmp_path, reg, ok, costs=costs).candidates[3].options == {"rows": (1, 3)}
+    err = error(tmp_path, reg, ok)  # it has none: found before any search
+    assert (err.file, err.line, err.key) == (str(tmp_path / "p.yaml"),
+                                             line_of(ok, "  costs:"), "design.costs")
+    assert "candidate design.candidates[3] (net): no price for quantity 'net'" in err.message
+    assert "catalogue costs.yaml" in err.message
 
 
 @pytest.mark.parametrize(

@@ -10,6 +10,8 @@ import pytest
 from rockfall_design.cli import main
 from rockfall_design.project import load_project
 
+from .plugin_helpers import install_embankment_example
+
 # Catalogue files (products, prices) and the materials library live beside the
 # projects but are not projects.
 PROJECTS = sorted(
@@ -20,7 +22,9 @@ PROJECTS = sorted(
 
 
 @pytest.mark.parametrize("path", PROJECTS, ids=[p.stem for p in PROJECTS])
-def test_example_project_runs(path, capsys):
+def test_example_project_runs(path, capsys, tmp_path, monkeypatch):
+    if path.name == "design_embankment.yaml":  # its candidate is the example plugin's
+        install_embankment_example(tmp_path, monkeypatch)
     project = load_project(path)
     if project.measures:
         code = main(["check", str(path), "--rocks", "30", "--json"])

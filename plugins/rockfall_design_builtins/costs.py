@@ -1,8 +1,10 @@
-"""The built-in cost model: unit prices per running metre and per cubic metre.
+"""The built-in cost model: unit prices of named quantities.
 
 An ordinary plugin: it uses only the public ``rockfall_design`` API and is
 registered through the ``rockfall_design`` entry-point group, exactly as a
-third party's cost model would be.
+third party's cost model would be. It knows no measure by name: it prices
+the quantities each measure bills (:class:`~rockfall_design.Quantity`) by
+their names.
 """
 
 from __future__ import annotations
@@ -12,7 +14,7 @@ from typing import Annotated, Any, ClassVar
 
 from pydantic import ConfigDict, Field
 
-from rockfall_design import CostModel, CostParams, ProtectiveMeasure, hookimpl
+from rockfall_design import CostModel, CostParams, ProtectiveMeasure, Quantity, hookimpl
 
 __all__ = ["UnitPrices", "UnitPricesParams", "rockfall_design_cost_models"]
 
@@ -20,6 +22,8 @@ __all__ = ["UnitPrices", "UnitPricesParams", "rockfall_design_cost_models"]
 #: cost contract (rightly) calls a bug of this plugin, not of the price file.
 _Price = Annotated[float, Field(ge=0, le=1e9)]
 _Height = Annotated[float, Field(gt=0)]
+#: A price of a quantity: per unit, or by product, or by product and size.
+_PriceEntry = _Price | dict[str, _Price | dict[_Height, _Price]]
 
 
 class UnitPricesParams(CostParams):
@@ -57,34 +61,53 @@ class UnitPricesParams(CostParams):
         description="Other measure types (e.g. a third party's): measure type -> price per "
         "running metre (currency/m).", json_schema_extra={"unit": "currency/m"},
     )
+    prices: dict[str, _PriceEntry] = Field(
+        default_factory=dict,
+        description="Prices of quantities by name (currency per unit of the quantity): a "
+        "number, or product -> price, or product -> size -> price. Overrides the keys above "
+        "and a measure's default prices.", json_schema_extra={"unit": "currency/unit"},
+    )
 
 
-_BARRIERS = ("fence", "wall")
-_EARTHWORKS = ("ditch", "berm")
+#: The named quantities the catalogue's fixed keys price (currency per unit).
+_PER_UNIT_KEYS = {
+    "excavation_m3": "excavation_per_m3",
+    "fill_m3": "fill_per_m3",
+    "block_m3": "boulder_per_m3",
+}
+
+
+def _fmt(value: float) -> str:
+    return f"{value:g}"
 
 
 class UnitPrices(CostModel):
-    """Cost from unit prices: per running metre for barriers, per m^3 for earthworks and blocks.
+    """Cost from unit prices of the named quantities each measure bills.
 
     The cost of a measure over a length L (m) of slope is
-    ``fixed_per_measure`` plus, by measure type:
+    ``fixed_per_measure + L * sum(amount * unit price)`` over the quantities
+    of its bill (:meth:`ProtectiveMeasure.bill`, amounts per running metre).
+    A quantity's unit price is looked up by its name, first found:
 
-    * ``fence``, ``wall`` (and any type listed in ``barrier_per_m``):
-      ``barrier_per_m[type][product][height] * L``, the price per running
-      metre of the measure's catalogue ``product`` at its ``height`` (m);
-      a KeyError if the catalogue has no such price.
-    * ``ditch``, ``berm``: ``(excavation_m3_per_m * excavation_per_m3 +
-      fill_m3_per_m * fill_per_m3) * L`` with the measure's quantities
-      (m^3 per running metre).
-    * ``boulder_row``: ``block_volume_m3 * blocks_per_m * L * boulder_per_m3``.
-    * any other type: ``other_per_m[type] * L``; a KeyError if not listed.
+    1. ``prices[name]``: a number (per unit of the quantity), or a table by
+       the quantity's product, or by product and size;
+    2. ``barrier_per_m[name]`` (product -> size -> price per running metre:
+       the built-in fence and wall bill one running metre named ``fence`` or
+       ``wall`` of their product at their height), ``other_per_m[name]`` (per
+       running metre: a measure written before bills existed bills one
+       running metre named after its type), and ``excavation_per_m3``,
+       ``fill_per_m3``, ``boulder_per_m3`` for the quantities
+       ``excavation_m3``, ``fill_m3`` and ``block_m3``;
+    3. the measure's own ``default_prices[name]``.
 
-    Prices are in ``currency`` (default EUR).
+    A KeyError when there is none, or none for the quantity's product or
+    size. Prices are in ``currency`` (default EUR).
     """
 
     name: ClassVar[str] = "unit_prices"
     summary: ClassVar[str] = (
-        "unit prices: barriers per metre by product and height, earthworks and blocks per m3"
+        "unit prices of named quantities: barriers per metre by product and height, "
+        "earthworks and blocks per m3, any plugin's own quantities"
     )
     Params: ClassVar[type[CostParams]] = UnitPricesParams
     example: ClassVar[dict[str, Any]] = {
@@ -98,77 +121,111 @@ class UnitPrices(CostModel):
         "fill_per_m3": 18.0,
         "boulder_per_m3": 110.0,
         "other_per_m": {},
+        "prices": {},
     }
 
     params: UnitPricesParams
 
-    def cost(
-        self, measure: ProtectiveMeasure, quantities: dict[str, float], length_m: float
+    def _entry(self, name: str, measure: ProtectiveMeasure) -> tuple[Any, str] | None:
+        """(price entry, where it comes from) for quantity ``name``, or None."""
+        p = self.params
+        if name in p.prices:
+            return p.prices[name], f"prices.{name}"
+        if name in p.barrier_per_m:
+            return p.barrier_per_m[name], f"barrier_per_m.{name}"
+        if name in p.other_per_m:
+            return p.other_per_m[name], f"other_per_m.{name}"
+        if name in _PER_UNIT_KEYS:
+            return getattr(p, _PER_UNIT_KEYS[name]), _PER_UNIT_KEYS[name]
+        defaults = getattr(type(measure), "default_prices", None) or {}
+        if name in defaults:
+            return defaults[name], f"the default prices of {measure.kind}"
+        return None
+
+    def _no_price(self, q: Quantity, measure: ProtectiveMeasure) -> str:
+        listed = ", ".join(sorted({*self.params.prices, *self.params.barrier_per_m,
+                                   *self.params.other_per_m, *_PER_UNIT_KEYS})) or "none"
+        where = "prices (currency per " + q.unit + ")"
+        if q.product is not None:
+            where += " or barrier_per_m (product -> height -> price per running metre)"
+        elif q.unit == "m":
+            where += " or other_per_m (price per running metre)"
+        return (f"unit_prices has no price for measure type {measure.kind!r} (quantity "
+                f"{q.name!r}, {q.unit} per running metre): add it to {where}; priced "
+                f"quantities: {listed}")
+
+    def unit_price(self, q: Quantity, measure: ProtectiveMeasure) -> float:
+        """Price of one unit of quantity ``q`` of ``measure`` (currency per unit).
+
+        Raises
+        ------
+        KeyError
+            No price for the quantity's name, or for its product or size.
+        """
+        found = self._entry(q.name, measure)
+        if found is None:
+            raise KeyError(self._no_price(q, measure))
+        entry, source = found
+        if not isinstance(entry, dict):
+            return float(entry)
+        if q.product is None:
+            raise KeyError(f"unit_prices prices {q.name!r} by product ({source}), but this "
+                           f"{measure.kind} has no product")
+        prices = entry.get(q.product)
+        if prices is None:
+            listed = ", ".join(entry) or "none"
+            raise KeyError(f"unit_prices has no price for {measure.kind} product "
+                           f"{q.product!r} ({source} lists: {listed})")
+        if not isinstance(prices, dict):
+            return float(prices)
+        if q.size is None:
+            raise KeyError(f"unit_prices prices {q.name!r} {q.product!r} by size ({source}), "
+                           f"but this {measure.kind} gives none")
+        for size, price in prices.items():
+            if math.isclose(size, q.size, rel_tol=1e-9, abs_tol=1e-9):
+                return float(price)
+        listed = ", ".join(_fmt(h) for h in prices) or "none"
+        raise KeyError(f"unit_prices has no price for {measure.kind} product {q.product!r} "
+                       f"at height {_fmt(q.size)} m (priced heights: {listed} m)")
+
+    def price(
+        self,
+        measure: ProtectiveMeasure,
+        bill: list[Quantity],
+        quantities: dict[str, float],
+        length_m: float,
     ) -> float:
         """Cost of ``measure`` over ``length_m`` metres of slope (currency); see the class.
 
         Raises
         ------
         KeyError
-            If there is no price for the measure's type, or for a barrier's
-            product and height.
+            If a quantity of the bill has no price (see :meth:`unit_price`).
         """
-        p = self.params
-        kind = measure.kind
-        if kind in _BARRIERS or kind in p.barrier_per_m:
-            part = self._barrier_price(measure, quantities) * length_m
-        elif kind in _EARTHWORKS:
-            part = (
-                quantities["excavation_m3_per_m"] * p.excavation_per_m3
-                + quantities.get("fill_m3_per_m", 0.0) * p.fill_per_m3
-            ) * length_m
-        elif kind == "boulder_row":
-            part = (
-                quantities["block_volume_m3"]
-                * quantities["blocks_per_m"]
-                * length_m
-                * p.boulder_per_m3
-            )
-        elif kind in p.other_per_m:
-            part = p.other_per_m[kind] * length_m
-        else:
-            listed = ", ".join(sorted(p.other_per_m)) or "none"
-            raise KeyError(
-                f"unit_prices has no price for measure type {kind!r}: add it to other_per_m "
-                f"(price per running metre; listed: {listed})"
-            )
-        return p.fixed_per_measure + part
+        per_m = 0.0
+        for q in bill:
+            per_m += q.amount * self.unit_price(q, measure)
+        return self.params.fixed_per_measure + per_m * length_m
 
-    def _barrier_price(self, measure: ProtectiveMeasure, quantities: dict[str, float]) -> float:
-        """Price per running metre of a barrier's product at its height."""
-        kind = measure.kind
-        product = getattr(measure.params, "product", None)
-        height = quantities.get("height_m", getattr(measure.params, "height", None))
-        if height is None:
-            raise KeyError(f"unit_prices prices a {kind} by its height, but this {kind} has none")
-        if product is None:
-            raise KeyError(
-                f"unit_prices prices a {kind} by its catalogue product, but this {kind} has "
-                "no product"
-            )
-        table = self.params.barrier_per_m.get(kind)
-        if table is None:
-            raise KeyError(f"unit_prices has no barrier_per_m prices for {kind}")
-        prices = table.get(product)
-        if prices is None:
-            listed = ", ".join(table) or "none"
-            raise KeyError(
-                f"unit_prices has no price for {kind} product {product!r} "
-                f"(barrier_per_m.{kind} lists: {listed})"
-            )
-        for h, price in prices.items():
-            if math.isclose(h, height, rel_tol=1e-9, abs_tol=1e-9):
-                return price
-        listed = ", ".join(f"{h:g}" for h in prices) or "none"
-        raise KeyError(
-            f"unit_prices has no price for {kind} product {product!r} at height "
-            f"{height:g} m (priced heights: {listed} m)"
-        )
+    def cost(
+        self, measure: ProtectiveMeasure, quantities: dict[str, float], length_m: float
+    ) -> float:
+        """Cost from the measure's quantities dict: the bill it names from them (``bill_from``).
+
+        Raises
+        ------
+        KeyError
+            As :meth:`price`.
+        """
+        return self.price(measure, measure.bill_from(quantities), quantities, length_m)
+
+    def missing_price(self, measure: ProtectiveMeasure, bill: list[Quantity]) -> str | None:
+        """The first quantity of ``bill`` without any price by its name, or None."""
+        for q in bill:
+            if self._entry(q.name, measure) is None:
+                return (f"no price for quantity {q.name!r} ({q.unit} per running metre): add "
+                        f"prices: {{{q.name}: PRICE}} (currency per {q.unit})")
+        return None
 
 
 @hookimpl

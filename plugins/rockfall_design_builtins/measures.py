@@ -36,6 +36,7 @@ from rockfall_design import (
     MeasureParams,
     ProfileEdit,
     ProtectiveMeasure,
+    Quantity,
     hookimpl,
 )
 
@@ -170,6 +171,18 @@ def cut_and_fill(
     return cut, fill
 
 
+def _running_metre(measure: Any, quantities: dict[str, float]) -> list[Quantity]:
+    """A barrier's bill: one running metre named after its kind, of its product at its height."""
+    height = quantities.get("height_m", measure.params.height)
+    return [Quantity(measure.kind, 1.0, "m", product=measure.params.product, size=height)]
+
+
+def _earthworks(quantities: dict[str, float]) -> list[Quantity]:
+    """A ground edit's bill: excavated and filled m^3 per running metre."""
+    return [Quantity("excavation_m3", quantities["excavation_m3_per_m"], "m3"),
+            Quantity("fill_m3", quantities.get("fill_m3_per_m", 0.0), "m3")]
+
+
 def _edit_volumes(section: SectionLike, edit: ProfileEdit) -> tuple[float, float]:
     pts = np.asarray(edit.points, float)
     return cut_and_fill(
@@ -188,15 +201,15 @@ class FenceParams(_Params):
     x: float = Field(description="Station of the fence (m).", json_schema_extra={"unit": "m"})
     height: float = Field(
         gt=0, description="Nominal height of the fence (m).",
-        json_schema_extra={"unit": "m"},
+        json_schema_extra={"unit": "m", "design": "catalogue_height"},
     )
     capacity_kj: float = Field(
         gt=0, description="Energy capacity of the product (kJ): its MEL energy class.",
-        json_schema_extra={"unit": "kJ"},
+        json_schema_extra={"unit": "kJ", "design": "catalogue_capacity"},
     )
     product: str | None = Field(
         default=None, description="Catalogue name of the product (for reports), optional.",
-        json_schema_extra={"unit": None},
+        json_schema_extra={"unit": None, "design": "catalogue"},
     )
 
 
@@ -255,6 +268,10 @@ class Fence(ProtectiveMeasure):
         p = self.params
         return {"height_m": p.height, "capacity_kj": p.capacity_kj, "area_m2_per_m": p.height}
 
+    def bill_from(self, quantities: dict[str, float]) -> list[Quantity]:
+        """One running metre of the fence's product at its height (priced by kind)."""
+        return _running_metre(self, quantities)
+
     def label(self) -> str:
         p = self.params
         name = f"fence {p.product}" if p.product else "fence"
@@ -267,11 +284,11 @@ class WallParams(_Params):
     x: float = Field(description="Station of the wall (m).", json_schema_extra={"unit": "m"})
     height: float = Field(
         gt=0, description="Height of the wall above the ground (m).",
-        json_schema_extra={"unit": "m"},
+        json_schema_extra={"unit": "m", "design": "catalogue_height"},
     )
     capacity_kj: float = Field(
         gt=0, description="Energy the wall can take before it fails (kJ).",
-        json_schema_extra={"unit": "kJ"},
+        json_schema_extra={"unit": "kJ", "design": "catalogue_capacity"},
     )
     restitution: float = Field(
         default=0.2,
@@ -286,7 +303,7 @@ class WallParams(_Params):
     )
     product: str | None = Field(
         default=None, description="Catalogue name of the wall type (for costing), if any.",
-        json_schema_extra={"unit": None},
+        json_schema_extra={"unit": None, "design": "catalogue"},
     )
 
 
@@ -362,6 +379,10 @@ class Wall(ProtectiveMeasure):
             "volume_m3_per_m": p.height * p.thickness,
         }
 
+    def bill_from(self, quantities: dict[str, float]) -> list[Quantity]:
+        """One running metre of the wall's product at its height (priced by kind)."""
+        return _running_metre(self, quantities)
+
     def label(self) -> str:
         p = self.params
         return f"wall ({p.height:g} m, {p.capacity_kj:g} kJ) at x = {p.x:g} m"
@@ -373,7 +394,7 @@ class BoulderRowParams(_Params):
     x: float = Field(description="Station of the row (m).", json_schema_extra={"unit": "m"})
     block_size: float = Field(
         gt=0, description="Edge of the cubic blocks (m); also the row's height.",
-        json_schema_extra={"unit": "m"},
+        json_schema_extra={"unit": "m", "design": {"bounds": [0.5, 3.0]}},
     )
     gap_ratio: float = Field(
         ge=0,
@@ -482,6 +503,11 @@ class BoulderRow(ProtectiveMeasure):
             "capacity_kj": p.capacity_kj,
         }
 
+    def bill_from(self, quantities: dict[str, float]) -> list[Quantity]:
+        """``block_m3``: m^3 of block per running metre."""
+        return [Quantity("block_m3", quantities["block_volume_m3"] * quantities["blocks_per_m"],
+                         "m3")]
+
     def label(self) -> str:
         p = self.params
         return f"boulder row ({p.block_size:g} m blocks, gaps {self.gap_m:.2g} m) at x = {p.x:g} m"
@@ -507,11 +533,11 @@ class DitchParams(_Params):
     )
     width: float = Field(
         gt=0, description="Top width of the ditch along x (m).",
-        json_schema_extra={"unit": "m"},
+        json_schema_extra={"unit": "m", "design": {"bounds": [2.0, 20.0]}},
     )
     depth: float = Field(
         gt=0, description="Depth of the bottom below the lower of the two edges (m).",
-        json_schema_extra={"unit": "m"},
+        json_schema_extra={"unit": "m", "design": {"bounds": [0.5, 5.0]}},
     )
     upslope_side_deg: float = Field(
         default=45.0, ge=10, le=80, description="Slope of the upslope side (degrees), 10..80.",
@@ -628,6 +654,10 @@ class Ditch(ProtectiveMeasure):
             "depth_m": self.params.depth,
         }
 
+    def bill_from(self, quantities: dict[str, float]) -> list[Quantity]:
+        """``excavation_m3`` and ``fill_m3`` per running metre."""
+        return _earthworks(quantities)
+
     def label(self) -> str:
         p = self.params
         return f"ditch ({p.width:g} m wide, {p.depth:g} m deep) at x = {p.x:g} m"
@@ -642,7 +672,7 @@ class BermParams(_Params):
     )
     width: float = Field(
         gt=0, description="Width of the bench along x (m).",
-        json_schema_extra={"unit": "m"},
+        json_schema_extra={"unit": "m", "design": {"bounds": [2.0, 20.0]}},
     )
     cut_face_deg: float = Field(
         default=60.0,
@@ -779,6 +809,10 @@ class Berm(ProtectiveMeasure):
             "width_m": self.params.width,
             "cut_height_m": float(pts[0, 1] - pts[1, 1]),
         }
+
+    def bill_from(self, quantities: dict[str, float]) -> list[Quantity]:
+        """``excavation_m3`` and ``fill_m3`` per running metre."""
+        return _earthworks(quantities)
 
     def label(self) -> str:
         p = self.params

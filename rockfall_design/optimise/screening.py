@@ -253,11 +253,9 @@ class Screening:
         KeyError or ValueError
             From the cost model: it has no price for one of the measures.
         """
-        model, total = self.spec.cost_model, 0.0
-        for m in measures:
-            q = guard(self.registry).measure(m).quantities(self.section)
-            total += float(guard(self.registry).cost_model(model).cost(m, q, self.spec.length_m))
-        return total
+        from ..design import design_cost
+
+        return design_cost(self.registry, self.spec, measures, self.section)
 
     # -- tables -------------------------------------------------------------------
     def _table_for(self, edits: Sequence[ProfileEdit], edited: Section | None) -> _Table:

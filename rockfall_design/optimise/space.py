@@ -42,12 +42,16 @@ class _Var:
     """One coordinate of the search vector."""
 
     slot: int  # which measure of the family
-    name: str  # "x", "product", "height", or a parameter name
+    name: str  # the parameter (for a catalogue choice, the field the plugin declares)
     low: float
     high: float
     integer: bool
     options: tuple[Any, ...] = ()
     step: float = 0.0  # lattice of a continuous variable (0: 1/RANGE_STEPS of the range)
+    # "x" (the station), "product" / "height" (index of a catalogue product, of
+    # its height), "option" (index into options) or "range" (a value): the role,
+    # never the parameter's name, says how a coordinate is decoded.
+    role: str = "range"
 
 
 def families(candidates: Sequence[CandidateSpec], max_measures: int) -> list[tuple[int, ...]]:
@@ -83,20 +87,22 @@ def _variables(
     out: list[_Var] = []
     for slot, ci in enumerate(fam):
         c = cands[ci]
-        out.append(_Var(slot, "x", c.x_range[0], c.x_range[1], False))
+        out.append(_Var(slot, "x", c.x_range[0], c.x_range[1], False, role="x"))
         if c.products:
-            out.append(_Var(slot, "product", 0, len(c.products) - 1, True))
-            nh = max(len(p.heights) for p in c.products)
-            out.append(_Var(slot, "height", 0, nh - 1, True))
+            out.append(_Var(slot, c.product_field or "", 0, len(c.products) - 1, True,
+                            role="product"))
+            if c.height_field is not None:
+                nh = max(len(p.heights) for p in c.products)
+                out.append(_Var(slot, c.height_field, 0, nh - 1, True, role="height"))
         for name, (lo, hi) in c.ranges.items():
             step = (hi - lo) / RANGE_STEPS
             if edits and ci in edits:
                 # Every new ground edit costs a run: a coarser lattice lets the
                 # search come back to designs it has already run.
                 step = max(step, EDIT_STEP_M if hi - lo > 4 * EDIT_STEP_M else step)
-            out.append(_Var(slot, name, lo, hi, False, step=step))
+            out.append(_Var(slot, name, lo, hi, False, step=step, role="range"))
         for name, opts in c.options.items():
-            out.append(_Var(slot, name, 0, len(opts) - 1, True, tuple(opts)))
+            out.append(_Var(slot, name, 0, len(opts) - 1, True, tuple(opts), role="option"))
     return out
 
 
@@ -109,17 +115,17 @@ def _decode(cands, fam, variables, vec) -> list[tuple[int, dict[str, Any]]]:
     heights: list[int] = [0] * len(fam)
     for v, val in zip(variables, vec, strict=True):
         p = params[v.slot]
-        if v.name == "x":
+        if v.role == "x":
             # Stations on the lattice of the candidate's range (the table's stations).
             lo, hi = v.low, v.high
             k = min(round((float(val) - lo) / STATION_STEP_M),
                     math.floor((hi - lo) / STATION_STEP_M + 1e-9))
             p["x"] = float(lo + max(k, 0) * STATION_STEP_M)
-        elif v.name == "product":
+        elif v.role == "product":
             prods[v.slot] = cands[fam[v.slot]].products[int(round(val))]
-        elif v.name == "height":
+        elif v.role == "height":
             heights[v.slot] = int(round(val))
-        elif v.integer:
+        elif v.role == "option":
             p[v.name] = v.options[int(round(val))]
         else:
             # A lattice of 1/RANGE_STEPS of the range: designs an engineer can
@@ -135,9 +141,11 @@ def _decode(cands, fam, variables, vec) -> list[tuple[int, dict[str, Any]]]:
     for slot, ci in enumerate(fam):
         p = params[slot]
         prod = prods[slot]
-        if prod is not None:
-            p["product"] = prod.name
-            p["height"] = prod.heights[min(heights[slot], len(prod.heights) - 1)]
+        c = cands[ci]
+        if prod is not None and c.product_field is not None:
+            p[c.product_field] = prod.name
+            if c.height_field is not None:
+                p[c.height_field] = prod.heights[min(heights[slot], len(prod.heights) - 1)]
         out.append((ci, p))
     return out
 
@@ -168,8 +176,10 @@ def _lattice(lo: float, hi: float, step: float) -> np.ndarray:
 def _discrete_choices(c: CandidateSpec) -> list[dict[str, Any]]:
     """Every catalogue choice of a candidate: product and height, options, range lattice."""
     axes: list[list[dict[str, Any]]] = []
-    if c.products:
-        axes.append([{"product": p.name, "height": h} for p in c.products for h in p.heights])
+    if c.products and c.product_field is not None:
+        pf, hf = c.product_field, c.height_field
+        axes.append([{pf: p.name, hf: h} if hf is not None else {pf: p.name}
+                     for p in c.products for h in (p.heights if hf is not None else (None,))])
     for name, opts in c.options.items():
         axes.append([{name: o} for o in opts])
     for name, (lo, hi) in c.ranges.items():

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..measures import Barrier, BarrierBehaviour, ProfileEdit
+from ..measures import Barrier, BarrierBehaviour, ProfileEdit, Quantity
 from ..safety import Check
 from .manager import _SECTIONS
 
@@ -37,6 +37,16 @@ def _is_number_dict(value: Any) -> bool:
 
 def _is_cost(value: Any) -> bool:
     return _is_number(value) and math.isfinite(value) and value >= 0
+
+
+def _is_bill(value: Any) -> bool:
+    # A bill is priced as amount x unit price: an amount must be a finite number >= 0.
+    return isinstance(value, list) and all(
+        isinstance(q, Quantity) and isinstance(q.name, str) and q.name
+        and isinstance(q.unit, str) and _is_number(q.amount) and math.isfinite(q.amount)
+        and q.amount >= 0 and (q.product is None or isinstance(q.product, str))
+        and (q.size is None or (_is_number(q.size) and math.isfinite(q.size)))
+        for q in value)
 
 
 def _is_check_list(value: Any) -> bool:
@@ -77,12 +87,17 @@ _CONTRACTS: dict[tuple[str, str], _Contract] = {
         "a Barrier or a ProfileEdit", lambda v, m, args: footprint_problem(v, m, *args)),
     ("measure", "design_properties"): _NUMBER_DICT,
     ("measure", "quantities"): _NUMBER_DICT,
+    ("measure", "bill"): _Contract((), _is_bill, "a list of Quantity (a name, a unit, an "
+                                   "amount that is a finite number >= 0)"),
     ("measure", "label"): _Contract((), lambda v: isinstance(v, str), "a str"),
     ("safety", "__init__"): _Contract(),
     ("safety", "checks"): _Contract((), _is_check_list, "a list of Check"),
     ("cost", "__init__"): _Contract(),
     # KeyError or ValueError: no price for this measure (the optimiser skips the design).
     ("cost", "cost"): _Contract((KeyError, ValueError), _is_cost, "a finite number >= 0"),
+    ("cost", "price"): _Contract((KeyError, ValueError), _is_cost, "a finite number >= 0"),
+    ("cost", "missing_price"): _Contract((), lambda v: v is None or isinstance(v, str),
+                                         "a str or None"),
 }
 
 _NOUN = {"measure": "measure", "safety": "safety concept", "cost": "cost model"}

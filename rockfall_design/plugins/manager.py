@@ -42,7 +42,7 @@ from pydantic import BaseModel, ValidationError
 from .. import hookspecs
 from ..costs import CostModel
 from ..errors import Interrupted, PluginError
-from ..measures import ProtectiveMeasure
+from ..measures import ProtectiveMeasure, design_role
 from ..safety import SafetyConcept
 
 log = logging.getLogger(__name__)
@@ -335,7 +335,49 @@ def _validate_class(cls: Any, section: str, base: type, name_attr: str) -> str |
             if not (math.isnan(low) or math.isnan(high) or low < high):
                 return (f"{label} (kind {name!r}): design variable {var!r} has bounds "
                         f"({low:g}, {high:g}); low must be below high")
+        for var in params.model_fields:
+            try:
+                design_role(params, var)  # the field's own declaration, if any
+            except ValueError as exc:
+                return f"{label} (kind {name!r}): {exc}"
     return None
+
+
+def blocked_provider(registry: Registry, section: str, name: str) -> str | None:
+    """The blocked distribution that provides measure kind (or concept, cost model) ``name``.
+
+    Only for the message of a run that has already failed on an unknown
+    name: the blocked plugins are loaded, guarded and apart from
+    ``registry``, to say which of them provides it.
+
+    Parameters
+    ----------
+    registry
+        The registry of the run (its ``blocked`` names).
+    section
+        ``"measure"``, ``"safety"`` or ``"cost"``.
+    name
+        The unknown name.
+
+    Returns
+    -------
+    str or None
+        The distribution (or plugin) name, or None if no blocked plugin
+        provides it (or none can be loaded).
+    """
+    blocked = {_normalise(b) for b in registry.blocked}
+    if not blocked:
+        return None
+    eps = [ep for ep in _entry_points(None)
+           if _normalise(ep.name) in blocked
+           or (_dist_name(ep) and _normalise(_dist_name(ep) or "") in blocked)]
+    if not eps:
+        return None
+    try:
+        found = load_registry(entry_points=eps)
+    except PluginError:  # two blocked plugins claiming one name: say nothing
+        return None
+    return found.provider.get((section, name))
 
 
 def _entry_points(entry_points: Iterable[EntryPoint] | None) -> list[EntryPoint]:

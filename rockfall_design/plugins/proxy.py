@@ -22,7 +22,7 @@ from typing import Any
 
 from ..costs import CostModel
 from ..errors import PluginError
-from ..measures import Barrier, ProfileEdit, ProtectiveMeasure
+from ..measures import Barrier, ProfileEdit, ProtectiveMeasure, Quantity
 from ..safety import Check, SafetyConcept
 from .contract import _CONTRACTS, _NOUN, _identify
 from .manager import Registry, _describe_exception, is_real_interrupt, plugin_code
@@ -41,8 +41,8 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
     method
         ``"__init__"`` (instantiate the class with ``args``), or the name of
         the method: ``footprint``, ``design_properties``, ``quantities``,
-        ``label`` (measures), ``checks`` (safety concepts), ``cost`` (cost
-        models).
+        ``bill``, ``label`` (measures), ``checks`` (safety concepts), ``cost``,
+        ``price``, ``missing_price`` (cost models).
     *args
         Passed on to the method.
 
@@ -56,7 +56,7 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
     ValueError
         From ``footprint`` (the measure does not fit on the section).
     KeyError or ValueError
-        From ``cost`` (the catalogue has no price for the measure).
+        From ``cost`` and ``price`` (the catalogue has no price for the measure).
     PluginError
         Exit code 3: the method raised anything else, or returned what its
         contract does not allow. The one-line message names the measure,
@@ -141,6 +141,10 @@ class GuardedMeasure:
         """The measure's quantities for costing on ``section`` (name to number)."""
         return call_plugin(self.registry, self.measure, "quantities", section)
 
+    def bill(self, section: Any) -> list[Quantity]:
+        """The measure's named quantities per running metre on ``section``, for pricing."""
+        return call_plugin(self.registry, self.measure, "bill", section)
+
     def label(self) -> str:
         """The measure's one-line label for reports."""
         return call_plugin(self.registry, self.measure, "label")
@@ -192,6 +196,22 @@ class GuardedCostModel:
             The catalogue has no price for the measure.
         """
         return call_plugin(self.registry, self.model, "cost", *args)
+
+    def price(self, measure: ProtectiveMeasure, bill: list[Quantity],
+              quantities: dict[str, float], length_m: float) -> float:
+        """The cost of ``measure`` priced from its bill over ``length_m`` (m), a number >= 0.
+
+        Raises
+        ------
+        KeyError or ValueError
+            The catalogue has no price for a quantity of the bill.
+        """
+        return call_plugin(self.registry, self.model, "price", measure, bill, quantities,
+                           length_m)
+
+    def missing_price(self, measure: ProtectiveMeasure, bill: list[Quantity]) -> str | None:
+        """Why the model cannot price ``bill`` (one line), or None if it can."""
+        return call_plugin(self.registry, self.model, "missing_price", measure, bill)
 
 
 class Guard:
