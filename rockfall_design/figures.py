@@ -25,20 +25,7 @@ from matplotlib import colormaps
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter
 
-from .engine import G
-from .engine.core import (
-    CAUGHT,
-    EXIT_DOWNSLOPE,
-    EXIT_UPSLOPE,
-    STOPPED,
-    T_MODE,
-    T_T,
-    T_VX,
-    T_VY,
-    T_X,
-    T_Y,
-    UNRESOLVED,
-)
+from .engine.trajectory import end_counts
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -109,24 +96,6 @@ _PROTECT = "#e8a0a0"
 
 
 # ---- pieces ---------------------------------------------------------------------
-
-
-def _trajectory_xy(tr: np.ndarray, pts_per_flight: int = 24) -> tuple[np.ndarray, np.ndarray]:
-    """Centre positions along a recorded path: parabolas in flight, lines in contact."""
-    xs: list[np.ndarray] = []
-    ys: list[np.ndarray] = []
-    for i in range(len(tr) - 1):
-        a = tr[i]
-        if a[T_MODE] == 0:  # flight
-            t = np.linspace(0.0, tr[i + 1, T_T] - a[T_T], pts_per_flight)
-            xs.append(a[T_X] + a[T_VX] * t)
-            ys.append(a[T_Y] + a[T_VY] * t - 0.5 * G * t**2)
-        else:
-            xs.append(np.array([a[T_X], tr[i + 1, T_X]]))
-            ys.append(np.array([a[T_Y], tr[i + 1, T_Y]]))
-    if not xs:
-        return tr[:, T_X], tr[:, T_Y]
-    return np.concatenate(xs), np.concatenate(ys)
 
 
 def _ground(ax: Axes, section: Any) -> None:
@@ -230,11 +199,11 @@ def profile_figure(study: Study | StreamedStudy, evaluation: Evaluation | None =
     fig = RockfallFigure(figsize=(11, 5.5), layout="constrained")
     ax = fig.add_subplot()
     _ground(ax, study.section)
-    for k, tr in enumerate(study.trajectories):
-        x, y = _trajectory_xy(tr)
+    paths = study.paths()
+    for k, (x, y) in enumerate(paths):
         ax.plot(x, y, lw=0.6, alpha=0.55, color="#c0392b", zorder=4,
                 label="rock centre paths" if k == 0 else None)
-    n_stopped = int(study.status_counts()[STOPPED])
+    n_stopped = study.ends()["stopped"]
     rest_x, rest_y = study.rest_positions()
     if rest_x.size:
         ax.plot(rest_x, rest_y, "k.", ms=2, alpha=0.4, zorder=5,
@@ -245,7 +214,7 @@ def profile_figure(study: Study | StreamedStudy, evaluation: Evaluation | None =
         _draw_measures(ax, evaluation)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("elevation (m)")
-    ax.set_title(f"{study.project.name}: slope section and {len(study.trajectories)} of "
+    ax.set_title(f"{study.project.name}: slope section and {len(paths)} of "
                  f"{study.n:,} paths")
     ax.set_aspect("equal", adjustable="box")
     ax.legend(loc="upper right", fontsize=8)
@@ -320,14 +289,14 @@ def envelopes_figure(
     return fig
 
 
-def no_stop_reason(counts: Sequence[int] | np.ndarray) -> str:
+def no_stop_reason(counts: Mapping[str, int] | Sequence[int] | np.ndarray) -> str:
     """Why no rock came to rest on the section, from the counts of end states.
 
     Parameters
     ----------
-    counts : array of int
-        Rocks per end state, indexed by the engine's status codes
-        (``Study.status_counts()``).
+    counts : mapping of str to int, or array of int
+        Rocks per end state by name (``Study.ends()``), or indexed by the
+        engine's status codes (``Study.status_counts()``).
 
     Returns
     -------
@@ -336,12 +305,12 @@ def no_stop_reason(counts: Sequence[int] | np.ndarray) -> str:
         caught by the measures"`` or the mix, e.g. ``"of 500 rocks, 300 left
         the section downslope and 200 were caught by the measures"``.
     """
-    c = np.asarray(counts)
-    n = int(c.sum())
-    parts = [(int(c[EXIT_DOWNSLOPE]), "left the section downslope"),
-             (int(c[EXIT_UPSLOPE]), "left the section upslope"),
-             (int(c[CAUGHT]), "were caught by the measures"),
-             (int(c[UNRESOLVED]), "reached the event limit (unresolved)")]
+    ends = dict(counts) if isinstance(counts, Mapping) else end_counts(np.asarray(counts))
+    n = sum(ends.values())
+    parts = [(ends["exit_downslope"], "left the section downslope"),
+             (ends["exit_upslope"], "left the section upslope"),
+             (ends["caught"], "were caught by the measures"),
+             (ends["unresolved"], "reached the event limit (unresolved)")]
     parts = [(k, what) for k, what in parts if k]
     if len(parts) == 1:
         return f"all {n:,} rocks {parts[0][1]}"
@@ -359,8 +328,8 @@ def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = N
     -------
     matplotlib.figure.Figure
     """
-    counts = study.status_counts()
-    n_stopped = int(counts[STOPPED])
+    counts = study.ends()
+    n_stopped = counts["stopped"]
     fig = RockfallFigure(figsize=(11, 6), layout="constrained")
     a1, a2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1]})
     sec = study.section
@@ -369,10 +338,10 @@ def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = N
         a1.bar(bins[:-1], study.stop_counts(80), width=np.diff(bins), align="edge",
                color="#7f8c8d", edgecolor="white", label="rocks at rest")
         others = []
-        if counts[EXIT_DOWNSLOPE]:
-            others.append(f"{int(counts[EXIT_DOWNSLOPE]):,} left the section downslope")
-        if counts[CAUGHT]:
-            others.append(f"{int(counts[CAUGHT]):,} were caught by the measures")
+        if counts["exit_downslope"]:
+            others.append(f"{counts['exit_downslope']:,} left the section downslope")
+        if counts["caught"]:
+            others.append(f"{counts['caught']:,} were caught by the measures")
         title = f"rest positions of {n_stopped:,} of {study.n:,} rocks"
         if others:
             title += "; " + ", ".join(others)

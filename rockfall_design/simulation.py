@@ -23,6 +23,7 @@ import numpy as np
 
 from .engine import EnsembleResult, Releases, Section, run_ensemble
 from .engine.columns import C_H, C_T, C_VX, C_VY, C_W, STATUS_NAMES, STOPPED
+from .engine.trajectory import centre_points, end_counts
 from .histograms import LogHistogram
 from .judge.outcomes import protected_zone_counts, reaches_protected_zone
 
@@ -115,6 +116,17 @@ class Study:
     def status_counts(self) -> np.ndarray:
         """Number of rocks per end state, indexed by the engine's status codes."""
         return np.bincount(self.result.status, minlength=len(STATUS_NAMES))
+
+    def ends(self) -> dict[str, int]:
+        """Rocks per end state by name: ``stopped``, ``exit_downslope``, ``caught``, ...
+
+        See :func:`rockfall_design.engine.trajectory.end_counts`.
+        """
+        return end_counts(self.status_counts())
+
+    def paths(self, pts_per_flight: int = 24) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Points (x, y in m) along the centre paths of the rocks whose events were kept."""
+        return [centre_points(tr, pts_per_flight) for tr in self.trajectories]
 
     def rest_positions(self) -> tuple[np.ndarray, np.ndarray]:
         """x and y (m) of the rock centres at rest (every stopped rock)."""

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .engine.columns import STATUS_NAMES, STOPPED
+from .engine.trajectory import centre_points, end_counts
 from .histograms import LinearHistogram, LogHistogram
 from .judge.outcomes import protected_zone_counts
 from .summary import _STATION_QUANTITIES, _hist_blocks, _pct_label, _summary
@@ -107,7 +108,16 @@ class StreamedStudy:
 
     # ---- what the figures need -------------------------------------------
     def status_counts(self) -> np.ndarray:
+        """Number of rocks per end state, indexed by the engine's status codes."""
         return self._counts.copy()
+
+    def ends(self) -> dict[str, int]:
+        """Rocks per end state by name, as :meth:`Study.ends`."""
+        return end_counts(self._counts)
+
+    def paths(self, pts_per_flight: int = 24) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Points (x, y in m) along the centre paths of the first rocks, as :meth:`Study.paths`."""
+        return [centre_points(tr, pts_per_flight) for tr in self.trajectories]
 
     def rest_positions(self) -> tuple[np.ndarray, np.ndarray]:
         """x and y (m) of the first ``REST_SAMPLE`` rocks to come to rest."""
