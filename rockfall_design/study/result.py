@@ -175,8 +175,8 @@ class StudyResult:
                         label=f"{scenario.index}: {name}" if n <= _LEGEND_SCENARIOS else None)
         for ax in (a1, a2):
             ax.grid(alpha=0.3)
-            if n <= _LEGEND_SCENARIOS:
-                ax.legend(loc="upper right", fontsize=7)
+        if n <= _LEGEND_SCENARIOS:
+            a1.legend(loc="upper right", fontsize=7)
         if n > _LEGEND_SCENARIOS:
             from matplotlib.cm import ScalarMappable
             from matplotlib.colors import Normalize
@@ -219,7 +219,8 @@ class StudyResult:
             highs = np.array([e["high"] for e in rows])
             ax.barh(names, highs - lows, left=lows, color="#2980b9", alpha=0.8)
             for k, e in enumerate(rows):
-                ax.text(e["high"], k, f"  {e['effect']:.3g}", va="center", fontsize=8)
+                ax.text(e["high"], k, f"  {_number(e['effect'])}", va="center", fontsize=8)
+            ax.margins(x=0.15)
             unit = rows[0]["unit"] if rows else ""
             ax.set_title(f"{target} ({unit})", fontsize=9, loc="left")
             ax.grid(axis="x", alpha=0.3)
@@ -259,9 +260,9 @@ class StudyResult:
         table = Table(title="Scenarios", show_edge=False, title_justify="left")
         for col in ["#", *paths, *shown]:
             table.add_column(col, justify="right")
-        for _, row in frame.iterrows():
-            cells = [str(row["index"]), *(_text(row[p]) for p in paths)]
-            cells += [_number(row[c]) for c in shown]
+        for k, scenario in enumerate(self.scenario_list):
+            cells = [str(scenario.index), *(_text(scenario.values[p]) for p in paths)]
+            cells += [_number(float(frame[c].iloc[k])) for c in shown]
             table.add_row(*cells)
         ranked = Table(title="Which input moves each design value (largest effect first)",
                        show_edge=False, title_justify="left")
