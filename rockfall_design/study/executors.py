@@ -51,8 +51,13 @@ def single_thread() -> None:
 
 
 def _pool_context() -> multiprocessing.context.BaseContext:
-    methods = multiprocessing.get_all_start_methods()
-    return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+    """forkserver (its server loads the engine once, see :mod:`._warm`), else spawn."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        context = multiprocessing.get_context("forkserver")
+        # Only heeded when the forkserver starts (the first pool of the process).
+        context.set_forkserver_preload(["rockfall_design.study._warm"])
+        return context
+    return multiprocessing.get_context("spawn")
 
 
 def run_tasks(

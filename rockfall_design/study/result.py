@@ -150,13 +150,13 @@ class StudyResult:
         from matplotlib import colormaps
 
         from ..figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure
+        from .run import envelope_percentile
 
         analysis = self.project.analysis
         min_rocks = int(getattr(analysis, "min_rocks_envelope", DEFAULT_MIN_ROCKS_ENVELOPE))
-        pcts = list(analysis.percentiles)
-        q = 95.0 if 95.0 in pcts else (max(pcts) if pcts else None)
-        label = "max" if q is None else f"p{_fmt(q)}"
-        col = "max" if q is None else f"p{_fmt(q).replace('.', '_')}"
+        q = envelope_percentile(self.project)
+        label = f"p{q:g}"
+        col = f"p{q:g}".replace(".", "_")
         fig = RockfallFigure(figsize=(11, 7.5), layout="constrained")
         a1, a2 = fig.subplots(2, 1, sharex=True)
         n = len(self.results)
