@@ -90,7 +90,9 @@ class StudyResult:
         ``index``, ``seed``, ``values`` keyed exactly as under ``vary:``,
         ``rocks``, ``events``, ``project_hash`` of the scenario's project,
         and ``stations``, ``stops``, ``protect`` as ``simulate --json``, and
-        ``measures`` for the barriers) and ``sensitivity`` (see
+        ``measures`` for the barriers, and ``bounds``: ``confidence`` and
+        ``upper``, the one-sided upper confidence bound of each design value
+        by name) and ``sensitivity`` (see
         :func:`~rockfall_design.study.sensitivity.sensitivity`).
         """
         from .. import __version__
@@ -127,7 +129,13 @@ class StudyResult:
 
     @property
     def scenarios(self) -> pd.DataFrame:
-        """One row per scenario: index, seed, the varied values, then every design value."""
+        """One row per scenario: index, seed, the varied values, then every design value.
+
+        Each design value ``x=100 energy_kj p95`` is followed (after all of
+        them) by ``x=100 energy_kj p95 upper``, its one-sided upper confidence
+        bound (NaN where too few rocks passed to bound it; see ``bounds`` in
+        the summary).
+        """
         import pandas as pd
 
         from .sensitivity import targets
@@ -141,6 +149,11 @@ class StudyResult:
                     json.dumps(value, sort_keys=True)
             for name, (_, values) in table.items():
                 row[name] = values[k]
+            upper = self.results[k].get("bounds", {}).get("upper", {})
+            for name in table:
+                if name in upper:
+                    bound = upper[name]
+                    row[f"{name} upper"] = math.nan if bound is None else bound
             rows.append(row)
         return pd.DataFrame(rows)
 
@@ -219,7 +232,8 @@ class StudyResult:
             highs = np.array([e["high"] for e in rows])
             ax.barh(names, highs - lows, left=lows, color="#2980b9", alpha=0.8)
             for k, e in enumerate(rows):
-                ax.text(e["high"], k, f"  {_number(e['effect'])}", va="center", fontsize=8)
+                ax.text(e["high"], k, f"  {_number(e['effect'], e['unit'])}", va="center",
+                        fontsize=8)
             ax.margins(x=0.15)
             unit = rows[0]["unit"] if rows else ""
             ax.set_title(f"{target} ({unit})", fontsize=9, loc="left")
@@ -262,16 +276,18 @@ class StudyResult:
             table.add_column(col, justify="right")
         for k, scenario in enumerate(self.scenario_list):
             cells = [str(scenario.index), *(_text(scenario.values[p]) for p in paths)]
-            cells += [_number(float(frame[c].iloc[k])) for c in shown]
+            cells += [_number(float(frame[c].iloc[k]), _unit(c)) for c in shown]
             table.add_row(*cells)
-        ranked = Table(title="Which input moves each design value (largest effect first)",
-                       show_edge=False, title_justify="left")
+        ranked = Table(title="Which input moves each design value (per design value, the "
+                       "largest effect first; the design values moved most, relative to "
+                       "their size, first)", show_edge=False, title_justify="left")
         indices = any("S1" in e for e in s["sensitivity"])
         for col in ("target", "input", "effect", "low .. high", *(("S1",) if indices else ())):
             ranked.add_column(col, justify="left" if col in ("target", "input") else "right")
-        for e in s["sensitivity"][:top]:
-            cells = [e["target"], e["parameter"], f"{_number(e['effect'])} {e['unit']}",
-                     f"{_number(e['low'])} .. {_number(e['high'])}"]
+        for e in _by_target(s["sensitivity"])[:top]:
+            unit = e["unit"]
+            cells = [e["target"], e["parameter"], f"{_number(e['effect'], unit)} {unit}",
+                     f"{_number(e['low'], unit)} .. {_number(e['high'], unit)}"]
             if indices:
                 cells.append("-" if "S1" not in e else f"{e['S1']:.2f} ± {e['S1_conf']:.2f}")
             ranked.add_row(*cells)
@@ -281,10 +297,39 @@ class StudyResult:
         (console or fitted_console(group)).print(group)
 
 
-def _number(v: Any) -> str:
+def _unit(target: str) -> str:
+    """The unit of a design value by its name (see :func:`~.sensitivity.targets`)."""
+    if "passing_height_m" in target:
+        return "m"
+    if "energy_kj" in target:
+        return "kJ"
+    return "fraction" if target.endswith("residual") else ""
+
+
+def _number(v: Any, unit: str = "") -> str:
+    """A design value as a report shows it: m to cm, kJ to 1 kJ, fractions to 4 digits."""
     if v is None or (isinstance(v, float) and math.isnan(v)):
         return "-"
-    return f"{v:,.4g}" if isinstance(v, float) and abs(v) < 1 else f"{v:,.1f}"
+    if unit == "m":
+        return f"{v:,.2f}"
+    if unit == "kJ":
+        return f"{v:,.0f}"
+    if unit == "fraction":
+        return f"{v:.4f}"
+    return f"{v:,.4g}"
+
+
+def _by_target(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Sensitivity entries grouped by design value, each group largest effect first.
+
+    The groups are ordered by their largest effect relative to the design
+    value's size, so that metres, kilojoules and fractions compare.
+    """
+    groups: dict[str, list[dict[str, Any]]] = {}
+    for e in entries:
+        groups.setdefault(e["target"], []).append(e)
+    order = sorted(groups, key=lambda t: -max(_relative(e) for e in groups[t]))
+    return [e for t in order for e in sorted(groups[t], key=lambda e: -e["effect"])]
 
 
 def _relative(entry: dict[str, Any]) -> float:

@@ -198,9 +198,59 @@ def run_scenario(task: ScenarioTask) -> dict[str, Any]:
              **{q: by_x[x][q] for q in QUANTITIES}}
             for i, label, x in task.barriers
         ]
+    out["bounds"] = _bounds(study, summary, task, _confidence(project))
     out["envelope"] = _envelope(study, envelope_percentile(project))
     out["runtime_s"] = runtime
     return out
+
+
+#: Confidence of the design values' upper bounds when the safety concept gives none.
+DEFAULT_CONFIDENCE = 0.95
+
+
+def _confidence(project: Project) -> float:
+    """The safety concept's ``confidence`` (the bounds of ``check``), else 0.95."""
+    value = project.safety.get("confidence", DEFAULT_CONFIDENCE)
+    ok = isinstance(value, int | float) and not isinstance(value, bool) and 0 < value < 1
+    return float(value) if ok else DEFAULT_CONFIDENCE
+
+
+def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
+            confidence: float) -> dict[str, Any]:
+    """One-sided upper confidence bounds of the scenario's design values.
+
+    Each p95 and p99 of passing height and energy at the stations and
+    barriers: the distribution-free order-statistic bound over the rocks
+    that passed (None where too few did); the fraction reaching the
+    protected zone: Clopper-Pearson. A streamed run (more than
+    ``EXACT_ROCKS`` rocks) keeps no per-rock values: only the fraction's
+    bound is given then.
+    """
+    from ..judge.bounds import fraction_upper_bound, quantile_upper_bound
+    from ..simulation import Study
+    from .sensitivity import TARGET_STATISTICS, place_names
+
+    values: dict[str, float | None] = {}
+    if isinstance(study, Study):
+        arrays = study.crossing_arrays()
+        columns = {float(x): j for j, x in enumerate(study.stations)}
+        for where, x in place_names(summary["stations"], task.barriers, task.project):
+            j = columns[x]
+            for quantity, array, scale in (("passing_height_m", "passing_height_m", 1.0),
+                                           ("energy_kj", "energy_j", 1e3)):
+                column = arrays[array][:, j]
+                column = column[np.isfinite(column)] / scale
+                for stat in TARGET_STATISTICS:
+                    q = float(stat[1:]) / 100
+                    values[f"{where} {quantity} {stat}"] = (
+                        quantile_upper_bound(column, q, confidence) if column.size else None)
+    protect = summary.get("protect")
+    if protect is not None:
+        from ..project.messages import _fmt
+
+        values[f"x={_fmt(protect['x'])} residual"] = fraction_upper_bound(
+            int(protect["reaching"]), int(summary["rocks"]), confidence)
+    return {"confidence": confidence, "upper": values}
 
 
 def envelope_percentile(project: Project) -> float:
