@@ -13,42 +13,26 @@
 - :mod:`.command`: the ``rockfall-design study`` command.
 
 The engineer's entry point is :func:`rockfall_design.study` (the function of
-the public API, which shares its name with this package). The names below
-are imported on first use, so that the command line's ``--help`` does not
-import pydantic and numpy.
+the public API, which shares its name with this package).
 """
 
-from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
-_LAZY = {
-    "PathError": ".paths",
-    "check_study": ".paths",
-    "parse_path": ".paths",
-    "with_values": ".paths",
-    "Scenario": ".scenarios",
-    "scenario_seed": ".scenarios",
-    "scenarios": ".scenarios",
-    "StudyResult": ".result",
-}
+# Imported here, not on first use: the function ``scenarios`` must be bound
+# after its module of the same name, which importing the submodule binds.
+from .paths import PathError, check_study, parse_path, with_values
+from .scenarios import Scenario, scenario_seed, scenarios
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .paths import PathError, check_study, parse_path, with_values
     from .result import StudyResult
-    from .scenarios import Scenario, scenario_seed, scenarios
 
 
 def __getattr__(name: str) -> Any:
-    where = _LAZY.get(name)
-    if where is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(where, __name__), name)
-    globals()[name] = value
-    return value
+    if name == "StudyResult":  # with pandas and matplotlib behind it: on first use
+        from .result import StudyResult
 
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+        return StudyResult
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 __all__ = [
