@@ -200,3 +200,17 @@ def test_the_function_keeps_its_name_over_the_package():
     import rockfall_design.study.scenarios  # noqa: F401  (imports the subpackage)
 
     assert callable(rd.study) and rd.study is rd.api.study
+
+
+def test_the_scenario_envelope_percentile_is_numpys():
+    from rockfall_design.study.run import _column_percentile
+
+    rng = np.random.default_rng(3)
+    table = rng.lognormal(size=(500, 6)).astype(np.float32)
+    table[rng.random(table.shape) < 0.4] = np.nan
+    table[:, 2] = np.nan  # no rock passes here
+    table[1:, 4] = np.nan  # one rock passes here
+    for q in (0, 50, 95, 99, 100):
+        with np.errstate(all="ignore"), pytest.warns(RuntimeWarning):
+            expected = np.nanpercentile(table.astype(float), q, axis=0)
+        np.testing.assert_allclose(_column_percentile(table, q), expected, rtol=1e-12)

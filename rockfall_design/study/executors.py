@@ -50,6 +50,19 @@ def single_thread() -> None:
     os.environ[THREADS_ENV] = "1"
 
 
+def _pool_worker() -> None:
+    """A pool's worker: one engine thread, and Ctrl-C left to the parent.
+
+    The terminal sends SIGINT to the whole process group; the parent stops
+    the pool (see :func:`_on_pool`), so a worker ignores it rather than print
+    a traceback of its own.
+    """
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    single_thread()
+
+
 def _pool_context() -> multiprocessing.context.BaseContext:
     """forkserver (its server loads the engine once, see :mod:`._warm`), else spawn."""
     if "forkserver" in multiprocessing.get_all_start_methods():
@@ -112,7 +125,7 @@ def _on_pool(fn: Callable[[Any], Any], tasks: Sequence[Any], n: int,
              on_done: Callable[[int, Any], None] | None) -> list[Any]:
     results: list[Any] = [None] * len(tasks)
     pool = ProcessPoolExecutor(max_workers=n, mp_context=_pool_context(),
-                               initializer=single_thread)
+                               initializer=_pool_worker)
     try:
         pending: dict[Future, int] = {pool.submit(fn, t): i for i, t in enumerate(tasks)}
         while pending:
@@ -123,8 +136,12 @@ def _on_pool(fn: Callable[[Any], Any], tasks: Sequence[Any], n: int,
                 if on_done is not None:
                     on_done(i, results[i])
     except BaseException:
-        # an error or Ctrl-C: nothing more is started, and nothing is waited for
+        # An error or Ctrl-C: nothing more is started, and the scenarios under
+        # way are stopped rather than waited for (their results are not used).
+        workers = list(getattr(pool, "_processes", {}).values())
         pool.shutdown(wait=False, cancel_futures=True)
+        for process in workers:
+            process.terminate()
         raise
     pool.shutdown(wait=True)
     return results
