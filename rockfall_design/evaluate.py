@@ -494,7 +494,7 @@ def validate_project(project: Project, registry: Registry) -> None:
         # the study's paths and values, against this project (after the sections above it)
         from .study.paths import check_study
 
-        check_study(project)
+        check_study(project, registry)
 
 
 def evaluate(

@@ -214,3 +214,20 @@ def test_the_scenario_envelope_percentile_is_numpys():
         with np.errstate(all="ignore"), pytest.warns(RuntimeWarning):
             expected = np.nanpercentile(table.astype(float), q, axis=0)
         np.testing.assert_allclose(_column_percentile(table, q), expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize(("values", "words"), [
+    ("[4.0, -1.0]", "value -1: measures[0].height: expected a number > 0"),
+    ("[160, 999]", "outside the section"),
+])
+def test_a_varied_plugin_parameter_is_checked_by_its_plugin(tmp_path, capsys, values, words):
+    path = tmp_path / "bad.yaml"
+    text = TALUS.read_text().replace("rocks.volume: [0.5, 1.0, 2.0]",
+                                     f"measures[0].{'height' if '4.0' in values else 'x'}: "
+                                     f"{values}")
+    path.write_text(text)
+    for command in ("study", "check"):
+        assert main([command, str(path), "--rocks", "20"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert words in err and "study.vary.measures[0]." in err
+        assert len(err.splitlines()) == 1

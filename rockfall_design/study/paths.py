@@ -222,14 +222,16 @@ def with_values(project: Project, values: Mapping[str, Any]) -> Project:
     raise located(first, f"the values {given} do not fit together: {combined}")
 
 
-def check_study(project: Project) -> None:
+def check_study(project: Project, registry: Any = None) -> None:
     """Check every path and value of the project's ``study:`` section against the project.
 
     Each value of a list, and each end of a range (and each level of a grid
     range), is set alone with :func:`with_values`: an unknown path or a value
     that the schema refuses is reported before anything runs, by every
-    command (as the rest of the file is). Values that are valid alone but not
-    together are reported when the study builds its scenarios.
+    command (as the rest of the file is). With the plugins (``registry``),
+    the plugin sections of each such project are checked too (a fence's
+    height varied to -1). Values that are valid alone but not together are
+    reported when the study builds its scenarios.
 
     Raises
     ------
@@ -249,4 +251,15 @@ def check_study(project: Project) -> None:
         else:
             tried = list(levels)
         for value in tried:
-            with_values(project, {path: value})
+            varied = with_values(project, {path: value})
+            if registry is None:
+                continue
+            from ..evaluate import validate_project
+
+            try:
+                validate_project(varied, registry)
+            except ProjectError as exc:
+                where = f"{exc.key}: " if exc.key else ""
+                raise project.error_at(
+                    ("study", "vary", path), f"value {_describe(value)}: {where}{exc.message}"
+                ) from None
