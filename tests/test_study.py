@@ -231,3 +231,17 @@ def test_a_varied_plugin_parameter_is_checked_by_its_plugin(tmp_path, capsys, va
         err = capsys.readouterr().err.strip()
         assert words in err and "study.vary.measures[0]." in err
         assert len(err.splitlines()) == 1
+
+
+def test_values_that_do_not_fit_together_stop_the_study_before_it_runs(tmp_path, capsys):
+    path = tmp_path / "bad.yaml"
+    text = TALUS.read_text().replace("volume: 1.0 ", "volume: {uniform: [0.5, 1.0]}")
+    text = text.replace("rocks.volume: [0.5, 1.0, 2.0]",
+                        "rocks.volume.uniform.0: [0.5, 0.9]\n"
+                        "    rocks.volume.uniform.1: [0.8, 1.2]")
+    path.write_text(text)
+    assert main(["check", str(path), "--rocks", "20"]) in (0, 1)  # each value fits alone
+    capsys.readouterr()
+    assert main(["study", str(path), "--rocks", "20", "--workers", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "do not fit together" in err and len(err.splitlines()) == 1

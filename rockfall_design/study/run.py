@@ -58,33 +58,29 @@ class ScenarioTask:
 
 
 def _relocated(project: Project, scenario: Scenario, exc: ProjectError) -> ProjectError:
-    """A plugin's complaint about a scenario's project, at the ``study.vary`` line to blame.
+    """A complaint about a scenario's project, at the ``study.vary`` line to blame.
 
-    The path to blame is the first varied path whose input the complaint is
-    about (``measures[0].height_m`` for ``measures[0]``), else the first one.
+    The path to blame is the first varied path that the complaint's key lies
+    on (``measures[0].height`` for a complaint at ``measures[0]``), else the
+    first one; the message names the scenario and all its values.
     """
-    from .paths import ALIASES, parse_path
+    from ..project.messages import _describe
+    from .paths import ALIASES, _shown, parse_path
 
-    def text(path: str) -> str:
+    def key_text(path: str) -> str:
         keys = parse_path(path)
         if isinstance(keys[0], str) and keys[0] in ALIASES:
             keys = (*ALIASES[keys[0]], *keys[1:])
-        out = ""
-        for key in keys:
-            out += f"[{key}]" if isinstance(key, int) else (f".{key}" if out else key)
-        return out
+        return _shown(keys)
 
     paths = list(scenario.values)
-    blamed = next(
-        (p for p in paths if exc.key and (text(p).startswith(exc.key) or
-                                         exc.key.startswith(text(p)))),
-        paths[0],
-    )
-    given = ", ".join(f"{p} = {v!r}" for p, v in scenario.values.items())
-    return project.error_at(
-        ("study", "vary", blamed),
-        f"scenario {scenario.index} ({given}): {exc.key + ': ' if exc.key else ''}{exc.message}",
-    )
+    blamed = next((p for p in paths if exc.key and (key_text(p).startswith(exc.key)
+                                                    or exc.key.startswith(key_text(p)))),
+                  paths[0])
+    given = ", ".join(f"{p} = {_describe(v)}" for p, v in scenario.values.items())
+    where = f"{exc.key}: " if exc.key else ""
+    return project.error_at(("study", "vary", blamed),
+                            f"scenario {scenario.index} ({given}): {where}{exc.message}")
 
 
 def _barriers(project: Project, registry: Any) -> tuple[tuple[int, str, float], ...]:
