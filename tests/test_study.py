@@ -245,3 +245,21 @@ def test_values_that_do_not_fit_together_stop_the_study_before_it_runs(tmp_path,
     assert main(["study", str(path), "--rocks", "20", "--workers", "1"]) == 2
     err = capsys.readouterr().err.strip()
     assert "do not fit together" in err and len(err.splitlines()) == 1
+
+
+def test_common_seeds_keep_the_monte_carlo_noise_out_of_the_sensitivity():
+    # a varied input that does nothing (the scatter of a material no segment uses)
+    text = RUNOUT.replace("materials:\n", "materials:\n  unused: {restitution: 0.3, "
+                          "friction: 0.5}\n") + (
+        "  vary:\n    materials.unused.restitution: [0.2, 0.4]\n"
+        "    rocks.volume: [0.5, 2.0]\n")
+    own = rd.study(load_project_text(text, "r.yaml"), rocks=60, seed=4, workers=1)
+    common = rd.study(load_project_text(text + "  seeds: common\n", "r.yaml"), rocks=60,
+                      seed=4, workers=1)
+    assert {b["seed"] for b in common.summary["scenarios"]} == {4}
+    noise = [e for e in own.summary["sensitivity"]
+             if e["parameter"] == "materials.unused.restitution"]
+    none = [e for e in common.summary["sensitivity"]
+            if e["parameter"] == "materials.unused.restitution"]
+    assert any(e["effect"] > 0 for e in noise)  # independent rocks: noise shows as an effect
+    assert all(e["effect"] == 0 for e in none)  # the same rocks: no effect at all

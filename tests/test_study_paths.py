@@ -231,3 +231,10 @@ def test_latin_hypercube_sample():
     assert scenarios(spec, run_seed=1) == sc
     other = {**spec, "scenarios": {**spec["scenarios"], "seed": 4}}
     assert [s.values for s in scenarios(other, run_seed=1)] != [s.values for s in sc]
+
+
+def test_common_seeds_give_every_scenario_the_run_seed():
+    p = project(STUDY + "  seeds: common\n")
+    assert [s.seed for s in scenarios(p.study, run_seed=7)] == [7] * 9
+    with pytest.raises(ProjectError, match="expected one of independent, common"):
+        project(STUDY + "  seeds: same\n")

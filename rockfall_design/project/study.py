@@ -7,6 +7,7 @@
         materials.talus.restitution: [0.28, 0.32, 0.36]   # a list of values
         rocks.volume.lognormal.0: {range: [0.5, 2.0], levels: 3}
       scenarios: grid          # or {sample: latin_hypercube, n: 50, seed: 3}
+      seeds: independent       # or common: every scenario runs the same rocks
 
 Each key under ``vary:`` is the path of an input in the project file (dots
 between keys, ``[i]`` or ``.i`` for list items); its value is a list of the
@@ -173,6 +174,15 @@ class StudySpec(_Model):
         "grid",
         description="grid (every combination of the values) or {sample: latin_hypercube, "
         "n: N, seed: S}.",
+    )
+
+    seeds: Annotated[
+        Literal["independent", "common"], BeforeValidator(_choice("independent", "common"))
+    ] = Field(
+        "independent",
+        description="independent: each scenario draws its own rocks (its seed derived from "
+        "the run's seed and its index); common: every scenario runs the same rocks (the "
+        "run's seed), so that differences between scenarios come from the inputs alone.",
     )
 
     @model_validator(mode="after")

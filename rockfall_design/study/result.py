@@ -85,8 +85,8 @@ class StudyResult:
         """The dict that ``study --json`` prints.
 
         ``project``, ``version``, ``seed`` (the run's), ``rocks`` (per
-        scenario), ``project_hash``, ``vary`` and ``sampling`` (the study
-        section, resolved), ``runtime_s``, ``scenarios`` (each with
+        scenario), ``project_hash``, ``vary``, ``sampling`` and ``seeds`` (the
+        study section, resolved), ``runtime_s``, ``scenarios`` (each with
         ``index``, ``seed``, ``values`` keyed exactly as under ``vary:``,
         ``rocks``, ``events``, ``project_hash`` of the scenario's project,
         and ``stations``, ``stops``, ``protect`` as ``simulate --json``, and
@@ -114,6 +114,7 @@ class StudyResult:
             "runtime_s": round(self.runtime_s, 6),
             "vary": study["vary"],
             "sampling": study["scenarios"],
+            "seeds": study["seeds"],
             "scenarios": scenarios,
             "sensitivity": [dict(e) for e in self._sensitivity],
         }

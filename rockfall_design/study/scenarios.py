@@ -20,6 +20,13 @@ or ``rocks.seed``) and the scenario's index by
 sequence, as ``SeedSequence(seed).spawn(n)[index]`` gives it. The scenarios
 are therefore independent samples; the same run seed gives the same seeds,
 and a scenario's seed depends on its index only, never on who runs it.
+
+With ``seeds: common`` every scenario runs with the run's seed itself:
+the same release draws and per-rock random streams in every scenario
+(common random numbers), so that the differences between scenarios, and
+the sensitivity, come from the inputs alone and not from Monte Carlo noise.
+(A varied input that changes what is drawn, such as the size distribution,
+still changes the rocks' sizes, from the same random numbers.)
 """
 
 from __future__ import annotations
@@ -138,13 +145,16 @@ def scenarios(spec: StudySpec | Mapping[str, Any], run_seed: int) -> list[Scenar
     list of Scenario
         In the documented order (grid: nested loops, last input fastest;
         sample: the order of the Latin hypercube's points), each with its
-        values and seed (:func:`scenario_seed`).
+        values and seed (:func:`scenario_seed`; the run's seed with
+        ``seeds: common``).
     """
     if not isinstance(spec, StudySpec):
         spec = StudySpec.model_validate(spec)
     if int(run_seed) < 0:
         raise ValueError(f"the run seed must be >= 0, got {run_seed}")
+    common = spec.seeds == "common"
     return [
-        Scenario(index=i, values=values, seed=scenario_seed(run_seed, i))
+        Scenario(index=i, values=values,
+                 seed=int(run_seed) if common else scenario_seed(run_seed, i))
         for i, values in enumerate(design_points(spec))
     ]
