@@ -180,8 +180,7 @@ class StudyResult:
             env = result["envelope"]
             x = np.asarray(env["x_m"], dtype=float)
             enough = np.asarray(env["crossings"]) >= min_rocks
-            name = ", ".join(f"{p.split('.')[-1]}={_text(v)}"
-                             for p, v in scenario.values.items())
+            name = ", ".join(f"{_short(p)}={_text(v)}" for p, v in scenario.values.items())
             for ax, key in ((a1, f"height_{col}_m"), (a2, f"energy_{col}_kj")):
                 y = np.where(enough, np.asarray(env.get(key, [np.nan] * x.size), dtype=float),
                              np.nan)
@@ -296,6 +295,12 @@ class StudyResult:
 
         group = Group(head, table, ranked)
         (console or fitted_console(group)).print(group)
+
+
+def _short(path: str) -> str:
+    """A varied input's name for a legend: its last key (with the one before an index)."""
+    keys = path.replace("[", ".").replace("]", "").split(".")
+    return ".".join(keys[-2:]) if keys[-1].isdigit() and len(keys) > 1 else keys[-1]
 
 
 def _unit(target: str) -> str:
