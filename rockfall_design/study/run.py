@@ -132,12 +132,15 @@ def prepare(
     chosen = scenarios(project.study, run_seed)
     tasks = []
     for scenario in chosen:
-        q = with_values(project, scenario.values)
         try:
-            barriers = _barriers(q, registry)
+            barriers = _barriers(with_values(project, scenario.values), registry)
         except ProjectError as exc:
             raise _relocated(project, scenario, exc) from None
-        tasks.append(ScenarioTask(scenario.index, scenario.seed, n, q, barriers))
+        # The task gets a project of its own, fresh from the data: the one checked
+        # above may keep what the plugins built for it (objects of the plugins,
+        # the registry), which a worker neither needs nor may be able to unpickle.
+        fresh = with_values(project, scenario.values)
+        tasks.append(ScenarioTask(scenario.index, scenario.seed, n, fresh, barriers))
     return chosen, tasks
 
 
