@@ -485,6 +485,11 @@ def validate_project(project: Project, registry: Registry) -> None:
         Exit code 3, if a plugin misbehaves.
     """
     plan_for(project, registry)
+    if project.study is not None:
+        # the study's paths and values, against this project (after the sections above it)
+        from .study.paths import check_study
+
+        check_study(project, registry)
 
 
 def evaluate(
