@@ -317,7 +317,7 @@ def _plugins_for(project: Any, args: argparse.Namespace) -> Any:
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .api import SimulationResult, run_simulation
     from .outputs import OutputSet
-    from .project import load_project
+    from .project import Project
     from .simulation import study_memory
 
     recorded = None
@@ -328,7 +328,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     elif args.project is None:
         raise InputError("a project file (or --repeat SUMMARY) is needed")
     else:
-        project = load_project(args.project)
+        project = _load(args.project)
+        if not isinstance(project, Project):  # a corridor: every section
+            from .corridor import cli_simulate
+
+            return cli_simulate(args, project)
     _plugins_for(project, args)
     n = args.rocks or project.rocks.count
     _memory_guard(study_memory(project, n), f"{n:,} rocks with "
@@ -430,6 +434,13 @@ def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
     return project, recorded
 
 
+def _load(path: Path) -> Any:
+    """The project file: a Project, or a Corridor when it lists ``sections:``."""
+    from .project import load_corridor
+
+    return load_corridor(path)
+
+
 def _comparable(summary: dict[str, Any]) -> dict[str, Any]:
     """A summary without what legitimately changes between runs (timing, the run record)."""
     return {k: v for k, v in summary.items() if k not in ("runtime_s", "run")}
@@ -439,9 +450,13 @@ def cmd_check(args: argparse.Namespace) -> int:
     """Evaluate the project's measures; exit 0 if every check holds, else 1."""
     from .api import check
     from .outputs import OutputSet
-    from .project import load_project
+    from .project import Project
 
-    project = load_project(args.project)
+    project = _load(args.project)
+    if not isinstance(project, Project):  # a corridor: every section
+        from .corridor import cli_check
+
+        return cli_check(args, project)
     registry = _plugins_for(project, args)
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
@@ -477,10 +492,14 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     """Least-cost design; exit 0 with a design, 1 if no family meets the targets."""
     from .api import optimise
     from .outputs import OutputSet
-    from .project import load_project
+    from .project import Project
     from .report import design_yaml, print_optimise
 
-    project = load_project(args.project)
+    project = _load(args.project)
+    if not isinstance(project, Project):  # a corridor: every section
+        from .corridor import cli_optimise
+
+        return cli_optimise(args, project)
     if project.design is None:
         raise project.error_at((), "the project has no design: section to optimise "
                                    "(see the README, 'Designing protection')")
