@@ -490,6 +490,11 @@ def validate_project(project: Project, registry: Registry) -> None:
     edited_section(project, bare, place_measures(project, registry, measures, bare))
     if project.design is not None:
         resolve_design(project, registry)
+    if project.study is not None:
+        # the study's paths and values, against this project (after the sections above it)
+        from .study.paths import check_study
+
+        check_study(project)
 
 
 def evaluate(

@@ -45,6 +45,8 @@ The package, one room each (the names above are all importable from here):
   parameters validated with their problems located in the file;
 - :mod:`.design`: the ``design:`` section (:class:`Design`, :class:`DesignCosts`,
   candidates, residual, site, catalogues);
+- :mod:`.study`: the ``study:`` section (:class:`StudySpec`: inputs varied
+  by their path, grid or Latin hypercube scenarios);
 - :mod:`.model`: :class:`Project`, the whole file;
 - :mod:`.loading`: YAML with line numbers and limits, :func:`load_project`,
   :func:`load_project_text`, :func:`dump_yaml`, and :func:`load_corridor`
@@ -108,6 +110,7 @@ from .schema import (
     Slope,
 )
 from .schema import SizeField as SizeField
+from .study import Range, Sample, StudySpec
 
 __all__ = [
     "Corridor",
@@ -132,6 +135,9 @@ __all__ = [
     "Scatter",
     "SizeSpec",
     "Slope",
+    "Range",
+    "Sample",
+    "StudySpec",
     "load_project",
     "load_project_text",
 ]

@@ -28,6 +28,7 @@ from .fields import (
 from .locator import Locator
 from .messages import _did_you_mean, _fail, _fmt
 from .schema import Analysis, EngineConfig, Material, Protect, Rocks, Slope
+from .study import StudySpec
 
 
 class Project(_Model):
@@ -66,6 +67,11 @@ class Project(_Model):
     )
     design: Design | None = Field(
         None, description="What the least-cost optimiser may build; none if absent."
+    )
+    study: StudySpec | None = Field(
+        None,
+        description="A parametric study (rockfall-design study): inputs to vary by their "
+        "path in this file, and the scenarios to run; none if absent.",
     )
 
     _source: str = PrivateAttr(default="<string>")
@@ -146,6 +152,9 @@ class Project(_Model):
         Numeric keys (heights in a price table) become strings, as in JSON.
         """
         data = self.model_dump(mode="json")
+        if data.get("study") is None:
+            # absent from files without a study, so their record and hash are as before
+            data.pop("study", None)
         if self.design is not None and data.get("design") is not None:
             # the catalogues inline, so the record (and its hash) holds the figures used
             design = data["design"]

@@ -1,0 +1,204 @@
+"""Study: the ``study:`` section, a parametric study over inputs of the project.
+
+.. code-block:: yaml
+
+    study:
+      vary:
+        materials.talus.restitution: [0.28, 0.32, 0.36]   # a list of values
+        rocks.volume.lognormal.0: {range: [0.5, 2.0], levels: 3}
+      scenarios: grid          # or {sample: latin_hypercube, n: 50, seed: 3}
+
+Each key under ``vary:`` is the path of an input in the project file (dots
+between keys, ``[i]`` or ``.i`` for list items); its value is a list of the
+values to try, or ``{range: [lo, hi]}`` (with ``levels: N``, evenly spaced
+values, for a grid). This module checks the section's shape; whether each
+path exists and each value is valid there is checked against the project
+itself, by :func:`rockfall_design.study.paths.with_values`.
+"""
+
+import math
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BeforeValidator,
+    Field,
+    PlainSerializer,
+    PlainValidator,
+    WithJsonSchema,
+    model_validator,
+)
+from pydantic_core import PydanticCustomError
+
+from .fields import Integer, String, _as_integer, _as_number, _choice, _Model
+from .messages import _describe, _did_you_mean, _fail, _fmt
+
+#: Most scenarios in one study: each is a full Monte Carlo run.
+MAX_SCENARIOS = 10_000
+#: Most inputs varied in one study.
+MAX_VARIED = 50
+
+
+class Range(_Model):
+    """A continuous range of a numeric input: ``{range: [lo, hi], levels: N}``."""
+
+    range: tuple[float, float] = Field(description="Lowest and highest value [lo, hi], lo < hi.")
+    levels: Annotated[Integer, Field(ge=2, le=MAX_SCENARIOS)] | None = Field(
+        None,
+        description="Evenly spaced values from lo to hi, both included, for a grid; a "
+        "sampled study draws from the whole range and ignores it.",
+    )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _check_range(cls, data: Any) -> Any:
+        if isinstance(data, dict) and "range" in data:
+            value = data["range"]
+            if not isinstance(value, list | tuple) or len(value) != 2:
+                raise _fail(f"expected [lo, hi], got {_describe(value)}", ("range",))
+            lo = _as_number(value[0], ("range", 0))
+            hi = _as_number(value[1], ("range", 1))
+            if not lo < hi:
+                raise _fail(
+                    f"expected [lo, hi] with lo < hi, got [{_fmt(lo)}, {_fmt(hi)}]", ("range",)
+                )
+            data = {**data, "range": (lo, hi)}
+        return data
+
+    def grid_values(self) -> list[float]:
+        """The ``levels`` evenly spaced values of a grid, lo and hi included."""
+        assert self.levels is not None
+        lo, hi = self.range
+        step = (hi - lo) / (self.levels - 1)
+        # lo + i * step rather than numpy's linspace: plain floats, hi exactly hi
+        return [lo + i * step if i < self.levels - 1 else hi for i in range(self.levels)]
+
+
+def _parse_levels(value: Any) -> Any:
+    """A list of values (kept as written) or a ``{range: ...}`` mapping."""
+    if isinstance(value, list | tuple):
+        if not value:
+            raise _fail("expected at least one value, got an empty list")
+        seen: list[Any] = []
+        for i, item in enumerate(value):
+            if isinstance(item, float) and not math.isfinite(item):
+                raise _fail(f"must be finite, got {_fmt(item)}", (i,))
+            if any(type(item) is type(s) and item == s for s in seen):
+                raise _fail(f"value {_fmt(item)} is listed twice", (i,))
+            seen.append(item)
+        return list(value)
+    if isinstance(value, dict):
+        if "range" not in value:
+            raise _fail(
+                "expected a list of values or {range: [lo, hi]}, got a mapping without 'range'"
+            )
+        return Range.model_validate(value)
+    raise _fail(f"expected a list of values or {{range: [lo, hi]}}, got {_describe(value)}")
+
+
+Levels = Annotated[list[Any] | Range, BeforeValidator(_parse_levels)]
+
+
+class Sample(_Model):
+    """A sampled study: ``{sample: latin_hypercube, n: 50, seed: 3}``."""
+
+    sample: Annotated[Literal["latin_hypercube"], BeforeValidator(_choice("latin_hypercube"))] = (
+        Field(description="Sampling design: latin_hypercube (scipy.stats.qmc.LatinHypercube).")
+    )
+    n: Annotated[Integer, Field(ge=2, le=MAX_SCENARIOS)] = Field(
+        description="Number of scenarios drawn."
+    )
+    seed: Annotated[Integer, Field(ge=0)] = Field(
+        0, description="Seed of the sample (the scenarios' values; not the rocks)."
+    )
+
+
+_SCENARIOS = "grid or {sample: latin_hypercube, n: N, seed: S}"
+
+
+def _parse_scenarios(value: Any) -> Any:
+    """``grid`` or a :class:`Sample`, each problem one message at its key.
+
+    Validated here rather than as a pydantic union, which would report a
+    mapping's problems twice (once per alternative).
+    """
+    if isinstance(value, Sample) or (value == "grid" and isinstance(value, str)):
+        return value
+    if not isinstance(value, dict):
+        raise _fail(f"expected {_SCENARIOS}, got {_describe(value)}")
+    for key in value:
+        if key not in Sample.model_fields:
+            hint = _did_you_mean(str(key), list(Sample.model_fields)) or (
+                f"; expected one of {', '.join(Sample.model_fields)}")
+            raise _fail(f"unknown key {key!r}{hint}", (key,))
+    if "sample" not in value:
+        raise _fail(f"expected {_SCENARIOS}: 'sample' is missing")
+    if value["sample"] != "latin_hypercube" or not isinstance(value["sample"], str):
+        raise _fail(
+            f"expected latin_hypercube, got {_describe(value['sample'])}", ("sample",)
+        )
+    if "n" not in value:
+        raise _fail("required key is missing (the number of scenarios drawn)", ("n",))
+    limits = {"n": (2, MAX_SCENARIOS), "seed": (0, None)}
+    numbers = {}
+    for key, (low, high) in limits.items():
+        if key not in value:
+            continue
+        number = _as_integer_at(value[key], key)
+        if number < low or (high is not None and number > high):
+            bound = f">= {low}" if number < low else f"<= {high:,}"
+            raise _fail(f"expected an integer {bound}, got {number}", (key,))
+        numbers[key] = number
+    return Sample(sample="latin_hypercube", **numbers)
+
+
+def _as_integer_at(value: Any, key: str) -> int:
+    try:
+        return _as_integer(value)
+    except PydanticCustomError as exc:
+        raise _fail(exc.message(), (key,)) from None
+
+
+class StudySpec(_Model):
+    """The ``study:`` section: which inputs vary, and which scenarios are run."""
+
+    vary: Annotated[dict[String, Levels], Field(min_length=1, max_length=MAX_VARIED)] = Field(
+        description="Input path -> a list of values or {range: [lo, hi], levels: N}."
+    )
+    scenarios: Annotated[
+        Literal["grid"] | Sample,
+        PlainValidator(_parse_scenarios),
+        PlainSerializer(lambda v: v if isinstance(v, str) else v.model_dump(mode="json")),
+        WithJsonSchema({"anyOf": [{"const": "grid"}, Sample.model_json_schema()]}),
+    ] = Field(
+        "grid",
+        description="grid (every combination of the values) or {sample: latin_hypercube, "
+        "n: N, seed: S}.",
+    )
+
+    @model_validator(mode="after")
+    def _check_study(self) -> "StudySpec":
+        if self.scenarios == "grid":
+            total = 1
+            for path, levels in self.vary.items():
+                if isinstance(levels, Range):
+                    if levels.levels is None:
+                        raise _fail(
+                            "a range in a grid needs levels: N (how many evenly spaced "
+                            "values to try), or give the values as a list",
+                            ("vary", path),
+                        )
+                    total *= levels.levels
+                else:
+                    total *= len(levels)
+            if total > MAX_SCENARIOS:
+                raise _fail(
+                    f"the grid has {total:,} scenarios, more than {MAX_SCENARIOS:,}: use fewer "
+                    "values or a sample ({sample: latin_hypercube, n: N})",
+                    ("scenarios",),
+                )
+        return self
+
+    @property
+    def sampled(self) -> bool:
+        """True for a sampled (latin hypercube) study, False for a grid."""
+        return isinstance(self.scenarios, Sample)
