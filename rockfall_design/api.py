@@ -630,6 +630,9 @@ def optimise(
     from .optimise import optimise as _optimise
 
     p = _project(project, registry)
+    if p.design is not None and p.design.scenarios is not None:
+        # design.scenarios: the cheapest design that holds across the study's scenarios
+        from .optimise.across import optimise_across as _optimise  # type: ignore[assignment]
     if p.design is None:
         raise p.error_at((), "the project has no design: section to optimise "
                              "(see the README, 'Designing protection')")

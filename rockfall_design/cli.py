@@ -155,6 +155,10 @@ def build_parser() -> argparse.ArgumentParser:
         json_="print the summary with measures, protect, ok and failures as one JSON object "
         "on stdout instead of the report",
     )
+    chk.add_argument("--scenarios", action="store_true",
+                     help="check the measures in every scenario of the project's study: "
+                     "section, each with its own rocks; holds when it holds in the share "
+                     "design.scenarios asks (default: all); names the binding scenario")
     _add_block_option(chk)
     chk.set_defaults(func=cmd_check)
     opt = sub.add_parser(
@@ -458,6 +462,10 @@ def cmd_check(args: argparse.Namespace) -> int:
 
         return cli_check(args, project)
     registry = _plugins_for(project, args)
+    if args.scenarios:  # every scenario of the study
+        from .across import cli_check_scenarios
+
+        return cli_check_scenarios(args, project, registry)
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
                      len(project.analysis.stations))
@@ -519,9 +527,15 @@ def cmd_optimise(args: argparse.Namespace) -> int:
                                   progress=callback)
         result = report.result
         summary = report.summary
+        across = project.design.scenarios is not None  # a design across a study's scenarios
         if args.out:
             out: Path = args.out
-            if result.best is not None:
+            if result.best is not None and across:
+                from .across import across_design_yaml
+
+                files.write_text(out / "design.yaml",
+                                 across_design_yaml(result, args.project, project))
+            elif result.best is not None:
                 files.write_text(out / "design.yaml", design_yaml(result.best, args.project,
                                                                   result.search_rocks))
             else:
@@ -545,6 +559,10 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
         print_optimise(result, project)
+        if across:
+            from .across import print_across
+
+            print_across(result)
     return int(ExitCode.OK if result.best is not None else ExitCode.CHECK_FAILED)
 
 

@@ -35,7 +35,7 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from .errors import ExitCode
+from .errors import ExitCode, InputError
 
 if TYPE_CHECKING:  # pragma: no cover
     from .outputs import OutputSet
@@ -285,6 +285,9 @@ def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
     from .outputs import OutputSet
     from .report import print_check
 
+    if getattr(args, "scenarios", False):
+        raise InputError("check --scenarios of a corridor is not supported yet: check each "
+                         "section's project file with --scenarios")
     registry = _registry(corridor, args)
     run_seed, seeds = _seeds(corridor, args)
     for section in corridor.sections:
@@ -383,7 +386,12 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
             summary = report.summary
             if sub.out:
                 out: Path = sub.out
-                if result.best is not None:
+                if result.best is not None and project.design.scenarios is not None:
+                    from .across import across_design_yaml
+
+                    files.write_text(out / "design.yaml", across_design_yaml(
+                        result, f"{args.project}, section {section.name!r}", project))
+                elif result.best is not None:
                     files.write_text(out / "design.yaml", design_yaml(
                         result.best, f"{args.project}, section {section.name!r}",
                         result.search_rocks))

@@ -43,6 +43,7 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--block": ["plugin"],
         "--plot-format": ["png", "svg", "pdf", "--plot"],
         "--report": ["report.html", "report.md", "DIR"],
+        "--scenarios": ["every scenario", "study:", "design.scenarios", "binding scenario"],
     },
     "optimise": {
         "project": ["project file", "design:"],
