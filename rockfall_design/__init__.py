@@ -2,10 +2,11 @@
 
 The public API is what this module exports:
 
-- for engineers: :func:`load_project`, :func:`simulate`, :func:`check` and
-  :func:`optimise`, whose results carry ``.summary`` (the dict of the
-  command's ``--json``), pandas DataFrames (``.rocks``, ``.stations``,
-  ``.crossings``, ``.measures``, ``.alternatives``) and matplotlib Figures
+- for engineers: :func:`load_project`, :func:`simulate`, :func:`check`,
+  :func:`optimise` and :func:`study` (a parametric study), whose results
+  carry ``.summary`` (the dict of the command's ``--json``), pandas
+  DataFrames (``.rocks``, ``.stations``, ``.crossings``, ``.measures``,
+  ``.alternatives``, ``.scenarios``, ``.sensitivity``) and matplotlib Figures
   (``.plot()``) built without touching matplotlib's backend;
 - for plugin authors: the hook marker, the contracts of measures, safety
   concepts and cost models, and the plain data they exchange with the program.
@@ -46,7 +47,8 @@ from .safety import Check, SafetyConcept, SafetyParams
 # pytest11 entry point), does not import the engine, numba, scipy and pandas.
 _LAZY: dict[str, str] = {
     **dict.fromkeys(("CheckResult", "OptimiseResult", "SimulationResult", "check",
-                     "load_project", "optimise", "simulate"), ".api"),
+                     "load_project", "optimise", "simulate", "study"), ".api"),
+    "StudyResult": ".study.result",
     **dict.fromkeys(("fraction_upper_bound", "quantile_upper_bound",
                      "rocks_to_bound_quantile", "rocks_to_show_fraction"), ".judge.bounds"),
 }
@@ -60,6 +62,7 @@ if TYPE_CHECKING:  # pragma: no cover
         load_project,
         optimise,
         simulate,
+        study,
     )
     from .judge.bounds import (
         fraction_upper_bound,
@@ -67,6 +70,7 @@ if TYPE_CHECKING:  # pragma: no cover
         rocks_to_bound_quantile,
         rocks_to_show_fraction,
     )
+    from .study.result import StudyResult
 
 
 def __getattr__(name: str) -> Any:
@@ -82,19 +86,23 @@ def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY))
 
 
-class _Package(types.ModuleType):
-    """The package module: the name ``optimise`` belongs to the function.
+#: Names of the API's functions that a subpackage shares.
+_FUNCTIONS_OVER_MODULES = frozenset({"optimise", "study"})
 
-    The submodule ``rockfall_design.optimise`` shares its name with the
-    function :func:`optimise`. Importing a submodule sets the package's
-    attribute of that name to the module; that one assignment is declined
-    here, so ``rockfall_design.optimise`` is always the function, and the
-    submodule is found in ``sys.modules`` (``from rockfall_design.optimise
-    import ...``).
+
+class _Package(types.ModuleType):
+    """The package module: the names ``optimise`` and ``study`` belong to the functions.
+
+    The submodules ``rockfall_design.optimise`` and ``rockfall_design.study``
+    share their names with the functions :func:`optimise` and :func:`study`.
+    Importing a submodule sets the package's attribute of that name to the
+    module; that one assignment is declined here, so
+    ``rockfall_design.optimise`` is always the function, and the submodule is
+    found in ``sys.modules`` (``from rockfall_design.optimise import ...``).
     """
 
     def __setattr__(self, name: str, value: Any) -> None:
-        if name == "optimise" and isinstance(value, types.ModuleType):
+        if name in _FUNCTIONS_OVER_MODULES and isinstance(value, types.ModuleType):
             return
         super().__setattr__(name, value)
 
@@ -108,9 +116,11 @@ __all__ = [
     "simulate",
     "check",
     "optimise",
+    "study",
     "SimulationResult",
     "CheckResult",
     "OptimiseResult",
+    "StudyResult",
     "Barrier",
     "BarrierBehaviour",
     "Check",

@@ -40,6 +40,7 @@ __all__ = [
     "simulate",
     "check",
     "optimise",
+    "study",
     "SimulationResult",
     "CheckResult",
     "OptimiseResult",
@@ -641,3 +642,87 @@ def optimise(
     result = _call(progress, n, _optimise, stages=True, project=p, registry=reg, rocks=n,
                    seed=seed)
     return OptimiseResult(p, result, reg)
+
+
+def study(
+    project: Project | str | os.PathLike[str],
+    *,
+    rocks: int | None = None,
+    seed: int | None = None,
+    workers: int | None = None,
+    scheduler: Any = None,
+    progress: bool | Callable[[int, int, int], None] = False,
+    registry: Registry | None = None,
+) -> Any:
+    """Run the parametric study of a project's ``study:`` section (``rockfall-design study``).
+
+    Every scenario is a full Monte Carlo run of ``simulate`` with the
+    scenario's values and its own seed; the scenarios run as independent
+    tasks (see :mod:`rockfall_design.study.executors`), with the same results
+    wherever they run.
+
+    Parameters
+    ----------
+    project : Project or path
+        A project with a ``study:`` section, or the path of its file.
+    rocks : int, optional
+        Rocks per scenario (default: ``rocks.count``).
+    seed : int, optional
+        The study's seed (default: ``rocks.seed``); scenario ``i`` runs with
+        the seed :func:`~rockfall_design.study.scenario_seed` derives from it.
+    workers : int, optional
+        Processes of the local pool (default: every usable core); 1 runs the
+        scenarios in this process, one after the other.
+    scheduler : str or dask.distributed.Client, optional
+        Run on a Dask cluster instead (``"tcp://127.0.0.1:8786"``); needs the
+        ``study`` extra.
+    progress : bool or callable
+        True: a progress bar on stderr (scenarios done, rocks per second); a
+        callable is called as ``progress(done, total, rocks_done)``.
+    registry : Registry, optional
+        The plugins (default: the installed ones).
+
+    Returns
+    -------
+    StudyResult
+        ``.summary`` (as ``--json``), ``.scenarios`` and ``.sensitivity``
+        (DataFrames), ``.plot_envelopes()``, ``.plot_tornado()``, ``.print()``.
+    """
+    from .study.run import run_parametric
+
+    registry = registry or default_registry()
+    p = _project(project, registry)
+    n = _count(p, rocks)
+    bar, callback = _study_progress(progress)
+    kw = dict(rocks=n, seed=seed, workers=workers, scheduler=scheduler, progress=callback)
+    if bar is None:
+        return run_parametric(p, registry, **kw)
+    with bar:
+        return run_parametric(p, registry, **kw)
+
+
+def _study_progress(progress: bool | Callable[[int, int, int], None]) -> tuple[Any, Any]:
+    """(rich progress or None, callback(done, total, rocks_done) or None) of a study."""
+    if callable(progress):
+        return None, progress
+    if not progress:
+        return None, None
+    import time
+
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
+
+    bar = Progress("[progress.description]{task.description}", BarColumn(),
+                   MofNCompleteColumn(), "{task.fields[rate]}", TimeElapsedColumn(),
+                   console=Console(stderr=True), transient=True)
+    task: list[Any] = []
+    start = time.perf_counter()
+
+    def callback(done: int, total: int, rocks_done: int) -> None:
+        if not task:
+            task.append(bar.add_task("scenarios", total=total, rate=""))
+        elapsed = time.perf_counter() - start
+        rate = f"{rocks_done / elapsed:,.0f} rocks/s" if rocks_done and elapsed > 0 else ""
+        bar.update(task[0], completed=done, rate=rate)
+
+    return bar, callback

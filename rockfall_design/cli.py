@@ -190,6 +190,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_block_option(opt)
     opt.set_defaults(func=cmd_optimise)
+    from .study.command import add_study_parser
+
+    add_study_parser(sub)
     plg = sub.add_parser(
         "plugins",
         help="list the measures, safety concepts and cost models of the installed plugins",

@@ -58,6 +58,19 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--plot-format": ["png", "svg", "pdf", "--plot"],
         "--report": ["report.html", "report.md", "DIR"],
     },
+    "study": {
+        "project": ["project file", "study:"],
+        "--rocks": ["number of rocks", "each scenario", "rocks.count"],
+        "--seed": ["random seed", "rocks.seed", "each scenario's seed"],
+        "--out": ["scenarios.csv", "sensitivity.csv", "summary.json", "DIR"],
+        "--plot": ["study_envelopes.png", "tornado.png", "DIR"],
+        "--json": ["JSON", "stdout", "vary", "scenarios", "stations", "stops", "protect",
+                   "sensitivity"],
+        "--workers": ["local pool", "processes", "1 runs them in this process"],
+        "--scheduler": ["Dask", "tcp://", "study extra"],
+        "--block": ["plugin"],
+        "--plot-format": ["png", "svg", "pdf", "--plot"],
+    },
     "plugins": {
         "--json": ["JSON", "stdout", "measures", "safety concepts", "cost models", "failed"],
         "--block": ["plugin"],
@@ -126,6 +139,7 @@ def named_files(command: str, option: str, capsys, monkeypatch) -> set[str]:
     ("simulate", "standard_slope.yaml", "40"),
     ("check", "quarry_fence_ditch.yaml", "40"),
     ("optimise", "design_ditch_or_fence.yaml", "200"),
+    ("study", "study_talus.yaml", "20"),
 ])
 def test_out_and_plot_write_the_files_their_help_names(command, project, rocks, tmp_path,
                                                        capsys, monkeypatch):
@@ -158,6 +172,8 @@ def test_out_and_plot_write_the_files_their_help_names(command, project, rocks, 
     (["optimise", str(PROJECTS / "design_ditch_or_fence.yaml"), "--rocks", "100"],
      {"alternatives", "best"}),
     (["plugins"], {"measures", "safety_concepts", "cost_models", "failures"}),
+    (["study", str(PROJECTS / "study_talus.yaml"), "--rocks", "20", "--workers", "1"],
+     {"vary", "scenarios", "sensitivity"}),
 ])
 def test_json_prints_the_keys_its_help_names(argv, keys, capsys):
     assert main([*argv, "--json"]) in (0, 1)

@@ -2,19 +2,43 @@
 
 - :mod:`.paths`: :func:`with_values`, a project with inputs set by their path
   in the project file (``materials.talus.restitution``), validated again;
+  :func:`check_study`, every path and value of a ``study:`` section checked;
 - :mod:`.scenarios`: the scenarios of a ``study:`` section (grid or Latin
-  hypercube), each with its values and its own rock seed.
+  hypercube), each with its values and its own rock seed;
+- :mod:`.run`: the scenarios as tasks, and the task (one ``simulate`` run);
+- :mod:`.executors`: tasks in-process, on a local process pool or on Dask;
+- :mod:`.sensitivity`: which input moves each design value (main-effect
+  ranges; RBD-FAST indices of SALib for a sampled study);
+- :mod:`.result`: :class:`StudyResult` (JSON, tables, figures, report);
+- :mod:`.command`: the ``rockfall-design study`` command.
 
 The engineer's entry point is :func:`rockfall_design.study` (the function of
 the public API, which shares its name with this package).
 """
 
+from typing import TYPE_CHECKING, Any
+
+# Imported here, not on first use: the function ``scenarios`` must be bound
+# after its module of the same name, which importing the submodule binds.
 from .paths import PathError, check_study, parse_path, with_values
 from .scenarios import Scenario, scenario_seed, scenarios
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .result import StudyResult
+
+
+def __getattr__(name: str) -> Any:
+    if name == "StudyResult":  # with pandas and matplotlib behind it: on first use
+        from .result import StudyResult
+
+        return StudyResult
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "PathError",
     "Scenario",
+    "StudyResult",
     "check_study",
     "parse_path",
     "scenario_seed",

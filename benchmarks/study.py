@@ -1,0 +1,105 @@
+"""Speed of a study: 27 scenarios against one simulation, timed in the same run.
+
+    python benchmarks/study.py [--rocks N] [--workers N] [--scheduler ADDRESS]
+
+Runs projects/benchmark.yaml with a study of three inputs of three values
+each (talus Rn and Rt, rock radius: 27 scenarios of ``--rocks`` rocks) on the
+local process pool (or on a Dask scheduler), and one ``simulate`` of the same
+number of rocks on the same machine, on one core (``ROCKFALL_DESIGN_THREADS=1``)
+and on every core, and prints them, the ratio of the study to the one-core
+simulation and the ideal ratio, 27 / cores: the issue's target is a study
+that takes about 27 times one simulation divided by the number of cores.
+On a machine that other work shares, the ratios say little: the best of
+three short simulations finds the cores idle, a study of many seconds does
+not.
+
+The one simulation is timed as the best of ``--repeat``; the study once
+(its 27 runs average out), on the pool (or cluster) and in this process
+(``--workers 1``: one scenario after the other, each on every engine
+thread). Timings include what a study adds to the runs: checking each
+scenario's project, starting the pool's processes (each imports the package
+and loads numba's cache), and the envelope and statistics of each scenario.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+from pathlib import Path
+
+import rockfall_design as rd
+from rockfall_design.engine.ensemble import THREADS_ENV
+from rockfall_design.project import load_project_text
+from rockfall_design.simulation import simulate
+from rockfall_design.study.executors import usable_cores
+
+ROOT = Path(__file__).resolve().parents[1]
+
+STUDY = """
+study:
+  vary:
+    materials.talus.restitution: [0.3, 0.35, 0.4]
+    materials.talus.tangential_restitution: [0.8, 0.85, 0.9]
+    rocks.radius: [0.4, 0.5, 0.6]
+"""
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rocks", type=int, default=10_000)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--workers", type=int, default=None,
+                    help="processes of the local pool (default: every core)")
+    ap.add_argument("--scheduler", default=None, help="a Dask scheduler's address")
+    args = ap.parse_args()
+    path = ROOT / "projects" / "benchmark.yaml"
+    project = load_project_text(path.read_text() + STUDY, str(path))
+    n = args.rocks
+    simulate(project, rocks=10)  # load numba's cache in this process
+
+    def best(threads: str | None) -> float:
+        saved = os.environ.get(THREADS_ENV)
+        if threads is not None:
+            os.environ[THREADS_ENV] = threads
+        try:
+            times = []
+            for _ in range(args.repeat):
+                t0 = time.perf_counter()
+                simulate(project, rocks=n)
+                times.append(time.perf_counter() - t0)
+            return min(times)
+        finally:
+            if saved is None:
+                os.environ.pop(THREADS_ENV, None)
+            else:
+                os.environ[THREADS_ENV] = saved
+
+    t_one = best("1")  # the issue's unit: one simulation on one core
+    t_all = best(None)
+    t0 = time.perf_counter()
+    result = rd.study(project, rocks=n, workers=args.workers, scheduler=args.scheduler)
+    t_study = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    rd.study(project, rocks=n, workers=1)
+    t_here = time.perf_counter() - t0
+    k = len(result.results)
+    cores = usable_cores()
+    where = (f"Dask scheduler {args.scheduler}" if args.scheduler
+             else f"local pool of {min(args.workers or cores, k)} processes")
+    print(f"rocks per run: {n:,}; cores: {cores}")
+    print(f"one simulation on one core (best of {args.repeat}):       {t_one:8.2f} s "
+          f"{n / t_one:>10,.0f} rocks/s")
+    print(f"one simulation on every core (best of {args.repeat}):     {t_all:8.2f} s "
+          f"{n / t_all:>10,.0f} rocks/s")
+    for what, t in ((f"on the {where}", t_study),
+                    ("in this process (--workers 1)", t_here)):
+        print(f"study of {k} scenarios {what}: {t:8.2f} s {k * n / t:>10,.0f} rocks/s, "
+              f"{t / t_one:6.2f} x one simulation")
+    print(f"ideal: {k} / {cores} cores = {k / cores:.2f} x one simulation; "
+          f"efficiency of the {'cluster' if args.scheduler else 'pool'} "
+          f"{k / cores / (t_study / t_one):.0%}")
+
+
+if __name__ == "__main__":
+    main()

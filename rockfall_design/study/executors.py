@@ -1,0 +1,175 @@
+"""Executors: run independent tasks in-process, on a local process pool, or on Dask.
+
+The scenarios of a study are independent tasks: a function applied to a
+picklable task, returning a picklable result. Where they run changes nothing
+in the results: every task carries its own seed, so a task gives the same
+numbers in-process, on any worker of a pool, or on any worker of a cluster.
+
+- ``workers=1``: in this process, one after the other (the engine uses its
+  threads, every core).
+- ``workers=N`` (default: every usable core): a local
+  :class:`~concurrent.futures.ProcessPoolExecutor` of N processes, started
+  with the ``forkserver`` method where the platform has it (``spawn``
+  elsewhere), never ``fork``: a forked copy of a process that runs threads
+  (numba's, rich's) can deadlock. Each worker runs the engine on one thread
+  (``ROCKFALL_DESIGN_THREADS=1``), so N workers keep N cores busy, not N x N
+  threads.
+- ``scheduler=ADDRESS``: a :class:`dask.distributed.Client` to a running
+  scheduler (``tcp://host:8786``); the workers need only rockfall-design
+  installed. Each task runs the engine on one thread there too. Needs the
+  ``study`` extra.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from typing import Any
+
+from ..engine.ensemble import THREADS_ENV
+from ..errors import InputError
+
+__all__ = ["run_tasks", "usable_cores", "EXTRA_HINT"]
+
+#: How to install what a Dask cluster or SALib's indices need.
+EXTRA_HINT = "pip install 'rockfall-design[study]'"
+
+
+def usable_cores() -> int:
+    """Cores this process may run on (its CPU affinity), at least 1."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def single_thread() -> None:
+    """Run the engine of this process on one thread (a worker of a pool or a cluster)."""
+    os.environ[THREADS_ENV] = "1"
+
+
+def _pool_context() -> multiprocessing.context.BaseContext:
+    """forkserver (its server loads the engine once, see :mod:`._warm`), else spawn."""
+    if "forkserver" in multiprocessing.get_all_start_methods():
+        context = multiprocessing.get_context("forkserver")
+        # Only heeded when the forkserver starts (the first pool of the process).
+        context.set_forkserver_preload(["rockfall_design.study._warm"])
+        return context
+    return multiprocessing.get_context("spawn")
+
+
+def run_tasks(
+    fn: Callable[[Any], Any],
+    tasks: Sequence[Any],
+    *,
+    workers: int | None = None,
+    scheduler: Any = None,
+    on_done: Callable[[int, Any], None] | None = None,
+) -> list[Any]:
+    """Apply ``fn`` to every task; the results in the order of ``tasks``.
+
+    Parameters
+    ----------
+    fn
+        A module-level function (picklable by reference).
+    tasks
+        Picklable arguments, one per call.
+    workers
+        Processes of the local pool; 1 runs in this process. Default: every
+        usable core (but no more than there are tasks).
+    scheduler
+        Address of a Dask scheduler (``"tcp://127.0.0.1:8786"``), or a
+        ``dask.distributed.Client``; overrides ``workers``.
+    on_done
+        Called in this process as each task finishes, with its position in
+        ``tasks`` and its result (in the order they finish).
+
+    Raises
+    ------
+    InputError
+        The scheduler cannot be reached, or dask.distributed is not installed.
+    Exception
+        Whatever a task raised (the first one to fail), as raised.
+    """
+    if not tasks:
+        return []
+    if scheduler is not None:
+        return _on_dask(fn, tasks, scheduler, on_done)
+    n = min(int(workers) if workers else usable_cores(), len(tasks))
+    if n <= 1:
+        results = []
+        for i, task in enumerate(tasks):
+            results.append(fn(task))
+            if on_done is not None:
+                on_done(i, results[-1])
+        return results
+    return _on_pool(fn, tasks, n, on_done)
+
+
+def _on_pool(fn: Callable[[Any], Any], tasks: Sequence[Any], n: int,
+             on_done: Callable[[int, Any], None] | None) -> list[Any]:
+    results: list[Any] = [None] * len(tasks)
+    pool = ProcessPoolExecutor(max_workers=n, mp_context=_pool_context(),
+                               initializer=single_thread)
+    try:
+        pending: dict[Future, int] = {pool.submit(fn, t): i for i, t in enumerate(tasks)}
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                i = pending.pop(future)
+                results[i] = future.result()  # a task's error is raised here, as it was
+                if on_done is not None:
+                    on_done(i, results[i])
+    except BaseException:
+        # an error or Ctrl-C: nothing more is started, and nothing is waited for
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+    return results
+
+
+def _dask_task(fn: Callable[[Any], Any], task: Any) -> Any:
+    """A task on a Dask worker: the engine on one thread, as on a pool's worker."""
+    single_thread()
+    return fn(task)
+
+
+def _on_dask(fn: Callable[[Any], Any], tasks: Sequence[Any], scheduler: Any,
+             on_done: Callable[[int, Any], None] | None) -> list[Any]:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:
+        raise InputError(
+            f"--scheduler needs dask.distributed, which is not installed: {EXTRA_HINT}"
+        ) from None
+    own = not isinstance(scheduler, Client)
+    if own:
+        try:
+            client = Client(str(scheduler), timeout="10s")
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise InputError(
+                f"cannot reach the Dask scheduler at {scheduler}: {exc} (is 'dask scheduler' "
+                "running there?)"
+            ) from None
+    else:
+        client = scheduler
+    futures: list[Any] = []
+    try:
+        futures = client.map(_dask_task, [fn] * len(tasks), list(tasks), pure=False)
+        where = {future.key: i for i, future in enumerate(futures)}
+        results: list[Any] = [None] * len(tasks)
+        for future in as_completed(futures):
+            i = where[future.key]
+            results[i] = future.result()
+            if on_done is not None:
+                on_done(i, results[i])
+        return results
+    except BaseException:
+        if futures:
+            client.cancel(futures)
+        raise
+    finally:
+        if own:
+            client.close()

@@ -1,0 +1,338 @@
+"""The result of a study: its JSON summary, tables, figures and terminal report.
+
+:class:`StudyResult` is what :func:`rockfall_design.study` returns and what
+``rockfall-design study`` prints (``--json``: :attr:`StudyResult.summary`),
+writes (``--out``: scenarios.csv and summary.json) and draws (``--plot``:
+the envelopes of every scenario on one figure, and a tornado chart).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Sequence
+from functools import cached_property
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..project import Project
+from ..project.messages import _fmt
+from .scenarios import Scenario
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+    from matplotlib.figure import Figure
+    from rich.console import Console
+
+__all__ = ["StudyResult", "FIGURES"]
+
+#: The figures of a study (``--plot``), by file stem.
+FIGURES = ("study_envelopes", "tornado")
+#: Scenarios drawn with their values in the legend of the envelopes; more get a colour scale.
+_LEGEND_SCENARIOS = 12
+#: Targets drawn in the tornado chart (the ones whose inputs move them most).
+_TORNADO_TARGETS = 4
+
+
+def _text(value: Any) -> str:
+    """A varied value for a table cell or a legend: numbers as written, the rest as JSON."""
+    if isinstance(value, bool | int | float | str):
+        return _fmt(value)
+    return json.dumps(value, sort_keys=True)
+
+
+class StudyResult:
+    """The scenarios of a parametric study, their results and the sensitivity.
+
+    Attributes
+    ----------
+    project : Project
+        The study's project (with its ``study:`` section).
+    scenario_list : list of Scenario
+        Index, values and seed of each scenario.
+    results : list of dict
+        Each scenario's result (:func:`~rockfall_design.study.run.run_scenario`).
+    seed : int
+        The run's seed, from which each scenario's seed was derived.
+    runtime_s : float
+        Wall time of the whole study (s).
+    """
+
+    def __init__(self, project: Project, scenario_list: Sequence[Scenario],
+                 results: Sequence[dict[str, Any]], seed: int, runtime_s: float,
+                 sensitivity: list[dict[str, Any]]) -> None:
+        self.project = project
+        self.scenario_list = list(scenario_list)
+        self.results = list(results)
+        self.seed = int(seed)
+        self.runtime_s = float(runtime_s)
+        self._sensitivity = sensitivity
+
+    def __repr__(self) -> str:
+        return (f"<StudyResult {self.project.name!r}: {len(self.results)} scenarios of "
+                f"{self.n_rocks:,} rocks, seed {self.seed}>")
+
+    @property
+    def n_rocks(self) -> int:
+        """Rocks per scenario."""
+        return int(self.results[0]["rocks"]) if self.results else 0
+
+    @cached_property
+    def summary(self) -> dict[str, Any]:
+        """The dict that ``study --json`` prints.
+
+        ``project``, ``version``, ``seed`` (the run's), ``rocks`` (per
+        scenario), ``project_hash``, ``vary`` and ``sampling`` (the study
+        section, resolved), ``runtime_s``, ``scenarios`` (each with
+        ``index``, ``seed``, ``values`` keyed exactly as under ``vary:``,
+        ``rocks``, ``events``, ``project_hash`` of the scenario's project,
+        and ``stations``, ``stops``, ``protect`` as ``simulate --json``, and
+        ``measures`` for the barriers, and ``bounds``: ``confidence`` and
+        ``upper``, the one-sided upper confidence bound of each design value
+        by name) and ``sensitivity`` (see
+        :func:`~rockfall_design.study.sensitivity.sensitivity`).
+        """
+        from .. import __version__
+
+        study = self.project.resolved_dict()["study"]
+        scenarios = []
+        for scenario, result in zip(self.scenario_list, self.results, strict=True):
+            block = {"index": scenario.index, "seed": scenario.seed,
+                     "values": dict(scenario.values)}
+            block.update({k: v for k, v in result.items()
+                          if k not in ("index", "seed", "envelope", "runtime_s")})
+            scenarios.append(block)
+        return {
+            "project": self.project.name,
+            "version": __version__,
+            "seed": self.seed,
+            "rocks": self.n_rocks,
+            "project_hash": self.project.resolved_hash(),
+            "runtime_s": round(self.runtime_s, 6),
+            "vary": study["vary"],
+            "sampling": study["scenarios"],
+            "scenarios": scenarios,
+            "sensitivity": [dict(e) for e in self._sensitivity],
+        }
+
+    @property
+    def sensitivity(self) -> pd.DataFrame:
+        """One row per (parameter, target): effect, unit, low, high (and S1, S1_conf)."""
+        import pandas as pd
+
+        cols = ["parameter", "target", "effect", "unit", "low", "high"]
+        frame = pd.DataFrame(self._sensitivity)
+        return frame if not frame.empty else pd.DataFrame(columns=cols)
+
+    @property
+    def scenarios(self) -> pd.DataFrame:
+        """One row per scenario: index, seed, the varied values, then every design value.
+
+        Each design value ``x=100 energy_kj p95`` is followed (after all of
+        them) by ``x=100 energy_kj p95 upper``, its one-sided upper confidence
+        bound (NaN where too few rocks passed to bound it; see ``bounds`` in
+        the summary).
+        """
+        import pandas as pd
+
+        from .sensitivity import targets
+
+        table = targets(self.results)
+        rows = []
+        for k, scenario in enumerate(self.scenario_list):
+            row: dict[str, Any] = {"index": scenario.index, "seed": scenario.seed}
+            for path, value in scenario.values.items():
+                row[path] = value if isinstance(value, bool | int | float | str) else \
+                    json.dumps(value, sort_keys=True)
+            for name, (_, values) in table.items():
+                row[name] = values[k]
+            upper = self.results[k].get("bounds", {}).get("upper", {})
+            for name in table:
+                if name in upper:
+                    bound = upper[name]
+                    row[f"{name} upper"] = math.nan if bound is None else bound
+            rows.append(row)
+        return pd.DataFrame(rows)
+
+    # ---- figures -------------------------------------------------------------------
+    def plot_envelopes(self) -> Figure:
+        """Envelopes of passing height and energy along x, every scenario on one figure."""
+        from matplotlib import colormaps
+
+        from ..figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure
+        from .run import envelope_percentile
+
+        analysis = self.project.analysis
+        min_rocks = int(getattr(analysis, "min_rocks_envelope", DEFAULT_MIN_ROCKS_ENVELOPE))
+        q = envelope_percentile(self.project)
+        label = f"p{q:g}"
+        col = f"p{q:g}".replace(".", "_")
+        fig = RockfallFigure(figsize=(11, 7.5), layout="constrained")
+        a1, a2 = fig.subplots(2, 1, sharex=True)
+        n = len(self.results)
+        colors = colormaps["viridis"](np.linspace(0.05, 0.95, max(n, 1)))
+        for scenario, result, color in zip(self.scenario_list, self.results, colors,
+                                           strict=False):
+            env = result["envelope"]
+            x = np.asarray(env["x_m"], dtype=float)
+            enough = np.asarray(env["crossings"]) >= min_rocks
+            name = ", ".join(f"{p.split('.')[-1]}={_text(v)}"
+                             for p, v in scenario.values.items())
+            for ax, key in ((a1, f"height_{col}_m"), (a2, f"energy_{col}_kj")):
+                y = np.where(enough, np.asarray(env.get(key, [np.nan] * x.size), dtype=float),
+                             np.nan)
+                ax.plot(x, y, color=color, lw=1.0,
+                        label=f"{scenario.index}: {name}" if n <= _LEGEND_SCENARIOS else None)
+        for ax in (a1, a2):
+            ax.grid(alpha=0.3)
+        if n <= _LEGEND_SCENARIOS:
+            a1.legend(loc="upper right", fontsize=7)
+        if n > _LEGEND_SCENARIOS:
+            from matplotlib.cm import ScalarMappable
+            from matplotlib.colors import Normalize
+
+            fig.colorbar(ScalarMappable(Normalize(0, n - 1), colormaps["viridis"]),
+                         ax=[a1, a2], label="scenario index")
+        a1.set_ylabel(f"passing height {label} (m)")
+        a2.set_ylabel(f"kinetic energy {label} (kJ)")
+        a2.set_xlabel("x (m)")
+        a1.set_title(f"{self.project.name}: {label} envelopes of {n} scenarios, "
+                     f"{self.n_rocks:,} rocks each (drawn where at least {min_rocks} pass)")
+        return fig
+
+    def plot_tornado(self) -> Figure:
+        """Tornado chart: for the targets moved most, each input's range of level means."""
+        from ..figures import RockfallFigure
+
+        entries = self._sensitivity
+        chosen: list[str] = []
+        for e in entries:  # the targets, most moved first (relative to their own size)
+            if e["target"] not in chosen and (e["target"].endswith(" p95")
+                                              or e["target"].endswith("residual")):
+                chosen.append(e["target"])
+        chosen.sort(key=lambda t: -max(_relative(e) for e in entries if e["target"] == t))
+        chosen = chosen[:_TORNADO_TARGETS]
+        fig = RockfallFigure(figsize=(10, 2.2 + 1.9 * max(len(chosen), 1)),
+                             layout="constrained")
+        if not chosen:
+            ax = fig.subplots()
+            ax.text(0.5, 0.5, "no design value changed between the scenarios",
+                    ha="center", va="center", transform=ax.transAxes)
+            ax.set_axis_off()
+            return fig
+        axes = np.atleast_1d(fig.subplots(len(chosen), 1))
+        for ax, target in zip(axes, chosen, strict=True):
+            rows = sorted((e for e in entries if e["target"] == target),
+                          key=lambda e: e["effect"])
+            names = [e["parameter"] for e in rows]
+            lows = np.array([e["low"] for e in rows])
+            highs = np.array([e["high"] for e in rows])
+            ax.barh(names, highs - lows, left=lows, color="#2980b9", alpha=0.8)
+            for k, e in enumerate(rows):
+                ax.text(e["high"], k, f"  {_number(e['effect'], e['unit'])}", va="center",
+                        fontsize=8)
+            ax.margins(x=0.15)
+            unit = rows[0]["unit"] if rows else ""
+            ax.set_title(f"{target} ({unit})", fontsize=9, loc="left")
+            ax.grid(axis="x", alpha=0.3)
+        axes[-1].set_xlabel("range of the level means of each input")
+        fig.suptitle(f"{self.project.name}: which input moves each design value")
+        return fig
+
+    def figures(self) -> dict[str, Figure]:
+        """The study's figures by name (:data:`FIGURES`)."""
+        return {"study_envelopes": self.plot_envelopes(), "tornado": self.plot_tornado()}
+
+    def save_figures(self, directory: str | os.PathLike[str],
+                     formats: Sequence[str] = ("png",)) -> list[Path]:
+        """Write :meth:`figures` into ``directory``, one file per figure and format."""
+        from ..figures import save_figures
+
+        return save_figures(self.figures(), directory, formats)
+
+    # ---- terminal --------------------------------------------------------------------
+    def print(self, console: Console | None = None, top: int = 20) -> None:
+        """The study as rich tables: the scenarios, and the sensitivity ranking."""
+        from rich.table import Table
+        from rich.text import Text
+
+        from ..report import fitted_console
+
+        s = self.summary
+        rate = len(self.results) * self.n_rocks / self.runtime_s if self.runtime_s else 0.0
+        head = Text.assemble(
+            (self.project.name, "bold"),
+            f"   {len(self.results)} scenarios x {self.n_rocks:,} rocks, seed {self.seed}, "
+            f"{self.runtime_s:.1f} s ({rate:,.0f} rocks/s)",
+        )
+        frame = self.scenarios
+        paths = list(self.scenario_list[0].values) if self.scenario_list else []
+        shown = [c for c in frame.columns if c.endswith(" p95") or c.endswith("residual")][:6]
+        table = Table(title="Scenarios", show_edge=False, title_justify="left")
+        for col in ["#", *paths, *shown]:
+            table.add_column(col, justify="right")
+        for k, scenario in enumerate(self.scenario_list):
+            cells = [str(scenario.index), *(_text(scenario.values[p]) for p in paths)]
+            cells += [_number(float(frame[c].iloc[k]), _unit(c)) for c in shown]
+            table.add_row(*cells)
+        ranked = Table(title="Which input moves each design value (per design value, the "
+                       "largest effect first; the design values moved most, relative to "
+                       "their size, first)", show_edge=False, title_justify="left")
+        indices = any("S1" in e for e in s["sensitivity"])
+        for col in ("target", "input", "effect", "low .. high", *(("S1",) if indices else ())):
+            ranked.add_column(col, justify="left" if col in ("target", "input") else "right")
+        for e in _by_target(s["sensitivity"])[:top]:
+            unit = e["unit"]
+            cells = [e["target"], e["parameter"], f"{_number(e['effect'], unit)} {unit}",
+                     f"{_number(e['low'], unit)} .. {_number(e['high'], unit)}"]
+            if indices:
+                cells.append("-" if "S1" not in e else f"{e['S1']:.2f} ± {e['S1_conf']:.2f}")
+            ranked.add_row(*cells)
+        from rich.console import Group
+
+        group = Group(head, table, ranked)
+        (console or fitted_console(group)).print(group)
+
+
+def _unit(target: str) -> str:
+    """The unit of a design value by its name (see :func:`~.sensitivity.targets`)."""
+    if "passing_height_m" in target:
+        return "m"
+    if "energy_kj" in target:
+        return "kJ"
+    return "fraction" if target.endswith("residual") else ""
+
+
+def _number(v: Any, unit: str = "") -> str:
+    """A design value as a report shows it: m to cm, kJ to 1 kJ, fractions to 4 digits."""
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "-"
+    if unit == "m":
+        return f"{v:,.2f}"
+    if unit == "kJ":
+        return f"{v:,.0f}"
+    if unit == "fraction":
+        return f"{v:.4f}"
+    return f"{v:,.4g}"
+
+
+def _by_target(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Sensitivity entries grouped by design value, each group largest effect first.
+
+    The groups are ordered by their largest effect relative to the design
+    value's size, so that metres, kilojoules and fractions compare.
+    """
+    groups: dict[str, list[dict[str, Any]]] = {}
+    for e in entries:
+        groups.setdefault(e["target"], []).append(e)
+    order = sorted(groups, key=lambda t: -max(_relative(e) for e in groups[t]))
+    return [e for t in order for e in sorted(groups[t], key=lambda e: -e["effect"])]
+
+
+def _relative(entry: dict[str, Any]) -> float:
+    """An effect relative to its target's size (to compare targets of different units)."""
+    size = max(abs(entry["low"]), abs(entry["high"]))
+    return entry["effect"] / size if size > 0 else 0.0

@@ -1,0 +1,349 @@
+"""Run a study: one full Monte Carlo run per scenario, as independent tasks.
+
+:func:`prepare` turns the project's ``study:`` section into tasks, in this
+process and before anything runs: the scenarios (values and seeds), each
+scenario's project (:func:`~.paths.with_values`, then the plugin sections
+checked as every command checks them) and the stations of its barriers.
+:func:`run_scenario` is the task: the run of ``simulate`` on the scenario's
+project with the scenario's seed, reduced to the blocks of
+``simulate --json`` (``stations``, ``stops``, ``protect``), the passing height
+and energy at each barrier, and the scenario's envelopes for the figure.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import ProjectError
+from ..project import Project
+from .paths import with_values
+from .scenarios import Scenario, scenarios
+
+__all__ = ["ScenarioTask", "prepare", "run_parametric", "run_scenario", "run_tasks_of"]
+
+#: The station quantities a study keeps per scenario (design values and envelopes).
+QUANTITIES = ("passing_height_m", "energy_kj")
+
+
+@dataclass(frozen=True)
+class ScenarioTask:
+    """Everything one scenario's run needs (picklable, sent to a worker).
+
+    Attributes
+    ----------
+    index : int
+        The scenario's index.
+    seed : int
+        Its rock seed.
+    rocks : int
+        Rocks of its Monte Carlo run.
+    project : Project
+        Its project: the study's project with the scenario's values.
+    barriers : tuple of (int, str, float)
+        (index in ``measures``, label, station x in m) of each barrier
+        (fence, wall, boulder row, ...) of the project, whose passing height
+        and energy on the bare slope are design values of the study.
+    """
+
+    index: int
+    seed: int
+    rocks: int
+    project: Project
+    barriers: tuple[tuple[int, str, float], ...] = ()
+
+
+def _relocated(project: Project, scenario: Scenario, exc: ProjectError) -> ProjectError:
+    """A plugin's complaint about a scenario's project, at the ``study.vary`` line to blame.
+
+    The path to blame is the first varied path whose input the complaint is
+    about (``measures[0].height_m`` for ``measures[0]``), else the first one.
+    """
+    from .paths import ALIASES, parse_path
+
+    def text(path: str) -> str:
+        keys = parse_path(path)
+        if isinstance(keys[0], str) and keys[0] in ALIASES:
+            keys = (*ALIASES[keys[0]], *keys[1:])
+        out = ""
+        for key in keys:
+            out += f"[{key}]" if isinstance(key, int) else (f".{key}" if out else key)
+        return out
+
+    paths = list(scenario.values)
+    blamed = next(
+        (p for p in paths if exc.key and (text(p).startswith(exc.key) or
+                                         exc.key.startswith(text(p)))),
+        paths[0],
+    )
+    given = ", ".join(f"{p} = {v!r}" for p, v in scenario.values.items())
+    return project.error_at(
+        ("study", "vary", blamed),
+        f"scenario {scenario.index} ({given}): {exc.key + ': ' if exc.key else ''}{exc.message}",
+    )
+
+
+def _barriers(project: Project, registry: Any) -> tuple[tuple[int, str, float], ...]:
+    """The barriers of a project, checked and placed as every command does."""
+    from ..evaluate import build_measures, place_measures, validate_project
+    from ..measures import Barrier
+    from ..simulation import section_from_project
+
+    validate_project(project, registry)
+    measures = build_measures(project, registry)
+    placed = place_measures(project, registry, measures, section_from_project(project))
+    return tuple(
+        (p.index, p.label, float(p.footprint.x))
+        for p in placed
+        if isinstance(p.footprint, Barrier)
+    )
+
+
+def prepare(
+    project: Project, registry: Any, *, rocks: int | None = None, seed: int | None = None
+) -> tuple[list[Scenario], list[ScenarioTask]]:
+    """The scenarios of the project's study and their tasks, every input checked.
+
+    Parameters
+    ----------
+    project
+        A project with a ``study:`` section (validated, plugins included).
+    registry
+        The plugins, to check each scenario's plugin sections.
+    rocks
+        Rocks per scenario (default: ``rocks.count``).
+    seed
+        The run's seed (default: ``rocks.seed``); each scenario's seed is
+        derived from it (:func:`~.scenarios.scenario_seed`).
+
+    Raises
+    ------
+    ProjectError
+        No ``study:`` section, or a scenario's values are not valid together
+        (located at the ``study.vary`` line to blame).
+    """
+    if project.study is None:
+        raise project.error_at(
+            (), "the project has no study: section (inputs to vary and the scenarios to run; "
+            "see 'Parametric studies' in the README)"
+        )
+    n = int(project.rocks.count if rocks is None else rocks)
+    run_seed = int(project.rocks.seed if seed is None else seed)
+    chosen = scenarios(project.study, run_seed)
+    tasks = []
+    for scenario in chosen:
+        q = with_values(project, scenario.values)
+        try:
+            barriers = _barriers(q, registry)
+        except ProjectError as exc:
+            raise _relocated(project, scenario, exc) from None
+        tasks.append(ScenarioTask(scenario.index, scenario.seed, n, q, barriers))
+    return chosen, tasks
+
+
+def _with_stations(project: Project, extra: Sequence[float]) -> Project:
+    """``project`` with more analysis stations (they only observe: no rock changes path)."""
+    if not extra:
+        return project
+    analysis = project.analysis.model_copy(
+        update={"stations": [*project.analysis.stations, *extra]})
+    copy = project.model_copy(update={"analysis": analysis})
+    return copy
+
+
+def run_scenario(task: ScenarioTask) -> dict[str, Any]:
+    """Run one scenario: ``simulate`` of its project with its seed.
+
+    Returns
+    -------
+    dict
+        ``index``, ``seed``, ``rocks``, ``events``, ``project_hash``, and the
+        blocks ``stations``, ``stops`` and ``protect`` (if the project has a
+        protected zone) exactly as ``simulate --json`` of the scenario's
+        project gives them; ``measures``: per barrier its ``index``,
+        ``label``, ``x`` and the ``passing_height_m`` and ``energy_kj``
+        blocks on the bare slope at its station; ``envelope``: x (m),
+        crossings and the percentile envelopes of height (m) and energy
+        (kJ); ``runtime_s`` (not part of the study's JSON: it differs
+        between runs).
+    """
+    from ..simulation import simulate
+
+    project = task.project
+    own = [float(x) for x in project.analysis.stations]
+    extra = sorted({x for _, _, x in task.barriers if x not in own})
+    t0 = time.perf_counter()
+    study = simulate(_with_stations(project, extra), rocks=task.rocks, seed=task.seed)
+    summary = study.summary()
+    runtime = time.perf_counter() - t0
+    by_x = {st["x"]: st for st in summary["stations"]}
+    out: dict[str, Any] = {
+        "index": task.index,
+        "seed": task.seed,
+        "rocks": summary["rocks"],
+        "events": summary["events"],
+        "project_hash": project.resolved_hash(),
+        "stations": [st for st in summary["stations"] if st["x"] in own],
+        "stops": summary["stops"],
+    }
+    if "protect" in summary:
+        out["protect"] = summary["protect"]
+    if task.barriers:
+        out["measures"] = [
+            {"index": i, "label": label, "x": x, "crossings": by_x[x]["crossings"],
+             **{q: by_x[x][q] for q in QUANTITIES}}
+            for i, label, x in task.barriers
+        ]
+    out["bounds"] = _bounds(study, summary, task, _confidence(project))
+    out["envelope"] = _envelope(study, envelope_percentile(project))
+    out["runtime_s"] = runtime
+    return out
+
+
+#: Confidence of the design values' upper bounds when the safety concept gives none.
+DEFAULT_CONFIDENCE = 0.95
+
+
+def _confidence(project: Project) -> float:
+    """The safety concept's ``confidence`` (the bounds of ``check``), else 0.95."""
+    value = project.safety.get("confidence", DEFAULT_CONFIDENCE)
+    ok = isinstance(value, int | float) and not isinstance(value, bool) and 0 < value < 1
+    return float(value) if ok else DEFAULT_CONFIDENCE
+
+
+def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
+            confidence: float) -> dict[str, Any]:
+    """One-sided upper confidence bounds of the scenario's design values.
+
+    Each p95 and p99 of passing height and energy at the stations and
+    barriers: the distribution-free order-statistic bound over the rocks
+    that passed (None where too few did); the fraction reaching the
+    protected zone: Clopper-Pearson. A streamed run (more than
+    ``EXACT_ROCKS`` rocks) keeps no per-rock values: only the fraction's
+    bound is given then.
+    """
+    from ..judge.bounds import fraction_upper_bound, quantile_upper_bound
+    from ..simulation import Study
+    from .sensitivity import TARGET_STATISTICS, place_names
+
+    values: dict[str, float | None] = {}
+    if isinstance(study, Study):
+        arrays = study.crossing_arrays()
+        columns = {float(x): j for j, x in enumerate(study.stations)}
+        for where, x in place_names(summary["stations"], task.barriers, task.project):
+            j = columns[x]
+            for quantity, array, scale in (("passing_height_m", "passing_height_m", 1.0),
+                                           ("energy_kj", "energy_j", 1e3)):
+                column = arrays[array][:, j]
+                column = column[np.isfinite(column)] / scale
+                for stat in TARGET_STATISTICS:
+                    q = float(stat[1:]) / 100
+                    values[f"{where} {quantity} {stat}"] = (
+                        quantile_upper_bound(column, q, confidence) if column.size else None)
+    protect = summary.get("protect")
+    if protect is not None:
+        from ..project.messages import _fmt
+
+        values[f"x={_fmt(protect['x'])} residual"] = fraction_upper_bound(
+            int(protect["reaching"]), int(summary["rocks"]), confidence)
+    return {"confidence": confidence, "upper": values}
+
+
+def envelope_percentile(project: Project) -> float:
+    """The percentile of the study's envelope figure: p95 if configured, else the highest."""
+    pcts = [float(q) for q in project.analysis.percentiles]
+    return 95.0 if 95.0 in pcts or not pcts else max(pcts)
+
+
+def _column_percentile(values: np.ndarray, q: float) -> np.ndarray:
+    """The ``q``-th percentile (0..100) of each column's finite values; NaN if none.
+
+    Linear interpolation between order statistics, as numpy's default
+    method, from one sort of the whole table: ``np.nanpercentile`` per column
+    took as long as the scenario's run.
+    """
+    ordered = np.sort(values, axis=0)  # NaN sort last
+    count = np.isfinite(values).sum(axis=0)
+    out = np.full(values.shape[1], np.nan)
+    cols = np.nonzero(count > 0)[0]
+    pos = (count[cols] - 1) * (q / 100.0)
+    lo = np.floor(pos).astype(np.int64)
+    hi = np.minimum(lo + 1, count[cols] - 1)
+    low = ordered[lo, cols].astype(float)
+    out[cols] = low + (ordered[hi, cols].astype(float) - low) * (pos - lo)
+    return out
+
+
+def _envelope(study: Any, q: float) -> dict[str, list[float]]:
+    """x (m), crossings and the ``q`` envelopes of height (m) and energy (kJ) of a run."""
+    from ..simulation import Study
+
+    label = f"{q:g}".replace(".", "_")
+    if isinstance(study, Study):
+        r = study.result
+        return {
+            "x_m": np.asarray(r.grid, dtype=float).tolist(),
+            "crossings": np.isfinite(r.grid_height).sum(axis=0).tolist(),
+            f"height_p{label}_m": _column_percentile(r.grid_height, q).tolist(),
+            f"energy_p{label}_kj": (_column_percentile(r.grid_energy, q) / 1e3).tolist(),
+        }
+    env = study.envelopes()  # a streamed run: from its histograms
+    keep = ["x_m", "crossings", f"height_p{label}_m", f"energy_p{label}_kj"]
+    return {c: env[c].tolist() for c in keep if c in env.columns}
+
+
+def run_tasks_of(
+    tasks: Sequence[ScenarioTask],
+    *,
+    workers: int | None = None,
+    scheduler: Any = None,
+    on_done: Callable[[int, dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Run the tasks with :func:`~.executors.run_tasks`; results in scenario order."""
+    from .executors import run_tasks
+
+    return run_tasks(run_scenario, tasks, workers=workers, scheduler=scheduler, on_done=on_done)
+
+
+def run_parametric(
+    project: Project,
+    registry: Any,
+    *,
+    rocks: int | None = None,
+    seed: int | None = None,
+    workers: int | None = None,
+    scheduler: Any = None,
+    progress: Callable[[int, int, int], None] | None = None,
+    indices: bool | None = None,
+) -> Any:
+    """Prepare, run and analyse the project's study; a :class:`~.result.StudyResult`.
+
+    Parameters are those of :func:`prepare` and :func:`run_tasks_of`;
+    ``indices`` those of :func:`~.sensitivity.sensitivity`. ``progress`` is
+    called as ``progress(done, total, rocks_done)`` once the scenarios are
+    known (``done`` 0) and as each finishes.
+    """
+    from .result import StudyResult
+    from .sensitivity import sensitivity
+
+    t0 = time.perf_counter()
+    chosen, tasks = prepare(project, registry, rocks=rocks, seed=seed)
+    on_done = None
+    if progress is not None:
+        done = [0, 0]  # scenarios, rocks
+
+        def on_done(i: int, result: dict[str, Any]) -> None:
+            done[0] += 1
+            done[1] += int(result["rocks"])
+            progress(done[0], len(tasks), done[1])
+
+        progress(0, len(tasks), 0)
+    results = run_tasks_of(tasks, workers=workers, scheduler=scheduler, on_done=on_done)
+    assert project.study is not None  # prepare checked it
+    effects = sensitivity(project.study, [s.values for s in chosen], results, indices=indices)
+    run_seed = int(project.rocks.seed if seed is None else seed)
+    return StudyResult(project, chosen, results, run_seed, time.perf_counter() - t0, effects)
