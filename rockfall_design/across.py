@@ -43,8 +43,26 @@ def _values_text(values: dict[str, Any]) -> str:
     return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
 
 
+def _check_task(task: tuple[Any, int | None, tuple[str, ...]]) -> dict[str, Any]:
+    """One scenario's check (a task for a pool or a cluster): its JSON block and margin.
+
+    ``task`` is (scenario run, rocks, blocked plugins); the plugins are
+    loaded where the task runs, as the command loads them.
+    """
+    from .api import default_registry
+    from .evaluate import evaluate
+    from .optimise.across import margin
+
+    run, rocks, block = task
+    ev = evaluate(run.project, default_registry(block), rocks=rocks)
+    slack, what = margin(ev)
+    return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
+            "binds_at": what, **ev.summary()}
+
+
 def check_across(project: Project, registry: Registry, *, rocks: int | None = None,
-                 seed: int | None = None) -> dict[str, Any]:
+                 seed: int | None = None, block: tuple[str, ...] = (),
+                 workers: int | None = 1, scheduler: Any = None) -> dict[str, Any]:
     """Check the project's measures in every scenario of its study (see the module's text).
 
     Parameters
@@ -57,28 +75,41 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
         Rocks of every scenario (default ``rocks.count``).
     seed
         The run seed the scenarios' seeds derive from (default ``rocks.seed``).
+    block
+        Plugins not loaded (``--block``), where the scenarios run.
+    workers, scheduler
+        Where the scenarios run (see
+        :func:`rockfall_design.study.executors.run_tasks`): 1 (the default
+        here) in this process with ``registry``, N on a local pool of N
+        processes (None: one per core), or on the Dask cluster of
+        ``scheduler``; the numbers are the same wherever they run.
 
     Returns
     -------
     dict
         The JSON object of ``check --scenarios --json``.
     """
-    from .corridor import run_tasks
-    from .evaluate import evaluate
+    from .evaluate import evaluate, validate_project
     from .optimise.across import margin, required_scenarios, scenario_runs
+    from .study.executors import run_tasks
 
     runs = scenario_runs(project, seed)
+    for run in runs:  # every scenario's plugin sections, before anything runs
+        validate_project(run.project, registry)
     share = project.design.scenario_share if project.design is not None else None
     share = 1.0 if share is None else share
     required = required_scenarios(share, len(runs))
+    if scheduler is None and workers == 1:
+        def one(run: Any) -> dict[str, Any]:
+            ev = evaluate(run.project, registry, rocks=rocks)
+            slack, what = margin(ev)
+            return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
+                    "binds_at": what, **ev.summary()}
 
-    def one(run: Any) -> dict[str, Any]:
-        ev = evaluate(run.project, registry, rocks=rocks)
-        slack, what = margin(ev)
-        return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
-                "binds_at": what, **ev.summary()}
-
-    per = run_tasks(one, runs)
+        per = [one(run) for run in runs]
+    else:
+        per = run_tasks(_check_task, [(run, rocks, tuple(block)) for run in runs],
+                        workers=workers, scheduler=scheduler)
     holds = sum(bool(p["ok"]) for p in per)
     bind = min(per, key=lambda p: (math.inf if p["margin"] is None else p["margin"],
                                    p["index"]))
@@ -145,7 +176,9 @@ def cli_check_scenarios(args: argparse.Namespace, project: Project, registry: Re
     with OutputSet() as files:
         if args.out:
             files.reserve(args.out / "summary.json")
-        summary = check_across(project, registry, rocks=args.rocks, seed=args.seed)
+        summary = check_across(project, registry, rocks=args.rocks, seed=args.seed,
+                               block=tuple(args.block), workers=args.workers,
+                               scheduler=args.scheduler)
         if args.out:
             files.write_json(args.out / "summary.json", summary)
     if args.json:

@@ -159,6 +159,12 @@ def build_parser() -> argparse.ArgumentParser:
                      help="check the measures in every scenario of the project's study: "
                      "section, each with its own rocks; holds when it holds in the share "
                      "design.scenarios asks (default: all); names the binding scenario")
+    chk.add_argument("--workers", type=_int_at_least(1, "number of workers"), metavar="N",
+                     help="with --scenarios: check the scenarios on a local pool of N "
+                     "processes (default: one per core; 1 runs them in this process)")
+    chk.add_argument("--scheduler", metavar="ADDRESS",
+                     help="with --scenarios: check the scenarios on the Dask cluster of this "
+                     "scheduler (e.g. tcp://127.0.0.1:8786); needs the study extra")
     _add_block_option(chk)
     chk.set_defaults(func=cmd_check)
     opt = sub.add_parser(
@@ -459,6 +465,9 @@ def cmd_check(args: argparse.Namespace) -> int:
     from .outputs import OutputSet
     from .project import Project
 
+    if not args.scenarios and (args.workers or args.scheduler):
+        raise InputError("--workers and --scheduler run the scenarios of check --scenarios; "
+                         "give --scenarios too")
     project = _load(args.project)
     if not isinstance(project, Project):  # a corridor: every section
         from .corridor import cli_check

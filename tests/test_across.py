@@ -73,6 +73,11 @@ def _json(capsys) -> dict:
     return json.loads(capsys.readouterr().out)
 
 
+def test_workers_without_scenarios_is_refused(tmp_path, capsys):
+    assert main(["check", str(_write(tmp_path, _text())), "--workers", "2"]) == 2
+    assert "give --scenarios too" in capsys.readouterr().err
+
+
 def test_required_scenarios():
     assert required_scenarios(1.0, 9) == 9
     assert required_scenarios(0.9, 9) == 9    # ceil(8.1)
@@ -107,8 +112,14 @@ def test_a_design_without_scenarios_keeps_its_record():
 
 def test_check_scenarios_reports_every_scenario_and_the_binding_one(tmp_path, capsys):
     path = _write(tmp_path, _text())
-    assert main(["check", str(path), "--scenarios", "--json"]) == 0
+    assert main(["check", str(path), "--scenarios", "--json", "--workers", "1"]) == 0
     out = _json(capsys)
+    # the same numbers on a pool of processes (each scenario carries its seed)
+    assert main(["check", str(path), "--scenarios", "--json", "--workers", "2"]) == 0
+    pooled = _json(capsys)
+    for a, b in zip(out["scenarios"], pooled["scenarios"], strict=True):
+        a.pop("runtime_s"), b.pop("runtime_s")
+        assert a == b
     assert out["of"] == 4 and out["required"] == 4 and out["holds_in"] == 4 and out["ok"]
     assert [s["index"] for s in out["scenarios"]] == [0, 1, 2, 3]
     assert len({s["seed"] for s in out["scenarios"]}) == 4
@@ -127,7 +138,7 @@ def test_check_scenarios_fails_and_names_the_scenarios(tmp_path, capsys):
     # margins of +55 % and -25 % or more on seeds 3, 4 and 5
     weak = _text().replace("capacity_kj: 1000", "capacity_kj: 300")
     path = _write(tmp_path, weak)
-    assert main(["check", str(path), "--scenarios", "--json"]) == 1
+    assert main(["check", str(path), "--scenarios", "--json", "--workers", "1"]) == 1
     out = _json(capsys)
     assert out["holds_in"] == 2 and out["required"] == 4 and not out["ok"]
     assert [s["ok"] for s in out["scenarios"]] == [True, False, True, False]
@@ -135,7 +146,7 @@ def test_check_scenarios_fails_and_names_the_scenarios(tmp_path, capsys):
     assert {f.split(" (")[0] for f in out["failures"]} == {"scenario 1", "scenario 3"}
     # half of the scenarios is what it holds in
     half = _write(tmp_path, weak.replace("scenarios: all", "scenarios: {share: 0.5}"), "q.yaml")
-    assert main(["check", str(half), "--scenarios"]) == 0
+    assert main(["check", str(half), "--scenarios", "--workers", "1"]) == 0
     text = capsys.readouterr().out
     assert "Binding scenario" in text and "Design holds in 2 of 4 scenarios; required: 2" in text
 
@@ -154,7 +165,7 @@ def test_optimise_across_all_scenarios_passes_check_in_every_scenario(tmp_path, 
     head = (out_dir / "design.yaml").read_text()
     assert "binding scenario" in head and "check design.yaml --scenarios" in head
     # the done-when: the design passes check in every scenario
-    assert main(["check", str(out_dir / "design.yaml"), "--scenarios", "--json"]) == 0
+    assert main(["check", str(out_dir / "design.yaml"), "--scenarios", "--json", "--workers", "1"]) == 0
     checked = _json(capsys)
     assert checked["holds_in"] == 4 and checked["holds_with_confidence_in"] == 4
     assert [s["seed"] for s in checked["scenarios"]] == [s["seed"] for s in block["scenarios"]]

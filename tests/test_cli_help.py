@@ -44,6 +44,8 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--plot-format": ["png", "svg", "pdf", "--plot"],
         "--report": ["report.html", "report.md", "DIR"],
         "--scenarios": ["every scenario", "study:", "design.scenarios", "binding scenario"],
+        "--workers": ["--scenarios", "pool", "processes", "one per core"],
+        "--scheduler": ["--scenarios", "Dask", "scheduler"],
     },
     "optimise": {
         "project": ["project file", "design:"],
