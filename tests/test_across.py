@@ -165,7 +165,8 @@ def test_optimise_across_all_scenarios_passes_check_in_every_scenario(tmp_path, 
     head = (out_dir / "design.yaml").read_text()
     assert "binding scenario" in head and "check design.yaml --scenarios" in head
     # the done-when: the design passes check in every scenario
-    assert main(["check", str(out_dir / "design.yaml"), "--scenarios", "--json", "--workers", "1"]) == 0
+    design = str(out_dir / "design.yaml")
+    assert main(["check", design, "--scenarios", "--json", "--workers", "1"]) == 0
     checked = _json(capsys)
     assert checked["holds_in"] == 4 and checked["holds_with_confidence_in"] == 4
     assert [s["seed"] for s in checked["scenarios"]] == [s["seed"] for s in block["scenarios"]]

@@ -365,8 +365,8 @@ def load_project_text(
     if "sections" in data:
         raise ProjectError(
             source, _line_of(("sections",), lines), "sections",
-            "this file lists sections (a corridor): load it with load_corridor, or run it "
-            "with the rockfall-design commands, which run every section",
+            "this file lists sections (a corridor): load it with load_corridor; simulate, "
+            "check and optimise run every section (study does not yet)",
         )
     base = Path(source).parent if base_dir is None else Path(base_dir)
     return _validated(data, lines, source, base)
