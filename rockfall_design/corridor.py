@@ -411,6 +411,10 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
             if not args.json:
                 _section_rule(section, len(subs))
                 print_optimise(result, project)
+                if project.design.scenarios is not None:
+                    from .across import print_across
+
+                    print_across(result)
             cost = None if result.best is None else float(result.best.cost)
             return section_block(section, summary), cost
 

@@ -215,3 +215,22 @@ def test_optimise_a_corridor_writes_a_design_per_section_that_check_accepts(tmp_
         assert main(["check", str(design), "--json"]) == 0
         assert _json(capsys)["ok"] is True
     assert json.loads((out_dir / "summary.json").read_text())["totals"] == totals
+
+
+def test_a_corridor_design_across_scenarios_in_every_section(tmp_path, capsys):
+    text = EXAMPLE.read_text().replace(
+        "\ndesign:\n", "\nstudy:\n  vary:\n    materials.talus.restitution: [0.2, 0.3]\n"
+        "  scenarios: grid\ndesign:\n  scenarios: all\n")
+    text = text.replace("catalogue_", str(EXAMPLE.parent / "catalogue_"))
+    path = tmp_path / "c.yaml"
+    path.write_text(text)
+    out_dir = tmp_path / "out"
+    assert main(["optimise", str(path), "--json", "--out", str(out_dir)]) == 0
+    out = _json(capsys)
+    assert out["totals"]["ok"] is True
+    for block in out["sections"]:
+        assert block["scenarios"]["required"] == 2 and block["scenarios"]["of"] == 2
+        assert block["scenarios"]["binding"]["index"] in (0, 1)
+    design = out_dir / "km_12.4" / "design.yaml"
+    assert main(["check", str(design), "--scenarios", "--json", "--workers", "1"]) == 0
+    assert _json(capsys)["holds_in"] == 2
