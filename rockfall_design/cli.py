@@ -101,6 +101,16 @@ def _add_run_options(
     p.add_argument("--json", action="store_true", help=json_)
 
 
+def _add_tasks_options(p: argparse.ArgumentParser, what: str) -> None:
+    """--workers and --scheduler: where independent runs (scenarios, sections) run."""
+    p.add_argument("--workers", type=_int_at_least(1, "number of workers"), metavar="N",
+                   help=f"run {what} on a local pool of N processes (default: one per core; "
+                   "1 runs them in this process)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help=f"run {what} on the Dask cluster of this scheduler (e.g. "
+                   "tcp://127.0.0.1:8786); needs the study extra")
+
+
 def _add_block_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--block", action="append", default=[], metavar="NAME",
                    help="do not load the plugin with this entry-point or distribution "
@@ -132,6 +142,7 @@ def build_parser() -> argparse.ArgumentParser:
         json_="print the summary as one JSON object on stdout instead of the report",
         repeatable=True,
     )
+    _add_tasks_options(sim, "a corridor's sections (a file with sections:)")
     _add_block_option(sim)
     sim.set_defaults(func=cmd_simulate)
     chk = sub.add_parser(
@@ -159,12 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="check the measures in every scenario of the project's study: "
                      "section, each with its own rocks; holds when it holds in the share "
                      "design.scenarios asks (default: all); names the binding scenario")
-    chk.add_argument("--workers", type=_int_at_least(1, "number of workers"), metavar="N",
-                     help="with --scenarios: check the scenarios on a local pool of N "
-                     "processes (default: one per core; 1 runs them in this process)")
-    chk.add_argument("--scheduler", metavar="ADDRESS",
-                     help="with --scenarios: check the scenarios on the Dask cluster of this "
-                     "scheduler (e.g. tcp://127.0.0.1:8786); needs the study extra")
+    _add_tasks_options(chk, "the scenarios of --scenarios, or a corridor's sections")
     _add_block_option(chk)
     chk.set_defaults(func=cmd_check)
     opt = sub.add_parser(
@@ -346,6 +352,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             from .corridor import cli_simulate
 
             return cli_simulate(args, project)
+    if args.workers or args.scheduler:
+        raise InputError("--workers and --scheduler run the sections of a corridor (a project "
+                         "file with sections:); this file has none")
     _plugins_for(project, args)
     n = args.rocks or project.rocks.count
     _memory_guard(study_memory(project, n), f"{n:,} rocks with "
@@ -465,14 +474,14 @@ def cmd_check(args: argparse.Namespace) -> int:
     from .outputs import OutputSet
     from .project import Project
 
-    if not args.scenarios and (args.workers or args.scheduler):
-        raise InputError("--workers and --scheduler run the scenarios of check --scenarios; "
-                         "give --scenarios too")
     project = _load(args.project)
     if not isinstance(project, Project):  # a corridor: every section
         from .corridor import cli_check
 
         return cli_check(args, project)
+    if not args.scenarios and (args.workers or args.scheduler):
+        raise InputError("--workers and --scheduler run the scenarios of check --scenarios "
+                         "(give --scenarios too), or the sections of a corridor")
     registry = _plugins_for(project, args)
     if args.scenarios:  # every scenario of the study
         from .across import cli_check_scenarios

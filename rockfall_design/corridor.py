@@ -22,6 +22,11 @@ and ``_`` made ``_``) and the corridor's ``DIR/summary.json``; ``--plot``
 and ``--report`` likewise. A section's ``design.yaml`` is an ordinary
 project file that ``check`` reads.
 
+Sections are independent tasks: ``simulate`` and ``check`` run them on a
+local pool of processes by default (``--workers N``, ``--scheduler
+ADDRESS`` for a Dask cluster), ``optimise`` in this process (see
+:func:`run_tasks`).
+
 A single-section project (no ``sections:``) never comes here: its commands,
 files and JSON are exactly those of a project file.
 """
@@ -51,11 +56,15 @@ R = TypeVar("R")
 def run_tasks(task: Callable[[T], R], items: Iterable[T]) -> list[R]:
     """Run ``task`` on every item, independently; the results in the items' order.
 
-    Sections are independent tasks: this is the one place that runs them,
-    in this process, one after the other (the engine already uses every
-    core for the rocks of one section). A pool of processes or a Dask
-    cluster (``rockfall_design.study.executors``) can take its place without
-    changing the callers; ``task`` must then be picklable.
+    The loop of the runs that stay in this process: ``optimise``'s sections
+    (each search keeps its screening, plugins and evaluations here), the
+    sections of ``simulate`` and ``check`` with ``--workers 1``, and those of
+    a ``simulate`` of more than ``EXACT_ROCKS`` rocks per section (streamed
+    to its files as it runs). Otherwise ``simulate`` and ``check`` run their
+    sections as tasks on the study's executors
+    (:func:`rockfall_design.study.executors.run_tasks`: a local pool, one
+    process per core, or a Dask cluster with ``--scheduler``) and write and
+    print them here; the numbers are the same wherever a section runs.
     """
     return [task(item) for item in items]
 
@@ -168,6 +177,60 @@ def _section_rule(section: CorridorSection, of: int) -> None:
     fitted_console(rule).print(rule)
 
 
+# ---- sections as tasks elsewhere ---------------------------------------------------
+
+
+def _pooled(args: argparse.Namespace) -> bool:
+    """Whether the sections run on the study's executors (a pool or a cluster)."""
+    return getattr(args, "scheduler", None) is not None or getattr(args, "workers", None) != 1
+
+
+def _trajectories(args: argparse.Namespace) -> int:
+    from .api import DEFAULT_TRAJECTORIES
+
+    return DEFAULT_TRAJECTORIES if (args.plot or args.report) else 0
+
+
+def _simulate_task(task: tuple[Any, int, int, int]) -> Any:
+    """One section's run of ``simulate`` (a task for a pool or a cluster): its Study."""
+    from .api import run_simulation
+
+    project, rocks, seed, trajectories = task
+    return run_simulation(project, rocks=rocks, seed=seed, progress=False,
+                          trajectories=trajectories)
+
+
+def _check_task(task: tuple[Any, int, int, int, tuple[str, ...]]) -> Any:
+    """One section's ``check`` (a task for a pool or a cluster): its Evaluation.
+
+    The plugins are loaded where the task runs, as the command loads them.
+    """
+    from .api import check, default_registry
+
+    project, rocks, seed, trajectories, block = task
+    return check(project, rocks=rocks, seed=seed, trajectories=trajectories,
+                 registry=default_registry(block)).evaluation
+
+
+def _on_executors(fn: Callable[[Any], Any], corridor: Corridor,
+                  subs: Sequence[argparse.Namespace], args: argparse.Namespace) -> list[Any]:
+    """Every section's run of ``fn`` on a pool (``--workers``) or a cluster (``--scheduler``).
+
+    Each section carries its project, rocks and seed, so the numbers are
+    those of the run in this process, wherever it runs.
+    """
+    from .study.executors import run_tasks as run_elsewhere
+
+    tasks = []
+    for section, sub in zip(corridor.sections, subs, strict=True):
+        task: tuple = (section.project, int(args.rocks or section.project.rocks.count),
+                       int(sub.seed), _trajectories(args))
+        if fn is _check_task:
+            task += (tuple(args.block),)
+        tasks.append(task)
+    return run_elsewhere(fn, tasks, workers=args.workers, scheduler=args.scheduler)
+
+
 # ---- the commands ----------------------------------------------------------------
 
 
@@ -228,7 +291,7 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
     )
     from .outputs import OutputSet
     from .report import print_simulation
-    from .simulation import study_memory
+    from .simulation import EXACT_ROCKS, study_memory
 
     _registry(corridor, args)
     run_seed, seeds = _seeds(corridor, args)
@@ -247,10 +310,20 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
             _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
         _reserve(files, args.out, ("summary.json",))
 
+        pooled = _pooled(args) and all(
+            (args.rocks or s.project.rocks.count) <= EXACT_ROCKS for s in corridor.sections)
+        studies = _on_executors(_simulate_task, corridor, subs, args) if pooled else None
+
         def one(i: int) -> dict[str, Any]:
             section, sub = corridor.sections[i], subs[i]
-            on_chunk = _table_writers(files, sub.out) if sub.out else None
-            study = _run(run_simulation, section.project, sub, on_chunk=on_chunk)
+            if studies is not None:  # run elsewhere, kept whole: its tables written here
+                study = studies[i]
+                if sub.out:
+                    files.write_csv(sub.out / "rocks.csv", study.rocks_table())
+                    files.write_csv(sub.out / "crossings.csv", study.crossings_table())
+            else:
+                on_chunk = _table_writers(files, sub.out) if sub.out else None
+                study = _run(run_simulation, section.project, sub, on_chunk=on_chunk)
             result = SimulationResult(section.project, study)
             summary = result.summary
             if sub.out:
@@ -271,7 +344,7 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
 
 def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
     """``check`` of a corridor: every section checked; exit 0 only if every section holds."""
-    from .api import check
+    from .api import CheckResult, check
     from .cli import (
         _FIGURES,
         REPORT_FILES,
@@ -304,9 +377,15 @@ def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
             _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
         _reserve(files, args.out, ("summary.json",))
 
+        evaluations = (_on_executors(_check_task, corridor, subs, args) if _pooled(args)
+                       else None)
+
         def one(i: int) -> dict[str, Any]:
             section, sub = corridor.sections[i], subs[i]
-            result = _run(check, section.project, sub, registry=registry)
+            if evaluations is not None:  # run elsewhere
+                result = CheckResult(section.project, evaluations[i])
+            else:
+                result = _run(check, section.project, sub, registry=registry)
             evaluation = result.evaluation
             summary = result.summary
             if sub.out:

@@ -134,7 +134,7 @@ def test_plugin_parameters_of_a_section_are_located_in_the_section(capsys):
     path = ROOT / "tests" / "_corridor_bad.yaml"
     try:
         path.write_text(text)
-        assert main(["simulate", str(path), "--json"]) == 2
+        assert main(["simulate", str(path), "--json", "--workers", "1"]) == 2
     finally:
         path.unlink()
     err = capsys.readouterr().err
@@ -148,7 +148,8 @@ def _json(capsys) -> dict:
 def test_simulate_runs_every_section_as_its_own_project(tmp_path, capsys):
     path = tmp_path / "c.yaml"
     path.write_text(CORRIDOR)
-    assert main(["simulate", str(path), "--json", "--out", str(tmp_path / "out")]) == 0
+    assert main(["simulate", str(path), "--json", "--out", str(tmp_path / "out"),
+                 "--workers", "1"]) == 0
     out = _json(capsys)
     assert out["name"] == "Two cuts" and out["command"] == "simulate" and out["seed"] == 3
     assert [s["name"] for s in out["sections"]] == ["north", "south"]
@@ -177,7 +178,8 @@ def test_simulate_runs_every_section_as_its_own_project(tmp_path, capsys):
 def test_seed_option_derives_every_section_seed(tmp_path, capsys):
     path = tmp_path / "c.yaml"
     path.write_text(CORRIDOR)
-    assert main(["simulate", str(path), "--json", "--seed", "8", "--rocks", "10"]) == 0
+    assert main(["simulate", str(path), "--json", "--seed", "8", "--rocks", "10",
+                 "--workers", "1"]) == 0
     out = _json(capsys)
     assert out["seed"] == 8
     assert [s["seed"] for s in out["sections"]] == [section_seed(8, 0), section_seed(8, 1)]
@@ -187,13 +189,13 @@ def test_seed_option_derives_every_section_seed(tmp_path, capsys):
 def test_check_holds_only_if_every_section_holds(tmp_path, capsys):
     path = tmp_path / "c.yaml"
     path.write_text(CORRIDOR.replace("capacity_kj: 1000", "capacity_kj: 1"))
-    assert main(["check", str(path), "--json"]) == 1
+    assert main(["check", str(path), "--json", "--workers", "1"]) == 1
     out = _json(capsys)
     assert out["totals"]["ok"] is False
     assert out["totals"]["failures"] and all(
         f.startswith("south: ") for f in out["totals"]["failures"])
     assert out["sections"][0]["ok"] is True and out["sections"][1]["ok"] is False
-    assert main(["check", str(path)]) == 1  # the terminal report
+    assert main(["check", str(path), "--workers", "1"]) == 1  # the terminal report
     text = capsys.readouterr().out
     assert "section 2 of 2: south" in text and "total" in text
 
@@ -234,3 +236,31 @@ def test_a_corridor_design_across_scenarios_in_every_section(tmp_path, capsys):
     design = out_dir / "km_12.4" / "design.yaml"
     assert main(["check", str(design), "--scenarios", "--json", "--workers", "1"]) == 0
     assert _json(capsys)["holds_in"] == 2
+
+
+@pytest.mark.parametrize("command", ["simulate", "check"])
+def test_sections_give_the_same_numbers_and_files_on_a_pool(tmp_path, capsys, command):
+    path = tmp_path / "c.yaml"
+    path.write_text(CORRIDOR)
+    runs = {}
+    for workers in ("1", "2"):
+        out_dir = tmp_path / f"out{workers}"
+        assert main([command, str(path), "--json", "--workers", workers,
+                     "--out", str(out_dir)]) in (0, 1)
+        out = _json(capsys)
+        for block in out["sections"]:
+            block.pop("runtime_s")
+        runs[workers] = out
+        for name in ("north", "south"):
+            for table in ("rocks.csv", "crossings.csv"):
+                runs[(workers, name, table)] = (out_dir / name / table).read_text()
+    assert runs["1"] == runs["2"]
+    for name in ("north", "south"):
+        for table in ("rocks.csv", "crossings.csv"):
+            assert runs[("1", name, table)] == runs[("2", name, table)]
+
+
+def test_workers_need_a_corridor_or_scenarios(capsys):
+    plain = str(ROOT / "projects" / "standard_slope.yaml")
+    assert main(["simulate", plain, "--workers", "2"]) == 2
+    assert "sections of a corridor" in capsys.readouterr().err
