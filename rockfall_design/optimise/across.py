@@ -37,6 +37,7 @@ is the single-scenario optimiser, untouched.
 
 from __future__ import annotations
 
+import functools
 import heapq
 import math
 import time
@@ -50,10 +51,17 @@ import numpy as np
 from ..evaluate import Evaluation, evaluate_design
 from ..judge.bounds import rocks_to_show_fraction
 from ..safety import DEFAULT_CONFIDENCE
-from . import MAX_EXACT_PER_FAMILY, SEARCH_FACTOR, Alternative, OptimisationResult
+from . import (
+    MAX_EXACT_PER_FAMILY,
+    MAX_NEAR_PER_FAMILY,
+    MAX_UNJUDGED_FAILURES,
+    SEARCH_FACTOR,
+    Alternative,
+    OptimisationResult,
+)
 from .decide import decide, plan_rocks
 from .screening import Screening
-from .search import _barrier_designs, _BarrierSlots, _edit_designs, _Tally
+from .search import MAX_EXACT_PER_LEVEL, _barrier_designs, _BarrierSlots, _edit_designs, _Tally
 from .space import families, family_name
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -252,11 +260,21 @@ class _Verdict:
     decisions: list[Any]
     simulated: int = 0
     exact: int = 0
+    feasible: bool = False  # passes the screening (not only within its margin) in enough
+    unjudged: bool = False  # too few rocks at a measure in a screening to judge it
 
 
 def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure],
-                  required: int, registry: Registry) -> _Verdict:
-    """Screen a design in every scenario; decide and verify it in those it may hold in."""
+                  required: int, registry: Registry,
+                  gate: Callable[[bool, bool], str] | None = None) -> _Verdict:
+    """Screen a design in every scenario; decide and verify it in those it may hold in.
+
+    ``gate(feasible, unjudged)`` may hold back the exact decision of a
+    design that passes the screening in enough scenarios only within its
+    margin (``feasible`` False) or that too few rocks met at a measure to
+    judge (``unjudged``), as the single-scenario optimiser does: it returns
+    the reason, or "" to decide.
+    """
     k = len(scs)
     rows: list[dict[str, Any]] = [{**sc.run.head(), "admitted": False, "decision_rocks": None,
                                    "margin": None, "binds_at": "", "holds_on_fresh_rocks": None,
@@ -270,6 +288,13 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
     if len(passing) < required:
         return _Verdict(False, rows, failed, f"fails the screening in scenario(s) "
                         f"{', '.join(str(scs[j].run.index) for j in failed)}", [None] * k)
+    feasible = sum(screened[j].feasible for j in passing) >= required
+    unjudged = any(c.bound is None and c.value is not None
+                   for j in passing for cs in screened[j].checks for c in cs)
+    held_back = gate(feasible, unjudged) if gate is not None else ""
+    if held_back:
+        return _Verdict(False, rows, failed, held_back, [None] * k, feasible=feasible,
+                        unjudged=unjudged)
     # The scenario nearest to failing first: its failure ends the design soonest.
     passing.sort(key=lambda j: (-screened[j].violation, screened[j].feasible))
     decisions: list[Any] = [None] * k
@@ -296,7 +321,8 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
                 break
     if len(admitted) < required:
         why = "; ".join(f"scenario {scs[j].run.index}: {rows[j]['reason']}" for j in failed)
-        return _Verdict(False, rows, failed, why, decisions, simulated, exact)
+        return _Verdict(False, rows, failed, why, decisions, simulated, exact, feasible,
+                        unjudged)
     holding = 0
     for j in admitted:
         sc = scs[j]
@@ -315,8 +341,9 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
     if holding < required:
         why = "; ".join(f"scenario {scs[j].run.index}: {rows[j]['reason']}" for j in failed
                         if rows[j]["reason"])
-        return _Verdict(False, rows, failed, why, decisions, simulated, exact)
-    return _Verdict(True, rows, failed, "", decisions, simulated, exact)
+        return _Verdict(False, rows, failed, why, decisions, simulated, exact, feasible,
+                        unjudged)
+    return _Verdict(True, rows, failed, "", decisions, simulated, exact, feasible, unjudged)
 
 
 def optimise_across(
@@ -372,13 +399,19 @@ def optimise_across(
         alt = Alternative(name=family_name(spec.candidates, fam), family=fam)
         tallies = [_Tally() for _ in scs]
         fam_seed = int(np.random.SeedSequence([s, fi]).generate_state(1)[0])
-        streams = [_designs(sc, fam, fam_seed, limit, t) for sc, t in zip(scs, tallies,
-                                                                          strict=True)]
+        streams = [((j, d) for d in _designs(sc, fam, fam_seed, limit, t))
+                   for j, (sc, t) in enumerate(zip(scs, tallies, strict=True))]
         seen: set[tuple] = set()
         reasons: Counter = Counter()
         last_failed: dict[str, Any] | None = None
         decided = designs = 0
-        for d in heapq.merge(*streams, key=lambda d: d.cost):
+        # The single optimiser's limits on exact decisions (see _settle): per level
+        # of catalogue choices, of designs within the margin only, of unjudged ones.
+        per_level: Counter = Counter()
+        state = {"near": 0, "unjudged_failures": 0}
+        gate = functools.partial(_gate, state)
+
+        for j_src, d in heapq.merge(*streams, key=lambda item: item[1].cost):
             key = _design_key(d.measures)
             if key in seen:
                 continue
@@ -388,10 +421,17 @@ def optimise_across(
                 alt.reason = (f"stopped after {designs - 1} designs screened in every scenario "
                               f"and {decided} decided exactly")
                 break
-            verdict = _judge_design(scs, d.measures, required, registry)
+            level = (j_src, d.level)
+            if per_level[level] >= MAX_EXACT_PER_LEVEL:
+                continue
+            verdict = _judge_design(scs, d.measures, required, registry, gate)
             simulated += verdict.simulated
             alt.exact_evaluations += verdict.exact
-            decided += verdict.exact > 0
+            if verdict.exact:
+                decided += 1
+                per_level[level] += 1
+                state["near"] += not verdict.feasible
+                state["unjudged_failures"] += verdict.unjudged and not verdict.holds
             if not verdict.holds:
                 reasons[verdict.reason.split(":")[0][:60] or "fails"] += 1
                 alt.reason = verdict.reason
@@ -437,6 +477,15 @@ def optimise_across(
         search_rocks=n, confidence=confidence, exact_evaluations=exact_total,
         rocks_simulated=simulated + sum(sc.screen.edit_rocks for sc in scs),
         share=share, required=required, runs=runs, per_family=per_family)
+
+
+def _gate(state: dict[str, int], feasible: bool, unjudged: bool) -> str:
+    """Why a family's design is not decided exactly (see :func:`_judge_design`), or ""."""
+    if unjudged and state["unjudged_failures"] >= MAX_UNJUDGED_FAILURES:
+        return "too few rocks at a measure to judge in the screening, not decided"
+    if not feasible and state["near"] >= MAX_NEAR_PER_FAMILY:
+        return "within the screening margin, not decided"
+    return ""
 
 
 def _fill(alt: Alternative, d: Any, verdict: _Verdict, scs: Sequence[_Scenario],
