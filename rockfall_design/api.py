@@ -105,6 +105,12 @@ def _project(project: Any, registry: Registry | None = None) -> Project:
     """A Project from a Project or a path (validated with ``registry``)."""
     if isinstance(project, str | os.PathLike):
         return load_project(project, registry=registry)
+    from .project import Corridor
+
+    if isinstance(project, Corridor):
+        raise InputError("a corridor runs section by section: pass one section's project "
+                         "(corridor.sections[i].project), or use the command line, which "
+                         "runs every section")
     return project
 
 

@@ -264,3 +264,14 @@ def test_workers_need_a_corridor_or_scenarios(capsys):
     plain = str(ROOT / "projects" / "standard_slope.yaml")
     assert main(["simulate", plain, "--workers", "2"]) == 2
     assert "sections of a corridor" in capsys.readouterr().err
+
+
+def test_the_api_takes_one_section_at_a_time():
+    import rockfall_design as rd
+    from rockfall_design.errors import InputError
+
+    corridor = rd.load_corridor(EXAMPLE)
+    with pytest.raises(InputError, match="section by section"):
+        rd.simulate(corridor)
+    result = rd.simulate(corridor.sections[1].project, rocks=20)
+    assert result.seed == corridor.sections[1].seed
