@@ -50,6 +50,7 @@ _LAZY: dict[str, str] = {
     **dict.fromkeys(("CheckResult", "OptimiseResult", "SimulationResult", "check",
                      "load_project", "optimise", "simulate", "study"), ".api"),
     "StudyResult": ".study.result",
+    **dict.fromkeys(("Corridor", "load_corridor"), ".project"),
     **dict.fromkeys(("fraction_upper_bound", "quantile_upper_bound",
                      "rocks_to_bound_quantile", "rocks_to_show_fraction"), ".judge.bounds"),
 }
@@ -71,6 +72,7 @@ if TYPE_CHECKING:  # pragma: no cover
         rocks_to_bound_quantile,
         rocks_to_show_fraction,
     )
+    from .project import Corridor, load_corridor
     from .study.result import StudyResult
 
 
@@ -114,6 +116,8 @@ __all__ = [
     "__version__",
     "hookimpl",
     "load_project",
+    "load_corridor",
+    "Corridor",
     "simulate",
     "check",
     "optimise",

@@ -105,6 +105,12 @@ def _project(project: Any, registry: Registry | None = None) -> Project:
     """A Project from a Project or a path (validated with ``registry``)."""
     if isinstance(project, str | os.PathLike):
         return load_project(project, registry=registry)
+    from .project import Corridor
+
+    if isinstance(project, Corridor):
+        raise InputError("a corridor runs section by section: pass one section's project "
+                         "(corridor.sections[i].project), or use the command line, which "
+                         "runs every section")
     return project
 
 
@@ -631,6 +637,9 @@ def optimise(
     from .optimise import optimise as _optimise
 
     p = _project(project, registry)
+    if p.design is not None and p.design.scenarios is not None:
+        # design.scenarios: the cheapest design that holds across the study's scenarios
+        from .optimise.across import optimise_across as _optimise  # type: ignore[assignment]
     if p.design is None:
         raise p.error_at((), "the project has no design: section to optimise "
                              "(see the README, 'Designing protection')")

@@ -101,6 +101,16 @@ def _add_run_options(
     p.add_argument("--json", action="store_true", help=json_)
 
 
+def _add_tasks_options(p: argparse.ArgumentParser, what: str) -> None:
+    """--workers and --scheduler: where independent runs (scenarios, sections) run."""
+    p.add_argument("--workers", type=_int_at_least(1, "number of workers"), metavar="N",
+                   help=f"run {what} on a local pool of N processes (default: one per core; "
+                   "1 runs them in this process)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help=f"run {what} on the Dask cluster of this scheduler (e.g. "
+                   "tcp://127.0.0.1:8786); needs the study extra")
+
+
 def _add_block_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--block", action="append", default=[], metavar="NAME",
                    help="do not load the plugin with this entry-point or distribution "
@@ -132,6 +142,7 @@ def build_parser() -> argparse.ArgumentParser:
         json_="print the summary as one JSON object on stdout instead of the report",
         repeatable=True,
     )
+    _add_tasks_options(sim, "a corridor's sections (a file with sections:)")
     _add_block_option(sim)
     sim.set_defaults(func=cmd_simulate)
     chk = sub.add_parser(
@@ -155,6 +166,11 @@ def build_parser() -> argparse.ArgumentParser:
         json_="print the summary with measures, protect, ok and failures as one JSON object "
         "on stdout instead of the report",
     )
+    chk.add_argument("--scenarios", action="store_true",
+                     help="check the measures in every scenario of the project's study: "
+                     "section, each with its own rocks; holds when it holds in the share "
+                     "design.scenarios asks (default: all); names the binding scenario")
+    _add_tasks_options(chk, "the scenarios of --scenarios, or a corridor's sections")
     _add_block_option(chk)
     chk.set_defaults(func=cmd_check)
     opt = sub.add_parser(
@@ -320,7 +336,7 @@ def _plugins_for(project: Any, args: argparse.Namespace) -> Any:
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .api import SimulationResult, run_simulation
     from .outputs import OutputSet
-    from .project import load_project
+    from .project import Project
     from .simulation import study_memory
 
     recorded = None
@@ -331,7 +347,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     elif args.project is None:
         raise InputError("a project file (or --repeat SUMMARY) is needed")
     else:
-        project = load_project(args.project)
+        project = _load(args.project)
+        if not isinstance(project, Project):  # a corridor: every section
+            from .corridor import cli_simulate
+
+            return cli_simulate(args, project)
+    if args.workers or args.scheduler:
+        raise InputError("--workers and --scheduler run the sections of a corridor (a project "
+                         "file with sections:); this file has none")
     _plugins_for(project, args)
     n = args.rocks or project.rocks.count
     _memory_guard(study_memory(project, n), f"{n:,} rocks with "
@@ -433,6 +456,13 @@ def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
     return project, recorded
 
 
+def _load(path: Path) -> Any:
+    """The project file: a Project, or a Corridor when it lists ``sections:``."""
+    from .project import load_corridor
+
+    return load_corridor(path)
+
+
 def _comparable(summary: dict[str, Any]) -> dict[str, Any]:
     """A summary without what legitimately changes between runs (timing, the run record)."""
     return {k: v for k, v in summary.items() if k not in ("runtime_s", "run")}
@@ -442,10 +472,21 @@ def cmd_check(args: argparse.Namespace) -> int:
     """Evaluate the project's measures; exit 0 if every check holds, else 1."""
     from .api import check
     from .outputs import OutputSet
-    from .project import load_project
+    from .project import Project
 
-    project = load_project(args.project)
+    project = _load(args.project)
+    if not isinstance(project, Project):  # a corridor: every section
+        from .corridor import cli_check
+
+        return cli_check(args, project)
+    if not args.scenarios and (args.workers or args.scheduler):
+        raise InputError("--workers and --scheduler run the scenarios of check --scenarios "
+                         "(give --scenarios too), or the sections of a corridor")
     registry = _plugins_for(project, args)
+    if args.scenarios:  # every scenario of the study
+        from .across import cli_check_scenarios
+
+        return cli_check_scenarios(args, project, registry)
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
                      len(project.analysis.stations))
@@ -480,10 +521,14 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     """Least-cost design; exit 0 with a design, 1 if no family meets the targets."""
     from .api import optimise
     from .outputs import OutputSet
-    from .project import load_project
+    from .project import Project
     from .report import design_yaml, print_optimise
 
-    project = load_project(args.project)
+    project = _load(args.project)
+    if not isinstance(project, Project):  # a corridor: every section
+        from .corridor import cli_optimise
+
+        return cli_optimise(args, project)
     if project.design is None:
         raise project.error_at((), "the project has no design: section to optimise "
                                    "(see the README, 'Designing protection')")
@@ -503,9 +548,15 @@ def cmd_optimise(args: argparse.Namespace) -> int:
                                   progress=callback)
         result = report.result
         summary = report.summary
+        across = project.design.scenarios is not None  # a design across a study's scenarios
         if args.out:
             out: Path = args.out
-            if result.best is not None:
+            if result.best is not None and across:
+                from .across import across_design_yaml
+
+                files.write_text(out / "design.yaml",
+                                 across_design_yaml(result, args.project, project))
+            elif result.best is not None:
                 files.write_text(out / "design.yaml", design_yaml(result.best, args.project,
                                                                   result.search_rocks))
             else:
@@ -529,6 +580,10 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
         print_optimise(result, project)
+        if across:
+            from .across import print_across
+
+            print_across(result)
     return int(ExitCode.OK if result.best is not None else ExitCode.CHECK_FAILED)
 
 

@@ -31,6 +31,8 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--block": ["plugin"],
         "--plot-format": ["png", "svg", "pdf", "--plot"],
         "--report": ["report.html", "report.md", "DIR"],
+        "--workers": ["corridor", "sections:", "pool", "processes", "one per core"],
+        "--scheduler": ["corridor", "Dask", "scheduler"],
     },
     "check": {
         "project": ["project file", "measures:"],
@@ -43,6 +45,9 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--block": ["plugin"],
         "--plot-format": ["png", "svg", "pdf", "--plot"],
         "--report": ["report.html", "report.md", "DIR"],
+        "--scenarios": ["every scenario", "study:", "design.scenarios", "binding scenario"],
+        "--workers": ["--scenarios", "corridor", "pool", "processes", "one per core"],
+        "--scheduler": ["--scenarios", "corridor", "Dask", "scheduler"],
     },
     "optimise": {
         "project": ["project file", "design:"],

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from rockfall_design.cli import main
-from rockfall_design.project import load_project
+from rockfall_design.project import Project, load_corridor
 
 from .plugin_helpers import install_embankment_example
 
@@ -25,10 +25,19 @@ PROJECTS = sorted(
 def test_example_project_runs(path, capsys, tmp_path, monkeypatch):
     if path.name == "design_embankment.yaml":  # its candidate is the example plugin's
         install_embankment_example(tmp_path, monkeypatch)
-    project = load_project(path)
-    if project.measures:
+    loaded = load_corridor(path)
+    if isinstance(loaded, Project):
+        projects = [loaded]
+    else:  # a corridor: every section runs, the totals add them up
+        projects = [s.project for s in loaded.sections]
+    if any(p.measures for p in projects):
         code = main(["check", str(path), "--rocks", "30", "--json"])
         assert code in (0, 1)
     else:
         assert main(["simulate", str(path), "--rocks", "30", "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["rocks"] == 30
+    out = json.loads(capsys.readouterr().out)
+    if isinstance(loaded, Project):
+        assert out["rocks"] == 30
+    else:
+        assert out["totals"]["rocks"] == 30 * len(projects)
+        assert [s["rocks"] for s in out["sections"]] == [30] * len(projects)

@@ -49,7 +49,10 @@ The package, one room each (the names above are all importable from here):
   by their path, grid or Latin hypercube scenarios);
 - :mod:`.model`: :class:`Project`, the whole file;
 - :mod:`.loading`: YAML with line numbers and limits, :func:`load_project`,
-  :func:`load_project_text`, :func:`dump_yaml`.
+  :func:`load_project_text`, :func:`dump_yaml`, and :func:`load_corridor`
+  for a file that may list ``sections:``;
+- :mod:`.corridor`: :class:`Corridor`, a file of several sections, each an
+  ordinary :class:`Project` (shared keys merged in, its own seed).
 """
 
 # The package's face: every name callers import from ``rockfall_design.project``.
@@ -57,6 +60,7 @@ The package, one room each (the names above are all importable from here):
 # few private helpers used by rockfall_design.sources and the tests) are
 # re-exported by name.
 from ..errors import ProjectError as ProjectError
+from .corridor import Corridor, CorridorSection, section_seed
 from .design import Design, DesignCosts, ResidualFraction, Site
 from .fields import Boolean as Boolean
 from .fields import Fraction as Fraction
@@ -67,7 +71,7 @@ from .fields import Positive as Positive
 from .fields import String as String
 from .loading import _LIBYAML_FROM as _LIBYAML_FROM
 from .loading import _parse_yaml as _parse_yaml
-from .loading import dump_yaml, load_project, load_project_text
+from .loading import dump_yaml, load_corridor, load_corridor_text, load_project, load_project_text
 from .locator import Locator, params_problem
 from .messages import _ERROR_TYPE as _ERROR_TYPE
 from .messages import _describe as _describe
@@ -109,6 +113,11 @@ from .schema import SizeField as SizeField
 from .study import Range, Sample, StudySpec
 
 __all__ = [
+    "Corridor",
+    "CorridorSection",
+    "load_corridor",
+    "load_corridor_text",
+    "section_seed",
     "dump_yaml",
     "Analysis",
     "Design",

@@ -307,6 +307,24 @@ def _parse_candidates(value: Any) -> list[dict[str, Any]]:
     return candidates
 
 
+def _parse_scenarios(value: Any) -> Any:
+    """``design.scenarios``: None, ``"all"`` or ``{"share": S}`` with 0 < S <= 1."""
+    if value is None or value == "all":
+        return value
+    if isinstance(value, dict) and set(value) == {"share"}:
+        share = value["share"]
+        if (isinstance(share, int | float) and not isinstance(share, bool)
+                and math.isfinite(share) and 0 < share <= 1):
+            return {"share": float(share)}
+        raise _fail(f"expected a number > 0 and <= 1, got {_describe(share)}", ("share",))
+    if isinstance(value, dict):
+        extra = sorted(str(k) for k in value if k != "share")
+        if extra:
+            raise _fail(f"unknown key {extra[0]!r}; expected share", (extra[0],))
+        raise _fail("expected {share: S}", ())
+    raise _fail(f"expected all or {{share: S}} (0 < S <= 1), got {_describe(value)}")
+
+
 class Design(_Model):
     """``design:``, what the least-cost optimiser may build and how it checks a design.
 
@@ -372,6 +390,29 @@ class Design(_Model):
         "and the measure's parameters (fixed, [min, max] or {options: [...]})."
     )
 
+    scenarios: Annotated[
+        Any,
+        BeforeValidator(_parse_scenarios),
+        WithJsonSchema(
+            {
+                "anyOf": [
+                    {"const": "all"},
+                    {
+                        "type": "object",
+                        "properties": {"share": {"type": "number", "exclusiveMinimum": 0,
+                                                 "maximum": 1}},
+                        "required": ["share"],
+                        "additionalProperties": False,
+                    },
+                ]
+            }
+        ),
+    ] = Field(
+        None,
+        description="With a study: section, the scenarios a design must hold in: 'all', or "
+        "{share: S}, at least that share of them (0 < S <= 1); none: the project as written.",
+    )
+
     _catalogue: dict | None = PrivateAttr(default=None)
     _products_locator: "Locator | None" = PrivateAttr(default=None)
     _cost_params: dict | None = PrivateAttr(default=None)
@@ -401,6 +442,13 @@ class Design(_Model):
     def residual_fraction(self) -> float | None:
         """Allowed fraction of the rocks in the protected zone, or None if a count is given."""
         return self.residual.fraction if isinstance(self.residual, ResidualFraction) else None
+
+    @property
+    def scenario_share(self) -> float | None:
+        """The share of a study's scenarios a design must hold in (1.0 for ``all``), or None."""
+        if self.scenarios is None:
+            return None
+        return 1.0 if self.scenarios == "all" else float(self.scenarios["share"])
 
     @property
     def catalogue(self) -> dict[str, dict[str, dict[str, Any]]]:

@@ -10,7 +10,7 @@ writes data that loads back to the same values.
 import os
 import re
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 from pydantic import ValidationError
@@ -32,6 +32,9 @@ from .messages import (
     _yaml_path,
 )
 from .model import Project
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .corridor import Corridor
 
 # --------------------------------------------------------------------------------------
 # YAML with line numbers
@@ -358,6 +361,19 @@ def load_project_text(
         For any problem (the one earliest in the file), as one line
         ``source:line: key.path: message``.
     """
+    data, lines = _parse_top(text, source)
+    if "sections" in data:
+        raise ProjectError(
+            source, _line_of(("sections",), lines), "sections",
+            "this file lists sections (a corridor): load it with load_corridor; simulate, "
+            "check and optimise run every section (study does not yet)",
+        )
+    base = Path(source).parent if base_dir is None else Path(base_dir)
+    return _validated(data, lines, source, base)
+
+
+def _parse_top(text: str, source: str) -> tuple[dict, _Lines]:
+    """The YAML of a project file: a mapping of its top-level keys, and its line map."""
     data, lines = _parse_yaml(text, source)
     if data is None:
         raise ProjectError(source, 1, "", "the project file is empty")
@@ -371,7 +387,11 @@ def load_project_text(
             f"expected a mapping of top-level keys (name, slope, materials, rocks, ...), "
             f"got {got}",
         )
-    base = Path(source).parent if base_dir is None else Path(base_dir)
+    return data, lines
+
+
+def _validated(data: dict, lines: _Lines, source: str, base: Path) -> Project:
+    """A project from parsed data and its line map: files resolved, validated, catalogues."""
     # A slope from a survey file and materials from a library become inline data here.
     from ..sources import resolve_inputs
 
@@ -451,6 +471,69 @@ def _attach_catalogues(project: Project, base_dir: Path) -> None:
         )
 
 
+def load_corridor_text(
+    text: str, source: str = "<string>", *, base_dir: str | os.PathLike[str] | None = None
+) -> "Corridor | Project":
+    """Parse and validate a project file that may list ``sections:`` (a corridor).
+
+    Parameters are those of :func:`load_project_text`.
+
+    Returns
+    -------
+    Corridor or Project
+        A :class:`~.corridor.Corridor` (one complete :class:`Project` per
+        section, see :mod:`.corridor`) for a file with ``sections:``;
+        otherwise the :class:`Project`, exactly as :func:`load_project_text`
+        gives it.
+
+    Raises
+    ------
+    ProjectError
+        For the first problem, located in the file (``sections[1].slope...``).
+    """
+    from .corridor import Corridor, CorridorSection, section_seed, split_sections
+
+    data, lines = _parse_top(text, source)
+    base = Path(source).parent if base_dir is None else Path(base_dir)
+    if "sections" not in data:
+        return _validated(data, lines, source, base)
+    sections = []
+    run_seed = 0
+    for index, (name, section_data, section_lines) in enumerate(
+            split_sections(data, lines, source)):
+        project = _validated(section_data, section_lines, source, base)
+        # Each section its own random numbers, derived from the corridor's seed
+        # (the top level's rocks.seed: a section may not set its own).
+        run_seed = int(project.rocks.seed)
+        seed = section_seed(run_seed, index)
+        project = project.model_copy(
+            update={"rocks": project.rocks.model_copy(update={"seed": seed})})
+        sections.append(CorridorSection(name=name, index=index, project=project))
+    description = data.get("description")
+    return Corridor(name=str(data.get("name", "")),
+                    description=description if isinstance(description, str) else "",
+                    source=source, seed=run_seed, sections=tuple(sections))
+
+
+def load_corridor(path: str | os.PathLike[str]) -> "Corridor | Project":
+    """Read a project file that may list ``sections:``; see :func:`load_corridor_text`."""
+    source = os.fspath(path)
+    return load_corridor_text(_read_project(source), source, base_dir=Path(source).parent)
+
+
+def _read_project(source: str) -> str:
+    """The text of a project file; one located line when it cannot be read."""
+    try:
+        return read_text(source)
+    except UnicodeDecodeError as exc:
+        raise ProjectError(
+            source, None, "", f"cannot read file: not UTF-8 text ({exc.reason})"
+        ) from exc
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise ProjectError(source, None, "", f"cannot read file: {reason}") from exc
+
+
 def load_project(path: str | os.PathLike[str]) -> Project:
     """Read, parse and validate a project file.
 
@@ -471,13 +554,4 @@ def load_project(path: str | os.PathLike[str]) -> Project:
         ``path:line: key.path: message``).
     """
     source = os.fspath(path)
-    try:
-        text = read_text(source)
-    except UnicodeDecodeError as exc:
-        raise ProjectError(
-            source, None, "", f"cannot read file: not UTF-8 text ({exc.reason})"
-        ) from exc
-    except OSError as exc:
-        reason = exc.strerror or type(exc).__name__
-        raise ProjectError(source, None, "", f"cannot read file: {reason}") from exc
-    return load_project_text(text, source, base_dir=Path(source).parent)
+    return load_project_text(_read_project(source), source, base_dir=Path(source).parent)

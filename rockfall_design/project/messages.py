@@ -98,6 +98,11 @@ _Lines = dict[tuple, tuple[int, str]]
 
 def _key_text(path: tuple, lines: _Lines) -> str:
     """Dotted key path as the user sees it: ``rocks.release[1].x``."""
+    shown = getattr(lines, "shown", None)
+    if shown is not None:
+        # One section of a corridor: the key as written in the file
+        # (``sections[1].slope...``), see project/corridor.py.
+        return _key_text(shown(path), lines.file_lines)  # type: ignore[attr-defined]
     text = ""
     prefix: tuple = ()
     for element in path:

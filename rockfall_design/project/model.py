@@ -123,6 +123,12 @@ class Project(_Model):
                     "residual rocks are counted at)",
                     ("design",),
                 )
+            if self.design.scenarios is not None and self.study is None:
+                raise _fail(
+                    "the design's scenarios are those of a study: give a study: section "
+                    "(see the README, 'Designs that hold across scenarios')",
+                    ("design", "scenarios"),
+                )
             for i, candidate in enumerate(self.design.candidates):
                 low, high = candidate["x"]
                 if low < first or high > last:
@@ -160,6 +166,9 @@ class Project(_Model):
         if self.design is not None and data.get("design") is not None:
             # the catalogues inline, so the record (and its hash) holds the figures used
             design = data["design"]
+            if design.get("scenarios") is None:
+                # absent unless given, so the record and hash of a design are as before
+                design.pop("scenarios", None)
             try:
                 design["products"] = _json_copy(self.design.catalogue)
                 design["costs"] = {

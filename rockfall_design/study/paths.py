@@ -195,6 +195,9 @@ def with_values(project: Project, values: Mapping[str, Any]) -> Project:
 
     base = project.resolved_dict()
     base.pop("study", None)
+    if isinstance(base.get("design"), dict):
+        # design.scenarios names the study's scenarios: one scenario has none
+        base["design"].pop("scenarios", None)
 
     def located(path: str, message: str) -> ProjectError:
         return project.error_at(("study", "vary", path), message)

@@ -1,0 +1,251 @@
+"""Designs across the scenarios of a study: ``check --scenarios`` and the optimiser's report.
+
+``check --scenarios`` checks the project's measures in every scenario of its
+``study:`` section, each scenario with its own rocks (its values set, its own
+seed, as ``rockfall-design study`` runs it), and says in how many the design
+holds against how many it must (``design.scenarios``: ``all``, the default,
+or ``{share: S}``, at least ``ceil(S k)`` of ``k``) and which scenario binds
+(the least margin: the smallest relative slack of a check or of the
+residual with the confidence bounds in place, negative where it fails).
+
+``--json`` prints ``rocks``, ``seed`` (the run seed), ``share``,
+``required``, ``of``, ``holds_in``, ``holds_with_confidence_in``, ``ok``,
+``binding`` (``index``, ``values``, ``seed``, ``margin``, ``binds_at``),
+``failures`` (one line per failed check, naming the scenario) and
+``scenarios``: per scenario ``index``, ``values``, ``seed``, ``margin``,
+``binds_at`` and the JSON of ``check`` in that scenario.
+
+For ``optimise`` with ``design.scenarios`` (see
+:mod:`rockfall_design.optimise.across`) this module prints the scenario
+lines of the report and writes ``design.yaml``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .errors import ExitCode, InputError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .optimise.across import AcrossResult
+    from .plugins import Registry
+    from .project import Project
+
+__all__ = ["check_across", "cli_check_scenarios", "across_design_yaml", "print_across"]
+
+
+def _values_text(values: dict[str, Any]) -> str:
+    return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
+
+
+def _check_task(task: tuple[Any, int | None, tuple[str, ...]]) -> dict[str, Any]:
+    """One scenario's check (a task for a pool or a cluster): its JSON block and margin.
+
+    ``task`` is (scenario run, rocks, blocked plugins); the plugins are
+    loaded where the task runs, as the command loads them.
+    """
+    from .api import default_registry
+    from .evaluate import evaluate
+    from .optimise.across import margin
+
+    run, rocks, block = task
+    ev = evaluate(run.project, default_registry(block), rocks=rocks)
+    slack, what = margin(ev)
+    return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
+            "binds_at": what, **ev.summary()}
+
+
+def check_across(project: Project, registry: Registry, *, rocks: int | None = None,
+                 seed: int | None = None, block: tuple[str, ...] = (),
+                 workers: int | None = 1, scheduler: Any = None) -> dict[str, Any]:
+    """Check the project's measures in every scenario of its study (see the module's text).
+
+    Parameters
+    ----------
+    project
+        With a ``study:`` section (and ``measures:`` to check).
+    registry
+        The plugins.
+    rocks
+        Rocks of every scenario (default ``rocks.count``).
+    seed
+        The run seed the scenarios' seeds derive from (default ``rocks.seed``).
+    block
+        Plugins not loaded (``--block``), where the scenarios run.
+    workers, scheduler
+        Where the scenarios run (see
+        :func:`rockfall_design.study.executors.run_tasks`): 1 (the default
+        here) in this process with ``registry``, N on a local pool of N
+        processes (None: one per core), or on the Dask cluster of
+        ``scheduler``; the numbers are the same wherever they run.
+
+    Returns
+    -------
+    dict
+        The JSON object of ``check --scenarios --json``.
+    """
+    from .evaluate import evaluate, validate_project
+    from .optimise.across import margin, required_scenarios, scenario_runs
+    from .study.executors import run_tasks
+
+    runs = scenario_runs(project, seed)
+    for run in runs:  # every scenario's plugin sections, before anything runs
+        validate_project(run.project, registry)
+    share = project.design.scenario_share if project.design is not None else None
+    share = 1.0 if share is None else share
+    required = required_scenarios(share, len(runs))
+    if scheduler is None and workers == 1:
+        def one(run: Any) -> dict[str, Any]:
+            ev = evaluate(run.project, registry, rocks=rocks)
+            slack, what = margin(ev)
+            return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
+                    "binds_at": what, **ev.summary()}
+
+        per = [one(run) for run in runs]
+    else:
+        per = run_tasks(_check_task, [(run, rocks, tuple(block)) for run in runs],
+                        workers=workers, scheduler=scheduler)
+    holds = sum(bool(p["ok"]) for p in per)
+    bind = min(per, key=lambda p: (math.inf if p["margin"] is None else p["margin"],
+                                   p["index"]))
+    failures = [f"scenario {p['index']} ({_values_text(p['values'])}): {f}"
+                for p in per for f in p.get("failures", [])]
+    return {
+        "rocks": int(per[0]["rocks"]),
+        "seed": int(project.rocks.seed if seed is None else seed),
+        "share": share,
+        "required": required,
+        "of": len(per),
+        "holds_in": holds,
+        "holds_with_confidence_in": sum(bool(p["holds_with_confidence"]) for p in per),
+        "ok": holds >= required,
+        "binding": {k: bind[k] for k in ("index", "values", "seed", "margin", "binds_at")},
+        "failures": failures,
+        "scenarios": per,
+    }
+
+
+def print_check_across(summary: dict[str, Any]) -> None:
+    """The terminal report of ``check --scenarios``: a row per scenario, the verdict."""
+    from rich.table import Table
+
+    from .report import fitted_console
+
+    table = Table(show_edge=False)
+    for col, just in (("#", "right"), ("values", "left"), ("seed", "right"),
+                      ("holds", "left"), ("with conf.", "left"), ("margin", "right"),
+                      ("binds at", "left")):
+        table.add_column(col, justify=just)
+    for p in summary["scenarios"]:
+        table.add_row(str(p["index"]), _values_text(p["values"]), str(p["seed"]),
+                      "yes" if p["ok"] else "NO", "yes" if p["holds_with_confidence"] else "no",
+                      "-" if p["margin"] is None else f"{100 * p['margin']:+.1f} %",
+                      p["binds_at"] or "-",
+                      style="" if p["ok"] else "red")
+    console = fitted_console(table)
+    console.print(f"check over {summary['of']} scenarios, {summary['rocks']:,} rocks each, "
+                  f"run seed {summary['seed']}", style="bold", markup=False, highlight=False)
+    console.print(table)
+    b = summary["binding"]
+    console.print(f"Binding scenario {b['index']} ({_values_text(b['values'])}): "
+                  + ("no check to bind" if b["margin"] is None else
+                     f"margin {100 * b['margin']:+.1f} % at {b['binds_at']}"),
+                  markup=False, highlight=False)
+    verdict = (f"Design holds in {summary['holds_in']} of {summary['of']} scenarios; "
+               f"required: {summary['required']}")
+    console.print(verdict, style="bold green" if summary["ok"] else "bold red", markup=False,
+                  highlight=False)
+    for line in summary["failures"]:
+        console.print("  " + line, style="dim", markup=False, highlight=False)
+
+
+def cli_check_scenarios(args: argparse.Namespace, project: Project, registry: Registry) -> int:
+    """``check --scenarios``: exit 0 when the design holds in the required scenarios, else 1."""
+    from .outputs import OutputSet
+
+    if args.plot or args.report:
+        raise InputError("--plot and --report are not drawn for check --scenarios yet; run "
+                         "check without --scenarios for one scenario's figures")
+    if project.study is None:
+        raise project.error_at((), "check --scenarios needs a study: section (its scenarios)")
+    with OutputSet() as files:
+        if args.out:
+            files.reserve(args.out / "summary.json")
+        summary = check_across(project, registry, rocks=args.rocks, seed=args.seed,
+                               block=tuple(args.block), workers=args.workers,
+                               scheduler=args.scheduler)
+        if args.out:
+            files.write_json(args.out / "summary.json", summary)
+    if args.json:
+        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
+    else:
+        print_check_across(summary)
+    return int(ExitCode.OK if summary["ok"] else ExitCode.CHECK_FAILED)
+
+
+def print_across(result: AcrossResult) -> None:
+    """The scenario lines of the optimiser's report: where the chosen design binds."""
+    from rich.text import Text
+
+    from .report import fitted_console
+
+    block = result.scenarios_block()
+    lines = [f"Scenarios: a design must hold in {block['required']} of {block['of']} "
+             f"(design.scenarios share {block['share']:g}), each with its own rocks."]
+    if result.best is not None and block["binding"] is not None:
+        b = block["binding"]
+        lines.append(f"Binding scenario {b['index']} ({_values_text(b['values'])}, seed "
+                     f"{b['seed']}): " + ("no check to bind" if b["margin"] is None else
+                                          f"margin {100 * b['margin']:+.1f} % at "
+                                          f"{b['binds_at']}"))
+        nxt = block["next_cheaper"]
+        if nxt is not None:
+            lines.append(f"The next cheaper design ({nxt['cost']:,.0f}) fails in scenario(s) "
+                         f"{', '.join(map(str, nxt['failed_in'])) or '-'}: {nxt['reason']}")
+    text = Text("\n".join(lines))
+    fitted_console(text).print(text)
+
+
+def across_design_yaml(result: AcrossResult, project_file: Path | str,
+                       project: Project) -> str:
+    """design.yaml of a design across scenarios: ``check --scenarios`` checks it as decided.
+
+    The project as written (its ``study:`` and ``design:`` sections, the
+    catalogues inline) with the chosen measures; ``rocks.seed`` is the run
+    seed the scenarios' seeds derive from and ``rocks.count`` the most rocks
+    that decided the design in a scenario.
+    """
+    from .project import dump_yaml
+
+    best = result.best
+    assert best is not None and best.evaluation is not None
+    ev = best.evaluation
+    data = project.resolved_dict()
+    data["rocks"]["count"] = int(best.decision_rocks or result.rocks)
+    data["rocks"]["seed"] = int(result.seed)
+    # the residual target as the protected zone's allowance, as the optimiser judged it
+    data["protect"] = ev.study.project.resolved_dict()["protect"]
+    data["measures"] = [{"type": m.kind, **m.params.model_dump(mode="json")}
+                        for m in best.measures]
+    data["safety"] = {"concept": ev.concept.name, **ev.concept.params.model_dump(mode="json")}
+    block = result.scenarios_block()
+    b = block["binding"]
+    head = (
+        f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
+        f"cost {best.cost:,.0f}, holding in {block['required']} of {block['of']} scenarios "
+        "of the study.\n"
+        f"# Each scenario has its own rocks: seeds derived from rocks.seed ({result.seed}); "
+        f"rocks.count is the most rocks that decided it in a scenario.\n"
+        f"# binding scenario {b['index']} ({_values_text(b['values'])}): "
+        + ("no check to bind" if b["margin"] is None else
+           f"margin {100 * b['margin']:+.1f} % at {b['binds_at']}") + "\n"
+        "# verification: each scenario's fresh rocks (its seed + 1000003, twice its rocks) "
+        "held.\n"
+        "# check it in every scenario with: rockfall-design check design.yaml --scenarios\n"
+    )
+    return head + dump_yaml(data)

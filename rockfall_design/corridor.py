@@ -1,0 +1,505 @@
+"""Corridors run: every section an ordinary project, reported per section and in total.
+
+A corridor file (``sections:``, see :mod:`rockfall_design.project.corridor`)
+loads as one complete :class:`~rockfall_design.project.Project` per section,
+so each section runs through the same ``simulate``, ``check`` and
+``optimise`` as a single project; this module runs them as independent tasks
+(:func:`run_tasks`) and adds them up:
+
+- ``--json`` prints ``{name, seed, command, sections: [...], totals: {...}}``,
+  each item of ``sections`` the section's usual JSON object with its
+  ``name`` and ``index`` in front (its ``seed`` is the section's own);
+- ``totals``: ``sections``, ``rocks`` (the sum), ``ok`` (every section holds:
+  ``check``, every check; ``optimise``, a design found for every section),
+  ``reaching`` (``simulate``/``check``: rocks reaching the protected zones),
+  ``cost`` and ``currency`` (``optimise``: the corridor design's total cost,
+  null unless every section has a design) and ``failures`` (one line each,
+  naming the section).
+
+Files: ``--out DIR`` writes each section's usual files into ``DIR/<section>/``
+(the section name with other characters than letters, digits, ``.``, ``-``
+and ``_`` made ``_``) and the corridor's ``DIR/summary.json``; ``--plot``
+and ``--report`` likewise. A section's ``design.yaml`` is an ordinary
+project file that ``check`` reads.
+
+Sections are independent tasks: ``simulate`` and ``check`` run them on a
+local pool of processes by default (``--workers N``, ``--scheduler
+ADDRESS`` for a Dask cluster), ``optimise`` in this process (see
+:func:`run_tasks`).
+
+A single-section project (no ``sections:``) never comes here: its commands,
+files and JSON are exactly those of a project file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable, Iterable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypeVar
+
+from .errors import ExitCode, InputError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .outputs import OutputSet
+    from .plugins import Registry
+    from .project import Corridor, CorridorSection
+
+__all__ = ["run_tasks", "corridor_summary", "cli_simulate", "cli_check", "cli_optimise"]
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+def run_tasks(task: Callable[[T], R], items: Iterable[T]) -> list[R]:
+    """Run ``task`` on every item, independently; the results in the items' order.
+
+    The loop of the runs that stay in this process: ``optimise``'s sections
+    (each search keeps its screening, plugins and evaluations here), the
+    sections of ``simulate`` and ``check`` with ``--workers 1``, and those of
+    a ``simulate`` of more than ``EXACT_ROCKS`` rocks per section (streamed
+    to its files as it runs). Otherwise ``simulate`` and ``check`` run their
+    sections as tasks on the study's executors
+    (:func:`rockfall_design.study.executors.run_tasks`: a local pool, one
+    process per core, or a Dask cluster with ``--scheduler``) and write and
+    print them here; the numbers are the same wherever a section runs.
+    """
+    return [task(item) for item in items]
+
+
+# ---- summaries -------------------------------------------------------------------
+
+
+def section_block(section: CorridorSection, summary: dict[str, Any]) -> dict[str, Any]:
+    """A section's item of ``sections``: its name and index, then its usual JSON object."""
+    return {"name": section.name, "index": section.index, **summary}
+
+
+def corridor_summary(corridor: Corridor, command: str, seed: int,
+                     blocks: Sequence[dict[str, Any]],
+                     costs: Sequence[float | None] = ()) -> dict[str, Any]:
+    """The corridor's JSON: the run, every section's block, and the totals.
+
+    Parameters
+    ----------
+    corridor
+        The corridor run.
+    command
+        ``simulate``, ``check`` or ``optimise``.
+    seed
+        The run seed the sections' seeds derive from.
+    blocks
+        One :func:`section_block` per section, in order.
+    costs
+        ``optimise``: each section's chosen design's cost (None: no design).
+    """
+    totals: dict[str, Any] = {
+        "sections": len(blocks),
+        "rocks": int(sum(int(b.get("rocks", 0)) for b in blocks)),
+    }
+    failures: list[str] = []
+    if command in ("simulate", "check"):
+        reaching = [b["protect"]["reaching"] for b in blocks if b.get("protect")]
+        totals["reaching"] = int(sum(reaching)) if reaching else None
+    if command == "check":
+        totals["ok"] = all(bool(b.get("ok")) for b in blocks)
+        failures = [f"{b['name']}: {f}" for b in blocks for f in b.get("failures", [])]
+    if command == "optimise":
+        found = [c for c in costs if c is not None]
+        totals["ok"] = len(found) == len(blocks)
+        totals["cost"] = float(sum(found)) if totals["ok"] else None
+        currencies = sorted({str(b.get("currency") or "") for b in blocks} - {""})
+        totals["currency"] = currencies[0] if len(currencies) == 1 else ""
+        failures = [f"{b['name']}: no admissible design: {b.get('reason', '')}"
+                    for b, c in zip(blocks, costs, strict=True) if c is None]
+    if command != "simulate":
+        totals["failures"] = failures
+    return {"name": corridor.name, "command": command, "seed": int(seed),
+            "sections": list(blocks), "totals": totals}
+
+
+def _print_totals(summary: dict[str, Any]) -> None:
+    """The corridor's table: one row per section, and the total."""
+    from rich.table import Table
+
+    from .report import fitted_console
+
+    command, totals = summary["command"], summary["totals"]
+    cur = totals.get("currency") or ""
+    table = Table(show_edge=False)
+    columns = ["section", "seed", "rocks"]
+    if command in ("simulate", "check"):
+        columns.append("reaching")
+    if command == "check":
+        columns.append("holds")
+    if command == "optimise":
+        columns += ["design", f"cost {cur}".strip()]
+    for col in columns:
+        table.add_column(col, justify="left" if col in ("section", "design", "holds") else
+                         "right")
+    for block in summary["sections"]:
+        row = [block["name"], str(block["seed"]), f"{block['rocks']:,}"]
+        if command in ("simulate", "check"):
+            protect = block.get("protect")
+            row.append("-" if not protect else f"{protect['reaching']:,}")
+        if command == "check":
+            row.append("yes" if block["ok"] else "NO")
+        if command == "optimise":
+            best = block.get("best")
+            cost = next((a["cost"] for a in block["alternatives"] if a["name"] == best), None)
+            row += [best or "none", "-" if cost is None else f"{cost:,.0f}"]
+        table.add_row(*row)
+    last = ["total", "", f"{totals['rocks']:,}"]
+    if command in ("simulate", "check"):
+        last.append("-" if totals["reaching"] is None else f"{totals['reaching']:,}")
+    if command == "check":
+        last.append("yes" if totals["ok"] else "NO")
+    if command == "optimise":
+        last += ["", "-" if totals["cost"] is None else f"{totals['cost']:,.0f}"]
+    table.add_row(*last, style="bold")
+    console = fitted_console(table)
+    console.print(f"{summary['name']}: {totals['sections']} sections, run seed "
+                  f"{summary['seed']} (each section's seed derives from it)",
+                  style="bold", markup=False, highlight=False)
+    console.print(table)
+    for line in totals.get("failures", []):
+        console.print(line, style="red", markup=False, highlight=False)
+
+
+def _section_rule(section: CorridorSection, of: int) -> None:
+    from rich.rule import Rule
+
+    from .report import fitted_console
+
+    rule = Rule(f"section {section.index + 1} of {of}: {section.name} (seed {section.seed})")
+    fitted_console(rule).print(rule)
+
+
+# ---- sections as tasks elsewhere ---------------------------------------------------
+
+
+def _pooled(args: argparse.Namespace) -> bool:
+    """Whether the sections run on the study's executors (a pool or a cluster)."""
+    return getattr(args, "scheduler", None) is not None or getattr(args, "workers", None) != 1
+
+
+def _trajectories(args: argparse.Namespace) -> int:
+    from .api import DEFAULT_TRAJECTORIES
+
+    return DEFAULT_TRAJECTORIES if (args.plot or args.report) else 0
+
+
+def _simulate_task(task: tuple[Any, int, int, int]) -> Any:
+    """One section's run of ``simulate`` (a task for a pool or a cluster): its Study."""
+    from .api import run_simulation
+
+    project, rocks, seed, trajectories = task
+    return run_simulation(project, rocks=rocks, seed=seed, progress=False,
+                          trajectories=trajectories)
+
+
+def _check_task(task: tuple[Any, int, int, int, tuple[str, ...]]) -> Any:
+    """One section's ``check`` (a task for a pool or a cluster): its Evaluation.
+
+    The plugins are loaded where the task runs, as the command loads them.
+    """
+    from .api import check, default_registry
+
+    project, rocks, seed, trajectories, block = task
+    return check(project, rocks=rocks, seed=seed, trajectories=trajectories,
+                 registry=default_registry(block)).evaluation
+
+
+def _on_executors(fn: Callable[[Any], Any], corridor: Corridor,
+                  subs: Sequence[argparse.Namespace], args: argparse.Namespace) -> list[Any]:
+    """Every section's run of ``fn`` on a pool (``--workers``) or a cluster (``--scheduler``).
+
+    Each section carries its project, rocks and seed, so the numbers are
+    those of the run in this process, wherever it runs.
+    """
+    from .study.executors import run_tasks as run_elsewhere
+
+    tasks = []
+    for section, sub in zip(corridor.sections, subs, strict=True):
+        task: tuple = (section.project, int(args.rocks or section.project.rocks.count),
+                       int(sub.seed), _trajectories(args))
+        if fn is _check_task:
+            task += (tuple(args.block),)
+        tasks.append(task)
+    return run_elsewhere(fn, tasks, workers=args.workers, scheduler=args.scheduler)
+
+
+# ---- the commands ----------------------------------------------------------------
+
+
+def _registry(corridor: Corridor, args: argparse.Namespace) -> Registry:
+    """The plugins, loaded once, with every section's plugin sections checked."""
+    from .cli import _warn_failures
+    from .evaluate import validate_project
+    from .plugins import load_registry
+
+    registry = load_registry(blocked=args.block)
+    _warn_failures(registry)
+    for section in corridor.sections:
+        validate_project(section.project, registry)
+    return registry
+
+
+def _section_args(args: argparse.Namespace, section: CorridorSection,
+                  seed: int) -> argparse.Namespace:
+    """The command's options for one section: its own seed and its own subdirectories."""
+    sub = argparse.Namespace(**vars(args))
+    sub.seed = seed
+    for name in ("out", "plot", "report"):
+        base: Path | None = getattr(args, name, None)
+        setattr(sub, name, None if base is None else base / section.slug)
+    return sub
+
+
+def _seeds(corridor: Corridor, args: argparse.Namespace) -> tuple[int, list[int]]:
+    run = corridor.seed if args.seed is None else int(args.seed)
+    return run, corridor.section_seeds(run)
+
+
+def _finish(args: argparse.Namespace, summary: dict[str, Any], files: OutputSet) -> None:
+    if args.out:
+        files.write_json(args.out / "summary.json", summary)
+
+
+def _emit(args: argparse.Namespace, summary: dict[str, Any]) -> None:
+    if args.json:
+        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
+    else:
+        _print_totals(summary)
+
+
+def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
+    """``simulate`` of a corridor: every section's run, files and report, then the totals."""
+    from .api import SimulationResult, run_simulation
+    from .cli import (
+        _FIGURES,
+        REPORT_FILES,
+        _figure_files,
+        _figures_and_report,
+        _memory_guard,
+        _reserve,
+        _run,
+        _table_writers,
+        run_record,
+    )
+    from .outputs import OutputSet
+    from .report import print_simulation
+    from .simulation import EXACT_ROCKS, study_memory
+
+    _registry(corridor, args)
+    run_seed, seeds = _seeds(corridor, args)
+    for section in corridor.sections:
+        project = section.project
+        n = args.rocks or project.rocks.count
+        _memory_guard(study_memory(project, n), f"section {section.name!r}: {n:,} rocks "
+                      f"with {project.analysis.envelope_points} envelope points",
+                      "Use fewer analysis.envelope_points or analysis.stations.")
+    with OutputSet() as files:
+        subs = [_section_args(args, s, seed) for s, seed in
+                zip(corridor.sections, seeds, strict=True)]
+        for sub in subs:
+            _reserve(files, sub.out, ("rocks.csv", "crossings.csv", "summary.json"))
+            _reserve(files, sub.report, REPORT_FILES)
+            _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
+        _reserve(files, args.out, ("summary.json",))
+
+        pooled = _pooled(args) and all(
+            (args.rocks or s.project.rocks.count) <= EXACT_ROCKS for s in corridor.sections)
+        studies = _on_executors(_simulate_task, corridor, subs, args) if pooled else None
+
+        def one(i: int) -> dict[str, Any]:
+            section, sub = corridor.sections[i], subs[i]
+            if studies is not None:  # run elsewhere, kept whole: its tables written here
+                study = studies[i]
+                if sub.out:
+                    files.write_csv(sub.out / "rocks.csv", study.rocks_table())
+                    files.write_csv(sub.out / "crossings.csv", study.crossings_table())
+            else:
+                on_chunk = _table_writers(files, sub.out) if sub.out else None
+                study = _run(run_simulation, section.project, sub, on_chunk=on_chunk)
+            result = SimulationResult(section.project, study)
+            summary = result.summary
+            if sub.out:
+                files.write_json(sub.out / "summary.json",
+                                 {**summary, "run": run_record(study, sub)})
+            _figures_and_report(result, sub, files)
+            if not args.json:
+                _section_rule(section, len(subs))
+                print_simulation(summary)
+            return section_block(section, summary)
+
+        blocks = run_tasks(one, range(len(subs)))
+        summary = corridor_summary(corridor, "simulate", run_seed, blocks)
+        _finish(args, summary, files)
+    _emit(args, summary)
+    return int(ExitCode.OK)
+
+
+def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
+    """``check`` of a corridor: every section checked; exit 0 only if every section holds."""
+    from .api import CheckResult, check
+    from .cli import (
+        _FIGURES,
+        REPORT_FILES,
+        _figure_files,
+        _figures_and_report,
+        _in_memory_guard,
+        _reserve,
+        _run,
+        run_record,
+    )
+    from .outputs import OutputSet
+    from .report import print_check
+
+    if getattr(args, "scenarios", False):
+        raise InputError("check --scenarios of a corridor is not supported yet: check each "
+                         "section's project file with --scenarios")
+    registry = _registry(corridor, args)
+    run_seed, seeds = _seeds(corridor, args)
+    for section in corridor.sections:
+        a = section.project.analysis
+        _in_memory_guard(args.rocks or section.project.rocks.count,
+                         a.envelope_points + len(a.stations), len(a.stations))
+    with OutputSet() as files:
+        subs = [_section_args(args, s, seed) for s, seed in
+                zip(corridor.sections, seeds, strict=True)]
+        for sub in subs:
+            _reserve(files, sub.out, ("rocks.csv", "crossings.csv", "measures.csv",
+                                      "summary.json"))
+            _reserve(files, sub.report, REPORT_FILES)
+            _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
+        _reserve(files, args.out, ("summary.json",))
+
+        evaluations = (_on_executors(_check_task, corridor, subs, args) if _pooled(args)
+                       else None)
+
+        def one(i: int) -> dict[str, Any]:
+            section, sub = corridor.sections[i], subs[i]
+            if evaluations is not None:  # run elsewhere
+                result = CheckResult(section.project, evaluations[i])
+            else:
+                result = _run(check, section.project, sub, registry=registry)
+            evaluation = result.evaluation
+            summary = result.summary
+            if sub.out:
+                out: Path = sub.out
+                files.write_csv(out / "rocks.csv", result.rocks)
+                files.write_csv(out / "crossings.csv", evaluation.study.crossings_table())
+                files.write_csv(out / "measures.csv", evaluation.outcomes_table())
+                record = run_record(evaluation.study, sub)
+                record["project"] = evaluation.resolved_project().resolved_dict()
+                record["project_hash"] = evaluation.resolved_project().resolved_hash()
+                files.write_json(out / "summary.json", {**summary, "run": record})
+            _figures_and_report(result, sub, files)
+            if not args.json:
+                _section_rule(section, len(subs))
+                print_check(summary)
+            return section_block(section, summary)
+
+        blocks = run_tasks(one, range(len(subs)))
+        summary = corridor_summary(corridor, "check", run_seed, blocks)
+        _finish(args, summary, files)
+    _emit(args, summary)
+    return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
+
+
+def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
+    """``optimise`` of a corridor: the cheapest design of each section, and their total.
+
+    Sections share no measure, so the corridor's cheapest design is the
+    cheapest design of every section; exit 0 only if every section has one.
+    """
+    from . import __version__
+    from .api import optimise
+    from .cli import (
+        _FIGURES,
+        REPORT_FILES,
+        _figure_files,
+        _figures_and_report,
+        _in_memory_guard,
+        _reserve,
+        _stage_progress,
+    )
+    from .outputs import OutputSet
+    from .report import design_yaml, print_optimise
+
+    for section in corridor.sections:
+        if section.project.design is None:
+            raise section.project.error_at(
+                ("design",), "the section has no design: section to optimise (give design: "
+                "at the top level, or in every section)")
+    registry = _registry(corridor, args)
+    run_seed, seeds = _seeds(corridor, args)
+    for section in corridor.sections:
+        a = section.project.analysis
+        _in_memory_guard(args.rocks or section.project.rocks.count,
+                         a.envelope_points + 400, len(a.stations))
+    with OutputSet() as files:
+        subs = [_section_args(args, s, seed) for s, seed in
+                zip(corridor.sections, seeds, strict=True)]
+        for sub in subs:
+            _reserve(files, sub.out, ("design.yaml", "alternatives.csv", "summary.json"))
+            _reserve(files, sub.report, REPORT_FILES)
+            _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
+        _reserve(files, args.out, ("summary.json",))
+
+        def one(i: int) -> tuple[dict[str, Any], float | None]:
+            section, sub = corridor.sections[i], subs[i]
+            project = section.project
+            n = sub.rocks or project.rocks.count
+            prog, callback = _stage_progress(sys.stderr.isatty())
+            if prog is None:
+                report = optimise(project, rocks=n, seed=sub.seed, registry=registry)
+            else:
+                with prog:
+                    report = optimise(project, rocks=n, seed=sub.seed, registry=registry,
+                                      progress=callback)
+            result = report.result
+            summary = report.summary
+            if sub.out:
+                out: Path = sub.out
+                if result.best is not None and project.design.scenarios is not None:
+                    from .across import across_design_yaml
+
+                    files.write_text(out / "design.yaml", across_design_yaml(
+                        result, f"{args.project}, section {section.name!r}", project))
+                elif result.best is not None:
+                    files.write_text(out / "design.yaml", design_yaml(
+                        result.best, f"{args.project}, section {section.name!r}",
+                        result.search_rocks))
+                else:
+                    files.remove(out / "design.yaml")
+                files.write_csv(out / "alternatives.csv", report.alternatives)
+                record = {"command": "optimise", "version": __version__,
+                          "seed": result.seed, "rocks": result.rocks,
+                          "project_file": str(args.project), "section": section.name,
+                          "project_hash": project.resolved_hash(),
+                          "project": project.resolved_dict()}
+                files.write_json(out / "summary.json", {**summary, "run": record})
+            if sub.plot and result.best is None:
+                for name in _figure_files(_FIGURES, sub):
+                    files.remove(sub.plot / name)
+            _figures_and_report(report, sub, files)
+            if not args.json:
+                _section_rule(section, len(subs))
+                print_optimise(result, project)
+                if project.design.scenarios is not None:
+                    from .across import print_across
+
+                    print_across(result)
+            cost = None if result.best is None else float(result.best.cost)
+            return section_block(section, summary), cost
+
+        done = run_tasks(one, range(len(subs)))
+        summary = corridor_summary(corridor, "optimise", run_seed, [b for b, _ in done],
+                                   [c for _, c in done])
+        _finish(args, summary, files)
+    _emit(args, summary)
+    return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
