@@ -79,7 +79,7 @@ def _add_run_options(
     """The options every run command has; each command says what they do for it.
 
     The help texts differ because the commands write different files and
-    JSON (tests/test_cli_help.py runs each command to hold them to it).
+    JSON (tests/cli/test_cli_help.py runs each command to hold them to it).
     """
     if repeatable:
         p.add_argument("project", type=Path, nargs="?", help=project)

@@ -1,0 +1,186 @@
+"""The engine on several threads, numba's cache and the compile notice (issue 14)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import stat
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+from numpy.testing import assert_array_equal
+
+from rockfall_design.engine import Material, Releases, Section, barrier_table, core, run_ensemble
+from rockfall_design.engine._jit import choose_cache_dir
+from rockfall_design.engine.ensemble import THREADS_ENV, default_threads
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _case(n: int = 300):
+    x = np.array([0.0, 30, 60, 80, 120, 200])
+    y = np.array([100.0, 60, 30, 20, 15, 12])
+    mats = (
+        Material(restitution=0.35, friction=0.58, rolling_resistance=0.3, roughness_deg=5,
+                 sd_restitution=0.05, sd_friction=0.05, sd_rolling_resistance=0.02),
+        Material(impact_model="rn_rt", restitution=0.35, tangential_restitution=0.85,
+                 friction=0.5, rolling_resistance=0.2, roughness_deg=8, sd_restitution=0.05),
+    )
+    sec = Section(x, y, np.array([0, 0, 1, 1, 0]), mats)
+    rng = np.random.default_rng(3)
+    rel = Releases(
+        radius=rng.uniform(0.2, 1.0, n), density=2650.0, x=rng.uniform(1.0, 20.0, n),
+        height=rng.choice([0.0, 2.0], n), vx=np.full(n, 0.6), vy=np.full(n, -0.8),
+        spin=np.zeros(n), spin_rolling=rng.random(n) < 0.5,
+    )
+    bars = [barrier_table(90.0, 2.0, 3e5, core.B_NET)]
+    return sec, rel, bars
+
+
+def test_one_and_two_threads_give_identical_results():
+    """Every rock draws from its own stream and writes its own rows: bit-identical."""
+    sec, rel, bars = _case()
+    kw = dict(key=17, stations=[50.0, 100.0], grid=np.linspace(0, 200, 21), barriers=bars,
+              restart_stations=[70.0], record_speed=True, n_trajectories=40, batch_size=16)
+    one = run_ensemble(sec, rel, threads=1, **kw)
+    two = run_ensemble(sec, rel, threads=2, **kw)
+    for name in ("status", "x_end", "y_end", "max_x", "n_impacts", "n_events", "duration",
+                 "crossings", "grid_height", "grid_energy", "barrier_outcome",
+                 "barrier_meeting", "caught_by", "grid_speed", "restart_state", "restart_rng"):
+        assert_array_equal(getattr(one, name), getattr(two, name), err_msg=name)
+    for a, b in zip(one.trajectories, two.trajectories, strict=True):
+        assert_array_equal(a, b)
+    # And the same as one batch on one thread.
+    kw["batch_size"] = 4096
+    whole = run_ensemble(sec, rel, threads=1, **kw)
+    assert_array_equal(whole.grid_energy, two.grid_energy)
+
+
+def test_progress_counts_every_rock_with_threads():
+    sec, rel, _ = _case(100)
+    seen: list[int] = []
+    run_ensemble(sec, rel, key=1, threads=2, batch_size=7, progress=seen.append)
+    assert seen == sorted(seen) and seen[-1] == 100
+
+
+def test_threads_from_the_environment(monkeypatch):
+    monkeypatch.setenv(THREADS_ENV, "3")
+    assert default_threads() == 3
+    monkeypatch.setenv(THREADS_ENV, "not a number")
+    assert default_threads() >= 1
+    monkeypatch.delenv(THREADS_ENV)
+    assert default_threads() == len(os.sched_getaffinity(0))
+
+
+def _unwritable(tmp_path: Path) -> Path:
+    """A directory path nobody can create, root included: its parent is a file."""
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    f = tmp_path / "a_file"
+    f.write_text("")
+    return f / "pkg"
+
+
+def test_cache_dir_choice(tmp_path):
+    pkg_ok, temp = tmp_path / "pkg", tmp_path / "tmp"
+    pkg_ok.mkdir()
+    temp.mkdir()
+    pkg_ro = _unwritable(tmp_path)
+    # The user's own setting, and numba's default beside a writable package, stay.
+    assert choose_cache_dir({"NUMBA_CACHE_DIR": "/x"}, pkg_ro, temp) == (None, True)
+    assert choose_cache_dir({}, pkg_ok, temp) == (None, True)
+    # A read-only package: a private directory in the temp dir.
+    d, enabled = choose_cache_dir({}, pkg_ro, temp)
+    assert enabled and Path(d).parent == temp and Path(d).is_dir()
+    assert stat.S_IMODE(Path(d).stat().st_mode) & 0o077 == 0
+    # Nothing writable: no cache (the engine compiles in every run).
+    assert choose_cache_dir({}, pkg_ro, _unwritable(tmp_path / "x")) == (None, False)
+
+
+def test_cache_dir_that_others_can_write_is_not_used(tmp_path):
+    temp = tmp_path / "tmp"
+    temp.mkdir()
+    shared = temp / f"rockfall-design-numba-{os.getuid()}"
+    shared.mkdir()
+    shared.chmod(0o777)
+    assert choose_cache_dir({}, _unwritable(tmp_path), temp) == (None, False)
+
+
+def test_read_only_package_and_home_cache_in_the_temp_dir(tmp_path):
+    """A copy of the package whose __pycache__ cannot be made, HOME unwritable.
+
+    numba alone would find no cache directory and refuse to import the engine;
+    here the cache goes to a private directory under TMPDIR and works.
+    """
+    copy = tmp_path / "site"
+    shutil.copytree(ROOT / "rockfall_design", copy / "rockfall_design",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    (copy / "rockfall_design" / "engine" / "__pycache__").write_text("not a directory")
+    tmpdir = tmp_path / "tmp"
+    tmpdir.mkdir()
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
+    env.update(PYTHONPATH=str(copy), HOME=str(_unwritable(tmp_path)), TMPDIR=str(tmpdir),
+               PYTHONDONTWRITEBYTECODE="1")
+    code = (
+        "import os, numpy as np\n"
+        "from rockfall_design.engine import _jit, rng\n"
+        "print(_jit.CACHE, os.environ['NUMBA_CACHE_DIR'])\n"
+        "rng.stream_start(np.uint64(1), 2)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         timeout=300, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    enabled, where = out.stdout.split()
+    assert enabled == "True"
+    assert Path(where) == tmpdir / f"rockfall-design-numba-{os.getuid()}"
+    assert list(Path(where).rglob("rng.stream_start-*.nbi")), list(Path(where).rglob("*"))
+
+
+class _FakeCache:
+    _enabled = True
+
+    def __init__(self, path: Path) -> None:
+        self._cache_path = str(path)
+
+
+class _FakeDispatcher:
+    def __init__(self, path: Path) -> None:
+        self._cache = _FakeCache(path)
+
+
+def test_a_cache_compiled_from_other_engine_sources_is_dropped(tmp_path, monkeypatch):
+    # numba knows a cached function by its own file only; the engine's kernels
+    # call functions of other files, so a change to any engine source must
+    # drop the whole engine cache (and nothing else in that directory).
+    from rockfall_design.engine import _jit
+
+    monkeypatch.setattr(_jit, "CACHE", True)
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "rock.py").write_text("a = 1\n")
+    (src / "contact.py").write_text("b = 1\n")
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    ours = [cache / "rock.simulate_rock-58.py311.nbi", cache / "contact._accel-9.py311.1.nbc"]
+    theirs = cache / "elsewhere.f-1.py311.nbi"
+    for f in (*ours, theirs):
+        f.write_bytes(b"x")
+    disp = _FakeDispatcher(cache)
+    # No mark yet: the cache's sources are unknown, so it goes.
+    assert _jit.drop_stale_cache(disp, src) == 2
+    assert theirs.exists() and not any(f.exists() for f in ours)
+    # Same sources: kept.
+    for f in ours:
+        f.write_bytes(b"x")
+    assert _jit.drop_stale_cache(disp, src) == 0
+    assert all(f.exists() for f in ours)
+    # A callee's file changed (not the caller's): dropped again.
+    (src / "contact.py").write_text("b = 2\n")
+    assert _jit.drop_stale_cache(disp, src) == 2
+    assert not any(f.exists() for f in ours)
+    # Without a cache, or with a dispatcher numba no longer shapes so, nothing happens.
+    monkeypatch.setattr(_jit, "CACHE", False)
+    assert _jit.drop_stale_cache(disp, src) == 0
+    monkeypatch.setattr(_jit, "CACHE", True)
+    assert _jit.drop_stale_cache(object(), src) == 0
