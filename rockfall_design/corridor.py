@@ -87,7 +87,7 @@ def corridor_summary(corridor: Corridor, command: str, seed: int,
     corridor
         The corridor run.
     command
-        ``simulate``, ``check`` or ``optimise``.
+        ``simulate``, ``check``, ``optimise`` or ``study``.
     seed
         The run seed the sections' seeds derive from.
     blocks
@@ -99,6 +99,10 @@ def corridor_summary(corridor: Corridor, command: str, seed: int,
         "sections": len(blocks),
         "rocks": int(sum(int(b.get("rocks", 0)) for b in blocks)),
     }
+    if command == "study":
+        # a section's "rocks" is per scenario: the rocks run are per scenario times scenarios
+        totals["scenarios"] = int(sum(len(b["scenarios"]) for b in blocks))
+        totals["rocks"] = int(sum(int(b["rocks"]) * len(b["scenarios"]) for b in blocks))
     failures: list[str] = []
     if command in ("simulate", "check"):
         reaching = [b["protect"]["reaching"] for b in blocks if b.get("protect")]
@@ -114,7 +118,7 @@ def corridor_summary(corridor: Corridor, command: str, seed: int,
         totals["currency"] = currencies[0] if len(currencies) == 1 else ""
         failures = [f"{b['name']}: no admissible design: {b.get('reason', '')}"
                     for b, c in zip(blocks, costs, strict=True) if c is None]
-    if command != "simulate":
+    if command in ("check", "optimise"):
         totals["failures"] = failures
     return {"name": corridor.name, "command": command, "seed": int(seed),
             "sections": list(blocks), "totals": totals}
@@ -130,6 +134,8 @@ def _print_totals(summary: dict[str, Any]) -> None:
     cur = totals.get("currency") or ""
     table = Table(show_edge=False)
     columns = ["section", "seed", "rocks"]
+    if command == "study":
+        columns.append("scenarios")
     if command in ("simulate", "check"):
         columns.append("reaching")
     if command == "check":
@@ -141,6 +147,10 @@ def _print_totals(summary: dict[str, Any]) -> None:
                          "right")
     for block in summary["sections"]:
         row = [block["name"], str(block["seed"]), f"{block['rocks']:,}"]
+        if command == "study":  # rocks of all its scenarios
+            k = len(block["scenarios"])
+            row[2] = f"{block['rocks'] * k:,}"
+            row.append(f"{k:,}")
         if command in ("simulate", "check"):
             protect = block.get("protect")
             row.append("-" if not protect else f"{protect['reaching']:,}")
@@ -152,6 +162,8 @@ def _print_totals(summary: dict[str, Any]) -> None:
             row += [best or "none", "-" if cost is None else f"{cost:,.0f}"]
         table.add_row(*row)
     last = ["total", "", f"{totals['rocks']:,}"]
+    if command == "study":
+        last.append(f"{totals['scenarios']:,}")
     if command in ("simulate", "check"):
         last.append("-" if totals["reaching"] is None else f"{totals['reaching']:,}")
     if command == "check":
@@ -503,3 +515,60 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
         _finish(args, summary, files)
     _emit(args, summary)
     return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
+
+
+def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
+    """``study`` of a corridor: every section's parametric study, then the totals.
+
+    Each section runs the study of its merged project (the shared
+    ``study:`` or its own) with its own seed; its scenarios run on the
+    study's executors (a local pool, ``--workers``, ``--scheduler``), one
+    section after the other. A study has no pass or fail: exit 0.
+    """
+    from .api import study
+    from .cli import _figure_files, _reserve
+    from .outputs import OutputSet
+    from .study.command import OUT_FILES, run_record
+    from .study.result import FIGURES
+
+    for section in corridor.sections:
+        if section.project.study is None:
+            raise section.project.error_at(
+                (), "the section has no study: section (give study: at the top level, or "
+                "in every section)")
+    registry = _registry(corridor, args)
+    run_seed, seeds = _seeds(corridor, args)
+    with OutputSet() as files:
+        subs = [_section_args(args, s, seed) for s, seed in
+                zip(corridor.sections, seeds, strict=True)]
+        for sub in subs:
+            _reserve(files, sub.out, OUT_FILES)
+            _reserve(files, sub.plot, _figure_files(FIGURES, sub))
+        _reserve(files, args.out, ("summary.json",))
+
+        def one(i: int) -> dict[str, Any]:
+            section, sub = corridor.sections[i], subs[i]
+            project = section.project
+            result = study(project, rocks=sub.rocks or project.rocks.count, seed=sub.seed,
+                           workers=args.workers, scheduler=args.scheduler,
+                           progress=sys.stderr.isatty(), registry=registry)
+            summary = result.summary
+            if sub.out:
+                files.write_csv(sub.out / "scenarios.csv", result.scenarios)
+                files.write_csv(sub.out / "sensitivity.csv", result.sensitivity)
+                record = {**run_record(result, sub), "section": section.name}
+                files.write_json(sub.out / "summary.json", {**summary, "run": record})
+            if sub.plot:
+                from .figures import save_figures
+
+                save_figures(result.figures(), sub.plot, args.plot_format, files)
+            if not args.json:
+                _section_rule(section, len(subs))
+                result.print()
+            return section_block(section, summary)
+
+        blocks = run_tasks(one, range(len(subs)))
+        summary = corridor_summary(corridor, "study", run_seed, blocks)
+        _finish(args, summary, files)
+    _emit(args, summary)
+    return int(ExitCode.OK)

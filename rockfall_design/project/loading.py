@@ -366,7 +366,7 @@ def load_project_text(
         raise ProjectError(
             source, _line_of(("sections",), lines), "sections",
             "this file lists sections (a corridor): load it with load_corridor; simulate, "
-            "check and optimise run every section (study does not yet)",
+            "check, optimise and study run every section",
         )
     base = Path(source).parent if base_dir is None else Path(base_dir)
     return _validated(data, lines, source, base)

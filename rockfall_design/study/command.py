@@ -82,15 +82,19 @@ def run_record(result: Any, args: argparse.Namespace) -> dict[str, Any]:
 def cmd_study(args: argparse.Namespace) -> int:
     """Run the study; exit 0 (a study has no pass or fail)."""
     from ..api import study
-    from ..cli import PROG, _figure_files, _memory_guard, _plugins_for, _reserve
+    from ..cli import PROG, _figure_files, _load, _memory_guard, _plugins_for, _reserve
     from ..outputs import OutputSet
-    from ..project import load_project
+    from ..project import Project
     from ..simulation import study_memory
     from .executors import EXTRA_HINT, usable_cores
     from .result import FIGURES
     from .sensitivity import salib_available
 
-    project = load_project(args.project)
+    project = _load(args.project)
+    if not isinstance(project, Project):  # a corridor: every section's study
+        from ..corridor import cli_study
+
+        return cli_study(args, project)
     registry = _plugins_for(project, args)
     if project.study is None:
         raise project.error_at(

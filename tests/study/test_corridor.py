@@ -175,6 +175,31 @@ def test_simulate_runs_every_section_as_its_own_project(tmp_path, capsys):
     assert written["totals"] == totals
 
 
+def test_study_runs_every_section_as_its_own_study(tmp_path, capsys):
+    path = tmp_path / "c.yaml"
+    study = "study:\n  vary:\n    materials.talus.restitution: [0.2, 0.3]\n"
+    path.write_text(CORRIDOR.replace("sections:", study + "sections:"))
+    assert main(["study", str(path), "--json", "--workers", "1",
+                 "--out", str(tmp_path / "out")]) == 0
+    out = _json(capsys)
+    assert out["command"] == "study" and [s["name"] for s in out["sections"]] == ["north", "south"]
+    assert out["totals"]["scenarios"] == 4 and out["totals"]["rocks"] == 4 * 40
+    # Each section's block is the study of its project alone with its seed.
+    corridor = load_corridor(path)
+    from rockfall_design.project import dump_yaml
+
+    for section, block in zip(corridor.sections, out["sections"], strict=True):
+        assert block["seed"] == section.seed and len(block["scenarios"]) == 2
+        alone = tmp_path / f"{section.slug}.yaml"
+        alone.write_text(dump_yaml(section.project.resolved_dict()))
+        assert main(["study", str(alone), "--json", "--workers", "1"]) == 0
+        single = _json(capsys)
+        assert block["scenarios"] == single["scenarios"]
+        assert block["sensitivity"] == single["sensitivity"]
+        assert (tmp_path / "out" / section.slug / "scenarios.csv").is_file()
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["totals"] == out["totals"]
+
+
 def test_seed_option_derives_every_section_seed(tmp_path, capsys):
     path = tmp_path / "c.yaml"
     path.write_text(CORRIDOR)
