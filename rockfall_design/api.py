@@ -22,11 +22,10 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import pandas as pd
-
 from .errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
     from matplotlib.figure import Figure
 
     from .evaluate import Evaluation
@@ -171,6 +170,8 @@ def _stations_frame(summary: dict[str, Any]) -> pd.DataFrame:
             for stat, value in block.items():
                 row[f"{base}_{stat}_{unit}"] = value
         rows.append(row)
+    import pandas as pd  # on first use: simulate without tables need not load it
+
     return pd.DataFrame(rows)
 
 
@@ -226,6 +227,8 @@ class SimulationResult:
         if self.streamed:
             if self._rocks_tables is None:
                 raise ValueError("the per-rock table of this streamed run was not kept")
+            import pandas as pd
+
             return pd.concat(self._rocks_tables, ignore_index=True)
         return self.study.rocks_table()
 

@@ -23,7 +23,6 @@ import math
 from functools import lru_cache
 
 import numpy as np
-from scipy.special import bdtr, betaincinv
 
 __all__ = [
     "fraction_upper_bound",
@@ -64,6 +63,10 @@ def quantile_upper_index(n: int, q: float, confidence: float) -> int | None:
         return None
     if not 0.0 < q < 1.0:
         raise ValueError(f"quantile must lie in (0, 1), got {q!r}")
+    # scipy.special on first use: every command imports the judgement, and
+    # scipy costs a tenth of a second that `simulate` of the bare slope need not pay.
+    from scipy.special import bdtr
+
     # The binomial CDF is increasing in j: bisect for the smallest j with
     # cdf(j) >= c; k - 1 = j. cdf(n) = 1, so j <= n always exists.
     lo, hi = 0, n
@@ -133,6 +136,8 @@ def fraction_upper_bound(x: int, n: int, confidence: float) -> float:
     _check_confidence(confidence)
     if n <= 0 or x >= n:
         return 1.0
+    from scipy.special import betaincinv  # on first use, as in quantile_upper_index
+
     return float(betaincinv(x + 1, n - x, confidence))
 
 
