@@ -258,18 +258,37 @@ def envelope_percentile(project: Project) -> float:
     return 95.0 if 95.0 in pcts or not pcts else max(pcts)
 
 
-def _column_percentile(values: np.ndarray, q: float) -> np.ndarray:
+def _finite_counts(values: np.ndarray) -> np.ndarray:
+    """Finite values (rocks that passed) in each column of a (rocks, stations) table."""
+    return np.isfinite(values).sum(axis=0)
+
+
+def _column_percentile(values: np.ndarray, q: float,
+                       count: np.ndarray | None = None) -> np.ndarray:
     """The ``q``-th percentile (0..100) of each column's finite values; NaN if none.
 
     Linear interpolation between order statistics, as numpy's default
-    method, by selection in a compiled loop
-    (:func:`~._percentile.column_percentile`): ``np.nanpercentile`` per
-    column took as long as the scenario's run, one sort of the whole table
-    still an eighth of it.
+    method, from one sort of the whole table: ``np.nanpercentile`` per
+    column took as long as the scenario's run. The table is sorted as
+    (stations, rocks), each station's rocks contiguous (numpy sorts
+    contiguous rows with its vectorised sort, a quarter faster than down the
+    columns; the same order statistics, so the same numbers). ``count``: the
+    columns' finite counts if already known (:func:`_finite_counts`).
     """
-    from ._percentile import column_percentile
-
-    return column_percentile(np.ascontiguousarray(values), float(q))
+    ordered = np.ascontiguousarray(np.asarray(values).T)
+    if np.shares_memory(ordered, values):  # one row or column: a view, not a copy
+        ordered = ordered.copy()  # sorted in place below
+    ordered.sort(axis=1)  # NaN sort last
+    if count is None:
+        count = _finite_counts(values)
+    out = np.full(ordered.shape[0], np.nan)
+    cols = np.nonzero(count > 0)[0]
+    pos = (count[cols] - 1) * (q / 100.0)
+    lo = np.floor(pos).astype(np.int64)
+    hi = np.minimum(lo + 1, count[cols] - 1)
+    low = ordered[cols, lo].astype(float)
+    out[cols] = low + (ordered[cols, hi].astype(float) - low) * (pos - lo)
+    return out
 
 
 def _envelope(study: Any, q: float) -> dict[str, list[float]]:
@@ -279,10 +298,11 @@ def _envelope(study: Any, q: float) -> dict[str, list[float]]:
     label = f"{q:g}".replace(".", "_")
     if isinstance(study, Study):
         r = study.result
+        crossings = _finite_counts(r.grid_height)
         return {
             "x_m": np.asarray(r.grid, dtype=float).tolist(),
-            "crossings": np.isfinite(r.grid_height).sum(axis=0).tolist(),
-            f"height_p{label}_m": _column_percentile(r.grid_height, q).tolist(),
+            "crossings": crossings.tolist(),
+            f"height_p{label}_m": _column_percentile(r.grid_height, q, crossings).tolist(),
             f"energy_p{label}_kj": (_column_percentile(r.grid_energy, q) / 1e3).tolist(),
         }
     env = study.envelopes()  # a streamed run: from its histograms
