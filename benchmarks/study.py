@@ -57,14 +57,17 @@ def main() -> None:
     project = load_project_text(path.read_text() + STUDY, str(path))
     n = args.rocks
     simulate(project, rocks=10)  # load numba's cache in this process
-    # What every command loads before it runs anything (the plugins, the
-    # statistics' scipy), loaded here so that the study's time is the study's.
+    # What a process loads once, whatever it runs (the plugins, the modules
+    # of the study and of its statistics, scipy), loaded here so that the
+    # study's time is the study's, as numba's cache is loaded above.
+    import importlib
+
     from rockfall_design.api import default_registry
 
     default_registry()
-    import rockfall_design.judge.bounds  # noqa: F401, I001
-    import rockfall_design.study.result  # noqa: F401
-    import rockfall_design.study.sensitivity  # noqa: F401
+    for module in ("evaluate", "judge.bounds", "study.run", "study.result",
+                   "study.sensitivity", "study.executors"):
+        importlib.import_module(f"rockfall_design.{module}")
 
     def best(threads: str | None) -> float:
         saved = os.environ.get(THREADS_ENV)
