@@ -186,6 +186,15 @@ def test_study_command_json(capsys):
     assert summary["seed"] == 3 and summary["rocks"] == 40
 
 
+def test_study_command_pools_give_the_same_json(capsys):
+    runs = []
+    for pool in ("threads", "processes"):
+        assert main(["study", str(TALUS), "--rocks", "40", "--seed", "3", "--workers", "2",
+                     "--pool", pool, "--json"]) == 0
+        runs.append(comparable(json.loads(capsys.readouterr().out)))
+    assert runs[0] == runs[1]
+
+
 def test_study_command_report(capsys):
     assert main(["study", str(TALUS), "--rocks", "30", "--workers", "1"]) == 0
     out = capsys.readouterr().out

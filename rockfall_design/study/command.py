@@ -54,8 +54,9 @@ def add_study_parser(sub: Any) -> argparse.ArgumentParser:
                    "stations, stops and protect) and sensitivity as one JSON object on "
                    "stdout instead of the report")
     p.add_argument("--workers", type=_int_at_least(1, "number of workers"), metavar="N",
-                   help="run N scenarios at once on a local pool (default: one per core; 1 "
-                   "runs them in this process, one after the other)")
+                   help="run N scenarios at once on the local pool (threads, or processes "
+                   "with --pool processes; default: one per core; 1 runs them in this process, "
+                   "one after the other)")
     p.add_argument("--pool", choices=("threads", "processes"), default="threads",
                    help="the local pool: threads of this process, each scenario with one "
                    "engine thread (the default; nothing to start), or processes (same "
