@@ -186,6 +186,28 @@ def test_study_command_json(capsys):
     assert summary["seed"] == 3 and summary["rocks"] == 40
 
 
+def test_a_streamed_run_keeps_the_engine_threads_of_its_scenario(monkeypatch):
+    # A streamed run computes its chunks on a helper thread: that thread must
+    # run the engine on the scenario's one thread too, not on every core.
+    import rockfall_design.simulation as simulation
+    from rockfall_design.engine.ensemble import ENGINE_THREADS, default_threads
+
+    seen = []
+    real = simulation.run_ensemble
+
+    def spy(*args, **kwargs):
+        seen.append(default_threads())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(simulation, "run_ensemble", spy)
+    token = ENGINE_THREADS.set(1)
+    try:
+        simulation.simulate(load_project(TALUS), rocks=60, seed=1, chunk=20)
+    finally:
+        ENGINE_THREADS.reset(token)
+    assert seen == [1, 1, 1]
+
+
 def test_study_command_pools_give_the_same_json(capsys):
     runs = []
     for pool in ("threads", "processes"):
