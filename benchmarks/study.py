@@ -27,10 +27,10 @@ move by 10 to 15 % between runs), study of 27 scenarios against the ideal
 27 / 2 x one simulation on one core:
 
 =============  =========  ==========  ==============  ===========  ============
-rocks/run      one sim.   threads     processes       in-process   threads/ideal
+rocks/run      one sim.   threads s   processes s     in-process   threads/ideal
 =============  =========  ==========  ==============  ===========  ============
-10,000         0.04 s     0.80 s      1.41 s          1.06 s       1.47
-50,000         0.18 s     3.23 s      4.01 s          4.31 s       1.31
+10,000         0.04 s     0.72-0.75   1.39-1.40       0.94-0.96 s  1.37-1.41
+50,000         0.19 s     3.14-3.20   3.74-3.96       4.04-4.28 s  1.22-1.27
 =============  =========  ==========  ==============  ===========  ============
 
 (Before the threads, the default process pool took 1.83 s and 4.24 s.) What
