@@ -11,10 +11,10 @@ numbers in-process, on any worker of a pool, or on any worker of a cluster.
   threads of this process, each running one task at a time with the engine
   on one thread (:data:`~rockfall_design.engine.ensemble.ENGINE_THREADS`).
   The compiled engine releases the GIL, so N threads keep N cores busy, with
-  nothing to start: no process, no import, no loading of numba's cache. Only
-  what a task does in Python besides the engine (statistics, envelopes)
-  takes turns on the GIL; for a study's scenario that is a few per cent of
-  its run (see benchmarks/study.py). A task interrupted by an error or
+  nothing to start: no process, no import, no loading of numba's cache.
+  Only a task's pure-Python steps take turns on the GIL (numpy's sorts and
+  partitions of a scenario's statistics release it too); measured in
+  benchmarks/study.py. A task interrupted by an error or
   Ctrl-C is not stopped: the tasks under way finish (their results unused),
   no further one starts.
 - ``workers=N`` with ``pool="processes"`` (the default of :func:`run_tasks`,
