@@ -662,6 +662,7 @@ def study(
     scheduler: Any = None,
     progress: bool | Callable[[int, int, int], None] = False,
     registry: Registry | None = None,
+    pool: str = "threads",
 ) -> Any:
     """Run the parametric study of a project's ``study:`` section (``rockfall-design study``).
 
@@ -680,8 +681,8 @@ def study(
         The study's seed (default: ``rocks.seed``); scenario ``i`` runs with
         the seed :func:`~rockfall_design.study.scenario_seed` derives from it.
     workers : int, optional
-        Processes of the local pool (default: every usable core); 1 runs the
-        scenarios in this process, one after the other.
+        Scenarios run at once locally (default: every usable core); 1 runs
+        them in this process, one after the other, each on every core.
     scheduler : str or dask.distributed.Client, optional
         Run on a Dask cluster instead (``"tcp://127.0.0.1:8786"``); needs the
         ``study`` extra.
@@ -690,6 +691,10 @@ def study(
         callable is called as ``progress(done, total, rocks_done)``.
     registry : Registry, optional
         The plugins (default: the installed ones).
+    pool : {"threads", "processes"}
+        The local pool of ``workers`` > 1: threads of this process, each
+        scenario with one engine thread (the default: nothing to start), or
+        a process pool. The results are the same.
 
     Returns
     -------
@@ -703,7 +708,8 @@ def study(
     p = _project(project, registry)
     n = _count(p, rocks)
     bar, callback = _study_progress(progress)
-    kw = dict(rocks=n, seed=seed, workers=workers, scheduler=scheduler, progress=callback)
+    kw = dict(rocks=n, seed=seed, workers=workers, scheduler=scheduler, progress=callback,
+              pool=pool)
     if bar is None:
         return run_parametric(p, registry, **kw)
     with bar:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from contextvars import copy_context
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -428,18 +429,19 @@ def simulate(
     # while this thread adds the last one to the histograms: the two take
     # comparable time, so overlapping them saves about a third of a large run.
     # Releases are drawn here, in rock order, so the rocks are those of a run
-    # in one piece.
+    # in one piece. Each chunk runs in a copy of this thread's context, so
+    # that it keeps the engine threads set for it (a scenario of a study).
     firsts = list(range(0, n, size))
     with ThreadPoolExecutor(max_workers=1) as ahead:
         releases = stream.draw(min(size, n))
-        pending = ahead.submit(compute, 0, releases)
+        pending = ahead.submit(copy_context().run, compute, 0, releases)
         for i, first in enumerate(firsts):
             result = pending.result()
             current = releases
             if i + 1 < len(firsts):
                 nxt = firsts[i + 1]
                 releases = stream.draw(min(size, n - nxt))
-                pending = ahead.submit(compute, nxt, releases)
+                pending = ahead.submit(copy_context().run, compute, nxt, releases)
             part = Study(project=project, result=result, releases=current, seed=s,
                          runtime_s=0.0, section=section, first_rock=first)
             if out is None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -55,8 +56,23 @@ THREADS_ENV = "ROCKFALL_DESIGN_THREADS"
 """Environment variable that sets the number of engine threads (default: every core)."""
 
 
+#: Engine threads for runs started in this context (a thread of a study's
+#: scenario pool sets 1); None: :data:`THREADS_ENV` or the usable cores.
+#: A context variable, not the environment: several scenarios run at once in
+#: one process, and the caller's other runs keep every core.
+ENGINE_THREADS: ContextVar[int | None] = ContextVar("rockfall_design_engine_threads",
+                                                    default=None)
+
+
 def default_threads() -> int:
-    """Threads the engine runs on: ``ROCKFALL_DESIGN_THREADS``, else the usable cores."""
+    """Threads the engine runs on.
+
+    :data:`ENGINE_THREADS` if set in this context, else
+    ``ROCKFALL_DESIGN_THREADS``, else the usable cores.
+    """
+    own = ENGINE_THREADS.get()
+    if own is not None:
+        return max(1, int(own))
     env = os.environ.get(THREADS_ENV, "").strip()
     if env:
         try:

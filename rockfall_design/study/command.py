@@ -54,8 +54,13 @@ def add_study_parser(sub: Any) -> argparse.ArgumentParser:
                    "stations, stops and protect) and sensitivity as one JSON object on "
                    "stdout instead of the report")
     p.add_argument("--workers", type=_int_at_least(1, "number of workers"), metavar="N",
-                   help="run the scenarios on a local pool of N processes (default: one per "
-                   "core; 1 runs them in this process)")
+                   help="run N scenarios at once on the local pool (threads, or processes "
+                   "with --pool processes; default: one per core; 1 runs them in this process, "
+                   "one after the other)")
+    p.add_argument("--pool", choices=("threads", "processes"), default="threads",
+                   help="the local pool: threads of this process, each scenario with one "
+                   "engine thread (the default; nothing to start), or processes (same "
+                   "results)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="run the scenarios on the Dask cluster of this scheduler (e.g. "
                    "tcp://127.0.0.1:8786) instead of the local pool; needs the study extra")
@@ -114,7 +119,7 @@ def cmd_study(args: argparse.Namespace) -> int:
         _reserve(files, args.plot, _figure_files(FIGURES, args))
         result = study(project, rocks=n, seed=args.seed, workers=args.workers,
                        scheduler=args.scheduler, progress=sys.stderr.isatty(),
-                       registry=registry)
+                       registry=registry, pool=args.pool)
         summary = result.summary
         if args.out:
             out: Path = args.out

@@ -7,7 +7,18 @@ numbers in-process, on any worker of a pool, or on any worker of a cluster.
 
 - ``workers=1``: in this process, one after the other (the engine uses its
   threads, every core).
-- ``workers=N`` (default: every usable core): a local
+- ``workers=N`` with ``pool="threads"`` (what a study does by default): N
+  threads of this process, each running one task at a time with the engine
+  on one thread (:data:`~rockfall_design.engine.ensemble.ENGINE_THREADS`).
+  The compiled engine releases the GIL, so N threads keep N cores busy, with
+  nothing to start: no process, no import, no loading of numba's cache.
+  Only a task's pure-Python steps take turns on the GIL (numpy's sorts and
+  partitions of a scenario's statistics release it too); measured in
+  benchmarks/study.py. A task interrupted by an error or
+  Ctrl-C is not stopped: the tasks under way finish (their results unused),
+  no further one starts.
+- ``workers=N`` with ``pool="processes"`` (the default of :func:`run_tasks`,
+  for tasks that run plugins' Python code: sections, designs): a local
   :class:`~concurrent.futures.ProcessPoolExecutor` of N processes, started
   with the ``forkserver`` method where the platform has it (``spawn``
   elsewhere), never ``fork``: a forked copy of a process that runs threads
@@ -25,16 +36,25 @@ from __future__ import annotations
 import multiprocessing
 import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import (
+    FIRST_COMPLETED,
+    Future,
+    ProcessPoolExecutor,
+    ThreadPoolExecutor,
+    wait,
+)
 from typing import Any
 
-from ..engine.ensemble import THREADS_ENV
+from ..engine.ensemble import ENGINE_THREADS, THREADS_ENV
 from ..errors import InputError
 
-__all__ = ["run_tasks", "usable_cores", "EXTRA_HINT"]
+__all__ = ["run_tasks", "usable_cores", "EXTRA_HINT", "POOLS"]
 
 #: How to install what a Dask cluster or SALib's indices need.
 EXTRA_HINT = "pip install 'rockfall-design[study]'"
+
+#: The kinds of local pool :func:`run_tasks` runs tasks on.
+POOLS = ("threads", "processes")
 
 
 def usable_cores() -> int:
@@ -80,6 +100,7 @@ def run_tasks(
     workers: int | None = None,
     scheduler: Any = None,
     on_done: Callable[[int, Any], None] | None = None,
+    pool: str = "processes",
 ) -> list[Any]:
     """Apply ``fn`` to every task; the results in the order of ``tasks``.
 
@@ -98,6 +119,10 @@ def run_tasks(
     on_done
         Called in this process as each task finishes, with its position in
         ``tasks`` and its result (in the order they finish).
+    pool
+        The local pool of ``workers`` > 1: ``"processes"`` or ``"threads"``
+        (of this process, each task with one engine thread; for tasks that
+        spend their time in the compiled engine). The results are the same.
 
     Raises
     ------
@@ -106,6 +131,8 @@ def run_tasks(
     Exception
         Whatever a task raised (the first one to fail), as raised.
     """
+    if pool not in POOLS:
+        raise ValueError(f"pool must be one of {POOLS}, not {pool!r}")
     if not tasks:
         return []
     if scheduler is not None:
@@ -118,7 +145,41 @@ def run_tasks(
             if on_done is not None:
                 on_done(i, results[-1])
         return results
+    if pool == "threads":
+        return _on_threads(fn, tasks, n, on_done)
     return _on_pool(fn, tasks, n, on_done)
+
+
+def _one_engine_thread(fn: Callable[[Any], Any], task: Any) -> Any:
+    """A task on a thread of the pool: the engine on this one thread."""
+    token = ENGINE_THREADS.set(1)
+    try:
+        return fn(task)
+    finally:
+        ENGINE_THREADS.reset(token)
+
+
+def _on_threads(fn: Callable[[Any], Any], tasks: Sequence[Any], n: int,
+                on_done: Callable[[int, Any], None] | None) -> list[Any]:
+    results: list[Any] = [None] * len(tasks)
+    pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="rockfall-task")
+    try:
+        pending: dict[Future, int] = {
+            pool.submit(_one_engine_thread, fn, t): i for i, t in enumerate(tasks)}
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                i = pending.pop(future)
+                results[i] = future.result()  # a task's error is raised here, as it was
+                if on_done is not None:
+                    on_done(i, results[i])
+    except BaseException:
+        # An error or Ctrl-C: nothing more starts; a thread cannot be stopped,
+        # so the tasks under way finish on their own (results unused).
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+    return results
 
 
 def _on_pool(fn: Callable[[Any], Any], tasks: Sequence[Any], n: int,

@@ -71,6 +71,7 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--json": ["JSON", "stdout", "vary", "scenarios", "stations", "stops", "protect",
                    "sensitivity"],
         "--workers": ["local pool", "processes", "1 runs them in this process"],
+        "--pool": ["threads", "processes", "engine thread", "same results"],
         "--scheduler": ["Dask", "tcp://", "study extra"],
         "--block": ["plugin"],
         "--plot-format": ["png", "svg", "pdf", "--plot"],

@@ -77,9 +77,31 @@ def test_a_scenario_is_the_simulate_run_of_its_project(talus):
         assert block[key] == plain[key], key
 
 
-def test_the_process_pool_gives_the_same_numbers(talus):
-    pooled = rd.study(TALUS, rocks=120, seed=5, workers=2)
+def test_the_thread_pool_gives_the_same_numbers(talus):
+    pooled = rd.study(TALUS, rocks=120, seed=5, workers=2)  # threads: the default
     assert comparable(pooled.summary) == comparable(talus.summary)
+
+
+def test_the_process_pool_gives_the_same_numbers(talus):
+    pooled = rd.study(TALUS, rocks=120, seed=5, workers=2, pool="processes")
+    assert comparable(pooled.summary) == comparable(talus.summary)
+
+
+def _engine_threads(_task):
+    from rockfall_design.engine.ensemble import default_threads
+
+    return default_threads()
+
+
+def test_a_task_on_the_thread_pool_runs_the_engine_on_one_thread():
+    from rockfall_design.engine.ensemble import default_threads
+    from rockfall_design.study.executors import run_tasks
+
+    before = default_threads()
+    assert run_tasks(_engine_threads, range(5), workers=2, pool="threads") == [1] * 5
+    assert default_threads() == before  # this thread's runs keep every core
+    with pytest.raises(ValueError, match="pool"):
+        run_tasks(_engine_threads, range(2), workers=2, pool="fibres")
 
 
 def test_a_dask_local_cluster_gives_the_same_numbers(talus):
@@ -164,6 +186,37 @@ def test_study_command_json(capsys):
     assert summary["seed"] == 3 and summary["rocks"] == 40
 
 
+def test_a_streamed_run_keeps_the_engine_threads_of_its_scenario(monkeypatch):
+    # A streamed run computes its chunks on a helper thread: that thread must
+    # run the engine on the scenario's one thread too, not on every core.
+    import rockfall_design.simulation as simulation
+    from rockfall_design.engine.ensemble import ENGINE_THREADS, default_threads
+
+    seen = []
+    real = simulation.run_ensemble
+
+    def spy(*args, **kwargs):
+        seen.append(default_threads())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(simulation, "run_ensemble", spy)
+    token = ENGINE_THREADS.set(1)
+    try:
+        simulation.simulate(load_project(TALUS), rocks=60, seed=1, chunk=20)
+    finally:
+        ENGINE_THREADS.reset(token)
+    assert seen == [1, 1, 1]
+
+
+def test_study_command_pools_give_the_same_json(capsys):
+    runs = []
+    for pool in ("threads", "processes"):
+        assert main(["study", str(TALUS), "--rocks", "40", "--seed", "3", "--workers", "2",
+                     "--pool", pool, "--json"]) == 0
+        runs.append(comparable(json.loads(capsys.readouterr().out)))
+    assert runs[0] == runs[1]
+
+
 def test_study_command_report(capsys):
     assert main(["study", str(TALUS), "--rocks", "30", "--workers", "1"]) == 0
     out = capsys.readouterr().out
@@ -214,6 +267,36 @@ def test_the_scenario_envelope_percentile_is_numpys():
         with np.errstate(all="ignore"), pytest.warns(RuntimeWarning):
             expected = np.nanpercentile(table.astype(float), q, axis=0)
         np.testing.assert_allclose(_column_percentile(table, q), expected, rtol=1e-12)
+
+
+def _sorted_percentile(values, q):
+    """The envelope percentile as the study computed it before it was compiled: one sort."""
+    ordered = np.sort(values, axis=0)
+    count = np.isfinite(values).sum(axis=0)
+    out = np.full(values.shape[1], np.nan)
+    cols = np.nonzero(count > 0)[0]
+    pos = (count[cols] - 1) * (q / 100.0)
+    lo = np.floor(pos).astype(np.int64)
+    hi = np.minimum(lo + 1, count[cols] - 1)
+    low = ordered[lo, cols].astype(float)
+    out[cols] = low + (ordered[hi, cols].astype(float) - low) * (pos - lo)
+    return out
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_the_compiled_envelope_percentile_is_the_sorts_to_the_bit(seed):
+    # The study's JSON numbers must not move: the same order statistics,
+    # interpolated in the same float64 operations (float32 tables, as the engine's).
+    from rockfall_design.study.run import _column_percentile
+
+    rng = np.random.default_rng(seed)
+    for shape in [(2000, 13), (40, 5), (3, 4), (1, 3)]:
+        table = rng.lognormal(size=shape).astype(np.float32)
+        table[rng.random(shape) < 0.4] = np.nan
+        table[:, 0] = np.nan
+        for q in (0, 12.5, 50, 95, 99, 100):
+            got, want = _column_percentile(table, q), _sorted_percentile(table, q)
+            assert got.tobytes() == want.tobytes()
 
 
 @pytest.mark.parametrize(("values", "words"), [
