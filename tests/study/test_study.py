@@ -270,7 +270,7 @@ def test_the_scenario_envelope_percentile_is_numpys():
 
 
 def _sorted_percentile(values, q):
-    """The envelope percentile as the study computed it before it was compiled: one sort."""
+    """The envelope percentile as the study first computed it: one sort down the columns."""
     ordered = np.sort(values, axis=0)
     count = np.isfinite(values).sum(axis=0)
     out = np.full(values.shape[1], np.nan)
@@ -284,7 +284,7 @@ def _sorted_percentile(values, q):
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
-def test_the_compiled_envelope_percentile_is_the_sorts_to_the_bit(seed):
+def test_the_envelope_percentile_is_the_column_sorts_to_the_bit(seed):
     # The study's JSON numbers must not move: the same order statistics,
     # interpolated in the same float64 operations (float32 tables, as the engine's).
     from rockfall_design.study.run import _column_percentile
