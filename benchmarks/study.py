@@ -86,7 +86,7 @@ def main() -> None:
                    "study.sensitivity", "study.executors"):
         importlib.import_module(f"rockfall_design.{module}")
 
-    def best(threads: str | None) -> float:
+    def best(threads: str | None, summary: bool = False) -> float:
         saved = os.environ.get(THREADS_ENV)
         if threads is not None:
             os.environ[THREADS_ENV] = threads
@@ -94,7 +94,9 @@ def main() -> None:
             times = []
             for _ in range(args.repeat):
                 t0 = time.perf_counter()
-                simulate(project, rocks=n)
+                run = simulate(project, rocks=n)
+                if summary:  # what `simulate --json` computes besides the run
+                    run.summary()
                 times.append(time.perf_counter() - t0)
             return min(times)
         finally:
@@ -104,6 +106,7 @@ def main() -> None:
                 os.environ[THREADS_ENV] = saved
 
     t_one = best("1")  # the unit: one simulation on one core
+    t_json = best("1", summary=True)  # the same with its statistics, as simulate --json
     t_all = best(None)
     def timed(**kw: object) -> tuple[float, dict]:
         t0 = time.perf_counter()
@@ -126,6 +129,8 @@ def main() -> None:
     print(f"rocks per run: {n:,}; cores: {cores}")
     print(f"one simulation on one core (best of {args.repeat}):       {t_one:8.2f} s "
           f"{n / t_one:>10,.0f} rocks/s")
+    print(f"the same with its JSON statistics (simulate --json):     {t_json:8.2f} s "
+          f"{n / t_json:>10,.0f} rocks/s")
     print(f"one simulation on every core (best of {args.repeat}):     {t_all:8.2f} s "
           f"{n / t_all:>10,.0f} rocks/s")
     for what, t in ((f"on the {where}", t_study), *runs):
@@ -135,6 +140,10 @@ def main() -> None:
           f"{k / cores * t_one:.2f} s; the {'cluster' if args.scheduler else 'default'} "
           f"run takes {t_study / (k / cores * t_one):.2f} x ideal "
           f"(efficiency {k / cores / (t_study / t_one):.0%})")
+    # A scenario computes what simulate --json does (and its envelope and
+    # bounds): against that unit, what the study adds is its own work.
+    print(f"ideal with the statistics: {k} / {cores} x {t_json:.3f} s = "
+          f"{k / cores * t_json:.2f} s; the run takes {t_study / (k / cores * t_json):.2f} x")
 
 
 if __name__ == "__main__":
