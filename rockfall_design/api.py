@@ -663,6 +663,7 @@ def study(
     progress: bool | Callable[[int, int, int], None] = False,
     registry: Registry | None = None,
     pool: str = "threads",
+    envelopes: bool = True,
 ) -> Any:
     """Run the parametric study of a project's ``study:`` section (``rockfall-design study``).
 
@@ -695,6 +696,11 @@ def study(
         The local pool of ``workers`` > 1: threads of this process, each
         scenario with one engine thread (the default: nothing to start), or
         a process pool. The results are the same.
+    envelopes : bool
+        Compute every scenario's envelopes along x, for
+        ``.plot_envelopes()`` (default). False skips them, which saves about
+        a tenth of each scenario's time; every number of ``.summary`` is the
+        same either way.
 
     Returns
     -------
@@ -709,7 +715,7 @@ def study(
     n = _count(p, rocks)
     bar, callback = _study_progress(progress)
     kw = dict(rocks=n, seed=seed, workers=workers, scheduler=scheduler, progress=callback,
-              pool=pool)
+              pool=pool, envelopes=envelopes)
     if bar is None:
         return run_parametric(p, registry, **kw)
     with bar:

@@ -51,11 +51,15 @@ def _summary(
     blocks: dict[str, list[dict[str, float | None]]],
     stop_block: dict[str, float | None],
     reaching: tuple[int, int] | None,
+    project_hash: str | None = None,
 ) -> dict[str, Any]:
     """The summary dict, the same for an exact and a streamed study.
 
     ``reaching`` is (rocks counted as reaching the protected zone, how many of
     them are unresolved paths counted so), None without a protected zone.
+    ``project_hash``: the project's :meth:`~rockfall_design.project.Project.resolved_hash`
+    if the caller has it already (it hashes the whole project: a study's
+    scenario computes it once).
     """
     counts = study.status_counts()
     stations = []
@@ -68,7 +72,7 @@ def _summary(
         "version": __version__,
         "rocks": int(study.n),
         "seed": int(study.seed),
-        "project_hash": study.project.resolved_hash(),
+        "project_hash": project_hash or study.project.resolved_hash(),
         "runtime_s": round(float(study.runtime_s), 6),
         "events": int(events),
         "statistics": dict(study.statistics),

@@ -119,7 +119,8 @@ def cmd_study(args: argparse.Namespace) -> int:
         _reserve(files, args.plot, _figure_files(FIGURES, args))
         result = study(project, rocks=n, seed=args.seed, workers=args.workers,
                        scheduler=args.scheduler, progress=sys.stderr.isatty(),
-                       registry=registry, pool=args.pool)
+                       registry=registry, pool=args.pool,
+                       envelopes=args.plot is not None)  # only the figure reads them
         summary = result.summary
         if args.out:
             out: Path = args.out

@@ -162,7 +162,22 @@ def _problem(exc: ValidationError) -> str:
     return f"{err.key}: {err.message}" if err.key else err.message
 
 
-def with_values(project: Project, values: Mapping[str, Any]) -> Project:
+def scenario_base(project: Project) -> dict[str, Any]:
+    """The data every scenario of ``project`` starts from (:func:`with_values`'s ``base``).
+
+    The project's resolved data without its ``study:`` section and without
+    ``design.scenarios``: one scenario has neither.
+    """
+    base = project.resolved_dict()
+    base.pop("study", None)
+    if isinstance(base.get("design"), dict):
+        # design.scenarios names the study's scenarios: one scenario has none
+        base["design"].pop("scenarios", None)
+    return base
+
+
+def with_values(project: Project, values: Mapping[str, Any], *,
+                base: Mapping[str, Any] | None = None) -> Project:
     """A copy of ``project`` with the inputs at the given paths set, validated again.
 
     Parameters
@@ -173,6 +188,10 @@ def with_values(project: Project, values: Mapping[str, Any]) -> Project:
         Path -> value, e.g. ``{"materials.talus.restitution": 0.3,
         "release[0].x": 5.0}``; values in the file's own syntax (a size may
         be ``{lognormal: [1.0, 0.4]}``). Values are copied, never shared.
+    base
+        :func:`scenario_base` of ``project``, if already at hand (a study
+        sets each scenario's values on the same base; it is copied, never
+        changed).
 
     Returns
     -------
@@ -193,11 +212,8 @@ def with_values(project: Project, values: Mapping[str, Any]) -> Project:
     """
     import copy
 
-    base = project.resolved_dict()
-    base.pop("study", None)
-    if isinstance(base.get("design"), dict):
-        # design.scenarios names the study's scenarios: one scenario has none
-        base["design"].pop("scenarios", None)
+    if base is None:
+        base = scenario_base(project)
 
     def located(path: str, message: str) -> ProjectError:
         return project.error_at(("study", "vary", path), message)
@@ -246,6 +262,7 @@ def check_study(project: Project, registry: Any = None) -> None:
     spec = project.study
     if spec is None:
         return
+    base = scenario_base(project)
     for path, levels in spec.vary.items():
         if isinstance(levels, Range):
             tried = list(levels.range)
@@ -254,7 +271,7 @@ def check_study(project: Project, registry: Any = None) -> None:
         else:
             tried = list(levels)
         for value in tried:
-            varied = with_values(project, {path: value})
+            varied = with_values(project, {path: value}, base=base)
             if registry is None:
                 continue
             from ..evaluate import validate_project

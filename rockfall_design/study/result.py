@@ -166,6 +166,9 @@ class StudyResult:
         from ..figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure
         from .run import envelope_percentile
 
+        if any("envelope" not in result for result in self.results):
+            raise ValueError("this study ran without its envelopes (envelopes=False); run it "
+                             "again with envelopes=True to draw them")
         analysis = self.project.analysis
         min_rocks = int(getattr(analysis, "min_rocks_envelope", DEFAULT_MIN_ROCKS_ENVELOPE))
         q = envelope_percentile(self.project)

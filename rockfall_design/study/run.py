@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import ProjectError
 from ..project import Project
-from .paths import with_values
+from .paths import scenario_base, with_values
 from .scenarios import Scenario, scenarios
 
 __all__ = ["ScenarioTask", "prepare", "run_parametric", "run_scenario", "run_tasks_of"]
@@ -48,6 +48,11 @@ class ScenarioTask:
         (index in ``measures``, label, station x in m) of each barrier
         (fence, wall, boulder row, ...) of the project, whose passing height
         and energy on the bare slope are design values of the study.
+    envelope : bool
+        Whether to compute the scenario's envelopes along x (for the figure
+        of every scenario's envelopes; nothing else reads them). They cost
+        two sorts of the run's whole (rocks, points) tables, about a tenth
+        of a 10,000-rock scenario: a run that draws no figure skips them.
     """
 
     index: int
@@ -55,6 +60,7 @@ class ScenarioTask:
     rocks: int
     project: Project
     barriers: tuple[tuple[int, str, float], ...] = ()
+    envelope: bool = True
 
 
 def _relocated(project: Project, scenario: Scenario, exc: ProjectError) -> ProjectError:
@@ -100,7 +106,8 @@ def _barriers(project: Project, registry: Any) -> tuple[tuple[int, str, float], 
 
 
 def prepare(
-    project: Project, registry: Any, *, rocks: int | None = None, seed: int | None = None
+    project: Project, registry: Any, *, rocks: int | None = None, seed: int | None = None,
+    envelopes: bool = True,
 ) -> tuple[list[Scenario], list[ScenarioTask]]:
     """The scenarios of the project's study and their tasks, every input checked.
 
@@ -115,6 +122,8 @@ def prepare(
     seed
         The run's seed (default: ``rocks.seed``); each scenario's seed is
         derived from it (:func:`~.scenarios.scenario_seed`).
+    envelopes
+        Whether each scenario computes its envelopes (:attr:`ScenarioTask.envelope`).
 
     Raises
     ------
@@ -130,17 +139,20 @@ def prepare(
     n = int(project.rocks.count if rocks is None else rocks)
     run_seed = int(project.rocks.seed if seed is None else seed)
     chosen = scenarios(project.study, run_seed)
+    base = scenario_base(project)
     tasks = []
     for scenario in chosen:
         try:
-            barriers = _barriers(with_values(project, scenario.values), registry)
+            checked = with_values(project, scenario.values, base=base)
+            barriers = _barriers(checked, registry)
         except ProjectError as exc:
             raise _relocated(project, scenario, exc) from None
-        # The task gets a project of its own, fresh from the data: the one checked
-        # above may keep what the plugins built for it (objects of the plugins,
-        # the registry), which a worker neither needs nor may be able to unpickle.
-        fresh = with_values(project, scenario.values)
-        tasks.append(ScenarioTask(scenario.index, scenario.seed, n, fresh, barriers))
+        # The check keeps what the plugins built for it on the project (its plan:
+        # the plugins' objects, the registry), which a worker neither needs nor
+        # may be able to unpickle: the task's project is the data alone.
+        checked._plan = None
+        tasks.append(ScenarioTask(scenario.index, scenario.seed, n, checked, barriers,
+                                  envelopes))
     return chosen, tasks
 
 
@@ -167,8 +179,9 @@ def run_scenario(task: ScenarioTask) -> dict[str, Any]:
         ``label``, ``x`` and the ``passing_height_m`` and ``energy_kj``
         blocks on the bare slope at its station; ``envelope``: x (m),
         crossings and the percentile envelopes of height (m) and energy
-        (kJ); ``runtime_s`` (not part of the study's JSON: it differs
-        between runs).
+        (kJ), if the task asks for them (:attr:`ScenarioTask.envelope`);
+        ``runtime_s`` (not part of the study's JSON: it differs between
+        runs).
     """
     from ..simulation import simulate
 
@@ -177,7 +190,7 @@ def run_scenario(task: ScenarioTask) -> dict[str, Any]:
     extra = sorted({x for _, _, x in task.barriers if x not in own})
     t0 = time.perf_counter()
     study = simulate(_with_stations(project, extra), rocks=task.rocks, seed=task.seed)
-    summary = _summary_of(study, own)
+    summary = _summary_of(study, own, project.resolved_hash())
     runtime = time.perf_counter() - t0
     by_x = {st["x"]: st for st in summary["stations"]}
     out: dict[str, Any] = {
@@ -185,7 +198,7 @@ def run_scenario(task: ScenarioTask) -> dict[str, Any]:
         "seed": task.seed,
         "rocks": summary["rocks"],
         "events": summary["events"],
-        "project_hash": project.resolved_hash(),
+        "project_hash": summary["project_hash"],
         "stations": [st for st in summary["stations"] if st["x"] in own],
         "stops": summary["stops"],
     }
@@ -198,12 +211,13 @@ def run_scenario(task: ScenarioTask) -> dict[str, Any]:
             for i, label, x in task.barriers
         ]
     out["bounds"] = _bounds(study, summary, task, _confidence(project))
-    out["envelope"] = _envelope(study, envelope_percentile(project))
+    if task.envelope:
+        out["envelope"] = _envelope(study, envelope_percentile(project))
     out["runtime_s"] = runtime
     return out
 
 
-def _summary_of(study: Any, own: Sequence[float]) -> dict[str, Any]:
+def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> dict[str, Any]:
     """``study.summary()``, less what the study drops: a fifth of a scenario's statistics.
 
     At a station of the project (``own``) every block, as ``simulate
@@ -212,6 +226,8 @@ def _summary_of(study: Any, own: Sequence[float]) -> dict[str, Any]:
     block is computed as :meth:`~rockfall_design.simulation.Study.summary`
     computes it, so the numbers are the same to the bit (a test holds the
     scenario to ``simulate``). A streamed run: its own summary, whole.
+    ``project_hash``: the hash the summary gives, the scenario's project's
+    (not that of its copy with the barriers' stations).
     """
     from ..engine.columns import STOPPED
     from ..judge.outcomes import protected_zone_counts
@@ -219,7 +235,7 @@ def _summary_of(study: Any, own: Sequence[float]) -> dict[str, Any]:
     from ..summary import _STATION_QUANTITIES, STATISTICS, _stat_block, _summary
 
     if not isinstance(study, Study):
-        return study.summary()
+        return {**study.summary(), "project_hash": project_hash}
     r = study.result
     a = study.crossing_arrays()
     kept = {float(x) for x in own}
@@ -234,7 +250,8 @@ def _summary_of(study: Any, own: Sequence[float]) -> dict[str, Any]:
     stop_block = _stat_block(r.x_end[r.status == STOPPED])
     protect = study.project.protect
     reaching = None if protect is None else protected_zone_counts(r.max_x, r.status, protect.x)
-    return _summary(study, r.events_total, crossings, blocks, stop_block, reaching)
+    return _summary(study, r.events_total, crossings, blocks, stop_block, reaching,
+                    project_hash)
 
 
 #: Confidence of the design values' upper bounds when the safety concept gives none.
@@ -376,11 +393,13 @@ def run_parametric(
     progress: Callable[[int, int, int], None] | None = None,
     indices: bool | None = None,
     pool: str = "threads",
+    envelopes: bool = True,
 ) -> Any:
     """Prepare, run and analyse the project's study; a :class:`~.result.StudyResult`.
 
     Parameters are those of :func:`prepare` and :func:`run_tasks_of`;
-    ``indices`` those of :func:`~.sensitivity.sensitivity`. ``progress`` is
+    ``indices`` those of :func:`~.sensitivity.sensitivity`; ``envelopes``
+    False skips each scenario's envelopes (then the result cannot draw them). ``progress`` is
     called as ``progress(done, total, rocks_done)`` once the scenarios are
     known (``done`` 0) and as each finishes.
     """
@@ -388,7 +407,7 @@ def run_parametric(
     from .sensitivity import sensitivity
 
     t0 = time.perf_counter()
-    chosen, tasks = prepare(project, registry, rocks=rocks, seed=seed)
+    chosen, tasks = prepare(project, registry, rocks=rocks, seed=seed, envelopes=envelopes)
     on_done = None
     if progress is not None:
         done = [0, 0]  # scenarios, rocks

@@ -87,6 +87,15 @@ def test_the_process_pool_gives_the_same_numbers(talus):
     assert comparable(pooled.summary) == comparable(talus.summary)
 
 
+def test_a_study_without_its_envelopes_gives_the_same_numbers(talus):
+    bare = rd.study(TALUS, rocks=120, seed=5, workers=2, envelopes=False)
+    assert comparable(bare.summary) == comparable(talus.summary)
+    assert not any("envelope" in result for result in bare.results)
+    assert all("envelope" in result for result in talus.results)
+    with pytest.raises(ValueError, match="envelopes=True"):
+        bare.plot_envelopes()
+
+
 def _engine_threads(_task):
     from rockfall_design.engine.ensemble import default_threads
 
@@ -184,6 +193,17 @@ def test_study_command_json(capsys):
     summary = json.loads(capsys.readouterr().out)
     assert {"seed", "rocks", "version", "vary", "scenarios", "sensitivity"} <= set(summary)
     assert summary["seed"] == 3 and summary["rocks"] == 40
+
+
+def test_study_command_draws_the_envelopes_it_computes_only_for_plot(tmp_path, capsys):
+    # Without --plot the scenarios skip their envelopes (only the figure reads them).
+    assert main(["study", str(TALUS), "--rocks", "40", "--seed", "3", "--workers", "1",
+                 "--plot", str(tmp_path / "fig"), "--json"]) == 0
+    with_plot = comparable(json.loads(capsys.readouterr().out))
+    assert (tmp_path / "fig" / "study_envelopes.png").stat().st_size > 0
+    assert main(["study", str(TALUS), "--rocks", "40", "--seed", "3", "--workers", "1",
+                 "--json"]) == 0
+    assert comparable(json.loads(capsys.readouterr().out)) == with_plot
 
 
 def test_a_streamed_run_keeps_the_engine_threads_of_its_scenario(monkeypatch):
