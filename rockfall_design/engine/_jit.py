@@ -121,6 +121,28 @@ def _configure() -> bool:
 CACHE: bool = _configure()
 """Whether the engine's compiled functions are cached on disk (``cache=`` of ``njit``)."""
 
+
+def hot(fn: Callable[..., Any]) -> Any:
+    """Compile ``fn``, a function of the rock's event loop, without reference counting.
+
+    numba counts references to every array a compiled function is handed:
+    an atomic increment and decrement per array and call, which its pruning
+    pass removes only within simple control flow. In the event loop, whose
+    functions take the ground, the material table, the random stream and
+    the output rows, that was about 38 % of the engine's time (measured with
+    ``perf`` on ``projects/benchmark.yaml``, one thread), and the atomics on
+    arrays that the threads of one run share make the cores wait on each
+    other. A function compiled this way (numba's ``_nrt=False``) neither
+    counts references nor may allocate: it only reads and writes arrays that
+    its caller holds (the batch, :func:`~.ensemble._run_batch`, which
+    allocates every array, scratch included, and keeps them alive). numba
+    refuses to compile an allocation in it, so the rule cannot be broken
+    silently. Results are bit-identical (``benchmarks/golden.py``).
+    """
+    from numba import njit
+
+    return njit(cache=CACHE, _nrt=False)(fn)
+
 _notice_lock = threading.Lock()
 _checked: set[int] = set()
 

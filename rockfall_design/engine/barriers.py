@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ._jit import CACHE
+from ._jit import hot
 from .columns import (
     B_BLOCKS,
     B_RIGID,
@@ -29,7 +28,7 @@ from .columns import (
 from .rng import next_uniform
 
 
-@njit(cache=CACHE)
+@hot
 def _barrier_hit(bars, j, h, vx, vy, w, r, m, rng):
     """What barrier ``j`` does to a rock reaching its station.
 
@@ -82,7 +81,7 @@ def _barrier_hit(bars, j, h, vx, vy, w, r, m, rng):
     return O_CAUGHT, 0.0, 0.0, 0.0
 
 
-@njit(cache=CACHE)
+@hot
 def _meet(bar_out, bar_rec, j, code, h, vx, vy, w, t, m, r):
     """Record the first meeting of barrier ``j``."""
     if bar_out[j] != O_NOT_MET:

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ._jit import CACHE
+from ._jit import hot
 from .columns import G
 from .flight import _unit_tangent
 
@@ -13,7 +12,7 @@ SLIP_TOL = 1e-9
 """Slip sigma = v - r s (m/s), or spin r s (m/s), within which it counts as zero."""
 
 
-@njit(cache=CACHE)
+@hot
 def _contact_accel(sinb, cosb, v, s, mu, mur, r):
     """Accelerations of a rock in contact, moving along a piece.
 
@@ -89,7 +88,7 @@ def _contact_accel(sinb, cosb, v, s, mu, mur, r):
     return a, a - rds, rds / r, sg, s_zero
 
 
-@njit(cache=CACHE)
+@hot
 def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
     """Choose piece and direction for a rock at (almost) zero speed.
 

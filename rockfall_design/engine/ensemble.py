@@ -22,6 +22,7 @@ from ._jit import CACHE, compile_notice
 from .profile import centre_path
 from .records import (
     N_REL_COLS,
+    N_WORK,
     REL_H,
     REL_M,
     REL_R,
@@ -394,6 +395,7 @@ def _run_batch(ground, settings, max_chord, key, first_index, rel, resume, stati
     gh = np.empty(ns)
     ge = np.empty(ns)
     rng = np.empty(1, dtype=np.uint64)
+    work = np.zeros(N_WORK)  # each rock's scratch (RockOut.work): no allocation per rock
     empty_traj = np.empty((0, core.N_TRAJ_COLS))
     ntr = out.traj.shape[0]
     # Serial on purpose: a prange version measured slower here (per-rock
@@ -423,7 +425,7 @@ def _run_batch(ground, settings, max_chord, key, first_index, rel, resume, stati
         br = out.bar_rec[i]
         br[:, :] = np.nan
         rock_out = RockOut(gh, ge, gv, cr, out.traj[i] if i < ntr else empty_traj, bo, br, sr,
-                           out.srng[i])
+                           out.srng[i], work)
         st, xe, ye, ni, ne, mx, tt, nt, cb = core.simulate_rock(
             path, settings, rel[i], rng, stations, bars, rock_out, resume.mask[i],
             resume.states[i],

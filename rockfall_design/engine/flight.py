@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ._jit import CACHE
+from ._jit import hot
 from .columns import G
 
 
-@njit(cache=CACHE)
+@hot
 def locate(px: np.ndarray, x: float, vx: float) -> int:
     """Index of the centre-path piece under ``x``, on the side ``vx`` moves to."""
     npc = px.shape[0] - 1
@@ -24,13 +23,13 @@ def locate(px: np.ndarray, x: float, vx: float) -> int:
     return k
 
 
-@njit(cache=CACHE)
+@hot
 def path_height(px: np.ndarray, py: np.ndarray, k: int, x: float) -> float:
     """Height (m) of piece ``k`` of the centre path at ``x``."""
     return py[k] + (py[k + 1] - py[k]) * (x - px[k]) / (px[k + 1] - px[k])
 
 
-@njit(cache=CACHE)
+@hot
 def next_landing(px, py, x0, y0, vx, vy, k):
     """Time and piece of the next contact of a free flight with the centre path.
 
@@ -99,7 +98,7 @@ def next_landing(px, py, x0, y0, vx, vy, k):
         return False, t, k
 
 
-@njit(cache=CACHE)
+@hot
 def _unit_tangent(px, py, k):
     dx = px[k + 1] - px[k]
     dy = py[k + 1] - py[k]

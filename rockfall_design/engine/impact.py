@@ -7,9 +7,8 @@ impact, applies :func:`impact` and decides between flight and contact.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ._jit import CACHE
+from ._jit import hot
 from .columns import (
     CONTACT,
     FLIGHT,
@@ -31,7 +30,7 @@ from .flight import _unit_tangent
 from .rng import next_normal, next_uniform, truncated_normal
 
 
-@njit(cache=CACHE)
+@hot
 def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt_max=0.0):
     """Velocity and spin after an impact on ground of outward normal (nx, ny).
 
@@ -143,7 +142,7 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
     return vn2 * mx + vt2 * tx, vn2 * my + vt2 * ty, w2
 
 
-@njit(cache=CACHE)
+@hot
 def _draw(mats, mat, rng, drawn):
     """Draw this contact's e, mu and mu_r for material ``mat`` into ``drawn``."""
     drawn[0] = truncated_normal(rng, mats[mat, M_E], mats[mat, M_SD_E], 0.0, 1.0)
@@ -151,7 +150,7 @@ def _draw(mats, mat, rng, drawn):
     drawn[2] = truncated_normal(rng, mats[mat, M_MUR], mats[mat, M_SD_MUR], 0.0, np.inf)
 
 
-@njit(cache=CACHE)
+@hot
 def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn):
     """Impact on piece ``k``, then decide between flight and contact.
 

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ._jit import CACHE
+from ._jit import hot
 from .columns import (
     C_H,
     C_T,
@@ -36,12 +35,11 @@ from .columns import (
 )
 
 
-@njit(cache=CACHE, inline="always")
+@hot
 def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
     """Record the first downslope passage of station ``j``; True if it was the first.
 
-    Hot path: takes only the arrays it writes (passing more arrays to a
-    compiled call costs reference counting on every call).
+    Hot path, compiled without reference counting (:func:`~._jit.hot`).
     """
     if not np.isnan(grid_h[j]):
         return False
@@ -58,7 +56,7 @@ def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
     return True
 
 
-@njit(cache=CACHE, inline="always")
+@hot
 def _traj_row(traj, n, x, y, vx, vy, w, t, mode):
     """Append the state at an event to ``traj`` if there is room; the new count."""
     if n >= traj.shape[0]:
@@ -73,7 +71,7 @@ def _traj_row(traj, n, x, y, vx, vy, w, t, mode):
     return n + 1
 
 
-@njit(cache=CACHE)
+@hot
 def _record_restart(q, srec, srng, rng, drawn, ctx, mode, xs, yabs, vx, vy, w, t):
     """The full state of a rock at the first passage of restart station row ``q``.
 

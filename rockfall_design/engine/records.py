@@ -140,6 +140,12 @@ class RockOut(NamedTuple):
         station (columns ``RS_*``); in as NaN.
     srng : ndarray of uint64, shape (R,)
         The rock's random stream there.
+    work : ndarray of float, shape (N_WORK,)
+        The rock's scratch, any values in: ``work[:WORK_CTX]`` the
+        restitution, friction and rolling resistance drawn for the segment it
+        is on, ``work[WORK_CTX:]`` the segment, impacts, events and largest x
+        of a restart record. The caller allocates it once per batch, so that
+        the rock's loop allocates nothing (see ``_jit.hot``).
     """
 
     grid_h: np.ndarray
@@ -151,6 +157,12 @@ class RockOut(NamedTuple):
     bar_rec: np.ndarray
     srec: np.ndarray
     srng: np.ndarray
+    work: np.ndarray
+
+
+#: ``RockOut.work``: where the context of a restart record starts, and its length.
+WORK_CTX = 3
+N_WORK = 7
 
 
 class BatchOut(NamedTuple):

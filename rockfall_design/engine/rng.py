@@ -16,9 +16,8 @@ The state of a stream is a length-1 ``uint64`` array, mutated in place.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ._jit import CACHE
+from ._jit import hot
 
 _GAMMA = np.uint64(0x9E3779B97F4A7C15)
 _M1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -30,7 +29,7 @@ _S11 = np.uint64(11)
 _TWO_PI = 2.0 * np.pi
 
 
-@njit(cache=CACHE, inline="always")
+@hot
 def mix64(z: np.uint64) -> np.uint64:
     """SplitMix64 output function: a bijective avalanche mix of a 64-bit word."""
     z = (z ^ (z >> _S30)) * _M1
@@ -38,20 +37,20 @@ def mix64(z: np.uint64) -> np.uint64:
     return z ^ (z >> _S31)
 
 
-@njit(cache=CACHE)
+@hot
 def stream_start(key: np.uint64, index: np.int64) -> np.uint64:
     """Starting counter of the stream of rock ``index`` for the run key ``key``."""
     return mix64(key ^ mix64(np.uint64(index) * _GAMMA + _GAMMA))
 
 
-@njit(cache=CACHE, inline="always")
+@hot
 def next_uniform(state: np.ndarray) -> float:
     """Next draw from U[0, 1) with 53 random bits; advances ``state[0]``."""
     state[0] = state[0] + _GAMMA
     return float(mix64(state[0]) >> _S11) * (1.0 / 9007199254740992.0)
 
 
-@njit(cache=CACHE)
+@hot
 def next_normal(state: np.ndarray) -> float:
     """Next draw from N(0, 1) by the Box-Muller transform (two uniforms)."""
     u1 = 1.0 - next_uniform(state)  # in (0, 1], so the log is finite
@@ -59,7 +58,7 @@ def next_normal(state: np.ndarray) -> float:
     return np.sqrt(-2.0 * np.log(u1)) * np.cos(_TWO_PI * u2)
 
 
-@njit(cache=CACHE)
+@hot
 def truncated_normal(state: np.ndarray, mean: float, sd: float, lo: float, hi: float) -> float:
     """Draw from N(mean, sd) truncated to [lo, hi] by rejection.
 

@@ -8,9 +8,8 @@ its first event. Stations and barriers crossed on the way are recorded.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ._jit import CACHE
+from ._jit import hot
 from .barriers import _barrier_hit, _meet
 from .columns import (
     BR_E,
@@ -52,10 +51,21 @@ from .contact import SLIP_TOL, _contact_accel, _start_from_rest
 from .flight import _unit_tangent, locate, next_landing, path_height
 from .impact import _collide, _draw
 from .recording import _record, _record_restart, _traj_row
-from .records import REL_H, REL_M, REL_R, REL_ROLLING, REL_VX, REL_VY, REL_W, REL_X
+from .records import (
+    N_WORK,
+    REL_H,
+    REL_M,
+    REL_R,
+    REL_ROLLING,
+    REL_VX,
+    REL_VY,
+    REL_W,
+    REL_X,
+    WORK_CTX,
+)
 
 
-@njit(cache=CACHE)
+@hot
 def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0):
     """Follow one rock from its release to the end of its path.
 
@@ -138,7 +148,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
     v_stop = settings[S_V_STOP]
     max_events = int(settings[S_MAX_EVENTS])
     npc = px.shape[0] - 1
-    drawn = np.empty(3)
+    drawn = out.work[:WORK_CTX]
     cur_seg = -1
 
     x = x0
@@ -162,7 +172,8 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
     nvy = 0.0
     nw = 0.0
     vs = 0.0
-    ctx = np.zeros(4)
+    ctx = out.work[WORK_CTX:N_WORK]
+    ctx[:] = 0.0
     if resume:
         # Continue a path from its state at a restart station.
         mode = int(state0[RS_MODE])
