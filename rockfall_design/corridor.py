@@ -37,6 +37,7 @@ import argparse
 import json
 import sys
 from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -47,7 +48,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .plugins import Registry
     from .project import Corridor, CorridorSection
 
-__all__ = ["run_tasks", "corridor_summary", "cli_simulate", "cli_check", "cli_optimise"]
+__all__ = ["run_tasks", "corridor_summary", "each_section", "SectionRun", "SectionDone",
+           "cli_simulate", "cli_check", "cli_optimise", "cli_study"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -275,150 +277,225 @@ def _seeds(corridor: Corridor, args: argparse.Namespace) -> tuple[int, list[int]
     return run, corridor.section_seeds(run)
 
 
-def _finish(args: argparse.Namespace, summary: dict[str, Any], files: OutputSet) -> None:
-    if args.out:
-        files.write_json(args.out / "summary.json", summary)
+@dataclass
+class SectionRun:
+    """What a command's per-section body gets from :func:`each_section`.
+
+    Attributes
+    ----------
+    section
+        The section (its name, index and ordinary project).
+    args
+        The command's options for this section: ``seed`` is the section's
+        own, ``out``, ``plot`` and ``report`` its subdirectories (or None).
+    files
+        The command's output set (every section's files and the corridor's
+        summary land together, or none).
+    registry
+        The plugins, loaded once for every section.
+    ran
+        What the command ran for this section elsewhere (a pool or a
+        cluster) before the bodies run, or None.
+    """
+
+    section: CorridorSection
+    args: argparse.Namespace
+    files: OutputSet
+    registry: Registry
+    ran: Any = None
 
 
-def _emit(args: argparse.Namespace, summary: dict[str, Any]) -> None:
+@dataclass
+class SectionDone:
+    """What a per-section body returns to :func:`each_section`.
+
+    Attributes
+    ----------
+    summary
+        The section's JSON object, as the command prints it for one project.
+    show
+        Prints the section's terminal report (called unless ``--json``).
+    cost
+        ``optimise``: the chosen design's cost (None: no design).
+    """
+
+    summary: dict[str, Any]
+    show: Callable[[], None]
+    cost: float | None = None
+
+
+def each_section(
+    args: argparse.Namespace,
+    corridor: Corridor,
+    command: str,
+    body: Callable[[SectionRun], SectionDone],
+    *,
+    out_files: Sequence[str],
+    figures: Sequence[str],
+    report: bool = True,
+    guard: Callable[[CorridorSection], None] | None = None,
+    elsewhere: Callable[[Sequence[argparse.Namespace]], Sequence[Any] | None] | None = None,
+) -> dict[str, Any]:
+    """Run a command over every section of a corridor: the pattern every command shares.
+
+    Loads the plugins once (checking every section's plugin sections),
+    derives each section's seed, calls ``guard`` on each section, reserves
+    every section's files (``out_files`` under ``--out``, the figures
+    ``figures`` in every ``--plot-format`` under ``--plot``, the report's
+    files under ``--report`` when ``report``) and the corridor's
+    ``summary.json``, runs ``elsewhere`` (the sections' runs on a pool or a
+    cluster, or None) and then ``body`` on each section in order, printing
+    its rule and report unless ``--json``; then writes, prints and returns
+    the corridor's summary (:func:`corridor_summary`).
+
+    Parameters
+    ----------
+    args
+        The command's options.
+    corridor
+        The corridor.
+    command
+        ``simulate``, ``check``, ``optimise`` or ``study`` (the JSON's ``command``).
+    body
+        One section's run, files and report.
+    out_files, figures, report
+        The files each section writes (see above).
+    guard
+        Refuses a section before anything runs (e.g. too many rocks for the memory).
+    elsewhere
+        Given every section's options, runs the sections elsewhere and
+        returns one result per section (``SectionRun.ran``), or None.
+
+    Returns
+    -------
+    dict
+        The corridor's JSON object.
+    """
+    from .cli import REPORT_FILES, _figure_files, _reserve
+    from .outputs import OutputSet
+
+    registry = _registry(corridor, args)
+    run_seed, seeds = _seeds(corridor, args)
+    if guard is not None:
+        for section in corridor.sections:
+            guard(section)
+    with OutputSet() as files:
+        subs = [_section_args(args, s, seed) for s, seed in
+                zip(corridor.sections, seeds, strict=True)]
+        for sub in subs:
+            _reserve(files, sub.out, out_files)
+            if report:
+                _reserve(files, sub.report, REPORT_FILES)
+            _reserve(files, sub.plot, _figure_files(figures, sub))
+        _reserve(files, args.out, ("summary.json",))
+        ran = elsewhere(subs) if elsewhere is not None else None
+
+        def one(i: int) -> SectionDone:
+            section = corridor.sections[i]
+            done = body(SectionRun(section, subs[i], files, registry,
+                                   None if ran is None else ran[i]))
+            if not args.json:
+                _section_rule(section, len(subs))
+                done.show()
+            return done
+
+        done = run_tasks(one, range(len(subs)))
+        summary = corridor_summary(
+            corridor, command, run_seed, [section_block(s, d.summary) for s, d in
+                                          zip(corridor.sections, done, strict=True)],
+            [d.cost for d in done] if command == "optimise" else ())
+        if args.out:
+            files.write_json(args.out / "summary.json", summary)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
         _print_totals(summary)
+    return summary
 
 
 def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
     """``simulate`` of a corridor: every section's run, files and report, then the totals."""
     from .api import SimulationResult, run_simulation
-    from .cli import (
-        _FIGURES,
-        REPORT_FILES,
-        _figure_files,
-        _figures_and_report,
-        _memory_guard,
-        _reserve,
-        _run,
-        _table_writers,
-        run_record,
-    )
-    from .outputs import OutputSet
+    from .cli import _FIGURES, _figures_and_report, _memory_guard, _run, _table_writers, run_record
     from .report import print_simulation
     from .simulation import EXACT_ROCKS, study_memory
 
-    _registry(corridor, args)
-    run_seed, seeds = _seeds(corridor, args)
-    for section in corridor.sections:
+    def guard(section: CorridorSection) -> None:
         project = section.project
         n = args.rocks or project.rocks.count
         _memory_guard(study_memory(project, n), f"section {section.name!r}: {n:,} rocks "
                       f"with {project.analysis.envelope_points} envelope points",
                       "Use fewer analysis.envelope_points or analysis.stations.")
-    with OutputSet() as files:
-        subs = [_section_args(args, s, seed) for s, seed in
-                zip(corridor.sections, seeds, strict=True)]
-        for sub in subs:
-            _reserve(files, sub.out, ("rocks.csv", "crossings.csv", "summary.json"))
-            _reserve(files, sub.report, REPORT_FILES)
-            _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
-        _reserve(files, args.out, ("summary.json",))
 
+    def elsewhere(subs: Sequence[argparse.Namespace]) -> list[Any] | None:
         pooled = _pooled(args) and all(
             (args.rocks or s.project.rocks.count) <= EXACT_ROCKS for s in corridor.sections)
-        studies = _on_executors(_simulate_task, corridor, subs, args) if pooled else None
+        return _on_executors(_simulate_task, corridor, subs, args) if pooled else None
 
-        def one(i: int) -> dict[str, Any]:
-            section, sub = corridor.sections[i], subs[i]
-            if studies is not None:  # run elsewhere, kept whole: its tables written here
-                study = studies[i]
-                if sub.out:
-                    files.write_csv(sub.out / "rocks.csv", study.rocks_table())
-                    files.write_csv(sub.out / "crossings.csv", study.crossings_table())
-            else:
-                on_chunk = _table_writers(files, sub.out) if sub.out else None
-                study = _run(run_simulation, section.project, sub, on_chunk=on_chunk)
-            result = SimulationResult(section.project, study)
-            summary = result.summary
+    def body(run: SectionRun) -> SectionDone:
+        section, sub, files = run.section, run.args, run.files
+        if run.ran is not None:  # run elsewhere, kept whole: its tables written here
+            study = run.ran
             if sub.out:
-                files.write_json(sub.out / "summary.json",
-                                 {**summary, "run": run_record(study, sub)})
-            _figures_and_report(result, sub, files)
-            if not args.json:
-                _section_rule(section, len(subs))
-                print_simulation(summary)
-            return section_block(section, summary)
+                files.write_csv(sub.out / "rocks.csv", study.rocks_table())
+                files.write_csv(sub.out / "crossings.csv", study.crossings_table())
+        else:
+            on_chunk = _table_writers(files, sub.out) if sub.out else None
+            study = _run(run_simulation, section.project, sub, on_chunk=on_chunk)
+        result = SimulationResult(section.project, study)
+        summary = result.summary
+        if sub.out:
+            files.write_json(sub.out / "summary.json",
+                             {**summary, "run": run_record(study, sub)})
+        _figures_and_report(result, sub, files)
+        return SectionDone(summary, lambda: print_simulation(summary))
 
-        blocks = run_tasks(one, range(len(subs)))
-        summary = corridor_summary(corridor, "simulate", run_seed, blocks)
-        _finish(args, summary, files)
-    _emit(args, summary)
+    each_section(args, corridor, "simulate", body, guard=guard, elsewhere=elsewhere,
+                 out_files=("rocks.csv", "crossings.csv", "summary.json"), figures=_FIGURES)
     return int(ExitCode.OK)
 
 
 def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
     """``check`` of a corridor: every section checked; exit 0 only if every section holds."""
     from .api import CheckResult, check
-    from .cli import (
-        _FIGURES,
-        REPORT_FILES,
-        _figure_files,
-        _figures_and_report,
-        _in_memory_guard,
-        _reserve,
-        _run,
-        run_record,
-    )
-    from .outputs import OutputSet
+    from .cli import _FIGURES, _figures_and_report, _in_memory_guard, _run, run_record
     from .report import print_check
 
     if getattr(args, "scenarios", False):
         raise InputError("check --scenarios of a corridor is not supported yet: check each "
                          "section's project file with --scenarios")
-    registry = _registry(corridor, args)
-    run_seed, seeds = _seeds(corridor, args)
-    for section in corridor.sections:
+
+    def guard(section: CorridorSection) -> None:
         a = section.project.analysis
         _in_memory_guard(args.rocks or section.project.rocks.count,
                          a.envelope_points + len(a.stations), len(a.stations))
-    with OutputSet() as files:
-        subs = [_section_args(args, s, seed) for s, seed in
-                zip(corridor.sections, seeds, strict=True)]
-        for sub in subs:
-            _reserve(files, sub.out, ("rocks.csv", "crossings.csv", "measures.csv",
-                                      "summary.json"))
-            _reserve(files, sub.report, REPORT_FILES)
-            _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
-        _reserve(files, args.out, ("summary.json",))
 
-        evaluations = (_on_executors(_check_task, corridor, subs, args) if _pooled(args)
-                       else None)
+    def elsewhere(subs: Sequence[argparse.Namespace]) -> list[Any] | None:
+        return _on_executors(_check_task, corridor, subs, args) if _pooled(args) else None
 
-        def one(i: int) -> dict[str, Any]:
-            section, sub = corridor.sections[i], subs[i]
-            if evaluations is not None:  # run elsewhere
-                result = CheckResult(section.project, evaluations[i])
-            else:
-                result = _run(check, section.project, sub, registry=registry)
-            evaluation = result.evaluation
-            summary = result.summary
-            if sub.out:
-                out: Path = sub.out
-                files.write_csv(out / "rocks.csv", result.rocks)
-                files.write_csv(out / "crossings.csv", evaluation.study.crossings_table())
-                files.write_csv(out / "measures.csv", evaluation.outcomes_table())
-                record = run_record(evaluation.study, sub)
-                record["project"] = evaluation.resolved_project().resolved_dict()
-                record["project_hash"] = evaluation.resolved_project().resolved_hash()
-                files.write_json(out / "summary.json", {**summary, "run": record})
-            _figures_and_report(result, sub, files)
-            if not args.json:
-                _section_rule(section, len(subs))
-                print_check(summary)
-            return section_block(section, summary)
+    def body(run: SectionRun) -> SectionDone:
+        section, sub, files = run.section, run.args, run.files
+        if run.ran is not None:  # run elsewhere
+            result = CheckResult(section.project, run.ran)
+        else:
+            result = _run(check, section.project, sub, registry=run.registry)
+        evaluation = result.evaluation
+        summary = result.summary
+        if sub.out:
+            out: Path = sub.out
+            files.write_csv(out / "rocks.csv", result.rocks)
+            files.write_csv(out / "crossings.csv", evaluation.study.crossings_table())
+            files.write_csv(out / "measures.csv", evaluation.outcomes_table())
+            record = run_record(evaluation.study, sub)
+            record["project"] = evaluation.resolved_project().resolved_dict()
+            record["project_hash"] = evaluation.resolved_project().resolved_hash()
+            files.write_json(out / "summary.json", {**summary, "run": record})
+        _figures_and_report(result, sub, files)
+        return SectionDone(summary, lambda: print_check(summary))
 
-        blocks = run_tasks(one, range(len(subs)))
-        summary = corridor_summary(corridor, "check", run_seed, blocks)
-        _finish(args, summary, files)
-    _emit(args, summary)
+    summary = each_section(args, corridor, "check", body, guard=guard, elsewhere=elsewhere,
+                           out_files=("rocks.csv", "crossings.csv", "measures.csv",
+                                      "summary.json"), figures=_FIGURES)
     return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
 
 
@@ -430,16 +507,7 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
     """
     from . import __version__
     from .api import optimise
-    from .cli import (
-        _FIGURES,
-        REPORT_FILES,
-        _figure_files,
-        _figures_and_report,
-        _in_memory_guard,
-        _reserve,
-        _stage_progress,
-    )
-    from .outputs import OutputSet
+    from .cli import _FIGURES, _figure_files, _figures_and_report, _in_memory_guard, _stage_progress
     from .report import design_yaml, print_optimise
 
     for section in corridor.sections:
@@ -447,73 +515,63 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
             raise section.project.error_at(
                 ("design",), "the section has no design: section to optimise (give design: "
                 "at the top level, or in every section)")
-    registry = _registry(corridor, args)
-    run_seed, seeds = _seeds(corridor, args)
-    for section in corridor.sections:
+
+    def guard(section: CorridorSection) -> None:
         a = section.project.analysis
         _in_memory_guard(args.rocks or section.project.rocks.count,
                          a.envelope_points + 400, len(a.stations))
-    with OutputSet() as files:
-        subs = [_section_args(args, s, seed) for s, seed in
-                zip(corridor.sections, seeds, strict=True)]
-        for sub in subs:
-            _reserve(files, sub.out, ("design.yaml", "alternatives.csv", "summary.json"))
-            _reserve(files, sub.report, REPORT_FILES)
-            _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
-        _reserve(files, args.out, ("summary.json",))
 
-        def one(i: int) -> tuple[dict[str, Any], float | None]:
-            section, sub = corridor.sections[i], subs[i]
-            project = section.project
-            n = sub.rocks or project.rocks.count
-            prog, callback = _stage_progress(sys.stderr.isatty())
-            if prog is None:
-                report = optimise(project, rocks=n, seed=sub.seed, registry=registry)
+    def body(run: SectionRun) -> SectionDone:
+        section, sub, files = run.section, run.args, run.files
+        project = section.project
+        n = sub.rocks or project.rocks.count
+        prog, callback = _stage_progress(sys.stderr.isatty())
+        if prog is None:
+            report = optimise(project, rocks=n, seed=sub.seed, registry=run.registry)
+        else:
+            with prog:
+                report = optimise(project, rocks=n, seed=sub.seed, registry=run.registry,
+                                  progress=callback)
+        result = report.result
+        summary = report.summary
+        if sub.out:
+            out: Path = sub.out
+            if result.best is not None and project.design.scenarios is not None:
+                from .across import across_design_yaml
+
+                files.write_text(out / "design.yaml", across_design_yaml(
+                    result, f"{args.project}, section {section.name!r}", project))
+            elif result.best is not None:
+                files.write_text(out / "design.yaml", design_yaml(
+                    result.best, f"{args.project}, section {section.name!r}",
+                    result.search_rocks))
             else:
-                with prog:
-                    report = optimise(project, rocks=n, seed=sub.seed, registry=registry,
-                                      progress=callback)
-            result = report.result
-            summary = report.summary
-            if sub.out:
-                out: Path = sub.out
-                if result.best is not None and project.design.scenarios is not None:
-                    from .across import across_design_yaml
+                files.remove(out / "design.yaml")
+            files.write_csv(out / "alternatives.csv", report.alternatives)
+            record = {"command": "optimise", "version": __version__,
+                      "seed": result.seed, "rocks": result.rocks,
+                      "project_file": str(args.project), "section": section.name,
+                      "project_hash": project.resolved_hash(),
+                      "project": project.resolved_dict()}
+            files.write_json(out / "summary.json", {**summary, "run": record})
+        if sub.plot and result.best is None:
+            for name in _figure_files(_FIGURES, sub):
+                files.remove(sub.plot / name)
+        _figures_and_report(report, sub, files)
 
-                    files.write_text(out / "design.yaml", across_design_yaml(
-                        result, f"{args.project}, section {section.name!r}", project))
-                elif result.best is not None:
-                    files.write_text(out / "design.yaml", design_yaml(
-                        result.best, f"{args.project}, section {section.name!r}",
-                        result.search_rocks))
-                else:
-                    files.remove(out / "design.yaml")
-                files.write_csv(out / "alternatives.csv", report.alternatives)
-                record = {"command": "optimise", "version": __version__,
-                          "seed": result.seed, "rocks": result.rocks,
-                          "project_file": str(args.project), "section": section.name,
-                          "project_hash": project.resolved_hash(),
-                          "project": project.resolved_dict()}
-                files.write_json(out / "summary.json", {**summary, "run": record})
-            if sub.plot and result.best is None:
-                for name in _figure_files(_FIGURES, sub):
-                    files.remove(sub.plot / name)
-            _figures_and_report(report, sub, files)
-            if not args.json:
-                _section_rule(section, len(subs))
-                print_optimise(result, project)
-                if project.design.scenarios is not None:
-                    from .across import print_across
+        def show() -> None:
+            print_optimise(result, project)
+            if project.design.scenarios is not None:
+                from .across import print_across
 
-                    print_across(result)
-            cost = None if result.best is None else float(result.best.cost)
-            return section_block(section, summary), cost
+                print_across(result)
 
-        done = run_tasks(one, range(len(subs)))
-        summary = corridor_summary(corridor, "optimise", run_seed, [b for b, _ in done],
-                                   [c for _, c in done])
-        _finish(args, summary, files)
-    _emit(args, summary)
+        cost = None if result.best is None else float(result.best.cost)
+        return SectionDone(summary, show, cost)
+
+    summary = each_section(args, corridor, "optimise", body, guard=guard,
+                           out_files=("design.yaml", "alternatives.csv", "summary.json"),
+                           figures=_FIGURES)
     return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
 
 
@@ -526,8 +584,6 @@ def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
     section after the other. A study has no pass or fail: exit 0.
     """
     from .api import study
-    from .cli import _figure_files, _reserve
-    from .outputs import OutputSet
     from .study.command import OUT_FILES, run_record
     from .study.result import FIGURES
 
@@ -536,39 +592,25 @@ def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
             raise section.project.error_at(
                 (), "the section has no study: section (give study: at the top level, or "
                 "in every section)")
-    registry = _registry(corridor, args)
-    run_seed, seeds = _seeds(corridor, args)
-    with OutputSet() as files:
-        subs = [_section_args(args, s, seed) for s, seed in
-                zip(corridor.sections, seeds, strict=True)]
-        for sub in subs:
-            _reserve(files, sub.out, OUT_FILES)
-            _reserve(files, sub.plot, _figure_files(FIGURES, sub))
-        _reserve(files, args.out, ("summary.json",))
 
-        def one(i: int) -> dict[str, Any]:
-            section, sub = corridor.sections[i], subs[i]
-            project = section.project
-            result = study(project, rocks=sub.rocks or project.rocks.count, seed=sub.seed,
-                           workers=args.workers, scheduler=args.scheduler,
-                           progress=sys.stderr.isatty(), registry=registry)
-            summary = result.summary
-            if sub.out:
-                files.write_csv(sub.out / "scenarios.csv", result.scenarios)
-                files.write_csv(sub.out / "sensitivity.csv", result.sensitivity)
-                record = {**run_record(result, sub), "section": section.name}
-                files.write_json(sub.out / "summary.json", {**summary, "run": record})
-            if sub.plot:
-                from .figures import save_figures
+    def body(run: SectionRun) -> SectionDone:
+        section, sub, files = run.section, run.args, run.files
+        project = section.project
+        result = study(project, rocks=sub.rocks or project.rocks.count, seed=sub.seed,
+                       workers=args.workers, scheduler=args.scheduler,
+                       progress=sys.stderr.isatty(), registry=run.registry)
+        summary = result.summary
+        if sub.out:
+            files.write_csv(sub.out / "scenarios.csv", result.scenarios)
+            files.write_csv(sub.out / "sensitivity.csv", result.sensitivity)
+            record = {**run_record(result, sub), "section": section.name}
+            files.write_json(sub.out / "summary.json", {**summary, "run": record})
+        if sub.plot:
+            from .figures import save_figures
 
-                save_figures(result.figures(), sub.plot, args.plot_format, files)
-            if not args.json:
-                _section_rule(section, len(subs))
-                result.print()
-            return section_block(section, summary)
+            save_figures(result.figures(), sub.plot, args.plot_format, files)
+        return SectionDone(summary, result.print)
 
-        blocks = run_tasks(one, range(len(subs)))
-        summary = corridor_summary(corridor, "study", run_seed, blocks)
-        _finish(args, summary, files)
-    _emit(args, summary)
+    each_section(args, corridor, "study", body, out_files=OUT_FILES, figures=FIGURES,
+                 report=False)
     return int(ExitCode.OK)
