@@ -505,10 +505,7 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
     Sections share no measure, so the corridor's cheapest design is the
     cheapest design of every section; exit 0 only if every section has one.
     """
-    from . import __version__
-    from .api import optimise
-    from .cli import _FIGURES, _figure_files, _figures_and_report, _in_memory_guard, _stage_progress
-    from .report import design_yaml, print_optimise
+    from .cli import _FIGURES, _in_memory_guard, optimise_with_files, print_optimised
 
     for section in corridor.sections:
         if section.project.design is None:
@@ -522,52 +519,13 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
                          a.envelope_points + 400, len(a.stations))
 
     def body(run: SectionRun) -> SectionDone:
-        section, sub, files = run.section, run.args, run.files
-        project = section.project
-        n = sub.rocks or project.rocks.count
-        prog, callback = _stage_progress(sys.stderr.isatty())
-        if prog is None:
-            report = optimise(project, rocks=n, seed=sub.seed, registry=run.registry)
-        else:
-            with prog:
-                report = optimise(project, rocks=n, seed=sub.seed, registry=run.registry,
-                                  progress=callback)
+        project = run.section.project
+        report = optimise_with_files(project, run.args, run.registry, run.files,
+                                     f"{args.project}, section {run.section.name!r}",
+                                     {"section": run.section.name})
         result = report.result
-        summary = report.summary
-        if sub.out:
-            out: Path = sub.out
-            if result.best is not None and project.design.scenarios is not None:
-                from .across import across_design_yaml
-
-                files.write_text(out / "design.yaml", across_design_yaml(
-                    result, f"{args.project}, section {section.name!r}", project))
-            elif result.best is not None:
-                files.write_text(out / "design.yaml", design_yaml(
-                    result.best, f"{args.project}, section {section.name!r}",
-                    result.search_rocks))
-            else:
-                files.remove(out / "design.yaml")
-            files.write_csv(out / "alternatives.csv", report.alternatives)
-            record = {"command": "optimise", "version": __version__,
-                      "seed": result.seed, "rocks": result.rocks,
-                      "project_file": str(args.project), "section": section.name,
-                      "project_hash": project.resolved_hash(),
-                      "project": project.resolved_dict()}
-            files.write_json(out / "summary.json", {**summary, "run": record})
-        if sub.plot and result.best is None:
-            for name in _figure_files(_FIGURES, sub):
-                files.remove(sub.plot / name)
-        _figures_and_report(report, sub, files)
-
-        def show() -> None:
-            print_optimise(result, project)
-            if project.design.scenarios is not None:
-                from .across import print_across
-
-                print_across(result)
-
         cost = None if result.best is None else float(result.best.cost)
-        return SectionDone(summary, show, cost)
+        return SectionDone(report.summary, lambda: print_optimised(result, project), cost)
 
     summary = each_section(args, corridor, "optimise", body, guard=guard,
                            out_files=("design.yaml", "alternatives.csv", "summary.json"),
