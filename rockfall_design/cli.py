@@ -162,7 +162,8 @@ def build_parser() -> argparse.ArgumentParser:
         "crossings.csv (one row per rock and station), measures.csv (one row per rock and "
         "measure) and summary.json (the summary and the run record) into DIR",
         plot="draw profile.png (the section with the measures, rock paths and rest "
-        "positions), envelopes.png and stops.png into DIR",
+        "positions), envelopes.png and stops.png into DIR; with --scenarios, those of the "
+        "binding scenario and the margins figure (the margin in every scenario)",
         json_="print the summary with measures, protect, ok and failures as one JSON object "
         "on stdout instead of the report",
     )
