@@ -14,7 +14,12 @@ so each section runs through the same ``simulate``, ``check`` and
   ``reaching`` (``simulate``/``check``: rocks reaching the protected zones),
   ``cost`` and ``currency`` (``optimise``: the corridor design's total cost,
   null unless every section has a design) and ``failures`` (one line each,
-  naming the section).
+  naming the section);
+- ``check --scenarios``: every section checked over its study's scenarios
+  (:mod:`rockfall_design.across`); ``"scenarios": true``, each section's
+  block the JSON of ``check --scenarios``, and ``totals`` with ``sections``,
+  ``scenarios``, ``rocks`` (of every scenario), ``ok``, ``binding`` (the
+  corridor's scenario of least margin, with its ``section``) and ``failures``.
 
 Files: ``--out DIR`` writes each section's usual files into ``DIR/<section>/``
 (the section name with other characters than letters, digits, ``.``, ``-``
@@ -35,6 +40,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
@@ -81,7 +87,8 @@ def section_block(section: CorridorSection, summary: dict[str, Any]) -> dict[str
 
 def corridor_summary(corridor: Corridor, command: str, seed: int,
                      blocks: Sequence[dict[str, Any]],
-                     costs: Sequence[float | None] = ()) -> dict[str, Any]:
+                     costs: Sequence[float | None] = (),
+                     scenarios: bool = False) -> dict[str, Any]:
     """The corridor's JSON: the run, every section's block, and the totals.
 
     Parameters
@@ -96,6 +103,11 @@ def corridor_summary(corridor: Corridor, command: str, seed: int,
         One :func:`section_block` per section, in order.
     costs
         ``optimise``: each section's chosen design's cost (None: no design).
+    scenarios
+        ``check --scenarios``: each block is the section's ``check
+        --scenarios`` JSON; the totals count every scenario's rocks and name
+        the binding scenario of the corridor, and the JSON says
+        ``"scenarios": true``.
     """
     totals: dict[str, Any] = {
         "sections": len(blocks),
@@ -106,6 +118,17 @@ def corridor_summary(corridor: Corridor, command: str, seed: int,
         totals["scenarios"] = int(sum(len(b["scenarios"]) for b in blocks))
         totals["rocks"] = int(sum(int(b["rocks"]) * len(b["scenarios"]) for b in blocks))
     failures: list[str] = []
+    if scenarios:
+        # a section's "rocks" is per scenario, as in a study
+        totals["scenarios"] = int(sum(int(b["of"]) for b in blocks))
+        totals["rocks"] = int(sum(int(b["rocks"]) * int(b["of"]) for b in blocks))
+        totals["ok"] = all(bool(b["ok"]) for b in blocks)
+        bind = min(blocks, key=lambda b: (math.inf if b["binding"]["margin"] is None
+                                          else b["binding"]["margin"], b["index"]))
+        totals["binding"] = {"section": bind["name"], **bind["binding"]}
+        totals["failures"] = [f"{b['name']}: {f}" for b in blocks for f in b["failures"]]
+        return {"name": corridor.name, "command": command, "scenarios": True,
+                "seed": int(seed), "sections": list(blocks), "totals": totals}
     if command in ("simulate", "check"):
         reaching = [b["protect"]["reaching"] for b in blocks if b.get("protect")]
         totals["reaching"] = int(sum(reaching)) if reaching else None
@@ -133,6 +156,9 @@ def _print_totals(summary: dict[str, Any]) -> None:
     from .report import fitted_console
 
     command, totals = summary["command"], summary["totals"]
+    if summary.get("scenarios"):
+        _print_scenario_totals(summary)
+        return
     cur = totals.get("currency") or ""
     table = Table(show_edge=False)
     columns = ["section", "seed", "rocks"]
@@ -179,6 +205,46 @@ def _print_totals(summary: dict[str, Any]) -> None:
                   style="bold", markup=False, highlight=False)
     console.print(table)
     for line in totals.get("failures", []):
+        console.print(line, style="red", markup=False, highlight=False)
+
+
+def _margin(b: dict[str, Any]) -> str:
+    return "-" if b["margin"] is None else f"#{b['index']} {100 * b['margin']:+.1f} %"
+
+
+def _print_scenario_totals(summary: dict[str, Any]) -> None:
+    """The corridor's table of ``check --scenarios``: a row per section, and the total."""
+    from rich.table import Table
+
+    from .report import fitted_console
+
+    totals = summary["totals"]
+    table = Table(show_edge=False)
+    for col in ("section", "seed", "rocks", "scenarios", "holds in", "required", "binding",
+                "binds at", "holds"):
+        table.add_column(col, justify="right" if col in ("seed", "rocks", "scenarios",
+                                                         "holds in", "required") else "left")
+    for b in summary["sections"]:
+        table.add_row(b["name"], str(b["seed"]), f"{b['rocks'] * b['of']:,}", f"{b['of']:,}",
+                      f"{b['holds_in']:,}", f"{b['required']:,}", _margin(b["binding"]),
+                      b["binding"]["binds_at"] or "-", "yes" if b["ok"] else "NO",
+                      style="" if b["ok"] else "red")
+    bind = totals["binding"]
+    table.add_row("total", "", f"{totals['rocks']:,}", f"{totals['scenarios']:,}", "", "",
+                  f"{bind['section']} {_margin(bind)}", bind["binds_at"] or "-",
+                  "yes" if totals["ok"] else "NO", style="bold")
+    console = fitted_console(table)
+    console.print(f"{summary['name']}: {totals['sections']} sections checked over their "
+                  f"scenarios, run seed {summary['seed']} (each section's seed derives from "
+                  "it, each scenario's from its section's)", style="bold", markup=False,
+                  highlight=False)
+    console.print(table)
+    verdict = ("The corridor holds: every section holds in its required scenarios."
+               if totals["ok"] else "The corridor fails: a section holds in too few "
+               "scenarios.")
+    console.print(verdict, style="bold green" if totals["ok"] else "bold red", markup=False,
+                  highlight=False)
+    for line in totals["failures"]:
         console.print(line, style="red", markup=False, highlight=False)
 
 
@@ -335,6 +401,7 @@ def each_section(
     report: bool = True,
     guard: Callable[[CorridorSection], None] | None = None,
     elsewhere: Callable[[Sequence[argparse.Namespace]], Sequence[Any] | None] | None = None,
+    scenarios: bool = False,
 ) -> dict[str, Any]:
     """Run a command over every section of a corridor: the pattern every command shares.
 
@@ -365,6 +432,8 @@ def each_section(
     elsewhere
         Given every section's options, runs the sections elsewhere and
         returns one result per section (``SectionRun.ran``), or None.
+    scenarios
+        ``check --scenarios`` (see :func:`corridor_summary`).
 
     Returns
     -------
@@ -403,7 +472,7 @@ def each_section(
         summary = corridor_summary(
             corridor, command, run_seed, [section_block(s, d.summary) for s, d in
                                           zip(corridor.sections, done, strict=True)],
-            [d.cost for d in done] if command == "optimise" else ())
+            [d.cost for d in done] if command == "optimise" else (), scenarios)
         if args.out:
             files.write_json(args.out / "summary.json", summary)
     if args.json:
@@ -461,14 +530,13 @@ def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
     from .cli import _FIGURES, _figures_and_report, _in_memory_guard, _run, run_record
     from .report import print_check
 
-    if getattr(args, "scenarios", False):
-        raise InputError("check --scenarios of a corridor is not supported yet: check each "
-                         "section's project file with --scenarios")
-
     def guard(section: CorridorSection) -> None:
         a = section.project.analysis
         _in_memory_guard(args.rocks or section.project.rocks.count,
                          a.envelope_points + len(a.stations), len(a.stations))
+
+    if getattr(args, "scenarios", False):
+        return _check_scenarios(args, corridor, guard)
 
     def elsewhere(subs: Sequence[argparse.Namespace]) -> list[Any] | None:
         return _on_executors(_check_task, corridor, subs, args) if _pooled(args) else None
@@ -572,3 +640,38 @@ def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
     each_section(args, corridor, "study", body, out_files=OUT_FILES, figures=FIGURES,
                  report=False)
     return int(ExitCode.OK)
+
+
+def _check_scenarios(args: argparse.Namespace, corridor: Corridor,
+                     guard: Callable[[CorridorSection], None]) -> int:
+    """``check --scenarios`` of a corridor: every section over its study's scenarios.
+
+    Each section is checked as ``check --scenarios`` checks its project
+    alone (its study: the shared one or its own; its own seed, from which its
+    scenarios' seeds derive); the scenarios of a section run on the study's
+    executors (``--workers``, ``--scheduler``), one section after the other.
+    The corridor holds when every section holds in its required scenarios:
+    exit 0, else 1. A corridor without a study is refused before anything
+    runs (exit 2), as is a section without one: checking it plainly would
+    hide that nothing varies there.
+    """
+    from .across import SCENARIO_FIGURES, check_scenarios_with_files, print_check_across
+
+    missing = [s for s in corridor.sections if s.project.study is None]
+    if len(missing) == len(corridor.sections):
+        raise InputError(f"{corridor.source}: check --scenarios needs a study: section (at "
+                         "the top level of a corridor: every section's study), or check "
+                         "without --scenarios")
+    if missing:  # should a section ever have a study of its own
+        raise missing[0].project.error_at(
+            (), "check --scenarios: the section has no study: section; check without "
+            "--scenarios")
+
+    def body(run: SectionRun) -> SectionDone:
+        summary = check_scenarios_with_files(run.section.project, run.args, run.registry,
+                                             run.files)
+        return SectionDone(summary, lambda: print_check_across(summary))
+
+    summary = each_section(args, corridor, "check", body, guard=guard, scenarios=True,
+                           out_files=("summary.json",), figures=SCENARIO_FIGURES)
+    return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
