@@ -248,12 +248,13 @@ def _print_scenario_totals(summary: dict[str, Any]) -> None:
         console.print(line, style="red", markup=False, highlight=False)
 
 
-def _section_rule(section: CorridorSection, of: int) -> None:
+def _section_rule(section: CorridorSection, of: int, seed: int) -> None:
+    """The heading of a section's report; ``seed`` is the one it ran with (``--seed`` too)."""
     from rich.rule import Rule
 
     from .report import fitted_console
 
-    rule = Rule(f"section {section.index + 1} of {of}: {section.name} (seed {section.seed})")
+    rule = Rule(f"section {section.index + 1} of {of}: {section.name} (seed {seed})")
     fitted_console(rule).print(rule)
 
 
@@ -464,7 +465,7 @@ def each_section(
             done = body(SectionRun(section, subs[i], files, registry,
                                    None if ran is None else ran[i]))
             if not args.json:
-                _section_rule(section, len(subs))
+                _section_rule(section, len(subs), subs[i].seed)
                 done.show()
             return done
 

@@ -1,4 +1,4 @@
-"""check --scenarios of a corridor: every section over its study's scenarios, and the total."""
+"""Corridors: check --scenarios (every section over its study's scenarios), the section headings."""
 
 from __future__ import annotations
 
@@ -84,3 +84,11 @@ def test_a_corridor_without_a_study_is_one_line_and_writes_nothing(tmp_path, cap
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "c.yaml: check --scenarios needs a study: section" in err
     assert not out_dir.exists()
+
+
+def test_the_section_heading_names_the_seed_the_section_ran_with(tmp_path, capsys):
+    path = _write(tmp_path, CORRIDOR)
+    assert main(["simulate", str(path), "--seed", "8", "--rocks", "10", "--workers", "1"]) == 0
+    text = capsys.readouterr().out
+    assert f"north (seed {section_seed(8, 0)})" in text
+    assert f"south (seed {section_seed(8, 1)})" in text
