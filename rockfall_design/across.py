@@ -13,7 +13,11 @@ residual with the confidence bounds in place, negative where it fails).
 ``binding`` (``index``, ``values``, ``seed``, ``margin``, ``binds_at``),
 ``failures`` (one line per failed check, naming the scenario) and
 ``scenarios``: per scenario ``index``, ``values``, ``seed``, ``margin``,
-``binds_at`` and the JSON of ``check`` in that scenario.
+``binds_at`` and the JSON of ``check`` in that scenario. ``--plot`` draws the
+binding scenario's figures (as ``check --plot`` draws them) and the margin of
+every scenario (:func:`~rockfall_design.figures.margins_figure`);
+``--report`` writes the report of every scenario and the binding one in full
+(:class:`ScenariosCheckResult`, rendered by :mod:`rockfall_design.documents`).
 
 For ``optimise`` with ``design.scenarios`` (see
 :mod:`rockfall_design.optimise.across`) this module prints the scenario
@@ -26,17 +30,21 @@ import argparse
 import json
 import math
 import sys
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .errors import ExitCode, InputError
+from .errors import ExitCode
 
 if TYPE_CHECKING:  # pragma: no cover
     from .optimise.across import AcrossResult
+    from .outputs import OutputSet
     from .plugins import Registry
     from .project import Project
 
-__all__ = ["check_across", "cli_check_scenarios", "across_design_yaml", "print_across"]
+__all__ = ["check_across", "cli_check_scenarios", "across_design_yaml", "print_across",
+           "ScenariosCheckResult", "SCENARIO_FIGURES", "check_scenarios_with_files",
+           "print_check_across"]
 
 
 def _values_text(values: dict[str, Any]) -> str:
@@ -164,23 +172,97 @@ def print_check_across(summary: dict[str, Any]) -> None:
         console.print("  " + line, style="dim", markup=False, highlight=False)
 
 
+#: The figures of ``check --scenarios --plot``: the binding scenario's three and the margins.
+SCENARIO_FIGURES = ("profile", "envelopes", "stops", "margins")
+
+
+class ScenariosCheckResult:
+    """What ``check --scenarios`` found, for its figures and report.
+
+    Attributes
+    ----------
+    project : Project
+        The project as written (with its ``study:``).
+    summary : dict
+        The JSON of ``check --scenarios --json`` (:func:`check_across`).
+    """
+
+    command = "check"
+    #: The report shows every scenario, then the binding one in full.
+    across = True
+
+    def __init__(self, project: Project, summary: dict[str, Any], registry: Registry) -> None:
+        self.project = project
+        self.summary = summary
+        self._registry = registry
+
+    @cached_property
+    def binding_check(self) -> Any:
+        """The binding scenario checked again in this process, keeping paths for the figures.
+
+        Its own project (the study's values set) and its own seed and rocks:
+        the same rocks as in :func:`check_across`, so the same numbers.
+        """
+        from .api import DEFAULT_TRAJECTORIES, check
+        from .optimise.across import scenario_runs
+
+        b = self.summary["binding"]
+        run = next(r for r in scenario_runs(self.project, self.summary["seed"])
+                   if r.index == b["index"])
+        return check(run.project, rocks=int(self.summary["rocks"]), seed=run.seed,
+                     trajectories=DEFAULT_TRAJECTORIES, registry=self._registry)
+
+    def plot_margins(self) -> Any:
+        """A bar per scenario: the margin, the binding scenario, the count required."""
+        from .figures import margins_figure
+
+        s = self.summary
+        return margins_figure(s["scenarios"], s["required"], s["binding"]["index"],
+                              self.project.name)
+
+    def figures(self) -> dict[str, Any]:
+        """The binding scenario's profile, envelopes and stops, and the margins, by name."""
+        return {**self.binding_check.figures(), "margins": self.plot_margins()}
+
+
+def reserve_scenarios_files(files: OutputSet, args: argparse.Namespace) -> None:
+    """Reserve the files of ``check --scenarios`` (``--out``, ``--plot``, ``--report``)."""
+    from .cli import REPORT_FILES, _figure_files, _reserve
+
+    _reserve(files, args.out, ("summary.json",))
+    _reserve(files, args.report, REPORT_FILES)
+    _reserve(files, args.plot, _figure_files(SCENARIO_FIGURES, args))
+
+
+def check_scenarios_with_files(project: Project, args: argparse.Namespace, registry: Registry,
+                               files: OutputSet) -> dict[str, Any]:
+    """Check ``project`` in every scenario and put its files in the output set.
+
+    ``args`` gives ``rocks``, ``seed``, ``block``, ``workers``,
+    ``scheduler`` and the directories ``out`` (``summary.json``), ``plot``
+    (:data:`SCENARIO_FIGURES` in every ``--plot-format``) and ``report``.
+    Returns the JSON object of ``check --scenarios``.
+    """
+    from .cli import _figures_and_report
+
+    summary = check_across(project, registry, rocks=args.rocks, seed=args.seed,
+                           block=tuple(args.block), workers=args.workers,
+                           scheduler=args.scheduler)
+    if args.out:
+        files.write_json(args.out / "summary.json", summary)
+    _figures_and_report(ScenariosCheckResult(project, summary, registry), args, files)
+    return summary
+
+
 def cli_check_scenarios(args: argparse.Namespace, project: Project, registry: Registry) -> int:
     """``check --scenarios``: exit 0 when the design holds in the required scenarios, else 1."""
     from .outputs import OutputSet
 
-    if args.plot or args.report:
-        raise InputError("--plot and --report are not drawn for check --scenarios yet; run "
-                         "check without --scenarios for one scenario's figures")
     if project.study is None:
         raise project.error_at((), "check --scenarios needs a study: section (its scenarios)")
     with OutputSet() as files:
-        if args.out:
-            files.reserve(args.out / "summary.json")
-        summary = check_across(project, registry, rocks=args.rocks, seed=args.seed,
-                               block=tuple(args.block), workers=args.workers,
-                               scheduler=args.scheduler)
-        if args.out:
-            files.write_json(args.out / "summary.json", summary)
+        reserve_scenarios_files(files, args)
+        summary = check_scenarios_with_files(project, args, registry, files)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:

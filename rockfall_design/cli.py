@@ -162,7 +162,8 @@ def build_parser() -> argparse.ArgumentParser:
         "crossings.csv (one row per rock and station), measures.csv (one row per rock and "
         "measure) and summary.json (the summary and the run record) into DIR",
         plot="draw profile.png (the section with the measures, rock paths and rest "
-        "positions), envelopes.png and stops.png into DIR",
+        "positions), envelopes.png and stops.png into DIR; with --scenarios, those of the "
+        "binding scenario and the margins figure (the margin in every scenario)",
         json_="print the summary with measures, protect, ok and failures as one JSON object "
         "on stdout instead of the report",
     )
@@ -519,10 +520,8 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 def cmd_optimise(args: argparse.Namespace) -> int:
     """Least-cost design; exit 0 with a design, 1 if no family meets the targets."""
-    from .api import optimise
     from .outputs import OutputSet
     from .project import Project
-    from .report import design_yaml, print_optimise
 
     project = _load(args.project)
     if not isinstance(project, Project):  # a corridor: every section
@@ -539,52 +538,90 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         _reserve(files, args.out, ("design.yaml", "alternatives.csv", "summary.json"))
         _reserve(files, args.report, REPORT_FILES)
         _reserve(files, args.plot, _figure_files(_FIGURES, args))
-        prog, callback = _stage_progress(sys.stderr.isatty())
-        if prog is None:
-            report = optimise(project, rocks=n, seed=args.seed, registry=registry)
-        else:
-            with prog:
-                report = optimise(project, rocks=n, seed=args.seed, registry=registry,
-                                  progress=callback)
-        result = report.result
-        summary = report.summary
-        across = project.design.scenarios is not None  # a design across a study's scenarios
-        if args.out:
-            out: Path = args.out
-            if result.best is not None and across:
-                from .across import across_design_yaml
-
-                files.write_text(out / "design.yaml",
-                                 across_design_yaml(result, args.project, project))
-            elif result.best is not None:
-                files.write_text(out / "design.yaml", design_yaml(result.best, args.project,
-                                                                  result.search_rocks))
-            else:
-                # A design.yaml of an earlier run must not sit beside a
-                # summary that says there is no design.
-                files.remove(out / "design.yaml")
-            files.write_csv(out / "alternatives.csv", report.alternatives)
-            record = {"command": "optimise", "version": __version__, "seed": result.seed,
-                      "rocks": result.rocks, "project_file": str(args.project),
-                      "project_hash": project.resolved_hash(),
-                      "project": project.resolved_dict()}
-            files.write_json(out / "summary.json", {**summary, "run": record})
-        if args.plot and result.best is None:
-            # Figures of an earlier run's design must not stay beside a
-            # result that has none.
-            for name in _figure_files(_FIGURES, args):
-                files.remove(args.plot / name)
-        # The chosen design's figures run its rocks again, keeping a sample of paths.
-        _figures_and_report(report, args, files)
+        report = optimise_with_files(project, args, registry, files, args.project)
     if args.json:
-        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
+        sys.stdout.write(json.dumps(report.summary, allow_nan=False) + "\n")
     else:
-        print_optimise(result, project)
-        if across:
-            from .across import print_across
+        print_optimised(report.result, project)
+    return int(ExitCode.OK if report.result.best is not None else ExitCode.CHECK_FAILED)
 
-            print_across(result)
-    return int(ExitCode.OK if result.best is not None else ExitCode.CHECK_FAILED)
+
+def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
+                        files: OutputSet, source: Any,
+                        record: dict[str, Any] | None = None) -> Any:
+    """Optimise one project and put its files (--out, --plot, --report) in the output set.
+
+    Parameters
+    ----------
+    project
+        The project (with ``design:``).
+    args
+        Its options: ``rocks``, ``seed``, ``out``, ``plot``, ``report``, ``plot_format``.
+    registry
+        The plugins.
+    files
+        The command's output set.
+    source
+        What design.yaml says the design was chosen from (the project file,
+        or the corridor file and the section).
+    record
+        Keys added to the run record of summary.json after ``project_file``.
+
+    Returns
+    -------
+    OptimiseResult
+    """
+    from .api import optimise
+    from .report import design_yaml
+
+    n = args.rocks or project.rocks.count
+    prog, callback = _stage_progress(sys.stderr.isatty())
+    if prog is None:
+        report = optimise(project, rocks=n, seed=args.seed, registry=registry)
+    else:
+        with prog:
+            report = optimise(project, rocks=n, seed=args.seed, registry=registry,
+                              progress=callback)
+    result = report.result
+    summary = report.summary
+    if args.out:
+        out: Path = args.out
+        if result.best is not None and project.design.scenarios is not None:
+            # a design across a study's scenarios
+            from .across import across_design_yaml
+
+            files.write_text(out / "design.yaml", across_design_yaml(result, source, project))
+        elif result.best is not None:
+            files.write_text(out / "design.yaml", design_yaml(result.best, source,
+                                                              result.search_rocks))
+        else:
+            # A design.yaml of an earlier run must not sit beside a
+            # summary that says there is no design.
+            files.remove(out / "design.yaml")
+        files.write_csv(out / "alternatives.csv", report.alternatives)
+        run = {"command": "optimise", "version": __version__, "seed": result.seed,
+               "rocks": result.rocks, "project_file": str(args.project), **(record or {}),
+               "project_hash": project.resolved_hash(), "project": project.resolved_dict()}
+        files.write_json(out / "summary.json", {**summary, "run": run})
+    if args.plot and result.best is None:
+        # Figures of an earlier run's design must not stay beside a
+        # result that has none.
+        for name in _figure_files(_FIGURES, args):
+            files.remove(args.plot / name)
+    # The chosen design's figures run its rocks again, keeping a sample of paths.
+    _figures_and_report(report, args, files)
+    return report
+
+
+def print_optimised(result: Any, project: Any) -> None:
+    """The terminal report of ``optimise``: the alternatives, and the scenarios if any."""
+    from .report import print_optimise
+
+    print_optimise(result, project)
+    if project.design.scenarios is not None:
+        from .across import print_across
+
+        print_across(result)
 
 
 def _stage_progress(interactive: bool):

@@ -14,7 +14,12 @@ so each section runs through the same ``simulate``, ``check`` and
   ``reaching`` (``simulate``/``check``: rocks reaching the protected zones),
   ``cost`` and ``currency`` (``optimise``: the corridor design's total cost,
   null unless every section has a design) and ``failures`` (one line each,
-  naming the section).
+  naming the section);
+- ``check --scenarios``: every section checked over its study's scenarios
+  (:mod:`rockfall_design.across`); ``"scenarios": true``, each section's
+  block the JSON of ``check --scenarios``, and ``totals`` with ``sections``,
+  ``scenarios``, ``rocks`` (of every scenario), ``ok``, ``binding`` (the
+  corridor's scenario of least margin, with its ``section``) and ``failures``.
 
 Files: ``--out DIR`` writes each section's usual files into ``DIR/<section>/``
 (the section name with other characters than letters, digits, ``.``, ``-``
@@ -35,8 +40,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -47,7 +54,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .plugins import Registry
     from .project import Corridor, CorridorSection
 
-__all__ = ["run_tasks", "corridor_summary", "cli_simulate", "cli_check", "cli_optimise"]
+__all__ = ["run_tasks", "corridor_summary", "each_section", "SectionRun", "SectionDone",
+           "cli_simulate", "cli_check", "cli_optimise", "cli_study"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -79,7 +87,8 @@ def section_block(section: CorridorSection, summary: dict[str, Any]) -> dict[str
 
 def corridor_summary(corridor: Corridor, command: str, seed: int,
                      blocks: Sequence[dict[str, Any]],
-                     costs: Sequence[float | None] = ()) -> dict[str, Any]:
+                     costs: Sequence[float | None] = (),
+                     scenarios: bool = False) -> dict[str, Any]:
     """The corridor's JSON: the run, every section's block, and the totals.
 
     Parameters
@@ -94,6 +103,11 @@ def corridor_summary(corridor: Corridor, command: str, seed: int,
         One :func:`section_block` per section, in order.
     costs
         ``optimise``: each section's chosen design's cost (None: no design).
+    scenarios
+        ``check --scenarios``: each block is the section's ``check
+        --scenarios`` JSON; the totals count every scenario's rocks and name
+        the binding scenario of the corridor, and the JSON says
+        ``"scenarios": true``.
     """
     totals: dict[str, Any] = {
         "sections": len(blocks),
@@ -104,6 +118,17 @@ def corridor_summary(corridor: Corridor, command: str, seed: int,
         totals["scenarios"] = int(sum(len(b["scenarios"]) for b in blocks))
         totals["rocks"] = int(sum(int(b["rocks"]) * len(b["scenarios"]) for b in blocks))
     failures: list[str] = []
+    if scenarios:
+        # a section's "rocks" is per scenario, as in a study
+        totals["scenarios"] = int(sum(int(b["of"]) for b in blocks))
+        totals["rocks"] = int(sum(int(b["rocks"]) * int(b["of"]) for b in blocks))
+        totals["ok"] = all(bool(b["ok"]) for b in blocks)
+        bind = min(blocks, key=lambda b: (math.inf if b["binding"]["margin"] is None
+                                          else b["binding"]["margin"], b["index"]))
+        totals["binding"] = {"section": bind["name"], **bind["binding"]}
+        totals["failures"] = [f"{b['name']}: {f}" for b in blocks for f in b["failures"]]
+        return {"name": corridor.name, "command": command, "scenarios": True,
+                "seed": int(seed), "sections": list(blocks), "totals": totals}
     if command in ("simulate", "check"):
         reaching = [b["protect"]["reaching"] for b in blocks if b.get("protect")]
         totals["reaching"] = int(sum(reaching)) if reaching else None
@@ -131,6 +156,9 @@ def _print_totals(summary: dict[str, Any]) -> None:
     from .report import fitted_console
 
     command, totals = summary["command"], summary["totals"]
+    if summary.get("scenarios"):
+        _print_scenario_totals(summary)
+        return
     cur = totals.get("currency") or ""
     table = Table(show_edge=False)
     columns = ["section", "seed", "rocks"]
@@ -180,12 +208,53 @@ def _print_totals(summary: dict[str, Any]) -> None:
         console.print(line, style="red", markup=False, highlight=False)
 
 
-def _section_rule(section: CorridorSection, of: int) -> None:
+def _margin(b: dict[str, Any]) -> str:
+    return "-" if b["margin"] is None else f"#{b['index']} {100 * b['margin']:+.1f} %"
+
+
+def _print_scenario_totals(summary: dict[str, Any]) -> None:
+    """The corridor's table of ``check --scenarios``: a row per section, and the total."""
+    from rich.table import Table
+
+    from .report import fitted_console
+
+    totals = summary["totals"]
+    table = Table(show_edge=False)
+    for col in ("section", "seed", "rocks", "scenarios", "holds in", "required", "binding",
+                "binds at", "holds"):
+        table.add_column(col, justify="right" if col in ("seed", "rocks", "scenarios",
+                                                         "holds in", "required") else "left")
+    for b in summary["sections"]:
+        table.add_row(b["name"], str(b["seed"]), f"{b['rocks'] * b['of']:,}", f"{b['of']:,}",
+                      f"{b['holds_in']:,}", f"{b['required']:,}", _margin(b["binding"]),
+                      b["binding"]["binds_at"] or "-", "yes" if b["ok"] else "NO",
+                      style="" if b["ok"] else "red")
+    bind = totals["binding"]
+    table.add_row("total", "", f"{totals['rocks']:,}", f"{totals['scenarios']:,}", "", "",
+                  f"{bind['section']} {_margin(bind)}", bind["binds_at"] or "-",
+                  "yes" if totals["ok"] else "NO", style="bold")
+    console = fitted_console(table)
+    console.print(f"{summary['name']}: {totals['sections']} sections checked over their "
+                  f"scenarios, run seed {summary['seed']} (each section's seed derives from "
+                  "it, each scenario's from its section's)", style="bold", markup=False,
+                  highlight=False)
+    console.print(table)
+    verdict = ("The corridor holds: every section holds in its required scenarios."
+               if totals["ok"] else "The corridor fails: a section holds in too few "
+               "scenarios.")
+    console.print(verdict, style="bold green" if totals["ok"] else "bold red", markup=False,
+                  highlight=False)
+    for line in totals["failures"]:
+        console.print(line, style="red", markup=False, highlight=False)
+
+
+def _section_rule(section: CorridorSection, of: int, seed: int) -> None:
+    """The heading of a section's report; ``seed`` is the one it ran with (``--seed`` too)."""
     from rich.rule import Rule
 
     from .report import fitted_console
 
-    rule = Rule(f"section {section.index + 1} of {of}: {section.name} (seed {section.seed})")
+    rule = Rule(f"section {section.index + 1} of {of}: {section.name} (seed {seed})")
     fitted_console(rule).print(rule)
 
 
@@ -275,150 +344,227 @@ def _seeds(corridor: Corridor, args: argparse.Namespace) -> tuple[int, list[int]
     return run, corridor.section_seeds(run)
 
 
-def _finish(args: argparse.Namespace, summary: dict[str, Any], files: OutputSet) -> None:
-    if args.out:
-        files.write_json(args.out / "summary.json", summary)
+@dataclass
+class SectionRun:
+    """What a command's per-section body gets from :func:`each_section`.
+
+    Attributes
+    ----------
+    section
+        The section (its name, index and ordinary project).
+    args
+        The command's options for this section: ``seed`` is the section's
+        own, ``out``, ``plot`` and ``report`` its subdirectories (or None).
+    files
+        The command's output set (every section's files and the corridor's
+        summary land together, or none).
+    registry
+        The plugins, loaded once for every section.
+    ran
+        What the command ran for this section elsewhere (a pool or a
+        cluster) before the bodies run, or None.
+    """
+
+    section: CorridorSection
+    args: argparse.Namespace
+    files: OutputSet
+    registry: Registry
+    ran: Any = None
 
 
-def _emit(args: argparse.Namespace, summary: dict[str, Any]) -> None:
+@dataclass
+class SectionDone:
+    """What a per-section body returns to :func:`each_section`.
+
+    Attributes
+    ----------
+    summary
+        The section's JSON object, as the command prints it for one project.
+    show
+        Prints the section's terminal report (called unless ``--json``).
+    cost
+        ``optimise``: the chosen design's cost (None: no design).
+    """
+
+    summary: dict[str, Any]
+    show: Callable[[], None]
+    cost: float | None = None
+
+
+def each_section(
+    args: argparse.Namespace,
+    corridor: Corridor,
+    command: str,
+    body: Callable[[SectionRun], SectionDone],
+    *,
+    out_files: Sequence[str],
+    figures: Sequence[str],
+    report: bool = True,
+    guard: Callable[[CorridorSection], None] | None = None,
+    elsewhere: Callable[[Sequence[argparse.Namespace]], Sequence[Any] | None] | None = None,
+    scenarios: bool = False,
+) -> dict[str, Any]:
+    """Run a command over every section of a corridor: the pattern every command shares.
+
+    Loads the plugins once (checking every section's plugin sections),
+    derives each section's seed, calls ``guard`` on each section, reserves
+    every section's files (``out_files`` under ``--out``, the figures
+    ``figures`` in every ``--plot-format`` under ``--plot``, the report's
+    files under ``--report`` when ``report``) and the corridor's
+    ``summary.json``, runs ``elsewhere`` (the sections' runs on a pool or a
+    cluster, or None) and then ``body`` on each section in order, printing
+    its rule and report unless ``--json``; then writes, prints and returns
+    the corridor's summary (:func:`corridor_summary`).
+
+    Parameters
+    ----------
+    args
+        The command's options.
+    corridor
+        The corridor.
+    command
+        ``simulate``, ``check``, ``optimise`` or ``study`` (the JSON's ``command``).
+    body
+        One section's run, files and report.
+    out_files, figures, report
+        The files each section writes (see above).
+    guard
+        Refuses a section before anything runs (e.g. too many rocks for the memory).
+    elsewhere
+        Given every section's options, runs the sections elsewhere and
+        returns one result per section (``SectionRun.ran``), or None.
+    scenarios
+        ``check --scenarios`` (see :func:`corridor_summary`).
+
+    Returns
+    -------
+    dict
+        The corridor's JSON object.
+    """
+    from .cli import REPORT_FILES, _figure_files, _reserve
+    from .outputs import OutputSet
+
+    registry = _registry(corridor, args)
+    run_seed, seeds = _seeds(corridor, args)
+    if guard is not None:
+        for section in corridor.sections:
+            guard(section)
+    with OutputSet() as files:
+        subs = [_section_args(args, s, seed) for s, seed in
+                zip(corridor.sections, seeds, strict=True)]
+        for sub in subs:
+            _reserve(files, sub.out, out_files)
+            if report:
+                _reserve(files, sub.report, REPORT_FILES)
+            _reserve(files, sub.plot, _figure_files(figures, sub))
+        _reserve(files, args.out, ("summary.json",))
+        ran = elsewhere(subs) if elsewhere is not None else None
+
+        def one(i: int) -> SectionDone:
+            section = corridor.sections[i]
+            done = body(SectionRun(section, subs[i], files, registry,
+                                   None if ran is None else ran[i]))
+            if not args.json:
+                _section_rule(section, len(subs), subs[i].seed)
+                done.show()
+            return done
+
+        done = run_tasks(one, range(len(subs)))
+        summary = corridor_summary(
+            corridor, command, run_seed, [section_block(s, d.summary) for s, d in
+                                          zip(corridor.sections, done, strict=True)],
+            [d.cost for d in done] if command == "optimise" else (), scenarios)
+        if args.out:
+            files.write_json(args.out / "summary.json", summary)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
         _print_totals(summary)
+    return summary
 
 
 def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
     """``simulate`` of a corridor: every section's run, files and report, then the totals."""
     from .api import SimulationResult, run_simulation
-    from .cli import (
-        _FIGURES,
-        REPORT_FILES,
-        _figure_files,
-        _figures_and_report,
-        _memory_guard,
-        _reserve,
-        _run,
-        _table_writers,
-        run_record,
-    )
-    from .outputs import OutputSet
+    from .cli import _FIGURES, _figures_and_report, _memory_guard, _run, _table_writers, run_record
     from .report import print_simulation
     from .simulation import EXACT_ROCKS, study_memory
 
-    _registry(corridor, args)
-    run_seed, seeds = _seeds(corridor, args)
-    for section in corridor.sections:
+    def guard(section: CorridorSection) -> None:
         project = section.project
         n = args.rocks or project.rocks.count
         _memory_guard(study_memory(project, n), f"section {section.name!r}: {n:,} rocks "
                       f"with {project.analysis.envelope_points} envelope points",
                       "Use fewer analysis.envelope_points or analysis.stations.")
-    with OutputSet() as files:
-        subs = [_section_args(args, s, seed) for s, seed in
-                zip(corridor.sections, seeds, strict=True)]
-        for sub in subs:
-            _reserve(files, sub.out, ("rocks.csv", "crossings.csv", "summary.json"))
-            _reserve(files, sub.report, REPORT_FILES)
-            _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
-        _reserve(files, args.out, ("summary.json",))
 
+    def elsewhere(subs: Sequence[argparse.Namespace]) -> list[Any] | None:
         pooled = _pooled(args) and all(
             (args.rocks or s.project.rocks.count) <= EXACT_ROCKS for s in corridor.sections)
-        studies = _on_executors(_simulate_task, corridor, subs, args) if pooled else None
+        return _on_executors(_simulate_task, corridor, subs, args) if pooled else None
 
-        def one(i: int) -> dict[str, Any]:
-            section, sub = corridor.sections[i], subs[i]
-            if studies is not None:  # run elsewhere, kept whole: its tables written here
-                study = studies[i]
-                if sub.out:
-                    files.write_csv(sub.out / "rocks.csv", study.rocks_table())
-                    files.write_csv(sub.out / "crossings.csv", study.crossings_table())
-            else:
-                on_chunk = _table_writers(files, sub.out) if sub.out else None
-                study = _run(run_simulation, section.project, sub, on_chunk=on_chunk)
-            result = SimulationResult(section.project, study)
-            summary = result.summary
+    def body(run: SectionRun) -> SectionDone:
+        section, sub, files = run.section, run.args, run.files
+        if run.ran is not None:  # run elsewhere, kept whole: its tables written here
+            study = run.ran
             if sub.out:
-                files.write_json(sub.out / "summary.json",
-                                 {**summary, "run": run_record(study, sub)})
-            _figures_and_report(result, sub, files)
-            if not args.json:
-                _section_rule(section, len(subs))
-                print_simulation(summary)
-            return section_block(section, summary)
+                files.write_csv(sub.out / "rocks.csv", study.rocks_table())
+                files.write_csv(sub.out / "crossings.csv", study.crossings_table())
+        else:
+            on_chunk = _table_writers(files, sub.out) if sub.out else None
+            study = _run(run_simulation, section.project, sub, on_chunk=on_chunk)
+        result = SimulationResult(section.project, study)
+        summary = result.summary
+        if sub.out:
+            files.write_json(sub.out / "summary.json",
+                             {**summary, "run": run_record(study, sub)})
+        _figures_and_report(result, sub, files)
+        return SectionDone(summary, lambda: print_simulation(summary))
 
-        blocks = run_tasks(one, range(len(subs)))
-        summary = corridor_summary(corridor, "simulate", run_seed, blocks)
-        _finish(args, summary, files)
-    _emit(args, summary)
+    each_section(args, corridor, "simulate", body, guard=guard, elsewhere=elsewhere,
+                 out_files=("rocks.csv", "crossings.csv", "summary.json"), figures=_FIGURES)
     return int(ExitCode.OK)
 
 
 def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
     """``check`` of a corridor: every section checked; exit 0 only if every section holds."""
     from .api import CheckResult, check
-    from .cli import (
-        _FIGURES,
-        REPORT_FILES,
-        _figure_files,
-        _figures_and_report,
-        _in_memory_guard,
-        _reserve,
-        _run,
-        run_record,
-    )
-    from .outputs import OutputSet
+    from .cli import _FIGURES, _figures_and_report, _in_memory_guard, _run, run_record
     from .report import print_check
 
-    if getattr(args, "scenarios", False):
-        raise InputError("check --scenarios of a corridor is not supported yet: check each "
-                         "section's project file with --scenarios")
-    registry = _registry(corridor, args)
-    run_seed, seeds = _seeds(corridor, args)
-    for section in corridor.sections:
+    def guard(section: CorridorSection) -> None:
         a = section.project.analysis
         _in_memory_guard(args.rocks or section.project.rocks.count,
                          a.envelope_points + len(a.stations), len(a.stations))
-    with OutputSet() as files:
-        subs = [_section_args(args, s, seed) for s, seed in
-                zip(corridor.sections, seeds, strict=True)]
-        for sub in subs:
-            _reserve(files, sub.out, ("rocks.csv", "crossings.csv", "measures.csv",
-                                      "summary.json"))
-            _reserve(files, sub.report, REPORT_FILES)
-            _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
-        _reserve(files, args.out, ("summary.json",))
 
-        evaluations = (_on_executors(_check_task, corridor, subs, args) if _pooled(args)
-                       else None)
+    if getattr(args, "scenarios", False):
+        return _check_scenarios(args, corridor, guard)
 
-        def one(i: int) -> dict[str, Any]:
-            section, sub = corridor.sections[i], subs[i]
-            if evaluations is not None:  # run elsewhere
-                result = CheckResult(section.project, evaluations[i])
-            else:
-                result = _run(check, section.project, sub, registry=registry)
-            evaluation = result.evaluation
-            summary = result.summary
-            if sub.out:
-                out: Path = sub.out
-                files.write_csv(out / "rocks.csv", result.rocks)
-                files.write_csv(out / "crossings.csv", evaluation.study.crossings_table())
-                files.write_csv(out / "measures.csv", evaluation.outcomes_table())
-                record = run_record(evaluation.study, sub)
-                record["project"] = evaluation.resolved_project().resolved_dict()
-                record["project_hash"] = evaluation.resolved_project().resolved_hash()
-                files.write_json(out / "summary.json", {**summary, "run": record})
-            _figures_and_report(result, sub, files)
-            if not args.json:
-                _section_rule(section, len(subs))
-                print_check(summary)
-            return section_block(section, summary)
+    def elsewhere(subs: Sequence[argparse.Namespace]) -> list[Any] | None:
+        return _on_executors(_check_task, corridor, subs, args) if _pooled(args) else None
 
-        blocks = run_tasks(one, range(len(subs)))
-        summary = corridor_summary(corridor, "check", run_seed, blocks)
-        _finish(args, summary, files)
-    _emit(args, summary)
+    def body(run: SectionRun) -> SectionDone:
+        section, sub, files = run.section, run.args, run.files
+        if run.ran is not None:  # run elsewhere
+            result = CheckResult(section.project, run.ran)
+        else:
+            result = _run(check, section.project, sub, registry=run.registry)
+        evaluation = result.evaluation
+        summary = result.summary
+        if sub.out:
+            out: Path = sub.out
+            files.write_csv(out / "rocks.csv", result.rocks)
+            files.write_csv(out / "crossings.csv", evaluation.study.crossings_table())
+            files.write_csv(out / "measures.csv", evaluation.outcomes_table())
+            record = run_record(evaluation.study, sub)
+            record["project"] = evaluation.resolved_project().resolved_dict()
+            record["project_hash"] = evaluation.resolved_project().resolved_hash()
+            files.write_json(out / "summary.json", {**summary, "run": record})
+        _figures_and_report(result, sub, files)
+        return SectionDone(summary, lambda: print_check(summary))
+
+    summary = each_section(args, corridor, "check", body, guard=guard, elsewhere=elsewhere,
+                           out_files=("rocks.csv", "crossings.csv", "measures.csv",
+                                      "summary.json"), figures=_FIGURES)
     return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
 
 
@@ -428,92 +574,31 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
     Sections share no measure, so the corridor's cheapest design is the
     cheapest design of every section; exit 0 only if every section has one.
     """
-    from . import __version__
-    from .api import optimise
-    from .cli import (
-        _FIGURES,
-        REPORT_FILES,
-        _figure_files,
-        _figures_and_report,
-        _in_memory_guard,
-        _reserve,
-        _stage_progress,
-    )
-    from .outputs import OutputSet
-    from .report import design_yaml, print_optimise
+    from .cli import _FIGURES, _in_memory_guard, optimise_with_files, print_optimised
 
     for section in corridor.sections:
         if section.project.design is None:
             raise section.project.error_at(
                 ("design",), "the section has no design: section to optimise (give design: "
                 "at the top level, or in every section)")
-    registry = _registry(corridor, args)
-    run_seed, seeds = _seeds(corridor, args)
-    for section in corridor.sections:
+
+    def guard(section: CorridorSection) -> None:
         a = section.project.analysis
         _in_memory_guard(args.rocks or section.project.rocks.count,
                          a.envelope_points + 400, len(a.stations))
-    with OutputSet() as files:
-        subs = [_section_args(args, s, seed) for s, seed in
-                zip(corridor.sections, seeds, strict=True)]
-        for sub in subs:
-            _reserve(files, sub.out, ("design.yaml", "alternatives.csv", "summary.json"))
-            _reserve(files, sub.report, REPORT_FILES)
-            _reserve(files, sub.plot, _figure_files(_FIGURES, sub))
-        _reserve(files, args.out, ("summary.json",))
 
-        def one(i: int) -> tuple[dict[str, Any], float | None]:
-            section, sub = corridor.sections[i], subs[i]
-            project = section.project
-            n = sub.rocks or project.rocks.count
-            prog, callback = _stage_progress(sys.stderr.isatty())
-            if prog is None:
-                report = optimise(project, rocks=n, seed=sub.seed, registry=registry)
-            else:
-                with prog:
-                    report = optimise(project, rocks=n, seed=sub.seed, registry=registry,
-                                      progress=callback)
-            result = report.result
-            summary = report.summary
-            if sub.out:
-                out: Path = sub.out
-                if result.best is not None and project.design.scenarios is not None:
-                    from .across import across_design_yaml
+    def body(run: SectionRun) -> SectionDone:
+        project = run.section.project
+        report = optimise_with_files(project, run.args, run.registry, run.files,
+                                     f"{args.project}, section {run.section.name!r}",
+                                     {"section": run.section.name})
+        result = report.result
+        cost = None if result.best is None else float(result.best.cost)
+        return SectionDone(report.summary, lambda: print_optimised(result, project), cost)
 
-                    files.write_text(out / "design.yaml", across_design_yaml(
-                        result, f"{args.project}, section {section.name!r}", project))
-                elif result.best is not None:
-                    files.write_text(out / "design.yaml", design_yaml(
-                        result.best, f"{args.project}, section {section.name!r}",
-                        result.search_rocks))
-                else:
-                    files.remove(out / "design.yaml")
-                files.write_csv(out / "alternatives.csv", report.alternatives)
-                record = {"command": "optimise", "version": __version__,
-                          "seed": result.seed, "rocks": result.rocks,
-                          "project_file": str(args.project), "section": section.name,
-                          "project_hash": project.resolved_hash(),
-                          "project": project.resolved_dict()}
-                files.write_json(out / "summary.json", {**summary, "run": record})
-            if sub.plot and result.best is None:
-                for name in _figure_files(_FIGURES, sub):
-                    files.remove(sub.plot / name)
-            _figures_and_report(report, sub, files)
-            if not args.json:
-                _section_rule(section, len(subs))
-                print_optimise(result, project)
-                if project.design.scenarios is not None:
-                    from .across import print_across
-
-                    print_across(result)
-            cost = None if result.best is None else float(result.best.cost)
-            return section_block(section, summary), cost
-
-        done = run_tasks(one, range(len(subs)))
-        summary = corridor_summary(corridor, "optimise", run_seed, [b for b, _ in done],
-                                   [c for _, c in done])
-        _finish(args, summary, files)
-    _emit(args, summary)
+    summary = each_section(args, corridor, "optimise", body, guard=guard,
+                           out_files=("design.yaml", "alternatives.csv", "summary.json"),
+                           figures=_FIGURES)
     return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
 
 
@@ -526,8 +611,6 @@ def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
     section after the other. A study has no pass or fail: exit 0.
     """
     from .api import study
-    from .cli import _figure_files, _reserve
-    from .outputs import OutputSet
     from .study.command import OUT_FILES, run_record
     from .study.result import FIGURES
 
@@ -536,39 +619,60 @@ def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
             raise section.project.error_at(
                 (), "the section has no study: section (give study: at the top level, or "
                 "in every section)")
-    registry = _registry(corridor, args)
-    run_seed, seeds = _seeds(corridor, args)
-    with OutputSet() as files:
-        subs = [_section_args(args, s, seed) for s, seed in
-                zip(corridor.sections, seeds, strict=True)]
-        for sub in subs:
-            _reserve(files, sub.out, OUT_FILES)
-            _reserve(files, sub.plot, _figure_files(FIGURES, sub))
-        _reserve(files, args.out, ("summary.json",))
 
-        def one(i: int) -> dict[str, Any]:
-            section, sub = corridor.sections[i], subs[i]
-            project = section.project
-            result = study(project, rocks=sub.rocks or project.rocks.count, seed=sub.seed,
-                           workers=args.workers, scheduler=args.scheduler,
-                           progress=sys.stderr.isatty(), registry=registry)
-            summary = result.summary
-            if sub.out:
-                files.write_csv(sub.out / "scenarios.csv", result.scenarios)
-                files.write_csv(sub.out / "sensitivity.csv", result.sensitivity)
-                record = {**run_record(result, sub), "section": section.name}
-                files.write_json(sub.out / "summary.json", {**summary, "run": record})
-            if sub.plot:
-                from .figures import save_figures
+    def body(run: SectionRun) -> SectionDone:
+        section, sub, files = run.section, run.args, run.files
+        project = section.project
+        result = study(project, rocks=sub.rocks or project.rocks.count, seed=sub.seed,
+                       workers=args.workers, scheduler=args.scheduler,
+                       progress=sys.stderr.isatty(), registry=run.registry)
+        summary = result.summary
+        if sub.out:
+            files.write_csv(sub.out / "scenarios.csv", result.scenarios)
+            files.write_csv(sub.out / "sensitivity.csv", result.sensitivity)
+            record = {**run_record(result, sub), "section": section.name}
+            files.write_json(sub.out / "summary.json", {**summary, "run": record})
+        if sub.plot:
+            from .figures import save_figures
 
-                save_figures(result.figures(), sub.plot, args.plot_format, files)
-            if not args.json:
-                _section_rule(section, len(subs))
-                result.print()
-            return section_block(section, summary)
+            save_figures(result.figures(), sub.plot, args.plot_format, files)
+        return SectionDone(summary, result.print)
 
-        blocks = run_tasks(one, range(len(subs)))
-        summary = corridor_summary(corridor, "study", run_seed, blocks)
-        _finish(args, summary, files)
-    _emit(args, summary)
+    each_section(args, corridor, "study", body, out_files=OUT_FILES, figures=FIGURES,
+                 report=False)
     return int(ExitCode.OK)
+
+
+def _check_scenarios(args: argparse.Namespace, corridor: Corridor,
+                     guard: Callable[[CorridorSection], None]) -> int:
+    """``check --scenarios`` of a corridor: every section over its study's scenarios.
+
+    Each section is checked as ``check --scenarios`` checks its project
+    alone (its study: the shared one or its own; its own seed, from which its
+    scenarios' seeds derive); the scenarios of a section run on the study's
+    executors (``--workers``, ``--scheduler``), one section after the other.
+    The corridor holds when every section holds in its required scenarios:
+    exit 0, else 1. A corridor without a study is refused before anything
+    runs (exit 2), as is a section without one: checking it plainly would
+    hide that nothing varies there.
+    """
+    from .across import SCENARIO_FIGURES, check_scenarios_with_files, print_check_across
+
+    missing = [s for s in corridor.sections if s.project.study is None]
+    if len(missing) == len(corridor.sections):
+        raise InputError(f"{corridor.source}: check --scenarios needs a study: section (at "
+                         "the top level of a corridor: every section's study), or check "
+                         "without --scenarios")
+    if missing:  # should a section ever have a study of its own
+        raise missing[0].project.error_at(
+            (), "check --scenarios: the section has no study: section; check without "
+            "--scenarios")
+
+    def body(run: SectionRun) -> SectionDone:
+        summary = check_scenarios_with_files(run.section.project, run.args, run.registry,
+                                             run.files)
+        return SectionDone(summary, lambda: print_check_across(summary))
+
+    summary = each_section(args, corridor, "check", body, guard=guard, scenarios=True,
+                           out_files=("summary.json",), figures=SCENARIO_FIGURES)
+    return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)

@@ -296,6 +296,8 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
     """
     from .figures import CAPTIONS
 
+    if getattr(result, "across", False):  # check --scenarios
+        return _scenarios_context(result, figures)
     summary = result.summary
     project = result.project
     command = result.command
@@ -340,6 +342,115 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
     figs = figures if figures is not None else result.figures()
     ctx["figures"] = [{"name": name, "caption": CAPTIONS.get(name, ""), "fig": fig}
                       for name, fig in figs.items()]
+    return ctx
+
+
+def _values_text(values: Mapping[str, Any]) -> str:
+    return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
+
+
+def _margin_text(margin: Any, binds_at: Any) -> str:
+    return "no check to bind" if margin is None else (
+        f"margin {100 * float(margin):+.1f} % at {binds_at}")
+
+
+def _scenarios_table(summary: Mapping[str, Any], paths: list[str]) -> Table:
+    """Every scenario of ``check --scenarios``: values, seed, verdicts, margin, what binds."""
+    b = summary["binding"]["index"]
+    cols = ["", "#", *paths, "seed", "reaching", "holds", "with confidence", "margin",
+            "binds at"]
+    rows, marks = [], []
+    for p in summary["scenarios"]:
+        prot = p.get("protect")
+        rows.append(["*" if p["index"] == b else "", str(p["index"]),
+                     *(str(p["values"].get(k, "-")) for k in paths), str(p["seed"]),
+                     "-" if not prot else f"{prot['reaching']:,}",
+                     "yes" if p["ok"] else "FAILS",
+                     "yes" if p["holds_with_confidence"] else "no",
+                     "-" if p["margin"] is None else f"{100 * p['margin']:+.1f} %",
+                     str(p["binds_at"] or "-")])
+        marks.append(p["index"] == b)
+    return Table(f"Scenarios: {summary['of']}, each with its own rocks "
+                 f"({int(summary['rocks']):,} rocks, its own seed)", cols, rows,
+                 note="* the binding scenario (least margin). holds: every check and the "
+                 "residual on the point values, as check judges them; with confidence: with "
+                 "the confidence bounds in place. margin: the smallest relative slack of a "
+                 "check or of the residual with the confidence bounds in place, negative "
+                 "where it fails. reaching: rocks reaching the protected zone.",
+                 highlight=marks)
+
+
+def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The report of ``check --scenarios``: every scenario, the binding one in full.
+
+    The binding scenario's part is the report of ``check`` in that scenario
+    (:func:`report_context` of its :class:`~rockfall_design.api.CheckResult`),
+    its tables and figures titled with the scenario.
+    """
+    from types import SimpleNamespace
+
+    from .figures import CAPTIONS
+
+    summary = result.summary
+    project = result.project
+    binding = result.binding_check
+    b = summary["binding"]
+    figs = dict(figures) if figures is not None else result.figures()
+    ctx = report_context(binding, {k: v for k, v in figs.items() if k != "margins"})
+    name = f"binding scenario {b['index']} ({_values_text(b['values'])})"
+    # The run: the project as written, the run seed the scenarios' seeds derive from.
+    head = SimpleNamespace(project=project, command="check")
+    run = _run_table(head, {**binding.summary, "seed": summary["seed"],
+                            "project_hash": project.resolved_hash()})
+    for row in run.rows:
+        if row[0] == "seed":
+            row[0] = "run seed (each scenario's seed derives from it)"
+        if row[0] == "rocks":
+            row[0] = "rocks per scenario"
+        if row[0] == "program":
+            row[1] = f"rockfall-design {__version__}, command check --scenarios"
+    at = next(i for i, row in enumerate(run.rows) if row[0].startswith("run seed")) + 1
+    run.rows[at:at] = [
+        ["scenarios", f"{summary['of']}; the design must hold in {summary['required']} "
+         f"(design.scenarios share {summary['share']:g})"],
+        ["binding scenario", f"{b['index']} ({_values_text(b['values'])}), seed {b['seed']}: "
+         + _margin_text(b["margin"], b["binds_at"])],
+    ]
+    ctx["run"] = run
+    study = project.resolved_dict().get("study") or {}
+    vary = study.get("vary") or {}
+    ctx["inputs"] = _inputs(project, "check") + [Table(
+        "Study: the varied inputs", ["input (path in the project)", "values"],
+        [[k, ", ".join(map(str, v)) if isinstance(v, list) else str(v)]
+         for k, v in vary.items()],
+        note=f"Scenarios: {study.get('scenarios')}; seeds: {study.get('seeds')}. The other "
+        "inputs are as written above.")]
+    paths = list(dict.fromkeys(k for p in summary["scenarios"] for k in p["values"]))
+    ctx["results"] = [_scenarios_table(summary, paths)] + [
+        Table(f"{name[0].upper()}{name[1:]}: {t.title}", t.columns, t.rows, t.note, t.highlight)
+        for t in ctx["results"]]
+    if ctx["protect"]:
+        ctx["protect"] = f"{name[0].upper()}{name[1:]}: {ctx['protect']}"
+    ctx["results_note"] = (
+        "Every scenario of the study first; then the binding scenario (the least margin), "
+        f"in full as check shows one scenario: scenario {b['index']}, seed {b['seed']}, "
+        + _margin_text(b["margin"], b["binds_at"]) + ".")
+    ok = bool(summary["ok"])
+    ctx["title"] = f"{project.name}: rockfall check over {summary['of']} scenarios"
+    ctx["command"] = "check --scenarios"
+    ctx["verdict"] = (
+        f"Design {'holds' if ok else 'fails'}: it holds in {summary['holds_in']} of "
+        f"{summary['of']} scenarios (on the point values; "
+        f"{summary['holds_with_confidence_in']} with the confidence bounds); required: "
+        f"{summary['required']}. Binding: scenario {b['index']}, "
+        + _margin_text(b["margin"], b["binds_at"]) + ".")
+    ctx["verdict_ok"] = ok
+    ctx["failures"] = list(summary.get("failures", []))
+    for f in ctx["figures"]:
+        f["caption"] = f"{name[0].upper()}{name[1:]}: {f['caption']}"
+    if "margins" in figs:  # first: the report begins with every scenario
+        ctx["figures"].insert(0, {"name": "margins", "caption": CAPTIONS["margins"],
+                                  "fig": figs["margins"]})
     return ctx
 
 

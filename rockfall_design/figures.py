@@ -43,6 +43,7 @@ __all__ = [
     "envelopes_figure",
     "stops_figure",
     "alternatives_figure",
+    "margins_figure",
     "study_figures",
     "save_figures",
     "no_stop_reason",
@@ -68,6 +69,11 @@ CAPTIONS = {
     "alternatives": "The optimiser's alternatives: cost of the cheapest design of each family "
     "(admissible ones coloured, the chosen one marked), with the rocks still reaching the "
     "protected zone and the check that binds or fails.",
+    "margins": "The design's margin in every scenario of the study: the smallest relative "
+    "slack of a check or of the residual with the confidence bounds in place (%, negative "
+    "where it fails), with what binds; green where the design holds on the point values "
+    "(hatched: not with the confidence bounds), red where it fails; * the binding scenario "
+    "(least margin). Below: the scenarios it holds in against the number required.",
 }
 
 
@@ -454,6 +460,113 @@ def alternatives_figure(
     ax.set_title(f"{title}: {head}" if title else head)
     if not rows:
         ax.text(0.5, 0.5, "no alternatives", transform=ax.transAxes, ha="center")
+    return fig
+
+
+def _short_paths(paths: Sequence[str]) -> dict[str, str]:
+    """Each varied path by its shortest ending of at least two parts that no other shares.
+
+    'materials.talus.restitution' -> 'talus.restitution', 'rocks.volume.lognormal.0'
+    -> 'lognormal.0': the scenario labels stay short and still say which input.
+    """
+    out = {}
+    for path in paths:
+        parts = path.split(".")
+        for n in range(min(2, len(parts)), len(parts) + 1):
+            tail = ".".join(parts[-n:])
+            if not any(o != path and (o == tail or o.endswith("." + tail)) for o in paths):
+                break
+        out[path] = tail
+    return out
+
+
+def _scenario_label(index: int, values: Mapping[str, Any], short: Mapping[str, str],
+                    width: int = 60) -> str:
+    """'#2 talus.restitution = 0.3, ...' shortened to ``width`` characters."""
+    text = ", ".join(f"{short.get(k, k)} = {v}" for k, v in values.items()) or "as written"
+    if len(text) > width:
+        text = text[:width - 3] + "..."
+    return f"#{index} {text}"
+
+
+def margins_figure(
+    scenarios: Sequence[Mapping[str, Any]],
+    required: int,
+    binding: int | None = None,
+    title: str = "",
+) -> Figure:
+    """A bar per scenario: the design's margin, the binding scenario, the count required.
+
+    Parameters
+    ----------
+    scenarios : sequence of dict
+        The scenarios of ``check --scenarios --json`` (``index``, ``values``,
+        ``margin`` (a fraction, None without a check), ``binds_at``, ``ok``,
+        ``holds_with_confidence``; other keys ignored).
+    required : int
+        Scenarios the design must hold in.
+    binding : int, optional
+        The index of the binding scenario (marked).
+    title : str
+        A title (e.g. the project's name).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Top: a horizontal bar per scenario, its margin in % (green where the
+        design holds on the point values, hatched where not with the
+        confidence bounds, red where it fails). Bottom: one cell per
+        scenario, those it holds in first, and a line at the count required.
+    """
+    k = len(scenarios)
+    fig = RockfallFigure(figsize=(10, 2.2 + 0.42 * max(k, 1)), layout="constrained")
+    ax, strip = fig.subplots(2, 1, height_ratios=[max(k, 1) * 0.42, 0.7])
+    margins = [None if p.get("margin") is None else 100.0 * float(p["margin"])
+               for p in scenarios]
+    finite = [abs(m) for m in margins if m is not None]
+    span = max(finite) if finite else 1.0
+    span = span if span > 0 else 1.0
+    for i, (p, m) in enumerate(zip(scenarios, margins, strict=True)):
+        bind = binding is not None and p.get("index") == binding
+        if not p.get("ok"):
+            color, hatch = "#e6b0aa", None
+        else:
+            color = "#1e8449" if bind else "#7dcea0"
+            hatch = None if p.get("holds_with_confidence") else "//"
+        width = 0.0 if m is None else m
+        ax.barh(i, width, color=color, hatch=hatch, height=0.6,
+                edgecolor="#1b2631" if bind else "#566573", linewidth=2.0 if bind else 0.8)
+        note = "no check to bind" if m is None else f"{m:+.1f} %  {p.get('binds_at') or ''}"
+        if bind:
+            note += "   (binding)"
+        ax.text(max(width, 0.0) + 0.02 * span, i, note.rstrip(), va="center", fontsize=8)
+    ax.axvline(0.0, color="#1b2631", lw=1.0)
+    short = _short_paths(list(dict.fromkeys(k for p in scenarios for k in p.get("values") or {})))
+    ax.set_yticks(range(k), [("* " if binding is not None and p.get("index") == binding
+                              else "") + _scenario_label(int(p.get("index", i)),
+                                                         p.get("values") or {}, short)
+                             for i, p in enumerate(scenarios)], fontsize=8)
+    ax.invert_yaxis()
+    low = min([m for m in margins if m is not None] + [0.0])
+    ax.set_xlim(low - 0.1 * span, span * 2.2)
+    ax.set_xlabel("margin (%): least relative slack with the confidence bounds in place")
+    ax.grid(axis="x", alpha=0.3)
+    head = "design margin per scenario; * binding (least margin)"
+    ax.set_title(f"{title}: {head}" if title else head)
+    # The count: one cell per scenario, those the design holds in first.
+    holds = sum(bool(p.get("ok")) for p in scenarios)
+    for j in range(k):
+        strip.barh(0, 1, left=j, height=0.8, color="#7dcea0" if j < holds else "#e6b0aa",
+                   edgecolor="white")
+    strip.axvline(required, color="#1b2631", lw=2.0)
+    strip.text(required, 0.55, f" required: {required} of {k}", va="bottom", fontsize=8)
+    strip.set_xlim(0, max(k, 1) * 1.0001)
+    strip.set_ylim(-0.5, 1.2)
+    strip.set_yticks([])
+    strip.set_xticks(range(k + 1))
+    ok = holds >= required
+    strip.set_xlabel(f"holds in {holds} of {k} scenarios (point values): "
+                     + ("enough" if ok else "too few"))
     return fig
 
 
