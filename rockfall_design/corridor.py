@@ -625,7 +625,8 @@ def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
         project = section.project
         result = study(project, rocks=sub.rocks or project.rocks.count, seed=sub.seed,
                        workers=args.workers, scheduler=args.scheduler,
-                       progress=sys.stderr.isatty(), registry=run.registry)
+                       progress=sys.stderr.isatty(), registry=run.registry,
+                       pool=args.pool, envelopes=sub.plot is not None)
         summary = result.summary
         if sub.out:
             files.write_csv(sub.out / "scenarios.csv", result.scenarios)

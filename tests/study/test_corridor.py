@@ -200,6 +200,34 @@ def test_study_runs_every_section_as_its_own_study(tmp_path, capsys):
     assert json.loads((tmp_path / "out" / "summary.json").read_text())["totals"] == out["totals"]
 
 
+def test_a_corridor_study_heeds_pool_and_draws_the_envelopes(tmp_path, capsys, monkeypatch):
+    import importlib
+
+    executors = importlib.import_module("rockfall_design.study.executors")
+    pools = []
+    for name in ("_on_pool", "_on_threads"):
+        real = getattr(executors, name)
+
+        def spy(*a, _real=real, _name=name, **k):
+            pools.append(_name)
+            return _real(*a, **k)
+
+        monkeypatch.setattr(executors, name, spy)
+    path = tmp_path / "c.yaml"
+    study = "study:\n  vary:\n    materials.talus.restitution: [0.2, 0.3]\n"
+    path.write_text(CORRIDOR.replace("sections:", study + "sections:"))
+    runs = []
+    for pool in ("threads", "processes"):
+        assert main(["study", str(path), "--json", "--workers", "2", "--pool", pool,
+                     "--plot", str(tmp_path / pool)]) == 0
+        out = _json(capsys)
+        runs.append([block["scenarios"] for block in out["sections"]])
+        for name in ("north", "south"):
+            assert (tmp_path / pool / name / "study_envelopes.png").stat().st_size > 0
+    assert runs[0] == runs[1]
+    assert pools == ["_on_threads"] * 2 + ["_on_pool"] * 2  # each section, each pool
+
+
 def test_seed_option_derives_every_section_seed(tmp_path, capsys):
     path = tmp_path / "c.yaml"
     path.write_text(CORRIDOR)
