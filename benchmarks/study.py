@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import rockfall_design as rd
@@ -43,6 +44,7 @@ from rockfall_design.engine.ensemble import ENGINE_THREADS
 from rockfall_design.project import load_project_text
 from rockfall_design.simulation import simulate
 from rockfall_design.study.executors import usable_cores
+from rockfall_design.study.run import ScenarioTask, prepare
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -78,22 +80,37 @@ def main() -> None:
     for module in ("evaluate", "judge.bounds", "study.run", "study.result",
                    "study.sensitivity", "study.executors"):
         importlib.import_module(f"rockfall_design.{module}")
-    from rockfall_design.study.run import prepare
 
     _, tasks = prepare(project, registry, rocks=n)
     k = len(tasks)
     cores = usable_cores()
 
-    def yardstick() -> float:
-        """The 27 scenarios' own simulations with their statistics, one core, in turn."""
+    def one(task: ScenarioTask) -> None:
+        """A scenario's own simulation with its statistics (simulate --json), one core."""
         token = ENGINE_THREADS.set(1)
         try:
-            t0 = time.perf_counter()
-            for task in tasks:
-                simulate(task.project, rocks=n, seed=task.seed).summary()
-            return time.perf_counter() - t0
+            simulate(task.project, rocks=n, seed=task.seed).summary()
         finally:
             ENGINE_THREADS.reset(token)
+
+    def yardstick() -> float:
+        """The 27 scenarios' own simulations, one after the other on one core."""
+        t0 = time.perf_counter()
+        for task in tasks:
+            one(task)
+        return time.perf_counter() - t0
+
+    def side_by_side() -> float:
+        """The same 27 simulations on a plain pool of ``cores`` threads, nothing else.
+
+        What this machine gives for them at best, with no study around them:
+        where cores share caches, memory bandwidth or (virtual CPUs) one
+        physical core, less than ``cores`` times one core.
+        """
+        t0 = time.perf_counter()
+        with ThreadPoolExecutor(max_workers=cores) as threads:
+            list(threads.map(one, tasks))
+        return time.perf_counter() - t0
 
     def timed(**kw: object) -> tuple[float, dict]:
         t0 = time.perf_counter()
@@ -104,28 +121,36 @@ def main() -> None:
     pool = (f"Dask scheduler {args.scheduler}" if args.scheduler
             else f"local pool of {min(args.workers or cores, k)} threads")
     print(f"rocks per scenario: {n:,}; scenarios: {k}; cores: {cores}; rounds: {args.rounds}")
-    print(f"{'round':>5}  {'27 simulations':>14}  {'ideal':>6}  {'study':>6}  {'ratio':>5}  "
-          f"{'+envelopes':>10}  {'ratio':>5}")
-    ratios, ratios_env, studies, sticks = [], [], [], []
+    print("times in s; ratios: the study against the ideal (27 simulations / cores) and "
+          "against the same simulations side by side on a plain thread pool")
+    print(f"{'round':>5} {'27 sims':>8} {'ideal':>6} {'side by side':>13} {'study':>6} "
+          f"{'/ideal':>7} {'/side':>6} {'+envelopes':>11} {'/ideal':>7}")
+    ratios, ratios_env, ratios_side, speedups, studies, sticks = [], [], [], [], [], []
     summary: dict = {}
     for r in range(args.rounds):
         t_seq = yardstick()
+        t_side = side_by_side()
         t_study, summary = timed(envelopes=False, **where)  # as study --json
         t_env, other = timed(**where)  # as study --plot
         assert other["scenarios"] == summary["scenarios"], "the envelopes changed a number"
         ideal = t_seq / cores
         ratios.append(t_study / ideal)
         ratios_env.append(t_env / ideal)
+        ratios_side.append(t_study / t_side)
+        speedups.append(t_seq / t_side)
         studies.append(t_study)
         sticks.append(t_seq)
-        print(f"{r + 1:>5}  {t_seq:>12.2f} s  {ideal:>4.2f} s  {t_study:>4.2f} s  "
-              f"{ratios[-1]:>5.2f}  {t_env:>8.2f} s  {ratios_env[-1]:>5.2f}")
-    print(f"median: the study on the {pool} (the default) takes "
-          f"{statistics.median(ratios):.2f} x the ideal, 27 simulations / {cores} cores "
-          f"(range {min(ratios):.2f}-{max(ratios):.2f}); with envelopes "
-          f"{statistics.median(ratios_env):.2f} x; "
-          f"{k * n / statistics.median(studies):,.0f} rocks/s, against "
-          f"{k * n / statistics.median(sticks):,.0f} rocks/s of one simulation on one core")
+        print(f"{r + 1:>5} {t_seq:>8.2f} {ideal:>6.2f} {t_side:>13.2f} {t_study:>6.2f} "
+              f"{ratios[-1]:>7.2f} {ratios_side[-1]:>6.2f} {t_env:>11.2f} {ratios_env[-1]:>7.2f}")
+    med = statistics.median
+    print(f"median: the study on the {pool} (the default) takes {med(ratios):.2f} x the ideal "
+          f"(range {min(ratios):.2f}-{max(ratios):.2f}), {med(ratios_side):.2f} x the "
+          f"simulations side by side (range {min(ratios_side):.2f}-{max(ratios_side):.2f}); "
+          f"with envelopes {med(ratios_env):.2f} x the ideal")
+    print(f"this machine runs the simulations side by side {med(speedups):.2f} x as fast as one "
+          f"after the other on one core ({cores} cores); "
+          f"{k * n / med(studies):,.0f} rocks/s in the study, "
+          f"{k * n / med(sticks):,.0f} rocks/s on one core")
     if args.scheduler is None:
         t_proc, other = timed(envelopes=False, pool="processes", workers=args.workers)
         assert other["scenarios"] == summary["scenarios"], "the pools differ"
