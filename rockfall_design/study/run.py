@@ -250,20 +250,33 @@ def _confidence(project: Project) -> float:
 
 def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
             confidence: float) -> dict[str, Any]:
-    """One-sided upper confidence bounds of the scenario's design values.
+    """Confidence bounds of the scenario's design values, by name.
 
     Each p95 and p99 of passing height and energy at the stations and
-    barriers: the distribution-free order-statistic bound over the rocks
+    barriers: the distribution-free order-statistic bounds over the rocks
     that passed (None where too few did); the fraction reaching the
     protected zone: Clopper-Pearson. A streamed run (more than
     ``EXACT_ROCKS`` rocks) keeps no per-rock values: only the fraction's
-    bound is given then.
-    """
-    from ..judge.bounds import fraction_upper_bound, quantile_upper_bound
-    from ..simulation import Study
-    from .sensitivity import TARGET_STATISTICS, place_names
+    bounds are given then.
 
-    values: dict[str, float | None] = {}
+    Returns
+    -------
+    dict
+        ``confidence`` (c); ``upper`` and ``lower``, the one-sided upper and
+        lower bound of each design value at c (together a two-sided
+        interval at 2c - 1); ``ladder``, the bounds the sensitivity needs
+        (:func:`~.sensitivity.joint_bounds`): per number of scenarios k of
+        :data:`~.sensitivity.LADDER`, ``lower`` and ``upper`` at the one-sided
+        confidence 1 - (1 - c) / (2k) each. The ladder is there because a
+        scenario's task does not know how many scenarios its study has; it
+        is left out of the study's JSON.
+    """
+    from ..simulation import Study
+    from .sensitivity import LADDER, TARGET_STATISTICS, ladder_confidences, place_names
+
+    sides = ladder_confidences(confidence)
+    out: dict[str, Any] = {"confidence": confidence, "upper": {}, "lower": {}}
+    ladder: dict[str, Any] = {"scenarios": list(LADDER), "upper": {}, "lower": {}}
     if isinstance(study, Study):
         arrays = study.crossing_arrays()
         columns = {float(x): j for j, x in enumerate(study.stations)}
@@ -272,18 +285,51 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
             for quantity, array, scale in (("passing_height_m", "passing_height_m", 1.0),
                                            ("energy_kj", "energy_j", 1e3)):
                 column = arrays[array][:, j]
-                column = column[np.isfinite(column)] / scale
+                # one sort per column; every bound below is an index into it
+                ordered = np.sort(column[np.isfinite(column)] / scale)
                 for stat in TARGET_STATISTICS:
-                    q = float(stat[1:]) / 100
-                    values[f"{where} {quantity} {stat}"] = (
-                        quantile_upper_bound(column, q, confidence) if column.size else None)
+                    name = f"{where} {quantity} {stat}"
+                    found = _order_bounds(ordered, float(stat[1:]) / 100, confidence, sides)
+                    out["lower"][name], out["upper"][name] = found[0], found[1]
+                    ladder["lower"][name], ladder["upper"][name] = found[2], found[3]
     protect = summary.get("protect")
     if protect is not None:
+        from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
         from ..project.messages import _fmt
 
-        values[f"x={_fmt(protect['x'])} residual"] = fraction_upper_bound(
-            int(protect["reaching"]), int(summary["rocks"]), confidence)
-    return {"confidence": confidence, "upper": values}
+        name = f"x={_fmt(protect['x'])} residual"
+        x, n = int(protect["reaching"]), int(summary["rocks"])
+        out["upper"][name] = fraction_upper_bound(x, n, confidence)
+        out["lower"][name] = fraction_lower_bound(x, n, confidence)
+        ladder["lower"][name] = [fraction_lower_bound(x, n, c) for c in sides]
+        ladder["upper"][name] = [fraction_upper_bound(x, n, c) for c in sides]
+    out["ladder"] = ladder
+    return out
+
+
+def _order_bounds(ordered: np.ndarray, q: float, confidence: float, sides: Sequence[float]
+                  ) -> tuple[float | None, float | None, list[float | None], list[float | None]]:
+    """Lower and upper bound of the q-quantile of a sorted sample at ``confidence``,
+    then the lists of both at each one-sided confidence of ``sides``; None: too few values.
+
+    The upper bound at ``confidence`` is the index of
+    :func:`~rockfall_design.judge.bounds.quantile_upper_index`, as ``check``
+    bounds its design values; the rest come from one vectorised bisection each side.
+    """
+    from ..judge.bounds import quantile_indices, quantile_upper_index
+
+    n = int(ordered.size)
+    if n == 0:
+        return None, None, [None] * len(sides), [None] * len(sides)
+    levels = [confidence, *sides]
+
+    def pick(indices: Any) -> list[float | None]:
+        return [float(ordered[i]) if i >= 0 else None for i in indices]
+
+    lower = pick(quantile_indices(n, q, levels, "lower"))
+    upper = pick(quantile_indices(n, q, sides, "upper"))
+    k = quantile_upper_index(n, q, confidence)
+    return lower[0], (None if k is None else float(ordered[k])), lower[1:], upper
 
 
 def envelope_percentile(project: Project) -> float:
