@@ -280,56 +280,65 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
     if isinstance(study, Study):
         arrays = study.crossing_arrays()
         columns = {float(x): j for j, x in enumerate(study.stations)}
+        names, samples, qs = [], [], []
         for where, x in place_names(summary["stations"], task.barriers, task.project):
             j = columns[x]
             for quantity, array, scale in (("passing_height_m", "passing_height_m", 1.0),
                                            ("energy_kj", "energy_j", 1e3)):
                 column = arrays[array][:, j]
-                # one sort per column; every bound below is an index into it
+                # one sort per column: every bound of its design values is an index into it
                 ordered = np.sort(column[np.isfinite(column)] / scale)
                 for stat in TARGET_STATISTICS:
-                    name = f"{where} {quantity} {stat}"
-                    found = _order_bounds(ordered, float(stat[1:]) / 100, confidence, sides)
-                    out["lower"][name], out["upper"][name] = found[0], found[1]
-                    ladder["lower"][name], ladder["upper"][name] = found[2], found[3]
+                    names.append(f"{where} {quantity} {stat}")
+                    samples.append(ordered)
+                    qs.append(float(stat[1:]) / 100)
+        found = _order_bounds(samples, qs, confidence, sides)
+        for name, (lower, upper, low_ladder, high_ladder) in zip(names, found, strict=True):
+            out["lower"][name], out["upper"][name] = lower, upper
+            ladder["lower"][name], ladder["upper"][name] = low_ladder, high_ladder
     protect = summary.get("protect")
     if protect is not None:
-        from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
+        from ..judge.bounds import fraction_bounds, fraction_lower_bound, fraction_upper_bound
         from ..project.messages import _fmt
 
         name = f"x={_fmt(protect['x'])} residual"
         x, n = int(protect["reaching"]), int(summary["rocks"])
         out["upper"][name] = fraction_upper_bound(x, n, confidence)
         out["lower"][name] = fraction_lower_bound(x, n, confidence)
-        ladder["lower"][name] = [fraction_lower_bound(x, n, c) for c in sides]
-        ladder["upper"][name] = [fraction_upper_bound(x, n, c) for c in sides]
+        low, high = fraction_bounds(x, n, sides)
+        ladder["lower"][name], ladder["upper"][name] = low.tolist(), high.tolist()
     out["ladder"] = ladder
     return out
 
 
-def _order_bounds(ordered: np.ndarray, q: float, confidence: float, sides: Sequence[float]
-                  ) -> tuple[float | None, float | None, list[float | None], list[float | None]]:
-    """Lower and upper bound of the q-quantile of a sorted sample at ``confidence``,
-    then the lists of both at each one-sided confidence of ``sides``; None: too few values.
+def _order_bounds(samples: Sequence[np.ndarray], qs: Sequence[float], confidence: float,
+                  sides: Sequence[float]) -> list[tuple[Any, Any, list[Any], list[Any]]]:
+    """Per sorted sample and its quantile q: the lower and upper bound of the q-quantile
+    at ``confidence``, then the lists of both at each one-sided confidence of
+    ``sides``; None where the sample is too small.
 
-    The upper bound at ``confidence`` is the index of
-    :func:`~rockfall_design.judge.bounds.quantile_upper_index`, as ``check``
-    bounds its design values; the rest come from one vectorised bisection each side.
+    All from two vectorised searches, one a side
+    (:func:`~rockfall_design.judge.bounds.quantile_index_table`: the upper
+    bound at ``confidence`` is the one of ``check``,
+    :func:`~rockfall_design.judge.bounds.quantile_upper_bound`).
     """
-    from ..judge.bounds import quantile_indices, quantile_upper_index
+    from ..judge.bounds import quantile_index_table
 
-    n = int(ordered.size)
-    if n == 0:
-        return None, None, [None] * len(sides), [None] * len(sides)
+    ns = [int(v.size) for v in samples]
     levels = [confidence, *sides]
-
-    def pick(indices: Any) -> list[float | None]:
-        return [float(ordered[i]) if i >= 0 else None for i in indices]
-
-    lower = pick(quantile_indices(n, q, levels, "lower"))
-    upper = pick(quantile_indices(n, q, sides, "upper"))
-    k = quantile_upper_index(n, q, confidence)
-    return lower[0], (None if k is None else float(ordered[k])), lower[1:], upper
+    lows = quantile_index_table(ns, qs, levels, "lower")
+    highs = quantile_index_table(ns, qs, levels, "upper")
+    out = []
+    for v, n, low, high in zip(samples, ns, lows, highs, strict=True):
+        if n == 0:
+            out.append((None, None, [None] * len(sides), [None] * len(sides)))
+            continue
+        picked_low = [None if i < 0 else x for i, x in zip(low.tolist(), v[low].tolist(),
+                                                             strict=True)]
+        picked_high = [None if i < 0 else x for i, x in zip(high.tolist(), v[high].tolist(),
+                                                              strict=True)]
+        out.append((picked_low[0], picked_high[0], picked_low[1:], picked_high[1:]))
+    return out
 
 
 def envelope_percentile(project: Project) -> float:
