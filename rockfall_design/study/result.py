@@ -90,20 +90,34 @@ class StudyResult:
         ``index``, ``seed``, ``values`` keyed exactly as under ``vary:``,
         ``rocks``, ``events``, ``project_hash`` of the scenario's project,
         and ``stations``, ``stops``, ``protect`` as ``simulate --json``, and
-        ``measures`` for the barriers, and ``bounds``: ``confidence`` and
-        ``upper``, the one-sided upper confidence bound of each design value
-        by name) and ``sensitivity`` (see
-        :func:`~rockfall_design.study.sensitivity.sensitivity`).
+        ``measures`` for the barriers, and ``bounds``: ``confidence`` c,
+        ``upper`` and ``lower``, the one-sided upper and lower confidence
+        bound at c of each design value by name, and ``joint``: its
+        ``confidence`` and the ``lower`` and ``upper`` bounds of the
+        intervals that hold for all scenarios together at c, from which the
+        sensitivity's intervals come), ``sensitivity`` (see
+        :func:`~rockfall_design.study.sensitivity.sensitivity`) and
+        ``sensitivity_confidence``, the c at which its ``effect_low`` ..
+        ``effect_high`` hold (None if no scenario has bounds).
         """
         from .. import __version__
+        from .sensitivity import joint_bounds
 
         study = self.project.resolved_dict()["study"]
+        joint = joint_bounds(self.results)
         scenarios = []
-        for scenario, result in zip(self.scenario_list, self.results, strict=True):
+        for k, (scenario, result) in enumerate(zip(self.scenario_list, self.results,
+                                                   strict=True)):
             block = {"index": scenario.index, "seed": scenario.seed,
                      "values": dict(scenario.values)}
-            block.update({k: v for k, v in result.items()
-                          if k not in ("index", "seed", "envelope", "runtime_s")})
+            block.update({key: v for key, v in result.items()
+                          if key not in ("index", "seed", "envelope", "runtime_s")})
+            if "bounds" in block:  # the ladder is the run's working: the bounds used show
+                bounds = {b: v for b, v in block["bounds"].items() if b != "ladder"}
+                if joint is not None:
+                    bounds["joint"] = {"confidence": joint["scenario_confidence"],
+                                       "lower": joint["lower"][k], "upper": joint["upper"][k]}
+                block["bounds"] = bounds
             scenarios.append(block)
         return {
             "project": self.project.name,
@@ -117,16 +131,37 @@ class StudyResult:
             "seeds": study["seeds"],
             "scenarios": scenarios,
             "sensitivity": [dict(e) for e in self._sensitivity],
+            "sensitivity_confidence": None if joint is None else joint["confidence"],
         }
 
     @property
+    def sensitivity_confidence(self) -> float | None:
+        """The confidence c of the sensitivity's ``effect_low`` .. ``effect_high``."""
+        from .sensitivity import joint_bounds
+
+        joint = joint_bounds(self.results)
+        return None if joint is None else float(joint["confidence"])
+
+    @property
     def sensitivity(self) -> pd.DataFrame:
-        """One row per (parameter, target): effect, unit, low, high (and S1, S1_conf)."""
+        """One row per (parameter, target), as the JSON's entries, and the ``confidence``.
+
+        Columns: parameter, target, effect, unit, low, high, effect_low,
+        effect_high (empty where there is no interval), resolved (True: the
+        effect is more than Monte Carlo noise at the confidence), confidence
+        (:attr:`sensitivity_confidence`), and S1, S1_conf for a sampled study.
+        """
         import pandas as pd
 
-        cols = ["parameter", "target", "effect", "unit", "low", "high"]
+        cols = ["parameter", "target", "effect", "unit", "low", "high", "effect_low",
+                "effect_high", "resolved", "confidence"]
         frame = pd.DataFrame(self._sensitivity)
-        return frame if not frame.empty else pd.DataFrame(columns=cols)
+        if frame.empty:
+            return pd.DataFrame(columns=cols)
+        if "resolved" in frame.columns:
+            frame.insert(int(frame.columns.get_loc("resolved")) + 1, "confidence",
+                         self.sensitivity_confidence)
+        return frame
 
     @property
     def scenarios(self) -> pd.DataFrame:
@@ -134,8 +169,9 @@ class StudyResult:
 
         Each design value ``x=100 energy_kj p95`` is followed (after all of
         them) by ``x=100 energy_kj p95 upper``, its one-sided upper confidence
-        bound (NaN where too few rocks passed to bound it; see ``bounds`` in
-        the summary).
+        bound, then (after all of those) by ``x=100 energy_kj p95 lower``,
+        its one-sided lower one (NaN where too few rocks passed to bound it;
+        see ``bounds`` in the summary).
         """
         import pandas as pd
 
@@ -150,11 +186,12 @@ class StudyResult:
                     json.dumps(value, sort_keys=True)
             for name, (_, values) in table.items():
                 row[name] = values[k]
-            upper = self.results[k].get("bounds", {}).get("upper", {})
-            for name in table:
-                if name in upper:
-                    bound = upper[name]
-                    row[f"{name} upper"] = math.nan if bound is None else bound
+            for side in ("upper", "lower"):
+                given = self.results[k].get("bounds", {}).get(side, {})
+                for name in table:
+                    if name in given:
+                        bound = given[name]
+                        row[f"{name} {side}"] = math.nan if bound is None else bound
             rows.append(row)
         return pd.DataFrame(rows)
 
@@ -230,18 +267,34 @@ class StudyResult:
         for ax, target in zip(axes, chosen, strict=True):
             rows = sorted((e for e in entries if e["target"] == target),
                           key=lambda e: e["effect"])
-            names = [e["parameter"] for e in rows]
+            names = [e["parameter"] + ("" if e.get("resolved", True) else " *") for e in rows]
             lows = np.array([e["low"] for e in rows])
             highs = np.array([e["high"] for e in rows])
-            ax.barh(names, highs - lows, left=lows, color="#2980b9", alpha=0.8)
+            resolved = [e.get("resolved", True) for e in rows]
+            ax.barh(names, highs - lows, left=lows, color=["#2980b9" if r else "#95a5a6"
+                                                          for r in resolved], alpha=0.8)
+            # The interval of each bar's length (the effect), drawn from its left end:
+            # the bar's right end could lie anywhere on the error bar.
+            ends = [k for k, e in enumerate(rows) if e.get("effect_low") is not None]
+            if ends:
+                at = np.array([lows[k] + rows[k]["effect"] for k in ends])
+                spread = np.array([[rows[k]["effect"] - rows[k]["effect_low"] for k in ends],
+                                   [rows[k]["effect_high"] - rows[k]["effect"] for k in ends]])
+                ax.errorbar(at, ends, xerr=np.clip(spread, 0.0, None), fmt="none",
+                            ecolor="black", elinewidth=1.0, capsize=3)
             for k, e in enumerate(rows):
-                ax.text(e["high"], k, f"  {_number(e['effect'], e['unit'])}", va="center",
+                right = e["high"] if e.get("effect_high") is None else \
+                    max(e["high"], e["low"] + e["effect_high"])
+                ax.text(right, k, f"  {_number(e['effect'], e['unit'])}", va="center",
                         fontsize=8)
             ax.margins(x=0.15)
             unit = rows[0]["unit"] if rows else ""
             ax.set_title(f"{target} ({unit})", fontsize=9, loc="left")
             ax.grid(axis="x", alpha=0.3)
-        axes[-1].set_xlabel("range of the level means of each input")
+        c = self.sensitivity_confidence
+        axes[-1].set_xlabel("range of the level means of each input; error bar: where its "
+                            f"end may lie at {_percent(c)} (Monte Carlo noise); * grey: not "
+                            "resolved from the noise")
         fig.suptitle(f"{self.project.name}: which input moves each design value")
         return fig
 
@@ -285,18 +338,31 @@ class StudyResult:
                        "largest effect first; the design values moved most, relative to "
                        "their size, first)", show_edge=False, title_justify="left")
         indices = any("S1" in e for e in s["sensitivity"])
-        for col in ("target", "input", "effect", "low .. high", *(("S1",) if indices else ())):
+        c = s["sensitivity_confidence"]
+        sure = "effect, sure" if c is None else f"effect at {_percent(c)}"
+        for col in ("target", "input", "effect", sure, "level means",
+                    *(("S1",) if indices else ())):
             ranked.add_column(col, justify="left" if col in ("target", "input") else "right")
-        for e in _by_target(s["sensitivity"])[:top]:
+        shown_entries = _by_target(s["sensitivity"])[:top]
+        for e in shown_entries:
             unit = e["unit"]
-            cells = [e["target"], e["parameter"], f"{_number(e['effect'], unit)} {unit}",
-                     f"{_number(e['low'], unit)} .. {_number(e['high'], unit)}"]
+            mark = "" if e.get("resolved", True) else " *"
+            cells = [e["target"], e["parameter"], f"{_number(e['effect'], unit)} {unit}{mark}",
+                     _interval(e), f"{_number(e['low'], unit)} .. {_number(e['high'], unit)}"]
             if indices:
                 cells.append("-" if "S1" not in e else f"{e['S1']:.2f} ± {e['S1_conf']:.2f}")
             ranked.add_row(*cells)
         from rich.console import Group
 
-        group = Group(head, table, ranked)
+        parts: list[Any] = [head, table, ranked]
+        if any(not e.get("resolved", True) for e in shown_entries):
+            parts.append(Text(
+                f"* not resolved from Monte Carlo noise: at {_percent(c)} the effect may "
+                "be 0 (its interval reaches 0), or '-': too few rocks passed to bound "
+                "the design value in some scenario; more rocks, or seeds: common, may "
+                "resolve it. The intervals hold for all inputs of a design value together.",
+                style="dim"))
+        group = Group(*parts)
         (console or fitted_console(group)).print(group)
 
 
@@ -326,6 +392,19 @@ def _number(v: Any, unit: str = "") -> str:
     if unit == "fraction":
         return f"{v:.4f}"
     return f"{v:,.4g}"
+
+
+def _percent(c: float | None) -> str:
+    """A confidence as the report says it: 0.95 as 95 %, 0.975 as 97.5 %."""
+    return "-" if c is None else f"{100 * c:g} %"
+
+
+def _interval(entry: dict[str, Any]) -> str:
+    """The interval of an effect, ``effect_low .. effect_high``, or '-' if it has none."""
+    low, high, unit = entry.get("effect_low"), entry.get("effect_high"), entry["unit"]
+    if low is None or high is None:
+        return "-"
+    return f"{_number(low, unit)} .. {_number(high, unit)}"
 
 
 def _by_target(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -267,40 +267,95 @@ def _confidence(project: Project) -> float:
 
 def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
             confidence: float) -> dict[str, Any]:
-    """One-sided upper confidence bounds of the scenario's design values.
+    """Confidence bounds of the scenario's design values, by name.
 
     Each p95 and p99 of passing height and energy at the stations and
-    barriers: the distribution-free order-statistic bound over the rocks
+    barriers: the distribution-free order-statistic bounds over the rocks
     that passed (None where too few did); the fraction reaching the
     protected zone: Clopper-Pearson. A streamed run (more than
     ``EXACT_ROCKS`` rocks) keeps no per-rock values: only the fraction's
-    bound is given then.
-    """
-    from ..judge.bounds import fraction_upper_bound, quantile_upper_bound
-    from ..simulation import Study
-    from .sensitivity import TARGET_STATISTICS, place_names
+    bounds are given then.
 
-    values: dict[str, float | None] = {}
+    Returns
+    -------
+    dict
+        ``confidence`` (c); ``upper`` and ``lower``, the one-sided upper and
+        lower bound of each design value at c (together a two-sided
+        interval at 2c - 1); ``ladder``, the bounds the sensitivity needs
+        (:func:`~.sensitivity.joint_bounds`): per number of scenarios k of
+        :data:`~.sensitivity.LADDER`, ``lower`` and ``upper`` at the one-sided
+        confidence 1 - (1 - c) / (2k) each. The ladder is there because a
+        scenario's task does not know how many scenarios its study has; it
+        is left out of the study's JSON.
+    """
+    from ..simulation import Study
+    from .sensitivity import LADDER, TARGET_STATISTICS, ladder_confidences, place_names
+
+    sides = ladder_confidences(confidence)
+    out: dict[str, Any] = {"confidence": confidence, "upper": {}, "lower": {}}
+    ladder: dict[str, Any] = {"scenarios": list(LADDER), "upper": {}, "lower": {}}
     if isinstance(study, Study):
         arrays = study.crossing_arrays()
         columns = {float(x): j for j, x in enumerate(study.stations)}
+        names, samples, qs = [], [], []
         for where, x in place_names(summary["stations"], task.barriers, task.project):
             j = columns[x]
             for quantity, array, scale in (("passing_height_m", "passing_height_m", 1.0),
                                            ("energy_kj", "energy_j", 1e3)):
                 column = arrays[array][:, j]
-                column = column[np.isfinite(column)] / scale
+                # one sort per column: every bound of its design values is an index into it
+                ordered = np.sort(column[np.isfinite(column)] / scale)
                 for stat in TARGET_STATISTICS:
-                    q = float(stat[1:]) / 100
-                    values[f"{where} {quantity} {stat}"] = (
-                        quantile_upper_bound(column, q, confidence) if column.size else None)
+                    names.append(f"{where} {quantity} {stat}")
+                    samples.append(ordered)
+                    qs.append(float(stat[1:]) / 100)
+        found = _order_bounds(samples, qs, confidence, sides)
+        for name, (lower, upper, low_ladder, high_ladder) in zip(names, found, strict=True):
+            out["lower"][name], out["upper"][name] = lower, upper
+            ladder["lower"][name], ladder["upper"][name] = low_ladder, high_ladder
     protect = summary.get("protect")
     if protect is not None:
+        from ..judge.bounds import fraction_bounds, fraction_lower_bound, fraction_upper_bound
         from ..project.messages import _fmt
 
-        values[f"x={_fmt(protect['x'])} residual"] = fraction_upper_bound(
-            int(protect["reaching"]), int(summary["rocks"]), confidence)
-    return {"confidence": confidence, "upper": values}
+        name = f"x={_fmt(protect['x'])} residual"
+        x, n = int(protect["reaching"]), int(summary["rocks"])
+        out["upper"][name] = fraction_upper_bound(x, n, confidence)
+        out["lower"][name] = fraction_lower_bound(x, n, confidence)
+        low, high = fraction_bounds(x, n, sides)
+        ladder["lower"][name], ladder["upper"][name] = low.tolist(), high.tolist()
+    out["ladder"] = ladder
+    return out
+
+
+def _order_bounds(samples: Sequence[np.ndarray], qs: Sequence[float], confidence: float,
+                  sides: Sequence[float]) -> list[tuple[Any, Any, list[Any], list[Any]]]:
+    """Per sorted sample and its quantile q: the lower and upper bound of the q-quantile
+    at ``confidence``, then the lists of both at each one-sided confidence of
+    ``sides``; None where the sample is too small.
+
+    All from two vectorised searches, one a side
+    (:func:`~rockfall_design.judge.bounds.quantile_index_table`: the upper
+    bound at ``confidence`` is the one of ``check``,
+    :func:`~rockfall_design.judge.bounds.quantile_upper_bound`).
+    """
+    from ..judge.bounds import quantile_index_table
+
+    ns = [int(v.size) for v in samples]
+    levels = [confidence, *sides]
+    lows = quantile_index_table(ns, qs, levels, "lower")
+    highs = quantile_index_table(ns, qs, levels, "upper")
+    out = []
+    for v, n, low, high in zip(samples, ns, lows, highs, strict=True):
+        if n == 0:
+            out.append((None, None, [None] * len(sides), [None] * len(sides)))
+            continue
+        picked_low = [None if i < 0 else x for i, x in zip(low.tolist(), v[low].tolist(),
+                                                             strict=True)]
+        picked_high = [None if i < 0 else x for i, x in zip(high.tolist(), v[high].tolist(),
+                                                              strict=True)]
+        out.append((picked_low[0], picked_high[0], picked_low[1:], picked_high[1:]))
+    return out
 
 
 def envelope_percentile(project: Project) -> float:

@@ -18,10 +18,22 @@ about the same number of Latin hypercube points). The effect is in the
 target's unit; it says how far the design value moves over the input's
 range, which is what the engineer designs against.
 
+How sure the effect is: each scenario's design values are Monte Carlo
+estimates, so part of an effect may be noise. Every entry carries
+``effect_low`` and ``effect_high``, an interval that holds, with the safety
+concept's confidence c (``confidence``, default 0.95) and for all inputs of a
+target together, for the effect of the true design values (those of
+infinitely many rocks) of the study's scenarios; see :func:`effect_interval`
+and :func:`joint_bounds`. An entry whose ``effect_low`` is 0 is not resolved
+from the Monte Carlo noise: more rocks (or ``seeds: common``) may resolve it.
+
 A sampled study adds variance-based first-order indices from SALib's
 RBD-FAST (``S1``, the share of the target's variance explained by the input
 alone, with a bootstrap ``S1_conf``), which apply to any sample and are
 computed on the study's own Latin hypercube. SALib is imported only then.
+Its main-effect range (over the bins of a range) has the interval too; it
+bounds the Monte Carlo noise of the sampled scenarios' design values, not
+the sampling of the points themselves.
 """
 
 from __future__ import annotations
@@ -36,10 +48,18 @@ import numpy as np
 from ..project.messages import _fmt
 from ..project.study import Range, StudySpec
 
-__all__ = ["targets", "sensitivity", "TARGET_STATISTICS", "salib_available"]
+__all__ = ["targets", "sensitivity", "TARGET_STATISTICS", "salib_available", "LADDER",
+           "ladder_confidences", "joint_bounds", "effect_interval"]
 
 #: The statistics of passing height and energy that are design values.
 TARGET_STATISTICS = ("p95", "p99")
+
+#: Numbers of scenarios k at which each scenario's run bounds its design values for the
+#: sensitivity (each side at 1 - (1 - c) / (2k)): a scenario's task does not know its
+#: study's size, so it gives them for these k, and the study takes the first k' >= its
+#: own (at most 1.5 times it: a slightly wider interval, never a weaker one). The last
+#: is above the largest study (``MAX_SCENARIOS``, 10,000).
+LADDER = tuple(sorted({2 ** m for m in range(15)} | {3 * 2 ** m for m in range(13)}))
 _QUANTITIES = (("passing_height_m", "m"), ("energy_kj", "kJ"))
 
 
@@ -91,6 +111,107 @@ def targets(results: Sequence[Mapping[str, Any]]) -> dict[str, tuple[str, np.nda
         name: (units[name], np.array([row.get(name, math.nan) for row in rows], dtype=float))
         for name in names
     }
+
+
+def ladder_confidences(confidence: float) -> list[float]:
+    """The one-sided confidence of each side of a scenario's bounds per k of :data:`LADDER`:
+    ``1 - (1 - c) / (2k)``, so that its two-sided interval holds at ``1 - (1 - c) / k``."""
+    return [1.0 - (1.0 - confidence) / (2 * k) for k in LADDER]
+
+
+def joint_bounds(results: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
+    """Per scenario, the interval of each design value that holds for all scenarios at once.
+
+    Parameters
+    ----------
+    results
+        The study's k scenario results (:func:`~.run.run_scenario`), each with
+        its ``bounds`` (``confidence`` c and the ``ladder``).
+
+    Returns
+    -------
+    dict or None
+        ``confidence``: c, the smallest of the scenarios' (all the same unless
+        the safety concept's confidence is varied); ``scenario_confidence``:
+        ``1 - (1 - c) / k'``, the two-sided confidence of each scenario's
+        interval, with ``k'`` the first number of :data:`LADDER` not below k;
+        ``lower`` and ``upper``: per scenario, name -> bound (None where too
+        few rocks passed). None without scenarios or without bounds.
+
+    Notes
+    -----
+    Bonferroni: each side of each scenario's interval fails with a
+    probability of at most ``(1 - c) / (2k')`` (the distribution-free order
+    statistic bound of a percentile, Clopper-Pearson for the residual); by
+    the union bound over the 2k sides of the k scenarios, all the intervals
+    of one design value hold together with a probability of at least
+    ``1 - k (1 - c) / k' >= c``, whether the scenarios' rocks are
+    independent or common. (Not over several design values together.)
+    """
+    k = len(results)
+    if k == 0 or any("ladder" not in r.get("bounds", {}) for r in results):
+        return None
+    rung = next((n for n in LADDER if n >= k), None)
+    if rung is None:
+        return None
+    confidence = min(float(r["bounds"]["confidence"]) for r in results)
+    lower, upper = [], []
+    for result in results:
+        ladder = result["bounds"]["ladder"]
+        if rung not in ladder["scenarios"]:
+            return None
+        at = list(ladder["scenarios"]).index(rung)
+        lower.append({name: v[at] for name, v in ladder["lower"].items()})
+        upper.append({name: v[at] for name, v in ladder["upper"].items()})
+    return {"confidence": confidence, "scenario_confidence": 1.0 - (1.0 - confidence) / rung,
+            "lower": lower, "upper": upper}
+
+
+def effect_interval(keys: Sequence[Any], lower: Sequence[float | None],
+                    upper: Sequence[float | None]) -> tuple[float, float] | None:
+    """The interval of a main-effect range from intervals of the scenarios' values.
+
+    Parameters
+    ----------
+    keys
+        Each scenario's level of the input (:func:`_level_keys`).
+    lower, upper
+        Each scenario's lower and upper bound of the target (its unit); None
+        or NaN where it has none.
+
+    Returns
+    -------
+    (float, float) or None
+        ``(effect_low, effect_high)`` with, over the levels' means of the
+        bounds ``L_i`` (of ``lower``) and ``U_i`` (of ``upper``),
+        ``effect_high = max_i U_i - min_j L_j`` and ``effect_low =
+        max(0, max over i != j of L_i - U_j)``. None if a scenario has no
+        bound or there are fewer than two levels.
+
+    Notes
+    -----
+    If every scenario's true value t lies in its interval [l, u], the true
+    mean ``m_i`` of level i (the mean of its scenarios' t) lies in
+    [L_i, U_i], the means of their bounds (a mean of values each within
+    bounds lies within the mean of the bounds). The true effect
+    ``max_i m_i - min_j m_j`` is then at most ``max_i U_i - min_j L_j``, and
+    at least ``m_i - m_j >= L_i - U_j`` for every pair i != j, and at least
+    0. So the interval holds whenever all the scenarios' intervals do: with
+    those of :func:`joint_bounds`, at the confidence c.
+    """
+    lo = np.array([math.nan if v is None else float(v) for v in lower], dtype=float)
+    hi = np.array([math.nan if v is None else float(v) for v in upper], dtype=float)
+    if lo.size == 0 or not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        return None
+    levels = list(dict.fromkeys(keys))
+    if len(levels) < 2:
+        return None
+    at = [np.array([k == key for k in keys]) for key in levels]
+    low_means = np.array([lo[m].mean() for m in at])
+    high_means = np.array([hi[m].mean() for m in at])
+    gaps = low_means[:, None] - high_means[None, :]  # L_i - U_j
+    np.fill_diagonal(gaps, -math.inf)
+    return max(0.0, float(gaps.max())), float(high_means.max() - low_means.min())
 
 
 def _level_keys(spec: StudySpec, path: str, values: Sequence[Any]) -> list[Any]:
@@ -181,19 +302,33 @@ def sensitivity(
     Returns
     -------
     list of dict
-        ``{parameter, target, effect, unit, low, high}`` (and ``S1``,
-        ``S1_conf`` with indices), sorted by ``effect``, largest first
-        (ties: by target, then parameter, in study order). ``low`` and
-        ``high`` are the lowest and highest level means; ``effect`` is
-        ``high - low``, in ``unit``.
+        ``{parameter, target, effect, unit, low, high, effect_low,
+        effect_high, resolved}`` (and ``S1``, ``S1_conf`` with indices),
+        sorted by ``effect``, largest first (ties: by target, then
+        parameter, in study order). ``low`` and ``high`` are the lowest and
+        highest level means; ``effect`` is ``high - low``, in ``unit``.
+        ``effect_low`` and ``effect_high`` bound the effect of the true
+        design values at the safety concept's confidence c, for all the
+        inputs of a target together (:func:`effect_interval` of the
+        scenarios' :func:`joint_bounds`); both None where a scenario has no
+        bound of the target (too few rocks passed). ``resolved``:
+        ``effect_low > 0``, the effect is more than Monte Carlo noise (False
+        where there is no interval).
     """
     if indices is None:
         indices = spec.sampled and salib_available()
     seed = spec.scenarios.seed if spec.sampled else 0  # type: ignore[union-attr]
+    joint = joint_bounds(results)
     out = []
     order = {}
     for t, (name, (unit, y)) in enumerate(targets(results).items()):
         s1 = _indices(spec, points, y, seed) if indices else {}
+        if joint is None:
+            lower: list[float | None] = [None] * len(results)
+            upper: list[float | None] = [None] * len(results)
+        else:
+            lower = [b.get(name) for b in joint["lower"]]
+            upper = [b.get(name) for b in joint["upper"]]
         for p, path in enumerate(spec.vary):
             order[(name, path)] = (t, p)
             keys = _level_keys(spec, path, [pt[path] for pt in points])
@@ -201,9 +336,13 @@ def sensitivity(
             if found is None:
                 continue
             low, high = found
+            interval = effect_interval(keys, lower, upper)
             entry: dict[str, Any] = {
                 "parameter": path, "target": name, "effect": high - low,
                 "unit": unit, "low": low, "high": high,
+                "effect_low": None if interval is None else interval[0],
+                "effect_high": None if interval is None else interval[1],
+                "resolved": interval is not None and interval[0] > 0,
             }
             if path in s1:
                 entry["S1"], entry["S1_conf"] = s1[path]
