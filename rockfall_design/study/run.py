@@ -48,6 +48,10 @@ class ScenarioTask:
         (index in ``measures``, label, station x in m) of each barrier
         (fence, wall, boulder row, ...) of the project, whose passing height
         and energy on the bare slope are design values of the study.
+    scenarios : int
+        How many scenarios the study has (k): the bounds the sensitivity
+        needs are computed for this k alone (0: for every k of
+        :data:`~.sensitivity.LADDER`).
     envelope : bool
         Whether to compute the scenario's envelopes along x (for the figure
         of every scenario's envelopes; nothing else reads them). They cost
@@ -61,6 +65,7 @@ class ScenarioTask:
     project: Project
     barriers: tuple[tuple[int, str, float], ...] = ()
     envelope: bool = True
+    scenarios: int = 0
 
 
 def _relocated(project: Project, scenario: Scenario, exc: ProjectError) -> ProjectError:
@@ -152,7 +157,7 @@ def prepare(
         # may be able to unpickle: the task's project is the data alone.
         checked._plan = None
         tasks.append(ScenarioTask(scenario.index, scenario.seed, n, checked, barriers,
-                                  envelopes))
+                                  envelopes, len(chosen)))
     return chosen, tasks
 
 
@@ -282,18 +287,19 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
         ``confidence`` (c); ``upper`` and ``lower``, the one-sided upper and
         lower bound of each design value at c (together a two-sided
         interval at 2c - 1); ``ladder``, the bounds the sensitivity needs
-        (:func:`~.sensitivity.joint_bounds`): per number of scenarios k of
-        :data:`~.sensitivity.LADDER`, ``lower`` and ``upper`` at the one-sided
-        confidence 1 - (1 - c) / (2k) each. The ladder is there because a
-        scenario's task does not know how many scenarios its study has; it
-        is left out of the study's JSON.
+        (:func:`~.sensitivity.joint_bounds`): for the study's number of
+        scenarios k (:attr:`ScenarioTask.scenarios`; a task that does not
+        know it: for every k of :data:`~.sensitivity.LADDER`), ``lower`` and
+        ``upper`` at the one-sided confidence 1 - (1 - c) / (2k) each. It is
+        left out of the study's JSON.
     """
     from ..simulation import Study
     from .sensitivity import LADDER, TARGET_STATISTICS, ladder_confidences, place_names
 
-    sides = ladder_confidences(confidence)
+    rungs = [task.scenarios] if task.scenarios > 0 else list(LADDER)
+    sides = ladder_confidences(confidence, rungs)
     out: dict[str, Any] = {"confidence": confidence, "upper": {}, "lower": {}}
-    ladder: dict[str, Any] = {"scenarios": list(LADDER), "upper": {}, "lower": {}}
+    ladder: dict[str, Any] = {"scenarios": rungs, "upper": {}, "lower": {}}
     if isinstance(study, Study):
         arrays = study.crossing_arrays()
         columns = {float(x): j for j, x in enumerate(study.stations)}

@@ -54,11 +54,12 @@ __all__ = ["targets", "sensitivity", "TARGET_STATISTICS", "salib_available", "LA
 #: The statistics of passing height and energy that are design values.
 TARGET_STATISTICS = ("p95", "p99")
 
-#: Numbers of scenarios k at which each scenario's run bounds its design values for the
-#: sensitivity (each side at 1 - (1 - c) / (2k)): a scenario's task does not know its
-#: study's size, so it gives them for these k, and the study takes the first k' >= its
-#: own (at most 1.5 times it: a slightly wider interval, never a weaker one). The last
-#: is above the largest study (``MAX_SCENARIOS``, 10,000).
+#: Numbers of scenarios k at which a scenario's run bounds its design values for the
+#: sensitivity (each side at 1 - (1 - c) / (2k)) when its task does not say how many
+#: scenarios its study has (``ScenarioTask.scenarios`` 0; a study's tasks say it, and are
+#: bounded at k itself): the study then takes the first k' >= its own (at most 1.5 times
+#: it: a slightly wider interval, never a weaker one). The last is above the largest
+#: study (``MAX_SCENARIOS``, 10,000).
 LADDER = tuple(sorted({2 ** m for m in range(15)} | {3 * 2 ** m for m in range(13)}))
 _QUANTITIES = (("passing_height_m", "m"), ("energy_kj", "kJ"))
 
@@ -113,10 +114,10 @@ def targets(results: Sequence[Mapping[str, Any]]) -> dict[str, tuple[str, np.nda
     }
 
 
-def ladder_confidences(confidence: float) -> list[float]:
-    """The one-sided confidence of each side of a scenario's bounds per k of :data:`LADDER`:
+def ladder_confidences(confidence: float, rungs: Sequence[int] = LADDER) -> list[float]:
+    """The one-sided confidence of each side of a scenario's bounds per k of ``rungs``:
     ``1 - (1 - c) / (2k)``, so that its two-sided interval holds at ``1 - (1 - c) / k``."""
-    return [1.0 - (1.0 - confidence) / (2 * k) for k in LADDER]
+    return [1.0 - (1.0 - confidence) / (2 * k) for k in rungs]
 
 
 def joint_bounds(results: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
@@ -134,7 +135,9 @@ def joint_bounds(results: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
         ``confidence``: c, the smallest of the scenarios' (all the same unless
         the safety concept's confidence is varied); ``scenario_confidence``:
         ``1 - (1 - c) / k'``, the two-sided confidence of each scenario's
-        interval, with ``k'`` the first number of :data:`LADDER` not below k;
+        interval, with ``k'`` = k when the scenarios' bounds were computed
+        for k (a study's scenarios are), else the first number of
+        :data:`LADDER` not below k;
         ``lower`` and ``upper``: per scenario, name -> bound (None where too
         few rocks passed). None without scenarios or without bounds.
 
@@ -151,7 +154,10 @@ def joint_bounds(results: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
     k = len(results)
     if k == 0 or any("ladder" not in r.get("bounds", {}) for r in results):
         return None
-    rung = next((n for n in LADDER if n >= k), None)
+    # k itself if every scenario has it (a study's tasks know k), else the
+    # first rung of the ladder not below it (a conservative rounding)
+    exact = all(k in r["bounds"]["ladder"]["scenarios"] for r in results)
+    rung = k if exact else next((n for n in LADDER if n >= k), None)
     if rung is None:
         return None
     confidence = min(float(r["bounds"]["confidence"]) for r in results)
