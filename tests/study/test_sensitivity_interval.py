@@ -155,6 +155,17 @@ def test_the_joint_bounds_take_the_first_rung_not_below_the_number_of_scenarios(
     assert joint_bounds([]) is None
 
 
+def test_the_joint_bounds_are_at_k_itself_when_the_scenarios_were_bounded_for_it():
+    # A study's tasks know k: each scenario is bounded for k alone, no rounding up.
+    def result(value: float) -> dict:
+        return {"bounds": {"confidence": 0.95, "ladder": {
+            "scenarios": [9], "lower": {"t": [value - 1]}, "upper": {"t": [value + 1]}}}}
+
+    joint = joint_bounds([result(10.0 * i) for i in range(9)])
+    assert joint["scenario_confidence"] == pytest.approx(1 - 0.05 / 9)
+    assert [b["t"] for b in joint["upper"]] == [10.0 * i + 1 for i in range(9)]
+
+
 # ---- on a study ---------------------------------------------------------------------------------
 
 
@@ -247,6 +258,7 @@ def test_a_scenario_bounds_are_the_order_statistics_of_its_rocks():
     bounds = block["bounds"]
     assert bounds["upper"][ENERGY] == quantile_upper_bound(energy, 0.95, 0.95)
     assert bounds["lower"][ENERGY] == quantile_lower_bound(energy, 0.95, 0.95)
+    assert result.results[3]["bounds"]["ladder"]["scenarios"] == [4]  # k itself, alone
     side = 1 - (1 - 0.95) / 8  # four scenarios: each side of each at 1 - (1 - c) / (2k)
     assert bounds["joint"]["upper"][ENERGY] == quantile_upper_bound(energy, 0.95, side)
     assert bounds["joint"]["lower"][ENERGY] == quantile_lower_bound(energy, 0.95, side)
