@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import (
     FIRST_COMPLETED,
     Future,
@@ -95,12 +95,13 @@ def _pool_context() -> multiprocessing.context.BaseContext:
 
 def run_tasks(
     fn: Callable[[Any], Any],
-    tasks: Sequence[Any],
+    tasks: Sequence[Any] | Iterable[Any],
     *,
     workers: int | None = None,
     scheduler: Any = None,
     on_done: Callable[[int, Any], None] | None = None,
     pool: str = "processes",
+    total: int | None = None,
 ) -> list[Any]:
     """Apply ``fn`` to every task; the results in the order of ``tasks``.
 
@@ -109,7 +110,13 @@ def run_tasks(
     fn
         A module-level function (picklable by reference).
     tasks
-        Picklable arguments, one per call.
+        Picklable arguments, one per call; or an iterator of them, with
+        ``total`` their number. A pool of threads starts each task as the
+        iterator gives it, so that making the tasks (a study checks each
+        scenario's project) overlaps the first runs; an error the iterator
+        raises stops the pool as a task's error does. Every other way of
+        running takes them all first (one after the other in this process,
+        each task would otherwise wait for the runs before it).
     workers
         Processes of the local pool; 1 runs in this process. Default: every
         usable core (but no more than there are tasks).
@@ -124,20 +131,31 @@ def run_tasks(
         (of this process, each task with one engine thread; for tasks that
         spend their time in the compiled engine). The results are the same.
 
+    total
+        The number of ``tasks`` if they are an iterator.
+
     Raises
     ------
     InputError
         The scheduler cannot be reached, or dask.distributed is not installed.
     Exception
-        Whatever a task raised (the first one to fail), as raised.
+        Whatever a task raised (the first one to fail), as raised; or what
+        the iterator of ``tasks`` raised.
     """
     if pool not in POOLS:
         raise ValueError(f"pool must be one of {POOLS}, not {pool!r}")
-    if not tasks:
+    count = len(tasks) if isinstance(tasks, Sequence) else total
+    if count is None:
+        tasks = list(tasks)
+        count = len(tasks)
+    if count == 0:
         return []
+    n = min(int(workers) if workers else usable_cores(), count)
+    if scheduler is None and n > 1 and pool == "threads":
+        return _on_threads(fn, tasks, count, n, on_done)
+    tasks = list(tasks)  # every task made before any runs
     if scheduler is not None:
         return _on_dask(fn, tasks, scheduler, on_done)
-    n = min(int(workers) if workers else usable_cores(), len(tasks))
     if n <= 1:
         results = []
         for i, task in enumerate(tasks):
@@ -145,8 +163,6 @@ def run_tasks(
             if on_done is not None:
                 on_done(i, results[-1])
         return results
-    if pool == "threads":
-        return _on_threads(fn, tasks, n, on_done)
     return _on_pool(fn, tasks, n, on_done)
 
 
@@ -159,13 +175,17 @@ def _one_engine_thread(fn: Callable[[Any], Any], task: Any) -> Any:
         ENGINE_THREADS.reset(token)
 
 
-def _on_threads(fn: Callable[[Any], Any], tasks: Sequence[Any], n: int,
+def _on_threads(fn: Callable[[Any], Any], tasks: Iterable[Any], count: int, n: int,
                 on_done: Callable[[int, Any], None] | None) -> list[Any]:
-    results: list[Any] = [None] * len(tasks)
+    results: list[Any] = [None] * count
     pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="rockfall-task")
     try:
-        pending: dict[Future, int] = {
-            pool.submit(_one_engine_thread, fn, t): i for i, t in enumerate(tasks)}
+        pending: dict[Future, int] = {}
+        # Each task starts as it is made: its run overlaps the making of the next.
+        for i, t in enumerate(tasks):
+            pending[pool.submit(_one_engine_thread, fn, t)] = i
+        if len(pending) != count:
+            raise ValueError(f"{len(pending)} tasks given, {count} announced")
         while pending:
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in done:

@@ -1,9 +1,12 @@
 """Run a study: one full Monte Carlo run per scenario, as independent tasks.
 
 :func:`prepare` turns the project's ``study:`` section into tasks, in this
-process and before anything runs: the scenarios (values and seeds), each
-scenario's project (:func:`~.paths.with_values`, then the plugin sections
-checked as every command checks them) and the stations of its barriers.
+process: the scenarios (values and seeds), each scenario's project
+(:func:`~.paths.with_values`, then the plugin sections checked as every
+command checks them) and the stations of its barriers. Every task is made
+before any runs, except on a pool of threads, which starts each as it is
+made (:func:`prepare_lazily`): a bad scenario then stops the study a few
+milliseconds in, with nothing written.
 :func:`run_scenario` is the task: the run of ``simulate`` on the scenario's
 project with the scenario's seed, reduced to the blocks of
 ``simulate --json`` (``stations``, ``stops``, ``protect``), the passing height
@@ -13,7 +16,7 @@ and energy at each barrier, and the scenario's envelopes for the figure.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -24,7 +27,8 @@ from ..project import Project
 from .paths import scenario_base, with_values
 from .scenarios import Scenario, scenarios
 
-__all__ = ["ScenarioTask", "prepare", "run_parametric", "run_scenario", "run_tasks_of"]
+__all__ = ["ScenarioTask", "prepare", "prepare_lazily", "run_parametric", "run_scenario",
+           "run_tasks_of"]
 
 #: The station quantities a study keeps per scenario (design values and envelopes).
 QUANTITIES = ("passing_height_m", "energy_kj")
@@ -136,6 +140,22 @@ def prepare(
         No ``study:`` section, or a scenario's values are not valid together
         (located at the ``study.vary`` line to blame).
     """
+    chosen, tasks = prepare_lazily(project, registry, rocks=rocks, seed=seed,
+                                   envelopes=envelopes)
+    return chosen, list(tasks)
+
+
+def prepare_lazily(
+    project: Project, registry: Any, *, rocks: int | None = None, seed: int | None = None,
+    envelopes: bool = True,
+) -> tuple[list[Scenario], Iterator[ScenarioTask]]:
+    """As :func:`prepare`, but each scenario's task is made (and checked) when asked for.
+
+    The scenarios are known at once; a scenario's project is checked as the
+    iterator reaches it, and a bad one raises there. A pool of threads
+    (:func:`~.executors.run_tasks`) starts each task as it is made, so the
+    checks overlap the first runs instead of keeping the cores waiting.
+    """
     if project.study is None:
         raise project.error_at(
             (), "the project has no study: section (inputs to vary and the scenarios to run; "
@@ -145,20 +165,22 @@ def prepare(
     run_seed = int(project.rocks.seed if seed is None else seed)
     chosen = scenarios(project.study, run_seed)
     base = scenario_base(project)
-    tasks = []
-    for scenario in chosen:
-        try:
-            checked = with_values(project, scenario.values, base=base)
-            barriers = _barriers(checked, registry)
-        except ProjectError as exc:
-            raise _relocated(project, scenario, exc) from None
-        # The check keeps what the plugins built for it on the project (its plan:
-        # the plugins' objects, the registry), which a worker neither needs nor
-        # may be able to unpickle: the task's project is the data alone.
-        checked._plan = None
-        tasks.append(ScenarioTask(scenario.index, scenario.seed, n, checked, barriers,
-                                  envelopes, len(chosen)))
-    return chosen, tasks
+
+    def tasks() -> Iterator[ScenarioTask]:
+        for scenario in chosen:
+            try:
+                checked = with_values(project, scenario.values, base=base)
+                barriers = _barriers(checked, registry)
+            except ProjectError as exc:
+                raise _relocated(project, scenario, exc) from None
+            # The check keeps what the plugins built for it on the project (its
+            # plan: the plugins' objects, the registry), which a worker neither
+            # needs nor may be able to unpickle: the task's project is the data alone.
+            checked._plan = None
+            yield ScenarioTask(scenario.index, scenario.seed, n, checked, barriers, envelopes,
+                               len(chosen))
+
+    return chosen, tasks()
 
 
 def _with_stations(project: Project, extra: Sequence[float]) -> Project:
@@ -423,12 +445,13 @@ def _envelope(study: Any, q: float) -> dict[str, list[float]]:
 
 
 def run_tasks_of(
-    tasks: Sequence[ScenarioTask],
+    tasks: Sequence[ScenarioTask] | Iterable[ScenarioTask],
     *,
     workers: int | None = None,
     scheduler: Any = None,
     on_done: Callable[[int, dict[str, Any]], None] | None = None,
     pool: str = "threads",
+    total: int | None = None,
 ) -> list[dict[str, Any]]:
     """Run the tasks with :func:`~.executors.run_tasks`; results in scenario order.
 
@@ -440,7 +463,7 @@ def run_tasks_of(
     from .executors import run_tasks
 
     return run_tasks(run_scenario, tasks, workers=workers, scheduler=scheduler, on_done=on_done,
-                     pool=pool)
+                     pool=pool, total=total)
 
 
 def run_parametric(
@@ -468,7 +491,8 @@ def run_parametric(
     from .sensitivity import sensitivity
 
     t0 = time.perf_counter()
-    chosen, tasks = prepare(project, registry, rocks=rocks, seed=seed, envelopes=envelopes)
+    chosen, tasks = prepare_lazily(project, registry, rocks=rocks, seed=seed,
+                                   envelopes=envelopes)
     on_done = None
     if progress is not None:
         done = [0, 0]  # scenarios, rocks
@@ -476,11 +500,11 @@ def run_parametric(
         def on_done(i: int, result: dict[str, Any]) -> None:
             done[0] += 1
             done[1] += int(result["rocks"])
-            progress(done[0], len(tasks), done[1])
+            progress(done[0], len(chosen), done[1])
 
-        progress(0, len(tasks), 0)
+        progress(0, len(chosen), 0)
     results = run_tasks_of(tasks, workers=workers, scheduler=scheduler, on_done=on_done,
-                           pool=pool)
+                           pool=pool, total=len(chosen))
     assert project.study is not None  # prepare checked it
     effects = sensitivity(project.study, [s.values for s in chosen], results, indices=indices)
     run_seed = int(project.rocks.seed if seed is None else seed)

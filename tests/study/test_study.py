@@ -336,7 +336,9 @@ def test_a_varied_plugin_parameter_is_checked_by_its_plugin(tmp_path, capsys, va
         assert len(err.splitlines()) == 1
 
 
-def test_values_that_do_not_fit_together_stop_the_study_before_it_runs(tmp_path, capsys):
+@pytest.mark.parametrize("workers", ["1", "2"])  # in turn; threads, each task as it is made
+def test_values_that_do_not_fit_together_stop_the_study_before_it_runs(tmp_path, capsys,
+                                                                        workers):
     path = tmp_path / "bad.yaml"
     text = TALUS.read_text().replace("volume: 1.0 ", "volume: {uniform: [0.5, 1.0]}")
     text = text.replace("rocks.volume: [0.5, 1.0, 2.0]",
@@ -345,7 +347,7 @@ def test_values_that_do_not_fit_together_stop_the_study_before_it_runs(tmp_path,
     path.write_text(text)
     assert main(["check", str(path), "--rocks", "20"]) in (0, 1)  # each value fits alone
     capsys.readouterr()
-    assert main(["study", str(path), "--rocks", "20", "--workers", "1"]) == 2
+    assert main(["study", str(path), "--rocks", "20", "--workers", workers]) == 2
     err = capsys.readouterr().err.strip()
     assert "do not fit together" in err and len(err.splitlines()) == 1
 
