@@ -149,6 +149,9 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
     max_events = int(settings[S_MAX_EVENTS])
     npc = px.shape[0] - 1
     drawn = out.work[:WORK_CTX]
+    # Nothing drawn yet (a restart record before the first contact says so),
+    # not the previous rock's draw left in the batch's scratch.
+    drawn[:] = np.nan
     cur_seg = -1
 
     x = x0
