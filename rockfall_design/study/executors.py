@@ -95,7 +95,7 @@ def _pool_context() -> multiprocessing.context.BaseContext:
 
 def run_tasks(
     fn: Callable[[Any], Any],
-    tasks: Sequence[Any] | Iterable[Any],
+    tasks: Iterable[Any],
     *,
     workers: int | None = None,
     scheduler: Any = None,
@@ -130,7 +130,6 @@ def run_tasks(
         The local pool of ``workers`` > 1: ``"processes"`` or ``"threads"``
         (of this process, each task with one engine thread; for tasks that
         spend their time in the compiled engine). The results are the same.
-
     total
         The number of ``tasks`` if they are an iterator.
 

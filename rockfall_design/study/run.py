@@ -445,7 +445,7 @@ def _envelope(study: Any, q: float) -> dict[str, list[float]]:
 
 
 def run_tasks_of(
-    tasks: Sequence[ScenarioTask] | Iterable[ScenarioTask],
+    tasks: Iterable[ScenarioTask],
     *,
     workers: int | None = None,
     scheduler: Any = None,
