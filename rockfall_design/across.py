@@ -4,9 +4,13 @@
 ``study:`` section, each scenario with its own rocks (its values set, its own
 seed, as ``rockfall-design study`` runs it), and says in how many the design
 holds against how many it must (``design.scenarios``: ``all``, the default,
-or ``{share: S}``, at least ``ceil(S k)`` of ``k``) and which scenario binds
-(the least margin: the smallest relative slack of a check or of the
-residual with the confidence bounds in place, negative where it fails).
+or ``{share: S}``, at least ``ceil(S k)`` of ``k``) and which scenario binds.
+A scenario's margin is the smallest relative slack of a check or of the
+residual with the confidence bounds in place, negative where it fails; the
+binding scenario is the one that decides the required count, the one of the
+``required``-th largest margin: with every scenario required, the least
+margin; with a share, the scenarios of smaller margins are those the share
+lets the design fail in.
 
 ``--json`` prints ``rocks``, ``seed`` (the run seed), ``share``,
 ``required``, ``of``, ``holds_in``, ``holds_with_confidence_in``, ``ok``,
@@ -119,8 +123,12 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
         per = run_tasks(_check_task, [(run, rocks, tuple(block)) for run in runs],
                         workers=workers, scheduler=scheduler)
     holds = sum(bool(p["ok"]) for p in per)
-    bind = min(per, key=lambda p: (math.inf if p["margin"] is None else p["margin"],
-                                   p["index"]))
+    # The binding scenario decides the required count: the one of the required-th
+    # largest margin (with every scenario required, the least margin). Below it are
+    # the scenarios a share allows the design to fail in.
+    ranked = sorted(per, key=lambda p: (-(math.inf if p["margin"] is None else p["margin"]),
+                                        -p["index"]))  # ties: the first scenario binds
+    bind = ranked[min(required, len(ranked)) - 1]
     failures = [f"scenario {p['index']} ({_values_text(p['values'])}): {f}"
                 for p in per for f in p.get("failures", [])]
     return {
