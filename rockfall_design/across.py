@@ -142,7 +142,7 @@ def print_check_across(summary: dict[str, Any]) -> None:
     """The terminal report of ``check --scenarios``: a row per scenario, the verdict."""
     from rich.table import Table
 
-    from .report import fitted_console
+    from .report.terminal import fitted_console
 
     table = Table(show_edge=False)
     for col, just in (("#", "right"), ("values", "left"), ("seed", "right"),
@@ -274,7 +274,7 @@ def print_across(result: AcrossResult) -> None:
     """The scenario lines of the optimiser's report: where the chosen design binds."""
     from rich.text import Text
 
-    from .report import fitted_console
+    from .report.terminal import fitted_console
 
     block = result.scenarios_block()
     lines = [f"Scenarios: a design must hold in {block['required']} of {block['of']} "

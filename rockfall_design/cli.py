@@ -383,7 +383,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
-        from .report import print_simulation
+        from .report.terminal import print_simulation
 
         print_simulation(summary)
     if recorded is not None and not same:
@@ -512,7 +512,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
-        from .report import print_check
+        from .report.terminal import print_check
 
         print_check(summary)
     return int(ExitCode.OK if evaluation.ok else ExitCode.CHECK_FAILED)
@@ -572,7 +572,7 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     OptimiseResult
     """
     from .api import optimise
-    from .report import design_yaml
+    from .report.terminal import design_yaml
 
     n = args.rocks or project.rocks.count
     prog, callback = _stage_progress(sys.stderr.isatty())
@@ -615,7 +615,7 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
 
 def print_optimised(result: Any, project: Any) -> None:
     """The terminal report of ``optimise``: the alternatives, and the scenarios if any."""
-    from .report import print_optimise
+    from .report.terminal import print_optimise
 
     print_optimise(result, project)
     if project.design.scenarios is not None:
@@ -649,7 +649,7 @@ def cmd_plugins(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(plugins_json(registry), allow_nan=False) + "\n")
     else:
-        from .report import fitted_console
+        from .report.terminal import fitted_console
 
         table = plugins_table(registry)
         fitted_console(table).print(table)

@@ -315,7 +315,7 @@ class StudyResult:
         from rich.table import Table
         from rich.text import Text
 
-        from ..report import fitted_console
+        from ..report.terminal import fitted_console
 
         s = self.summary
         rate = len(self.results) * self.n_rocks / self.runtime_s if self.runtime_s else 0.0

@@ -1,4 +1,8 @@
-"""Terminal reports (rich) and figures for engineers' reports (matplotlib)."""
+"""The terminal's reports (rich), and the one call that writes a run's figures.
+
+The terminal side of the report room (:mod:`rockfall_design.report`); it was
+the module ``rockfall_design/report.py``, whose names the package still offers.
+"""
 
 from __future__ import annotations
 
@@ -11,11 +15,11 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from .outputs import OutputSet
+from ..outputs import OutputSet
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .plugins import Registry
-    from .simulation import StreamedStudy, Study
+    from ..plugins import Registry
+    from ..simulation import StreamedStudy, Study
 
 __all__ = [
     "print_simulation",
@@ -310,14 +314,14 @@ def alternatives_table(result: Any) -> Any:
 
     See :func:`rockfall_design.tables.alternatives_frame`.
     """
-    from .tables import alternatives_frame
+    from ..tables import alternatives_frame
 
     return alternatives_frame(result.summary())
 
 
 def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -> str:
     """The project with the chosen measures, as YAML that ``check`` accepts."""
-    from .project import dump_yaml
+    from ..project import dump_yaml
 
     ev = best.evaluation
     data = ev.study.project.resolved_dict()
@@ -363,7 +367,7 @@ def plot_study(
     The figures are built by :mod:`rockfall_design.figures` (no pyplot, no
     backend switch). Returns the paths written.
     """
-    from .figures import save_figures, study_figures
+    from ..figures import save_figures, study_figures
 
     return save_figures(study_figures(study, evaluation), directory, formats, outputs)
 
@@ -373,7 +377,7 @@ def plot_study(
 
 def plugins_table(registry: Registry) -> Group:
     """The registry as rich tables (``rockfall-design plugins``)."""
-    from .plugins.listing import _SECTIONS, _parameter_list
+    from ..plugins.listing import _SECTIONS, _parameter_list
 
     titles = {"measures": "Measures", "safety_concepts": "Safety concepts",
               "cost_models": "Cost models"}
