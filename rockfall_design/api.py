@@ -353,14 +353,14 @@ class CheckResult(SimulationResult):
     @cached_property
     def measures(self) -> pd.DataFrame:
         """One row per measure: rocks met, caught, over, through; a column per check."""
-        from .tables import measures_frame
+        from .report.tables import measures_frame
 
         return measures_frame(self.summary)
 
     @cached_property
     def checks(self) -> pd.DataFrame:
         """One row per safety check: value, confidence bound (if any), target, verdict."""
-        from .tables import checks_frame
+        from .report.tables import checks_frame
 
         return checks_frame(self.summary)
 
@@ -422,7 +422,7 @@ class OptimiseResult:
     @cached_property
     def alternatives(self) -> pd.DataFrame:
         """One row per family: cost (currency units), residual, a column per check, reason."""
-        from .tables import alternatives_frame
+        from .report.tables import alternatives_frame
 
         return alternatives_frame(self.summary)
 

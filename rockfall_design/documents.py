@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from . import __version__
-from .tables import measure_text, round_value
+from .report.tables import measure_text, round_value
 
 if TYPE_CHECKING:  # pragma: no cover
     from .outputs import OutputSet

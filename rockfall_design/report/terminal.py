@@ -312,9 +312,9 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
 def alternatives_table(result: Any) -> Any:
     """alternatives.csv: one row per family, one column per check, rounded numbers.
 
-    See :func:`rockfall_design.tables.alternatives_frame`.
+    See :func:`rockfall_design.report.tables.alternatives_frame`.
     """
-    from ..tables import alternatives_frame
+    from .tables import alternatives_frame
 
     return alternatives_frame(result.summary())
 

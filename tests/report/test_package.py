@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+import ast
+import importlib
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 import rockfall_design.report as report
 from rockfall_design.report import terminal
+
+ROOT = Path(__file__).resolve().parents[2]
 
 #: What ``from rockfall_design.report import X`` gave when it was one module,
 #: and still gives: its ``__all__`` and the public helpers the commands share.
@@ -48,3 +53,49 @@ def test_importing_the_package_loads_none_of_its_modules():
              "rockfall_design.report.figures", "rockfall_design.report.documents",
              "rockfall_design.report.tables")
     assert _loaded_after("import rockfall_design.report", heavy) == []
+
+
+#: The modules that moved into the room, each still importable from where it was.
+MOVED = {"rockfall_design.tables": "rockfall_design.report.tables"}
+
+
+@pytest.mark.parametrize("old, new", MOVED.items())
+def test_a_moved_module_is_still_importable_where_it_was(old, new):
+    """The old module hands on every public name of the new one, the very same objects."""
+    shim, module = importlib.import_module(old), importlib.import_module(new)
+    assert shim.__all__ == module.__all__
+    for name in module.__all__:
+        assert getattr(shim, name) is getattr(module, name), name
+    assert new in shim.__doc__
+
+
+def _imported_modules(path: Path, package: str) -> set[str]:
+    """The absolute names of the modules that the file at ``path`` imports from."""
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parent = package.split(".")[:len(package.split(".")) - node.level + 1]
+                base = ".".join(parent + ([base] if base else []))
+            names.add(base)
+            names.update(f"{base}.{a.name}" for a in node.names)
+        elif isinstance(node, ast.Import):
+            names.update(a.name for a in node.names)
+    return names
+
+
+def test_no_code_of_the_program_imports_a_moved_module_where_it_was():
+    """The old places are for users; the program and its plugins import the new ones."""
+    old = set(MOVED)
+    offenders = []
+    for root in (ROOT / "rockfall_design", ROOT / "plugins" / "rockfall_design_builtins"):
+        for path in root.rglob("*.py"):
+            parts = path.relative_to(root.parent).with_suffix("").parts
+            if ".".join(parts) in old:
+                continue  # the compatibility module itself
+            # The package that the file's relative imports start from.
+            package = ".".join(parts[:-1])
+            hits = _imported_modules(path, package) & old
+            offenders += [f"{path.relative_to(ROOT)}: {h}" for h in sorted(hits)]
+    assert offenders == []
