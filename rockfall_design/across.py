@@ -15,7 +15,7 @@ residual with the confidence bounds in place, negative where it fails).
 ``scenarios``: per scenario ``index``, ``values``, ``seed``, ``margin``,
 ``binds_at`` and the JSON of ``check`` in that scenario. ``--plot`` draws the
 binding scenario's figures (as ``check --plot`` draws them) and the margin of
-every scenario (:func:`~rockfall_design.figures.margins_figure`);
+every scenario (:func:`~rockfall_design.report.figures.margins_figure`);
 ``--report`` writes the report of every scenario and the binding one in full
 (:class:`ScenariosCheckResult`, rendered by :mod:`rockfall_design.documents`).
 
@@ -214,7 +214,7 @@ class ScenariosCheckResult:
 
     def plot_margins(self) -> Any:
         """A bar per scenario: the margin, the binding scenario, the count required."""
-        from .figures import margins_figure
+        from .report.figures import margins_figure
 
         s = self.summary
         return margins_figure(s["scenarios"], s["required"], s["binding"]["index"],

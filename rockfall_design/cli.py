@@ -54,7 +54,7 @@ _positive_int = _int_at_least(1, "number", _MAX_ROCKS)
 
 def _formats(text: str) -> tuple[str, ...]:
     """An argparse type: 'png,svg' -> ('png', 'svg'), each a known figure format."""
-    from .figures import FIGURE_FORMATS
+    from .report.figures import FIGURE_FORMATS
 
     out = tuple(dict.fromkeys(f.strip().lower() for f in text.split(",") if f.strip()))
     bad = [f for f in out if f not in FIGURE_FORMATS]
@@ -304,7 +304,7 @@ def _figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet)
         return
     figures = result.figures()  # drawn once for both
     if args.plot:
-        from .figures import save_figures
+        from .report.figures import save_figures
 
         save_figures(figures, args.plot, args.plot_format, files)
     if args.report:

@@ -634,7 +634,7 @@ def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
             record = {**run_record(result, sub), "section": section.name}
             files.write_json(sub.out / "summary.json", {**summary, "run": record})
         if sub.plot:
-            from .figures import save_figures
+            from .report.figures import save_figures
 
             save_figures(result.figures(), sub.plot, args.plot_format, files)
         return SectionDone(summary, result.print)

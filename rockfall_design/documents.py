@@ -294,7 +294,7 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
     figures : mapping of str to Figure, optional
         Default: ``result.figures()``.
     """
-    from .figures import CAPTIONS
+    from .report.figures import CAPTIONS
 
     if getattr(result, "across", False):  # check --scenarios
         return _scenarios_context(result, figures)
@@ -389,7 +389,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
     """
     from types import SimpleNamespace
 
-    from .figures import CAPTIONS
+    from .report.figures import CAPTIONS
 
     summary = result.summary
     project = result.project
@@ -485,7 +485,7 @@ def render_html(context: Mapping[str, Any]) -> str:
     """report.html: self-contained, every figure inline as SVG."""
     from markupsafe import Markup
 
-    from .figures import figure_svg
+    from .report.figures import figure_svg
 
     figs = [{**f, "svg": Markup(figure_svg(f["fig"]))} for f in context["figures"]]
     return _environment(False).get_template("report.html.j2").render(**{**context,
@@ -518,8 +518,8 @@ def write_report(result: Any, directory: str | os.PathLike[str],
     -------
     list of Path
     """
-    from .figures import save_figures
     from .outputs import OutputSet
+    from .report.figures import save_figures
 
     if outputs is None:
         with OutputSet() as own:

@@ -364,10 +364,10 @@ def plot_study(
     With an ``evaluation`` (from ``check``) the measures are drawn too. The
     figures join the output set ``outputs`` of the command they belong to
     and land when it commits; without one they land together on return.
-    The figures are built by :mod:`rockfall_design.figures` (no pyplot, no
+    The figures are built by :mod:`rockfall_design.report.figures` (no pyplot, no
     backend switch). Returns the paths written.
     """
-    from ..figures import save_figures, study_figures
+    from .figures import save_figures, study_figures
 
     return save_figures(study_figures(study, evaluation), directory, formats, outputs)
 
