@@ -17,7 +17,7 @@ residual with the confidence bounds in place, negative where it fails).
 binding scenario's figures (as ``check --plot`` draws them) and the margin of
 every scenario (:func:`~rockfall_design.report.figures.margins_figure`);
 ``--report`` writes the report of every scenario and the binding one in full
-(:class:`ScenariosCheckResult`, rendered by :mod:`rockfall_design.documents`).
+(:class:`ScenariosCheckResult`, rendered by :mod:`rockfall_design.report.documents`).
 
 For ``optimise`` with ``design.scenarios`` (see
 :mod:`rockfall_design.optimise.across`) this module prints the scenario

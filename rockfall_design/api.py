@@ -307,7 +307,7 @@ class SimulationResult:
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
-        from .documents import write_report
+        from .report.documents import write_report
 
         return write_report(self, directory)
 
@@ -491,7 +491,7 @@ class OptimiseResult:
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
-        from .documents import write_report
+        from .report.documents import write_report
 
         return write_report(self, directory)
 

@@ -308,7 +308,7 @@ def _figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet)
 
         save_figures(figures, args.plot, args.plot_format, files)
     if args.report:
-        from .documents import write_report
+        from .report.documents import write_report
 
         write_report(result, args.report, outputs=files, figures=figures)
 

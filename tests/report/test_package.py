@@ -57,7 +57,8 @@ def test_importing_the_package_loads_none_of_its_modules():
 
 #: The modules that moved into the room, each still importable from where it was.
 MOVED = {"rockfall_design.tables": "rockfall_design.report.tables",
-         "rockfall_design.figures": "rockfall_design.report.figures"}
+         "rockfall_design.figures": "rockfall_design.report.figures",
+         "rockfall_design.documents": "rockfall_design.report.documents"}
 
 
 def _public_definitions(module: object) -> set[str]:
@@ -120,3 +121,33 @@ def test_no_code_of_the_program_imports_a_moved_module_where_it_was():
             hits = _imported_modules(path, package) & old
             offenders += [f"{path.relative_to(ROOT)}: {h}" for h in sorted(hits)]
     assert offenders == []
+
+
+def test_the_templates_are_package_data_where_the_loader_looks():
+    """A wheel ships what package-data names: every template, beside documents.py."""
+    import tomllib
+
+    from rockfall_design.report import documents
+
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    patterns = data["tool"]["setuptools"]["package-data"]["rockfall_design.report"]
+    here = Path(documents.__file__).parent
+    templates = sorted(p.relative_to(here) for p in (here / "templates").iterdir())
+    assert [t.name for t in templates] == ["report.html.j2", "report.md.j2"]
+    for t in templates:
+        assert any(t.match(pattern) for pattern in patterns), t
+    env = documents._environment(markdown=True)
+    assert env.get_template("report.md.j2").filename == str(here / "templates" / "report.md.j2")
+
+
+@pytest.mark.parametrize("module, not_loaded", [
+    # A notebook's .plot(): matplotlib, but not the terminal's rich nor the reports' Jinja2.
+    ("rockfall_design.report.figures", ("rich", "jinja2", "rockfall_design.report.terminal",
+                                        "rockfall_design.report.documents")),
+    # The documents draw their figures only when a report is written.
+    ("rockfall_design.report.documents", ("matplotlib", "rich", "jinja2",
+                                          "rockfall_design.report.figures")),
+    ("rockfall_design.report.terminal", ("matplotlib", "jinja2", "pandas")),
+])
+def test_each_module_of_the_room_loads_only_its_own(module, not_loaded):
+    assert _loaded_after(f"import {module}", not_loaded) == []
