@@ -5,12 +5,6 @@ users' scripts and notebooks keeps working: it hands on the public names of
 :mod:`rockfall_design.report.documents`, which new code imports instead.
 """
 
-from .report.documents import (
-    Table,
-    render_html,
-    render_markdown,
-    report_context,
-    write_report,
-)
-
-__all__ = ["Table", "report_context", "render_html", "render_markdown", "write_report"]
+# Exactly the new module's __all__, so the two cannot drift apart.
+from .report.documents import *  # noqa: F403
+from .report.documents import __all__  # noqa: F401

@@ -5,20 +5,6 @@ scripts and notebooks keeps working: it hands on the public names of
 :mod:`rockfall_design.report.tables`, which new code imports instead.
 """
 
-from .report.tables import (
-    alternatives_frame,
-    check_columns,
-    checks_frame,
-    measure_text,
-    measures_frame,
-    round_value,
-)
-
-__all__ = [
-    "round_value",
-    "check_columns",
-    "measure_text",
-    "alternatives_frame",
-    "measures_frame",
-    "checks_frame",
-]
+# Exactly the new module's __all__, so the two cannot drift apart.
+from .report.tables import *  # noqa: F403
+from .report.tables import __all__  # noqa: F401

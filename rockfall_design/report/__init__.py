@@ -21,22 +21,6 @@ from __future__ import annotations
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
-#: The names of the terminal module offered here: its ``__all__`` and the
-#: public helpers the commands share (``fitted_console``, ``MAX_FILE_WIDTH``).
-_TERMINAL = frozenset({
-    "print_simulation",
-    "print_check",
-    "print_optimise",
-    "alternatives_table",
-    "design_yaml",
-    "plot_study",
-    "plugins_table",
-    "fitted_console",
-    "simulation_renderable",
-    "check_renderable",
-    "MAX_FILE_WIDTH",
-})
-
 if TYPE_CHECKING:  # pragma: no cover
     from .terminal import (  # noqa: F401  (the names __getattr__ offers, for type checkers)
         MAX_FILE_WIDTH,
@@ -62,6 +46,11 @@ __all__ = [
     "plot_study",
     "plugins_table",
 ]
+
+#: The names of the terminal module offered here: its ``__all__`` and the
+#: public helpers the commands share.
+_TERMINAL = frozenset(__all__) | {"fitted_console", "simulation_renderable",
+                                  "check_renderable", "MAX_FILE_WIDTH"}
 
 
 def __getattr__(name: str) -> Any:
