@@ -19,9 +19,9 @@ lets the design fail in.
 ``scenarios``: per scenario ``index``, ``values``, ``seed``, ``margin``,
 ``binds_at`` and the JSON of ``check`` in that scenario. ``--plot`` draws the
 binding scenario's figures (as ``check --plot`` draws them) and the margin of
-every scenario (:func:`~rockfall_design.figures.margins_figure`);
+every scenario (:func:`~rockfall_design.report.figures.margins_figure`);
 ``--report`` writes the report of every scenario and the binding one in full
-(:class:`ScenariosCheckResult`, rendered by :mod:`rockfall_design.documents`).
+(:class:`ScenariosCheckResult`, rendered by :mod:`rockfall_design.report.documents`).
 
 For ``optimise`` with ``design.scenarios`` (see
 :mod:`rockfall_design.optimise.across`) this module prints the scenario
@@ -150,7 +150,7 @@ def print_check_across(summary: dict[str, Any]) -> None:
     """The terminal report of ``check --scenarios``: a row per scenario, the verdict."""
     from rich.table import Table
 
-    from .report import fitted_console
+    from .report.terminal import fitted_console
 
     table = Table(show_edge=False)
     for col, just in (("#", "right"), ("values", "left"), ("seed", "right"),
@@ -222,7 +222,7 @@ class ScenariosCheckResult:
 
     def plot_margins(self) -> Any:
         """A bar per scenario: the margin, the binding scenario, the count required."""
-        from .figures import margins_figure
+        from .report.figures import margins_figure
 
         s = self.summary
         return margins_figure(s["scenarios"], s["required"], s["binding"]["index"],
@@ -282,7 +282,7 @@ def print_across(result: AcrossResult) -> None:
     """The scenario lines of the optimiser's report: where the chosen design binds."""
     from rich.text import Text
 
-    from .report import fitted_console
+    from .report.terminal import fitted_console
 
     block = result.scenarios_block()
     lines = [f"Scenarios: a design must hold in {block['required']} of {block['of']} "

@@ -262,7 +262,7 @@ class SimulationResult:
     # ---- figures ---------------------------------------------------------
     def plot_profile(self) -> Figure:
         """The slope section with a sample of paths, stations and measures."""
-        from .figures import profile_figure
+        from .report.figures import profile_figure
 
         return profile_figure(self.study, self._evaluation)
 
@@ -271,13 +271,13 @@ class SimulationResult:
 
         ``min_rocks`` defaults to the project's ``analysis.min_rocks_envelope``.
         """
-        from .figures import envelopes_figure
+        from .report.figures import envelopes_figure
 
         return envelopes_figure(self.study, self._evaluation, min_rocks)
 
     def plot_stops(self) -> Figure:
         """Where the rocks come to rest (says why when none does)."""
-        from .figures import stops_figure
+        from .report.figures import stops_figure
 
         return stops_figure(self.study, self._evaluation)
 
@@ -301,13 +301,13 @@ class SimulationResult:
     def save_figures(self, directory: str | os.PathLike[str],
                      formats: tuple[str, ...] = ("png",)) -> list[Path]:
         """Write every figure into ``directory`` as NAME.FORMAT (png, svg, pdf)."""
-        from .figures import save_figures
+        from .report.figures import save_figures
 
         return save_figures(self.figures(), directory, formats)
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
-        from .documents import write_report
+        from .report.documents import write_report
 
         return write_report(self, directory)
 
@@ -353,14 +353,14 @@ class CheckResult(SimulationResult):
     @cached_property
     def measures(self) -> pd.DataFrame:
         """One row per measure: rocks met, caught, over, through; a column per check."""
-        from .tables import measures_frame
+        from .report.tables import measures_frame
 
         return measures_frame(self.summary)
 
     @cached_property
     def checks(self) -> pd.DataFrame:
         """One row per safety check: value, confidence bound (if any), target, verdict."""
-        from .tables import checks_frame
+        from .report.tables import checks_frame
 
         return checks_frame(self.summary)
 
@@ -422,7 +422,7 @@ class OptimiseResult:
     @cached_property
     def alternatives(self) -> pd.DataFrame:
         """One row per family: cost (currency units), residual, a column per check, reason."""
-        from .tables import alternatives_frame
+        from .report.tables import alternatives_frame
 
         return alternatives_frame(self.summary)
 
@@ -460,7 +460,7 @@ class OptimiseResult:
     # ---- figures ---------------------------------------------------------
     def plot_alternatives(self) -> Figure:
         """A bar per family: cost, residual and the check that binds or fails."""
-        from .figures import alternatives_figure
+        from .report.figures import alternatives_figure
 
         s = self.summary
         return alternatives_figure(s["alternatives"], s.get("best"), s.get("currency", ""),
@@ -485,13 +485,13 @@ class OptimiseResult:
     def save_figures(self, directory: str | os.PathLike[str],
                      formats: tuple[str, ...] = ("png",)) -> list[Path]:
         """Write every figure into ``directory`` as NAME.FORMAT (png, svg, pdf)."""
-        from .figures import save_figures
+        from .report.figures import save_figures
 
         return save_figures(self.figures(), directory, formats)
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
-        from .documents import write_report
+        from .report.documents import write_report
 
         return write_report(self, directory)
 

@@ -54,7 +54,7 @@ _positive_int = _int_at_least(1, "number", _MAX_ROCKS)
 
 def _formats(text: str) -> tuple[str, ...]:
     """An argparse type: 'png,svg' -> ('png', 'svg'), each a known figure format."""
-    from .figures import FIGURE_FORMATS
+    from .report.figures import FIGURE_FORMATS
 
     out = tuple(dict.fromkeys(f.strip().lower() for f in text.split(",") if f.strip()))
     bad = [f for f in out if f not in FIGURE_FORMATS]
@@ -304,11 +304,11 @@ def _figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet)
         return
     figures = result.figures()  # drawn once for both
     if args.plot:
-        from .figures import save_figures
+        from .report.figures import save_figures
 
         save_figures(figures, args.plot, args.plot_format, files)
     if args.report:
-        from .documents import write_report
+        from .report.documents import write_report
 
         write_report(result, args.report, outputs=files, figures=figures)
 
@@ -383,7 +383,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
-        from .report import print_simulation
+        from .report.terminal import print_simulation
 
         print_simulation(summary)
     if recorded is not None and not same:
@@ -512,7 +512,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
-        from .report import print_check
+        from .report.terminal import print_check
 
         print_check(summary)
     return int(ExitCode.OK if evaluation.ok else ExitCode.CHECK_FAILED)
@@ -572,7 +572,7 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     OptimiseResult
     """
     from .api import optimise
-    from .report import design_yaml
+    from .report.terminal import design_yaml
 
     n = args.rocks or project.rocks.count
     prog, callback = _stage_progress(sys.stderr.isatty())
@@ -615,7 +615,7 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
 
 def print_optimised(result: Any, project: Any) -> None:
     """The terminal report of ``optimise``: the alternatives, and the scenarios if any."""
-    from .report import print_optimise
+    from .report.terminal import print_optimise
 
     print_optimise(result, project)
     if project.design.scenarios is not None:
@@ -649,7 +649,7 @@ def cmd_plugins(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(plugins_json(registry), allow_nan=False) + "\n")
     else:
-        from .report import fitted_console
+        from .report.terminal import fitted_console
 
         table = plugins_table(registry)
         fitted_console(table).print(table)

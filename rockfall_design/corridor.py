@@ -153,7 +153,7 @@ def _print_totals(summary: dict[str, Any]) -> None:
     """The corridor's table: one row per section, and the total."""
     from rich.table import Table
 
-    from .report import fitted_console
+    from .report.terminal import fitted_console
 
     command, totals = summary["command"], summary["totals"]
     if summary.get("scenarios"):
@@ -216,7 +216,7 @@ def _print_scenario_totals(summary: dict[str, Any]) -> None:
     """The corridor's table of ``check --scenarios``: a row per section, and the total."""
     from rich.table import Table
 
-    from .report import fitted_console
+    from .report.terminal import fitted_console
 
     totals = summary["totals"]
     table = Table(show_edge=False)
@@ -252,7 +252,7 @@ def _section_rule(section: CorridorSection, of: int, seed: int) -> None:
     """The heading of a section's report; ``seed`` is the one it ran with (``--seed`` too)."""
     from rich.rule import Rule
 
-    from .report import fitted_console
+    from .report.terminal import fitted_console
 
     rule = Rule(f"section {section.index + 1} of {of}: {section.name} (seed {seed})")
     fitted_console(rule).print(rule)
@@ -487,7 +487,7 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
     """``simulate`` of a corridor: every section's run, files and report, then the totals."""
     from .api import SimulationResult, run_simulation
     from .cli import _FIGURES, _figures_and_report, _memory_guard, _run, _table_writers, run_record
-    from .report import print_simulation
+    from .report.terminal import print_simulation
     from .simulation import EXACT_ROCKS, study_memory
 
     def guard(section: CorridorSection) -> None:
@@ -529,7 +529,7 @@ def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
     """``check`` of a corridor: every section checked; exit 0 only if every section holds."""
     from .api import CheckResult, check
     from .cli import _FIGURES, _figures_and_report, _in_memory_guard, _run, run_record
-    from .report import print_check
+    from .report.terminal import print_check
 
     def guard(section: CorridorSection) -> None:
         a = section.project.analysis
@@ -634,7 +634,7 @@ def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
             record = {**run_record(result, sub), "section": section.name}
             files.write_json(sub.out / "summary.json", {**summary, "run": record})
         if sub.plot:
-            from .figures import save_figures
+            from .report.figures import save_figures
 
             save_figures(result.figures(), sub.plot, args.plot_format, files)
         return SectionDone(summary, result.print)

@@ -67,7 +67,7 @@ def __getattr__(name: str) -> Any:
     # The terminal's tables live with the other terminal output (report); rich
     # is imported only when they are drawn.
     if name == "plugins_table":
-        from ..report import plugins_table
+        from ..report.terminal import plugins_table
 
         return plugins_table
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

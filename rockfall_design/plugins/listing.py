@@ -1,6 +1,7 @@
 """The registry as plain data: what ``rockfall-design plugins --json`` prints.
 
-(The terminal's tables of the same are drawn by :func:`rockfall_design.report.plugins_table`.)
+(The terminal's tables of the same are drawn by
+:func:`rockfall_design.report.terminal.plugins_table`.)
 """
 
 from __future__ import annotations

@@ -128,7 +128,7 @@ def cmd_study(args: argparse.Namespace) -> int:
             files.write_csv(out / "sensitivity.csv", result.sensitivity)
             files.write_json(out / "summary.json", {**summary, "run": run_record(result, args)})
         if args.plot:
-            from ..figures import save_figures
+            from ..report.figures import save_figures
 
             save_figures(result.figures(), args.plot, args.plot_format, files)
     if args.json:

@@ -200,7 +200,7 @@ class StudyResult:
         """Envelopes of passing height and energy along x, every scenario on one figure."""
         from matplotlib import colormaps
 
-        from ..figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure
+        from ..report.figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure
         from .run import envelope_percentile
 
         if any("envelope" not in result for result in self.results):
@@ -245,7 +245,7 @@ class StudyResult:
 
     def plot_tornado(self) -> Figure:
         """Tornado chart: for the targets moved most, each input's range of level means."""
-        from ..figures import RockfallFigure
+        from ..report.figures import RockfallFigure
 
         entries = self._sensitivity
         chosen: list[str] = []
@@ -305,7 +305,7 @@ class StudyResult:
     def save_figures(self, directory: str | os.PathLike[str],
                      formats: Sequence[str] = ("png",)) -> list[Path]:
         """Write :meth:`figures` into ``directory``, one file per figure and format."""
-        from ..figures import save_figures
+        from ..report.figures import save_figures
 
         return save_figures(self.figures(), directory, formats)
 
@@ -315,7 +315,7 @@ class StudyResult:
         from rich.table import Table
         from rich.text import Text
 
-        from ..report import fitted_console
+        from ..report.terminal import fitted_console
 
         s = self.summary
         rate = len(self.results) * self.n_rocks / self.runtime_s if self.runtime_s else 0.0

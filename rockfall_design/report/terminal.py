@@ -1,4 +1,8 @@
-"""Terminal reports (rich) and figures for engineers' reports (matplotlib)."""
+"""The terminal's reports (rich), and the one call that writes a run's figures.
+
+The terminal side of the report room (:mod:`rockfall_design.report`); it was
+the module ``rockfall_design/report.py``, whose names the package still offers.
+"""
 
 from __future__ import annotations
 
@@ -11,11 +15,11 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from .outputs import OutputSet
+from ..outputs import OutputSet
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .plugins import Registry
-    from .simulation import StreamedStudy, Study
+    from ..plugins import Registry
+    from ..simulation import StreamedStudy, Study
 
 __all__ = [
     "print_simulation",
@@ -308,7 +312,7 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
 def alternatives_table(result: Any) -> Any:
     """alternatives.csv: one row per family, one column per check, rounded numbers.
 
-    See :func:`rockfall_design.tables.alternatives_frame`.
+    See :func:`rockfall_design.report.tables.alternatives_frame`.
     """
     from .tables import alternatives_frame
 
@@ -317,7 +321,7 @@ def alternatives_table(result: Any) -> Any:
 
 def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -> str:
     """The project with the chosen measures, as YAML that ``check`` accepts."""
-    from .project import dump_yaml
+    from ..project import dump_yaml
 
     ev = best.evaluation
     data = ev.study.project.resolved_dict()
@@ -360,7 +364,7 @@ def plot_study(
     With an ``evaluation`` (from ``check``) the measures are drawn too. The
     figures join the output set ``outputs`` of the command they belong to
     and land when it commits; without one they land together on return.
-    The figures are built by :mod:`rockfall_design.figures` (no pyplot, no
+    The figures are built by :mod:`rockfall_design.report.figures` (no pyplot, no
     backend switch). Returns the paths written.
     """
     from .figures import save_figures, study_figures
@@ -373,7 +377,7 @@ def plot_study(
 
 def plugins_table(registry: Registry) -> Group:
     """The registry as rich tables (``rockfall-design plugins``)."""
-    from .plugins.listing import _SECTIONS, _parameter_list
+    from ..plugins.listing import _SECTIONS, _parameter_list
 
     titles = {"measures": "Measures", "safety_concepts": "Safety concepts",
               "cost_models": "Cost models"}

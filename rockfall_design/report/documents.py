@@ -1,0 +1,533 @@
+"""The report an engineer hands in: report.html (self-contained) and report.md.
+
+Both are rendered from one context (plain data: headings, tables of text,
+figures) by the Jinja2 templates shipped in ``rockfall_design/report/templates``.
+The HTML file embeds every figure as inline SVG and references no other
+file or URL, so it can be mailed or archived alone; the Markdown twin
+references its figures as SVG files written beside it.
+
+Everything comes from the result's JSON summary and project, never from
+engine columns, so the report says what ``--json`` says.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from .. import __version__
+from .tables import measure_text, round_value
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..outputs import OutputSet
+
+__all__ = ["Table", "report_context", "render_html", "render_markdown", "write_report"]
+
+
+@dataclass
+class Table:
+    """A table of the report: a title, column headers, rows of text, an optional note."""
+
+    title: str
+    columns: list[str]
+    rows: list[list[str]]
+    note: str = ""
+    highlight: list[bool] = field(default_factory=list)  # rows to emphasise (chosen design)
+
+
+def _num(v: Any, unit: str = "-", none: str = "-") -> str:
+    """A number as text, rounded for its unit (see :func:`tables.round_value`)."""
+    if v is None:
+        return none
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float) and not math.isfinite(v):
+        return str(v)
+    r = round_value(v, unit)
+    if isinstance(r, int):
+        return f"{r:,}"
+    if isinstance(r, float):
+        return f"{r:,.2f}" if unit in ("-", "m") else f"{r:,g}"
+    return str(r)
+
+
+def _fixed(v: Any, digits: int) -> str:
+    return "-" if v is None else f"{float(v):,.{digits}f}"
+
+
+# ---- the parts of the context -------------------------------------------------
+
+
+def _inputs(project: Any, command: str) -> list[Table]:
+    d = project.resolved_dict()
+    out = []
+    slope = d["slope"]
+    pts = slope["points"]
+    rows = [[_fixed(p[0], 1), _fixed(p[1], 1), slope["materials"][i] if i < len(pts) - 1 else ""]
+            for i, p in enumerate(pts)]
+    out.append(Table("Slope section", ["x (m)", "elevation (m)", "material of the next segment"],
+                     rows))
+    mats = d["materials"]
+    keys = ["restitution", "friction", "rolling_resistance", "roughness_deg", "impact_model"]
+    out.append(Table("Ground materials", ["material", *keys],
+                     [[name, *(str(m.get(k, "-")) for k in keys)] for name, m in mats.items()],
+                     note="Restitution, friction and rolling resistance are dimensionless; "
+                     "roughness in degrees. Scatter as in the project file."))
+    r = d["rocks"]
+    size = next(((q, r[q]) for q in ("radius", "volume", "mass") if r.get(q) is not None),
+                ("size", None))
+    unit = {"radius": "m", "volume": "m3", "mass": "kg"}.get(size[0], "")
+    dist = size[1]
+    if isinstance(dist, dict):  # {lognormal: [a, b]} -> "lognormal 0.6, 0.4"
+        dist = "; ".join(f"{k} " + ", ".join(f"{v:g}" for v in (vals if isinstance(vals, list)
+                                                               else [vals]))
+                         for k, vals in dist.items())
+    rows = [["density (kg/m3)", _num(r["density"], "m")],
+            [f"{size[0]} ({unit})", str(dist)]]
+    for i, z in enumerate(r["release"]):
+        rows.append([f"release zone {i + 1}",
+                     f"x {z['x'][0]:g} to {z['x'][1]:g} m, height {z['height']:g} m, velocity "
+                     f"{z['velocity']} m/s, spin {z['spin']}, weight {z['weight']:g}"])
+    out.append(Table("Rocks", ["quantity", "value"], rows))
+    a = d["analysis"]
+    rows = [["analysis stations x (m)", ", ".join(f"{x:g}" for x in a["stations"]) or "-"],
+            ["percentiles (%)", ", ".join(f"{q:g}" for q in a["percentiles"])],
+            ["envelope points", str(a["envelope_points"])],
+            ["fewest rocks for an envelope point", str(a.get("min_rocks_envelope", "-"))]]
+    if d.get("protect"):
+        rows.append(["protected zone from x (m)", f"{d['protect']['x']:g}"])
+    out.append(Table("Analysis", ["setting", "value"], rows))
+    if command == "check" and d.get("measures"):
+        out.append(Table("Measures checked", ["measure", "parameters"],
+                         [[m["type"], ", ".join(f"{k} {v}" for k, v in m.items() if k != "type")]
+                          for m in d["measures"]]))
+    if command in ("check", "optimise"):
+        s = d.get("safety") or {}
+        out.append(Table("Safety concept", ["parameter", "value"],
+                         [[k, str(v)] for k, v in s.items()]))
+    if command == "optimise" and d.get("design"):
+        des = d["design"]
+        rows = [[c.get("type", "?"), ", ".join(f"{k} {v}" for k, v in c.items() if k != "type")]
+                for c in des.get("candidates", [])]
+        out.append(Table("Candidate measures of the design", ["type", "range"], rows,
+                         note=f"At most {des.get('max_measures')} measures in one design; "
+                         f"residual target {des.get('residual')}."))
+    return out
+
+
+def _run_table(result: Any, summary: Mapping[str, Any]) -> Table:
+    project = result.project
+    rows = [["program", f"rockfall-design {__version__}, command {result.command}"],
+            ["project file", str(project.source)],
+            ["project hash (sha256 of the resolved project)",
+             str(summary.get("project_hash") or project.resolved_hash())],
+            ["rocks", f"{int(summary['rocks']):,}"],
+            ["seed", str(summary["seed"])]]
+    if result.command == "optimise":
+        rows += [["fresh rocks (verification)", f"{int(summary['fresh_rocks']):,}"],
+                 ["fresh seed", str(summary["fresh_seed"])],
+                 ["designs screened", f"{int(summary.get('designs_evaluated', 0)):,}"]]
+    stats = summary.get("statistics") or {}
+    if stats.get("method") == "histograms":
+        rows.append(["statistics", "streamed in chunks: counts, means and maxima exact, "
+                     f"percentiles within {100 * stats['relative_error']:g} %"])
+    elif stats:
+        rows.append(["statistics", "exact, over every rock"])
+    if summary.get("safety_concept"):
+        rows.append(["safety concept", str(summary["safety_concept"])])
+    e = project.engine
+    rows.append(["engine", f"exact events (flight parabolas, impacts, rolling and sliding in "
+                 f"closed form); v_contact {e.v_contact:g} m/s, v_stop {e.v_stop:g} m/s, "
+                 f"max_events {e.max_events:,}"])
+    return Table("", ["item", "value"], rows)
+
+
+def _stations_table(summary: Mapping[str, Any]) -> Table | None:
+    stations = summary.get("stations") or []
+    if not stations:
+        return None
+    cols = ["x (m)", "rocks passing", "h p50 (m)", "h p95 (m)", "h p99 (m)", "h max (m)",
+            "v p95 (m/s)", "v max (m/s)", "E p50 (kJ)", "E p95 (kJ)", "E p99 (kJ)",
+            "E max (kJ)"]
+    rows = []
+    for s in stations:
+        h, v, e = s["passing_height_m"], s["velocity_ms"], s["energy_kj"]
+        rows.append([f"{s['x']:g}", f"{s['crossings']:,}",
+                     *(_fixed(h[q], 2) for q in ("p50", "p95", "p99", "max")),
+                     _fixed(v["p95"], 1), _fixed(v["max"], 1),
+                     *(_fixed(e[q], 0) for q in ("p50", "p95", "p99", "max"))])
+    return Table("Analysis stations (first passage downslope)", cols, rows,
+                 note="h: passing height of the rock centre above the ground; v: speed; "
+                 "E: total kinetic energy. Percentiles over the rocks passing the station.")
+
+
+def _ends_table(summary: Mapping[str, Any]) -> Table:
+    st = summary["stops"]
+    n = max(int(summary["rocks"]), 1)
+    rows = []
+    for label, key in (("stopped on the section", "stopped"),
+                       ("left downslope end", "exit_downslope"),
+                       ("left upslope end", "exit_upslope"),
+                       ("caught by a barrier", "caught"),
+                       ("unresolved (event limit)", "unresolved")):
+        rows.append([label, f"{st[key]:,}", f"{100 * st[key] / n:.1f} %"])
+    sx = st["x"]
+    note = ("Stop position x of the rocks at rest (m): "
+            f"mean {_fixed(sx['mean'], 1)}, p50 {_fixed(sx['p50'], 1)}, "
+            f"p95 {_fixed(sx['p95'], 1)}, max {_fixed(sx['max'], 1)}.")
+    return Table("How the paths ended", ["end", "rocks", "share"], rows, note=note)
+
+
+def _protect_text(summary: Mapping[str, Any]) -> str:
+    p = summary.get("protect")
+    if not p:
+        return ""
+    text = (f"Protected zone x >= {p['x']:g} m: {p['reaching']:,} of {summary['rocks']:,} rocks "
+            f"reach it ({100 * p['fraction']:.2f} %)")
+    if p.get("upper_fraction") is not None:
+        text += f", upper confidence bound {100 * p['upper_fraction']:.2f} %"
+    if p.get("allowed_fraction") is not None:
+        text += f"; allowed {100 * p['allowed_fraction']:.2f} %"
+    if p.get("unresolved"):
+        text += f"; {p['unresolved']:,} unresolved paths counted as reaching it"
+    return text + "."
+
+
+def _checks_table(summary: Mapping[str, Any]) -> Table | None:
+    measures = summary.get("measures")
+    if measures is None:
+        return None
+    bounds = any(c.get("bound") is not None for m in measures for c in m.get("checks", []))
+    cols = ["measure", "met", "caught", "over", "through", "check", "value"]
+    cols += ["bound"] if bounds else []
+    cols += ["target", "unit", "verdict", "how"]
+    rows = []
+    for m in measures:
+        through = m.get("broken_through", 0) + m.get("passed_through_gap", 0)
+        head = [m.get("label", m.get("type", "?")), f"{m['met']:,}", f"{m['caught']:,}",
+                f"{m['passed_over']:,}", f"{through:,}"]
+        for k, c in enumerate(m.get("checks") or [None]):
+            first = head if k == 0 else [""] * 5
+            if c is None:
+                rows.append(first + ["(none)"] + [""] * (len(cols) - 6))
+                continue
+            unit = str(c.get("unit", "-"))
+            row = first + [str(c["name"]), _num(c.get("value"), unit)]
+            if bounds:
+                row.append(_num(c.get("bound"), unit))
+            row += [_num(c.get("target"), unit), unit, "ok" if c.get("ok") else "FAILS",
+                    str(c.get("detail", ""))]
+            rows.append(row)
+    return Table("Measures and their checks", cols, rows,
+                 note="met: rocks that reached the measure; over: passed over it; through: "
+                 "broke through or passed a gap. Value against target as the safety concept "
+                 "defines it.")
+
+
+def _alternatives_table(summary: Mapping[str, Any]) -> Table:
+    cur = summary.get("currency") or ""
+    best = summary.get("best")
+    alts = sorted(summary.get("alternatives", []),
+                  key=lambda a: (not a.get("feasible"), a.get("cost") is None,
+                                 a.get("cost") or 0))
+    names: list[tuple[str, str]] = []
+    for a in alts:
+        seen: dict[str, int] = {}
+        for c in a.get("checks") or []:
+            seen[c["name"]] = seen.get(c["name"], 0) + 1
+            key = c["name"] if seen[c["name"]] == 1 else f"{c['name']}_{seen[c['name']]}"
+            if key not in [n for n, _ in names]:
+                names.append((key, str(c.get("unit", "-"))))
+    cols = ["", "family", f"cost ({cur})" if cur else "cost", "measures", "residual",
+            "fresh rocks", *(n.removesuffix("_factor") + ("" if u == "-" else f" ({u})")
+                             for n, u in names), "reason"]
+    rows, marks = [], []
+    for a in alts:
+        values: dict[str, Any] = {}
+        seen = {}
+        for c in a.get("checks") or []:
+            seen[c["name"]] = seen.get(c["name"], 0) + 1
+            key = c["name"] if seen[c["name"]] == 1 else f"{c['name']}_{seen[c['name']]}"
+            values[key] = _num(c.get("value"), str(c.get("unit", "-"))) + (
+                "" if c.get("ok") else " !")
+        fresh = a.get("holds_on_fresh_rocks")
+        chosen = best is not None and a.get("name") == best
+        rows.append(["*" if chosen else "", str(a.get("name")),
+                     _num(a.get("cost"), "cost") if a.get("feasible")
+                     else f"({_num(a.get('cost'), 'cost')})",
+                     "; ".join(measure_text(m) for m in a.get("measures") or []) or "-",
+                     _num(a.get("residual"), "count"),
+                     "-" if fresh is None else ("holds" if fresh else "FAILS"),
+                     *(values.get(n, "") for n, _ in names),
+                     str(a.get("reason") or "")])
+        marks.append(chosen)
+    return Table("Alternatives: the cheapest design of each family", cols, rows,
+                 note="* the chosen design; a cost in brackets: not admissible; ! a check "
+                 "that misses its target; residual: rocks reaching the protected zone; fresh "
+                 "rocks: whether the design holds on rocks not used in the search.",
+                 highlight=marks)
+
+
+def _chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
+    best = summary.get("best")
+    if best is None:
+        return f"No admissible design: {summary.get('reason', '')}", []
+    alt = next(a for a in summary["alternatives"] if a.get("name") == best)
+    cur = summary.get("currency") or ""
+    head = f"Chosen design: {best}, cost {_num(alt.get('cost'), 'cost')} {cur}".rstrip() + "."
+    if summary.get("reason"):
+        head += f" Note: {summary['reason']}."
+    return head, [measure_text(m) for m in alt.get("measures") or []]
+
+
+def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Everything the report templates show, as plain data.
+
+    Parameters
+    ----------
+    result : SimulationResult, CheckResult or OptimiseResult
+    figures : mapping of str to Figure, optional
+        Default: ``result.figures()``.
+    """
+    from .figures import CAPTIONS
+
+    if getattr(result, "across", False):  # check --scenarios
+        return _scenarios_context(result, figures)
+    summary = result.summary
+    project = result.project
+    command = result.command
+    ctx: dict[str, Any] = {
+        "title": f"{project.name}: rockfall {'design' if command == 'optimise' else command}",
+        "project": project.name,
+        "description": project.description,
+        "command": command,
+        "version": __version__,
+        "generated": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "run": _run_table(result, summary),
+        "inputs": _inputs(project, command),
+        "results": [],
+        "protect": "",
+        "verdict": "",
+        "failures": [],
+        "chosen": "",
+        "chosen_measures": [],
+    }
+    design = result.design if command == "optimise" else None
+    stats_summary = design.summary if design is not None else (
+        summary if command != "optimise" else None)
+    if command == "optimise":
+        ctx["chosen"], ctx["chosen_measures"] = _chosen_text(summary)
+        ctx["results"].append(_alternatives_table(summary))
+    if stats_summary is not None:
+        ctx["results"].append(_ends_table(stats_summary))
+        st = _stations_table(stats_summary)
+        if st is not None:
+            ctx["results"].append(st)
+        ct = _checks_table(stats_summary)
+        if ct is not None:
+            ctx["results"].append(ct)
+        ctx["protect"] = _protect_text(stats_summary)
+    if command == "check":
+        ctx["verdict"] = ("Design holds: every check passes." if summary["ok"]
+                          else "Design fails.")
+        ctx["failures"] = list(summary.get("failures", []))
+    if design is not None:
+        ctx["results_note"] = ("Statistics, checks and figures of the chosen design, on the "
+                               "search rocks.")
+    figs = figures if figures is not None else result.figures()
+    ctx["figures"] = [{"name": name, "caption": CAPTIONS.get(name, ""), "fig": fig}
+                      for name, fig in figs.items()]
+    return ctx
+
+
+def _values_text(values: Mapping[str, Any]) -> str:
+    return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
+
+
+def _margin_text(margin: Any, binds_at: Any) -> str:
+    return "no check to bind" if margin is None else (
+        f"margin {100 * float(margin):+.1f} % at {binds_at}")
+
+
+def _scenarios_table(summary: Mapping[str, Any], paths: list[str]) -> Table:
+    """Every scenario of ``check --scenarios``: values, seed, verdicts, margin, what binds."""
+    b = summary["binding"]["index"]
+    cols = ["", "#", *paths, "seed", "reaching", "holds", "with confidence", "margin",
+            "binds at"]
+    rows, marks = [], []
+    for p in summary["scenarios"]:
+        prot = p.get("protect")
+        rows.append(["*" if p["index"] == b else "", str(p["index"]),
+                     *(str(p["values"].get(k, "-")) for k in paths), str(p["seed"]),
+                     "-" if not prot else f"{prot['reaching']:,}",
+                     "yes" if p["ok"] else "FAILS",
+                     "yes" if p["holds_with_confidence"] else "no",
+                     "-" if p["margin"] is None else f"{100 * p['margin']:+.1f} %",
+                     str(p["binds_at"] or "-")])
+        marks.append(p["index"] == b)
+    return Table(f"Scenarios: {summary['of']}, each with its own rocks "
+                 f"({int(summary['rocks']):,} rocks, its own seed)", cols, rows,
+                 note="* the binding scenario (least margin). holds: every check and the "
+                 "residual on the point values, as check judges them; with confidence: with "
+                 "the confidence bounds in place. margin: the smallest relative slack of a "
+                 "check or of the residual with the confidence bounds in place, negative "
+                 "where it fails. reaching: rocks reaching the protected zone.",
+                 highlight=marks)
+
+
+def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The report of ``check --scenarios``: every scenario, the binding one in full.
+
+    The binding scenario's part is the report of ``check`` in that scenario
+    (:func:`report_context` of its :class:`~rockfall_design.api.CheckResult`),
+    its tables and figures titled with the scenario.
+    """
+    from types import SimpleNamespace
+
+    from .figures import CAPTIONS
+
+    summary = result.summary
+    project = result.project
+    binding = result.binding_check
+    b = summary["binding"]
+    figs = dict(figures) if figures is not None else result.figures()
+    ctx = report_context(binding, {k: v for k, v in figs.items() if k != "margins"})
+    name = f"binding scenario {b['index']} ({_values_text(b['values'])})"
+    # The run: the project as written, the run seed the scenarios' seeds derive from.
+    head = SimpleNamespace(project=project, command="check")
+    run = _run_table(head, {**binding.summary, "seed": summary["seed"],
+                            "project_hash": project.resolved_hash()})
+    for row in run.rows:
+        if row[0] == "seed":
+            row[0] = "run seed (each scenario's seed derives from it)"
+        if row[0] == "rocks":
+            row[0] = "rocks per scenario"
+        if row[0] == "program":
+            row[1] = f"rockfall-design {__version__}, command check --scenarios"
+    at = next(i for i, row in enumerate(run.rows) if row[0].startswith("run seed")) + 1
+    run.rows[at:at] = [
+        ["scenarios", f"{summary['of']}; the design must hold in {summary['required']} "
+         f"(design.scenarios share {summary['share']:g})"],
+        ["binding scenario", f"{b['index']} ({_values_text(b['values'])}), seed {b['seed']}: "
+         + _margin_text(b["margin"], b["binds_at"])],
+    ]
+    ctx["run"] = run
+    study = project.resolved_dict().get("study") or {}
+    vary = study.get("vary") or {}
+    ctx["inputs"] = _inputs(project, "check") + [Table(
+        "Study: the varied inputs", ["input (path in the project)", "values"],
+        [[k, ", ".join(map(str, v)) if isinstance(v, list) else str(v)]
+         for k, v in vary.items()],
+        note=f"Scenarios: {study.get('scenarios')}; seeds: {study.get('seeds')}. The other "
+        "inputs are as written above.")]
+    paths = list(dict.fromkeys(k for p in summary["scenarios"] for k in p["values"]))
+    ctx["results"] = [_scenarios_table(summary, paths)] + [
+        Table(f"{name[0].upper()}{name[1:]}: {t.title}", t.columns, t.rows, t.note, t.highlight)
+        for t in ctx["results"]]
+    if ctx["protect"]:
+        ctx["protect"] = f"{name[0].upper()}{name[1:]}: {ctx['protect']}"
+    ctx["results_note"] = (
+        "Every scenario of the study first; then the binding scenario (the least margin), "
+        f"in full as check shows one scenario: scenario {b['index']}, seed {b['seed']}, "
+        + _margin_text(b["margin"], b["binds_at"]) + ".")
+    ok = bool(summary["ok"])
+    ctx["title"] = f"{project.name}: rockfall check over {summary['of']} scenarios"
+    ctx["command"] = "check --scenarios"
+    ctx["verdict"] = (
+        f"Design {'holds' if ok else 'fails'}: it holds in {summary['holds_in']} of "
+        f"{summary['of']} scenarios (on the point values; "
+        f"{summary['holds_with_confidence_in']} with the confidence bounds); required: "
+        f"{summary['required']}. Binding: scenario {b['index']}, "
+        + _margin_text(b["margin"], b["binds_at"]) + ".")
+    ctx["verdict_ok"] = ok
+    ctx["failures"] = list(summary.get("failures", []))
+    for f in ctx["figures"]:
+        f["caption"] = f"{name[0].upper()}{name[1:]}: {f['caption']}"
+    if "margins" in figs:  # first: the report begins with every scenario
+        ctx["figures"].insert(0, {"name": "margins", "caption": CAPTIONS["margins"],
+                                  "fig": figs["margins"]})
+    return ctx
+
+
+# ---- rendering ------------------------------------------------------------------
+
+
+def _environment(markdown: bool) -> Any:
+    try:
+        import jinja2
+    except ImportError:  # pragma: no cover - a core dependency
+        from ..errors import InputError
+
+        raise InputError("--report needs Jinja2: python -m pip install jinja2") from None
+    env = jinja2.Environment(
+        loader=jinja2.PackageLoader("rockfall_design.report", "templates"),
+        autoescape=not markdown,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+        undefined=jinja2.StrictUndefined,
+    )
+    env.filters["md"] = _md_cell
+    return env
+
+
+def _md_cell(text: Any) -> str:
+    """Text safe inside a Markdown table cell (pipes escaped, one line)."""
+    return " ".join(str(text).split()).replace("|", "\\|")
+
+
+def render_html(context: Mapping[str, Any]) -> str:
+    """report.html: self-contained, every figure inline as SVG."""
+    from markupsafe import Markup
+
+    from .figures import figure_svg
+
+    figs = [{**f, "svg": Markup(figure_svg(f["fig"]))} for f in context["figures"]]
+    return _environment(False).get_template("report.html.j2").render(**{**context,
+                                                                        "figures": figs})
+
+
+def render_markdown(context: Mapping[str, Any]) -> str:
+    """report.md: figures referenced as NAME.svg beside it."""
+    figs = [{**f, "file": f"{f['name']}.svg"} for f in context["figures"]]
+    return _environment(True).get_template("report.md.j2").render(**{**context,
+                                                                     "figures": figs})
+
+
+def write_report(result: Any, directory: str | os.PathLike[str],
+                 outputs: OutputSet | None = None,
+                 figures: Mapping[str, Any] | None = None) -> list[Path]:
+    """Write DIR/report.html, DIR/report.md and the Markdown's figures DIR/NAME.svg.
+
+    Parameters
+    ----------
+    result : SimulationResult, CheckResult or OptimiseResult
+    directory : path
+    outputs : OutputSet, optional
+        The command's output set: the files land when it commits (all or
+        none). Without one they land together on return.
+    figures : mapping of str to Figure, optional
+        Default: ``result.figures()``.
+
+    Returns
+    -------
+    list of Path
+    """
+    from ..outputs import OutputSet
+    from .figures import save_figures
+
+    if outputs is None:
+        with OutputSet() as own:
+            return write_report(result, directory, own, figures)
+    out = Path(directory)
+    ctx = report_context(result, figures)
+    figs = {f["name"]: f["fig"] for f in ctx["figures"]}
+    written = save_figures(figs, out, ("svg",), outputs)
+    outputs.write_text(out / "report.html", render_html(ctx))
+    outputs.write_text(out / "report.md", render_markdown(ctx))
+    return [*written, out / "report.html", out / "report.md"]

@@ -1,0 +1,214 @@
+"""Tables of results as pandas DataFrames, rounded to what is meaningful.
+
+Built from the JSON-ready summaries (the dicts that ``--json`` prints), not
+from the optimiser's or the engine's objects, so that they keep working
+while those change and tolerate keys they do not know.
+
+Rounding (:func:`round_value`): costs to whole currency units, factors to
+0.01, lengths and heights to 0.01 m, energies to 1 kJ.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import pandas as pd
+
+__all__ = [
+    "round_value",
+    "check_columns",
+    "measure_text",
+    "alternatives_frame",
+    "measures_frame",
+    "checks_frame",
+]
+
+#: Decimals kept for a value of a unit (unknown units keep 3 significant decimals).
+_DECIMALS = {"-": 2, "m": 2, "kJ": 0, "kj": 0, "m/s": 1, "%": 2}
+
+
+def round_value(value: Any, unit: str = "-") -> Any:
+    """A number rounded for its unit; None, NaN and non-numbers as they are.
+
+    Parameters
+    ----------
+    value : float or None
+    unit : str
+        ``"-"`` (a factor: 0.01), ``"m"`` (0.01 m), ``"kJ"`` (1 kJ),
+        ``"m/s"`` (0.1), ``"cost"`` (whole currency units), ``"count"`` (whole
+        numbers); other units 0.001.
+
+    Returns
+    -------
+    float, int or the value unchanged
+    """
+    if value is None or isinstance(value, bool) or not isinstance(value, int | float):
+        return value
+    if not math.isfinite(value):
+        return value
+    if unit in ("cost", "count"):
+        return int(round(value))
+    digits = _DECIMALS.get(unit, 3)
+    return int(round(value)) if digits == 0 else round(float(value), digits)
+
+
+def check_columns(checks: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """One column per check: ``name`` -> rounded value (``name_2`` for a second one).
+
+    A design of two measures has, say, two ``height_factor`` checks: the
+    second is ``height_factor_2``. A check with a ``bound`` (a confidence
+    bound of its value) gets a ``name_bound`` column too.
+    """
+    out: dict[str, Any] = {}
+    seen: dict[str, int] = {}
+    for c in checks:
+        name = str(c.get("name", "check"))
+        seen[name] = seen.get(name, 0) + 1
+        key = name if seen[name] == 1 else f"{name}_{seen[name]}"
+        unit = str(c.get("unit", "-"))
+        out[key] = round_value(c.get("value"), unit)
+        if c.get("bound") is not None:
+            out[f"{key}_bound"] = round_value(c.get("bound"), unit)
+    return out
+
+
+def measure_text(m: Mapping[str, Any]) -> str:
+    """A measure of a design, from its ``{type, ...params}`` dict: 'fence RX-100 3 m @ 110.5'.
+
+    Uses the measure's ``label`` when the dict carries one.
+    """
+    if m.get("label"):
+        return str(m["label"])
+    bits = [str(m.get("type", "?"))]
+    if m.get("product"):
+        bits.append(str(m["product"]))
+    if m.get("width") is not None and m.get("depth") is not None:
+        bits.append(f"{m['width']:.3g} x {m['depth']:.3g} m")
+    else:
+        for name in ("height", "width", "block_size"):
+            if isinstance(m.get(name), int | float):
+                bits.append(f"{m[name]:.3g} m")
+                break
+    if m.get("capacity_kj") is not None:
+        bits.append(f"{m['capacity_kj']:,.0f} kJ")
+    if isinstance(m.get("x"), int | float):
+        bits.append(f"@ {m['x']:g} m")
+    return " ".join(bits)
+
+
+_ALT_FIRST = ("family", "chosen", "feasible", "holds_on_fresh_rocks", "cost", "residual",
+              "fresh_residual", "measures")
+_ALT_LAST = ("reason", "designs_screened", "checks")
+
+
+def alternatives_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
+    """One row per family of the optimiser's summary; one column per check.
+
+    Parameters
+    ----------
+    summary : dict
+        What ``optimise --json`` prints: its ``alternatives`` (each
+        ``Alternative.as_dict()``) and ``best``.
+
+    Returns
+    -------
+    DataFrame
+        ``family``, ``chosen``, ``feasible``, ``holds_on_fresh_rocks``,
+        ``cost`` (whole currency units), ``residual``, ``fresh_residual``,
+        ``measures`` (one text), one column per check (factors to 0.01,
+        heights to 0.01 m, energies to 1 kJ; ``name_2`` for a second
+        measure's check of the same name), any further scalar keys of the
+        alternatives, then ``reason``, ``designs_screened`` and ``checks``
+        (every check as ``name=value/target:ok``, for readers of earlier
+        files).
+    """
+    best = summary.get("best")
+    rows: list[dict[str, Any]] = []
+    for a in summary.get("alternatives", []):
+        row: dict[str, Any] = {
+            "family": a.get("name"),
+            "chosen": best is not None and a.get("name") == best,
+            "feasible": a.get("feasible"),
+            "holds_on_fresh_rocks": a.get("holds_on_fresh_rocks"),
+            "cost": round_value(a.get("cost"), "cost"),
+            "residual": a.get("residual"),
+            "fresh_residual": a.get("fresh_residual"),
+            "measures": "; ".join(measure_text(m) for m in a.get("measures") or []),
+        }
+        checks = a.get("checks") or []
+        row.update(check_columns(checks))
+        # Keys the optimiser may add later: kept when they are plain values.
+        for k, v in a.items():
+            if k in ("name", "measures", "checks", "evaluations") or k in row:
+                continue
+            if v is None or isinstance(v, str | int | float | bool):
+                # A number of unknown meaning keeps 4 significant digits: a
+                # small fraction must not round to 0.
+                row[k] = float(f"{v:.4g}") if isinstance(v, float) and math.isfinite(v) else v
+        row["reason"] = a.get("reason", "")
+        row["designs_screened"] = a.get("evaluations")
+        row["checks"] = "; ".join(
+            f"{c.get('name')}={round_value(c.get('value'), str(c.get('unit', '-')))}/"
+            f"{round_value(c.get('target'), str(c.get('unit', '-')))}:"
+            f"{'ok' if c.get('ok') else 'fails'}" for c in checks)
+        rows.append(row)
+    frame = pd.DataFrame(rows)
+    if frame.empty:
+        return pd.DataFrame(columns=list(_ALT_FIRST + _ALT_LAST))
+    middle = [c for c in frame.columns if c not in _ALT_FIRST and c not in _ALT_LAST]
+    frame = frame[list(_ALT_FIRST) + middle + list(_ALT_LAST)]
+    # Integers stay integers where a family has no value (pandas would make floats).
+    for col in ("cost", "residual", "fresh_residual", "designs_screened"):
+        frame[col] = frame[col].astype("Int64")
+    for col in middle:
+        values = [v for v in frame[col] if v is not None and not pd.isna(v)]
+        if values and all(isinstance(v, int) and not isinstance(v, bool) for v in values):
+            frame[col] = frame[col].astype("Int64")  # energies rounded to 1 kJ
+    return frame
+
+
+def measures_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
+    """One row per measure of a ``check`` summary: what the rocks did there and whether it holds."""
+    rows = []
+    for i, m in enumerate(summary.get("measures", [])):
+        rows.append({
+            "measure": i,
+            "type": m.get("type"),
+            "label": m.get("label"),
+            "x_m": m.get("x"),
+            "met": m.get("met"),
+            "caught": m.get("caught"),
+            "passed_over": m.get("passed_over"),
+            "broken_through": m.get("broken_through"),
+            "rebounded": m.get("rebounded"),
+            "passed_through_gap": m.get("passed_through_gap"),
+            **check_columns(m.get("checks") or []),
+            "ok": m.get("ok"),
+        })
+    frame = pd.DataFrame(rows)
+    if "ok" in frame:  # the verdict last, after the check columns of every measure
+        frame = frame[[c for c in frame.columns if c != "ok"] + ["ok"]]
+    return frame
+
+
+def checks_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
+    """One row per safety check of a ``check`` summary, with its target and verdict."""
+    rows = []
+    for i, m in enumerate(summary.get("measures", [])):
+        for c in m.get("checks") or []:
+            unit = str(c.get("unit", "-"))
+            rows.append({
+                "measure": i,
+                "label": m.get("label"),
+                "check": c.get("name"),
+                "value": round_value(c.get("value"), unit),
+                "bound": round_value(c.get("bound"), unit),
+                "target": round_value(c.get("target"), unit),
+                "unit": unit,
+                "ok": c.get("ok"),
+                "detail": c.get("detail", ""),
+            })
+    cols = ["measure", "label", "check", "value", "bound", "target", "unit", "ok", "detail"]
+    return pd.DataFrame(rows, columns=cols)
