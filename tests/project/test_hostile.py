@@ -102,8 +102,10 @@ def test_mutated_project_files_run_or_fail_with_one_line(tmp_path_factory, capsy
 
 
 #: Keys whose errors a mutation elsewhere may cause: the section's extent
-#: places the releases, stations and protection; the materials name the slope's.
-_DEPENDS = {"slope": ("rocks.release", "analysis.stations", "protect.x"),
+#: places the releases, stations and protection; a point's x orders it among
+#: its neighbours (a point moved onto the next one's x is reported at the next);
+#: the materials name the slope's.
+_DEPENDS = {"slope": ("rocks.release", "analysis.stations", "protect.x", "slope.points"),
             "materials": ("slope.materials",), "rocks": ("rocks",)}
 
 
@@ -133,6 +135,23 @@ def _related(error_key: str, mutated: str) -> bool:
     top = mutated.split(".")[0].split("[")[0]
     return (under(error_key, mutated) or under(mutated, error_key)
             or any(under(error_key, dep) for dep in _DEPENDS.get(top, ())))
+
+
+def test_a_point_moved_onto_its_neighbour_is_reported_at_a_related_key(tmp_path, capsys):
+    # Found by the test above: x of point 1 set to point 2's, reported at point 2.
+    import copy
+
+    import yaml
+
+    data = copy.deepcopy(EXAMPLE_DATA)
+    data["slope"]["points"][1][0] = data["slope"]["points"][2][0]
+    path = tmp_path / "p.yaml"
+    path.write_text(yaml.safe_dump(data))
+    assert main(["simulate", str(path), "--rocks", "3", "--json"]) == 2
+    err = _project_error(path)
+    assert err is not None and err.key.startswith("slope.points")
+    assert str(err) in capsys.readouterr().err
+    assert any(_related(err.key, key) for key in _mutated_keys(EXAMPLE_DATA, data))
 
 
 def _project_error(path):
