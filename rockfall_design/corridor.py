@@ -19,7 +19,8 @@ so each section runs through the same ``simulate``, ``check`` and
   (:mod:`rockfall_design.across`); ``"scenarios": true``, each section's
   block the JSON of ``check --scenarios``, and ``totals`` with ``sections``,
   ``scenarios``, ``rocks`` (of every scenario), ``ok``, ``binding`` (the
-  corridor's scenario of least margin, with its ``section``) and ``failures``.
+  corridor's binding scenario: of the sections' binding ones, the least margin, with its
+  ``section``) and ``failures``.
 
 Files: ``--out DIR`` writes each section's usual files into ``DIR/<section>/``
 (the section name with other characters than letters, digits, ``.``, ``-``

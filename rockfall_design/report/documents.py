@@ -372,7 +372,8 @@ def _scenarios_table(summary: Mapping[str, Any], paths: list[str]) -> Table:
         marks.append(p["index"] == b)
     return Table(f"Scenarios: {summary['of']}, each with its own rocks "
                  f"({int(summary['rocks']):,} rocks, its own seed)", cols, rows,
-                 note="* the binding scenario (least margin). holds: every check and the "
+                 note="* the binding scenario (the one that decides the count required; with every "
+                 "scenario required, the least margin). holds: every check and the "
                  "residual on the point values, as check judges them; with confidence: with "
                  "the confidence bounds in place. margin: the smallest relative slack of a "
                  "check or of the residual with the confidence bounds in place, negative "
@@ -432,7 +433,8 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
     if ctx["protect"]:
         ctx["protect"] = f"{name[0].upper()}{name[1:]}: {ctx['protect']}"
     ctx["results_note"] = (
-        "Every scenario of the study first; then the binding scenario (the least margin), "
+        "Every scenario of the study first; then the binding scenario (the one that decides "
+        "the count required), "
         f"in full as check shows one scenario: scenario {b['index']}, seed {b['seed']}, "
         + _margin_text(b["margin"], b["binds_at"]) + ".")
     ok = bool(summary["ok"])

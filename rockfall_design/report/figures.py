@@ -73,7 +73,8 @@ CAPTIONS = {
     "slack of a check or of the residual with the confidence bounds in place (%, negative "
     "where it fails), with what binds; green where the design holds on the point values "
     "(hatched: not with the confidence bounds), red where it fails; * the binding scenario "
-    "(least margin). Below: the scenarios it holds in against the number required.",
+    "(the one that decides the count required: with every scenario required, the least "
+    "margin). Below: the scenarios it holds in against the number required.",
 }
 
 
@@ -551,7 +552,7 @@ def margins_figure(
     ax.set_xlim(low - 0.1 * span, span * 2.2)
     ax.set_xlabel("margin (%): least relative slack with the confidence bounds in place")
     ax.grid(axis="x", alpha=0.3)
-    head = "design margin per scenario; * binding (least margin)"
+    head = "design margin per scenario; * binding (decides the count required)"
     ax.set_title(f"{title}: {head}" if title else head)
     # The count: one cell per scenario, those the design holds in first.
     holds = sum(bool(p.get("ok")) for p in scenarios)
