@@ -174,6 +174,18 @@ def _one_engine_thread(fn: Callable[[Any], Any], task: Any) -> Any:
         ENGINE_THREADS.reset(token)
 
 
+def _collect(pending: dict[Future, int], results: list[Any],
+             on_done: Callable[[int, Any], None] | None) -> None:
+    """Put each finished task's result at its place, as they finish; ``on_done`` for each."""
+    while pending:
+        done, _ = wait(pending, return_when=FIRST_COMPLETED)
+        for future in done:
+            i = pending.pop(future)
+            results[i] = future.result()  # a task's error is raised here, as it was
+            if on_done is not None:
+                on_done(i, results[i])
+
+
 def _on_threads(fn: Callable[[Any], Any], tasks: Iterable[Any], count: int, n: int,
                 on_done: Callable[[int, Any], None] | None) -> list[Any]:
     results: list[Any] = [None] * count
@@ -185,13 +197,7 @@ def _on_threads(fn: Callable[[Any], Any], tasks: Iterable[Any], count: int, n: i
             pending[pool.submit(_one_engine_thread, fn, t)] = i
         if len(pending) != count:
             raise ValueError(f"{len(pending)} tasks given, {count} announced")
-        while pending:
-            done, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in done:
-                i = pending.pop(future)
-                results[i] = future.result()  # a task's error is raised here, as it was
-                if on_done is not None:
-                    on_done(i, results[i])
+        _collect(pending, results, on_done)
     except BaseException:
         # An error or Ctrl-C: nothing more starts; a thread cannot be stopped,
         # so the tasks under way finish on their own (results unused).
@@ -208,13 +214,7 @@ def _on_pool(fn: Callable[[Any], Any], tasks: Sequence[Any], n: int,
                                initializer=_pool_worker)
     try:
         pending: dict[Future, int] = {pool.submit(fn, t): i for i, t in enumerate(tasks)}
-        while pending:
-            done, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in done:
-                i = pending.pop(future)
-                results[i] = future.result()  # a task's error is raised here, as it was
-                if on_done is not None:
-                    on_done(i, results[i])
+        _collect(pending, results, on_done)
     except BaseException:
         # An error or Ctrl-C: nothing more is started, and the scenarios under
         # way are stopped rather than waited for (their results are not used).
