@@ -51,7 +51,8 @@ _LAZY: dict[str, str] = {
                      "load_project", "optimise", "simulate", "study"), ".api"),
     "StudyResult": ".study.result",
     **dict.fromkeys(("Corridor", "load_corridor"), ".project"),
-    **dict.fromkeys(("fraction_upper_bound", "quantile_upper_bound",
+    **dict.fromkeys(("fraction_lower_bound", "fraction_upper_bound", "quantile_lower_bound",
+                     "quantile_upper_bound",
                      "rocks_to_bound_quantile", "rocks_to_show_fraction"), ".judge.bounds"),
 }
 
@@ -67,7 +68,9 @@ if TYPE_CHECKING:  # pragma: no cover
         study,
     )
     from .judge.bounds import (
+        fraction_lower_bound,
         fraction_upper_bound,
+        quantile_lower_bound,
         quantile_upper_bound,
         rocks_to_bound_quantile,
         rocks_to_show_fraction,
@@ -140,6 +143,8 @@ __all__ = [
     "SafetyConcept",
     "SafetyParams",
     "fraction_upper_bound",
+    "fraction_lower_bound",
+    "quantile_lower_bound",
     "quantile_upper_bound",
     "rocks_to_bound_quantile",
     "rocks_to_show_fraction",

@@ -18,7 +18,7 @@ import numpy as np
 
 from .design import unknown_measure_type
 from .engine import Section, barrier_table, core
-from .judge.bounds import fraction_upper_bound
+from .judge.bounds import fraction_lower_bound, fraction_upper_bound
 from .judge.outcomes import Judgement, RockFates, judge_measures
 from .judge.plan import plan_for
 from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
@@ -285,7 +285,9 @@ class Evaluation:
 
         ``upper_fraction`` is the Clopper-Pearson upper bound of the fraction
         at :attr:`confidence`; ``ok_with_confidence`` compares it with the
-        allowed fraction.
+        allowed fraction. ``lower_fraction`` is the Clopper-Pearson lower
+        bound; ``fails_with_confidence`` says it exceeds the allowed fraction
+        (the residual misses its target with confidence).
         """
         p = self.study.project.protect
         if p is None:
@@ -295,6 +297,7 @@ class Evaluation:
         fraction = reaching / n if n else 0.0
         allowed = float(getattr(p, "allowed_fraction", 0.0))
         upper = fraction_upper_bound(reaching, n, self.confidence)
+        lower = fraction_lower_bound(reaching, n, self.confidence)
         return {
             "x": float(p.x),
             "reaching": reaching,
@@ -304,6 +307,8 @@ class Evaluation:
             "allowed_fraction": allowed,
             "ok": fraction <= allowed,
             "ok_with_confidence": upper <= allowed,
+            "lower_fraction": lower,
+            "fails_with_confidence": lower > allowed,
         }
 
     @property
@@ -319,6 +324,13 @@ class Evaluation:
         checks_ok = all(c.holds_with_confidence for cs in self.checks for c in cs)
         prot = self.protect
         return checks_ok and (prot is None or prot["ok_with_confidence"])
+
+    @property
+    def fails_with_confidence(self) -> bool:
+        """Some check, or the residual, misses its target even with its favourable bound."""
+        prot = self.protect
+        return (any(c.rejects for cs in self.checks for c in cs)
+                or (prot is not None and prot["fails_with_confidence"]))
 
     def _failed_checks(self, holds: Callable[[Check], bool]) -> Iterator[tuple[str, Check, str]]:
         """(measure label, check, " unit" or "") of every check that ``holds`` rejects."""

@@ -80,6 +80,23 @@ class Check:
         When the sample is too small to bound the value: how many rocks must
         meet the measure for it to be bounded (the optimiser runs more rocks
         before it decides).
+    optimistic : float or None
+        The value computed with the one-sided *lower* confidence bounds of
+        the design values (the most favourable value the measure may have at
+        ``safety.confidence``); None when there is nothing to bound or the
+        sample is too small.
+    fails_with_confidence : bool or None
+        Whether the check fails even with ``optimistic`` in place of the
+        value: the sample shows with confidence that it does not hold, and
+        more rocks would not change that (the optimiser rejects such a
+        design). None means the concept does not report it: the optimiser
+        then treats a failed point value as failing with confidence only
+        where the concept reports no bounds at all (``ok_with_confidence``
+        None), and as undecided otherwise.
+
+    See Also
+    --------
+    rockfall_design.judge.bounds : the order-statistic and Clopper-Pearson bounds.
     """
 
     name: str
@@ -91,11 +108,26 @@ class Check:
     bound: float | None = None
     ok_with_confidence: bool | None = None
     rocks_needed: int | None = None
+    optimistic: float | None = None
+    fails_with_confidence: bool | None = None
 
     @property
     def holds_with_confidence(self) -> bool:
         """``ok_with_confidence``, or ``ok`` for a concept that reports no bounds."""
         return self.ok if self.ok_with_confidence is None else self.ok_with_confidence
+
+    @property
+    def rejects(self) -> bool:
+        """Does this check fail with confidence (see ``fails_with_confidence``)?
+
+        A concept that reports no bounds at all is judged on its point value,
+        as before bounds existed; one that reports upper bounds but not
+        ``fails_with_confidence`` never rejects (its failures stay undecided
+        until ``design.max_rocks``, where they are marginal).
+        """
+        if self.fails_with_confidence is not None:
+            return self.fails_with_confidence
+        return not self.ok if self.ok_with_confidence is None else False
 
     def as_dict(self) -> dict[str, Any]:
         return {
@@ -108,6 +140,8 @@ class Check:
             "bound": self.bound,
             "ok_with_confidence": self.ok_with_confidence,
             "rocks_needed": self.rocks_needed,
+            "optimistic": self.optimistic,
+            "fails_with_confidence": self.fails_with_confidence,
         }
 
 

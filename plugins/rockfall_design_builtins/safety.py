@@ -42,6 +42,7 @@ Units: m, m/s, kg, kJ.
 
 from __future__ import annotations
 
+import math
 from typing import Any, ClassVar, Literal
 
 import numpy as np
@@ -53,6 +54,7 @@ from rockfall_design import (
     SafetyConcept,
     SafetyParams,
     hookimpl,
+    quantile_lower_bound,
     quantile_upper_bound,
     rocks_to_bound_quantile,
 )
@@ -112,6 +114,18 @@ def _statistic_bound(values: np.ndarray, statistic: str, confidence: float) -> f
     if statistic == "max" or float(statistic[1:]) >= 100.0:
         return float(np.max(values))
     return quantile_upper_bound(values, float(statistic[1:]) / 100.0, confidence)
+
+
+def _statistic_lower(values: np.ndarray, statistic: str, confidence: float) -> float | None:
+    """Lower confidence bound of ``statistic``; None: too few rocks to bound it.
+
+    The maximum of nested samples only grows with more rocks, so the
+    sample's maximum is its own lower bound: a maximum that fails now fails
+    with every larger sample of the same rocks.
+    """
+    if statistic == "max" or float(statistic[1:]) >= 100.0:
+        return float(np.max(values))
+    return quantile_lower_bound(values, float(statistic[1:]) / 100.0, confidence)
 
 
 def _needed(statistic: str, confidence: float) -> int:
@@ -176,12 +190,17 @@ def _factor_check(
         return Check(name, None, target, True, "-", f"{detail}: factor undefined, no demand",
                      None, no_demand or (None if upper is None else provided / upper >= target))
     factor = provided / demand
+    # The most favourable factor at this confidence: over the lower bound of
+    # the statistic. It fails with confidence only when even that misses.
+    lower = _statistic_lower(values, statistic, confidence)
+    f_best = None if lower is None else (math.inf if not lower > 0.0 else provided / lower)
+    fails = f_best is not None and bool(f_best < target)
     if upper is None:
         return Check(name, factor, target, bool(factor >= target), "-", detail, None, False,
-                     _needed(statistic, confidence))
+                     _needed(statistic, confidence), f_best, fails)
     f_bound = provided / upper
     return Check(name, factor, target, bool(factor >= target), "-", detail, f_bound,
-                 bool(f_bound >= target))
+                 bool(f_bound >= target), None, f_best, fails)
 
 
 def _reach_check(
@@ -528,14 +547,19 @@ class Uni11211Concept(SafetyConcept):
         )
         speed_b = _statistic_bound(speeds, p, params.confidence)
         mass_b = _statistic_bound(masses, p, params.confidence)
+        speed_l = _statistic_lower(speeds, p, params.confidence)
+        mass_l = _statistic_lower(masses, p, params.confidence)
+        e_l = None if speed_l is None or mass_l is None else self._design_energy(mass_l,
+                                                                                  speed_l)
+        fails = e_l is not None and bool(e_l > target)
         if speed_b is None or mass_b is None:
             detail = f"{detail}; {_too_few(p, speeds.size, params.confidence)}"
             return Check("design_energy", e_d, target, bool(e_d <= target), "kJ", detail,
-                         None, False, _needed(p, params.confidence))
+                         None, False, _needed(p, params.confidence), e_l, fails)
         e_b = self._design_energy(mass_b, speed_b)
         detail = f"{detail}; with the {100 * params.confidence:g} % bounds {_num(e_b, 'kJ')}"
         return Check("design_energy", e_d, target, bool(e_d <= target), "kJ", detail, e_b,
-                     bool(e_b <= target))
+                     bool(e_b <= target), None, e_l, fails)
 
     def _design_energy(self, mass_kg: float, speed_ms: float) -> float:
         """E_d (kJ) from a characteristic mass (kg) and speed (m/s)."""
@@ -568,14 +592,19 @@ class Uni11211Concept(SafetyConcept):
         )
         height_b = _statistic_bound(heights, p, params.confidence)
         radius_b = _statistic_bound(radii, p, params.confidence) if radii.size else 0.0
+        height_l = _statistic_lower(heights, p, params.confidence)
+        radius_l = _statistic_lower(radii, p, params.confidence) if radii.size else 0.0
+        required_l = (None if height_l is None or radius_l is None
+                      else self._required_height(height_l, radius_l))
+        fails = required_l is not None and bool(height_m < required_l)
         if height_b is None or radius_b is None:
             detail = f"{detail}; {_too_few(p, heights.size, params.confidence)}"
             return Check("design_height", required, height_m, bool(height_m >= required), "m",
-                         detail, None, False, _needed(p, params.confidence))
+                         detail, None, False, _needed(p, params.confidence), required_l, fails)
         required_b = self._required_height(height_b, radius_b)
         detail = f"{detail}; with the {100 * params.confidence:g} % bounds {_num(required_b, 'm')}"
         return Check("design_height", required, height_m, bool(height_m >= required), "m",
-                     detail, required_b, bool(height_m >= required_b))
+                     detail, required_b, bool(height_m >= required_b), None, required_l, fails)
 
 
 @hookimpl
