@@ -201,6 +201,10 @@ def build_parser() -> argparse.ArgumentParser:
         json_="print the alternatives and the best design as one JSON object on stdout "
         "instead of the report",
     )
+    opt.add_argument("--max-rocks", type=_int_at_least(1, "number", 2_000_000),
+                     metavar="N", help="rocks of the last look of every decision (default: "
+                     "design.max_rocks of the project, 50,000): a design still undecided "
+                     "there is marginal, and the report says how many rocks would decide it")
     _add_block_option(opt)
     opt.set_defaults(func=cmd_optimise)
     from .study.command import add_study_parser
@@ -532,8 +536,12 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         raise project.error_at((), "the project has no design: section to optimise "
                                    "(see the README, 'Designing protection')")
     registry = _plugins_for(project, args)
+    if getattr(args, "max_rocks", None):
+        project = project.model_copy(update={"design": project.design.model_copy(
+            update={"max_rocks": args.max_rocks})})
     n = args.rocks or project.rocks.count
-    _in_memory_guard(n, project.analysis.envelope_points + 400, len(project.analysis.stations))
+    _in_memory_guard(max(n, project.design.max_rocks), project.analysis.envelope_points + 400,
+                     len(project.analysis.stations))
     with OutputSet() as files:
         _reserve(files, args.out, ("design.yaml", "alternatives.csv", "summary.json"))
         _reserve(files, args.report, REPORT_FILES)

@@ -20,13 +20,16 @@ How it works, with common random numbers (every design sees the same rocks):
    berm), whose every geometry costs a run, are searched with
    ``scipy.optimize.differential_evolution`` over their lattice, the
    barriers beside them enumerated exactly for each geometry.
-4. Decision (:func:`decide`). Designs that pass the screening, or miss it
-   within its margin (``Screening.violation``),
-   are evaluated exactly in order of cost, once each, with rocks planned
-   from the screening (more where a design is near a limit, up to
-   ``design.max_rocks``: :func:`plan_rocks`); a design is admitted only when
-   every check and the residual hold with their upper confidence bounds
-   (``safety.confidence``).
+4. Decision (:class:`~.decide.Decider`), sequential. The screening rejects
+   a design only when some check or the residual fails with confidence
+   (its favourable bound misses the target) on rocks it judged exactly.
+   The rest is decided in order of cost, look by look with more rocks
+   (:mod:`rockfall_design.judge.sequential`: the looks and the confidence
+   of each fixed in advance, so that looking again inflates neither
+   error): admitted when every check and the residual hold with their
+   upper bounds, rejected when one fails with its lower bound, and
+   *marginal* when still undecided at ``design.max_rocks``: never admitted,
+   and listed when it is cheaper than the chosen design.
 5. Verification. The first admitted design of a family is checked on fresh
    rocks: an independent seed and at least twice the rocks that decided it.
    If it fails there, the next design in order of cost is decided: a family
@@ -57,8 +60,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..evaluate import Evaluation, evaluate_design
-from ..judge.bounds import rocks_to_show_fraction
 from ..judge.outcomes import reaches_protected_zone
+from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..safety import DEFAULT_CONFIDENCE
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -67,7 +70,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
     from ..project import Project
 
-from .decide import Decision, decide, plan_rocks
+from .decide import Decider, Decision, decide, look_concept, rocks_to_decide
 from .screening import RESTART_STEP_M, Screening, ScreenResult
 from .search import (
     MAX_EXACT_PER_LEVEL,
@@ -94,6 +97,7 @@ __all__ = [
     "RESTART_STEP_M",
     "STATION_STEP_M",
     "Alternative",
+    "Decider",
     "Decision",
     "OptimisationResult",
     "ScreenResult",
@@ -103,18 +107,24 @@ __all__ = [
     "families",
     "family_name",
     "optimise",
-    "plan_rocks",
 ]
 
-#: Designs decided exactly that only came within the screening's margin, per family.
-MAX_NEAR_PER_FAMILY = 6
+#: Designs the screening left undecided that are decided, per family (the rest are
+#: counted in the report as not decided).
+MAX_NEAR_PER_FAMILY = 40
 #: The search runs at least this many times the rocks that show the residual target.
 SEARCH_FACTOR = 1
 #: Designs the screening could not judge (too few rocks at a measure) that may fail
 #: exactly before the family's other such designs are no longer decided.
 MAX_UNJUDGED_FAILURES = 3
-#: Exact decisions (each a run of the rocks) of one family, at most.
+#: Sequential decisions of one family, at most.
 MAX_EXACT_PER_FAMILY = 40
+#: Seed of the search over ground edits (with the family's index), whatever the run seed.
+SEARCH_SEED = 20261124
+#: Offset of the fresh rocks' seed from the search seed (``design.fresh_seed`` overrides).
+FRESH_OFFSET = 1000003
+#: Marginal designs a family keeps for the report (the cheapest).
+MAX_MARGINAL_PER_FAMILY = 5
 
 
 @dataclass
@@ -142,6 +152,8 @@ class Alternative:
     fresh_seed: int | None = None
     proof: str = ""
     dominated: str = ""
+    marginal: list[dict[str, Any]] = field(default_factory=list)
+    rejected: int = 0
 
     @property
     def holds(self) -> bool:
@@ -167,6 +179,7 @@ class Alternative:
             "dominated": self.dominated or None,
             "evaluations": self.evaluations,
             "exact_evaluations": self.exact_evaluations,
+            "marginal": self.marginal,
         }
 
 
@@ -187,6 +200,9 @@ class OptimisationResult:
     confidence: float = 0.95
     exact_evaluations: int = 0
     rocks_simulated: int = 0
+    looks: LookSchedule | None = None
+    marginal: list[dict[str, Any]] = field(default_factory=list)
+    decided: int = 0
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -206,6 +222,11 @@ class OptimisationResult:
             "best": None if self.best is None else self.best.name,
             "proof": "" if self.best is None else self.best.proof,
             "reason": self.reason,
+            "decided": self.decided,
+            "marginal": self.marginal,
+            "looks": None if self.looks is None else {
+                "rocks": list(self.looks.sizes), "confidence": self.looks.confidence,
+                "look_confidence": self.looks.look_confidence},
         }
 
 
@@ -249,76 +270,99 @@ def _cause(screen: Screening, slots: _BarrierSlots, fam: tuple[int, ...], tally:
     return f"no design of this family fits on the section{': ' + tally.why if tally.why else ''}"
 
 
-def _proof(alt: Alternative, tally: _Tally, n: int, currency: str) -> str:
-    """What was proven about a family's chosen design."""
-    top = ", ".join(f"{k} ({v:,})" for k, v in tally.reasons.most_common(4) if v)
+def _proof(alt: Alternative, tally: _Tally, looks: LookSchedule, currency: str) -> str:
+    """What was proven about a family's chosen design (never cut short)."""
+    top = ", ".join(f"{k} ({v:,})" for k, v in tally.reasons.most_common() if v)
     capped = (f"; in {tally.capped_levels} catalogue combinations only the "
               f"{MAX_SCREENS_PER_LEVEL} placements with fewest rocks through were screened"
               if tally.capped_levels else "")
     space = ("designs the search over its ground edits evaluated"
              if tally.searched else "designs in the space")
-    return (f"cheapest of {tally.designs:,} {space} ({alt.exact_evaluations} "
-            f"evaluated exactly); every cheaper design fails on {n:,} rocks: "
+    conf = f"{100 * looks.confidence:g} %"
+    marginal = (f", or is marginal ({len(alt.marginal)}, listed)" if alt.marginal else "")
+    return (f"cheapest admitted of {tally.designs:,} {space} ({alt.exact_evaluations} "
+            f"evaluated exactly); every cheaper design fails with {conf} confidence "
+            f"(looks of {looks.sizes[0]:,} to {looks.sizes[-1]:,} rocks){marginal}: "
             f"{top or 'none cheaper'}{capped}")
+
+
+def _marginal_entry(alt_name: str, d: Any, dec: Decision) -> dict[str, Any]:
+    return {"name": alt_name, "family": alt_name,
+            "measures": [{"type": m.kind, **m.params.model_dump(mode="json")}
+                         for m in d.measures],
+            "labels": list(d.result.labels), "cost": round(float(d.cost), 2),
+            "rocks": dec.rocks, "rocks_to_decide": rocks_to_decide(dec.values),
+            "values": dec.values, "reason": dec.reason}
 
 
 def _settle(
     alt: Alternative,
     designs: Any,
     tally: _Tally,
-    project: Project,
-    registry: Registry,
-    concept: Any,
-    screen: Screening,
+    decider: Decider,
     spec: DesignSpec,
+    concept: Any,
     *,
-    seed: int,
     fresh_seed: int,
 ) -> int:
     """Decide a family's screened designs in order of cost until one holds; fill ``alt``.
 
-    Returns the rocks simulated. The first design admitted with confidence
-    and holding on fresh rocks is the family's; one that fails on fresh rocks
-    is not chosen and the next is decided. A design in which a measure holds
-    no rock is dominated by the same design without it: the family is
-    reported as such (that design belongs to a smaller family).
+    Returns the rocks simulated. Each design the screening did not reject is
+    decided sequentially (:meth:`Decider.decide`); the first admitted one
+    that holds on fresh rocks is the family's; one that fails on fresh rocks
+    is not chosen and the next is decided. A marginal design is kept for the
+    report. A design in which a measure holds no rock is dominated by the
+    same design without it: the family is reported as such (that design
+    belongs to a smaller family).
     """
+    screen = decider.screen
+    project, registry = screen.project, screen.registry
     per_level: Counter = Counter()
     decisions = near = simulated = unjudged_failures = 0
     for d in designs:
         if decisions >= MAX_EXACT_PER_FAMILY:
-            alt.reason = (f"{alt.reason}; stopped after {MAX_EXACT_PER_FAMILY} exact "
-                          "decisions of this family")
+            tally.reasons["not decided: the family's decisions were used up"] += 1
+            alt.reason = (f"{alt.reason}; stopped after {MAX_EXACT_PER_FAMILY} decisions of "
+                          "this family")
             break
         if per_level[d.level] >= MAX_EXACT_PER_LEVEL:
+            tally.reasons["not decided: the catalogue combination's decisions were used up"] += 1
             continue
         # Too few rocks met one of its measures in the screening to bound its
         # checks: the screening could not judge it. After a few such designs
-        # failed exactly, the rest of them are not decided (and said so).
+        # failed, the rest of them are not decided (and said so).
         unjudged = any(c.bound is None and c.value is not None
                        for cs in d.result.checks for c in cs)
         if unjudged and unjudged_failures >= MAX_UNJUDGED_FAILURES:
-            tally.reasons["too few rocks at a measure to judge in the screening, not decided"] += 1
+            tally.reasons["not decided: too few rocks at a measure to judge in the "
+                          "screening"] += 1
             continue
         if not d.result.feasible:
             if near >= MAX_NEAR_PER_FAMILY:
-                tally.reasons["within the screening margin, not decided"] += 1
+                tally.reasons["not decided: undecided in the screening"] += 1
                 continue
             near += 1
         per_level[d.level] += 1
         decisions += 1
         alt.screened_feasible = alt.screened_feasible or d.result.feasible
-        planned = plan_rocks(d.result, screen)
-        dec = decide(project, registry, d.measures, concept, rocks=planned, seed=seed,
-                     max_rocks=screen.max_rocks)
-        alt.exact_evaluations += 1
-        simulated += dec.rocks
-        if not dec.admitted:
-            tally.reasons["exact: " + (dec.reason.split(":")[0][:60] or "fails")] += 1
+        dec = decider.decide(d.measures, d.result)
+        alt.exact_evaluations += dec.exact
+        simulated += dec.simulated
+        if dec.verdict is Verdict.MARGINAL:
+            tally.reasons["marginal"] += 1
+            if len(alt.marginal) < MAX_MARGINAL_PER_FAMILY:
+                alt.marginal.append(_marginal_entry(alt.name, d, dec))
             alt.reason = dec.reason
             unjudged_failures += unjudged
             continue
-        idle = [r.measure.label() for r in dec.evaluation.results if r.caught == 0]
+        if not dec.admitted:
+            tally.reasons["fails with confidence"] += 1
+            alt.rejected += 1
+            alt.reason = dec.reason
+            unjudged_failures += unjudged
+            continue
+        ev = dec.evaluation
+        idle = [r.measure.label() for r in ev.results if r.caught == 0]
         if idle and len(d.measures) > 1:
             alt.measures = sorted(d.measures, key=lambda m: m.x)
             alt.cost = d.cost
@@ -334,10 +378,10 @@ def _settle(
         simulated += fresh_n
         alt.measures = sorted(d.measures, key=lambda m: m.x)
         alt.cost = d.cost
-        alt.evaluation = dec.evaluation
+        alt.evaluation = ev
         alt.decision_rocks = dec.rocks
-        alt.checks = [c.as_dict() for cs in dec.evaluation.checks for c in cs]
-        alt.residual = dec.evaluation.protect["reaching"] if dec.evaluation.protect else None
+        alt.checks = [c.as_dict() for cs in ev.checks for c in cs]
+        alt.residual = ev.protect["reaching"] if ev.protect else None
         alt.holds_on_fresh_rocks = fresh.ok
         alt.fresh_rocks, alt.fresh_seed = fresh_n, fresh_seed
         alt.fresh_residual = fresh.protect["reaching"] if fresh.protect else None
@@ -404,13 +448,16 @@ def optimise(
     project = project.model_copy(
         update={"protect": project.protect.model_copy(update={"allowed_fraction": allowed})}
     )
-    fresh_seed = int(spec.fresh_seed) if spec.fresh_seed is not None else s + 1000003
-    # A search that cannot see the residual target decides nothing: it needs the
-    # rocks with which none reaching would show the target with confidence.
-    needed = rocks_to_show_fraction(allowed, confidence) if allowed > 0 else None
-    if needed is not None:
-        n = max(n, min(int(spec.max_rocks), SEARCH_FACTOR * needed))
-    screen = Screening(project, registry, spec, concept, rocks=n, seed=s)
+    fresh_seed = int(spec.fresh_seed) if spec.fresh_seed is not None else s + FRESH_OFFSET
+    # The looks of every decision, fixed before any rock runs: the search rocks
+    # are the first look, with at least the rocks with which none reaching
+    # shows the residual target at the look's confidence.
+    looks = plan_looks(n, max(n, int(spec.max_rocks)), confidence,
+                       allowed if allowed > 0 else None)
+    n = looks.sizes[0]
+    lc = look_concept(registry, concept, looks.look_confidence)
+    screen = Screening(project, registry, spec, lc, rocks=n, seed=s)
+    decider = Decider(screen, looks)
     slots = _BarrierSlots(screen)
     fams = families(spec.candidates, spec.max_measures)
     alternatives: list[Alternative] = []
@@ -430,14 +477,15 @@ def optimise(
         ev0 = screen.evaluations
         alt = Alternative(name=family_name(spec.candidates, fam), family=fam)
         tally = _Tally()
-        fam_seed = int(np.random.SeedSequence([s, fi]).generate_state(1)[0])
+        # The search over ground edits has its own seed, the same for every run
+        # seed: which geometries it tries should not change with the rocks.
+        fam_seed = int(np.random.SeedSequence([SEARCH_SEED, fi]).generate_state(1)[0])
         if any(ci in screen.edit_candidates for ci in fam):
             designs: Any = iter(_edit_designs(screen, slots, fam, tally, fam_seed, limit))
         else:
             designs = _barrier_designs(screen, slots, list(fam), [], 0.0, screen.bare, 0, tally,
                                        cost_limit=limit)
-        simulated += _settle(alt, designs, tally, project, registry, concept, screen, spec,
-                             seed=s, fresh_seed=fresh_seed)
+        simulated += _settle(alt, designs, tally, decider, spec, concept, fresh_seed=fresh_seed)
         if progress:
             progress("check", done + 1, len(fams))
         alt.evaluations = screen.evaluations - ev0
@@ -448,7 +496,7 @@ def optimise(
                 alt.reason = (f"no design of this family cheaper than the best so far "
                               f"({limit:,.0f} {currency}) holds: {alt.reason}")
         elif alt.holds:
-            alt.proof = _proof(alt, tally, n, currency)
+            alt.proof = _proof(alt, tally, looks, currency)
             limit = min(limit, alt.cost)
         exact_total += alt.exact_evaluations
         found[fi] = alt
@@ -458,6 +506,10 @@ def optimise(
     reason = "" if best is not None else (
         "no family of candidate measures has a design that holds with "
         f"{100 * confidence:g} % confidence and on fresh rocks; see each family's reason")
+    # Marginal designs cheaper than the chosen one (all of them when none holds).
+    top = math.inf if best is None else best.cost
+    marginal = sorted((m for a in alternatives for m in a.marginal if m["cost"] < top),
+                      key=lambda m: m["cost"])
     return OptimisationResult(
         alternatives=alternatives, best=best, reason=reason,
         rocks=best.decision_rocks if best is not None else n, seed=s,
@@ -465,7 +517,8 @@ def optimise(
         fresh_seed=fresh_seed, wall_s=time.perf_counter() - t0,
         evaluations=screen.evaluations, edit_runs=screen.edit_runs, currency=currency,
         search_rocks=n, confidence=confidence, exact_evaluations=exact_total,
-        rocks_simulated=simulated + screen.edit_rocks,
+        rocks_simulated=simulated + screen.edit_rocks + decider.simulated,
+        looks=looks, marginal=marginal, decided=sum(a.exact_evaluations for a in alternatives),
     )
 
 

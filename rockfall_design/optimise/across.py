@@ -49,17 +49,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..evaluate import Evaluation, evaluate_design
-from ..judge.bounds import rocks_to_show_fraction
+from ..judge.sequential import LookSchedule, plan_looks
 from ..safety import DEFAULT_CONFIDENCE
 from . import (
     MAX_EXACT_PER_FAMILY,
     MAX_NEAR_PER_FAMILY,
     MAX_UNJUDGED_FAILURES,
-    SEARCH_FACTOR,
+    SEARCH_SEED,
     Alternative,
     OptimisationResult,
 )
-from .decide import decide, plan_rocks
+from .decide import decide, look_concept
 from .screening import Screening
 from .search import MAX_EXACT_PER_LEVEL, _barrier_designs, _BarrierSlots, _edit_designs, _Tally
 from .space import families, family_name
@@ -171,6 +171,7 @@ class _Scenario:
     concept: Any
     screen: Screening
     slots: _BarrierSlots
+    looks: LookSchedule
 
     @property
     def fresh_seed(self) -> int:
@@ -233,11 +234,15 @@ def _build(run: ScenarioRun, registry: Registry, rocks: int | None) -> tuple[_Sc
         allowed = (spec.residual_count or 0) / max(n, 1)
     project = project.model_copy(
         update={"protect": project.protect.model_copy(update={"allowed_fraction": allowed})})
-    needed = rocks_to_show_fraction(allowed, confidence) if allowed > 0 else None
-    if needed is not None:
-        n = max(n, min(int(spec.max_rocks), SEARCH_FACTOR * needed))
-    screen = Screening(project, registry, spec, concept, rocks=n, seed=run.seed)
-    return _Scenario(run, project, spec, concept, screen, _BarrierSlots(screen)), n
+    # The single optimiser's looks: the screening is the first, at the look's
+    # confidence, and the exact decisions go on from there (decide).
+    looks = plan_looks(n, max(n, int(spec.max_rocks)), confidence,
+                       allowed if allowed > 0 else None)
+    n = looks.sizes[0]
+    screen = Screening(project, registry, spec,
+                       look_concept(registry, concept, looks.look_confidence), rocks=n,
+                       seed=run.seed)
+    return _Scenario(run, project, spec, concept, screen, _BarrierSlots(screen), looks), n
 
 
 def _designs(sc: _Scenario, fam: tuple[int, ...], fam_seed: int, limit: float,
@@ -303,8 +308,7 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
     for j in passing:
         sc = scs[j]
         dec = decide(sc.project, registry, measures, sc.concept,
-                     rocks=plan_rocks(screened[j], sc.screen), seed=sc.run.seed,
-                     max_rocks=sc.screen.max_rocks)
+                     rocks=sc.screen.n, seed=sc.run.seed, looks=sc.looks)
         simulated += dec.rocks
         exact += 1
         decisions[j] = dec
@@ -398,7 +402,7 @@ def optimise_across(
         ev0 = sum(sc.screen.evaluations for sc in scs)
         alt = Alternative(name=family_name(spec.candidates, fam), family=fam)
         tallies = [_Tally() for _ in scs]
-        fam_seed = int(np.random.SeedSequence([s, fi]).generate_state(1)[0])
+        fam_seed = int(np.random.SeedSequence([SEARCH_SEED, fi]).generate_state(1)[0])
         streams = [((j, d) for d in _designs(sc, fam, fam_seed, limit, t))
                    for j, (sc, t) in enumerate(zip(scs, tallies, strict=True))]
         seen: set[tuple] = set()

@@ -27,7 +27,7 @@ from ..evaluate import (
     edited_section,
     place_measures,
 )
-from ..judge.bounds import fraction_upper_bound
+from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
 from ..judge.outcomes import (
     Judgement,
     RockFates,
@@ -61,6 +61,12 @@ class ScreenResult:
 
     ``labels`` are the measures' labels, in the order of ``results``;
     ``reason`` says why a design that could not be judged is infeasible.
+    ``feasible``: admitted with the look's confidence bounds on rocks whose
+    paths were all judged exactly; ``near``: undecided (neither admitted
+    nor rejected with confidence, or resting on approximated rocks), so it
+    is left to more rocks and the exact decision; neither: rejected, some
+    check or the residual fails with confidence where nothing was
+    approximated.
     """
 
     cost: float
@@ -130,7 +136,15 @@ class Screening:
         rocks: int,
         seed: int,
         progress: Callable[[str], None] | None = None,
+        stations: np.ndarray | None = None,
     ) -> None:
+        """Run the search rocks on the bare slope and keep the table (see the class docs).
+
+        ``stations`` (m), when given, replaces the table stations (every
+        candidate's range on the grid) and drops the restart stations: a
+        later look at a few barrier designs with more rocks needs only
+        their stations (and memory grows with rocks x stations).
+        """
         from ..design import build_candidate_measure
 
         self.project = project
@@ -168,6 +182,8 @@ class Screening:
                 # Profile edits may start upslope of their x (a berm's cut face).
                 lo_r = max(x0, lo - 30.0 - self.margin)
                 restarts.append(np.arange(lo_r, hi + 1e-9, RESTART_STEP_M))
+        if stations is not None:
+            sts, restarts = [np.asarray(stations, dtype=float)], [np.zeros(0)]
         self.grid = np.unique(np.clip(np.concatenate(sts + [np.array([self.protect_x])]), x0, x1))
         self.restart_x = np.unique(np.clip(np.concatenate(restarts), x0, x1))
         t0 = time.perf_counter()
@@ -352,15 +368,16 @@ class Screening:
                   for res in judgement.results]
         labels = [p.label for p in placed]
         approximate = approx.any
-        violation, near = self.violation(checks, judgement.reaching, approx)
+        violation = self.violation(checks, judgement.reaching)
         # The screening admits only what it judged exactly (no rock whose path it
-        # approximates); a design that passes with such rocks, or misses within
-        # the margin, is left to the exact decision.
-        feasible = violation == 0.0 and not approximate
-        near = near or (violation == 0.0 and approximate)
-        return ScreenResult(cost, feasible, violation, checks, judgement.results,
-                            judgement.reaching, labels=labels, near=near,
-                            approximate=approximate)
+        # approximates) and holds with the bounds; it rejects only what fails with
+        # confidence where no approximated rock could be the cause; everything
+        # else is undecided and goes on to more rocks and the exact decision.
+        admitted = not approximate and self.admits(checks, judgement.reaching)
+        rejected = self.rejects(checks, judgement.reaching, approx)
+        return ScreenResult(cost, admitted, violation, checks, judgement.results,
+                            judgement.reaching, labels=labels,
+                            near=not admitted and not rejected, approximate=approximate)
 
     def judge(self, placed: Sequence[PlacedMeasure], table: _Table) -> tuple[Judgement, _Approx]:
         """The design's outcomes on the search rocks, by the one judgement.
@@ -425,67 +442,56 @@ class Screening:
             k -= 1
         return k
 
-    def violation(
-        self, checks: Sequence[Sequence[Check]], residual: int, approx: _Approx | None = None
-    ) -> tuple[float, bool]:
-        """How far a design misses its targets (0: it meets them), and whether within the margin.
+    def admits(self, checks: Sequence[Sequence[Check]], residual: int) -> bool:
+        """Every check and the residual hold with their upper bounds (the look's confidence)."""
+        return (all(c.holds_with_confidence for cs in checks for c in cs)
+                and fraction_upper_bound(residual, self.n, self.confidence)
+                <= self.allowed_fraction)
 
-        A check that holds on its point value but could not hold with its
-        confidence bound even with ``design.max_rocks`` rocks (and likewise
-        the residual) counts as a small miss. The second value says whether
-        every miss may be the screening's approximation, so that the design
-        is decided exactly before it may be rejected (the margin): each
-        failed check belongs to a measure that rocks with approximated paths
-        met (``approx.touched``), and the residual misses only through such
-        rocks. Elsewhere the screening is the exact run's judgement of the
-        same rocks.
+    def rejects(self, checks: Sequence[Sequence[Check]], residual: int,
+                approx: _Approx | None = None) -> bool:
+        """Some check, or the residual, fails with confidence on rocks judged exactly.
+
+        A check counts only where no rock with an approximated path met its
+        measure (``approx.touched``); the residual only with the rocks whose
+        fate the screening knows (``residual - approx.reaching``): the exact
+        run can only add to those (a rock the screening lets break through
+        with its full energy may stop in the exact run, never the reverse
+        for a rock that reaches the zone without meeting such a barrier).
         """
         touched = approx.touched if approx is not None else [False] * len(checks)
         uncertain = approx.reaching if approx is not None else 0
-        violation, near = 0.0, approx is not None and approx.any
         for cs, t in zip(checks, touched, strict=True):
+            if not t and any(c.rejects for c in cs):
+                return True
+        return self.residual_rejects(residual - uncertain)
+
+    def residual_rejects(self, reaching: int) -> bool:
+        """The Clopper-Pearson lower bound of ``reaching`` of the rocks exceeds the target."""
+        return (reaching > 0 and fraction_lower_bound(reaching, self.n, self.confidence)
+                > self.allowed_fraction)
+
+    def violation(self, checks: Sequence[Sequence[Check]], residual: int) -> float:
+        """How far a design misses its targets on the point values (0: it meets them).
+
+        Used to rank designs that fail (the report names the one that comes
+        closest), never to decide: that is :meth:`admits` and :meth:`rejects`.
+        """
+        violation = 0.0
+        for cs in checks:
             for c in cs:
-                if c.ok and _check_may_hold(c, self.n, self.max_rocks):
-                    continue
-                near &= t
                 if c.ok:
-                    violation += 1e-3  # holds on the point value, never with confidence
+                    violation += 0.0 if c.holds_with_confidence else 1e-3
                 elif c.value is None or not math.isfinite(c.value):
                     violation += 1.0
                 else:
                     violation += abs(c.value - c.target) / max(abs(c.target), 1e-9)
         if residual > self.allowed_residual:
             violation += 1.0 + (residual - self.allowed_residual) / max(self.n, 1) * 100.0
-            near &= residual - uncertain <= self.allowed_residual
-        elif not _fraction_may_hold(residual, self.n, self.allowed_fraction, self.max_rocks,
-                                    self.confidence):
+        elif fraction_upper_bound(residual, self.n, self.confidence) > self.allowed_fraction:
             violation += 1e-3
-            near &= uncertain > 0
-        return violation, near and violation > 0.0
+        return violation
 
 
 def _start(fp: Barrier | ProfileEdit) -> float:
     return fp.x if isinstance(fp, Barrier) else fp.x_start
-
-
-def _fraction_may_hold(reaching: int, n: int, allowed: float, rocks: int,
-                       confidence: float) -> bool:
-    """The Clopper-Pearson bound of the observed fraction, with ``rocks`` rocks, is allowed."""
-    return fraction_upper_bound(round(reaching / max(n, 1) * rocks), rocks,
-                                confidence) <= allowed
-
-
-def _check_may_hold(c: Check, n: int, rocks: int) -> bool:
-    """Could a check that holds on its point value hold with its bound with ``rocks`` rocks?
-
-    The gap between an order-statistic bound and the point value shrinks
-    about as 1/sqrt(n) (the spread of a sample quantile); a check without a
-    bound (too few rocks met the measure) may be bounded with more rocks.
-    """
-    if c.holds_with_confidence or c.value is None:
-        return True
-    if c.bound is None:
-        return rocks > n  # unbounded with n rocks: more rocks may bound it
-    predicted = c.value + (c.bound - c.value) * math.sqrt(n / rocks)
-    # It holds when the value stays on the side of the target it is on now.
-    return (c.value >= c.target) == (predicted >= c.target)

@@ -39,13 +39,17 @@ from ..plugins import guard
 if TYPE_CHECKING:  # pragma: no cover
     from ..measures import ProtectiveMeasure
 
-from .screening import Screening, ScreenResult, _check_may_hold, _fraction_may_hold, _Table
+from .screening import Screening, ScreenResult, _Table
 from .space import STATION_STEP_M, _decode, _discrete_choices, _lattice, _Option, _variables
 
 #: Placements of one combination of catalogue choices screened in full, fewest through first.
 MAX_SCREENS_PER_LEVEL = 80
 #: Designs of one combination of catalogue choices decided exactly, at most.
 MAX_EXACT_PER_LEVEL = 3
+#: The search over ground edits ranks a design the search rocks leave undecided
+#: as this many times its cost (one they admit at its cost, one they reject
+#: above every design's cost).
+UNDECIDED_HANDICAP = 1.1
 
 
 class _BarrierSlots:
@@ -143,8 +147,8 @@ class _BarrierSlots:
         The first barrier of a design meets every rock that crosses its station
         on the table, so these are exactly its checks in any design in which no
         other barrier stands upslope of it (edits upslope are in the table).
-        Checks that hold on the point values but could not hold with the
-        confidence bounds even with ``design.max_rocks`` rocks count as failed.
+        Only checks that fail with confidence (their favourable bound misses
+        the target) count as failed: the rest is left to more rocks.
         """
         sc = self.screen
         opts = self.options[ci]
@@ -163,7 +167,7 @@ class _BarrierSlots:
                 (res,) = judge_measures([placed], [oc], [np.column_stack([h, v, e_kj])],
                                         fates, None).results
                 checks = guard(sc.registry).concept(sc.concept).checks(res)
-                arr[k] = all(c.ok and _check_may_hold(c, sc.n, sc.max_rocks) for c in checks)
+                arr[k] = not any(c.rejects for c in checks)
             out[i] = bool(arr[k])
         return out
 
@@ -279,14 +283,18 @@ def _barrier_designs(
         np.float32)
     edits = [guard(screen.registry).measure(m).footprint(screen.section) for m in fixed]
     stretches = [(e.x_start, e.x_end) for e in edits if isinstance(e, ProfileEdit)]
-    # Rocks through for sure (the table knows their fate) must be within the
-    # target, and within what design.max_rocks rocks could show with confidence;
-    # a design that misses only through rocks breaking through is screened in
-    # full and, within the margin, decided exactly.
-    limit = screen.allowed_residual
-    while limit >= 0 and not _fraction_may_hold(limit, screen.n, screen.allowed_fraction,
-                                                screen.max_rocks, screen.confidence):
-        limit -= 1
+    # Rocks through for sure (the table knows their fate; the exact run can
+    # only add to them) rule a placement out only when they exceed the target
+    # with confidence (their Clopper-Pearson lower bound): the largest count
+    # that does not.
+    lo, hi = 0, screen.n
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if screen.residual_rejects(mid):
+            hi = mid - 1
+        else:
+            lo = mid
+    limit = lo
     k_slots = len(opts)
     for level_cost, idx in _level_combos(levels):
         total = fixed_cost + level_cost
@@ -432,7 +440,10 @@ def _edit_designs(
             value = big + fixed_cost
         else:
             kept[key + tuple((m.kind, m.x) for m in first.measures)] = first
-            value = first.cost if first.result.feasible else big + first.cost
+            # Admitted on the search rocks: its cost. Undecided (only more rocks
+            # can tell): its cost with a handicap, so that the search still
+            # explores cheap geometries that may hold, but prefers those shown.
+            value = first.cost if first.result.feasible else UNDECIDED_HANDICAP * first.cost
         seen[key] = value
         return value
 

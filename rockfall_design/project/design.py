@@ -371,9 +371,9 @@ class Design(_Model):
     )
     max_rocks: Annotated[Integer, Field(ge=1, le=2_000_000)] = Field(
         50_000,
-        description="Most rocks a design near a limit is decided with: the rocks of its one "
-        "exact evaluation are planned from the screening, more the nearer it is to a limit, "
-        "up to this.",
+        description="Rocks of the last look of every sequential decision: a design near a "
+        "limit is looked at with more and more rocks up to this; one still undecided here is "
+        "marginal (never admitted; the report lists it).",
     )
     fresh_seed: Annotated[Integer, Field(ge=0)] | None = Field(
         None, description="Seed of the re-check; default: the run's seed + 1000003."

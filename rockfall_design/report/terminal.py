@@ -302,11 +302,34 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
                               + "; ".join(b.fresh_failures), style="bold yellow"))
     else:
         parts.append(Text(f"No admissible design: {result.reason}", style="bold red"))
+    for m in getattr(result, "marginal", None) or []:
+        parts.append(Text(f"Marginal, cheaper: {m['name']} {m['cost']:,.0f} {cur}: "
+                          f"{'; '.join(m['labels'])}: {_marginal_values(m)}; "
+                          + (f"about {m['rocks_to_decide']:,} rocks would decide it "
+                             "(--max-rocks)" if m["rocks_to_decide"] else
+                             "its point value sits on the target"), style="yellow"))
     for a in order:
         if (not a.holds or a.dominated) and a.reason:
             parts.append(Text(f"  {a.name}: {a.reason}", style="dim"))
     panel = Panel(Group(*parts), title="rockfall-design optimise")
     (console or fitted_console(panel)).print(panel)
+
+
+def _marginal_values(m: dict[str, Any]) -> str:
+    """A marginal design's point values and bounds, one phrase each (see optimise.decide)."""
+    v = m["values"]
+    parts = []
+    for c in v["checks"]:
+        if c["value"] is None:
+            continue
+        ends = [x for x in (c["bound"], c["optimistic"]) if x is not None]
+        rng = f" ({min(ends):.2f} to {max(ends):.2f})" if ends else ""
+        parts.append(f"{c['name']} {c['value']:.2f}{rng}, target {c['target']:.2f}")
+    r = v.get("residual")
+    if r is not None:
+        parts.append(f"residual {100 * r['fraction']:.3f} % ({100 * r['lower']:.3f} to "
+                     f"{100 * r['upper']:.3f} %), allowed {100 * r['allowed']:.3f} %")
+    return f"on {v['rocks']:,} rocks at {100 * v['confidence']:.4g} %: " + ", ".join(parts)
 
 
 def alternatives_table(result: Any) -> Any:
