@@ -1,6 +1,7 @@
 """The optimiser on every bundled design project: speed, and how its answer holds up.
 
     python benchmarks/optimise.py [--projects projects/design_quarry.yaml ...] [--no-reference]
+    python benchmarks/optimise.py --seeds 11,12,13,14,15 [--projects ...]
 
 For each project it prints
 
@@ -91,12 +92,52 @@ def reference(project, registry, rocks: int) -> tuple[float, str, int]:
     return math.inf, "none", screened
 
 
+def _seeds(args: argparse.Namespace) -> None:
+    """Each project at each seed: the choice, the spread, and the marginal cheaper designs."""
+    registry = load_registry()
+    run_study(load_project(args.projects[0]), rocks=10)  # compile or load the engine first
+    for path in args.projects:
+        project = load_project(path)
+        try:
+            resolve_design(project, registry)
+        except ProjectError as exc:
+            print(f"\n{path.name}: skipped: {exc}")
+            continue
+        print(f"\n{path.name}")
+        costs = []
+        for seed in args.seeds:
+            t0 = time.perf_counter()
+            res = optimise(project, registry, seed=seed)
+            wall = time.perf_counter() - t0
+            b = res.best
+            cost = b.cost if b is not None else math.inf
+            costs.append(cost)
+            marginal = sum(len(a.marginal) for a in res.alternatives)
+            per = res.rocks_simulated / b.decision_rocks if b is not None else float("nan")
+            print(f"  seed {seed}: {cost:>12,.0f} {b.name if b else 'none':30s} {wall:5.1f} s, "
+                  f"{res.evaluations:,} screened, {res.exact_evaluations} exact, {marginal} "
+                  f"marginal, {res.rocks_simulated:,} rocks simulated = {per:.1f} per "
+                  f"deciding rock ({b.decision_rocks if b else 0:,})")
+            for m in res.marginal:
+                print(f"      marginal cheaper: {m['cost']:,.0f} {'; '.join(m['labels'])} "
+                      f"(about {m['rocks_to_decide'] or '?'} rocks would decide it)")
+        finite = [c for c in costs if math.isfinite(c)]
+        if finite:
+            print(f"  spread max/min {max(finite) / min(finite):.3f} over {len(finite)} seeds")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--projects", type=Path, nargs="*", default=PROJECTS)
     ap.add_argument("--no-reference", action="store_true",
                     help="skip the 2 m grid reference (the slow part)")
+    ap.add_argument("--seeds", type=lambda t: [int(x) for x in t.split(",")], default=None,
+                    help="comma-separated seeds: run each project at each seed and print "
+                    "each seed's choice, the spread of the chosen cost (max/min) and the "
+                    "marginal designs cheaper than a dearer choice (e.g. 11,12,13,14,15)")
     args = ap.parse_args()
+    if args.seeds:
+        return _seeds(args)
     registry = load_registry()
     t0 = time.perf_counter()
     run_study(load_project(args.projects[0]), rocks=10)

@@ -112,6 +112,11 @@ __all__ = [
 #: Designs the screening left undecided that are decided, per family (the rest are
 #: counted in the report as not decided).
 MAX_NEAR_PER_FAMILY = 40
+#: Designs that miss their targets on the point values of the search rocks, but not
+#: with confidence, decided per family when cheaper than its design (cheapest first).
+MAX_DEFERRED_PER_FAMILY = 8
+#: Such designs kept aside while the family's stream is read.
+MAX_DEFERRED_KEPT = 400
 #: The search runs at least this many times the rocks that show the residual target.
 SEARCH_FACTOR = 1
 #: Designs the screening could not judge (too few rocks at a measure) that may fail
@@ -314,53 +319,98 @@ def _settle(
     report. A design in which a measure holds no rock is dominated by the
     same design without it: the family is reported as such (that design
     belongs to a smaller family).
+
+    Contenders first: a design that meets its targets on the point values of
+    the search rocks is decided as the stream reaches it; one that misses
+    them there, but not with confidence (most often because the screening
+    approximates some of its rocks), is set aside and decided only if it is
+    cheaper than the family's design once that is found (at most
+    :data:`MAX_DEFERRED_PER_FAMILY` of them, cheapest first; the rest are
+    counted as not decided).
     """
-    screen = decider.screen
-    project, registry = screen.project, screen.registry
-    per_level: Counter = Counter()
-    decisions = near = simulated = unjudged_failures = 0
+    state = _SettleState(alt, tally, decider, spec, concept, fresh_seed)
+    deferred: list[Any] = []
     for d in designs:
-        if decisions >= MAX_EXACT_PER_FAMILY:
+        if state.decisions >= MAX_EXACT_PER_FAMILY:
             tally.reasons["not decided: the family's decisions were used up"] += 1
-            alt.reason = (f"{alt.reason}; stopped after {MAX_EXACT_PER_FAMILY} decisions of "
-                          "this family")
             break
-        if per_level[d.level] >= MAX_EXACT_PER_LEVEL:
-            tally.reasons["not decided: the catalogue combination's decisions were used up"] += 1
+        if not d.result.feasible and not d.result.point_ok:
+            if len(deferred) < MAX_DEFERRED_KEPT:
+                deferred.append(d)
             continue
+        if state.decide(d):
+            break
+    top = alt.cost if alt.holds_on_fresh_rocks or alt.dominated else math.inf
+    budget = MAX_DEFERRED_PER_FAMILY
+    for d in sorted(deferred, key=lambda d: d.cost):
+        if d.cost >= top:
+            break
+        if budget <= 0:
+            tally.reasons["not decided: misses its targets on the point values of the search "
+                          "rocks, not with confidence"] += 1
+            continue
+        budget -= 1
+        if state.decide(d):
+            top = alt.cost
+    return state.simulated
+
+
+@dataclass
+class _SettleState:
+    """What deciding a family's designs has found so far (see :func:`_settle`)."""
+
+    alt: Alternative
+    tally: _Tally
+    decider: Decider
+    spec: DesignSpec
+    concept: Any
+    fresh_seed: int
+    decisions: int = 0
+    simulated: int = 0
+    unjudged_failures: int = 0
+    per_level: Counter = field(default_factory=Counter)
+
+    def decide(self, d: Any) -> bool:
+        """Decide one design; True when it is the family's (holds, or dominated)."""
+        alt, tally = self.alt, self.tally
+        if self.per_level[d.level] >= MAX_EXACT_PER_LEVEL:
+            tally.reasons["not decided: the catalogue combination's decisions were used up"] += 1
+            return False
         # Too few rocks met one of its measures in the screening to bound its
         # checks: the screening could not judge it. After a few such designs
         # failed, the rest of them are not decided (and said so).
         unjudged = any(c.bound is None and c.value is not None
                        for cs in d.result.checks for c in cs)
-        if unjudged and unjudged_failures >= MAX_UNJUDGED_FAILURES:
+        if unjudged and self.unjudged_failures >= MAX_UNJUDGED_FAILURES:
             tally.reasons["not decided: too few rocks at a measure to judge in the "
                           "screening"] += 1
-            continue
-        if not d.result.feasible:
-            if near >= MAX_NEAR_PER_FAMILY:
-                tally.reasons["not decided: undecided in the screening"] += 1
-                continue
-            near += 1
-        per_level[d.level] += 1
-        decisions += 1
+            return False
+        self.per_level[d.level] += 1
+        self.decisions += 1
         alt.screened_feasible = alt.screened_feasible or d.result.feasible
-        dec = decider.decide(d.measures, d.result)
+        dec = self.decider.decide(d.measures, d.result)
         alt.exact_evaluations += dec.exact
-        simulated += dec.simulated
+        self.simulated += dec.simulated
         if dec.verdict is Verdict.MARGINAL:
             tally.reasons["marginal"] += 1
             if len(alt.marginal) < MAX_MARGINAL_PER_FAMILY:
                 alt.marginal.append(_marginal_entry(alt.name, d, dec))
-            alt.reason = dec.reason
-            unjudged_failures += unjudged
-            continue
+            if not alt.holds_on_fresh_rocks:
+                alt.reason = dec.reason
+            self.unjudged_failures += unjudged
+            return False
         if not dec.admitted:
             tally.reasons["fails with confidence"] += 1
             alt.rejected += 1
-            alt.reason = dec.reason
-            unjudged_failures += unjudged
-            continue
+            if not alt.holds_on_fresh_rocks:
+                alt.reason = dec.reason
+            self.unjudged_failures += unjudged
+            return False
+        return self._admitted(d, dec)
+
+    def _admitted(self, d: Any, dec: Decision) -> bool:
+        alt, tally = self.alt, self.tally
+        screen = self.decider.screen
         ev = dec.evaluation
         idle = [r.measure.label() for r in ev.results if r.caught == 0]
         if idle and len(d.measures) > 1:
@@ -370,31 +420,33 @@ def _settle(
                              f"{', '.join(idle)} holding no rock: dominated by the same design "
                              "without it")
             alt.reason = alt.dominated
-            return simulated
-        fresh_n = max(2 * dec.rocks, int(spec.fresh_rocks or 0))
-        fresh = evaluate_design(project, registry, d.measures, concept, rocks=fresh_n,
-                                seed=fresh_seed)
+            return True
+        fresh_n = max(2 * dec.rocks, int(self.spec.fresh_rocks or 0))
+        fresh = evaluate_design(screen.project, screen.registry, d.measures, self.concept,
+                                rocks=fresh_n, seed=self.fresh_seed)
         alt.exact_evaluations += 1
-        simulated += fresh_n
+        self.simulated += fresh_n
+        if not fresh.ok:
+            # Not chosen: it fits the noise of the search rocks. Decide the next one.
+            tally.reasons["fails on fresh rocks"] += 1
+            if not alt.holds_on_fresh_rocks:
+                alt.reason = ("the cheapest admitted design fails on fresh rocks: "
+                              + "; ".join(fresh.failures()))
+            return False
         alt.measures = sorted(d.measures, key=lambda m: m.x)
         alt.cost = d.cost
         alt.evaluation = ev
         alt.decision_rocks = dec.rocks
         alt.checks = [c.as_dict() for cs in ev.checks for c in cs]
         alt.residual = ev.protect["reaching"] if ev.protect else None
-        alt.holds_on_fresh_rocks = fresh.ok
-        alt.fresh_rocks, alt.fresh_seed = fresh_n, fresh_seed
+        alt.holds_on_fresh_rocks = True
+        alt.fresh_rocks, alt.fresh_seed = fresh_n, self.fresh_seed
         alt.fresh_residual = fresh.protect["reaching"] if fresh.protect else None
         alt.fresh_failures = fresh.failures()
         alt.feasible = True  # admitted with confidence on the deciding rocks
-        if fresh.ok:
-            alt.reason = ""
-            return simulated
-        # Not chosen: it fits the noise of the search rocks. Decide the next one.
-        tally.reasons["fails on fresh rocks"] += 1
-        alt.reason = ("the cheapest admitted design fails on fresh rocks: "
-                      + "; ".join(fresh.failures()))
-    return simulated
+        alt.dominated = ""
+        alt.reason = ""
+        return True
 
 
 def optimise(

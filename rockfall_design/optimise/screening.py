@@ -79,6 +79,7 @@ class ScreenResult:
     labels: list[str] = field(default_factory=list)
     near: bool = False
     approximate: bool = False  # some rock's path only approximated (see Screening.judge)
+    point_ok: bool = False  # every check and the residual meet their targets on point values
 
 
 @dataclass
@@ -377,7 +378,9 @@ class Screening:
         rejected = self.rejects(checks, judgement.reaching, approx)
         return ScreenResult(cost, admitted, violation, checks, judgement.results,
                             judgement.reaching, labels=labels,
-                            near=not admitted and not rejected, approximate=approximate)
+                            near=not admitted and not rejected, approximate=approximate,
+                            point_ok=all(c.ok for cs in checks for c in cs)
+                            and judgement.reaching <= self.allowed_residual)
 
     def judge(self, placed: Sequence[PlacedMeasure], table: _Table) -> tuple[Judgement, _Approx]:
         """The design's outcomes on the search rocks, by the one judgement.
