@@ -120,7 +120,7 @@ def test_alternatives_one_column_per_check_rounded(two_zones):
 
 
 def test_alternatives_tolerate_new_keys():
-    from rockfall_design.tables import alternatives_frame
+    from rockfall_design.report.tables import alternatives_frame
 
     summary = {"best": "a", "alternatives": [
         {"name": "a", "cost": 1234.567, "feasible": True, "measures": [
@@ -139,8 +139,8 @@ def test_alternatives_tolerate_new_keys():
 
 
 def test_stops_figure_says_why_no_rock_stops():
-    from rockfall_design.engine.core import CAUGHT, EXIT_DOWNSLOPE, STATUS_NAMES
-    from rockfall_design.figures import no_stop_reason
+    from rockfall_design.engine.columns import CAUGHT, EXIT_DOWNSLOPE, STATUS_NAMES
+    from rockfall_design.report.figures import no_stop_reason
 
     counts = np.zeros(len(STATUS_NAMES), int)
     counts[CAUGHT] = 40
@@ -219,7 +219,7 @@ def test_report_of_simulate_and_check(tmp_path):
 
 
 def test_report_shows_confidence_bounds_when_the_summary_has_them(tmp_path):
-    from rockfall_design.documents import render_html, render_markdown, report_context
+    from rockfall_design.report.documents import render_html, render_markdown, report_context
 
     c = rd.check(QUARRY, rocks=60, seed=2)
     c.summary["measures"][0]["checks"][0]["bound"] = 1.2345

@@ -7,7 +7,7 @@ import pytest
 from numpy.testing import assert_allclose
 
 from rockfall_design.engine import EngineSettings, G, Material, core
-from rockfall_design.engine.core import T_MODE, T_T, T_VX, T_VY, T_X, T_Y
+from rockfall_design.engine.columns import T_MODE, T_T, T_VX, T_VY, T_X, T_Y
 
 from ..engine_helpers import one_rock, run_one, section
 

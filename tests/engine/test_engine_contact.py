@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
 from rockfall_design.engine import EngineSettings, G, Material, Releases, core, run_ensemble
-from rockfall_design.engine.core import T_T, T_VX, T_VY, T_W, T_Y
+from rockfall_design.engine.columns import T_T, T_VX, T_VY, T_W, T_Y
 
 from ..engine_helpers import one_rock, run_one, section
 

@@ -19,7 +19,7 @@ from rockfall_design.engine import (
     core,
     run_ensemble,
 )
-from rockfall_design.engine.core import T_MODE, T_T, T_VX, T_VY, T_W, T_X, T_Y
+from rockfall_design.engine.columns import T_MODE, T_T, T_VX, T_VY, T_W, T_X, T_Y
 from rockfall_design.engine.profile import centre_path
 
 # RF_EXAMPLES raises the number of examples for a long hunt (default keeps CI quick).
