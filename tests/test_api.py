@@ -25,7 +25,11 @@ TWO_ZONES = PROJECTS / "design_two_zones.yaml"
 
 @pytest.fixture(scope="module")
 def two_zones():
-    """The issue's example: optimise design_two_zones with 2000 rocks, seed 1."""
+    """The issue's example: optimise design_two_zones with 2000 rocks, seed 1.
+
+    Half a minute to a minute on two cores: the tests that use it are in the
+    ``slow`` set (``python -m pytest -m slow``, run by .ci/run).
+    """
     p = rd.load_project(TWO_ZONES)
     return rd.optimise(p, rocks=2000, seed=1)
 
@@ -81,6 +85,7 @@ def test_check_tables():
     assert len(c.outcomes) == 2 * 200
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["svg", "pdf"])
 def test_plot_leaves_the_backend_as_it_was(backend, two_zones):
     previous = matplotlib.get_backend()
@@ -94,6 +99,7 @@ def test_plot_leaves_the_backend_as_it_was(backend, two_zones):
         matplotlib.use(previous)
 
 
+@pytest.mark.slow
 def test_the_issues_done_when(two_zones):
     r = two_zones
     assert r.best is not None and r.best["name"] == r.summary["best"]
@@ -105,6 +111,7 @@ def test_the_issues_done_when(two_zones):
     assert len(r.design.summary["measures"]) == len(r.best["measures"])
 
 
+@pytest.mark.slow
 def test_alternatives_one_column_per_check_rounded(two_zones):
     a = two_zones.alternatives
     assert {"height_factor", "energy_factor", "height_factor_bound"} <= set(a)
