@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 from numpy.testing import assert_array_equal
 
-from rockfall_design.engine import Material, Releases, Section, barrier_table, core, run_ensemble
+from rockfall_design.engine import Material, Releases, Section, barrier_table, columns, run_ensemble
 from rockfall_design.engine._jit import choose_cache_dir
 from rockfall_design.engine.ensemble import THREADS_ENV, default_threads
 
@@ -35,7 +35,7 @@ def _case(n: int = 300):
         height=rng.choice([0.0, 2.0], n), vx=np.full(n, 0.6), vy=np.full(n, -0.8),
         spin=np.zeros(n), spin_rolling=rng.random(n) < 0.5,
     )
-    bars = [barrier_table(90.0, 2.0, 3e5, core.B_NET)]
+    bars = [barrier_table(90.0, 2.0, 3e5, columns.B_NET)]
     return sec, rel, bars
 
 
