@@ -65,7 +65,7 @@ def pytest_collection_finish(session: pytest.Session) -> None:
         return
     capture = session.config.pluginmanager.getplugin("capturemanager")
     with capture.global_and_fixture_disabled():
-        sys.stderr.write("\ntests: the engine is not compiled yet (a fresh checkout); "
+        sys.stderr.write("\ntests: the engine is not compiled yet for these sources; "
                          "compiling it before the first test...\n")
         sys.stderr.flush()
         t0 = time.perf_counter()
