@@ -6,6 +6,34 @@ functions below, each marked with :data:`hookimpl`, and returns *classes*
 from them. The built-in fence, wall, ditch, ... are plugins of exactly this
 kind (``rockfall_design_builtins``); they get no special treatment.
 
+Current routes and older routes
+-------------------------------
+Some parts of the contract have two routes: the current one, and an older
+one kept so that plugins written against it keep working, unchanged and
+without warnings. New plugins should take the current route. Each route says
+the rockfall-design version it dates from ("since 0.1.0": every route below
+is in 0.1.0); an older route is removed only in a release whose notes say
+so, and not before 1.0. The same list is in the plugin guide,
+``docs/plugins.md`` (a test keeps the two alike):
+
+- **Design variables.** Current (since 0.1.0): each field declares its
+  role, ``json_schema_extra={"design": ...}``. Kept for plugins written
+  before declarations (no removal before 1.0): a required field the
+  candidate does not give is searched within ``design_variables``, and
+  fields named ``product``, ``height`` and ``capacity_kj`` are catalogue choices.
+- **What a measure takes.** Current (since 0.1.0): ``bill(section)``, a list
+  of ``Quantity``. Kept for plugins written before bills (no removal before
+  1.0): ``quantities(section)`` alone, billed as one running metre named
+  after the measure's ``kind``.
+- **Pricing.** Current (since 0.1.0): ``CostModel.price(measure, bill,
+  quantities, length_m)``. Kept for cost models written before bills (no
+  removal before 1.0): ``CostModel.cost(measure, quantities, length_m)``,
+  which the default ``price`` calls.
+- **Units of parameters.** Current (since 0.1.0): the field's metadata,
+  ``Field(..., json_schema_extra={"unit": "m"})``. Kept for plugins written
+  before unit metadata (no removal before 1.0): the trailing parentheses of
+  the description, ``"height of the net (m)"``.
+
 How a plugin is found
 ---------------------
 Through the entry-point group ``rockfall_design``. In the ``pyproject.toml``
@@ -124,7 +152,9 @@ product sets. Example::
         rings: int = Field(2, ge=1, le=4, json_schema_extra={
             "unit": None, "design": {"options": [1, 2, 3, 4]}})
 
-Plugins written without declarations keep the older conventions: a field
+Kept for plugins written before declarations (older route; current:
+declarations, since 0.1.0): plugins without declarations keep the older
+conventions: a field
 named ``product`` is the catalogue product, ``height`` its height and
 ``capacity_kj`` its energy class (unless those fields declare another role),
 and a *required* field the candidate does not give is searched within its
@@ -145,11 +175,13 @@ cost catalogue overrides (``prices: {embankment_fill_m3: 30}`` for the
 built-in ``unit_prices``). The default ``bill`` names the ``quantities()``
 dict through ``bill_from(quantities)``, and the default ``bill_from`` bills
 one running metre named after the measure's ``kind``: a measure written
-before bills existed is priced as before (``other_per_m`` of
-``unit_prices``).
+before bills existed (``quantities`` alone: the older route, kept) is
+priced as before (``other_per_m`` of ``unit_prices``).
 
-A cost model prices a bill in ``price(measure, bill, quantities, length_m)``;
-the default calls the older ``cost(measure, quantities, length_m)``. Before
+A cost model prices a bill in ``price(measure, bill, quantities, length_m)``
+(current route, since 0.1.0); the default calls the older
+``cost(measure, quantities, length_m)`` (kept for cost models written before
+bills). Before
 any search, ``missing_price(measure, bill)`` is asked, with a sample design
 of every candidate, whether each quantity has a price at all: a str (the
 reason) makes the design section an error at ``design.costs`` naming the

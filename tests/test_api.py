@@ -25,7 +25,11 @@ TWO_ZONES = PROJECTS / "design_two_zones.yaml"
 
 @pytest.fixture(scope="module")
 def two_zones():
-    """The issue's example: optimise design_two_zones with 2000 rocks, seed 1."""
+    """The issue's example: optimise design_two_zones with 2000 rocks, seed 1.
+
+    Half a minute to a minute on two cores: the tests that use it are in the
+    ``slow`` set (``python -m pytest -m slow``, run by .ci/run).
+    """
     p = rd.load_project(TWO_ZONES)
     return rd.optimise(p, rocks=2000, seed=1)
 
@@ -81,6 +85,7 @@ def test_check_tables():
     assert len(c.outcomes) == 2 * 200
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["svg", "pdf"])
 def test_plot_leaves_the_backend_as_it_was(backend, two_zones):
     previous = matplotlib.get_backend()
@@ -94,6 +99,7 @@ def test_plot_leaves_the_backend_as_it_was(backend, two_zones):
         matplotlib.use(previous)
 
 
+@pytest.mark.slow
 def test_the_issues_done_when(two_zones):
     r = two_zones
     assert r.best is not None and r.best["name"] == r.summary["best"]
@@ -105,6 +111,7 @@ def test_the_issues_done_when(two_zones):
     assert len(r.design.summary["measures"]) == len(r.best["measures"])
 
 
+@pytest.mark.slow
 def test_alternatives_one_column_per_check_rounded(two_zones):
     a = two_zones.alternatives
     assert {"height_factor", "energy_factor", "height_factor_bound"} <= set(a)
@@ -120,7 +127,7 @@ def test_alternatives_one_column_per_check_rounded(two_zones):
 
 
 def test_alternatives_tolerate_new_keys():
-    from rockfall_design.tables import alternatives_frame
+    from rockfall_design.report.tables import alternatives_frame
 
     summary = {"best": "a", "alternatives": [
         {"name": "a", "cost": 1234.567, "feasible": True, "measures": [
@@ -139,8 +146,8 @@ def test_alternatives_tolerate_new_keys():
 
 
 def test_stops_figure_says_why_no_rock_stops():
-    from rockfall_design.engine.core import CAUGHT, EXIT_DOWNSLOPE, STATUS_NAMES
-    from rockfall_design.figures import no_stop_reason
+    from rockfall_design.engine.columns import CAUGHT, EXIT_DOWNSLOPE, STATUS_NAMES
+    from rockfall_design.report.figures import no_stop_reason
 
     counts = np.zeros(len(STATUS_NAMES), int)
     counts[CAUGHT] = 40
@@ -219,7 +226,7 @@ def test_report_of_simulate_and_check(tmp_path):
 
 
 def test_report_shows_confidence_bounds_when_the_summary_has_them(tmp_path):
-    from rockfall_design.documents import render_html, render_markdown, report_context
+    from rockfall_design.report.documents import render_html, render_markdown, report_context
 
     c = rd.check(QUARRY, rocks=60, seed=2)
     c.summary["measures"][0]["checks"][0]["bound"] = 1.2345

@@ -6,9 +6,12 @@ import json
 import os
 from pathlib import Path
 
+import pytest
+
 NOTEBOOK = Path(__file__).resolve().parents[1] / "examples" / "design_walkthrough.ipynb"
 
 
+@pytest.mark.slow  # optimises a design in a real kernel: about half a minute
 def test_the_walkthrough_notebook_runs():
     try:
         import nbformat

@@ -18,12 +18,9 @@ from rockfall_design import simulation
 from rockfall_design.cli import main
 from rockfall_design.histograms import LinearHistogram, LogHistogram
 from rockfall_design.project import load_project
-from rockfall_design.simulation import (
-    STREAM_REL_ERROR,
-    ReleaseStream,
-    draw_releases,
-    simulate,
-)
+from rockfall_design.releases import ReleaseStream, draw_releases
+from rockfall_design.simulation import simulate
+from rockfall_design.streamed import STREAM_REL_ERROR
 
 ROOT = Path(__file__).resolve().parents[1]
 QUARRY = ROOT / "projects" / "quarry_road.yaml"

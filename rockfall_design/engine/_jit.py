@@ -6,12 +6,18 @@ numba reads ``NUMBA_CACHE_DIR`` when it is imported.
 Where the cache goes, in order:
 
 1. ``NUMBA_CACHE_DIR`` if the user set it (numba's own setting);
-2. ``__pycache__`` beside the engine's sources, numba's default, if writable;
-3. ``<system temp dir>/rockfall-design-numba-<uid>``, private to the user,
+2. ``<user cache>/rockfall-design/engine-<digest>`` (``$XDG_CACHE_HOME``, else
+   ``~/.cache``), private to the user and named by the digest of the
+   engine's sources: one compile per machine and user, however the package
+   is imported (an installed copy and a checkout of the same sources, as
+   ``pip install .`` and then ``python -m pytest`` in the checkout, share it;
+   numba's own default is a cache per copy, beside its sources);
+3. ``__pycache__`` beside the engine's sources, numba's default, if writable;
+4. ``<system temp dir>/rockfall-design-numba-<uid>``, private to the user,
    when the package directory is read-only (a system-wide install, a
    container image); numba would otherwise try the user's home and, if that
    is read-only too, refuse to import the engine;
-4. no cache at all, with a one-line notice: every run compiles anew.
+5. no cache at all, with a one-line notice: every run compiles anew.
 
 Wherever it is, a cache compiled from other engine sources than the ones
 installed is removed first (:func:`drop_stale_cache`).
@@ -22,6 +28,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import os
+import shutil
 import sys
 import tempfile
 import threading
@@ -33,6 +40,18 @@ from typing import Any
 PROG = "rockfall-design"
 COMPILE_ESTIMATE = "about 20 to 60 s"
 """What the first compilation takes (measured 20 to 40 s on one core of a laptop-class CPU)."""
+
+
+SOURCES_MARK = "rockfall-design-engine.sha256"
+"""File beside numba's cache files holding the digest of the sources they were compiled from."""
+
+
+def sources_digest(sources_dir: Path) -> str:
+    """SHA-256 of every ``*.py`` file of ``sources_dir`` (names and contents, sorted)."""
+    h = hashlib.sha256()
+    for path in sorted(sources_dir.glob("*.py")):
+        h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    return h.hexdigest()
 
 
 def _writable_dir(path: Path) -> bool:
@@ -103,7 +122,113 @@ def choose_cache_dir(
     return None, False
 
 
+ENGINE_DIR = Path(__file__).resolve().parent
+"""The engine's source directory."""
+
+KEEP_SHARED = 8
+"""Caches of other engine sources kept beside the shared one (the most recently used;
+any used in the last week is kept too)."""
+
+
+def shared_cache_dir(env: dict[str, str] | os._Environ[str], sources_dir: Path,
+                     home: Path) -> Path | None:
+    """The user's cache for these engine sources, shared by every copy of them.
+
+    Parameters
+    ----------
+    env : mapping
+        The environment (``NUMBA_CACHE_DIR`` wins; ``XDG_CACHE_HOME`` is honoured).
+    sources_dir : Path
+        The engine's source directory; the cache is named by their digest.
+    home : Path
+        The user's home directory (``~/.cache`` when ``XDG_CACHE_HOME`` is unset).
+
+    Returns
+    -------
+    Path or None
+        ``<cache>/rockfall-design/engine-<16 hex digits>``, created private to
+        the user; None if the user set ``NUMBA_CACHE_DIR`` or no such directory
+        can be made (read-only home): then :func:`choose_cache_dir` decides.
+    """
+    if env.get("NUMBA_CACHE_DIR"):
+        return None
+    base = Path(env["XDG_CACHE_HOME"]) if env.get("XDG_CACHE_HOME") else home / ".cache"
+    ours = base / "rockfall-design"
+    try:
+        ours.mkdir(mode=0o700, parents=True, exist_ok=True)
+    except OSError:
+        return None
+    path = ours / f"engine-{sources_digest(sources_dir)[:16]}"
+    if not (_private_dir(ours) and _private_dir(path)):
+        return None
+    # Each change of the engine's sources (a developer's edits, an upgrade)
+    # makes a new directory of about 3 MB: keep the latest few, and any used
+    # in the last week (another copy of the package may be running from it).
+    others = sorted((d for d in ours.glob("engine-*") if d != path and d.is_dir()),
+                    key=lambda d: d.stat().st_mtime, reverse=True)
+    week_ago = time.time() - 7 * 24 * 3600
+    for old in others[KEEP_SHARED:]:
+        if old.stat().st_mtime < week_ago:
+            shutil.rmtree(old, ignore_errors=True)
+    return path
+
+
+def _share_cache(path: Path, digest: str) -> bool:
+    """Have numba cache the engine's functions in ``path``, known by ``digest``.
+
+    numba's locators place a cache by the source file's directory, so two
+    copies of the same sources (an installed one and a checkout) compile
+    twice. This locator, tried first and only for the engine's own files,
+    places it in ``path`` and stamps it with the digest of all the engine's
+    sources instead of one file's: a cache compiled from other sources is
+    never loaded. numba's locators are not public API: if they change, the
+    answer is False and numba's own choice applies (one compile per copy).
+    """
+    try:
+        from numba.core import caching
+
+        # Named with a leading underscore up to numba 0.6x, without it later.
+        base = getattr(caching, "_CacheLocator", None) or caching.CacheLocator
+        impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl
+
+        class _EngineLocator(base):
+            def __init__(self, py_func: Any, py_file: str) -> None:
+                self._lineno = py_func.__code__.co_firstlineno
+
+            def get_cache_path(self) -> str:
+                return str(path)
+
+            def get_source_stamp(self) -> str:
+                return digest
+
+            def get_disambiguator(self) -> str:
+                return str(self._lineno)
+
+            @classmethod
+            def from_function(cls, py_func: Any, py_file: str) -> Any:
+                if Path(py_file).resolve().parent != ENGINE_DIR:
+                    return None
+                self = cls(py_func, py_file)
+                try:
+                    self.ensure_cache_path()
+                except OSError:
+                    return None
+                return self
+
+        impl._locator_classes.insert(0, _EngineLocator)
+    except Exception:  # noqa: BLE001 - numba's default locators still work
+        return False
+    return True
+
+
 def _configure() -> bool:
+    try:
+        home = Path.home()
+    except (RuntimeError, KeyError):  # no HOME and no password entry
+        home = Path(tempfile.gettempdir()) / "nonexistent-home"
+    shared = shared_cache_dir(os.environ, ENGINE_DIR, home)
+    if shared is not None and _share_cache(shared, sources_digest(ENGINE_DIR)):
+        return True
     cache_dir, enabled = choose_cache_dir(
         os.environ, Path(__file__).resolve().parent, Path(tempfile.gettempdir())
     )
@@ -196,18 +321,6 @@ def compile_notice(dispatcher: Any, args: Sequence[Any]) -> Callable[[], None] |
         sys.stderr.flush()
 
     return done
-
-
-SOURCES_MARK = "rockfall-design-engine.sha256"
-"""File beside numba's cache files holding the digest of the sources they were compiled from."""
-
-
-def sources_digest(sources_dir: Path) -> str:
-    """SHA-256 of every ``*.py`` file of ``sources_dir`` (names and contents, sorted)."""
-    h = hashlib.sha256()
-    for path in sorted(sources_dir.glob("*.py")):
-        h.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
-    return h.hexdigest()
 
 
 def drop_stale_cache(dispatcher: Any, sources_dir: Path) -> int:

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from rockfall_design.engine import G, Material, barrier_table, core
-from rockfall_design.engine.core import T_VX, T_VY, T_W, T_X, T_Y
+from rockfall_design.engine import G, Material, barrier_table, columns
+from rockfall_design.engine.columns import T_VX, T_VY, T_W, T_X, T_Y
 
 from ..engine_helpers import one_rock, run_one, section
 
@@ -37,7 +37,7 @@ def test_fence_in_flight_catches_below_and_lets_over_above(h_fence, expect):
     xb = 6.0
     h, t = _height_at(xb)  # 10.3 - 4.905 * 1.2^2 = 3.24 m above ground
     assert 2.0 < h < 5.0
-    bar = barrier_table(xb, h_fence, np.inf, core.B_NET)
+    bar = barrier_table(xb, h_fence, np.inf, columns.B_NET)
     res = run_one(section(FLAT, MAT), _flight(), barriers=[bar])
     out = res.barrier_outcome[0, 0]
     hb, vb, eb, tb = res.barrier_meeting[0, 0]
@@ -45,13 +45,13 @@ def test_fence_in_flight_catches_below_and_lets_over_above(h_fence, expect):
     m = res.mass[0]
     assert_allclose(eb, _energy(m, 0.3, 5.0, -G * t, 2.0), rtol=RTOL)
     if expect == "caught":
-        assert out == core.O_CAUGHT
-        assert core.STATUS_NAMES[res.status[0]] == "caught"
+        assert out == columns.O_CAUGHT
+        assert columns.STATUS_NAMES[res.status[0]] == "caught"
         assert res.caught_by[0] == 0
         assert_allclose(res.x_end[0], xb, rtol=RTOL)
         assert_allclose(res.y_end[0], h, rtol=RTOL)  # flat ground at y = 0
     else:
-        assert out == core.O_PASSED_OVER
+        assert out == columns.O_PASSED_OVER
         assert res.caught_by[0] == -1
         assert res.max_x[0] > xb
 
@@ -64,8 +64,8 @@ def test_fence_with_too_little_capacity_is_broken_through_with_the_surplus():
     m = probe.mass[0]
     e = _energy(m, 0.3, 5.0, -G * t, 2.0)
     cap = 0.4 * e
-    res = run_one(sec, _flight(), barriers=[barrier_table(xb, 9.0, cap, core.B_NET)])
-    assert res.barrier_outcome[0, 0] == core.O_BROKEN_THROUGH
+    res = run_one(sec, _flight(), barriers=[barrier_table(xb, 9.0, cap, columns.B_NET)])
+    assert res.barrier_outcome[0, 0] == columns.O_BROKEN_THROUGH
     tr = res.trajectories[0]
     row = tr[np.flatnonzero(np.isclose(tr[:, T_X], xb))[0]]
     f = np.sqrt((e - cap) / e)
@@ -80,15 +80,16 @@ def test_wall_rebounds_the_rock_upslope():
     h, t = _height_at(xb)
     e_w = 0.4
     res = run_one(
-        section(FLAT, MAT), _flight(), barriers=[barrier_table(xb, 9.0, np.inf, core.B_RIGID, e_w)]
+        section(FLAT, MAT), _flight(),
+        barriers=[barrier_table(xb, 9.0, np.inf, columns.B_RIGID, e_w)],
     )
-    assert res.barrier_outcome[0, 0] == core.O_REBOUNDED
+    assert res.barrier_outcome[0, 0] == columns.O_REBOUNDED
     tr = res.trajectories[0]
     row = tr[np.flatnonzero(np.isclose(tr[:, T_X], xb))[0]]
     assert_allclose([row[T_VX], row[T_VY], row[T_W]], [-e_w * 5.0, -G * t, 2.0], rtol=RTOL)
     assert res.max_x[0] == pytest.approx(xb)
     assert res.x_end[0] < xb
-    assert core.STATUS_NAMES[res.status[0]] == "stopped"
+    assert columns.STATUS_NAMES[res.status[0]] == "stopped"
 
 
 def test_rolling_rock_meets_a_barrier_at_its_rolling_height_both_ways():
@@ -97,9 +98,9 @@ def test_rolling_rock_meets_a_barrier_at_its_rolling_height_both_ways():
     res = run_one(
         section(FLAT, MAT),
         one_rock(r=r, x=50.0, vx=-6.0, rolling=True),
-        barriers=[barrier_table(45.0, 1.0, np.inf, core.B_NET)],
+        barriers=[barrier_table(45.0, 1.0, np.inf, columns.B_NET)],
     )
-    assert res.barrier_outcome[0, 0] == core.O_CAUGHT
+    assert res.barrier_outcome[0, 0] == columns.O_CAUGHT
     hb, vb, eb, tb = res.barrier_meeting[0, 0]
     # Rolling decelerates at 5/7 g mu_r: v^2 = v0^2 - 2 a d over d = 5 m.
     a = 5 / 7 * G * 0.2
@@ -112,9 +113,9 @@ def test_a_rock_bigger_than_the_barrier_rolls_over_it():
     res = run_one(
         section(FLAT, MAT),
         one_rock(r=1.5, x=10.0, vx=6.0, rolling=True),
-        barriers=[barrier_table(15.0, 1.0, np.inf, core.B_NET)],
+        barriers=[barrier_table(15.0, 1.0, np.inf, columns.B_NET)],
     )
-    assert res.barrier_outcome[0, 0] == core.O_PASSED_OVER
+    assert res.barrier_outcome[0, 0] == columns.O_PASSED_OVER
 
 
 def test_boulder_row_gaps_pass_the_expected_fraction_of_small_rocks():
@@ -123,28 +124,28 @@ def test_boulder_row_gaps_pass_the_expected_fraction_of_small_rocks():
     res = run_one(
         section(FLAT, MAT),
         one_rock(r=r, x=10.0, vx=6.0, rolling=True, n=n),
-        barriers=[barrier_table(15.0, 1.0, np.inf, core.B_BLOCKS, gap_m=gap, spacing_m=spacing)],
+        barriers=[barrier_table(15.0, 1.0, np.inf, columns.B_BLOCKS, gap_m=gap, spacing_m=spacing)],
     )
-    through = np.mean(res.barrier_outcome[:, 0] == core.O_PASSED_THROUGH_GAP)
+    through = np.mean(res.barrier_outcome[:, 0] == columns.O_PASSED_THROUGH_GAP)
     p = (gap - 2 * r) / spacing
     assert abs(through - p) < 4 * np.sqrt(p * (1 - p) / n)
-    caught = res.barrier_outcome[:, 0] == core.O_CAUGHT
-    assert np.all(caught | (res.barrier_outcome[:, 0] == core.O_PASSED_THROUGH_GAP))
+    caught = res.barrier_outcome[:, 0] == columns.O_CAUGHT
+    assert np.all(caught | (res.barrier_outcome[:, 0] == columns.O_PASSED_THROUGH_GAP))
     # Rocks wider than the gap never pass.
     big = run_one(
         section(FLAT, MAT),
         one_rock(r=0.7, x=10.0, vx=6.0, rolling=True, n=200),
-        barriers=[barrier_table(15.0, 2.0, np.inf, core.B_BLOCKS, gap_m=gap, spacing_m=spacing)],
+        barriers=[barrier_table(15.0, 2.0, np.inf, columns.B_BLOCKS, gap_m=gap, spacing_m=spacing)],
     )
-    assert np.all(big.barrier_outcome[:, 0] == core.O_CAUGHT)
+    assert np.all(big.barrier_outcome[:, 0] == columns.O_CAUGHT)
 
 
 def test_barriers_are_reported_in_the_given_order():
     bars = [
-        barrier_table(30.0, 9.0, np.inf, core.B_NET),
-        barrier_table(20.0, 0.1, np.inf, core.B_NET),
+        barrier_table(30.0, 9.0, np.inf, columns.B_NET),
+        barrier_table(20.0, 0.1, np.inf, columns.B_NET),
     ]
     res = run_one(section(FLAT, MAT), one_rock(r=0.3, x=10.0, vx=10.0, rolling=True), barriers=bars)
     # The low barrier at x = 20 (second in the list) is passed over; the fence at 30 catches.
-    assert res.barrier_outcome[0].tolist() == [core.O_CAUGHT, core.O_PASSED_OVER]
+    assert res.barrier_outcome[0].tolist() == [columns.O_CAUGHT, columns.O_PASSED_OVER]
     assert res.caught_by[0] == 0

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from rockfall_design.engine import EngineSettings, G, Material, core
-from rockfall_design.engine.core import T_MODE, T_T, T_VX, T_VY, T_X, T_Y
+from rockfall_design.engine import EngineSettings, G, Material, columns
+from rockfall_design.engine.columns import T_MODE, T_T, T_VX, T_VY, T_X, T_Y
+from rockfall_design.engine.impact import impact
 
 from ..engine_helpers import one_rock, run_one, section
 
@@ -22,7 +23,7 @@ def test_free_flight_parabola_landing_and_station():
     tr = res.trajectories[0]
     t_land = (vy + np.sqrt(vy**2 + 2 * G * h0)) / G
     # Row 1 is the state after the first landing (position and time exact).
-    assert tr[0, T_MODE] == core.FLIGHT
+    assert tr[0, T_MODE] == columns.FLIGHT
     assert_allclose(tr[1, T_X], vx * t_land, rtol=RTOL)
     assert_allclose(tr[1, T_Y], r, rtol=RTOL)
     assert_allclose(tr[1, T_T], t_land, rtol=RTOL)
@@ -46,7 +47,7 @@ def test_vertical_bounce_series():
     res = run_one(sec, one_rock(r=r, x=0.0, h=h0))
     tr = res.trajectories[0]
     # Rows after landings in flight mode carry the rebound velocity.
-    rebounds = tr[1:][tr[1:, T_MODE] == core.FLIGHT]
+    rebounds = tr[1:][tr[1:, T_MODE] == columns.FLIGHT]
     assert len(rebounds) >= 3
     for k, row in enumerate(rebounds, start=1):
         assert row[T_VX] == 0.0
@@ -54,7 +55,7 @@ def test_vertical_bounce_series():
     # It stops bouncing once the rebound speed is below v_contact, then rests.
     v_last = rebounds[-1, T_VY]
     assert v_last >= 0.5 and e * v_last < 0.5
-    assert core.STATUS_NAMES[res.status[0]] == "stopped"
+    assert columns.STATUS_NAMES[res.status[0]] == "stopped"
     assert_allclose(res.x_end[0], 0.0, atol=1e-12)
 
 
@@ -68,7 +69,7 @@ def test_horizontal_launch_from_cliff_edge(v):
     )
     res = run_one(sec, one_rock(r=r, x=2.0, vx=v, rolling=True))
     tr = res.trajectories[0]
-    flights = np.flatnonzero(tr[:, T_MODE] == core.FLIGHT)
+    flights = np.flatnonzero(tr[:, T_MODE] == columns.FLIGHT)
     launch, land = tr[flights[0]], tr[flights[0] + 1]
     # The centre leaves where the arc's first (tangent) edge ends, horizontally.
     assert_allclose(launch[T_VY], 0.0, atol=1e-12)
@@ -144,7 +145,7 @@ def test_rolling_stop_distance(v0, mur):
     """On level ground a rolling rock stops after v0^2 / (2 * 5/7 g mu_r)."""
     sec = section([[0, 0], [200, 0]], Material(friction=0.6, rolling_resistance=mur))
     res = run_one(sec, one_rock(r=0.5, x=1.0, vx=v0, rolling=True))
-    assert core.STATUS_NAMES[res.status[0]] == "stopped"
+    assert columns.STATUS_NAMES[res.status[0]] == "stopped"
     assert_allclose(res.x_end[0] - 1.0, v0**2 / (2 * 5 / 7 * G * mur), rtol=RTOL)
     assert_allclose(res.duration[0], v0 / (5 / 7 * G * mur), rtol=RTOL)
 
@@ -155,7 +156,7 @@ def _impact(
     w,
     n=(0.0, 1.0),
     r=0.5,
-    model=core.MODEL_SPANG,
+    model=columns.MODEL_SPANG,
     e=0.5,
     rt=1.0,
     mu=0.5,
@@ -163,7 +164,7 @@ def _impact(
     k=9.144,
 ):
     rng = np.zeros(1, dtype=np.uint64)
-    return np.array(core.impact(vx, vy, w, n[0], n[1], r, model, e, rt, mu, vscale, k, 0.0, rng))
+    return np.array(impact(vx, vy, w, n[0], n[1], r, model, e, rt, mu, vscale, k, 0.0, rng))
 
 
 def test_impact_spang_stick_branch():
@@ -192,13 +193,13 @@ def test_impact_is_frame_independent():
 
 
 def test_impact_rn_rt_law():
-    vx, vy, w = _impact(4.0, -3.0, -2.0, model=core.MODEL_RN_RT, e=0.4, rt=0.8)
+    vx, vy, w = _impact(4.0, -3.0, -2.0, model=columns.MODEL_RN_RT, e=0.4, rt=0.8)
     assert_allclose([vx, vy, w], [0.8 * 4.0, 0.4 * 3.0, 0.8 * -2.0], rtol=RTOL)
 
 
 def test_pfeiffer_bowen_velocity_scaling():
     vn = -12.0
-    for model in (core.MODEL_SPANG, core.MODEL_RN_RT):
+    for model in (columns.MODEL_SPANG, columns.MODEL_RN_RT):
         out = _impact(0.0, vn, 0.0, model=model, e=0.5, mu=0.5, vscale=True)
         assert_allclose(out[1], 0.5 / (1 + (12.0 / 9.144) ** 2) * 12.0, rtol=RTOL)
 
@@ -212,7 +213,7 @@ def test_counter_slope_rolls_back():
     res = run_one(sec, one_rock(r=0.3, x=1.0, rolling=True))
     tr = res.trajectories[0]
     assert (tr[:, T_VX] < 0).any(), "the rock never moved back upslope"
-    assert core.STATUS_NAMES[res.status[0]] == "stopped"
+    assert columns.STATUS_NAMES[res.status[0]] == "stopped"
     assert 19.0 < res.x_end[0] < 21.0
     assert res.max_x[0] > 21.0
 
@@ -220,14 +221,14 @@ def test_counter_slope_rolls_back():
 def test_event_cap_reports_unresolved():
     sec = section([[0, 10], [20, 0], [30, 5]], Material(friction=0.8, rolling_resistance=0.05))
     res = run_one(sec, one_rock(r=0.3, x=1.0, rolling=True), settings=EngineSettings(max_events=10))
-    assert core.STATUS_NAMES[res.status[0]] == "unresolved"
+    assert columns.STATUS_NAMES[res.status[0]] == "unresolved"
     assert res.n_events[0] == 10
 
 
 def test_rock_resting_on_gentle_slope_does_not_move():
     sec = section([[0, 1], [10, 0]], Material(friction=0.5, rolling_resistance=0.2))
     res = run_one(sec, one_rock(r=0.3, x=5.0))
-    assert core.STATUS_NAMES[res.status[0]] == "stopped"
+    assert columns.STATUS_NAMES[res.status[0]] == "stopped"
     assert res.x_end[0] == 5.0
     assert res.n_events[0] == 1
 
@@ -247,6 +248,6 @@ def test_rock_released_in_a_hollow_comes_to_rest_inside(shape, side, model):
                    sd_restitution=0.05, sd_friction=0.05)
     x0 = 3.0 if side == "left" else 37.0
     res = run_one(section(pts, mat), one_rock(r=0.4, x=x0, h=1.0, n=20), key=9)
-    assert np.all(res.status == core.STOPPED)
+    assert np.all(res.status == columns.STOPPED)
     lo, hi = (15.0, 25.0) if shape == "V" else (14.0, 26.0)
     assert np.all((res.x_end > lo) & (res.x_end < hi)), res.x_end

@@ -15,8 +15,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from numpy.testing import assert_allclose
 
-from rockfall_design.engine import EngineSettings, G, Material, Releases, core, run_ensemble
-from rockfall_design.engine.core import T_T, T_VX, T_VY, T_W, T_Y
+from rockfall_design.engine import EngineSettings, G, Material, Releases, columns, run_ensemble
+from rockfall_design.engine import contact as engine_contact
+from rockfall_design.engine.columns import T_T, T_VX, T_VY, T_W, T_Y
+from rockfall_design.engine.impact import impact
 
 from ..engine_helpers import one_rock, run_one, section
 
@@ -138,7 +140,7 @@ def test_rn_rt_spin_rule_keeps_a_rolling_rock_rolling(rt):
     r, vt, vn = 0.7, 5.0, -2.0
     v = vt * t + vn * n
     rng = np.zeros(1, dtype=np.uint64)
-    vx, vy, w = core.impact(v[0], v[1], -vt / r, n[0], n[1], r, core.MODEL_RN_RT, 0.35, rt,
+    vx, vy, w = impact(v[0], v[1], -vt / r, n[0], n[1], r, columns.MODEL_RN_RT, 0.35, rt,
                             0.5, False, 9.144, 0.0, rng)
     vt2 = vx * t[0] + vy * t[1]
     assert_allclose(vt2, rt * vt, rtol=RTOL, atol=1e-12)
@@ -157,7 +159,7 @@ def test_slip_at_tolerance_starts_in_the_sense_of_its_rate(side, offset):
     mu, mur, r, v = 0.3, 0.1, 0.5, 3.0
     beta = np.radians(45.0 if side > 0 else -65.0)
     s = (v - offset) / r
-    a, dsig, ds, sg, s_zero = core._contact_accel(
+    a, dsig, ds, sg, s_zero = engine_contact._contact_accel(
         np.sin(beta), np.cos(beta), v, s, mu, mur, r
     )
     assert not np.isnan(ds) and not s_zero
@@ -173,9 +175,9 @@ def test_slip_decays_exactly_where_rolling_can_hold(deg):
     beta = np.radians(deg)
     lo, hi = -(7 * mu + 5 * mur) / 2, (7 * mu - 5 * mur) / 2
     holds = lo <= np.tan(beta) <= hi
-    _, d_pos, _, _, _ = core._contact_accel(np.sin(beta), np.cos(beta), v, (v - 0.1) / r,
+    _, d_pos, _, _, _ = engine_contact._contact_accel(np.sin(beta), np.cos(beta), v, (v - 0.1) / r,
                                             mu, mur, r)
-    _, d_neg, _, _, _ = core._contact_accel(np.sin(beta), np.cos(beta), v, (v + 0.1) / r,
+    _, d_neg, _, _, _ = engine_contact._contact_accel(np.sin(beta), np.cos(beta), v, (v + 0.1) / r,
                                             mu, mur, r)
     assert holds == (d_pos < 0 and d_neg > 0)
 
@@ -206,7 +208,7 @@ def _assert_no_zero_length_event(res) -> None:
     for i, tr in enumerate(res.trajectories):
         dt = np.diff(tr[:, T_T])
         ne = int(res.n_events[i])
-        moving = dt[: ne - 1] if res.status[i] == core.STOPPED else dt[:ne]
+        moving = dt[: ne - 1] if res.status[i] == columns.STOPPED else dt[:ne]
         assert np.all(moving > 0.0), (i, np.flatnonzero(moving <= 0.0)[:5])
 
 
@@ -224,7 +226,7 @@ def test_scan_of_spins_near_rolling_leaves_no_rock_unresolved(deg):
         rel = _near_rolling(deg, 150, direction, seed=deg)
         res = run_ensemble(sec, rel, key=deg, settings=EngineSettings(max_events=2000),
                            n_trajectories=len(rel), max_trajectory_points=2001)
-        assert np.all(res.status != core.UNRESOLVED)
+        assert np.all(res.status != columns.UNRESOLVED)
         _assert_no_zero_length_event(res)
 
 
@@ -276,7 +278,7 @@ def test_no_zero_length_event_near_the_coulomb_limits(
     )
     res = run_ensemble(sec, rel, key=3, settings=EngineSettings(max_events=2000),
                        n_trajectories=n, max_trajectory_points=2001)
-    assert np.all(res.status != core.UNRESOLVED), res.n_events
+    assert np.all(res.status != columns.UNRESOLVED), res.n_events
     _assert_no_zero_length_event(res)
     # Energy never grows on the way either.
     for i, tr in enumerate(res.trajectories):

@@ -16,10 +16,10 @@ from rockfall_design.engine import (
     Releases,
     Section,
     barrier_table,
-    core,
+    columns,
     run_ensemble,
 )
-from rockfall_design.engine.core import T_MODE, T_T, T_VX, T_VY, T_W, T_X, T_Y
+from rockfall_design.engine.columns import T_MODE, T_T, T_VX, T_VY, T_W, T_X, T_Y
 from rockfall_design.engine.profile import centre_path
 
 # RF_EXAMPLES raises the number of examples for a long hunt (default keeps CI quick).
@@ -93,7 +93,7 @@ def cases(draw):
                 x[0] + draw(st.floats(0.0, 1.0)) * (x[-1] - x[0]),
                 draw(st.sampled_from([0.2, 1.0, 4.0])),
                 draw(st.sampled_from([5e3, 1e5, np.inf])),
-                draw(st.sampled_from([core.B_NET, core.B_RIGID, core.B_BLOCKS])),
+                draw(st.sampled_from([columns.B_NET, columns.B_RIGID, columns.B_BLOCKS])),
                 restitution=draw(st.floats(0.0, 1.0)),
                 gap_m=draw(st.sampled_from([0.0, 0.5, 3.0])),
                 spacing_m=4.0,
@@ -153,7 +153,7 @@ def test_rock_never_enters_the_ground(case):
         r = res.radius[i]
         X, Y = [tr[:, T_X]], [tr[:, T_Y]]
         # Sample every flight between its events.
-        for a in np.flatnonzero(tr[:-1, T_MODE] == core.FLIGHT):
+        for a in np.flatnonzero(tr[:-1, T_MODE] == columns.FLIGHT):
             dt = tr[a + 1, T_T] - tr[a, T_T]
             ts = np.linspace(0.0, dt, 25)
             X.append(tr[a, T_X] + tr[a, T_VX] * ts)
@@ -171,11 +171,11 @@ def test_every_rock_ends_in_a_named_state_and_same_seed_same_result(case):
     a = _run(sec, rel, bars, key=11)
     b = _run(sec, rel, bars, key=11)
     assert set(np.unique(a.status)) <= {
-        core.STOPPED,
-        core.EXIT_UPSLOPE,
-        core.EXIT_DOWNSLOPE,
-        core.UNRESOLVED,
-        core.CAUGHT,
+        columns.STOPPED,
+        columns.EXIT_UPSLOPE,
+        columns.EXIT_DOWNSLOPE,
+        columns.UNRESOLVED,
+        columns.CAUGHT,
     }
     for name in (
         "status",
@@ -190,7 +190,7 @@ def test_every_rock_ends_in_a_named_state_and_same_seed_same_result(case):
         "caught_by",
     ):
         assert_array_equal(getattr(a, name), getattr(b, name))
-    stopped = a.status == core.STOPPED
+    stopped = a.status == columns.STOPPED
     assert np.all((a.x_end[stopped] >= sec.x[0]) & (a.x_end[stopped] <= sec.x[-1]))
 
 

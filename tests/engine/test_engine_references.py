@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from rockfall_design.engine import core
+from rockfall_design.engine import columns, impact
 
 RTOL = 1e-10
 
 
 def _impact(vx, vy, w, r, model, e, mu, rt=1.0, vscale=False, k=9.144):
     rng = np.zeros(1, dtype=np.uint64)
-    return core.impact(vx, vy, w, 0.0, 1.0, r, model, e, rt, mu, vscale, k, 0.0, rng)
+    return impact.impact(vx, vy, w, 0.0, 1.0, r, model, e, rt, mu, vscale, k, 0.0, rng)
 
 
 @pytest.mark.parametrize("theta_deg", np.arange(5.0, 86.0, 5.0))
@@ -35,7 +35,7 @@ def test_chung_ooi_2011_test4_oblique_impact(theta_deg):
     v, r, e, mu = 3.9, 0.0025, 0.98, 0.092
     th = np.radians(theta_deg)
     vt, vn = v * np.sin(th), v * np.cos(th)
-    vx, vy, w = _impact(vt, -vn, 0.0, r, core.MODEL_SPANG, e, mu)
+    vx, vy, w = _impact(vt, -vn, 0.0, r, columns.MODEL_SPANG, e, mu)
     switch = np.degrees(np.arctan(3.5 * mu * (1 + e)))
     assert_allclose(switch, 32.52, atol=5e-3)
     assert_allclose(vy, e * vn, rtol=RTOL)
@@ -50,7 +50,7 @@ def test_chung_ooi_2011_test4_oblique_impact(theta_deg):
     assert_allclose(-w, spin, rtol=RTOL)
 
 
-@pytest.mark.parametrize("model", [core.MODEL_SPANG, core.MODEL_RN_RT])
+@pytest.mark.parametrize("model", [columns.MODEL_SPANG, columns.MODEL_RN_RT])
 def test_pfeiffer_bowen_velocity_scaling_hand_calculation(model):
     """Velocity-scaled normal restitution, by hand.
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rockfall_design.engine import Material, core, run_ensemble
+from rockfall_design.engine import Material, columns, run_ensemble
 from rockfall_design.project import load_project
-from rockfall_design.simulation import draw_releases, engine_key, section_from_project
+from rockfall_design.releases import draw_releases, engine_key, section_from_project
 
 from ..engine_helpers import one_rock, run_one, section
 
@@ -23,7 +23,7 @@ def quarry():
 def test_resume_reproduces_the_full_run(quarry):
     sec, rel, key = quarry
     full = run_ensemble(sec, rel, key=key, restart_stations=[95.0], grid=[120.0, 130.0])
-    crossed = np.isfinite(full.restart_state[:, 0, core.RS_X])
+    crossed = np.isfinite(full.restart_state[:, 0, columns.RS_X])
     assert crossed.sum() > 500
     again = run_ensemble(
         sec, rel, key=key, grid=[120.0, 130.0],
@@ -33,7 +33,7 @@ def test_resume_reproduces_the_full_run(quarry):
         again.status == full.status)
     # Round-off at the restart point can only tip a rare chaotic bounce.
     assert same_end[crossed].mean() > 0.99
-    assert np.all(again.n_events[crossed] >= full.restart_state[crossed, 0, core.RS_NEV])
+    assert np.all(again.n_events[crossed] >= full.restart_state[crossed, 0, columns.RS_NEV])
     cols = np.searchsorted(full.grid, again.grid)  # full also has the restart station
     h_full, h_again = full.grid_height[crossed][:, cols], again.grid_height[crossed]
     both = np.isfinite(h_full) & np.isfinite(h_again)
@@ -44,7 +44,7 @@ def test_resume_onto_an_edited_section_equals_a_full_run_there(quarry):
     """Downslope changes do not alter the path upslope: resume == full run on the edit."""
     sec, rel, key = quarry
     full = run_ensemble(sec, rel, key=key, restart_stations=[95.0])
-    crossed = np.isfinite(full.restart_state[:, 0, core.RS_X])
+    crossed = np.isfinite(full.restart_state[:, 0, columns.RS_X])
     # Dig a 2 m deep pit between 122 and 130 m.
     x = np.concatenate([sec.x[sec.x < 122], [122, 124, 128, 130], sec.x[sec.x > 130]])
     y = np.interp(x, sec.x, sec.y)
@@ -70,7 +70,7 @@ def test_resume_of_a_rolling_rock_is_exact():
     rel = one_rock(r=0.4, x=1.0, rolling=True)
     full = run_one(sec, rel, restart_stations=[20.0])
     st = full.restart_state[:, 0]
-    assert st[0, core.RS_MODE] == core.CONTACT
+    assert st[0, columns.RS_MODE] == columns.CONTACT
     again = run_one(sec, rel, resume=(np.array([True]), st, full.restart_rng[:, 0]))
     np.testing.assert_allclose(again.x_end, full.x_end, rtol=1e-12)
     np.testing.assert_allclose(again.duration, full.duration, rtol=1e-12)

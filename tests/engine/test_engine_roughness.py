@@ -8,25 +8,26 @@ import numpy as np
 import pytest
 from numpy.testing import assert_allclose
 
-from rockfall_design.engine import Material, core
+from rockfall_design.engine import Material, columns
+from rockfall_design.engine.impact import impact
 from rockfall_design.engine.rng import next_uniform
 from rockfall_design.errors import InputError
 from rockfall_design.project import load_project_text
-from rockfall_design.simulation import section_from_project
+from rockfall_design.releases import section_from_project
 
 from ..engine_helpers import one_rock, run_one, section
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _impact(v, n, w, r, tilt_max, seed=12345, model=core.MODEL_RN_RT):
+def _impact(v, n, w, r, tilt_max, seed=12345, model=columns.MODEL_RN_RT):
     rng = np.array([seed], dtype=np.uint64)
-    return np.array(core.impact(v[0], v[1], w, n[0], n[1], r, model, 0.6, 0.8, 0.4, False,
+    return np.array(impact(v[0], v[1], w, n[0], n[1], r, model, 0.6, 0.8, 0.4, False,
                                 9.144, 0.0, rng, tilt_max))
 
 
 @pytest.mark.parametrize("direction", [1.0, -1.0])
-@pytest.mark.parametrize("model", [core.MODEL_SPANG, core.MODEL_RN_RT])
+@pytest.mark.parametrize("model", [columns.MODEL_SPANG, columns.MODEL_RN_RT])
 def test_height_tilts_the_normal_against_the_motion(direction, model):
     """The impact equals one on a normal turned by U * atan(h_r / r) against v_t."""
     r, h = 0.5, 0.2
@@ -55,7 +56,7 @@ def test_tilt_is_uniform_on_zero_to_atan_h_over_r():
         # Elastic rn_rt impact: the outgoing velocity is the mirror image of the
         # incoming one about the tilted plane, so the tilt can be read back.
         rng = np.array([seed * 7919 + 1], dtype=np.uint64)
-        vx, vy, _ = core.impact(3.0, -2.0, 0.0, n[0], n[1], r, core.MODEL_RN_RT, 1.0, 1.0, 0.0,
+        vx, vy, _ = impact(3.0, -2.0, 0.0, n[0], n[1], r, columns.MODEL_RN_RT, 1.0, 1.0, 0.0,
                                 False, 9.144, 0.0, rng, tilt_max)
         # The normal bisects the change of velocity.
         dv = np.array([vx - 3.0, vy + 2.0])
@@ -91,7 +92,7 @@ def test_project_file_takes_roughness_height():
     p = _project("\n    roughness_height_m: 0.15")
     assert p.materials["talus"].roughness_height_m == 0.15
     sec = section_from_project(p)
-    assert sec.material_table()[0, core.M_ROUGH_H] == 0.15
+    assert sec.material_table()[0, columns.M_ROUGH_H] == 0.15
     assert _project("").materials["talus"].roughness_height_m == 0.0
 
 

@@ -10,10 +10,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from numpy.testing import assert_array_equal
 
-from rockfall_design.engine import Material, Releases, Section, barrier_table, core, run_ensemble
-from rockfall_design.engine._jit import choose_cache_dir
+from rockfall_design.engine import Material, Releases, Section, barrier_table, columns, run_ensemble
+from rockfall_design.engine._jit import KEEP_SHARED, choose_cache_dir, shared_cache_dir
 from rockfall_design.engine.ensemble import THREADS_ENV, default_threads
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -35,7 +36,7 @@ def _case(n: int = 300):
         height=rng.choice([0.0, 2.0], n), vx=np.full(n, 0.6), vy=np.full(n, -0.8),
         spin=np.zeros(n), spin_rolling=rng.random(n) < 0.5,
     )
-    bars = [barrier_table(90.0, 2.0, 3e5, core.B_NET)]
+    bars = [barrier_table(90.0, 2.0, 3e5, columns.B_NET)]
     return sec, rel, bars
 
 
@@ -135,6 +136,71 @@ def test_read_only_package_and_home_cache_in_the_temp_dir(tmp_path):
     assert enabled == "True"
     assert Path(where) == tmpdir / f"rockfall-design-numba-{os.getuid()}"
     assert list(Path(where).rglob("rng.stream_start-*.nbi")), list(Path(where).rglob("*"))
+
+
+def test_shared_cache_is_named_by_the_engine_sources_and_private(tmp_path):
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "rock.py").write_text("a = 1\n")
+    home = tmp_path / "home"
+    where = shared_cache_dir({}, src, home)
+    assert where is not None and where.parent == home / ".cache" / "rockfall-design"
+    assert where.name.startswith("engine-") and len(where.name) == len("engine-") + 16
+    assert stat.S_IMODE(where.stat().st_mode) == 0o700
+    # The same sources elsewhere (another copy of the package): the same directory.
+    other = tmp_path / "other"
+    shutil.copytree(src, other)
+    assert shared_cache_dir({}, other, home) == where
+    # Other sources: another directory; XDG_CACHE_HOME is honoured; the user's
+    # NUMBA_CACHE_DIR wins; an unwritable home gives None (the old choice applies).
+    (other / "rock.py").write_text("a = 2\n")
+    assert shared_cache_dir({}, other, home) not in (None, where)
+    xdg = shared_cache_dir({"XDG_CACHE_HOME": str(tmp_path / "xdg")}, src, home)
+    assert xdg == tmp_path / "xdg" / "rockfall-design" / where.name
+    assert shared_cache_dir({"NUMBA_CACHE_DIR": "/x"}, src, home) is None
+    assert shared_cache_dir({}, src, _unwritable(tmp_path / "ro")) is None
+
+
+def test_shared_cache_keeps_the_latest_few_of_other_sources(tmp_path):
+    src = tmp_path / "src"
+    src.mkdir()
+    home = tmp_path / "home"
+    ours = home / ".cache" / "rockfall-design"
+    ours.mkdir(parents=True, mode=0o700)
+    old = [ours / f"engine-{i:016x}" for i in range(KEEP_SHARED + 3)]
+    for i, d in enumerate(old):
+        d.mkdir()
+        os.utime(d, (1_000_000 + i, 1_000_000 + i))
+    where = shared_cache_dir({}, src, home)
+    assert where.is_dir()
+    assert sorted(d for d in ours.iterdir() if d != where) == old[3:]
+
+
+def test_another_copy_of_the_same_sources_does_not_compile_again(tmp_path):
+    """A copy of the package elsewhere (as an installed one beside a checkout) loads the cache."""
+    from rockfall_design.engine import _jit, ensemble
+
+    here = Path(ensemble._run_batch._cache._cache_path)
+    if here.parent.name != "rockfall-design":
+        pytest.skip("the engine is not in the shared cache (NUMBA_CACHE_DIR, or no writable home)")
+    copy = tmp_path / "site"
+    shutil.copytree(ROOT / "rockfall_design", copy / "rockfall_design",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
+    env.update(PYTHONPATH=str(copy), PYTHONDONTWRITEBYTECODE="1")
+    code = (
+        "import rockfall_design as rd\n"
+        "from rockfall_design.engine import ensemble\n"
+        "print(rd.__file__, ensemble._run_batch._cache._cache_path)\n"
+        f"rd.simulate({str(ROOT / 'projects' / 'standard_slope.yaml')!r}, rocks=1)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         timeout=300, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    module, where = out.stdout.split()
+    assert Path(module).is_relative_to(copy) and Path(where) == here
+    assert "compiling" not in out.stderr, out.stderr
+    assert _jit.CACHE
 
 
 class _FakeCache:

@@ -175,9 +175,13 @@ def test_family_without_a_design_names_its_binding_check(registry):
     text = text.replace("catalogue_products.yaml", str(PROJECTS / "catalogue_products.yaml"))
     text = text.replace("catalogue_costs.yaml", str(PROJECTS / "catalogue_costs.yaml"))
     text = text.replace("max_measures: 2", "max_measures: 1").replace("count: 3000", "count: 600")
+    # The upper fence alone (the lower one's family is not what is asked about, and
+    # searching it took four fifths of the time); alone, its family is named "fence".
+    # Its reason is the same at seeds 7, 11 (the file's) and 23.
+    text = text.replace("    - type: fence\n      x: [113, 280]\n", "")
     project = load_project_text(text, "two_zones.yaml")
     res = optimise(project, registry)
-    upper = {a.name: a for a in res.alternatives}["fence 25-92 m"]
+    (upper,) = [a for a in res.alternatives if a.name == "fence"]
     assert upper.cost == math.inf and not upper.feasible
     # Rocks released from the rock band below the fence's range can never meet it.
     assert "rocks released below x = 92 m never meet a barrier in 25-92 m" in upper.reason

@@ -1,6 +1,6 @@
 """Done when (issue 13): a third-party barrier is designed with like a fence.
 
-A plugin written outside the repository against the README (a ring-net
+A plugin written outside the repository against the plugin guide (a ring-net
 barrier with its own height, capacity and number of ring layers, priced
 through the project's cost catalogue by its own quantity) is installed as a
 real distribution, listed by ``plugins --json`` with its parameters' units,
@@ -198,14 +198,14 @@ def test_a_quantity_without_a_price_is_found_before_any_search(installed, tmp_pa
 
 
 def test_the_readme_catch_net_is_a_candidate_searched_by_its_own_height(tmp_path, monkeypatch):
-    """The README's catch net, unchanged: its height is its own, not a product's."""
+    """The plugin guide's catch net, unchanged: its height is its own, not a product's."""
     import re
 
     from rockfall_design.design import build_candidate_measure, design_cost
-    from rockfall_design.simulation import section_from_project
+    from rockfall_design.releases import section_from_project
 
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
-    tail = readme[readme.index("`rockfall_catchnet/__init__.py`"):]
+    guide = (ROOT / "docs" / "plugins.md").read_text(encoding="utf-8")
+    tail = guide[guide.index("`rockfall_catchnet/__init__.py`"):]
     source = re.search(r"```python\n(.*?)```", tail, re.S).group(1)
     write_distribution(tmp_path / "site", "rockfall_catchnet", source, "catchnet",
                        dist_name="rockfall-catchnet")

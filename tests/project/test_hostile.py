@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 
 from rockfall_design.cli import main
-from rockfall_design.engine import EngineSettings, Material, core
+from rockfall_design.engine import EngineSettings, Material, columns
 
 from ..engine_helpers import one_rock, run_one, section
 from ..plugin_helpers import write_distribution
@@ -19,12 +19,12 @@ from .test_project import EXAMPLE, EXAMPLE_DATA, mutated_projects
 
 MAT = Material(restitution=0.35, friction=0.55, rolling_resistance=0.3, roughness_deg=5,
                sd_restitution=0.05, sd_friction=0.05)
-NAMED = {core.STOPPED, core.EXIT_UPSLOPE, core.EXIT_DOWNSLOPE, core.UNRESOLVED}
+NAMED = {columns.STOPPED, columns.EXIT_UPSLOPE, columns.EXIT_DOWNSLOPE, columns.UNRESOLVED}
 
 
 def _ok(res, sec):
     assert set(np.unique(res.status)) <= NAMED
-    stopped = res.status == core.STOPPED
+    stopped = res.status == columns.STOPPED
     assert np.all((res.x_end[stopped] >= sec.x[0]) & (res.x_end[stopped] <= sec.x[-1]))
 
 

@@ -1,7 +1,7 @@
 """A rockfall protection embankment: an earth mound with a steep uphill face.
 
 An example third-party measure for rockfall-design, and the plugin author's
-walk-through of the README ("Writing a plugin"). Unlike the built-in
+walk-through of the plugin guide (docs/plugins.md). Unlike the built-in
 barriers it changes the ground, and unlike a ditch or a berm it adds ground
 rather than taking it away: rocks that reach it strike a steep, reinforced
 uphill face and come to rest in front of it, or climb over its crest.
