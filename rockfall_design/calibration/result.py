@@ -48,9 +48,9 @@ def _warnings(parameters: list[dict[str, Any]], fit: dict[str, Any],
     out = []
     for p in parameters:
         if p["identified"] is False:
-            out.append(f"{p['path']}: not identified by the observations (its interval fills "
-                       f"{100 * p['width_share']:.0f} % of its range): do not use its value "
-                       "as if it were known")
+            out.append(f"{p['path']}: not identified by the observations (its refits spread "
+                       f"over its range, the interval {100 * p['width_share']:.0f} % of it): do "
+                       "not use its value as if it were known")
         if p["at_bound"]:
             out.append(f"{p['path']}: the best value lies at the {p['at_bound']} end of its "
                        "range: widen the range if the physics allows")

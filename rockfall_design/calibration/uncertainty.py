@@ -10,8 +10,9 @@ rocks happened to be simulated. The interval of a parameter is the central
 correlation between parameters is that of the refitted values.
 
 A parameter the observations cannot pin down lands anywhere in its range
-from one replicate to the next: its interval then fills most of the range,
-and it is flagged ``identified: false`` rather than given as a value.
+from one replicate to the next (each replicate's global search starts from
+its own hypercube): its interval then fills most of the range, and it is
+flagged ``identified: false`` rather than given as a value.
 
 Every replicate is an independent task with its own seed, run by
 :func:`~rockfall_design.study.executors.run_tasks`: the numbers are the
@@ -35,12 +36,14 @@ import numpy as np
 from ..study.scenarios import scenario_seed
 from .fit import FitProblem, fit
 
-__all__ = ["IDENTIFIED_SHARE", "ReplicateTask", "replicate_seed", "run_replicate",
+__all__ = ["IDENTIFIED_SD_SHARE", "ReplicateTask", "replicate_seed", "run_replicate",
            "summarise"]
 
-#: A parameter whose interval covers more than this share of its range is
-#: reported as not identified by the observations.
-IDENTIFIED_SHARE = 0.75
+#: A parameter whose refitted values spread with a standard deviation above
+#: this share of its range is reported as not identified by the observations:
+#: half the standard deviation of values spread evenly over the range
+#: (1 / sqrt(12) of it), which does not depend on how many replicates there are.
+IDENTIFIED_SD_SHARE = 0.5 / 12**0.5
 #: A best value within this share of its range from an end is "at the bound".
 AT_BOUND_SHARE = 0.02
 
@@ -113,8 +116,9 @@ def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence:
         ``low`` and ``high`` (the percentile interval; None without
         replicates), ``sd`` (of the refitted values), ``range``,
         ``width_share`` (interval width / range width), ``identified``
-        (False when the interval fills more than :data:`IDENTIFIED_SHARE`
-        of the range: the data do not pin it down), ``at_bound`` ("low",
+        (False when the refitted values spread over the range, their
+        standard deviation above :data:`IDENTIFIED_SD_SHARE` of it: the data
+        do not pin it down; None without replicates), ``at_bound`` ("low",
         "high" or None: the best value at an end of the range, which should
         then be widened). ``correlation``: the parameters' correlation
         matrix over the replicates (None with fewer than 3 replicates or
@@ -136,9 +140,9 @@ def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence:
             # The interval holds the best value itself (a percentile interval
             # of a skewed bootstrap may not, with few replicates).
             a, b = min(float(a), value), max(float(b), value)
-            share = (b - a) / width
-            entry.update(low=a, high=b, sd=float(boot[:, j].std(ddof=1)),
-                         width_share=share, identified=bool(share <= IDENTIFIED_SHARE))
+            sd = float(boot[:, j].std(ddof=1))
+            entry.update(low=a, high=b, sd=sd, width_share=(b - a) / width,
+                         identified=bool(sd <= IDENTIFIED_SD_SHARE * width))
         near = AT_BOUND_SHARE * width
         entry["at_bound"] = "low" if value <= lo + near else "high" if value >= hi - near else None
         params.append(entry)
