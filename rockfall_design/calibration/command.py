@@ -109,21 +109,45 @@ def _header(result: Any) -> str:
             "material parameter\n# includes the spread of its fit (see docs/calibration.md).\n")
 
 
-def cmd_calibrate(args: argparse.Namespace) -> int:
-    """Calibrate; exit 0 (a calibration has no pass or fail: its warnings say what to doubt)."""
-    from ..api import calibrate
-    from ..cli import _figure_files, _load, _plugins_for, _reserve
-    from ..outputs import OutputSet
-    from ..project import Project, dump_yaml
-    from .result import FIGURES
+def _one_section(args: argparse.Namespace) -> tuple[Any, Any]:
+    """The project of ``args.project`` and its plugins; a corridor is refused."""
+    from ..cli import _load, _plugins_for
+    from ..errors import InputError
+    from ..project import Project
 
     project = _load(args.project)
     if not isinstance(project, Project):
-        from ..errors import InputError
+        raise InputError(f"{args.project}: a corridor of sections: {args.command} one "
+                         "section's project at a time")
+    return project, _plugins_for(project, args)
 
-        raise InputError(f"{args.project}: a corridor of sections: calibrate one section's "
-                         "project at a time")
-    registry = _plugins_for(project, args)
+
+def _save_plots(args: argparse.Namespace, result: Any, files: Any) -> None:
+    """The --plot figures, written through the command's output set."""
+    if args.plot:
+        from ..report.figures import save_figures
+
+        save_figures(result.figures(), args.plot, args.plot_format, files)
+
+
+def _show(args: argparse.Namespace, summary: dict[str, Any], result: Any) -> int:
+    """The JSON (--json) or the report; exit 0 (the statistics say how good the fit is)."""
+    if args.json:
+        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
+    else:
+        result.print()
+    return int(ExitCode.OK)
+
+
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    """Calibrate; exit 0 (a calibration has no pass or fail: its warnings say what to doubt)."""
+    from ..api import calibrate
+    from ..cli import _figure_files, _reserve
+    from ..outputs import OutputSet
+    from ..project import dump_yaml
+    from .result import FIGURES
+
+    project, registry = _one_section(args)
     with OutputSet() as files:
         _reserve(files, args.out, OUT_FILES)
         _reserve(files, args.plot, _figure_files(FIGURES, args))
@@ -145,32 +169,18 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         if args.save_materials is not None:
             files.write_text(args.save_materials,
                              _header(result) + dump_yaml(result.materials_library()))
-        if args.plot:
-            from ..report.figures import save_figures
-
-            save_figures(result.figures(), args.plot, args.plot_format, files)
-    if args.json:
-        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
-    else:
-        result.print()
-    return int(ExitCode.OK)
+        _save_plots(args, result, files)
+    return _show(args, summary, result)
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
     """Compare; exit 0 (the statistics say how good the prediction is)."""
     from ..api import compare
-    from ..cli import _figure_files, _load, _plugins_for, _reserve
+    from ..cli import _figure_files, _reserve
     from ..outputs import OutputSet
-    from ..project import Project
     from .result import FIGURES
 
-    project = _load(args.project)
-    if not isinstance(project, Project):
-        from ..errors import InputError
-
-        raise InputError(f"{args.project}: a corridor of sections: compare one section's "
-                         "project at a time")
-    registry = _plugins_for(project, args)
+    project, registry = _one_section(args)
     with OutputSet() as files:
         _reserve(files, args.out, ("summary.json",))
         _reserve(files, args.plot, _figure_files(FIGURES[:1], args))
@@ -180,12 +190,5 @@ def cmd_compare(args: argparse.Namespace) -> int:
         if args.out:
             record = run_record(args, project, result.seed, result.rocks)
             files.write_json(args.out / "summary.json", {**summary, "run": record})
-        if args.plot:
-            from ..report.figures import save_figures
-
-            save_figures(result.figures(), args.plot, args.plot_format, files)
-    if args.json:
-        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
-    else:
-        result.print()
-    return int(ExitCode.OK)
+        _save_plots(args, result, files)
+    return _show(args, summary, result)
