@@ -55,7 +55,11 @@ TRUTH = {"materials.soil.restitution": (0.3, (0.05, 0.7)),
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--reps", type=int, default=20)
-    ap.add_argument("--inputs", type=int, default=2, choices=(1, 2, 3))
+    ap.add_argument("--inputs", type=int, default=2, choices=(1, 2, 3),
+                    help="fit the first N of soil restitution, soil rolling resistance, rock "
+                    "restitution")
+    ap.add_argument("--only", choices=list(TRUTH), default=None,
+                    help="fit this one input alone instead")
     ap.add_argument("--observed", type=int, default=41, help="observed blocks per repetition")
     ap.add_argument("--rocks", type=int, default=400, help="simulated rocks per evaluation")
     ap.add_argument("--bootstrap", type=int, default=40)
@@ -66,14 +70,15 @@ def main() -> None:
     from rockfall_design.calibration.fit import problem_for, simulated_stops
     from rockfall_design.project import load_project_text
 
-    paths = list(TRUTH)[: args.inputs]
+    paths = [args.only] if args.only else list(TRUTH)[: args.inputs]
     fit = "\n".join(f"    {p}: [{TRUTH[p][1][0]}, {TRUTH[p][1][1]}]" for p in paths)
     text = SITE.format(fit=fit, rocks=args.rocks, bootstrap=args.bootstrap)
     truth = {p: TRUTH[p][0] for p in paths}
     project = load_project_text(text, "site.yaml")
     maker = problem_for(project, {}, rocks=args.observed)
-    print(f"{args.reps} repetitions, {args.inputs} input(s), {args.observed} observed blocks, "
-          f"{args.rocks} rocks per evaluation, {args.bootstrap} bootstrap replicates")
+    print(f"{args.reps} repetitions, {len(paths)} input(s), {args.observed} observed blocks, "
+          f"{args.rocks} rocks per evaluation, {args.bootstrap} bootstrap replicates; "
+          f"fitted: {', '.join(paths)}")
     covered = {p: 0 for p in paths}
     errors = {p: [] for p in paths}
     widths = {p: [] for p in paths}

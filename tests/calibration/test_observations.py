@@ -146,3 +146,25 @@ def test_path_of_the_observations_is_relative_to_the_project(tmp_path):
 
     (tmp_path / "site.yaml").write_text(SITE)
     assert observed_file(load_project(tmp_path / "site.yaml")) == Path(tmp_path / "stops.csv")
+
+
+def test_deposit_points_become_stations_along_the_trace(tmp_path):
+    import importlib.util
+    import subprocess
+    import sys
+
+    script = Path(__file__).resolve().parents[2] / "examples" / "stops_from_points.py"
+    spec = importlib.util.spec_from_file_location("stops_from_points", script)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    # An L-shaped trace: 30 m east, then 40 m north.
+    trace = np.array([[0.0, 0.0], [30.0, 0.0], [30.0, 40.0]])
+    x, d = module.stations(np.array([[10.0, 2.0], [31.0, 20.0], [50.0, 45.0]]), trace)
+    assert_allclose(x, [10.0, 50.0, 70.0])
+    assert_allclose(d, [2.0, 1.0, np.hypot(20.0, 5.0)])
+    (tmp_path / "dep.csv").write_text("id,E,N,vol\n1,10,2,0.3\n2,31,20,0.5\n3,50,45,0.2\n")
+    (tmp_path / "trace.csv").write_text("e,n\n0,0\n30,0\n30,40\n")
+    subprocess.run([sys.executable, str(script), str(tmp_path / "dep.csv"),
+                    str(tmp_path / "trace.csv"), str(tmp_path / "stops.csv"), "--e", "E",
+                    "--n", "N", "--volume", "vol", "--corridor", "5"], check=True)
+    assert (tmp_path / "stops.csv").read_text() == "x,volume_m3\n10.00,0.3\n50.00,0.5\n"
