@@ -95,7 +95,7 @@ def run_calibration(
     replicates = run_tasks(run_replicate, tasks, workers=workers, scheduler=scheduler,
                            pool=pool, on_done=finished)
     runtime = time.perf_counter() - t0
-    parameters, correlation = summarise(problem, replicates, spec.confidence)
+    parameters, correlation = summarise(problem, replicates, spec.confidence, obs.n)
     stops = np.asarray(replicates[0]["stops"])
     return CalibrationResult(
         project=project, problem=problem, observations=obs, parameters=parameters,

@@ -6,8 +6,10 @@ search) to a resample of the observed stops (n drawn with replacement)
 with its own simulation seed, so that its spread holds both sources of
 error of the fitted value: which blocks happened to be observed, and which
 rocks happened to be simulated. The interval of a parameter is the central
-``confidence`` share of its B refitted values (percentile bootstrap); the
-correlation between parameters is that of the refitted values.
+share of its B refitted values (the expanded percentile interval, which
+widens the plain percentile one for a small number of observations, see
+:func:`expanded_tail`); the correlation between parameters is that of the
+refitted values.
 
 A parameter the observations cannot pin down lands anywhere in its range
 from one replicate to the next (each replicate's global search starts from
@@ -36,8 +38,8 @@ import numpy as np
 from ..study.scenarios import scenario_seed
 from .fit import FitProblem, fit
 
-__all__ = ["IDENTIFIED_SD_SHARE", "ReplicateTask", "replicate_seed", "run_replicate",
-           "summarise"]
+__all__ = ["IDENTIFIED_SD_SHARE", "ReplicateTask", "expanded_tail", "replicate_seed",
+           "run_replicate", "summarise"]
 
 #: A parameter whose refitted values spread with a standard deviation above
 #: this share of its range is reported as not identified by the observations:
@@ -96,8 +98,33 @@ def run_replicate(task: ReplicateTask) -> dict[str, Any]:
     return result
 
 
-def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence: float
-              ) -> tuple[list[dict[str, Any]], np.ndarray | None]:
+def expanded_tail(confidence: float, n: int) -> float:
+    """The tail share of the expanded percentile interval for ``n`` observations.
+
+    The percentile bootstrap of a small sample is too narrow by about the
+    factor that separates the plug-in from the unbiased variance and a
+    normal from a Student quantile; the expanded percentile interval takes
+    its bootstrap quantiles at ``Phi(-sqrt(n / (n - 1)) * t(1 - a/2, n - 1))``
+    instead of ``a / 2`` (a = 1 - confidence). For n = 41 at 95 %: 0.0204
+    instead of 0.025.
+
+    References
+    ----------
+    Hesterberg, T. C. (2015). What teachers should know about the bootstrap:
+    resampling in the undergraduate statistics curriculum. The American
+    Statistician 69(4), 371-386, sec. 4.3.
+    """
+    from scipy import stats
+
+    alpha = 1.0 - confidence
+    if n < 2:
+        return alpha / 2
+    z = np.sqrt(n / (n - 1)) * stats.t.ppf(1 - alpha / 2, n - 1)
+    return float(stats.norm.cdf(-z))
+
+
+def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence: float,
+              observed: int = 0) -> tuple[list[dict[str, Any]], np.ndarray | None]:
     """Each parameter's best value, interval and flags; the correlation of the parameters.
 
     Parameters
@@ -108,6 +135,9 @@ def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence:
         :func:`run_replicate`'s results, replicate 0 first.
     confidence
         Two-sided confidence of the intervals.
+    observed
+        Number of observed blocks (for :func:`expanded_tail`; 0: the plain
+        percentile interval).
 
     Returns
     -------
@@ -126,7 +156,7 @@ def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence:
     """
     best = replicates[0]["values"]
     boot = np.array([[r["values"][p] for p in problem.paths] for r in replicates[1:]])
-    alpha = 1.0 - confidence
+    tail = expanded_tail(confidence, observed) if observed else (1.0 - confidence) / 2
     params = []
     for j, path in enumerate(problem.paths):
         lo, hi = problem.low[j], problem.high[j]
@@ -136,7 +166,7 @@ def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence:
                                  "sd": None, "range": [lo, hi], "width_share": None,
                                  "identified": None}
         if len(boot) >= 2:
-            a, b = np.quantile(boot[:, j], [alpha / 2, 1 - alpha / 2])
+            a, b = np.quantile(boot[:, j], [tail, 1 - tail])
             # The interval holds the best value itself (a percentile interval
             # of a skewed bootstrap may not, with few replicates).
             a, b = min(float(a), value), max(float(b), value)

@@ -168,3 +168,16 @@ def test_deposit_points_become_stations_along_the_trace(tmp_path):
                     str(tmp_path / "trace.csv"), str(tmp_path / "stops.csv"), "--e", "E",
                     "--n", "N", "--volume", "vol", "--corridor", "5"], check=True)
     assert (tmp_path / "stops.csv").read_text() == "x,volume_m3\n10.00,0.3\n50.00,0.5\n"
+
+
+def test_expanded_percentile_tail():
+    # Hesterberg (2015): quantiles at Phi(-sqrt(n/(n-1)) t(0.975, n-1)); to 0.025 as n grows.
+    from scipy import stats
+
+    from rockfall_design.calibration.uncertainty import expanded_tail
+
+    z = np.sqrt(41 / 40) * stats.t.ppf(0.975, 40)
+    assert_allclose(expanded_tail(0.95, 41), stats.norm.cdf(-z))
+    assert 0.020 < expanded_tail(0.95, 41) < 0.021
+    assert expanded_tail(0.95, 20) < expanded_tail(0.95, 41) < expanded_tail(0.95, 10**6)
+    assert_allclose(expanded_tail(0.95, 10**6), 0.025, atol=1e-4)
