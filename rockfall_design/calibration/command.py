@@ -65,6 +65,9 @@ def add_calibrate_parser(sub: Any) -> None:
     p.add_argument("--save-materials", type=Path, metavar="FILE",
                    help="write the calibrated project's materials as a materials library "
                    "(materials: {library: FILE})")
+    p.add_argument("--keep-scatter", action="store_true",
+                   help="write calibrated.yaml and --save-materials with the materials' "
+                   "scatter as it was, without the spread of the fit")
     p.add_argument("--workers", type=_int_at_least(1, "number of workers"), metavar="N",
                    help="fit N replicates at once on the local pool (default: one per core)")
     p.add_argument("--pool", choices=("threads", "processes"), default="threads",
@@ -102,11 +105,14 @@ def run_record(args: argparse.Namespace, project: Any, seed: int, rocks: int
             "project": project.resolved_dict()}
 
 
-def _header(result: Any) -> str:
+def _header(result: Any, spread: bool) -> str:
+    scatter = ("the scatter of a fitted material parameter\n# includes the spread of its fit"
+               if spread else "the materials' scatter\n# is the project's, without the spread "
+               "of the fit")
     return (f"# Calibrated by rockfall-design calibrate from {result.observations.source} "
             f"({result.observations.n} blocks), seed {result.seed}.\n"
-            "# Fitted values and their intervals: parameters.csv; the scatter of a fitted "
-            "material parameter\n# includes the spread of its fit (see docs/calibration.md).\n")
+            f"# Fitted values and their intervals: parameters.csv; {scatter} "
+            "(see docs/calibration.md).\n")
 
 
 def _one_section(args: argparse.Namespace) -> tuple[Any, Any]:
@@ -158,17 +164,18 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                            scheduler=args.scheduler, pool=args.pool,
                            progress=sys.stderr.isatty(), registry=registry)
         summary = result.summary
+        spread = not args.keep_scatter
         if args.out:
             out: Path = args.out
-            files.write_text(out / "calibrated.yaml",
-                             _header(result) + dump_yaml(result.calibrated_data(str(out))))
+            files.write_text(out / "calibrated.yaml", _header(result, spread)
+                             + dump_yaml(result.calibrated_data(str(out), spread=spread)))
             files.write_csv(out / "parameters.csv", result.parameters_table())
             files.write_csv(out / "replicates.csv", result.replicates_table())
             record = run_record(args, project, result.seed, result.problem.rocks)
             files.write_json(out / "summary.json", {**summary, "run": record})
         if args.save_materials is not None:
-            files.write_text(args.save_materials,
-                             _header(result) + dump_yaml(result.materials_library()))
+            files.write_text(args.save_materials, _header(result, spread)
+                             + dump_yaml(result.materials_library(spread=spread)))
         _save_plots(args, result, files)
     return _show(args, summary, result)
 

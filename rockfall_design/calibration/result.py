@@ -193,7 +193,8 @@ class CalibrationResult:
                               "objective": r["objective"], "evaluations": r["evaluations"],
                               **r["values"]} for r in self.replicates])
 
-    def calibrated_data(self, relative_to: str | None = None) -> dict[str, Any]:
+    def calibrated_data(self, relative_to: str | None = None, spread: bool = True
+                        ) -> dict[str, Any]:
         """The calibrated project as data (``calibrated.yaml``).
 
         The fitted inputs set to their best values; the rocks' size fitted
@@ -204,6 +205,7 @@ class CalibrationResult:
         ground as well as its variability. The ``calibrate:`` section is
         kept, its ``observed`` file relative to ``relative_to`` (the
         directory the file is written to), so ``compare`` finds its levels.
+        ``spread=False`` keeps the project's scatter as it was.
 
         Notes
         -----
@@ -223,7 +225,7 @@ class CalibrationResult:
         for p in self.parameters:
             set_input(data, p["path"], p["value"])
             key = _material_key(p["path"])
-            if key is not None and p["sd"] is not None:
+            if spread and key is not None and p["sd"] is not None:
                 scatter = data["materials"][key[0]].setdefault("scatter", {})
                 old = float(scatter.get(key[1]) or 0.0)
                 scatter[key[1]] = float(math.hypot(old, p["sd"]))
@@ -235,15 +237,15 @@ class CalibrationResult:
             data["calibrate"] = {**spec, "observed": path}
         return data
 
-    def calibrated_project(self) -> Project:
+    def calibrated_project(self, spread: bool = True) -> Project:
         """:meth:`calibrated_data` validated as a project."""
         from ..study.paths import with_values
 
-        return with_values(self.problem.project, {}, base=self.calibrated_data())
+        return with_values(self.problem.project, {}, base=self.calibrated_data(spread=spread))
 
-    def materials_library(self) -> dict[str, Any]:
+    def materials_library(self, spread: bool = True) -> dict[str, Any]:
         """The calibrated project's materials, as a library file holds them."""
-        return self.calibrated_data()["materials"]
+        return self.calibrated_data(spread=spread)["materials"]
 
     def figures(self) -> dict[str, Figure]:
         """The stops' figure and the bootstrap cloud (:data:`FIGURES`)."""

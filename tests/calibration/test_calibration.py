@@ -100,6 +100,8 @@ def test_json_out_plot_and_calibrated_project(site, tmp_path, capsys):
     assert soil.restitution == pytest.approx(summary["parameters"][0]["value"])
     assert soil.scatter.restitution == pytest.approx(summary["parameters"][0]["sd"])
     assert yaml.safe_load(lib.read_text())["soil"]["restitution"] == soil.restitution
+    kept = rd.calibrate(site, workers=1, bootstrap=3).calibrated_project(spread=False)
+    assert kept.materials["soil"].scatter.restitution == 0.0
     # compare: the calibrated project against the same observations, nothing fitted
     code = main(["compare", str(out / "calibrated.yaml"), "--observed",
                  str(site.parent / "stops.csv"), "--json", "--rocks", "200"])

@@ -87,6 +87,7 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--bootstrap": ["bootstrap replicates", "calibrate.bootstrap", "no intervals"],
         "--out": ["calibrated.yaml", "parameters.csv", "replicates.csv", "summary.json", "DIR"],
         "--save-materials": ["materials library"],
+        "--keep-scatter": ["calibrated.yaml", "scatter as it was"],
         "--workers": ["local pool", "one per core"],
         "--pool": ["threads", "processes", "same results"],
         "--scheduler": ["Dask", "same results", "study extra"],
