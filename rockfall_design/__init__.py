@@ -48,7 +48,9 @@ from .safety import Check, SafetyConcept, SafetyParams
 # pytest11 entry point), does not import the engine, numba, scipy and pandas.
 _LAZY: dict[str, str] = {
     **dict.fromkeys(("CheckResult", "OptimiseResult", "SimulationResult", "check",
-                     "load_project", "optimise", "simulate", "study"), ".api"),
+                     "load_project", "optimise", "simulate", "study", "calibrate", "compare"),
+                  ".api"),
+    **dict.fromkeys(("CalibrationResult", "ComparisonResult"), ".calibration.result"),
     "StudyResult": ".study.result",
     **dict.fromkeys(("Corridor", "load_corridor"), ".project"),
     **dict.fromkeys(("fraction_lower_bound", "fraction_upper_bound", "quantile_lower_bound",
@@ -61,12 +63,15 @@ if TYPE_CHECKING:  # pragma: no cover
         CheckResult,
         OptimiseResult,
         SimulationResult,
+        calibrate,
         check,
+        compare,
         load_project,
         optimise,
         simulate,
         study,
     )
+    from .calibration.result import CalibrationResult, ComparisonResult
     from .judge.bounds import (
         fraction_lower_bound,
         fraction_upper_bound,
@@ -125,10 +130,14 @@ __all__ = [
     "check",
     "optimise",
     "study",
+    "calibrate",
+    "compare",
     "SimulationResult",
     "CheckResult",
     "OptimiseResult",
     "StudyResult",
+    "CalibrationResult",
+    "ComparisonResult",
     "Barrier",
     "BarrierBehaviour",
     "Check",

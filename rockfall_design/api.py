@@ -40,6 +40,8 @@ __all__ = [
     "check",
     "optimise",
     "study",
+    "calibrate",
+    "compare",
     "SimulationResult",
     "CheckResult",
     "OptimiseResult",
@@ -720,6 +722,111 @@ def study(
         return run_parametric(p, registry, **kw)
     with bar:
         return run_parametric(p, registry, **kw)
+
+
+def calibrate(
+    project: Project | str | os.PathLike[str],
+    *,
+    observed: str | os.PathLike[str] | None = None,
+    rocks: int | None = None,
+    bootstrap: int | None = None,
+    seed: int | None = None,
+    workers: int | None = None,
+    scheduler: Any = None,
+    progress: bool | Callable[[int, int], None] = False,
+    registry: Registry | None = None,
+    pool: str = "threads",
+) -> Any:
+    """Back-analyse the inputs of a project's ``calibrate:`` section (``calibrate`` command).
+
+    The fitted inputs are set by their paths (as in ``study.vary``); each
+    evaluation runs the engine with the same rocks (common random numbers)
+    and measures the distance of their stop positions from the observed
+    ones; the intervals come from a bootstrap of the observations, each
+    replicate refitted with its own seed (see :mod:`rockfall_design.calibration`).
+
+    Parameters
+    ----------
+    project : Project or path
+        A project with a ``calibrate:`` section, or the path of its file.
+    observed : path, optional
+        Another file of observed stops than ``calibrate.observed``.
+    rocks : int, optional
+        Simulated rocks per evaluation (default ``calibrate.rocks``).
+    bootstrap : int, optional
+        Bootstrap replicates (default ``calibrate.bootstrap``; 0: the fit only).
+    seed : int, optional
+        The calibration's seed (default ``rocks.seed``).
+    workers, scheduler, pool
+        Where the replicates run, as for :func:`study`; the numbers are the
+        same wherever they run.
+    progress : bool or callable
+        True: a progress bar on stderr; a callable is called as
+        ``progress(done, total)`` with replicates done.
+    registry : Registry, optional
+        The plugins (default: the installed ones).
+
+    Returns
+    -------
+    CalibrationResult
+        ``.summary`` (as ``--json``), ``.parameters``, ``.values``,
+        ``.calibrated_project()``, ``.figures()``, ``.print()``.
+    """
+    from .calibration.run import run_calibration
+
+    p = _project(project, registry or default_registry())
+    kw = dict(observed=observed, rocks=rocks, bootstrap=bootstrap, seed=seed, workers=workers,
+              scheduler=scheduler, pool=pool)
+    bar, callback = _replicate_progress(progress)
+    if bar is None:
+        return run_calibration(p, on_done=callback, **kw)
+    with bar:
+        return run_calibration(p, on_done=callback, **kw)
+
+
+def compare(
+    project: Project | str | os.PathLike[str],
+    observed: str | os.PathLike[str],
+    *,
+    rocks: int | None = None,
+    seed: int | None = None,
+    registry: Registry | None = None,
+) -> Any:
+    """How well a project predicts observed stops, nothing fitted (``rockfall-design compare``).
+
+    Parameters
+    ----------
+    project : Project or path
+        E.g. the ``calibrated.yaml`` of a calibration on another profile.
+    observed : path
+        CSV of the observed stops (as ``calibrate.observed``).
+    rocks, seed : int, optional
+        Simulated rocks and their seed (default ``rocks.count``, ``rocks.seed``).
+    registry : Registry, optional
+        The plugins (default: the installed ones).
+
+    Returns
+    -------
+    ComparisonResult
+        ``.summary`` (``fit``, ``levels``), ``.figures()``, ``.print()``.
+    """
+    from .calibration.run import run_comparison
+
+    p = _project(project, registry or default_registry())
+    kind = p.calibrate.distance if p.calibrate is not None else "energy"
+    confidence = p.calibrate.confidence if p.calibrate is not None else 0.95
+    return run_comparison(p, observed, rocks=rocks, seed=seed, kind=kind,
+                          confidence=confidence)
+
+
+def _replicate_progress(progress: bool | Callable[[int, int], None]) -> tuple[Any, Any]:
+    """(rich progress or None, callback(done, total) or None) of a calibration's replicates."""
+    if callable(progress):
+        return None, progress
+    if not progress:
+        return None, None
+    bar, update = _progress_callback(True, 0, stages=True)
+    return bar, (lambda done, total: update("fits (best + bootstrap)", done, total))
 
 
 def _study_progress(progress: bool | Callable[[int, int, int], None]) -> tuple[Any, Any]:

@@ -210,6 +210,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .study.command import add_study_parser
 
     add_study_parser(sub)
+    from .calibration.command import add_calibrate_parser
+
+    add_calibrate_parser(sub)
     plg = sub.add_parser(
         "plugins",
         help="list the measures, safety concepts and cost models of the installed plugins",

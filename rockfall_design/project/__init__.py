@@ -47,6 +47,8 @@ The package, one room each (the names above are all importable from here):
   candidates, residual, site, catalogues);
 - :mod:`.study`: the ``study:`` section (:class:`StudySpec`: inputs varied
   by their path, grid or Latin hypercube scenarios);
+- :mod:`.calibrate`: the ``calibrate:`` section (:class:`CalibrateSpec`:
+  observed stops, inputs fitted by their path with their ranges, levels);
 - :mod:`.model`: :class:`Project`, the whole file;
 - :mod:`.loading`: YAML with line numbers and limits, :func:`load_project`,
   :func:`load_project_text`, :func:`dump_yaml`, and :func:`load_corridor`
@@ -60,6 +62,7 @@ The package, one room each (the names above are all importable from here):
 # few private helpers used by rockfall_design.sources and the tests) are
 # re-exported by name.
 from ..errors import ProjectError as ProjectError
+from .calibrate import CalibrateSpec
 from .corridor import Corridor, CorridorSection, section_seed
 from .design import Design, DesignCosts, ResidualFraction, Site
 from .fields import Boolean as Boolean
@@ -138,6 +141,7 @@ __all__ = [
     "Range",
     "Sample",
     "StudySpec",
+    "CalibrateSpec",
     "load_project",
     "load_project_text",
 ]

@@ -15,6 +15,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, BeforeValidator, Field, PrivateAttr, model_validator
 
 from ..errors import ProjectError
+from .calibrate import CalibrateSpec
 from .design import Design
 from .fields import (
     _DEFAULT_CONCEPT,
@@ -72,6 +73,11 @@ class Project(_Model):
         None,
         description="A parametric study (rockfall-design study): inputs to vary by their "
         "path in this file, and the scenarios to run; none if absent.",
+    )
+    calibrate: CalibrateSpec | None = Field(
+        None,
+        description="A back-analysis (rockfall-design calibrate): observed stop positions "
+        "and the inputs fitted to them, by their path in this file; none if absent.",
     )
 
     _source: str = PrivateAttr(default="<string>")
@@ -163,6 +169,9 @@ class Project(_Model):
         if data.get("study") is None:
             # absent from files without a study, so their record and hash are as before
             data.pop("study", None)
+        if data.get("calibrate") is None:
+            # likewise: files without a calibration keep their record and hash
+            data.pop("calibrate", None)
         if self.design is not None and data.get("design") is not None:
             # the catalogues inline, so the record (and its hash) holds the figures used
             design = data["design"]

@@ -31,7 +31,7 @@ from ..errors import ProjectError
 from ..project import Project
 from ..project.messages import _describe, _did_you_mean, _to_project_error
 
-__all__ = ["ALIASES", "PathError", "check_study", "parse_path", "with_values"]
+__all__ = ["ALIASES", "PathError", "check_study", "parse_path", "set_input", "with_values"]
 
 # one key: anything but dots and brackets, then any number of [i]
 _SEGMENT = re.compile(r"([^.\[\]]+)((?:\[\d+\])*)")
@@ -141,6 +141,17 @@ def _set(data: dict[str, Any], path: str, value: Any) -> None:
             container[step] = value
         else:
             container = container[step]
+
+
+def set_input(data: dict[str, Any], path: str, value: Any) -> None:
+    """Set the input at ``path`` in resolved project data ``data`` (in place).
+
+    Raises
+    ------
+    PathError
+        If the path names no input of ``data``.
+    """
+    _set(data, path, value)
 
 
 def _validate(project: Project, data: dict[str, Any]) -> Project:

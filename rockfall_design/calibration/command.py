@@ -1,0 +1,201 @@
+"""The ``rockfall-design calibrate`` and ``compare`` commands: options, files, printing.
+
+Kept beside the calibration rather than in ``cli.py``, which only registers
+them; errors and exit codes are still ``cli.main``'s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from ..errors import ExitCode
+
+__all__ = ["add_calibrate_parser", "cmd_calibrate", "cmd_compare"]
+
+#: The files of calibrate --out DIR.
+OUT_FILES = ("calibrated.yaml", "parameters.csv", "replicates.csv", "summary.json")
+
+
+def _common(p: argparse.ArgumentParser, what: str) -> None:
+    """--rocks, --seed, --json, --plot, --plot-format of both commands."""
+    from ..cli import _formats, _positive_int, _seed
+
+    p.add_argument("--rocks", type=_positive_int, metavar="N",
+                   help=f"simulated rocks {what}")
+    p.add_argument("--seed", type=_seed, metavar="S",
+                   help="random seed (default: rocks.seed of the project); recorded")
+    p.add_argument("--json", action="store_true",
+                   help="print the result as one JSON object on stdout instead of the report")
+    p.add_argument("--plot", type=Path, metavar="DIR",
+                   help="draw calibration_stops (ECDF and histogram of the observed and "
+                   "simulated stops) into DIR; calibrate also calibration_cloud (the bootstrap "
+                   "cloud of the fitted inputs)")
+    p.add_argument("--plot-format", type=_formats, default=("png",), metavar="FMT[,FMT]",
+                   help="file formats of the --plot figures: png, svg, pdf (default: png)")
+
+
+def add_calibrate_parser(sub: Any) -> None:
+    """Add the ``calibrate`` and ``compare`` commands to the subparsers ``sub``."""
+    from ..cli import _add_block_option, _int_at_least
+
+    p = sub.add_parser(
+        "calibrate",
+        help="fit ground parameters to observed stop positions (the calibrate: section)",
+        description="Back-analysis: fit the inputs named in the project's calibrate: section "
+        "to the observed stop positions (common random numbers, a global then a local "
+        "search), with intervals from a bootstrap of the observations (each replicate refitted "
+        "with its own seed), the correlation of the inputs, and a flag for inputs the "
+        "observations do not pin down.",
+    )
+    p.add_argument("project", type=Path, help="project file (YAML) with a calibrate: section")
+    _common(p, "per evaluation (default: calibrate.rocks)")
+    p.add_argument("--observed", type=Path, metavar="CSV",
+                   help="observed stops to fit (default: calibrate.observed)")
+    p.add_argument("--bootstrap", type=_int_at_least(0, "number of replicates", 2000),
+                   metavar="B", help="bootstrap replicates (default: calibrate.bootstrap; 0: "
+                   "the best fit only, no intervals)")
+    p.add_argument("--out", type=Path, metavar="DIR",
+                   help="write calibrated.yaml (the project with the fitted values, their "
+                   "spread added to the materials' scatter), parameters.csv, replicates.csv "
+                   "and summary.json (with the run record) into DIR")
+    p.add_argument("--save-materials", type=Path, metavar="FILE",
+                   help="write the calibrated project's materials as a materials library "
+                   "(materials: {library: FILE})")
+    p.add_argument("--keep-scatter", action="store_true",
+                   help="write calibrated.yaml and --save-materials with the materials' "
+                   "scatter as it was, without the spread of the fit")
+    p.add_argument("--workers", type=_int_at_least(1, "number of workers"), metavar="N",
+                   help="fit N replicates at once on the local pool (default: one per core)")
+    p.add_argument("--pool", choices=("threads", "processes"), default="threads",
+                   help="the local pool: threads (default) or processes (same results)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="fit the replicates on the Dask cluster of this scheduler instead "
+                   "(same results); needs the study extra")
+    _add_block_option(p)
+    p.set_defaults(func=cmd_calibrate)
+
+    c = sub.add_parser(
+        "compare",
+        help="how well a project predicts observed stop positions (nothing fitted)",
+        description="Run the project as it is and compare its stop positions with observed "
+        "ones: distance, Kolmogorov-Smirnov statistic and p-value, and the share of each "
+        "level of the project's calibrate: section. This validates a calibration on a "
+        "second profile or on held-out blocks.",
+    )
+    c.add_argument("project", type=Path, help="project file (YAML), e.g. a calibrated.yaml")
+    c.add_argument("--observed", type=Path, metavar="CSV", required=True,
+                   help="the observed stops (x, optionally volume_m3 or mass_kg)")
+    _common(c, "(default: rocks.count of the project)")
+    c.add_argument("--out", type=Path, metavar="DIR", help="write summary.json into DIR")
+    _add_block_option(c)
+    c.set_defaults(func=cmd_compare)
+
+
+def run_record(args: argparse.Namespace, project: Any, seed: int, rocks: int
+               ) -> dict[str, Any]:
+    """What is needed to repeat the command exactly: version, seed, rocks, project."""
+    from .. import __version__
+
+    return {"command": args.command, "version": __version__, "seed": seed, "rocks": rocks,
+            "project_file": str(args.project), "project_hash": project.resolved_hash(),
+            "project": project.resolved_dict()}
+
+
+def _header(result: Any, spread: bool) -> str:
+    scatter = ("the scatter of a fitted material parameter\n# includes the spread of its fit"
+               if spread else "the materials' scatter\n# is the project's, without the spread "
+               "of the fit")
+    return (f"# Calibrated by rockfall-design calibrate from {result.observations.source} "
+            f"({result.observations.n} blocks), seed {result.seed}.\n"
+            f"# Fitted values and their intervals: parameters.csv; {scatter} "
+            "(see docs/calibration.md).\n")
+
+
+def _one_section(args: argparse.Namespace) -> tuple[Any, Any]:
+    """The project of ``args.project`` and its plugins; a corridor is refused."""
+    from ..cli import _load, _plugins_for
+    from ..errors import InputError
+    from ..project import Project
+
+    project = _load(args.project)
+    if not isinstance(project, Project):
+        raise InputError(f"{args.project}: a corridor of sections: {args.command} one "
+                         "section's project at a time")
+    return project, _plugins_for(project, args)
+
+
+def _save_plots(args: argparse.Namespace, result: Any, files: Any) -> None:
+    """The --plot figures, written through the command's output set."""
+    if args.plot:
+        from ..report.figures import save_figures
+
+        save_figures(result.figures(), args.plot, args.plot_format, files)
+
+
+def _show(args: argparse.Namespace, summary: dict[str, Any], result: Any) -> int:
+    """The JSON (--json) or the report; exit 0 (the statistics say how good the fit is)."""
+    if args.json:
+        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
+    else:
+        result.print()
+    return int(ExitCode.OK)
+
+
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    """Calibrate; exit 0 (a calibration has no pass or fail: its warnings say what to doubt)."""
+    from ..api import calibrate
+    from ..cli import _figure_files, _reserve
+    from ..outputs import OutputSet
+    from ..project import dump_yaml
+    from .result import FIGURES
+
+    project, registry = _one_section(args)
+    with OutputSet() as files:
+        _reserve(files, args.out, OUT_FILES)
+        _reserve(files, args.plot, _figure_files(FIGURES, args))
+        if args.save_materials is not None:
+            files.reserve(args.save_materials)
+        result = calibrate(project, observed=args.observed, rocks=args.rocks,
+                           bootstrap=args.bootstrap, seed=args.seed, workers=args.workers,
+                           scheduler=args.scheduler, pool=args.pool,
+                           progress=sys.stderr.isatty(), registry=registry)
+        summary = result.summary
+        spread = not args.keep_scatter
+        if args.out:
+            out: Path = args.out
+            files.write_text(out / "calibrated.yaml", _header(result, spread)
+                             + dump_yaml(result.calibrated_data(str(out), spread=spread)))
+            files.write_csv(out / "parameters.csv", result.parameters_table())
+            files.write_csv(out / "replicates.csv", result.replicates_table())
+            record = run_record(args, project, result.seed, result.problem.rocks)
+            files.write_json(out / "summary.json", {**summary, "run": record})
+        if args.save_materials is not None:
+            files.write_text(args.save_materials, _header(result, spread)
+                             + dump_yaml(result.materials_library(spread=spread)))
+        _save_plots(args, result, files)
+    return _show(args, summary, result)
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    """Compare; exit 0 (the statistics say how good the prediction is)."""
+    from ..api import compare
+    from ..cli import _figure_files, _reserve
+    from ..outputs import OutputSet
+    from .result import FIGURES
+
+    project, registry = _one_section(args)
+    with OutputSet() as files:
+        _reserve(files, args.out, ("summary.json",))
+        _reserve(files, args.plot, _figure_files(FIGURES[:1], args))
+        result = compare(project, args.observed, rocks=args.rocks, seed=args.seed,
+                         registry=registry)
+        summary = result.summary
+        if args.out:
+            record = run_record(args, project, result.seed, result.rocks)
+            files.write_json(args.out / "summary.json", {**summary, "run": record})
+        _save_plots(args, result, files)
+    return _show(args, summary, result)

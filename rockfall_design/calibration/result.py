@@ -1,0 +1,322 @@
+"""Results of a calibration and of a comparison: JSON, tables, calibrated project, figures.
+
+:class:`CalibrationResult` holds the fitted parameters with their
+intervals and flags, the correlation between them, the fit statistics and
+level shares at the best fit, and every bootstrap replicate; it writes the
+calibrated project (:meth:`CalibrationResult.calibrated_data`).
+:class:`ComparisonResult` holds the same statistics for a project that was
+not fitted to the observations (``compare``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..project import Project
+from .distances import LevelShare
+from .fit import FitProblem
+from .observations import Observations, observed_file
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+    from matplotlib.figure import Figure
+    from rich.console import Console
+
+__all__ = ["CalibrationResult", "ComparisonResult", "FIGURES", "SCATTER_KEYS"]
+
+#: The figures of ``calibrate --plot`` by file stem (``compare`` draws the first).
+FIGURES = ("calibration_stops", "calibration_cloud")
+#: Material parameters that have a per-impact scatter in the project file.
+SCATTER_KEYS = ("restitution", "friction", "rolling_resistance")
+
+
+def _material_key(path: str) -> tuple[str, str] | None:
+    """(material, parameter) of a path ``materials.NAME.PARAM`` with a scatter, else None."""
+    parts = path.split(".")
+    if len(parts) == 3 and parts[0] == "materials" and parts[2] in SCATTER_KEYS:
+        return parts[1], parts[2]
+    return None
+
+
+def _warnings(parameters: list[dict[str, Any]], fit: dict[str, Any],
+              levels: list[LevelShare]) -> list[str]:
+    """What a reader of the calibration must not miss, one sentence each."""
+    out = []
+    for p in parameters:
+        if p["identified"] is False:
+            out.append(f"{p['path']}: not identified by the observations (its refits spread "
+                       f"over its range, the interval {100 * p['width_share']:.0f} % of it): do "
+                       "not use its value as if it were known")
+        if p["at_bound"]:
+            out.append(f"{p['path']}: the best value lies at the {p['at_bound']} end of its "
+                       "range: widen the range if the physics allows")
+    if fit.get("beyond_section", 0.0) > 0.05:
+        out.append(f"{100 * fit['beyond_section']:.0f} % of the simulated rocks leave the "
+                   "section at its lower end, where no block was observed")
+    for share in levels:
+        if not share.consistent:
+            out.append(f"level {share.name}: the simulated share {share.simulated_share:.2f} is "
+                       f"outside the observed share's interval [{share.low:.2f}, "
+                       f"{share.high:.2f}]")
+    return out
+
+
+@dataclass
+class ComparisonResult:
+    """How a project predicts observed stops, with nothing fitted (``compare``)."""
+
+    project: Project
+    observations: Observations
+    fit: dict[str, Any]
+    levels: list[LevelShare]
+    simulated: np.ndarray
+    seed: int
+    rocks: int
+    sizes: dict[str, Any] | None = None
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """``compare --json``: ``fit``, ``levels``, ``observations``, ``seed``, ``rocks``."""
+        return {
+            "project": self.project.name,
+            "observations": {"file": self.observations.source, "count": self.observations.n,
+                             "sizes": self.sizes},
+            "fit": self.fit,
+            "levels": [s.as_dict() for s in self.levels],
+            "seed": self.seed,
+            "rocks": self.rocks,
+            "warnings": _warnings([], self.fit, self.levels),
+        }
+
+    def figures(self) -> dict[str, Figure]:
+        """The stop positions' figure (:data:`FIGURES` [0])."""
+        from .figures import stops_figure
+
+        levels = {s.name: s.x for s in self.levels}
+        return {FIGURES[0]: stops_figure(self.observations.x, self.simulated, levels,
+                                         f"{self.project.name}: {self.observations.source}")}
+
+    def print(self, console: Console | None = None) -> None:
+        """The fit statistics and the levels as rich tables."""
+        _print_fit(self.project.name, self.fit, self.levels, console,
+                   f"{self.observations.n} observed blocks, {self.rocks:,} simulated rocks, "
+                   f"seed {self.seed}")
+
+
+@dataclass
+class CalibrationResult:
+    """A calibration: fitted parameters with intervals, fit statistics, replicates.
+
+    Attributes
+    ----------
+    parameters : list of dict
+        Per fitted input (:func:`~.uncertainty.summarise`): ``path``,
+        ``value``, ``low``, ``high``, ``sd``, ``range``, ``width_share``,
+        ``identified``, ``at_bound``.
+    correlation : ndarray or None
+        The parameters' correlation over the bootstrap replicates.
+    fit : dict
+        :func:`~.distances.fit_statistics` at the best fit.
+    levels : list of LevelShare
+    replicates : list of dict
+        Replicate 0 (the fit) and the bootstrap replicates.
+    simulated : ndarray
+        The simulated stops at the best fit (m).
+    """
+
+    project: Project
+    problem: FitProblem
+    observations: Observations
+    parameters: list[dict[str, Any]]
+    correlation: np.ndarray | None
+    replicates: list[dict[str, Any]]
+    fit: dict[str, Any]
+    levels: list[LevelShare]
+    simulated: np.ndarray
+    seed: int
+    confidence: float
+    sizes: dict[str, Any] | None = None
+    runtime_s: float = 0.0
+    _figures: dict[str, Any] = field(default_factory=dict, repr=False)
+
+    @property
+    def values(self) -> dict[str, float]:
+        """Path -> best value."""
+        return {p["path"]: p["value"] for p in self.parameters}
+
+    @property
+    def bootstrap(self) -> np.ndarray:
+        """(B, d) refitted values of the bootstrap replicates, in the order of the paths."""
+        return np.array([[r["values"][p] for p in self.problem.paths]
+                         for r in self.replicates[1:]]).reshape(-1, len(self.problem.paths))
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """``calibrate --json``."""
+        corr = None
+        if self.correlation is not None:
+            corr = {"paths": list(self.problem.paths),
+                    "matrix": [[float(v) for v in row] for row in self.correlation]}
+        return {
+            "project": self.project.name,
+            "parameters": self.parameters,
+            "correlation": corr,
+            "fit": self.fit,
+            "levels": [s.as_dict() for s in self.levels],
+            "observations": {"file": self.observations.source, "count": self.observations.n,
+                             "sizes": self.sizes},
+            "method": {"distance": self.problem.kind, "rocks": self.problem.rocks,
+                       "bootstrap": len(self.replicates) - 1, "confidence": self.confidence,
+                       "interval": "percentile bootstrap, each replicate refitted with its own "
+                       "simulation seed", "seed": self.seed,
+                       "evaluations": int(sum(r["evaluations"] for r in self.replicates))},
+            "warnings": _warnings(self.parameters, self.fit, self.levels),
+        }
+
+    def parameters_table(self) -> pd.DataFrame:
+        """One row per fitted input (``parameters.csv``)."""
+        import pandas as pd
+
+        rows = [{k: (v if not isinstance(v, list) else f"{v[0]:g}..{v[1]:g}")
+                 for k, v in p.items()} for p in self.parameters]
+        return pd.DataFrame(rows)
+
+    def replicates_table(self) -> pd.DataFrame:
+        """One row per replicate (``replicates.csv``): index, seed, objective, values."""
+        import pandas as pd
+
+        return pd.DataFrame([{"replicate": r["index"], "seed": r["seed"],
+                              "objective": r["objective"], "evaluations": r["evaluations"],
+                              **r["values"]} for r in self.replicates])
+
+    def calibrated_data(self, relative_to: str | None = None, spread: bool = True
+                        ) -> dict[str, Any]:
+        """The calibrated project as data (``calibrated.yaml``).
+
+        The fitted inputs set to their best values; the rocks' size fitted
+        to the observed blocks' (if they had sizes); for a fitted material
+        parameter with a per-impact scatter, the scatter widened by the
+        bootstrap's standard deviation of the fitted value (added in
+        quadrature), so that a later run carries the uncertainty of the
+        ground as well as its variability. The ``calibrate:`` section is
+        kept, its ``observed`` file relative to ``relative_to`` (the
+        directory the file is written to), so ``compare`` finds its levels.
+        ``spread=False`` keeps the project's scatter as it was.
+
+        Notes
+        -----
+        A per-impact scatter is drawn anew at every impact, whereas the
+        uncertainty of a calibrated mean is one unknown value for the whole
+        slope: the widened scatter is the simple way to carry it into every
+        later command. A study (``study:`` with the interval's ends in
+        ``vary``) is the rigorous one, and the intervals in ``--json`` give
+        its values.
+        """
+        import copy
+        import os
+
+        from ..study.paths import set_input
+
+        data = copy.deepcopy(self.problem.base)
+        for p in self.parameters:
+            set_input(data, p["path"], p["value"])
+            key = _material_key(p["path"])
+            if spread and key is not None and p["sd"] is not None:
+                scatter = data["materials"][key[0]].setdefault("scatter", {})
+                old = float(scatter.get(key[1]) or 0.0)
+                scatter[key[1]] = float(math.hypot(old, p["sd"]))
+        spec = self.project.resolved_dict().get("calibrate")
+        if spec is not None:
+            path = os.fspath(observed_file(self.project).resolve())
+            if relative_to is not None:
+                path = os.path.relpath(path, relative_to)
+            data["calibrate"] = {**spec, "observed": path}
+        return data
+
+    def calibrated_project(self, spread: bool = True) -> Project:
+        """:meth:`calibrated_data` validated as a project."""
+        from ..study.paths import with_values
+
+        return with_values(self.problem.project, {}, base=self.calibrated_data(spread=spread))
+
+    def materials_library(self, spread: bool = True) -> dict[str, Any]:
+        """The calibrated project's materials, as a library file holds them."""
+        return self.calibrated_data(spread=spread)["materials"]
+
+    def figures(self) -> dict[str, Figure]:
+        """The stops' figure and the bootstrap cloud (:data:`FIGURES`)."""
+        from .figures import cloud_figure, stops_figure
+
+        levels = {s.name: s.x for s in self.levels}
+        return {
+            FIGURES[0]: stops_figure(self.observations.x, self.simulated, levels,
+                                     f"{self.project.name}: best fit"),
+            FIGURES[1]: cloud_figure(self.problem.paths, self.bootstrap, self.parameters),
+        }
+
+    def print(self, console: Console | None = None) -> None:
+        """The parameters, the fit and the levels as rich tables."""
+        from rich.table import Table
+
+        from ..report.terminal import fitted_console
+
+        t = Table(title=f"fitted inputs ({100 * self.confidence:.0f} % intervals, "
+                  f"{len(self.replicates) - 1} bootstrap replicates)")
+        for col in ("input", "value", "low", "high", "range", "identified"):
+            t.add_column(col, justify="left" if col in ("input", "identified") else "right")
+        for p in self.parameters:
+            def num(v: Any) -> str:
+                return "-" if v is None else f"{v:.3g}"
+            ident = {True: "yes", False: "[red]NO[/red]", None: "-"}[p["identified"]]
+            t.add_row(p["path"], num(p["value"]), num(p["low"]), num(p["high"]),
+                      f"{p['range'][0]:g}..{p['range'][1]:g}", ident)
+        console = console or fitted_console(t)
+        console.print(t)
+        if self.correlation is not None:
+            c = Table(title="correlation of the fitted inputs (bootstrap)")
+            c.add_column("")
+            for j in range(len(self.problem.paths)):
+                c.add_column(str(j + 1), justify="right")
+            for i, path in enumerate(self.problem.paths):
+                c.add_row(f"{i + 1} {path}", *(f"{v:+.2f}" for v in self.correlation[i]))
+            console.print(c)
+        _print_fit(self.project.name, self.fit, self.levels, console,
+                   f"{self.observations.n} observed blocks, {self.problem.rocks:,} rocks per "
+                   f"evaluation, seed {self.seed}, {self.runtime_s:.1f} s")
+        for w in self.summary["warnings"]:
+            console.print(f"[yellow]warning:[/yellow] {w}")
+
+
+def _print_fit(name: str, fit: dict[str, Any], levels: list[LevelShare],
+               console: Console | None, head: str) -> None:
+    """The fit statistics and the level shares (shared by calibrate and compare)."""
+    from rich.table import Table
+
+    from ..report.terminal import fitted_console
+
+    t = Table(title=f"{name}: observed and simulated stops ({head})")
+    for col in ("", "count", "mean", "p5", "p25", "p50", "p75", "p95"):
+        t.add_column(col, justify="left" if not col else "right")
+    for label in ("observed", "simulated"):
+        d = fit[label]
+        t.add_row(label, f"{d['count']:,}", *(f"{d[k]:.1f}" for k in
+                                             ("mean_m", "p5_m", "p25_m", "p50_m", "p75_m",
+                                              "p95_m")))
+    console = console or fitted_console(t)
+    console.print(t)
+    console.print(f"{fit['distance_kind']} distance {fit['distance']:.2f} m; Kolmogorov-Smirnov "
+                  f"D = {fit['ks_statistic']:.3f}, p = {fit['ks_pvalue']:.3g}")
+    if levels:
+        lt = Table(title="levels: share of the stops")
+        for col in ("level", "x (m)", "observed", "interval", "simulated", ""):
+            lt.add_column(col, justify="left" if col in ("level", "") else "right")
+        for s in levels:
+            lt.add_row(s.name, f"{s.x[0]:g}..{s.x[1]:g}",
+                       f"{s.observed_share:.2f} ({s.observed_count})",
+                       f"{s.low:.2f}..{s.high:.2f}", f"{s.simulated_share:.2f}",
+                       "" if s.consistent else "[red]outside[/red]")
+        console.print(lt)
