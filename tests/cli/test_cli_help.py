@@ -61,6 +61,7 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--block": ["plugin"],
         "--plot-format": ["png", "svg", "pdf", "--plot"],
         "--report": ["report.html", "report.md", "DIR"],
+        "--max-rocks": ["last look", "design.max_rocks", "marginal", "rocks would decide it"],
     },
     "study": {
         "project": ["project file", "study:"],
