@@ -446,7 +446,7 @@ def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
     try:
         from .inputs import read_text
 
-        recorded = json.loads(read_text(path))
+        recorded = json.loads(read_text(path, "summary to repeat"))
         run = recorded["run"]
         text = dump_yaml(run["project"])
         seed, rocks = int(run["seed"]), int(run["rocks"])
@@ -761,6 +761,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     committed_before = committed_sets()
+    from .inputs import forget_inputs
+
+    forget_inputs()  # the files this command reads are noted anew
     handled = [signal.SIGTERM]
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         # An ignored SIGINT (a background job of a non-interactive shell) stays so.

@@ -465,6 +465,9 @@ class _DxfSection(_Section):
                 "python -m pip install 'rockfall-design[dxf]' (or '.[dxf]' in the repository)",
             ) from None
         _check_file(path, where, ("slope", "dxf"), "drawing")
+        from .inputs import note_input
+
+        note_input(path, "survey drawing")
         try:
             doc = ezdxf.readfile(path)
         except Exception as exc:  # noqa: BLE001 - the parser of an untrusted file

@@ -524,7 +524,7 @@ def load_corridor(path: str | os.PathLike[str]) -> "Corridor | Project":
 def _read_project(source: str) -> str:
     """The text of a project file; one located line when it cannot be read."""
     try:
-        return read_text(source)
+        return read_text(source, "project file")
     except UnicodeDecodeError as exc:
         raise ProjectError(
             source, None, "", f"cannot read file: not UTF-8 text ({exc.reason})"
