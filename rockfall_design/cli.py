@@ -278,12 +278,23 @@ def _rich_progress(elapsed: bool) -> Any:
 
 
 def _progress(console_needed: bool, total: int):
-    """A rich progress bar on stderr for long interactive runs, else nothing."""
+    """A rich progress bar on stderr for long interactive runs (or None), and its callback.
+
+    The callback is also a safe point: between batches of rocks it stops the
+    run if an interrupt was noted whose exception got lost.
+    """
+    from .outputs import check_interrupt
+
     if not console_needed:
-        return None, None
+        return None, (lambda done: check_interrupt())
     prog = _rich_progress(elapsed=False)
     task = prog.add_task("rocks", total=total)
-    return prog, (lambda done: prog.update(task, completed=done))
+
+    def update(done: int) -> None:
+        check_interrupt()
+        prog.update(task, completed=done)
+
+    return prog, update
 
 
 def _run(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:
@@ -296,7 +307,7 @@ def _run(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:
     kw.update(rocks=n, seed=args.seed, trajectories=DEFAULT_TRAJECTORIES if drawn else 0)
     prog, callback = _progress(sys.stderr.isatty() and n >= 20_000, n)
     if prog is None:
-        return run(project, progress=False, **kw)
+        return run(project, progress=callback, **kw)
     with prog:
         return run(project, progress=callback, **kw)
 
@@ -588,7 +599,8 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     n = args.rocks or project.rocks.count
     prog, callback = _stage_progress(sys.stderr.isatty())
     if prog is None:
-        report = optimise(project, rocks=n, seed=args.seed, registry=registry)
+        report = optimise(project, rocks=n, seed=args.seed, registry=registry,
+                          progress=callback)
     else:
         with prog:
             report = optimise(project, rocks=n, seed=args.seed, registry=registry,
@@ -636,13 +648,20 @@ def print_optimised(result: Any, project: Any) -> None:
 
 
 def _stage_progress(interactive: bool):
-    """A rich progress display of the optimiser's stages on stderr."""
+    """A rich progress display of the optimiser's stages on stderr (or None), and its callback.
+
+    The callback is also a safe point, between families: it stops the run if
+    an interrupt was noted whose exception got lost.
+    """
+    from .outputs import check_interrupt
+
     if not interactive:
-        return None, None
+        return None, (lambda stage, done, total: check_interrupt())
     prog = _rich_progress(elapsed=True)
     tasks: dict[str, Any] = {}
 
     def callback(stage: str, done: int, total: int) -> None:
+        check_interrupt()
         label = {"search": "searching families", "check": "exact and fresh checks"}.get(
             stage, stage)
         if stage not in tasks:
@@ -701,6 +720,12 @@ def _on_signal(signum: int, frame: Any) -> None:
     # discarded and the previous results stay as they were.
     if _exiting[0]:
         return  # the command is over, its output complete: nothing to stop
+    from .outputs import note_interrupt
+
+    # Noted first: the exception may be swallowed where it lands (numpy does,
+    # in its __array_ufunc__ lookup); the note stops the next safe point and
+    # every commit all the same.
+    note_interrupt(signum)
     raise _Interrupted(signum)
 
 
@@ -756,7 +781,7 @@ def _silence_stdout() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rockfall-design`` console script."""
-    from .outputs import committed_sets
+    from .outputs import check_interrupt, committed_sets, forget_interrupts
 
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -764,6 +789,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from .inputs import forget_inputs
 
     forget_inputs()  # the files this command reads are noted anew
+    forget_interrupts()
     handled = [signal.SIGTERM]
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         # An ignored SIGINT (a background job of a non-interactive shell) stays so.
@@ -774,6 +800,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         code = int(args.func(args))
         sys.stdout.flush()  # here, where a failure can still be reported
+        # An interrupt whose exception was swallowed: the command still ends as interrupted.
+        check_interrupt()
         return code
     except RockfallError as exc:
         if isinstance(exc, _StdoutFailed):
@@ -795,6 +823,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         # Set first, without a call: a signal from here on cannot raise.
         _exiting[0] = True
+        forget_interrupts()  # this command's: they must not stop what the process does next
         sys.stdout = stdout
         for s, handler in previous.items():
             # Run as the program (no argv), the process exits next: a Ctrl-C

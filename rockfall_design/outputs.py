@@ -48,14 +48,17 @@ from pathlib import Path
 from types import FrameType, TracebackType
 from typing import IO, Any, Literal
 
-from .errors import InputError
+from .errors import InputError, Interrupted
 
 __all__ = [
     "MANIFEST",
     "OutputError",
     "OutputSet",
     "atomic_writer",
+    "check_interrupt",
     "committed_sets",
+    "forget_interrupts",
+    "note_interrupt",
     "write_text",
     "write_json",
     "write_csv",
@@ -73,6 +76,40 @@ MANIFEST = ".rockfall-design-outputs.json"
 # How many non-empty output sets this process has committed (see
 # committed_sets()); only ever incremented, with the signals held.
 _committed = 0
+
+
+# The signals (SIGINT, SIGTERM) the command line's handler has received during
+# the current command, in order; see note_interrupt().
+_interrupts: list[int] = []
+
+
+def note_interrupt(signum: int) -> None:
+    """Note that the command was interrupted by ``signum``; no output set commits after it.
+
+    The command line's signal handler notes the signal before it raises
+    ``KeyboardInterrupt``. The exception may be swallowed where it lands
+    (numpy swallows one raised while it looks up ``__array_ufunc__``, say,
+    and a library's ``except BaseException`` would too); the note is not:
+    :meth:`OutputSet.commit` and :func:`check_interrupt` raise it again, so
+    the command still ends as interrupted (exit code 130) and replaces
+    nothing.
+    """
+    _interrupts.append(signum)
+
+
+def check_interrupt() -> None:
+    """Raise :class:`~rockfall_design.errors.Interrupted` if the command was interrupted.
+
+    Called at safe points of a run (between batches of rocks, families and
+    decisions of the optimiser, scenarios) and before every commit.
+    """
+    if _interrupts:
+        raise Interrupted(_interrupts[0])
+
+
+def forget_interrupts() -> None:
+    """Forget the noted signals (a new command starts)."""
+    _interrupts.clear()
 
 
 def committed_sets() -> int:
@@ -353,6 +390,8 @@ class OutputSet:
         """
         global _committed
         try:
+            # An interrupt whose exception was swallowed still stops the set.
+            check_interrupt()
             unwritten = [str(e.target) for e in self._entries.values() if e.state == "reserved"]
             if unwritten:
                 raise RuntimeError(f"reserved but never written: {', '.join(unwritten)}")
@@ -362,6 +401,7 @@ class OutputSet:
             for manifest in _manifests(list(self._entries.values())):
                 self._entries[manifest.target] = manifest
             with _signals_held():
+                check_interrupt()  # one that came while the files were synced
                 backups = _swap_in(list(self._entries.values()))
                 if self._entries:
                     _committed += 1
