@@ -460,15 +460,33 @@ def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
         recorded = json.loads(read_text(path, "summary to repeat"))
         run = recorded["run"]
         text = dump_yaml(run["project"])
-        seed, rocks = int(run["seed"]), int(run["rocks"])
+        seed, rocks = run["seed"], run["rocks"]
+        # Whole JSON numbers only: a message never quotes what an edited
+        # (or any other) file holds.
+        if not all(isinstance(v, int) and not isinstance(v, bool) for v in (seed, rocks)):
+            raise ValueError("run.seed and run.rocks must be whole numbers")
         if not (seed >= 0 and 1 <= rocks <= _MAX_ROCKS):
             raise ValueError("seed or rock count out of range")
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise InputError(f"{path}: not a summary.json with a run record ({exc})") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}:{exc.lineno}: not a summary.json with a run record "
+                         f"(invalid JSON at column {exc.colno})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a summary.json with a run record (not UTF-8 "
+                         "text)") from None
+    except KeyError as exc:
+        raise InputError(f"{path}: not a summary.json with a run record (no key "
+                         f"{exc.args[0]!r})") from None
+    except (OSError, ValueError, TypeError, AttributeError) as exc:
+        reason = (exc.strerror or type(exc).__name__) if isinstance(exc, OSError) else (
+            str(exc) if isinstance(exc, ValueError) else "not a mapping")
+        raise InputError(f"{path}: not a summary.json with a run record ({reason})") from None
     if run.get("version") != __version__:
         sys.stderr.write(f"{PROG}: warning: {path} was written by version "
                          f"{run.get('version')}, this is {__version__}\n")
-    project = load_project_text(text, f"{path} (run.project)")
+    from .project.messages import _unquoted
+
+    with _unquoted():  # a value of the recorded project is not quoted back either
+        project = load_project_text(text, f"{path} (run.project)")
     args.seed = seed if args.seed is None else args.seed
     args.rocks = rocks if args.rocks is None else args.rocks
     args.project = path
@@ -807,7 +825,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         if isinstance(exc, _StdoutFailed):
             sys.stdout = stdout
             _silence_stdout()
-        msg = " ".join(str(exc).split("\n"))
+        from .inputs import strip_controls
+
+        # One line, and nothing in it that steers the terminal (a name from a file).
+        msg = strip_controls(" ".join(str(exc).split("\n")))
         sys.stderr.write(f"{PROG}: error: {msg}\n")
         return int(exc.exit_code)
     except KeyboardInterrupt:

@@ -55,6 +55,7 @@ from .project import (
     _to_project_error,
     _yaml_path,
 )
+from .project.messages import _unquoted
 
 __all__ = ["MAX_SURVEY_POINTS", "resolve_inputs"]
 
@@ -189,15 +190,18 @@ def _merge_library(materials: dict, where: _Where, base_dir: Path) -> dict[Any, 
     data, lines = _parse_yaml(text, shown)
     if data is None or data == {}:
         raise ProjectError(shown, 1, "", "the materials library is empty")
-    if not isinstance(data, dict):
-        raise ProjectError(
-            shown,
-            _line_of((), lines),
-            "",
-            f"expected a mapping of material names to materials, got {_describe(data)}",
-        )
-    for name, value in data.items():
-        _check_library_material(name, value, shown, lines)
+    # A library path may name any file (a key file, /etc/shadow): its
+    # messages say what is wrong where, never what the file holds.
+    with _unquoted():
+        if not isinstance(data, dict):
+            raise ProjectError(
+                shown,
+                _line_of((), lines),
+                "",
+                f"expected a mapping of material names to materials, got {_describe(data)}",
+            )
+        for name, value in data.items():
+            _check_library_material(name, value, shown, lines)
     # Inline materials replace library ones of the same name as a whole: a
     # project that redefines "talus" means its own talus, not a blend.
     return {**data, **inline}
@@ -377,21 +381,23 @@ class _CsvSection(_Section):
                 )
 
     def _header(self, cells: list[str], line: int) -> list[str]:
+        # The survey path may name any file (a key file, /etc/passwd): a
+        # header that is not one says where, never what the line holds.
         columns = [cell.lower() for cell in cells]
         if _is_number(cells[0]):
             raise ProjectError(
                 self.shown, line, "",
-                f"expected a header row naming the columns x, y (and material), got "
-                f"{_describe(cells[0])}",
+                "expected a header row naming the columns x, y (and material), got a number",
             )
-        for column in columns:
+        for number, column in enumerate(columns, start=1):
             if column not in CSV_COLUMNS:
                 hint = _did_you_mean(column, CSV_COLUMNS) or (
                     f"; expected {', '.join(CSV_COLUMNS)}"
                 )
                 if ";" in column or "\t" in column:
                     hint = "; the columns must be separated by commas"
-                raise ProjectError(self.shown, line, "", f"unknown column {column!r}{hint}")
+                raise ProjectError(self.shown, line, "",
+                                   f"column {number} of the header is not a known column{hint}")
             if columns.count(column) > 1:
                 raise ProjectError(self.shown, line, "", f"column {column!r} appears twice")
         for needed in ("x", "y"):
@@ -414,9 +420,7 @@ class _CsvSection(_Section):
             if not text:
                 raise ProjectError(self.shown, line, column, "no value")
             if not _is_number(text):
-                raise ProjectError(
-                    self.shown, line, column, f"expected a number, got {_describe(text)}"
-                )
+                raise ProjectError(self.shown, line, column, "expected a number")
             number = float(text)
             if not math.isfinite(number):
                 raise ProjectError(self.shown, line, column, f"must be finite, got {text}")

@@ -19,7 +19,9 @@ from .calibrate import CalibrateSpec
 from .design import Design
 from .fields import (
     _DEFAULT_CONCEPT,
+    Prose,
     String,
+    Title,
     _Model,
     _none_as_empty,
     _parse_measures,
@@ -39,8 +41,8 @@ class Project(_Model):
     it came from is :attr:`source`.
     """
 
-    name: Annotated[String, Field(min_length=1)] = Field(description="Project name.")
-    description: Annotated[String, BeforeValidator(lambda v: "" if v is None else v)] = Field(
+    name: Annotated[Title, Field(min_length=1)] = Field(description="Project name.")
+    description: Annotated[Prose, BeforeValidator(lambda v: "" if v is None else v)] = Field(
         "", description="Free text."
     )
     slope: Slope = Field(description="The slope section.")

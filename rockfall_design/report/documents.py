@@ -473,9 +473,19 @@ def _environment(markdown: bool) -> Any:
         lstrip_blocks=True,
         keep_trailing_newline=True,
         undefined=jinja2.StrictUndefined,
+        # report.md escapes what it shows as report.html does: a project's
+        # name or description with <script> or <iframe> stays text.
+        finalize=_md_text if markdown else None,
     )
     env.filters["md"] = _md_cell
     return env
+
+
+def _md_text(value: Any) -> Any:
+    """A value shown in report.md: ``&`` and ``<`` as HTML entities (no tag can open)."""
+    if not isinstance(value, str):
+        return value
+    return value.replace("&", "&amp;").replace("<", "&lt;")
 
 
 def _md_cell(text: Any) -> str:
