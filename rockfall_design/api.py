@@ -650,6 +650,11 @@ def optimise(
                              "(see the README, 'Designing protection')")
     reg = registry or default_registry()
     n = _count(p, rocks)
+    if "max_rocks" in p.design.model_fields_set and p.design.max_rocks < n:
+        # The last look of a decision with fewer rocks than the search: no look at all.
+        raise p.error_at(("design", "max_rocks"), f"expected at least the {n:,} rocks of the "
+                         f"search, got {p.design.max_rocks:,}: a decision looks at more rocks "
+                         "than the search, never fewer")
     result = _call(progress, n, _optimise, stages=True, project=p, registry=reg, rocks=n,
                    seed=seed)
     return OptimiseResult(p, result, reg)

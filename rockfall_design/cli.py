@@ -321,14 +321,19 @@ def _figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet)
     if not (args.plot or args.report):
         return
     figures = result.figures()  # drawn once for both
-    if args.plot:
-        from .report.figures import save_figures
-
-        save_figures(figures, args.plot, args.plot_format, files)
     if args.report:
         from .report.documents import write_report
 
         write_report(result, args.report, outputs=files, figures=figures)
+    if args.plot:
+        from .report.figures import save_figures
+
+        # --plot and --report into one directory with --plot-format svg: the
+        # report has written those figures already, from the same drawings.
+        for fmt in args.plot_format:
+            todo = {name: fig for name, fig in figures.items()
+                    if args.plot / f"{name}.{fmt}" not in files}
+            save_figures(todo, args.plot, (fmt,), files)
 
 
 def _warn_failures(registry: Any) -> None:
@@ -569,6 +574,10 @@ def cmd_optimise(args: argparse.Namespace) -> int:
                                    "(see the README, 'Designing protection')")
     registry = _plugins_for(project, args)
     if getattr(args, "max_rocks", None):
+        if args.max_rocks < (args.rocks or project.rocks.count):
+            raise InputError(f"--max-rocks {args.max_rocks:,}: expected at least the "
+                             f"{args.rocks or project.rocks.count:,} rocks of the search; a "
+                             "decision looks at more rocks than the search, never fewer")
         project = project.model_copy(update={"design": project.design.model_copy(
             update={"max_rocks": args.max_rocks})})
     n = args.rocks or project.rocks.count
@@ -816,6 +825,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     stdout = sys.stdout
     sys.stdout = _GuardedStdout(stdout)
     try:
+        if getattr(args, "block", None):
+            from .plugins import check_blocked_names
+
+            check_blocked_names(args.block)
         code = int(args.func(args))
         sys.stdout.flush()  # here, where a failure can still be reported
         # An interrupt whose exception was swallowed: the command still ends as interrupted.

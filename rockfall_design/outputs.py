@@ -303,6 +303,13 @@ class OutputSet:
         else:
             self.discard()
 
+    def __contains__(self, path: object) -> bool:
+        """True if ``path`` is written (or being written) in this set."""
+        if not isinstance(path, str | os.PathLike):
+            return False
+        entry = self._entries.get(_key(path))
+        return entry is not None and entry.state in ("open", "ready")
+
     # ---- adding files ----------------------------------------------------
     def reserve(self, *paths: str | os.PathLike[str]) -> None:
         """Create the temporary files of ``paths`` now, to be written later.

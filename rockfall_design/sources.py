@@ -443,6 +443,25 @@ def _is_number(text: str) -> bool:
     return True
 
 
+def _dxf_problem(exc: BaseException) -> str:
+    """What is wrong with a DXF file ezdxf could not read, without quoting it.
+
+    A file cut short ends ezdxf's tag iterator (StopIteration) or its
+    stream; other failures are named by type and, where ezdxf says it, the
+    line. The file's own text is never repeated (the path may name any file).
+    """
+    if isinstance(exc, StopIteration | EOFError) or "ENDSEC" in str(exc) or "EOF" in str(exc):
+        return ("not a readable DXF drawing: the file ends before the drawing does "
+                "(is it cut short?)")
+    import re
+
+    found = re.search(r"line (\d+)", str(exc))
+    where = f" near line {found.group(1)}" if found else ""
+    if "not a DXF file" in str(exc):
+        return "not a readable DXF drawing: no DXF header"
+    return f"not a readable DXF drawing: {type(exc).__name__}{where}"
+
+
 class _DxfSection(_Section):
     """The one 2-D polyline on a layer of a DXF drawing, as section points."""
 
@@ -477,9 +496,7 @@ class _DxfSection(_Section):
         except Exception as exc:  # noqa: BLE001 - the parser of an untrusted file
             # ezdxf raises many kinds of exception for a damaged or foreign
             # file; every one of them is a problem with the file, not a bug here.
-            raise ProjectError(
-                self.shown, None, "", f"not a readable DXF drawing: {_one_line(exc)}"
-            ) from None
+            raise ProjectError(self.shown, None, "", _dxf_problem(exc)) from None
         units = doc.header.get("$INSUNITS", 0)
         if units not in (0, 6):  # unitless, metres
             name = ezdxf.units.unit_name(units)
