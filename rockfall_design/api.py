@@ -22,6 +22,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .arguments import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -534,6 +535,7 @@ def simulate(
     """
     from .simulation import EXACT_ROCKS
 
+    _checked(seed=seed, trajectories=trajectories)
     p = _project(project)
     n = _count(p, rocks)
     tables: list[pd.DataFrame] | None = None
@@ -563,10 +565,29 @@ def run_simulation(project: Project, *, rocks: int | None, seed: int | None,
 
 
 def _count(project: Project, rocks: int | None) -> int:
-    n = int(project.rocks.count if rocks is None else rocks)
-    if n < 1:
-        raise InputError(f"the number of rocks must be at least 1, got {n}")
-    return n
+    """``rocks``, checked as ``--rocks`` is, or the project's ``rocks.count``."""
+    if rocks is None:
+        return int(project.rocks.count)
+    return whole_number(rocks, "rocks", 1, MAX_ROCKS)
+
+
+def _checked(*, seed: Any = None, workers: Any = None, bootstrap: Any = None,
+             trajectories: Any = None) -> None:
+    """Check the numbers a run takes as the command line checks its options.
+
+    Raises
+    ------
+    ArgumentError
+        An :class:`InputError` naming the keyword, in the command line's words.
+    """
+    if seed is not None:
+        whole_number(seed, "seed", 0, what="seed")
+    if workers is not None:
+        whole_number(workers, "workers", 1, what="number of workers")
+    if bootstrap is not None:
+        whole_number(bootstrap, "bootstrap", 0, MAX_BOOTSTRAP, "number of replicates")
+    if trajectories is not None:
+        whole_number(trajectories, "trajectories", 0, what="number")
 
 
 def check(
@@ -597,6 +618,7 @@ def check(
     """
     from .evaluate import evaluate
 
+    _checked(seed=seed, trajectories=trajectories)
     p = _project(project, registry)
     n = _count(p, rocks)
     ev = _call(progress, n, evaluate, project=p, registry=registry or default_registry(),
@@ -641,6 +663,7 @@ def optimise(
     """
     from .optimise import optimise as _optimise
 
+    _checked(seed=seed)
     p = _project(project, registry)
     if p.design is not None and p.design.scenarios is not None:
         # design.scenarios: the cheapest design that holds across the study's scenarios
@@ -717,6 +740,7 @@ def study(
     """
     from .study.run import run_parametric
 
+    _checked(seed=seed, workers=workers)
     registry = registry or default_registry()
     p = _project(project, registry)
     n = _count(p, rocks)
@@ -779,6 +803,9 @@ def calibrate(
     """
     from .calibration.run import run_calibration
 
+    _checked(seed=seed, workers=workers, bootstrap=bootstrap)
+    if rocks is not None:
+        whole_number(rocks, "rocks", 1, MAX_ROCKS)
     p = _project(project, registry or default_registry())
     kw = dict(observed=observed, rocks=rocks, bootstrap=bootstrap, seed=seed, workers=workers,
               scheduler=scheduler, pool=pool)
@@ -817,6 +844,9 @@ def compare(
     """
     from .calibration.run import run_comparison
 
+    _checked(seed=seed)
+    if rocks is not None:
+        whole_number(rocks, "rocks", 1, MAX_ROCKS)
     p = _project(project, registry or default_registry())
     kind = p.calibrate.distance if p.calibrate is not None else "energy"
     confidence = p.calibrate.confidence if p.calibrate is not None else 0.95

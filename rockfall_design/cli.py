@@ -12,6 +12,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from . import __version__
+
+# The project's limit (rockfall_design.project.MAX_ROCKS), from a module
+# light enough for every --help (no pydantic).
+from .arguments import MAX_ROCKS as _MAX_ROCKS
 from .errors import ExitCode, InputError, Interrupted, RockfallError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -33,22 +37,21 @@ def _int_at_least(low: int, what: str, high: int | None = None):
     """An argparse type: a whole number >= ``low`` ("expected a {what} >= {low}"), <= ``high``."""
 
     def parse(text: str) -> int:
+        from .arguments import bounds_problem
+
         try:
             v = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        if v < low:
-            raise argparse.ArgumentTypeError(f"expected a {what} >= {low}, got {v}")
-        if high is not None and v > high:
-            raise argparse.ArgumentTypeError(f"expected a {what} <= {high:,}, got {v:,}")
+        # The API's checks and words (rockfall_design.arguments).
+        problem = bounds_problem(v, low, high, what)
+        if problem is not None:
+            raise argparse.ArgumentTypeError(problem)
         return v
 
     return parse
 
 
-# The project's limit (rockfall_design.project.MAX_ROCKS), here without
-# importing pydantic for every --help.
-_MAX_ROCKS = 1_000_000_000
 _positive_int = _int_at_least(1, "number", _MAX_ROCKS)
 
 
