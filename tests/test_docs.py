@@ -32,6 +32,7 @@ OTHER_PROGRAMS_OPTIONS = {
     "--kernel-only": "benchmarks/engine.py",
     "--nthreads": "dask worker",
     "--nworkers": "dask worker",
+    "--host": "dask scheduler and dask worker",
     "--e": "examples/stops_from_points.py",
     "--n": "examples/stops_from_points.py",
     "--volume": "examples/stops_from_points.py",
