@@ -145,6 +145,14 @@ class Project(_Model):
                         f"section {section}",
                         ("design", "candidates", i, "x"),
                     )
+                if low >= self.protect.x:
+                    # Rocks reach the zone before they reach such a measure.
+                    raise _fail(
+                        f"station range [{_fmt(low)}, {_fmt(high)}] lies inside the protected "
+                        f"zone (x >= {_fmt(self.protect.x)} m, protect.x): a measure there "
+                        "cannot keep rocks out of it; place the candidates upslope of it",
+                        ("design", "candidates", i, "x"),
+                    )
         return self
 
     def resolved_dict(self) -> dict[str, Any]:
