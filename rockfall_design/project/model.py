@@ -145,11 +145,11 @@ class Project(_Model):
                         f"section {section}",
                         ("design", "candidates", i, "x"),
                     )
-                if low >= self.protect.x:
+                if low > self.protect.x:
                     # Rocks reach the zone before they reach such a measure.
                     raise _fail(
                         f"station range [{_fmt(low)}, {_fmt(high)}] lies inside the protected "
-                        f"zone (x >= {_fmt(self.protect.x)} m, protect.x): a measure there "
+                        f"zone (beyond protect.x = {_fmt(self.protect.x)} m): a measure there "
                         "cannot keep rocks out of it; place the candidates upslope of it",
                         ("design", "candidates", i, "x"),
                     )

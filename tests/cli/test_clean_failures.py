@@ -165,11 +165,11 @@ def test_json_of_a_check_is_still_valid(capsys):
 
 def test_candidates_inside_the_protected_zone_are_refused_at_their_key(tmp_path, capsys):
     text = (PROJECTS / "design_ditch_or_fence.yaml").read_text()
-    text = text.replace("      x: [50, 145]", "      x: [150, 170]")
+    text = text.replace("      x: [50, 145]", "      x: [151, 170]")
     text = text.replace("catalogue_", f"{PROJECTS}/catalogue_")
     path = tmp_path / "project.yaml"
     path.write_text(text)
     assert main(["optimise", str(path), "--rocks", "100", "--json"]) == 2
     err = one_line(capsys)
-    assert "design.candidates[0].x: station range [150, 170] lies inside the protected zone" \
+    assert "design.candidates[0].x: station range [151, 170] lies inside the protected zone" \
         in err, err
