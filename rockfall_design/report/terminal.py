@@ -36,6 +36,9 @@ __all__ = [
 MAX_FILE_WIDTH = 200
 
 
+#: Marginal or undecided cheaper designs the optimise panel shows (the cheapest).
+MARGINAL_SHOWN = 6
+
 def fitted_console(renderable: Any, file: Any = None) -> Console:
     """A console as wide as the report's output can show it.
 
@@ -291,6 +294,15 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
                       f"edits simulated, {result.wall_s:.1f} s"),
         Text(""), tab, Text(""),
     ]
+    bare = getattr(result, "bare_slope", None)
+    if bare and bare["holds"]:
+        parts.append(Text(
+            f"The bare slope already meets the residual target: {bare['reaching']:,} of "
+            f"{bare['rocks']:,} search rocks reach x = {bare['x']:g} m, at most "
+            f"{100 * bare['upper']:.3f} % with {100 * result.confidence:g} % confidence "
+            f"(allowed {100 * bare['allowed']:.3f} %). No measure is needed for the "
+            "residual; a family's cheapest design may be one that meets few or no rocks.",
+            style="bold yellow"))
     if result.best is not None:
         b = result.best
         parts.append(Text(f"Chosen: {b.name}, {b.cost:,.0f} {cur}: "
@@ -302,12 +314,18 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
                               + "; ".join(b.fresh_failures), style="bold yellow"))
     else:
         parts.append(Text(f"No admissible design: {result.reason}", style="bold red"))
-    for m in getattr(result, "marginal", None) or []:
-        parts.append(Text(f"Marginal, cheaper: {m['name']} {m['cost']:,.0f} {cur}: "
+    marginal = getattr(result, "marginal", None) or []
+    for m in marginal[:MARGINAL_SHOWN]:
+        head = "Marginal, cheaper" if m.get("decided", True) else "Not decided, cheaper"
+        parts.append(Text(f"{head}: {m['name']} {m['cost']:,.0f} {cur}: "
                           f"{'; '.join(m['labels'])}: {_marginal_values(m)}; "
                           + (f"about {m['rocks_to_decide']:,} rocks would decide it "
                              "(--max-rocks)" if m["rocks_to_decide"] else
                              "its point value sits on the target"), style="yellow"))
+    if len(marginal) > MARGINAL_SHOWN:
+        parts.append(Text(f"... and {len(marginal) - MARGINAL_SHOWN} more cheaper designs "
+                          "marginal or not decided (listed under 'marginal' in --json and "
+                          "summary.json)", style="yellow"))
     for a in order:
         if (not a.holds or a.dominated) and a.reason:
             parts.append(Text(f"  {a.name}: {a.reason}", style="dim"))
