@@ -360,8 +360,14 @@ def alternatives_table(result: Any) -> Any:
     return alternatives_frame(result.summary())
 
 
-def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -> str:
-    """The project with the chosen measures, as YAML that ``check`` accepts."""
+def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
+                looks: Any = None) -> str:
+    """The project with the chosen measures, as YAML that ``check`` accepts.
+
+    Its head records how the design was decided (the looks of the sequential
+    decision, see :mod:`rockfall_design.judge.sequential`) and how to repeat
+    the verification on fresh rocks.
+    """
     from ..project import dump_yaml
 
     ev = best.evaluation
@@ -379,7 +385,11 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -
         f"cost {best.cost:,.0f}.\n"
         f"# rocks: below are the rocks that decided it (seed {ev.study.seed}, "
         f"{ev.study.result.n} rocks; search: {search_rocks} rocks).\n"
-        f"# verification: seed {best.fresh_seed}, {best.fresh_rocks} rocks: "
+        + (f"# decision: admitted at the look of {ev.study.result.n} rocks of the looks "
+           f"{', '.join(str(k) for k in looks.sizes)}, each at "
+           f"{100 * looks.look_confidence:.4g} % (together {100 * looks.confidence:g} %)\n"
+           if looks is not None else "")
+        + f"# verification: seed {best.fresh_seed}, {best.fresh_rocks} rocks: "
         f"{'holds' if best.holds_on_fresh_rocks else 'FAILS'}; reproduce with\n"
         f"#   rockfall-design check design.yaml --seed {best.fresh_seed} "
         f"--rocks {best.fresh_rocks}\n"

@@ -100,3 +100,21 @@ def test_the_proof_line_names_marginal_and_undecided_designs():
                             designs=12)
     text = _proof(alt, tally, plan_looks(4603, 50000, 0.95, 0.001), "EUR")
     assert "or is marginal (1) or was not decided (7) (the cheapest that may hold listed)" in text
+
+
+@pytest.mark.slow
+def test_the_same_seed_gives_the_same_design_on_one_thread_and_on_two(monkeypatch):
+    """Bit for bit: the chosen design, its cost, the looks and what is listed as marginal."""
+    import rockfall_design as rd
+    from rockfall_design.engine.ensemble import THREADS_ENV
+
+    runs = []
+    for threads in ("1", "2"):
+        monkeypatch.setenv(THREADS_ENV, threads)
+        res = rd.optimise(PROJECTS / "design_ditch_or_fence.yaml", seed=11)
+        s = res.summary
+        s.pop("runtime_s")
+        for a in s["alternatives"]:
+            a.pop("wall_s", None)
+        runs.append(s)
+    assert runs[0] == runs[1]
