@@ -181,8 +181,9 @@ def test_optimise_without_a_design_removes_earlier_figures(tmp_path, capsys):
     """Figures of an earlier design must not stay beside a result that has none."""
     text = (PROJECTS / "design_ditch_or_fence.yaml").read_text()
     text = text[: text.index("    - type: ditch")]
-    text = (text.replace("      x: [50, 145]", "      x: [2, 10]")
-            .replace("protect:\n  x: 150", "protect:\n  x: 50")
+    assert "      x: [50, 118]" in text and "protect:\n  x: 120" in text
+    text = (text.replace("      x: [50, 118]", "      x: [2, 10]")
+            .replace("protect:\n  x: 120", "protect:\n  x: 50")
             .replace("catalogue_", f"{PROJECTS}/catalogue_"))
     project = tmp_path / "hopeless.yaml"
     project.write_text(text)

@@ -118,3 +118,28 @@ def test_the_same_seed_gives_the_same_design_on_one_thread_and_on_two(monkeypatc
             a.pop("wall_s", None)
         runs.append(s)
     assert runs[0] == runs[1]
+
+
+def test_across_scenarios_designs_not_rejected_with_confidence_are_listed():
+    """A design marginal in some scenarios, or held back by a budget, is not "fails in too many
+    scenarios": it is counted and the cheapest (one per cost) listed with why."""
+    import importlib
+
+    across = importlib.import_module("rockfall_design.optimise.across")
+
+    class _M:
+        kind = "fence"
+        params = SimpleNamespace(model_dump=lambda mode: {"x": 1.0})
+
+        def label(self) -> str:
+            return "fence at 1 m"
+
+    alt = Alternative(name="fence", family=(0,))
+    d = [SimpleNamespace(cost=c, measures=[_M()]) for c in (10.0, 10.0, 20.0, 90.0)]
+    undecided = [(d[0], "marginal in scenario(s) 2"), (d[1], "marginal in scenario(s) 3"),
+                 (d[2], "not decided (budget)"), (d[3], "marginal in scenario(s) 1")]
+    across._list_undecided(alt, undecided, 50.0)
+    assert alt.undecided == 3
+    assert [(m["cost"], m["decided"], m["values"]) for m in alt.marginal] == [
+        (10.0, True, None), (20.0, False, None)]
+    assert alt.marginal[0]["reason"] == "marginal in scenario(s) 2"
