@@ -44,6 +44,12 @@ def _text(value: Any) -> str:
     return json.dumps(value, sort_keys=True)
 
 
+
+def envelope_percentile(project: Project) -> float:
+    """The percentile of the study's envelope figure: p95 if configured, else the highest."""
+    pcts = [float(q) for q in project.analysis.percentiles]
+    return 95.0 if 95.0 in pcts or not pcts else max(pcts)
+
 class StudyResult:
     """The scenarios of a parametric study, their results and the sensitivity.
 
@@ -201,7 +207,6 @@ class StudyResult:
         from matplotlib import colormaps
 
         from ..report.figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure
-        from .run import envelope_percentile
 
         if any("envelope" not in result for result in self.results):
             raise ValueError("this study ran without its envelopes (envelopes=False); run it "
