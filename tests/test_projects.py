@@ -115,3 +115,28 @@ def test_the_library_keeps_the_names_projects_use():
     for name in ("bedrock", "weathered_rock", "talus", "meadow", "forest_floor", "gravel",
                  "asphalt", "meadow_rn_rt"):
         assert name in data
+
+
+def test_the_materials_page_lists_every_entry_with_its_values():
+    """docs/materials.md's table is the library's: same entries, laws and values."""
+    import re
+
+    import yaml
+
+    data = yaml.safe_load(LIBRARY.read_text(encoding="utf-8"))
+    page = (LIBRARY.parents[1] / "docs" / "materials.md").read_text(encoding="utf-8")
+    rows = {}
+    for line in page.splitlines():
+        m = re.match(r"\| `(\w+)` \| (\w+) \| ([\d.]+) \| ([\d.]+|-) \| ([\d.]+)\*? \| ([\d.]+) \|",
+                     line)
+        if m:
+            rows[m.group(1)] = m.groups()[1:]
+    assert set(rows) == set(data)
+    for name, entry in data.items():
+        law, e, rt, mu, mur = rows[name]
+        assert law == entry.get("impact_model", "spang"), name
+        assert float(e) == entry["restitution"], name
+        assert (rt == "-") == ("tangential_restitution" not in entry), name
+        assert rt == "-" or float(rt) == entry["tangential_restitution"], name
+        assert float(mu) == entry["friction"], name
+        assert float(mur) == entry.get("rolling_resistance", 0.0), name
