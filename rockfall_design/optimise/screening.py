@@ -138,6 +138,7 @@ class Screening:
         seed: int,
         progress: Callable[[str], None] | None = None,
         stations: np.ndarray | None = None,
+        rock_progress: Callable[[int], None] | None = None,
     ) -> None:
         """Run the search rocks on the bare slope and keep the table (see the class docs).
 
@@ -145,6 +146,9 @@ class Screening:
         candidate's range on the grid) and drops the restart stations: a
         later look at a few barrier designs with more rocks needs only
         their stations (and memory grows with rocks x stations).
+        ``rock_progress``, when given, is called with the rocks done of the
+        bare run after each batch; an exception it raises stops the run
+        (``rockfall-design serve`` shows progress and cancels this way).
         """
         from ..design import build_candidate_measure
 
@@ -191,6 +195,7 @@ class Screening:
         bare = run_ensemble(
             self.section, self.releases, key=self.key, grid=self.grid,
             restart_stations=self.restart_x, settings=self.settings, record_speed=True,
+            progress=rock_progress,
         )
         self.bare_runtime_s = time.perf_counter() - t0
         cols = np.searchsorted(bare.grid, self.grid)
