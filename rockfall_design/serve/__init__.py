@@ -116,7 +116,7 @@ def serve(paths: Sequence[Path], *, host: str = "127.0.0.1", port: int | None = 
     _needs_web()
     import uvicorn
 
-    from ..api import default_registry
+    from ..plugins import load_registry
     from .app import create_app
     from .workbench import load_entries
 
@@ -124,7 +124,11 @@ def serve(paths: Sequence[Path], *, host: str = "127.0.0.1", port: int | None = 
     if not files:
         raise InputError("serve: no project file given and none in the current directory "
                          "(rockfall-design serve projects/design_two_zones.yaml)")
-    entries = load_entries(files, default_registry(tuple(block)))
+    registry = load_registry(blocked=tuple(block))
+    for f in registry.failures:
+        sys.stderr.write(f"rockfall-design serve: plugin {f.plugin!r} was not loaded: "
+                         f"{f.reason}\n")
+    entries = load_entries(files, registry)
     token = token or secrets.token_urlsafe(24)
     app = create_app(entries, token)
     sock = _bind(host, port)

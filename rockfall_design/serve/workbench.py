@@ -411,7 +411,7 @@ class ProjectEntry:
             403 for a target or a referenced file outside the directory, 400
             for a project that does not validate (its one-line message).
         """
-        target = inside(self.directory, name or self.path.name)
+        target = inside(self.directory, self.path.name if name is None else name)
         project = self.validate(text, target)
         fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
         try:
@@ -557,12 +557,14 @@ def load_entries(paths: Sequence[Path], registry: Registry) -> list[ProjectEntry
     ProjectError
         A file is not a valid project (the command line's one-line message).
     """
-    from ..api import load_project
+    from ..evaluate import validate_project
+    from ..project import load_project
 
     out: list[ProjectEntry] = []
     seen: set[str] = set()
     for path in paths:
-        project = load_project(path, registry=registry)
+        project = load_project(path)
+        validate_project(project, registry)
         base = re.sub(r"[^A-Za-z0-9_-]+", "-", Path(path).stem) or "project"
         pid, k = base, 2
         while pid in seen:
