@@ -61,7 +61,10 @@ def _bind(host: str, port: int | None) -> socket.socket:
     tries = [port] if port is not None else [DEFAULT_PORT + i for i in range(_PORT_TRIES)]
     last: OSError | None = None
     for p in tries:
-        sock = socket.socket(family, socket.SOCK_STREAM)
+        # IPPROTO_TCP said explicitly: asyncio sets TCP_NODELAY only on sockets
+        # that say so, and without it a response in two writes waits for the
+        # browser's delayed ACK (40 ms per request).
+        sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             sock.bind((host, p))
@@ -142,6 +145,11 @@ def serve(paths: Sequence[Path], *, host: str = "127.0.0.1", port: int | None = 
     server = uvicorn.Server(config)
     try:
         asyncio.run(server.serve(sockets=[sock]))
+    except KeyboardInterrupt:
+        # uvicorn shuts down on Ctrl-C, then raises the signal again: the
+        # server was stopped as asked, and it writes no files of its own.
+        pass
     finally:
         sock.close()
+    stream.write("rockfall-design serve: stopped\n")
     return 0
