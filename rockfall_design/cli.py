@@ -231,8 +231,9 @@ def build_parser() -> argparse.ArgumentParser:
         'pip install "rockfall-design[web]") and print its address, with a per-run token '
         "that keeps other local users and other sites out. Ctrl-C stops it.",
     )
-    srv.add_argument("projects", type=Path, nargs="*", metavar="PROJECT",
-                     help="project files (YAML); default: those of the current directory")
+    srv.add_argument("project", type=Path, nargs="*",
+                     help="project files (YAML), one or more; default: those of the current "
+                     "directory")
     srv.add_argument("--port", type=_int_at_least(0, "port", 65535), metavar="N",
                      help="port to listen on (default: the first free one from 8765; "
                      "0: any free port)")
@@ -687,7 +688,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     """Serve the browser app until Ctrl-C (the web extra, imported only here)."""
     from .serve import serve
 
-    return serve(args.projects, host=args.host, port=args.port, block=args.block)
+    return serve(args.project, host=args.host, port=args.port, block=args.block)
 
 
 def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:
