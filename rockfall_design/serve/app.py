@@ -16,6 +16,11 @@ changes nothing):
 ``GET  /api/jobs/{job}``                    its progress
 ``POST /api/jobs/{job}/cancel``             stop it
 ``GET  /api/projects/{id}/run``             envelopes, stops and paths of the last run
+``POST /api/projects/{id}/check``           ``{"measures", "rocks", "seed"}``: a job whose
+                                            result is ``check --json``
+``POST /api/projects/{id}/optimise``        ``{"rocks", "seed"}``: a job whose result is
+                                            ``optimise --json``
+``GET  /api/jobs/{job}/files/design.yaml``  the chosen design, as ``--out`` writes it
 ``POST /api/place``                         ``{"project", "measure", "x"}`` or
                                             ``{"project", "measures": [...]}``: checks,
                                             bounds and residual from the run's table
@@ -222,6 +227,31 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         jobs[job.id] = job
         return _json(job.as_dict(), 202)
 
+    async def check(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        raws = data.get("measures")
+        if raws is not None and not isinstance(raws, list):
+            raise ServeError(400, "measures: expected a list of measures")
+        job = e.start_check(raws, _optional_int(data, "rocks"), _optional_int(data, "seed"))
+        jobs[job.id] = job
+        return _json(job.as_dict(), 202)
+
+    async def optimise(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        job = e.start_optimise(_optional_int(data, "rocks"), _optional_int(data, "seed"))
+        jobs[job.id] = job
+        return _json(job.as_dict(), 202)
+
+    async def job_file(request: Request) -> Response:
+        j = job_of(request)
+        name = request.path_params["name"]
+        if name not in j.files:
+            raise ServeError(404, f"job {j.id} has no {name}")
+        return Response(j.files[name], media_type="application/yaml",
+                        headers={"Content-Disposition": f'attachment; filename="{name}"'})
+
     def job_of(request: Request) -> Any:
         job = jobs.get(request.path_params["jid"])
         if job is None:
@@ -306,7 +336,10 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         Route("/api/projects/{pid}/file", handle(file)),
         Route("/api/projects/{pid}/validate", handle(validate), methods=["POST"]),
         Route("/api/projects/{pid}/save", handle(save), methods=["POST"]),
+        Route("/api/projects/{pid}/check", handle(check), methods=["POST"]),
+        Route("/api/projects/{pid}/optimise", handle(optimise), methods=["POST"]),
         Route("/api/jobs/{jid}", handle(job)),
+        Route("/api/jobs/{jid}/files/{name}", handle(job_file)),
         Route("/api/jobs/{jid}/cancel", handle(cancel), methods=["POST"]),
         Route("/api/place", handle(place), methods=["POST"]),
         Route("/api/plugins", handle(plugins)),

@@ -124,14 +124,23 @@ def referenced_outside(data: Any, base: Path) -> str | None:
 
 @dataclass
 class Job:
-    """A run in a background thread: progress, cancel, and its result or error."""
+    """Work in a background thread: progress, cancel, and its result or error.
+
+    ``kind`` is ``simulate``, ``check`` or ``optimise``; ``stage`` the
+    optimiser's stage (``search``, ``check``); ``result`` the JSON-ready
+    answer of a finished check or optimise (their ``--json`` summaries) and
+    ``files`` what it offers for download (``design.yaml``).
+    """
 
     kind: str
     total: int
     id: str = field(default_factory=lambda: uuid.uuid4().hex[:12])
     done: int = 0
+    stage: str = ""
     state: str = "running"  # running, done, cancelled, failed
     error: str = ""
+    result: dict[str, Any] | None = None
+    files: dict[str, str] = field(default_factory=dict)
     started: float = field(default_factory=time.monotonic)
     runtime_s: float = 0.0
     cancel_event: threading.Event = field(default_factory=threading.Event)
@@ -142,10 +151,16 @@ class Job:
         if self.cancel_event.is_set():
             raise Cancelled
 
+    def staged(self, stage: str, done: int, total: int) -> None:
+        """The optimiser's progress (``stage``, ``done`` of ``total``); stop if cancelled."""
+        self.stage, self.total = stage, int(total)
+        self.progress(done)
+
     def as_dict(self) -> dict[str, Any]:
         return {"id": self.id, "kind": self.kind, "state": self.state, "done": self.done,
-                "total": self.total, "error": self.error,
-                "runtime_s": round(self.runtime_s or time.monotonic() - self.started, 3)}
+                "total": self.total, "stage": self.stage, "error": self.error,
+                "runtime_s": round(self.runtime_s or time.monotonic() - self.started, 3),
+                "result": self.result, "files": sorted(self.files)}
 
 
 # ---- a run's table and what is placed on it -------------------------------------
@@ -361,42 +376,129 @@ class ProjectEntry:
         return guard(self.registry).instantiate(cls, cls.Params(**values))
 
     # -- runs -----------------------------------------------------------------------
-    def start_run(self, rocks: int | None, seed: int | None) -> Job:
-        """Start the screening run of the project in a thread (one at a time per project).
-
-        Raises
-        ------
-        ServeError
-            409 when a run of this project is under way; 400 for a rock
-            count or seed out of range.
-        """
+    def _rocks_seed(self, rocks: int | None, seed: int | None) -> tuple[int, int]:
         n = int(self.project.rocks.count if rocks is None else rocks)
         s = int(self.project.rocks.seed if seed is None else seed)
         if not 1 <= n <= MAX_RUN_ROCKS:
             raise ServeError(400, f"rocks: expected 1 to {MAX_RUN_ROCKS:,}, got {n:,}")
         if s < 0:
             raise ServeError(400, f"seed: expected a whole number >= 0, got {s}")
+        return n, s
+
+    def _start(self, kind: str, total: int, work: Callable[[Job], None]) -> Job:
+        """Run ``work(job)`` in a thread; one job at a time per project.
+
+        Raises
+        ------
+        ServeError
+            409 when a job of this project is under way.
+        """
         with self.lock:
             if self.job is not None and self.job.state == "running":
-                raise ServeError(409, f"a run of {self.id} is under way (job {self.job.id})")
-            job = Job("simulate", n)
+                raise ServeError(409, f"a {self.job.kind} of {self.id} is under way "
+                                 f"(job {self.job.id})")
+            job = Job(kind, total)
             self.job = job
-        threading.Thread(target=self._run, args=(job, n, s), daemon=True,
+        threading.Thread(target=self._work, args=(job, work), daemon=True,
                          name=f"rockfall-serve-{job.id}").start()
         return job
 
-    def _run(self, job: Job, n: int, seed: int) -> None:
+    @staticmethod
+    def _work(job: Job, work: Callable[[Job], None]) -> None:
         try:
-            bench = build_bench(self.project, self.registry, n, seed, job.progress)
+            work(job)
         except Cancelled:
             job.state = "cancelled"
         except Exception as exc:  # noqa: BLE001 -- reported to the page, the app stays up
             job.state, job.error = "failed", " ".join(str(exc).split()) or type(exc).__name__
         else:
-            self.bench = bench
-            job.done = n
             job.state = "done"
         job.runtime_s = time.monotonic() - job.started
+
+    def start_run(self, rocks: int | None, seed: int | None) -> Job:
+        """Start the screening run of the project (see :func:`build_bench`).
+
+        Raises
+        ------
+        ServeError
+            409 when a job of this project is under way; 400 for a rock
+            count or seed out of range.
+        """
+        n, s = self._rocks_seed(rocks, seed)
+
+        def work(job: Job) -> None:
+            self.bench = build_bench(self.project, self.registry, n, s, job.progress)
+            job.done = n
+
+        return self._start("simulate", n, work)
+
+    def start_check(self, raws: Sequence[Any] | None, rocks: int | None,
+                    seed: int | None) -> Job:
+        """Start ``check`` of the project with these measures (None: the project's own).
+
+        Every rock runs against the measures (ditches and berms too); the
+        job's result is the summary ``rockfall-design check --json`` prints.
+
+        Raises
+        ------
+        ServeError
+            400 for measures the plugins reject or rocks or seed out of
+            range; 409 while a job of this project runs.
+        """
+        from ..errors import ProjectError
+        from ..evaluate import evaluate, place_measures
+        from ..simulation import section_from_project
+
+        n, s = self._rocks_seed(rocks, seed)
+        project = self.project
+        if raws is not None:
+            measures = [self.build_measure(raw, i) for i, raw in enumerate(raws)]
+            try:
+                place_measures(project, self.registry, measures, section_from_project(project))
+            except ProjectError as exc:
+                raise ServeError(400, _placed_message(exc.message)) from None
+            project = project.model_copy(update={"measures": [dict(r) for r in raws]})
+
+        def work(job: Job) -> None:
+            ev = evaluate(project, self.registry, rocks=n, seed=s, progress=job.progress)
+            job.result = ev.summary()
+            job.done = n
+
+        return self._start("check", n, work)
+
+    def start_optimise(self, rocks: int | None, seed: int | None) -> Job:
+        """Start ``optimise`` of the project: the same search and result as the command.
+
+        The job's result is the summary ``rockfall-design optimise --json``
+        prints; with a design, ``design.yaml`` (as ``--out`` writes it) is
+        offered for download.
+
+        Raises
+        ------
+        ServeError
+            400 without a ``design:`` section, or with ``design.scenarios``
+            (optimise those with the command line); 409 while a job runs.
+        """
+        from ..optimise import optimise
+        from ..report.terminal import design_yaml
+
+        if self.project.design is None:
+            raise ServeError(400, f"{self.path.name}: the project has no design: section to "
+                             "optimise")
+        if self.project.design.scenarios is not None:
+            raise ServeError(400, f"{self.path.name}: design.scenarios: a design across "
+                             "scenarios is optimised with rockfall-design optimise")
+        n, s = self._rocks_seed(rocks, seed)
+        project = self.project
+
+        def work(job: Job) -> None:
+            res = optimise(project, self.registry, rocks=n, seed=s, progress=job.staged)
+            job.result = res.summary()
+            if res.best is not None:
+                job.files["design.yaml"] = design_yaml(res.best, self.path.name,
+                                                       res.search_rocks)
+
+        return self._start("optimise", n, work)
 
     # -- the project file -----------------------------------------------------------
     def save(self, text: str, name: str | None) -> Path:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shutil
 import time
 
 import numpy as np
@@ -13,6 +14,7 @@ pytest.importorskip("httpx", reason="Starlette's test client needs httpx")
 from starlette.testclient import TestClient  # noqa: E402
 
 import rockfall_design as rd  # noqa: E402
+from rockfall_design.cli import main  # noqa: E402
 from rockfall_design.evaluate import place_measures  # noqa: E402
 from rockfall_design.serve.app import COOKIE, create_app  # noqa: E402
 from rockfall_design.serve.workbench import (  # noqa: E402
@@ -340,3 +342,80 @@ def test_place_answers_the_envelope_of_the_table(client):
                                           "x": 60}).json()
     assert out["measures"][0]["met"] == env["crossings"][j]
     assert np.isfinite(env["height"]["p95"][j])
+
+
+# ---- check and optimise from the page ---------------------------------------------------------
+
+
+def test_check_from_the_page_is_rockfall_design_check(client, project_copy, capsys):
+    fence = {**FENCE, "x": 150.0}
+    r = client.post("/api/projects/design_two_zones/check",
+                    json={"measures": [fence], "rocks": 800, "seed": 2})
+    assert r.status_code == 202, r.text
+    job = _wait(client, r.json()["id"])
+    assert job["state"] == "done", job
+    path = project_copy.parent / "with_fence.yaml"
+    path.write_text(project_copy.read_text()
+                    + "measures:\n  - {type: fence, x: 150, height: 5.0, capacity_kj: 2000}\n")
+    try:
+        assert main(["check", str(path), "--rocks", "800", "--seed", "2", "--json"]) in (0, 1)
+    finally:
+        path.unlink()
+    cli = json.loads(capsys.readouterr().out)
+    page = job["result"]
+    assert page["protect"] == cli["protect"] and page["ok"] == cli["ok"]
+    assert page["measures"] == cli["measures"]
+
+
+def test_check_with_a_measure_that_does_not_fit_starts_nothing(client):
+    r = client.post("/api/projects/design_two_zones/check",
+                    json={"measures": [{**FENCE, "x": -50.0}]})
+    assert r.status_code == 400 and "outside the section" in r.json()["error"]
+    r = client.post("/api/projects/design_two_zones/check", json={"measures": {"x": 1}})
+    assert r.status_code == 400
+
+
+def test_optimise_can_be_cancelled(entries, registry, project_copy):
+    (entry,) = load_entries([project_copy], registry)
+    app = create_app([entry], TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        job = c.post("/api/projects/design_two_zones/optimise", json={"rocks": 3000}).json()
+        assert job["kind"] == "optimise"
+        c.post(f"/api/jobs/{job['id']}/cancel", json={})
+        job = _wait(c, job["id"])
+        assert job["state"] == "cancelled" and job["result"] is None
+        assert c.get(f"/api/jobs/{job['id']}/files/design.yaml").status_code == 404
+
+
+def test_optimise_without_a_design_section(tmp_path, registry, projects_dir):
+    shutil.copy(projects_dir / "standard_slope.yaml", tmp_path / "standard_slope.yaml")
+    app = create_app(load_entries([tmp_path / "standard_slope.yaml"], registry), TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        r = c.post("/api/projects/standard_slope/optimise", json={})
+        assert r.status_code == 400 and "no design: section" in r.json()["error"]
+
+
+@pytest.mark.slow
+def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registry,
+                                                               projects_dir, capsys):
+    for name in ("design_quarry.yaml", "catalogue_products.yaml", "catalogue_costs.yaml"):
+        shutil.copy(projects_dir / name, tmp_path / name)
+    app = create_app(load_entries([tmp_path / "design_quarry.yaml"], registry), TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        job = c.post("/api/projects/design_quarry/optimise",
+                     json={"rocks": 500, "seed": 3}).json()
+        job = _wait(c, job["id"])
+        assert job["state"] == "done", job
+        page = job["result"]
+        design = c.get(f"/api/jobs/{job['id']}/files/design.yaml")
+    out = tmp_path / "out"
+    main(["optimise", str(tmp_path / "design_quarry.yaml"), "--rocks", "500", "--seed", "3",
+          "--json", "--out", str(out)])
+    cli = json.loads(capsys.readouterr().out)
+    assert page["best"] == cli["best"] and page["best"] is not None
+    assert page["alternatives"] == cli["alternatives"]
+    assert design.status_code == 200
+    # The same design.yaml but for the first line's "chosen from" (the file name as given).
+    ours, theirs = design.text.splitlines(), (out / "design.yaml").read_text().splitlines()
+    assert ours[0].startswith("# Chosen by rockfall-design optimise from design_quarry.yaml")
+    assert ours[1:] == theirs[1:]

@@ -12,6 +12,7 @@ const PAD = { l: 48, r: 12, t: 12, b: 26 };
 const state = {
   projects: [], project: null, plugins: null, run: null, job: null,
   placed: null,                     // {type, params, x}
+  chosen: null,                     // the optimiser's chosen measures
   inflight: false, pendingX: null, lastResult: null, lastMs: null,
   sx: null,                         // x scale of every drawing: m -> px
 };
@@ -119,6 +120,7 @@ function drawSection() {
         fill: "#00897b", opacity: 0.7 }, svg);
     }
   }
+  for (const m of state.chosen || []) drawMeasure(svg, m, "#2e7d32", false);
   if (state.placed) drawMeasure(svg, { ...state.placed.params, type: state.placed.type, x: state.placed.x },
     "#c62828", true);
   svg.onmousemove = (ev) => hover(ev);
@@ -366,35 +368,116 @@ function showPlace(r) {
   $("latency").dataset.roundTripMs = state.lastMs;
 }
 
-// ---- runs ----------------------------------------------------------------------------
-async function simulate() {
-  showError("");
+// ---- runs: simulate, check, optimise --------------------------------------------------
+function runOptions() {
   const body = {};
   if ($("rocks").value) body.rocks = Number($("rocks").value);
   if ($("seed").value) body.seed = Number($("seed").value);
+  return body;
+}
+
+async function startJob(kind, body) {
+  showError("");
   try {
-    state.job = await api(`/api/projects/${state.project.id}/simulate`, body);
+    state.job = await api(`/api/projects/${state.project.id}/${kind}`, body);
   } catch (e) { showError(e.message); return; }
-  $("cancel").disabled = false; $("simulate").disabled = true;
+  for (const id of ["simulate", "check", "optimise"]) $(id).disabled = true;
+  $("cancel").disabled = false;
+  $("status").dataset.state = "running";
   poll();
 }
+
+function simulate() { startJob("simulate", runOptions()); }
+
+function checkDesign() {
+  const measures = state.project.measures.map((m) => ({ ...m }));
+  if (state.placed) measures.push({ type: state.placed.type, ...state.placed.params, x: state.placed.x });
+  startJob("check", { ...runOptions(), measures });
+}
+
+function optimiseDesign() { startJob("optimise", runOptions()); }
 
 async function poll() {
   const job = await api(`/api/jobs/${state.job.id}`);
   state.job = job;
   $("progress").max = job.total; $("progress").value = job.done;
-  $("status").textContent = `${job.state}: ${job.done} of ${job.total} rocks (${fmt(job.runtime_s, 1)} s)`;
+  const what = job.kind === "optimise" ? `${job.stage || "search"} ${job.done} of ${job.total}`
+    : `${job.done} of ${job.total} rocks`;
+  $("status").textContent = `${job.kind} ${job.state}: ${what} (${fmt(job.runtime_s, 1)} s)`;
   if (job.state === "running") { setTimeout(poll, 250); return; }
   $("cancel").disabled = true; $("simulate").disabled = false;
+  $("optimise").disabled = !state.project.has_design;
+  $("check").disabled = false;
+  $("status").dataset.state = job.state;
   if (job.state === "failed") showError(job.error);
-  if (job.state === "done") {
+  if (job.state !== "done") return;
+  if (job.kind === "simulate") {
     state.run = await api(`/api/projects/${state.project.id}/run`);
     $("status").textContent = `done: ${state.run.rocks} rocks, seed ${state.run.seed}, ${fmt(state.run.runtime_s, 1)} s`;
-    $("status").dataset.state = "done";
     $("place").disabled = false;
     drawSection(); drawRun();
     if (state.placed) requestPlace(state.placed.x);
+  } else if (job.kind === "check") {
+    showCheck(job.result);
+  } else {
+    showOptimise(job);
   }
+}
+
+function cell(v) { const td = document.createElement("td"); td.textContent = v; return td; }
+
+function showCheck(s) {
+  const div = $("results");
+  const p = s.protect;
+  div.innerHTML = "";
+  const head = document.createElement("p");
+  head.className = s.ok ? "ok" : "fail";
+  head.textContent = `check (${s.rocks} rocks, seed ${s.seed}): ${s.ok ? "every check holds" : "fails"}` +
+    (p ? `; ${p.reaching} rocks reach x ≥ ${p.x} m (upper bound ${pct(p.upper_fraction)})` : "");
+  div.appendChild(head);
+  for (const f of s.failures) { const q = document.createElement("p"); q.className = "fail"; q.textContent = f; div.appendChild(q); }
+  const table = document.createElement("table");
+  table.id = "check-table";
+  for (const m of s.measures) {
+    for (const c of m.checks) {
+      const tr = document.createElement("tr");
+      tr.append(cell(m.label), cell(c.name), cell(fmt(c.value)), cell(fmt(c.bound)), cell(fmt(c.target)), cell(c.ok ? "ok" : "fails"));
+      table.appendChild(tr);
+    }
+  }
+  div.appendChild(table);
+}
+
+function showOptimise(job) {
+  const s = job.result, div = $("results");
+  const best = s.best === null ? null : s.alternatives.find((a) => a.name === s.best);
+  div.innerHTML = "";
+  const head = document.createElement("p");
+  head.id = "chosen";
+  head.textContent = best ? `chosen: ${best.name}, cost ${Math.round(best.cost).toLocaleString()} ${s.currency || ""}` :
+    `no admissible design: ${s.reason || ""}`;
+  div.appendChild(head);
+  const table = document.createElement("table");
+  table.id = "alternatives";
+  const hr = document.createElement("tr");
+  for (const h of ["family", "cost", "residual", "holds", "why not"]) { const th = document.createElement("th"); th.textContent = h; hr.appendChild(th); }
+  table.appendChild(hr);
+  for (const a of s.alternatives) {
+    const tr = document.createElement("tr");
+    if (best && a.name === best.name) tr.className = "ok";
+    tr.append(cell(a.name), cell(a.cost === null ? "–" : Math.round(a.cost).toLocaleString()),
+      cell(a.residual === undefined || a.residual === null ? "–" : a.residual),
+      cell(a.feasible ? (a.holds_on_fresh_rocks ? "yes" : "not on fresh rocks") : "no"), cell(a.reason || ""));
+    table.appendChild(tr);
+  }
+  div.appendChild(table);
+  if (job.files.includes("design.yaml")) {
+    const a = document.createElement("a");
+    a.href = `/api/jobs/${job.id}/files/design.yaml`; a.textContent = "download design.yaml"; a.download = "design.yaml";
+    div.appendChild(a);
+  }
+  state.chosen = best ? best.measures : null;
+  drawSection(); drawRun();
 }
 
 async function cancel() { if (state.job) await api(`/api/jobs/${state.job.id}/cancel`, {}); }
@@ -418,11 +501,14 @@ async function saveYaml() {
 // ---- start ---------------------------------------------------------------------------
 async function selectProject(id) {
   state.project = await api(`/api/projects/${id}`);
-  state.run = state.project.run; state.placed = null;
+  state.run = state.project.run; state.placed = null; state.chosen = null;
+  $("results").innerHTML = "";
   $("title").textContent = state.project.name;
   $("description").textContent = state.project.description;
   $("rocks").value = state.project.rocks; $("seed").value = state.project.seed;
   $("place").disabled = !state.run;
+  $("check").disabled = false;
+  $("optimise").disabled = !state.project.has_design;
   drawSection(); drawRun();
   loadYaml().catch((e) => showError(e.message));
 }
@@ -444,6 +530,7 @@ async function start() {
     $("measure-type").onchange = () => { buildForm(); if (state.placed) placeMeasure(); };
     $("project").onchange = () => selectProject($("project").value);
     $("simulate").onclick = simulate; $("cancel").onclick = cancel; $("place").onclick = placeMeasure;
+    $("check").onclick = checkDesign; $("optimise").onclick = optimiseDesign;
     $("validate").onclick = validateYaml; $("save").onclick = saveYaml;
     if (list.projects.length) await selectProject(list.projects[0].id);
     document.body.dataset.ready = "1";
