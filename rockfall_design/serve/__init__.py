@@ -23,7 +23,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TextIO
 
-from ..errors import InputError
+from ..errors import InputError, RockfallError
 
 __all__ = ["serve", "DEFAULT_PORT", "find_projects"]
 
@@ -123,15 +123,23 @@ def serve(paths: Sequence[Path], *, host: str = "127.0.0.1", port: int | None = 
     from .app import create_app
     from .workbench import load_entries
 
-    files = [Path(p) for p in paths] or find_projects(Path.cwd())
-    if not files:
-        raise InputError("serve: no project file given and none in the current directory "
-                         "(rockfall-design serve projects/design_two_zones.yaml)")
     registry = load_registry(blocked=tuple(block))
     for f in registry.failures:
         sys.stderr.write(f"rockfall-design serve: plugin {f.plugin!r} was not loaded: "
                          f"{f.reason}\n")
-    entries = load_entries(files, registry)
+    if paths:
+        entries = load_entries([Path(p) for p in paths], registry)
+    else:
+        # Found, not named: a file that is not a valid project is left out, and said so.
+        entries = []
+        for p in find_projects(Path.cwd()):
+            try:
+                entries += load_entries([p], registry)
+            except RockfallError as exc:
+                sys.stderr.write(f"rockfall-design serve: left out: {exc}\n")
+    if not entries:
+        raise InputError("serve: no project file given and none in the current directory "
+                         "(rockfall-design serve projects/design_two_zones.yaml)")
     token = token or secrets.token_urlsafe(24)
     app = create_app(entries, token)
     sock = _bind(host, port)

@@ -59,6 +59,8 @@ def test_drag_a_fence_and_the_residual_follows(tmp_path):
             try:
                 page = browser.new_page(viewport={"width": 1400, "height": 1000})
                 page.on("pageerror", lambda e: errors.append(str(e)))
+                requested: list[str] = []
+                page.on("request", lambda r: requested.append(r.url))
                 page.goto(url)
                 page.wait_for_selector("body[data-ready='1']", timeout=60_000)
                 # The section is drawn: ground segments in their materials' colours.
@@ -87,6 +89,10 @@ def test_drag_a_fence_and_the_residual_follows(tmp_path):
                 assert after != before and "At the protected zone" in after
                 assert page.locator("#checks td").count() > 4
                 shot = page.screenshot(path=str(tmp_path / "serve.png"), full_page=True)
+                # Everything came from the app itself: it works with no network.
+                origin = url.split("/?", 1)[0]
+                assert requested and all(u.startswith(origin + "/") or u.startswith("data:")
+                                         for u in requested), requested
             finally:
                 browser.close()
     finally:

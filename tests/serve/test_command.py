@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import urllib.error
 import urllib.request
 from urllib.parse import urlsplit
@@ -64,3 +65,20 @@ def test_serve_bad_port(port, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["serve", "--port", port])
     assert exc.value.code == 2
+
+
+def test_serve_without_projects_serves_those_of_the_directory(project_copy, monkeypatch):
+    broken = project_copy.parent / "broken.yaml"
+    broken.write_text("slope:\n  points: [[0, 10]]\n")
+    try:
+        proc, url = start_server(cwd=project_copy.parent)
+        try:
+            with urllib.request.urlopen(url.replace("/?", "/api/projects?"), timeout=30) as r:
+                ids = [p["id"] for p in json.loads(r.read())["projects"]]
+        finally:
+            code, err = stop_server(proc)
+    finally:
+        broken.unlink()
+    assert ids == ["design_two_zones"]
+    assert "left out" in err and "broken.yaml" in err
+    assert code == 0

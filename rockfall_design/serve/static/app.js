@@ -408,9 +408,8 @@ async function poll() {
   $("cancel").disabled = true; $("simulate").disabled = false;
   $("optimise").disabled = !state.project.has_design;
   $("check").disabled = false;
-  $("status").dataset.state = job.state;
   if (job.state === "failed") showError(job.error);
-  if (job.state !== "done") return;
+  if (job.state !== "done") { $("status").dataset.state = job.state; return; }
   if (job.kind === "simulate") {
     state.run = await api(`/api/projects/${state.project.id}/run`);
     $("status").textContent = `done: ${state.run.rocks} rocks, seed ${state.run.seed}, ${fmt(state.run.runtime_s, 1)} s`;
@@ -422,6 +421,8 @@ async function poll() {
   } else {
     showOptimise(job);
   }
+  // Said last: a test (or a user's script) that waits for "done" finds everything drawn.
+  $("status").dataset.state = "done";
 }
 
 function cell(v) { const td = document.createElement("td"); td.textContent = v; return td; }
