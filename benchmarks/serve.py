@@ -118,12 +118,12 @@ def in_browser(url: str, rocks: int, moves: int) -> None:
         step = 6 if moves * 6 < 500 else max(1, 500 // moves)
         for i in range(1, moves + 1):
             # Each move to a new table station: wait until the page shows its answer.
-            before = page.evaluate("state.lastResult && state.lastResult.measures[0].x")
+            before = page.evaluate("state.lastResult && state.lastResult.measures.at(-1).x")
             t = time.perf_counter()
             page.mouse.move(x + step * i, y)
             page.wait_for_function(
                 f"!state.inflight && state.pendingX === null && state.lastResult && "
-                f"state.lastResult.measures[0].x !== {json.dumps(before)}", timeout=30_000)
+                f"state.lastResult.measures.at(-1).x !== {json.dumps(before)}", timeout=30_000)
             outside.append((time.perf_counter() - t) * 1e3)
             round_trip.append(float(page.get_attribute("#latency", "data-round-trip-ms")))
         page.mouse.up()

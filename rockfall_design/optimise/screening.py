@@ -139,6 +139,7 @@ class Screening:
         progress: Callable[[str], None] | None = None,
         stations: np.ndarray | None = None,
         rock_progress: Callable[[int], None] | None = None,
+        restart_stations: np.ndarray | None = None,
     ) -> None:
         """Run the search rocks on the bare slope and keep the table (see the class docs).
 
@@ -149,6 +150,8 @@ class Screening:
         ``rock_progress``, when given, is called with the rocks done of the
         bare run after each batch; an exception it raises stops the run
         (``rockfall-design serve`` shows progress and cancels this way).
+        ``restart_stations`` (m), when given with ``stations``, are kept as
+        restart stations, so that ground edits can still be judged.
         """
         from ..design import build_candidate_measure
 
@@ -189,6 +192,8 @@ class Screening:
                 restarts.append(np.arange(lo_r, hi + 1e-9, RESTART_STEP_M))
         if stations is not None:
             sts, restarts = [np.asarray(stations, dtype=float)], [np.zeros(0)]
+            if restart_stations is not None:
+                restarts = [np.asarray(restart_stations, dtype=float)]
         self.grid = np.unique(np.clip(np.concatenate(sts + [np.array([self.protect_x])]), x0, x1))
         self.restart_x = np.unique(np.clip(np.concatenate(restarts), x0, x1))
         t0 = time.perf_counter()

@@ -40,6 +40,11 @@ if TYPE_CHECKING:  # pragma: no cover
 #: 10,000 rocks on a 300 m section near 75 MB.
 TABLE_STEP_M = 1.0
 
+#: Spacing (m) of the restart stations, where every rock's full state is kept
+#: so that a ditch or berm re-runs only the rocks from the station above it
+#: (14 numbers per rock and station: 10,000 rocks on 300 m near 35 MB).
+RESTART_STEP_M = 10.0
+
 #: Largest request body (bytes): a project file or a section to import.
 MAX_BODY_BYTES = 1_000_000
 
@@ -221,13 +226,21 @@ class Bench:
         Raises
         ------
         ServeError
-            400 for a measure the plugins reject, one that does not fit, or
-            one that edits the ground (its rocks must run again).
+            400 for a measure the plugins reject or one that does not fit.
+
+        Notes
+        -----
+        A ditch or berm (a measure that reshapes the ground) is judged by
+        running again only the rocks that pass the restart station just
+        above it, from their saved state, on the edited ground (the
+        screening's own way, cached per shape and place): a fraction of a
+        second, so the page sends it when the measure is let go, not on
+        every move (``reshapes_ground`` in the answer says so).
         """
         from ..errors import ProjectError
-        from ..evaluate import place_measures
+        from ..evaluate import edited_section, place_measures
         from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
-        from ..measures import Barrier
+        from ..measures import Barrier, ProfileEdit
 
         t0 = time.perf_counter()
         sc = self.screening
@@ -236,25 +249,31 @@ class Bench:
             placed = place_measures(entry.project, entry.registry, measures, sc.section)
         except ProjectError as exc:
             raise ServeError(400, _placed_message(exc.message)) from None
-        for p in placed:
-            if not isinstance(p.footprint, Barrier):
-                raise ServeError(
-                    400, f"measures[{p.index}]: {p.label} reshapes the ground; its rocks must "
-                    "run again (use rockfall-design check), only fences, walls and other "
-                    "barriers follow the mouse")
+        edits = [p.footprint for p in placed if isinstance(p.footprint, ProfileEdit)]
+        table = sc.bare
+        if edits:
+            try:
+                # The screening's table for edited ground (its private helper: the
+                # one place that resumes rocks at a restart station).
+                table = sc._table_for(edits, edited_section(entry.project, sc.section, placed))
+            except ValueError as exc:
+                raise ServeError(400, f"{' + '.join(p.label for p in placed)}: {exc}") from None
         cost = math.nan
         if sc.spec.cost_model is not None:
             try:
                 cost = sc.cost([p.measure for p in placed])
             except (KeyError, ValueError):
                 cost = math.nan  # the cost model has no price for it: shown as unknown
-        res = sc.screen_placed(placed, sc.bare, cost)
+        res = sc.screen_placed(placed, table, cost)
         n = sc.n
         out_measures = []
         for p, r, checks in zip(placed, res.results, res.checks, strict=True):
+            fp = p.footprint
+            x = float(fp.x) if isinstance(fp, Barrier) else float(fp.x_start)
             out_measures.append({
                 "index": p.index, "label": p.label, "type": raws[p.index]["type"],
-                "x": float(p.footprint.x), "x_table": float(sc.grid[sc.station(p.footprint.x)]),
+                "x": x, "x_table": float(sc.grid[sc.station(x)]),
+                "reshapes_ground": not isinstance(fp, Barrier),
                 "met": int(r.met), "caught": int(r.caught), "passed_over": int(r.passed_over),
                 "broken_through": int(r.broken_through), "rebounded": int(r.rebounded),
                 "checks": [_check_dict(c) for c in checks],
@@ -275,6 +294,8 @@ class Bench:
             "admitted": bool(res.feasible), "near": bool(res.near),
             "rejected": not res.feasible and not res.near,
             "approximate": bool(res.approximate), "cost": _num(cost),
+            "reshapes_ground": bool(edits),
+            "rerun_rocks": int(table.rows.size) if table.rows is not None else 0,
             "elapsed_ms": round((time.perf_counter() - t0) * 1e3, 3),
         }
 
@@ -613,7 +634,8 @@ def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
     t0 = time.perf_counter()
     sc = Screening(project, registry, default_spec(project, registry),
                    build_concept(project, registry), rocks=rocks, seed=seed,
-                   stations=stations, rock_progress=progress)
+                   stations=stations, rock_progress=progress,
+                   restart_stations=np.arange(x0, x1 + 1e-9, RESTART_STEP_M))
     runtime = time.perf_counter() - t0
     qs = sorted({50.0, 95.0, *[float(q) for q in project.analysis.percentiles]})
     t = sc.bare

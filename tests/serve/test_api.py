@@ -185,6 +185,25 @@ def test_a_fence_no_rock_gets_through_gives_what_check_gives(client, project_cop
     assert out["measures"][0]["met"] == m["met"]
 
 
+def test_a_ditch_reruns_only_the_rocks_below_and_gives_what_check_gives(client,
+                                                                       project_copy):
+    ditch = {"type": "ditch", "width": 8.0, "depth": 1.5}
+    out = client.post("/api/place", json={"project": "design_two_zones", "measure": ditch,
+                                          "x": 200}).json()
+    assert out["reshapes_ground"] and 0 < out["rerun_rocks"] <= ROCKS
+    text = project_copy.read_text() + (
+        "measures:\n  - {type: ditch, x: 200, width: 8.0, depth: 1.5}\n")
+    path = project_copy.parent / "check_ditch.yaml"
+    path.write_text(text)
+    try:
+        exact = rd.check(path, rocks=ROCKS, seed=SEED, progress=False)
+    finally:
+        path.unlink()
+    assert out["residual"]["reaching"] == exact.summary["protect"]["reaching"]
+    (m,) = exact.summary["measures"]
+    assert (out["measures"][0]["met"], out["measures"][0]["caught"]) == (m["met"], m["caught"])
+
+
 def test_moving_the_fence_changes_the_residual(client):
     def reaching(x: float) -> int:
         r = client.post("/api/place", json={"project": "design_two_zones",
@@ -210,8 +229,8 @@ def test_moving_the_fence_changes_the_residual(client):
     ({"project": "design_two_zones", "measure": FENCE, "x": 5000}, 400, "outside the section"),
     ({"project": "design_two_zones", "measures": []}, 400, "measures:"),
     ({"project": "design_two_zones",
-      "measure": {"type": "ditch", "width": 8, "depth": 1.5}, "x": 200}, 400,
-     "reshapes the ground"),
+      "measure": {"type": "ditch", "width": 3, "depth": 1.5}, "x": 200}, 400,
+     "ditch too narrow"),
 ])
 def test_bad_place_requests_get_one_clear_line(client, body, status, words):
     r = client.post("/api/place", json=body)

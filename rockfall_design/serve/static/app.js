@@ -315,6 +315,8 @@ function moveMarker() {
   const grp = $("placed");
   if (!grp) return;
   const line = grp.querySelector("line"), text = grp.querySelector("text"), grip = $("placed-handle");
+  const bed = grp.querySelector("rect:not(.handle)");
+  if (bed) { bed.setAttribute("x", X(m.x)); bed.setAttribute("y", Y(g) - 3); }
   if (line) { line.setAttribute("x1", X(m.x)); line.setAttribute("x2", X(m.x)); line.setAttribute("y1", Y(g)); line.setAttribute("y2", Y(g + h)); }
   if (text) { text.setAttribute("x", X(m.x) + 4); text.setAttribute("y", Y(g + h) - 4); text.textContent = `${m.type} ${fmt(m.x, 1)} m`; }
   grip.setAttribute("x", X(m.x) - 9); grip.setAttribute("y", Y(g + h) - 14);
@@ -327,7 +329,9 @@ function requestPlace(x) {
   state.inflight = true;
   const t0 = performance.now();
   const m = state.placed;
-  api("/api/place", { project: state.project.id, measure: { type: m.type, ...m.params }, x })
+  // The design on the section: the project's own measures (when asked) and the placed one.
+  const own = $("with-own").checked ? state.project.measures.map((q) => ({ ...q })) : [];
+  api("/api/place", { project: state.project.id, measures: [...own, { type: m.type, ...m.params, x }] })
     .then((r) => { state.lastMs = performance.now() - t0; showPlace(r); showError(""); })
     .catch((e) => { showError(e.message); $("residual").textContent = "—"; $("residual").className = "residual"; })
     .finally(() => {
@@ -342,14 +346,17 @@ function showPlace(r) {
   div.textContent = `At the protected zone (x ≥ ${res.x} m): ${res.reaching} of ${res.rocks} rocks ` +
     `(${pct(res.fraction)}, upper bound ${pct(res.upper_bound)} at ${Math.round(res.confidence * 100)} %); ` +
     `allowed ${pct(res.allowed_fraction)}. ` +
-    (r.admitted ? "Design admitted." : r.rejected ? "Fails with confidence." : "Undecided: more rocks needed.");
+    (r.admitted ? "The design holds with confidence."
+      : r.rejected ? "The design fails with confidence (a check or the residual)."
+        : "Undecided: more rocks would decide it.");
   div.className = "residual " + (r.admitted ? "ok" : r.rejected ? "fail" : "");
   div.dataset.reaching = res.reaching;
   const body = $("checks").querySelector("tbody");
   body.innerHTML = "";
   for (const m of r.measures) {
     const head = document.createElement("tr");
-    head.innerHTML = `<td colspan="5"><b>${m.label}</b> (table at ${m.x_table} m)</td>`;
+    head.innerHTML = `<td colspan="5"><b>${m.label}</b> ` + (m.reshapes_ground
+      ? `(${r.rerun_rocks} rocks run again from above it)</td>` : `(table at ${m.x_table} m)</td>`);
     body.appendChild(head);
     for (const c of m.checks) {
       const tr = document.createElement("tr");
@@ -360,7 +367,7 @@ function showPlace(r) {
       body.appendChild(tr);
     }
   }
-  const m0 = r.measures[0];
+  const m0 = r.measures[r.measures.length - 1];
   $("counts").textContent = m0 ? `met ${m0.met}, caught ${m0.caught}, over ${m0.passed_over}, ` +
     `through ${m0.broken_through}` + (r.cost !== null ? `; cost ${Math.round(r.cost).toLocaleString()}` : "") : "";
   $("latency").textContent = `judged in ${fmt(r.elapsed_ms, 1)} ms on the server, ${fmt(state.lastMs, 0)} ms round trip`;
@@ -390,7 +397,7 @@ async function startJob(kind, body) {
 function simulate() { startJob("simulate", runOptions()); }
 
 function checkDesign() {
-  const measures = state.project.measures.map((m) => ({ ...m }));
+  const measures = $("with-own").checked ? state.project.measures.map((m) => ({ ...m })) : [];
   if (state.placed) measures.push({ type: state.placed.type, ...state.placed.params, x: state.placed.x });
   startJob("check", { ...runOptions(), measures });
 }
@@ -510,6 +517,7 @@ async function selectProject(id) {
   $("place").disabled = !state.run;
   $("check").disabled = false;
   $("optimise").disabled = !state.project.has_design;
+  $("with-own-label").hidden = !state.project.measures.length;
   drawSection(); drawRun();
   loadYaml().catch((e) => showError(e.message));
 }
@@ -531,6 +539,7 @@ async function start() {
     $("measure-type").onchange = () => { buildForm(); if (state.placed) placeMeasure(); };
     $("project").onchange = () => selectProject($("project").value);
     $("simulate").onclick = simulate; $("cancel").onclick = cancel; $("place").onclick = placeMeasure;
+    $("with-own").onchange = () => { if (state.placed && state.run) requestPlace(state.placed.x); };
     $("check").onclick = checkDesign; $("optimise").onclick = optimiseDesign;
     $("validate").onclick = validateYaml; $("save").onclick = saveYaml;
     if (list.projects.length) await selectProject(list.projects[0].id);
