@@ -309,7 +309,11 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
             raise ServeError(404, f"no file {name!r} in the project's directory")
         if target.stat().st_size > MAX_BODY_BYTES:
             raise ServeError(413, f"{name}: larger than {MAX_BODY_BYTES:,} bytes")
-        return _json({"path": name, "text": target.read_text(encoding="utf-8")})
+        try:
+            text = target.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise ServeError(400, f"{name}: not a UTF-8 text file") from None
+        return _json({"path": name, "text": text})
 
     async def validate(request: Request) -> Response:
         e = entry(request.path_params["pid"])

@@ -49,7 +49,7 @@ RESTART_STEP_M = 10.0
 MAX_BODY_BYTES = 1_000_000
 
 #: Most rocks one run of the app may have (the table holds rocks x stations).
-MAX_RUN_ROCKS = 100_000
+MAX_RUN_ROCKS = 50_000
 
 #: Rocks whose paths are drawn on the section (the first rocks of the run).
 PATHS_DRAWN = 40
@@ -98,29 +98,41 @@ def inside(base: Path, name: str) -> Path:
     return target
 
 
-def referenced_outside(data: Any, base: Path) -> str | None:
-    """The first string of a parsed project that names a file outside ``base``, or None.
+def referenced_outside(text: str, base: Path, root: Path) -> str | None:
+    """The first string of a project's YAML that names a file outside ``root``, or None.
 
     A project names its survey section, materials library and catalogues as
-    paths relative to its directory; an edited project must not make the app
-    read anything else.
+    paths relative to its own directory ``base``; an edited project must not
+    make the app read anything outside the project's directory ``root``.
+    The YAML is composed, not constructed, and every node visited once, so
+    that aliases cannot multiply the work (the loader's own limits come
+    after this check).
     """
-    if isinstance(data, dict):
-        items: Sequence[Any] = list(data.values())
-    elif isinstance(data, list):
-        items = data
-    elif isinstance(data, str) and _FILE_LIKE.match(data):
-        try:
-            inside(base, data)
-        except ServeError:
-            return data
-        return None
-    else:
-        return None
-    for v in items:
-        hit = referenced_outside(v, base)
-        if hit is not None:
-            return hit
+    import yaml
+
+    try:
+        node = yaml.compose(text, Loader=yaml.SafeLoader)
+    except yaml.YAMLError:
+        return None  # the project loader says where and why
+    seen: set[int] = set()
+    todo = [node] if node is not None else []
+    root = root.resolve()
+    while todo:
+        n = todo.pop()
+        if id(n) in seen:
+            continue
+        seen.add(id(n))
+        if isinstance(n, yaml.ScalarNode):
+            value = n.value
+            if isinstance(value, str) and _FILE_LIKE.match(value):
+                target = (base / value).resolve()
+                if not target.is_relative_to(root):
+                    return value
+        elif isinstance(n, yaml.SequenceNode):
+            todo.extend(n.value)
+        elif isinstance(n, yaml.MappingNode):
+            for k, v in n.value:
+                todo.extend((k, v))
     return None
 
 
@@ -535,6 +547,10 @@ class ProjectEntry:
             for a project that does not validate (its one-line message).
         """
         target = inside(self.directory, self.path.name if name is None else name)
+        if not target.parent.is_dir():
+            raise ServeError(400, f"path {name!r}: no such directory in the project's directory")
+        if target.is_dir():
+            raise ServeError(400, f"path {name!r} is a directory")
         project = self.validate(text, target)
         fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
         try:
@@ -557,8 +573,6 @@ class ProjectEntry:
             403 when it names a file outside the project's directory; 400
             with the command line's one-line message when it is not valid.
         """
-        import yaml
-
         from ..errors import RockfallError
         from ..evaluate import validate_project
         from ..project.loading import load_project_text
@@ -566,16 +580,12 @@ class ProjectEntry:
         target = target or self.path.resolve()
         if not isinstance(text, str):
             raise ServeError(400, "text: expected the project file as a string")
-        try:
-            data = yaml.safe_load(text)
-        except yaml.YAMLError:
-            data = None  # the loader below says where and why
-        hit = referenced_outside(data, self.directory)
+        hit = referenced_outside(text, target.parent, self.directory)
         if hit is not None:
             raise ServeError(403, f"{target.name}: {hit!r} lies outside the project's "
                              f"directory ({self.directory})")
         try:
-            project = load_project_text(text, str(target.name), base_dir=self.directory)
+            project = load_project_text(text, str(target.name), base_dir=target.parent)
             validate_project(project, self.registry)
         except RockfallError as exc:
             raise ServeError(400, " ".join(str(exc).split())) from None

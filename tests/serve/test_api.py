@@ -438,3 +438,38 @@ def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registr
     ours, theirs = design.text.splitlines(), (out / "design.yaml").read_text().splitlines()
     assert ours[0].startswith("# Chosen by rockfall-design optimise from design_quarry.yaml")
     assert ours[1:] == theirs[1:]
+
+
+def test_a_yaml_bomb_is_refused_without_expanding_it(client, project_copy):
+    root = project_copy.parent.parent
+    before = _snapshot(root)
+    lines = ['a0: &a0 ["../outside.txt", "x"]']
+    for i in range(1, 40):
+        lines.append(f"a{i}: &a{i} [*a{i - 1}, *a{i - 1}]")
+    text = "\n".join(lines) + "\n"
+    r = client.post("/api/projects/design_two_zones/save", json={"text": text})
+    assert r.status_code == 403 and "../outside.txt" in r.json()["error"]
+    safe = text.replace("../outside.txt", "fine")
+    r = client.post("/api/projects/design_two_zones/save", json={"text": safe})
+    assert r.status_code == 400
+    assert _snapshot(root) == before
+
+
+def test_save_into_a_missing_directory_or_onto_a_directory(client, project_copy):
+    before = _snapshot(project_copy.parent.parent)
+    for path in ("nosuch/x.yaml", "."):
+        r = client.post("/api/projects/design_two_zones/save",
+                        json={"text": project_copy.read_text(), "path": path})
+        assert r.status_code == 400, r.text
+    assert _snapshot(project_copy.parent.parent) == before
+
+
+def test_a_binary_file_is_not_read_as_text(client, project_copy):
+    (project_copy.parent / "blob.bin").write_bytes(b"\xff\xfe\x00\x81")
+    try:
+        r = client.get("/api/projects/design_two_zones/file", params={"path": "blob.bin"})
+        assert r.status_code == 400 and "UTF-8" in r.json()["error"]
+        r = client.get("/api/projects/design_two_zones/file", params={"path": "none.yaml"})
+        assert r.status_code == 404
+    finally:
+        (project_copy.parent / "blob.bin").unlink()
