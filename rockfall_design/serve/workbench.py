@@ -362,9 +362,14 @@ class ProjectEntry:
         for r in p.rocks.release:
             d = r.model_dump() if hasattr(r, "model_dump") else dict(r)
             releases.append({k: d.get(k) for k in ("x", "height", "weight")})
-        measures = []
-        for raw in p.measures:
-            measures.append({k: _plain(v) for k, v in dict(raw).items()})
+        measures = [{k: _plain(v) for k, v in dict(raw).items()} for raw in p.measures]
+        # Their labels, as the reports write them (the project validated when loaded).
+        from ..evaluate import build_measures, place_measures
+
+        placed = place_measures(p, self.registry, build_measures(p, self.registry), sec)
+        labels = {q.index: q.label for q in placed}
+        for i, m in enumerate(measures):
+            m["label"] = labels.get(i, m.get("type", ""))
         return {
             "id": self.id, "name": p.name, "description": getattr(p, "description", "") or "",
             "file": self.path.name,

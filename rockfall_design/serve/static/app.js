@@ -139,8 +139,10 @@ function drawMeasure(svg, m, colour, draggable) {
     el("line", { x1: X(x), y1: Y(g), x2: X(x), y2: Y(g + h), stroke: colour,
       "stroke-width": m.type === "wall" ? 4 : 2.5 }, grp);
   }
-  el("text", { x: X(x) + 4, y: Y(g + h) - 4, fill: colour }, grp).textContent =
-    `${m.type} ${fmt(x, 1)} m`;
+  const label = el("text", { x: X(x) + 4, y: Y(g + h) - 4, fill: colour }, grp);
+  label.textContent = draggable ? `${m.type} ${fmt(x, 1)} m` : (m.label || `${m.type} ${fmt(x, 1)} m`);
+  const tip = el("title", {}, grp);
+  tip.textContent = m.label || `${m.type} at x = ${fmt(x, 1)} m`;
   if (draggable) {
     // A wide, invisible grip: easy to catch with the mouse.
     const grip = el("rect", { x: X(x) - 9, y: Y(g + h) - 14, width: 18, height: Y(g) - Y(g + h) + 20,
