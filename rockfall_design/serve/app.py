@@ -31,6 +31,8 @@ changes nothing):
                                             error, or ok
 ``POST /api/projects/{id}/save``            ``{"text", "path"}``: write it, only inside
                                             the project's directory
+``POST /api/projects/{id}/upload``          ``{"path", "text", "replace"}``: import a
+                                            CSV or DXF section or a library there
 ==========================================  ==========================================
 """
 
@@ -330,6 +332,15 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         target = e.save(data.get("text"), name)
         return _json({"ok": True, "path": str(target.relative_to(e.directory))})
 
+    async def upload(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        name = data.get("path")
+        if not isinstance(name, str):
+            raise ServeError(400, "path: expected a file name inside the project's directory")
+        target = e.upload(name, data.get("text"), bool(data.get("replace", False)))
+        return _json({"ok": True, "path": str(target.relative_to(e.directory))})
+
     routes = [
         Route("/", handle(page)),
         Route("/static/{name}", handle(static)),
@@ -340,6 +351,7 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         Route("/api/projects/{pid}/file", handle(file)),
         Route("/api/projects/{pid}/validate", handle(validate), methods=["POST"]),
         Route("/api/projects/{pid}/save", handle(save), methods=["POST"]),
+        Route("/api/projects/{pid}/upload", handle(upload), methods=["POST"]),
         Route("/api/projects/{pid}/check", handle(check), methods=["POST"]),
         Route("/api/projects/{pid}/optimise", handle(optimise), methods=["POST"]),
         Route("/api/jobs/{jid}", handle(job)),

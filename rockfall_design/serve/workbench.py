@@ -48,6 +48,9 @@ RESTART_STEP_M = 10.0
 #: Largest request body (bytes): a project file or a section to import.
 MAX_BODY_BYTES = 1_000_000
 
+#: Files that may be imported into a project's directory.
+UPLOAD_SUFFIXES = (".csv", ".dxf", ".yaml", ".yml")
+
 #: Most rocks one run of the app may have (the table holds rocks x stations).
 MAX_RUN_ROCKS = 50_000
 
@@ -557,16 +560,34 @@ class ProjectEntry:
         if target.is_dir():
             raise ServeError(400, f"path {name!r} is a directory")
         project = self.validate(text, target)
-        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as f:
-                f.write(text)
-            os.replace(tmp, target)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        _write_atomically(target, text)
         if target == self.path.resolve():
             self.project, self.bench = project, None
+        return target
+
+    def upload(self, name: str, text: str, replace: bool = False) -> Path:
+        """Write an imported file (a CSV or DXF section, a materials library) beside the project.
+
+        Raises
+        ------
+        ServeError
+            403 outside the project's directory; 400 for another kind of
+            file or text that is not a string; 409 when the file exists and
+            ``replace`` is not set.
+        """
+        target = inside(self.directory, name)
+        if target.suffix.lower() not in UPLOAD_SUFFIXES:
+            raise ServeError(400, f"path {name!r}: expected a file ending in "
+                             f"{', '.join(UPLOAD_SUFFIXES)}")
+        if not isinstance(text, str):
+            raise ServeError(400, "text: expected the file's text as a string")
+        if not target.parent.is_dir():
+            raise ServeError(400, f"path {name!r}: no such directory in the project's directory")
+        if target.exists() and not replace:
+            raise ServeError(409, f"{name} exists already (send \"replace\": true to replace it)")
+        if target.resolve() == self.path.resolve():
+            raise ServeError(400, f"{name} is the project file: save it from the editor")
+        _write_atomically(target, text)
         return target
 
     def validate(self, text: str, target: Path | None = None) -> Project:
@@ -595,6 +616,18 @@ class ProjectEntry:
         except RockfallError as exc:
             raise ServeError(400, " ".join(str(exc).split())) from None
         return project
+
+
+def _write_atomically(target: Path, text: str) -> None:
+    """Write ``text`` to ``target`` in one step: a reader sees the old file or the new one."""
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def _plain(v: Any) -> Any:

@@ -481,3 +481,33 @@ def test_the_projects_own_measures_come_with_their_labels(registry, projects_dir
     assert [m["label"] for m in d["measures"]] == [
         "fence (6 m, 5000 kJ) at x = 100 m", "ditch (8 m wide, 1.5 m deep) at x = 124 m"]
     assert d["has_design"] is False and d["protect"] == {"x": 135.0}
+
+
+def test_import_a_section_beside_the_project_and_use_it(client, project_copy, projects_dir):
+    csv = (projects_dir / "survey_section.csv").read_text()
+    r = client.post("/api/projects/design_two_zones/upload",
+                    json={"path": "survey.csv", "text": csv})
+    assert r.status_code == 200 and r.json()["path"] == "survey.csv"
+    assert (project_copy.parent / "survey.csv").read_text() == csv
+    # Not over an existing file unless asked, never the project file, never outside.
+    again = client.post("/api/projects/design_two_zones/upload",
+                        json={"path": "survey.csv", "text": "x,y\n"})
+    assert again.status_code == 409
+    before = _snapshot(project_copy.parent.parent)
+    for body, status in (({"path": "../survey.csv", "text": csv}, 403),
+                         ({"path": "design_two_zones.yaml", "text": "x", "replace": True}, 400),
+                         ({"path": "run.sh", "text": "echo"}, 400),
+                         ({"path": "s.csv", "text": 5}, 400),
+                         ({"text": csv}, 400)):
+        r = client.post("/api/projects/design_two_zones/upload", json=body)
+        assert r.status_code == status, (body, r.text)
+    assert _snapshot(project_copy.parent.parent) == before
+    # The edited project may name it: it is inside the directory.
+    text = (projects_dir / "survey_slope.yaml").read_text().replace("survey_section.csv",
+                                                                   "survey.csv")
+    text = text.replace("library: materials.yaml", "library: lib.yaml")
+    shutil.copy(projects_dir / "materials.yaml", project_copy.parent / "lib.yaml")
+    r = client.post("/api/projects/design_two_zones/validate", json={"text": text})
+    assert r.json() == {"ok": True}, r.text
+    (project_copy.parent / "survey.csv").unlink()
+    (project_copy.parent / "lib.yaml").unlink()

@@ -508,6 +508,15 @@ async function saveYaml() {
   catch (e) { $("yaml-status").textContent = e.message; }
 }
 
+async function uploadFile() {
+  const f = $("upload").files[0];
+  if (!f) return;
+  try {
+    const r = await api(`/api/projects/${state.project.id}/upload`, { path: f.name, text: await f.text() });
+    $("yaml-status").textContent = `imported ${r.path}`;
+  } catch (e) { $("yaml-status").textContent = e.message; }
+}
+
 // ---- start ---------------------------------------------------------------------------
 async function selectProject(id) {
   state.project = await api(`/api/projects/${id}`);
@@ -543,6 +552,7 @@ async function start() {
     $("simulate").onclick = simulate; $("cancel").onclick = cancel; $("place").onclick = placeMeasure;
     $("with-own").onchange = () => { if (state.placed && state.run) requestPlace(state.placed.x); };
     $("check").onclick = checkDesign; $("optimise").onclick = optimiseDesign;
+    $("upload").onchange = uploadFile;
     $("validate").onclick = validateYaml; $("save").onclick = saveYaml;
     if (list.projects.length) await selectProject(list.projects[0].id);
     document.body.dataset.ready = "1";
