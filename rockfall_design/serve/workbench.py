@@ -198,6 +198,21 @@ def _finite_percentiles(a: np.ndarray, qs: Sequence[float]) -> dict[str, list[fl
     return out
 
 
+def _p95_bounds(a: np.ndarray, confidence: float) -> list[list[float | None]]:
+    """Per column of ``a``: [lower, upper] confidence bound of the 95th percentile of its
+    finite values (None where too few rocks passed to bound it)."""
+    from ..judge.bounds import quantile_lower_bound, quantile_upper_bound
+
+    out = []
+    for j in range(a.shape[1]):
+        v = a[:, j]
+        v = v[np.isfinite(v)]
+        lo = quantile_lower_bound(v, 0.95, confidence) if v.size else None
+        hi = quantile_upper_bound(v, 0.95, confidence) if v.size else None
+        out.append([_num(lo), _num(hi)])
+    return out
+
+
 def _json_list(v: np.ndarray) -> list[float | None]:
     return [None if not math.isfinite(float(x)) else round(float(x), 4) for x in v]
 
@@ -695,6 +710,11 @@ def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
         "height": _finite_percentiles(t.h, qs),
         "energy": _finite_percentiles(t.e_kj, qs),
         "percentiles": [f"p{q:g}" for q in qs],
+        # The 95th percentile's distribution-free bounds at the project's
+        # confidence (the judge's order statistics), for the hover.
+        "confidence": sc.confidence,
+        "height_p95_bounds": _p95_bounds(t.h, sc.confidence),
+        "energy_p95_bounds": _p95_bounds(t.e_kj, sc.confidence),
     }
     stopped = t.status == STOPPED
     counts, edges = np.histogram(t.x_end[stopped], bins=STOP_BINS, range=(x0, x1))

@@ -511,3 +511,12 @@ def test_import_a_section_beside_the_project_and_use_it(client, project_copy, pr
     assert r.json() == {"ok": True}, r.text
     (project_copy.parent / "survey.csv").unlink()
     (project_copy.parent / "lib.yaml").unlink()
+
+
+def test_the_envelopes_come_with_bounds_of_the_95th_percentile(client):
+    env = client.get("/api/projects/design_two_zones/run").json()["envelopes"]
+    j = env["x"].index(150.0)
+    for q in ("height", "energy"):
+        lo, hi = env[f"{q}_p95_bounds"][j]
+        assert lo <= env[q]["p95"][j] <= hi
+    assert env["height_p95_bounds"][0] == [None, None]  # no rock passes the crest's x = 0

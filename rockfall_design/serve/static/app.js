@@ -228,9 +228,11 @@ function hover(ev) {
   let text = `x = ${x.toFixed(1)} m, ground ${groundAt(x).toFixed(1)} m`;
   if (state.run) {
     const e = state.run.envelopes, j = Math.max(0, Math.min(e.x.length - 1, Math.round((x - e.x[0]) / (e.x[1] - e.x[0] || 1))));
-    const q = e.percentiles[e.percentiles.length > 1 ? 1 : 0];
-    text += ` | passing ${e.crossings[j]} rocks, height ${q} ${fmt(e.height[q][j])} m (max ${fmt(e.height.max[j])}),` +
-      ` energy ${q} ${fmt(e.energy[q][j], 0)} kJ (max ${fmt(e.energy.max[j], 0)})`;
+    const hb = e.height_p95_bounds[j], eb = e.energy_p95_bounds[j], c = Math.round(100 * e.confidence);
+    text += ` | passing ${e.crossings[j]} rocks, height p95 ${fmt(e.height.p95[j])} m` +
+      ` [${fmt(hb[0])}, ${fmt(hb[1])}] (max ${fmt(e.height.max[j])}),` +
+      ` energy p95 ${fmt(e.energy.p95[j], 0)} kJ [${fmt(eb[0], 0)}, ${fmt(eb[1], 0)}] (max ${fmt(e.energy.max[j], 0)});` +
+      ` bounds at ${c} %`;
   }
   $("readout").textContent = text;
 }
