@@ -316,6 +316,8 @@ class Bench:
             "lower_bound": fraction_lower_bound(reaching, n, sc.confidence),
             "allowed_fraction": sc.allowed_fraction, "allowed": sc.allowed_residual,
             "confidence": sc.confidence, "x": sc.protect_x,
+            # Without protect: in the project, the foot of the section stands in.
+            "protected_zone": entry.project.protect is not None,
         }
         residual["ok"] = reaching <= sc.allowed_residual
         residual["ok_with_confidence"] = residual["upper_bound"] <= sc.allowed_fraction
@@ -694,8 +696,15 @@ def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
     section = section_from_project(project)
     x0, x1 = float(section.x[0]), float(section.x[-1])
     stations = np.arange(x0, x1 + 1e-9, TABLE_STEP_M)
+    judged = project
+    if project.protect is None:
+        # The screening counts rocks reaching a protected zone; without one,
+        # the foot of the section stands in (the page says there is none).
+        from ..project.schema import Protect
+
+        judged = project.model_copy(update={"protect": Protect(x=x1)})
     t0 = time.perf_counter()
-    sc = Screening(project, registry, default_spec(project, registry),
+    sc = Screening(judged, registry, default_spec(project, registry),
                    build_concept(project, registry), rocks=rocks, seed=seed,
                    stations=stations, rock_progress=progress,
                    restart_stations=np.arange(x0, x1 + 1e-9, RESTART_STEP_M))

@@ -520,3 +520,16 @@ def test_the_envelopes_come_with_bounds_of_the_95th_percentile(client):
         lo, hi = env[f"{q}_p95_bounds"][j]
         assert lo <= env[q]["p95"][j] <= hi
     assert env["height_p95_bounds"][0] == [None, None]  # no rock passes the crest's x = 0
+
+
+def test_a_project_without_a_protected_zone_runs_and_says_so(registry, projects_dir):
+    (entry,) = load_entries([projects_dir / "calibrate_quarry.yaml"], registry)
+    assert entry.project.protect is None
+    app = create_app([entry], TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        job = c.post("/api/projects/calibrate_quarry/simulate", json={"rocks": 300}).json()
+        assert _wait(c, job["id"])["state"] == "done"
+        out = c.post("/api/place", json={"project": "calibrate_quarry", "measure": FENCE,
+                                         "x": 20}).json()
+    assert out["residual"]["protected_zone"] is False
+    assert out["residual"]["x"] == entry.describe()["ground"][-1][0]

@@ -347,7 +347,9 @@ function requestPlace(x) {
 function showPlace(r) {
   state.lastResult = r;
   const res = r.residual, div = $("residual");
-  div.textContent = `At the protected zone (x ≥ ${res.x} m): ${res.reaching} of ${res.rocks} rocks ` +
+  div.textContent = (res.protected_zone ? `At the protected zone (x ≥ ${res.x} m): `
+    : `No protected zone (protect:); past the foot of the section (x = ${res.x} m): `) +
+    `${res.reaching} of ${res.rocks} rocks ` +
     `(${pct(res.fraction)}, upper bound ${pct(res.upper_bound)} at ${Math.round(res.confidence * 100)} %); ` +
     `allowed ${pct(res.allowed_fraction)}. ` +
     (r.admitted ? "The design holds with confidence."
