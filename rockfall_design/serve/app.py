@@ -61,6 +61,17 @@ _STATIC_FILES = {"app.js": "text/javascript", "style.css": "text/css",
                  "index.html": "text/html"}
 
 
+# The page loads nothing but this app's own files (no CDN, no inline script),
+# may not be framed by another site, and is not kept in a cache.
+_PAGE_HEADERS = {
+    "Cache-Control": "no-store",
+    "Content-Security-Policy": "default-src 'self'; img-src 'self' data:; "
+                               "style-src 'self' 'unsafe-inline'; frame-ancestors 'none'",
+    "X-Content-Type-Options": "nosniff",
+    "Referrer-Policy": "no-referrer",
+}
+
+
 class TokenGuard:
     """ASGI middleware: 403 for any request without the run's token.
 
@@ -377,5 +388,4 @@ def _inside(e: ProjectEntry, name: str) -> Any:
 def _static(name: str) -> Response:
     path = resources.files("rockfall_design.serve").joinpath("static", name)
     with resources.as_file(path) as p:
-        return FileResponse(p, media_type=_STATIC_FILES[name],
-                            headers={"Cache-Control": "no-store"})
+        return FileResponse(p, media_type=_STATIC_FILES[name], headers=_PAGE_HEADERS)

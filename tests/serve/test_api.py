@@ -91,6 +91,17 @@ def test_the_token_in_the_address_sets_the_cookie_that_later_requests_use(entrie
         assert c.get("/api/projects").json()["projects"][0]["id"] == "design_two_zones"
 
 
+def test_the_page_loads_only_its_own_files_and_leaks_no_token(client):
+    r = client.get("/")
+    csp = r.headers["content-security-policy"]
+    assert "default-src 'self'" in csp and "frame-ancestors 'none'" in csp
+    assert r.headers["referrer-policy"] == "no-referrer"
+    # No address of another site in the page (the SVG namespace is a name, not a request).
+    assert "http" not in r.text.replace("http://www.w3.org/2000/svg", "")
+    assert client.get("/static/app.js").headers["content-type"].startswith("text/javascript")
+    assert client.get("/static/../app.py").status_code == 404
+
+
 def test_each_app_has_its_own_random_token(entries):
     a, b = create_app(entries), create_app(entries)
     assert a.state.token != b.state.token and len(a.state.token) >= 24

@@ -152,15 +152,18 @@ function drawMeasure(svg, m, colour, draggable) {
 }
 
 function drawLegend(names) {
-  const parts = names.map((n, i) => `<span><i style="background:${MATERIAL_COLOURS[i % MATERIAL_COLOURS.length]}"></i>${n}</span>`);
-  parts.push('<span><i style="background:#f57c00"></i>release zone</span>');
-  parts.push('<span><i style="background:#1565c0"></i>station</span>');
-  parts.push('<span><i style="background:rgba(220,40,40,0.3)"></i>protected zone</span>');
-  if (state.run) {
-    parts.push('<span><i style="background:#6a1b9a"></i>rock paths</span>');
-    parts.push('<span><i style="background:#00897b"></i>stops</span>');
+  // Built node by node: names come from the project file, never parsed as HTML.
+  const items = names.map((n, i) => [MATERIAL_COLOURS[i % MATERIAL_COLOURS.length], n]);
+  items.push(["#f57c00", "release zone"], ["#1565c0", "station"], ["rgba(220,40,40,0.3)", "protected zone"]);
+  if (state.run) items.push(["#6a1b9a", "rock paths"], ["#00897b", "stops"]);
+  const legend = $("legend");
+  legend.textContent = "";
+  for (const [colour, name] of items) {
+    const span = document.createElement("span"), swatch = document.createElement("i");
+    swatch.style.background = colour;
+    span.append(swatch, name);
+    legend.appendChild(span);
   }
-  $("legend").innerHTML = parts.join("");
 }
 
 // ---- envelopes and stops ------------------------------------------------------------
@@ -360,16 +363,18 @@ function showPlace(r) {
   const body = $("checks").querySelector("tbody");
   body.innerHTML = "";
   for (const m of r.measures) {
-    const head = document.createElement("tr");
-    head.innerHTML = `<td colspan="5"><b>${m.label}</b> ` + (m.reshapes_ground
-      ? `(${r.rerun_rocks} rocks run again from above it)</td>` : `(table at ${m.x_table} m)</td>`);
+    const head = document.createElement("tr"), td = document.createElement("td"), b = document.createElement("b");
+    td.colSpan = 5;
+    b.textContent = m.label;
+    td.append(b, m.reshapes_ground ? ` (${r.rerun_rocks} rocks run again from above it)` : ` (table at ${m.x_table} m)`);
+    head.appendChild(td);
     body.appendChild(head);
     for (const c of m.checks) {
       const tr = document.createElement("tr");
       tr.title = c.detail;
-      const cls = c.holds_with_confidence ? "ok" : c.ok ? "" : "fail";
-      tr.innerHTML = `<td>${c.name}</td><td>${fmt(c.value)}</td><td>${fmt(c.bound)}</td>` +
-        `<td>${fmt(c.target)}</td><td class="${cls}">${c.holds_with_confidence ? "holds" : c.ok ? "bound fails" : "fails"}</td>`;
+      const verdict = cell(c.holds_with_confidence ? "holds" : c.ok ? "bound fails" : "fails");
+      verdict.className = c.holds_with_confidence ? "ok" : c.ok ? "" : "fail";
+      tr.append(cell(c.name), cell(fmt(c.value)), cell(fmt(c.bound)), cell(fmt(c.target)), verdict);
       body.appendChild(tr);
     }
   }
