@@ -70,8 +70,10 @@ def test_drag_a_fence_and_the_residual_follows(tmp_path):
                 page.wait_for_selector("#status[data-state='done']", timeout=300_000)
                 assert page.locator("#env-height path").count() >= 3
                 page.click("#place")
+                # Predicates as functions, not expressions: the page's CSP forbids
+                # eval, which Playwright uses for an expression it polls.
                 page.wait_for_function(
-                    "document.getElementById('residual').dataset.reaching !== undefined",
+                    "() => document.getElementById('residual').dataset.reaching !== undefined",
                     timeout=30_000)
                 before = page.inner_text("#residual")
                 reaching_before = page.get_attribute("#residual", "data-reaching")
@@ -83,8 +85,8 @@ def test_drag_a_fence_and_the_residual_follows(tmp_path):
                     page.mouse.move(x + 15 * i, y)
                 page.mouse.up()
                 page.wait_for_function(
-                    f"document.getElementById('residual').dataset.reaching !== "
-                    f"'{reaching_before}'", timeout=30_000)
+                    "(before) => document.getElementById('residual').dataset.reaching "
+                    "!== before", arg=reaching_before, timeout=30_000)
                 after = page.inner_text("#residual")
                 assert after != before and "At the protected zone" in after
                 assert page.locator("#checks td").count() > 4

@@ -416,7 +416,15 @@ function checkDesign() {
 function optimiseDesign() { startJob("optimise", runOptions()); }
 
 async function poll() {
-  const job = await api(`/api/jobs/${state.job.id}`);
+  let job;
+  try {
+    job = await api(`/api/jobs/${state.job.id}`);
+  } catch (e) {
+    // The server may be busy for a moment: say so and ask again.
+    showError(`progress: ${e.message}`);
+    setTimeout(poll, 1000);
+    return;
+  }
   state.job = job;
   $("progress").max = job.total; $("progress").value = job.done;
   const what = job.kind === "optimise" ? `${job.stage || "search"} ${job.done} of ${job.total}`
