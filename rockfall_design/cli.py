@@ -224,6 +224,23 @@ def build_parser() -> argparse.ArgumentParser:
                      "plugins as one JSON object on stdout instead of tables")
     _add_block_option(plg)
     plg.set_defaults(func=cmd_plugins)
+    srv = sub.add_parser(
+        "serve",
+        help="design in the browser: the section, the rocks, and measures dragged along it",
+        description="Start the browser app on the projects (needs the web extra: "
+        'pip install "rockfall-design[web]") and print its address, with a per-run token '
+        "that keeps other local users and other sites out. Ctrl-C stops it.",
+    )
+    srv.add_argument("project", type=Path, nargs="*",
+                     help="project files (YAML), one or more; default: those of the current "
+                     "directory")
+    srv.add_argument("--port", type=_int_at_least(0, "port", 65535), metavar="N",
+                     help="port to listen on (default: the first free one from 8765; "
+                     "0: any free port)")
+    srv.add_argument("--host", default="127.0.0.1", metavar="H",
+                     help="address to listen on (default: 127.0.0.1, this machine only)")
+    _add_block_option(srv)
+    srv.set_defaults(func=cmd_serve)
     return parser
 
 
@@ -666,6 +683,13 @@ def cmd_plugins(args: argparse.Namespace) -> int:
         table = plugins_table(registry)
         fitted_console(table).print(table)
     return int(ExitCode.OK)
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    """Serve the browser app until Ctrl-C (the web extra, imported only here)."""
+    from .serve import serve
+
+    return serve(args.project, host=args.host, port=args.port, block=args.block)
 
 
 def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:
