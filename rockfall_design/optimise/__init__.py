@@ -307,6 +307,12 @@ def _proof(alt: Alternative, tally: _Tally, looks: LookSchedule, currency: str) 
             f"{top or 'none cheaper'}{capped}")
 
 
+def fresh_failures(fresh: Evaluation) -> str:
+    """What fails on the fresh rocks: the point failures, or that some bound misses."""
+    return "; ".join(fresh.failures()) or (
+        "its point values hold, but not every check or the residual with its bound")
+
+
 def _marginal_entry(alt_name: str, d: Any, dec: Decision) -> dict[str, Any]:
     return {"name": alt_name, "family": alt_name,
             "measures": [{"type": m.kind, **m.params.model_dump(mode="json")}
@@ -513,12 +519,12 @@ class _SettleState:
                                 rocks=fresh_n, seed=self.fresh_seed)
         alt.exact_evaluations += 1
         self.simulated += fresh_n
-        if not fresh.ok:
+        if not fresh.holds_with_confidence:
             # Not chosen: it fits the noise of the search rocks. Decide the next one.
             tally.reasons["fails on fresh rocks"] += 1
             if not alt.holds_on_fresh_rocks:
-                alt.reason = ("the cheapest admitted design fails on fresh rocks: "
-                              + "; ".join(fresh.failures()))
+                alt.reason = ("the cheapest admitted design does not hold with confidence on "
+                              "fresh rocks: " + fresh_failures(fresh))
             return False
         alt.measures = sorted(d.measures, key=lambda m: m.x)
         alt.cost = d.cost

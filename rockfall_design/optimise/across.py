@@ -59,6 +59,7 @@ from . import (
     SEARCH_SEED,
     Alternative,
     OptimisationResult,
+    fresh_failures,
 )
 from .decide import decide, look_concept
 from .screening import Screening
@@ -347,12 +348,13 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
                                 seed=sc.fresh_seed)
         simulated += fresh_n
         exact += 1
-        rows[j].update(holds_on_fresh_rocks=fresh.ok, fresh_seed=sc.fresh_seed,
+        rows[j].update(holds_on_fresh_rocks=fresh.holds_with_confidence, fresh_seed=sc.fresh_seed,
                        fresh_rocks=fresh_n)
-        if fresh.ok:
+        if fresh.holds_with_confidence:
             holding += 1
         else:
-            rows[j]["reason"] = "fails on fresh rocks: " + "; ".join(fresh.failures())
+            rows[j]["reason"] = ("does not hold with confidence on fresh rocks: "
+                                 + fresh_failures(fresh))
             failed.append(j)
     if holding < required:
         why = "; ".join(f"scenario {scs[j].run.index}: {rows[j]['reason']}" for j in failed
