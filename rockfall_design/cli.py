@@ -325,6 +325,17 @@ def _warn_failures(registry: Any) -> None:
         sys.stderr.write(f"{PROG}: warning: plugin {f.plugin!r} was not loaded: {f.reason}\n")
 
 
+def _warn_requirements(project: Any, args: argparse.Namespace) -> None:
+    """One line per requirement that can never hold with confidence (an allowed fraction 0)."""
+    if args.command not in ("check", "optimise", "optimize"):
+        return
+    from .judge.verdict import requirement_warnings
+
+    command = "check" if args.command == "check" else "optimise"
+    for line in requirement_warnings(project, command):
+        sys.stderr.write(f"{PROG}: warning: {line}\n")
+
+
 def _plugins_for(project: Any, args: argparse.Namespace) -> Any:
     """Load the plugins and check the project's plugin sections with them.
 
@@ -495,6 +506,7 @@ def cmd_check(args: argparse.Namespace) -> int:
         from .across import cli_check_scenarios
 
         return cli_check_scenarios(args, project, registry)
+    _warn_requirements(project, args)
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
                      len(project.analysis.stations))
@@ -522,7 +534,8 @@ def cmd_check(args: argparse.Namespace) -> int:
         from .report.terminal import print_check
 
         print_check(summary)
-    return int(ExitCode.OK if evaluation.ok else ExitCode.CHECK_FAILED)
+    # result.ok: the checks hold on their point values, and something was tested
+    return int(ExitCode.OK if result.ok else ExitCode.CHECK_FAILED)
 
 
 def cmd_optimise(args: argparse.Namespace) -> int:
@@ -539,6 +552,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         raise project.error_at((), "the project has no design: section to optimise "
                                    "(see the README, 'Designing protection')")
     registry = _plugins_for(project, args)
+    _warn_requirements(project, args)
     if getattr(args, "max_rocks", None):
         project = project.model_copy(update={"design": project.design.model_copy(
             update={"max_rocks": args.max_rocks})})
@@ -553,7 +567,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(report.summary, allow_nan=False) + "\n")
     else:
-        print_optimised(report.result, project)
+        print_optimised(report.result, project, report.summary)
     return int(ExitCode.OK if report.result.best is not None else ExitCode.CHECK_FAILED)
 
 
@@ -624,11 +638,12 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     return report
 
 
-def print_optimised(result: Any, project: Any) -> None:
-    """The terminal report of ``optimise``: the alternatives, and the scenarios if any."""
+def print_optimised(result: Any, project: Any, summary: dict[str, Any] | None = None) -> None:
+    """The terminal report of ``optimise``: the verdict, the alternatives, the chosen
+    design's bill (from ``summary``), and the scenarios if any."""
     from .report.terminal import print_optimise
 
-    print_optimise(result, project)
+    print_optimise(result, project, summary=summary)
     if project.design.scenarios is not None:
         from .across import print_across
 

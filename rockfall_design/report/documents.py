@@ -313,7 +313,9 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
         "results": [],
         "protect": "",
         "verdict": "",
+        "verdict_state": "",
         "failures": [],
+        "bill": None,
         "chosen": "",
         "chosen_measures": [],
     }
@@ -332,17 +334,56 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
         if ct is not None:
             ctx["results"].append(ct)
         ctx["protect"] = _protect_text(stats_summary)
-    if command == "check":
-        ctx["verdict"] = ("Design holds: every check passes." if summary["ok"]
+    _set_verdict(ctx, summary.get("verdict"))
+    if command == "check" and not summary.get("verdict"):  # a summary from before verdicts
+        ctx["verdict"] = ("Design holds on the point values." if summary["ok"]
                           else "Design fails.")
         ctx["failures"] = list(summary.get("failures", []))
+    if summary.get("bill"):
+        ctx["bill"] = _bill_table(summary["bill"])
     if design is not None:
-        ctx["results_note"] = ("Statistics, checks and figures of the chosen design, on the "
-                               "search rocks.")
+        ctx["results_note"] = (
+            "Statistics, checks and figures of the chosen design on the "
+            f"{int(design.summary['rocks']):,} rocks that decided it (seed "
+            f"{design.summary['seed']}); the search used {int(summary.get('search_rocks') or 0):,} "
+            f"rocks and the verification {int(summary.get('fresh_rocks') or 0):,} fresh rocks "
+            f"(seed {summary.get('fresh_seed')}); confidence "
+            f"{100 * float(summary.get('confidence') or 0.95):g} %.")
     figs = figures if figures is not None else result.figures()
     ctx["figures"] = [{"name": name, "caption": CAPTIONS.get(name, ""), "fig": fig}
                       for name, fig in figs.items()]
     return ctx
+
+
+def _set_verdict(ctx: dict[str, Any], verdict: Mapping[str, Any] | None) -> None:
+    """The verdict (``summary["verdict"]``) as the report's first lines."""
+    if not verdict:
+        return
+    ctx["verdict"] = verdict["headline"]
+    ctx["verdict_state"] = verdict["state"]
+    ctx["verdict_ok"] = verdict["state"] == "holds with confidence"
+    ctx["failures"] = list(verdict.get("details") or [])
+
+
+def _money(v: float) -> str:
+    return f"{v:,.2f}"
+
+
+def _bill_table(bill: Mapping[str, Any]) -> Table:
+    """The chosen design's bill: a line per quantity and fixed cost, and the total."""
+    cur = bill.get("currency") or ""
+    unit = f" ({cur})" if cur else ""
+    rows = [[str(it["measure"]), str(it["quantity"]), _money(it["count"]), str(it["unit"]),
+             _money(it["unit_price"]), _money(it["amount"]), str(it.get("source") or "")]
+            for it in bill["items"]]
+    rows.append(["total", "", "", "", "", _money(bill["total"]), ""])
+    return Table(f"Bill of the chosen design (site length {bill['length_m']:g} m)",
+                 ["measure", "quantity", "count", "unit", f"unit price{unit}",
+                  f"amount{unit}", "price from"], rows,
+                 note="count: the quantity over the whole site length (running metres, m3, "
+                 "or each); amount = count x unit price; the total is the design's cost as the "
+                 f"optimiser compared it, priced by the cost model {bill.get('model', '')}.",
+                 highlight=[False] * len(bill["items"]) + [True])
 
 
 def _values_text(values: Mapping[str, Any]) -> str:
@@ -448,6 +489,10 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
         + _margin_text(b["margin"], b["binds_at"]) + ".")
     ctx["verdict_ok"] = ok
     ctx["failures"] = list(summary.get("failures", []))
+    if summary.get("verdict"):
+        ctx["scenarios_note"] = ctx["verdict"]
+        _set_verdict(ctx, summary["verdict"])
+        ctx["failures"] = [ctx["scenarios_note"], *ctx["failures"]]
     for f in ctx["figures"]:
         f["caption"] = f"{name[0].upper()}{name[1:]}: {f['caption']}"
     if "margins" in figs:  # first: the report begins with every scenario

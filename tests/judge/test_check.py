@@ -155,7 +155,7 @@ def test_example_that_passes_and_example_that_fails(capsys, tmp_path):
                 "--out", str(tmp_path / "o"), "--plot", str(tmp_path / "f")])
     report = capsys.readouterr().out
     assert bad == 1
-    assert "Design fails" in report and "height_factor" in report
+    assert "Fails: " in report and "height_factor" in report
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert summary["ok"] is False and summary["failures"]
     assert summary["run"]["project"]["measures"][0]["type"] == "fence"

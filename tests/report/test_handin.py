@@ -1,0 +1,112 @@
+"""A report an engineer can hand in: the verdict first everywhere, the bill, the inputs.
+
+Each command runs once per module (a small run of a bundled project); the
+tests read its terminal report, report.html, report.md and ``--json``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import html as html_lib
+import io
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from rockfall_design.cli import main
+from rockfall_design.judge.verdict import STATES
+
+ROOT = Path(__file__).resolve().parents[2]
+PROJECTS = ROOT / "projects"
+
+RUNS = {
+    "check": ["check", str(PROJECTS / "quarry_fence_ditch.yaml"), "--rocks", "300"],
+    "optimise": ["optimise", str(PROJECTS / "design_ditch_or_fence.yaml"), "--rocks", "400"],
+}
+
+
+@pytest.fixture(scope="module", params=sorted(RUNS))
+def run(request, tmp_path_factory):
+    """(command, --json summary, terminal text, report.html, report.md) of one run."""
+    # capsys is function-scoped: the module's one run captures its output by hand
+
+    out = tmp_path_factory.mktemp(request.param)
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        code = main([*RUNS[request.param], "--json", "--report", str(out / "report")])
+    assert code in (0, 1)
+    summary = json.loads(buf.getvalue())
+    term = io.StringIO()
+    with contextlib.redirect_stdout(term):
+        main(RUNS[request.param])
+    html = (out / "report" / "report.html").read_text(encoding="utf-8")
+    md = (out / "report" / "report.md").read_text(encoding="utf-8")
+    return request.param, summary, term.getvalue(), html, md
+
+
+def _html_verdict(html: str) -> str:
+    found = re.search(r'<p id="verdict" class="verdict (\w+)">(.*?)</p>', html, re.S)
+    assert found, "report.html has no verdict"
+    return html_lib.unescape(found.group(2))
+
+
+def test_the_verdict_heads_the_json_the_terminal_and_both_documents(run):
+    command, summary, term, html, md = run
+    assert next(iter(summary)) == "verdict"
+    v = summary["verdict"]
+    assert v["state"] in STATES and v["headline"].lower().startswith(v["state"])
+    # terminal: the first line inside the panel
+    first = term.splitlines()[1].strip("│ ").strip()
+    assert v["headline"].startswith(first)
+    # report.html: the first paragraph after the title
+    assert html.index('id="verdict"') < html.index('class="meta"')
+    assert _html_verdict(html) == v["headline"]
+    # report.md: the first line after the title
+    lines = [line for line in md.splitlines() if line.strip()]
+    assert lines[0].startswith("# ") and lines[1] == f"**{v['headline']}**"
+    for d in v["details"]:
+        assert html_lib.escape(d, quote=False) in html and d in md
+
+
+def test_the_optimise_report_says_which_rocks_its_statistics_are_of(run):
+    command, summary, term, html, md = run
+    if command != "optimise" or summary["best"] is None:
+        pytest.skip("the chosen design's statistics")
+    assert "on the search rocks" not in md
+    assert f"on the {summary['rocks']:,} rocks that decided it" in md
+    assert f"the search used {summary['search_rocks']:,} rocks" in md
+
+
+def _cells(html: str, title: str) -> list[list[str]]:
+    """The body rows of the HTML table titled ``title``, as text cells."""
+    part = html.split(f"<h3>{title}", 1)[1].split("</table>", 1)[0]
+    rows = re.findall(r"<tr[^>]*>(.*?)</tr>", part, re.S)
+    return [[html_lib.unescape(c) for c in re.findall(r"<td[^>]*>(.*?)</td>", r, re.S)]
+            for r in rows if "<td" in r]
+
+
+def test_the_bill_in_report_html_adds_up_to_the_stated_cost(run):
+    command, summary, term, html, md = run
+    if command != "optimise" or summary["best"] is None:
+        pytest.skip("a chosen design's bill")
+    bill = summary["bill"]
+    cost = next(a["cost"] for a in summary["alternatives"] if a["name"] == summary["best"])
+    assert bill["total"] == pytest.approx(cost, abs=0.01)
+    assert set(bill) >= {"items", "total", "currency"}
+    for it in bill["items"]:
+        assert set(it) >= {"measure", "quantity", "unit", "count", "unit_price", "amount"}
+        assert it["amount"] == pytest.approx(it["count"] * it["unit_price"], rel=1e-9)
+    # report.html alone: every line's amount adds up to the total it states
+    rows = _cells(html, "Bill of the chosen design")
+    *lines, total = rows
+    number = lambda text: float(text.replace(",", ""))  # noqa: E731
+    amounts = [number(r[5]) for r in lines]
+    assert total[0] == "total"
+    assert sum(amounts) == pytest.approx(number(total[5]), abs=0.01 * len(amounts))
+    assert number(total[5]) == pytest.approx(cost, abs=0.01)
+    for r in lines:  # count x unit price = amount, as printed
+        assert number(r[2]) * number(r[4]) == pytest.approx(number(r[5]), abs=0.05)
+        assert "catalogue" in r[6] or "design.costs" in r[6]
+    assert "Bill (" in term and f"{bill['total']:,.2f}" in term
