@@ -325,10 +325,13 @@ class CheckResult(SimulationResult):
 
     command = "check"
 
-    def __init__(self, project: Project, evaluation: Evaluation) -> None:
+    def __init__(self, project: Project, evaluation: Evaluation,
+                 registry: Registry | None = None) -> None:
         super().__init__(project, evaluation.study)
         self.evaluation = evaluation
         self._evaluation = evaluation
+        #: The plugins the check ran with (for the report's provenance); None if not known.
+        self.registry = registry
 
     @cached_property
     def summary(self) -> dict[str, Any]:
@@ -516,7 +519,7 @@ class OptimiseResult:
         project = self.design_project()
         ev = evaluate(project, self._registry, rocks=self.n_rocks, seed=self.seed,
                       n_trajectories=DEFAULT_TRAJECTORIES)
-        return CheckResult(project, ev)
+        return CheckResult(project, ev, self._registry)
 
     def design_project(self) -> Project:
         """The project with the chosen measures in ``measures:``, as ``check`` would read it."""
@@ -672,9 +675,10 @@ def check(
 
     p = _project(project, registry)
     n = _count(p, rocks)
-    ev = _call(progress, n, evaluate, project=p, registry=registry or default_registry(),
+    reg = registry or default_registry()
+    ev = _call(progress, n, evaluate, project=p, registry=reg,
                rocks=n, seed=seed, n_trajectories=trajectories)
-    return CheckResult(p, ev)
+    return CheckResult(p, ev, reg)
 
 
 def optimise(

@@ -637,7 +637,8 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
                                      {"section": run.section.name})
         result = report.result
         cost = None if result.best is None else float(result.best.cost)
-        return SectionDone(report.summary, lambda: print_optimised(result, project), cost)
+        return SectionDone(report.summary,
+                           lambda: print_optimised(result, project, report.summary), cost)
 
     summary = each_section(args, corridor, "optimise", body, guard=guard,
                            out_files=("design.yaml", "alternatives.csv", "summary.json"),

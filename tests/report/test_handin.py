@@ -110,3 +110,38 @@ def test_the_bill_in_report_html_adds_up_to_the_stated_cost(run):
         assert number(r[2]) * number(r[4]) == pytest.approx(number(r[5]), abs=0.05)
         assert "catalogue" in r[6] or "design.costs" in r[6]
     assert "Bill (" in term and f"{bill['total']:,.2f}" in term
+
+
+def test_report_html_alone_carries_the_run_and_every_input(run):
+    """Provenance: version, hash, seeds and rocks, confidence, plugins, run time, inputs."""
+    import rockfall_design as rd
+
+    command, summary, term, html, md = run
+    text = html_lib.unescape(html)
+    project = rd.load_project(RUNS[command][1])
+    d = project.resolved_dict()
+    assert f"rockfall-design {rd.__version__}" in text
+    assert project.resolved_hash() in text
+    assert '<td>confidence (one-sided, of every bound)</td><td class="n">95 %</td>' in html
+    if command == "optimise":
+        assert f"{summary['search_rocks']:,} rocks, seed {summary['seed']}" in text
+        assert f"{summary['rocks']:,} rocks, seed {summary['seed']}" in text
+        assert f"{summary['fresh_rocks']:,} rocks, seed {summary['fresh_seed']}" in text
+        assert "Product catalogue" in text and "Cost catalogue" in text
+    else:
+        assert f"<td>seed</td><td class=\"n\">{summary['seed']}</td>" in html
+    assert "run time" in text
+    # the plugins that ran, with their distribution and version
+    assert f"plugin: safety {d['safety']['concept']}" in text
+    assert f"rockfall-design {rd.__version__}" in text
+    # the inputs: every material with its scatter, every release zone, the safety concept
+    for name, m in d["materials"].items():
+        assert f"<td>{name}</td>" in html
+        for k in m.get("scatter") or {}:
+            assert f"scatter of {k}" in text
+    assert "Scatter as in the project file" not in text
+    for i, _ in enumerate(d["rocks"]["release"]):
+        assert f"release zone {i + 1}" in text
+    for k in d["safety"]:
+        assert f"<td>{k}</td>" in html
+    assert "Model and limits" in text and "EAD 340059" in text
