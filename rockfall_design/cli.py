@@ -325,15 +325,16 @@ def _warn_failures(registry: Any) -> None:
         sys.stderr.write(f"{PROG}: warning: plugin {f.plugin!r} was not loaded: {f.reason}\n")
 
 
-def _warn_requirements(project: Any, args: argparse.Namespace) -> None:
-    """One line per requirement that can never hold with confidence (an allowed fraction 0)."""
-    if args.command not in ("check", "optimise", "optimize"):
-        return
+def _requirement_warnings(project: Any, args: argparse.Namespace) -> list[str]:
+    """One line per requirement that can never hold with confidence (an allowed fraction 0).
+
+    Found when the project is loaded and written once the run has ended, so
+    that a run that fails on bad input or a plugin fault still says one line.
+    """
     from .judge.verdict import requirement_warnings
 
     command = "check" if args.command == "check" else "optimise"
-    for line in requirement_warnings(project, command):
-        sys.stderr.write(f"{PROG}: warning: {line}\n")
+    return [f"{PROG}: warning: {line}\n" for line in requirement_warnings(project, command)]
 
 
 def _plugins_for(project: Any, args: argparse.Namespace) -> Any:
@@ -506,7 +507,7 @@ def cmd_check(args: argparse.Namespace) -> int:
         from .across import cli_check_scenarios
 
         return cli_check_scenarios(args, project, registry)
-    _warn_requirements(project, args)
+    warnings = _requirement_warnings(project, args)
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
                      len(project.analysis.stations))
@@ -528,6 +529,7 @@ def cmd_check(args: argparse.Namespace) -> int:
             record["project_hash"] = evaluation.resolved_project().resolved_hash()
             files.write_json(out / "summary.json", {**summary, "run": record})
         _figures_and_report(result, args, files)
+    sys.stderr.writelines(warnings)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
@@ -552,7 +554,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         raise project.error_at((), "the project has no design: section to optimise "
                                    "(see the README, 'Designing protection')")
     registry = _plugins_for(project, args)
-    _warn_requirements(project, args)
+    warnings = _requirement_warnings(project, args)
     if getattr(args, "max_rocks", None):
         project = project.model_copy(update={"design": project.design.model_copy(
             update={"max_rocks": args.max_rocks})})
@@ -564,6 +566,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         _reserve(files, args.report, REPORT_FILES)
         _reserve(files, args.plot, _figure_files(_FIGURES, args))
         report = optimise_with_files(project, args, registry, files, args.project)
+    sys.stderr.writelines(warnings)
     if args.json:
         sys.stdout.write(json.dumps(report.summary, allow_nan=False) + "\n")
     else:
