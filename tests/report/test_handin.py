@@ -145,3 +145,40 @@ def test_report_html_alone_carries_the_run_and_every_input(run):
     for k in d["safety"]:
         assert f"<td>{k}</td>" in html
     assert "Model and limits" in text and "EAD 340059" in text
+
+
+def _bundled(kind: str) -> list[Path]:
+    """The bundled projects with measures to check (kind 'check') or a design section."""
+    from rockfall_design.project import Project, load_corridor
+
+    out = []
+    for p in sorted(PROJECTS.glob("*.yaml")):
+        if p.name.startswith("catalogue_") or p.name in ("materials.yaml",
+                                                          "design_embankment.yaml"):
+            continue  # catalogues; the embankment needs the example plugin installed
+        loaded = load_corridor(p)
+        if not isinstance(loaded, Project):
+            continue  # a corridor has no report of its own
+        if (kind == "check" and loaded.measures) or (kind == "optimise" and loaded.design):
+            out.append(p)
+    return out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command, path", [("check", p) for p in _bundled("check")]
+                         + [("optimise", p) for p in _bundled("optimise")],
+                         ids=lambda v: getattr(v, "stem", v))
+def test_every_bundled_project_gives_one_verdict_everywhere(command, path, tmp_path):
+    """The done-when of issue 25: the same verdict first in all four faces, every project."""
+    args = [command, str(path), "--rocks", "300" if command == "check" else "1000"]
+    buf, term = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        main([*args, "--json", "--report", str(tmp_path / "r")])
+    with contextlib.redirect_stdout(term):
+        main(args)
+    v = json.loads(buf.getvalue())["verdict"]
+    html = (tmp_path / "r" / "report.html").read_text(encoding="utf-8")
+    md = (tmp_path / "r" / "report.md").read_text(encoding="utf-8")
+    assert _html_verdict(html) == v["headline"]
+    assert [line for line in md.splitlines() if line.strip()][1] == f"**{v['headline']}**"
+    assert v["headline"].startswith(term.getvalue().splitlines()[1].strip("│ ").strip())
