@@ -621,7 +621,8 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
             files.write_text(out / "design.yaml", across_design_yaml(result, source, project))
         elif result.best is not None:
             files.write_text(out / "design.yaml", design_yaml(result.best, source,
-                                                              result.search_rocks))
+                                                              result.search_rocks,
+                                                              result.looks))
         else:
             # A design.yaml of an earlier run must not sit beside a
             # summary that says there is no design.

@@ -56,6 +56,7 @@ from rockfall_design import (
     hookimpl,
     quantile_lower_bound,
     quantile_upper_bound,
+    quantile_with_bounds,
     rocks_to_bound_quantile,
 )
 
@@ -174,8 +175,12 @@ def _factor_check(
     values = np.asarray(values, dtype=float)
     if values.size == 0:
         return Check(name, None, target, True, "-", _NO_ROCK, None, True)
-    demand = _statistic(values, statistic)
-    upper = _statistic_bound(values, statistic, confidence)
+    if statistic == "max" or float(statistic[1:]) >= 100.0:
+        demand = upper = lower = float(np.max(values))
+    else:
+        # One partial sort for the percentile and both its bounds.
+        demand, lower, upper = quantile_with_bounds(values, float(statistic[1:]) / 100.0,
+                                                    confidence)
     bound_text = ("" if statistic == "max" or upper is None else
                   f" (upper bound {_num(upper, unit)} at {100 * confidence:g} %)")
     detail = (
@@ -192,7 +197,6 @@ def _factor_check(
     factor = provided / demand
     # The most favourable factor at this confidence: over the lower bound of
     # the statistic. It fails with confidence only when even that misses.
-    lower = _statistic_lower(values, statistic, confidence)
     f_best = None if lower is None else (math.inf if not lower > 0.0 else provided / lower)
     fails = f_best is not None and bool(f_best < target)
     if upper is None:

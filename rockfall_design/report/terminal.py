@@ -36,6 +36,9 @@ __all__ = [
 MAX_FILE_WIDTH = 200
 
 
+#: Marginal or undecided cheaper designs the optimise panel shows (the cheapest).
+MARGINAL_SHOWN = 6
+
 def fitted_console(renderable: Any, file: Any = None) -> Console:
     """A console as wide as the report's output can show it.
 
@@ -334,6 +337,15 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
                       f"edits simulated, {result.wall_s:.1f} s"),
         Text(""), tab, Text(""),
     ]
+    bare = getattr(result, "bare_slope", None)
+    if bare and bare["holds"]:
+        parts.append(Text(
+            f"The bare slope already meets the residual target: {bare['reaching']:,} of "
+            f"{bare['rocks']:,} search rocks reach x = {bare['x']:g} m, at most "
+            f"{100 * bare['upper']:.3f} % with {100 * result.confidence:g} % confidence "
+            f"(allowed {100 * bare['allowed']:.3f} %). No measure is needed for the "
+            "residual; a family's cheapest design may be one that meets few or no rocks.",
+            style="bold yellow"))
     if result.best is not None:
         b = result.best
         parts.append(Text(f"Chosen: {b.name}, {b.cost:,.0f} {cur}: "
@@ -347,12 +359,18 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
             parts += [Text(""), _bill_table(summary["bill"]), Text("")]
     else:
         parts.append(Text(f"No admissible design: {result.reason}", style="bold red"))
-    for m in getattr(result, "marginal", None) or []:
-        parts.append(Text(f"Marginal, cheaper: {m['name']} {m['cost']:,.0f} {cur}: "
+    marginal = getattr(result, "marginal", None) or []
+    for m in marginal[:MARGINAL_SHOWN]:
+        head = "Marginal, cheaper" if m.get("decided", True) else "Not decided, cheaper"
+        parts.append(Text(f"{head}: {m['name']} {m['cost']:,.0f} {cur}: "
                           f"{'; '.join(m['labels'])}: {_marginal_values(m)}; "
                           + (f"about {m['rocks_to_decide']:,} rocks would decide it "
                              "(--max-rocks)" if m["rocks_to_decide"] else
                              "its point value sits on the target"), style="yellow"))
+    if len(marginal) > MARGINAL_SHOWN:
+        parts.append(Text(f"... and {len(marginal) - MARGINAL_SHOWN} more cheaper designs "
+                          "marginal or not decided (listed under 'marginal' in --json and "
+                          "summary.json)", style="yellow"))
     for a in order:
         if (not a.holds or a.dominated) and a.reason:
             parts.append(Text(f"  {a.name}: {a.reason}", style="dim"))
@@ -387,8 +405,14 @@ def alternatives_table(result: Any) -> Any:
     return alternatives_frame(result.summary())
 
 
-def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -> str:
-    """The project with the chosen measures, as YAML that ``check`` accepts."""
+def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
+                looks: Any = None) -> str:
+    """The project with the chosen measures, as YAML that ``check`` accepts.
+
+    Its head records how the design was decided (the looks of the sequential
+    decision, see :mod:`rockfall_design.judge.sequential`) and how to repeat
+    the verification on fresh rocks.
+    """
     from ..project import dump_yaml
 
     ev = best.evaluation
@@ -406,7 +430,11 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -
         f"cost {best.cost:,.0f}.\n"
         f"# rocks: below are the rocks that decided it (seed {ev.study.seed}, "
         f"{ev.study.result.n} rocks; search: {search_rocks} rocks).\n"
-        f"# verification: seed {best.fresh_seed}, {best.fresh_rocks} rocks: "
+        + (f"# decision: admitted at the look of {ev.study.result.n} rocks of the looks "
+           f"{', '.join(str(k) for k in looks.sizes)}, each at "
+           f"{100 * looks.look_confidence:.4g} % (together {100 * looks.confidence:g} %)\n"
+           if looks is not None else "")
+        + f"# verification: seed {best.fresh_seed}, {best.fresh_rocks} rocks: "
         f"{'holds' if best.holds_on_fresh_rocks else 'FAILS'}; reproduce with\n"
         f"#   rockfall-design check design.yaml --seed {best.fresh_seed} "
         f"--rocks {best.fresh_rocks}\n"
