@@ -37,7 +37,7 @@ MAX_FILE_WIDTH = 200
 
 
 #: Marginal or undecided cheaper designs the optimise panel shows (the cheapest).
-MARGINAL_SHOWN = 6
+_MARGINAL_SHOWN = 6
 
 def fitted_console(renderable: Any, file: Any = None) -> Console:
     """A console as wide as the report's output can show it.
@@ -360,15 +360,15 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
     else:
         parts.append(Text(f"No admissible design: {result.reason}", style="bold red"))
     marginal = getattr(result, "marginal", None) or []
-    for m in marginal[:MARGINAL_SHOWN]:
+    for m in marginal[:_MARGINAL_SHOWN]:
         head = "Marginal, cheaper" if m.get("decided", True) else "Not decided, cheaper"
         parts.append(Text(f"{head}: {m['name']} {m['cost']:,.0f} {cur}: "
                           f"{'; '.join(m['labels'])}: {_marginal_values(m)}; "
                           + (f"about {m['rocks_to_decide']:,} rocks would decide it "
                              "(--max-rocks)" if m["rocks_to_decide"] else
                              "its point value sits on the target"), style="yellow"))
-    if len(marginal) > MARGINAL_SHOWN:
-        parts.append(Text(f"... and {len(marginal) - MARGINAL_SHOWN} more cheaper designs "
+    if len(marginal) > _MARGINAL_SHOWN:
+        parts.append(Text(f"... and {len(marginal) - _MARGINAL_SHOWN} more cheaper designs "
                           "marginal or not decided (listed under 'marginal' in --json and "
                           "summary.json)", style="yellow"))
     for a in order:
