@@ -187,3 +187,18 @@ def test_an_allowed_fraction_of_zero_is_one_warning_line_at_load(tmp_path, capsy
     path.write_text(path.read_text().replace("allowed_fraction: 0", "allowed_fraction: 0.01"))
     main(["check", str(path), "--json"])
     assert "allowed_fraction" not in capsys.readouterr().err
+
+
+def test_check_scenarios_of_nothing_is_untested_not_holds_in_every_scenario(tmp_path, capsys):
+    """Issue 27 item 3: check --scenarios with no measures held "in 2 of 2"."""
+    path = _write(tmp_path, """\
+        study:
+          vary:
+            materials.ground.friction: [0.5, 0.7]
+          scenarios: grid
+        """)
+    code = main(["check", str(path), "--scenarios", "--workers", "1", "--json"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 1 and out["ok"] is False and out["holds_in"] == 0
+    assert out["verdict"]["state"] == UNTESTED
+    assert all(s["verdict"]["state"] == UNTESTED for s in out["scenarios"])
