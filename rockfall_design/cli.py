@@ -342,6 +342,18 @@ def _warn_failures(registry: Any) -> None:
         sys.stderr.write(f"{PROG}: warning: plugin {f.plugin!r} was not loaded: {f.reason}\n")
 
 
+def _requirement_warnings(project: Any, args: argparse.Namespace) -> list[str]:
+    """One line per requirement that can never hold with confidence (an allowed fraction 0).
+
+    Found when the project is loaded and written once the run has ended, so
+    that a run that fails on bad input or a plugin fault still says one line.
+    """
+    from .judge.verdict import requirement_warnings
+
+    command = "check" if args.command == "check" else "optimise"
+    return [f"{PROG}: warning: {line}\n" for line in requirement_warnings(project, command)]
+
+
 def _plugins_for(project: Any, args: argparse.Namespace) -> Any:
     """Load the plugins and check the project's plugin sections with them.
 
@@ -512,6 +524,7 @@ def cmd_check(args: argparse.Namespace) -> int:
         from .across import cli_check_scenarios
 
         return cli_check_scenarios(args, project, registry)
+    warnings = _requirement_warnings(project, args)
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
                      len(project.analysis.stations))
@@ -533,13 +546,15 @@ def cmd_check(args: argparse.Namespace) -> int:
             record["project_hash"] = evaluation.resolved_project().resolved_hash()
             files.write_json(out / "summary.json", {**summary, "run": record})
         _figures_and_report(result, args, files)
+    sys.stderr.writelines(warnings)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
         from .report.terminal import print_check
 
         print_check(summary)
-    return int(ExitCode.OK if evaluation.ok else ExitCode.CHECK_FAILED)
+    # result.ok: the checks hold on their point values, and something was tested
+    return int(ExitCode.OK if result.ok else ExitCode.CHECK_FAILED)
 
 
 def cmd_optimise(args: argparse.Namespace) -> int:
@@ -556,6 +571,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         raise project.error_at((), "the project has no design: section to optimise "
                                    "(see the README, 'Designing protection')")
     registry = _plugins_for(project, args)
+    warnings = _requirement_warnings(project, args)
     if getattr(args, "max_rocks", None):
         project = project.model_copy(update={"design": project.design.model_copy(
             update={"max_rocks": args.max_rocks})})
@@ -567,10 +583,11 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         _reserve(files, args.report, REPORT_FILES)
         _reserve(files, args.plot, _figure_files(_FIGURES, args))
         report = optimise_with_files(project, args, registry, files, args.project)
+    sys.stderr.writelines(warnings)
     if args.json:
         sys.stdout.write(json.dumps(report.summary, allow_nan=False) + "\n")
     else:
-        print_optimised(report.result, project)
+        print_optimised(report.result, project, report.summary)
     return int(ExitCode.OK if report.result.best is not None else ExitCode.CHECK_FAILED)
 
 
@@ -642,11 +659,12 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     return report
 
 
-def print_optimised(result: Any, project: Any) -> None:
-    """The terminal report of ``optimise``: the alternatives, and the scenarios if any."""
+def print_optimised(result: Any, project: Any, summary: dict[str, Any] | None = None) -> None:
+    """The terminal report of ``optimise``: the verdict, the alternatives, the chosen
+    design's bill (from ``summary``), and the scenarios if any."""
     from .report.terminal import print_optimise
 
-    print_optimise(result, project)
+    print_optimise(result, project, summary=summary)
     if project.design.scenarios is not None:
         from .across import print_across
 

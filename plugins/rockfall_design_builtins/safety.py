@@ -293,18 +293,21 @@ class SpangConcept(SafetyConcept):
             description="Target of berm or ditch width / reach of the rocks (the statistic "
             "of the concept) (-).", json_schema_extra={"unit": "-"},
         )
+        # p95 by default, as the README advises: the sample maximum grows with the
+        # number of rocks and has no confidence bound.
         statistic: Literal["max", "p95", "p99"] = Field(
-            "max",
+            "p95",
             description="Statistic of the passing heights and energies of the rocks that "
             "met the measure giving the critical height and the design energy: the "
-            "maximum or the 95th/99th percentile.", json_schema_extra={"unit": None},
+            "95th/99th percentile (default p95) or the maximum.",
+            json_schema_extra={"unit": None},
         )
 
     example: ClassVar[dict[str, Any]] = {
         "height_factor": 2.0,
         "energy_factor": 1.0,
         "reach_factor": 1.0,
-        "statistic": "max",
+        "statistic": "p95",
         "confidence": 0.95,
     }
 

@@ -167,9 +167,48 @@ def _value(v: float | None, unit: str) -> str:
     return f"{v:,.2f}" if unit == "-" else f"{v:,.2f} {unit}"
 
 
+#: The style of each verdict's headline (rockfall_design.judge.verdict.STATES).
+_VERDICT_STYLE = {"holds with confidence": "bold green",
+                  "holds on point values only": "bold yellow",
+                  "fails": "bold red", "untested": "bold magenta"}
+
+
+def _verdict_parts(verdict: dict[str, Any] | None) -> list[Any]:
+    """The verdict's headline and details: the first lines of a report."""
+    if not verdict:
+        return []
+    parts: list[Any] = [Text(verdict["headline"], style=_VERDICT_STYLE.get(verdict["state"],
+                                                                          "bold"))]
+    for line in verdict.get("details") or []:
+        parts.append(Text(f"  - {line}", style="red" if verdict["state"] == "fails" else ""))
+    return parts
+
+
+def _bill_table(bill: dict[str, Any]) -> Table:
+    """The bill of the chosen design: a line per quantity and fixed cost, the total."""
+    cur = bill.get("currency") or ""
+    tab = Table(title=f"Bill ({bill['model']}; site length {bill['length_m']:g} m)",
+                title_justify="left", show_edge=False, caption="count: over the whole site "
+                "length; unit prices as the catalogue gives them", caption_justify="left")
+    for col, just in (("measure", "left"), ("quantity", "left"), ("count", "right"),
+                      ("unit", "left"), (f"unit price {cur}".strip(), "right"),
+                      (f"amount {cur}".strip(), "right")):
+        tab.add_column(col, justify=just)
+    last = None
+    for it in bill["items"]:
+        tab.add_row("" if it["measure"] == last else it["measure"], it["quantity"],
+                    f"{it['count']:,.2f}", it["unit"], f"{it['unit_price']:,.2f}",
+                    f"{it['amount']:,.2f}")
+        last = it["measure"]
+    tab.add_row("total", "", "", "", "", f"{bill['total']:,.2f}", style="bold")
+    return tab
+
+
 def check_renderable(summary: dict[str, Any]) -> Group:
-    """The rich renderable of a ``check`` summary (measures, checks, verdict)."""
-    parts: list[Any] = list(simulation_renderable(summary).renderables)
+    """The rich renderable of a ``check`` summary (verdict first, measures, checks)."""
+    verdict = _verdict_parts(summary.get("verdict"))
+    parts: list[Any] = [*verdict, Text("")] if verdict else []
+    parts += list(simulation_renderable(summary).renderables)
     tab = Table(
         title=f"Measures (safety concept: {summary['safety_concept']})",
         title_justify="left",
@@ -218,14 +257,11 @@ def check_renderable(summary: dict[str, Any]) -> Group:
         for c in m["checks"]:
             if c["detail"]:
                 parts.append(Text(f"  {m['label']}: {c['name']}: {c['detail']}", style="dim"))
-    verdict = (
-        Text("Design holds: every check passes.", style="bold green")
-        if summary["ok"]
-        else Text("Design fails:", style="bold red")
-    )
-    parts += [Text(""), verdict]
-    for line in summary.get("failures", []):
-        parts.append(Text(f"  - {line}", style="red"))
+    if not verdict:  # a summary from before verdicts: the point values' word
+        parts += [Text(""), Text("Design holds on the point values." if summary["ok"]
+                                 else "Design fails:", style="bold")]
+        for line in summary.get("failures", []):
+            parts.append(Text(f"  - {line}", style="red"))
     return Group(*parts)
 
 
@@ -262,8 +298,13 @@ def _factors(alt: Any) -> str:
     return " ".join(out)
 
 
-def print_optimise(result: Any, project: Any, console: Console | None = None) -> None:
-    """The optimiser's comparison of alternatives, the chosen one marked."""
+def print_optimise(result: Any, project: Any, console: Console | None = None,
+                   summary: dict[str, Any] | None = None) -> None:
+    """The optimiser's comparison of alternatives, the chosen one marked.
+
+    With the command's ``summary`` (``OptimiseResult.summary``) the report
+    opens with its verdict and shows the chosen design's bill.
+    """
     cur = result.currency or ""
     tab = Table(show_edge=False, title="Alternatives (cheapest design of each family)",
                 title_justify="left", caption="factors: h height, e energy, r reach "
@@ -283,7 +324,9 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
         tab.add_row(star, a.name, cost if a.holds else f"({cost})",
                     "\n".join(_measure_short(m) for m in a.measures) or "-", _factors(a) or "-",
                     "-" if a.residual is None else f"{a.residual}", fresh, style=style)
-    parts: list[Any] = [
+    verdict = _verdict_parts((summary or {}).get("verdict"))
+    parts: list[Any] = [*verdict, Text("")] if verdict else []
+    parts += [
         Text.assemble((project.name, "bold"),
                       f"   search: {result.search_rocks or result.rocks:,} rocks, seed "
                       f"{result.seed}; chosen design decided with {result.rocks:,} rocks, "
@@ -312,6 +355,8 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
         if b.holds_on_fresh_rocks is False:
             parts.append(Text("Warning: the chosen design does not hold on the fresh rocks: "
                               + "; ".join(b.fresh_failures), style="bold yellow"))
+        if (summary or {}).get("bill"):
+            parts += [Text(""), _bill_table(summary["bill"]), Text("")]
     else:
         parts.append(Text(f"No admissible design: {result.reason}", style="bold red"))
     marginal = getattr(result, "marginal", None) or []
