@@ -104,7 +104,7 @@ def _seeds(args: argparse.Namespace) -> None:
             print(f"\n{path.name}: skipped: {exc}")
             continue
         print(f"\n{path.name}")
-        costs = []
+        costs, named = [], []
         for seed in args.seeds:
             t0 = time.perf_counter()
             res = optimise(project, registry, seed=seed)
@@ -112,18 +112,35 @@ def _seeds(args: argparse.Namespace) -> None:
             b = res.best
             cost = b.cost if b is not None else math.inf
             costs.append(cost)
-            marginal = sum(len(a.marginal) for a in res.alternatives)
+            marginal = sum(1 for m in res.marginal if m.get("decided", True))
+            undecided = len(res.marginal) - marginal
+            named.append({round(m["cost"], 2) for m in res.marginal})
             per = res.rocks_simulated / b.decision_rocks if b is not None else float("nan")
             print(f"  seed {seed}: {cost:>12,.0f} {b.name if b else 'none':30s} {wall:5.1f} s, "
                   f"{res.evaluations:,} screened, {res.exact_evaluations} exact, {marginal} "
-                  f"marginal, {res.rocks_simulated:,} rocks simulated = {per:.1f} per "
+                  f"marginal, {undecided} undecided listed, {res.rocks_simulated:,} rocks "
+                  f"simulated = {per:.1f} per "
                   f"deciding rock ({b.decision_rocks if b else 0:,})")
-            for m in res.marginal:
-                print(f"      marginal cheaper: {m['cost']:,.0f} {'; '.join(m['labels'])} "
+            if res.bare_slope and res.bare_slope["holds"]:
+                print(f"      the bare slope already meets the residual target "
+                      f"({res.bare_slope['reaching']} of {res.bare_slope['rocks']:,} reach)")
+            for m in res.marginal[:8]:
+                kind = "marginal" if m.get("decided", True) else "not decided"
+                print(f"      {kind}, cheaper: {m['cost']:,.0f} {'; '.join(m['labels'])} "
                       f"(about {m['rocks_to_decide'] or '?'} rocks would decide it)")
+            if len(res.marginal) > 8:
+                print(f"      ... {len(res.marginal) - 8} more listed")
         finite = [c for c in costs if math.isfinite(c)]
         if finite:
-            print(f"  spread max/min {max(finite) / min(finite):.3f} over {len(finite)} seeds")
+            low = min(finite)
+            print(f"  spread max/min {max(finite) / low:.3f} over {len(finite)} seeds")
+            # The criterion: within 3 %, or every dearer run's report names
+            # the cheapest choice of the seeds as marginal or not decided.
+            for seed, c, nm in zip(args.seeds, costs, named, strict=True):
+                if math.isfinite(c) and c > 1.03 * low:
+                    print(f"  seed {seed}: {c:,.0f} is dearer than {low:,.0f} by more than "
+                          f"3 %; its report names {low:,.0f}: "
+                          f"{'yes' if round(low, 2) in nm else 'NO'}")
 
 
 def main() -> None:

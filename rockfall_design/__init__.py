@@ -54,7 +54,7 @@ _LAZY: dict[str, str] = {
     "StudyResult": ".study.result",
     **dict.fromkeys(("Corridor", "load_corridor"), ".project"),
     **dict.fromkeys(("fraction_lower_bound", "fraction_upper_bound", "quantile_lower_bound",
-                     "quantile_upper_bound",
+                     "quantile_upper_bound", "quantile_with_bounds",
                      "rocks_to_bound_quantile", "rocks_to_show_fraction"), ".judge.bounds"),
 }
 
@@ -77,6 +77,7 @@ if TYPE_CHECKING:  # pragma: no cover
         fraction_upper_bound,
         quantile_lower_bound,
         quantile_upper_bound,
+        quantile_with_bounds,
         rocks_to_bound_quantile,
         rocks_to_show_fraction,
     )
@@ -155,6 +156,7 @@ __all__ = [
     "fraction_lower_bound",
     "quantile_lower_bound",
     "quantile_upper_bound",
+    "quantile_with_bounds",
     "rocks_to_bound_quantile",
     "rocks_to_show_fraction",
 ]

@@ -63,13 +63,14 @@ def _check_task(task: tuple[Any, int | None, tuple[str, ...]]) -> dict[str, Any]
     """
     from .api import default_registry
     from .evaluate import evaluate
+    from .judge.verdict import with_verdict
     from .optimise.across import margin
 
     run, rocks, block = task
     ev = evaluate(run.project, default_registry(block), rocks=rocks)
     slack, what = margin(ev)
     return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
-            "binds_at": what, **ev.summary()}
+            "binds_at": what, **with_verdict(ev.summary())}
 
 
 def check_across(project: Project, registry: Registry, *, rocks: int | None = None,
@@ -102,6 +103,7 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
         The JSON object of ``check --scenarios --json``.
     """
     from .evaluate import evaluate, validate_project
+    from .judge.verdict import with_verdict
     from .optimise.across import margin, required_scenarios, scenario_runs
     from .study.executors import run_tasks
 
@@ -116,7 +118,7 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
             ev = evaluate(run.project, registry, rocks=rocks)
             slack, what = margin(ev)
             return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
-                    "binds_at": what, **ev.summary()}
+                    "binds_at": what, **with_verdict(ev.summary())}
 
         per = [one(run) for run in runs]
     else:
@@ -131,7 +133,11 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
     bind = ranked[min(required, len(ranked)) - 1]
     failures = [f"scenario {p['index']} ({_values_text(p['values'])}): {f}"
                 for p in per for f in p.get("failures", [])]
+    from .judge.verdict import UNTESTED, verdict_of_scenarios
+
+    verdict = verdict_of_scenarios(per, required)
     return {
+        "verdict": verdict.as_dict(),
         "rocks": int(per[0]["rocks"]),
         "seed": int(project.rocks.seed if seed is None else seed),
         "share": share,
@@ -139,7 +145,7 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
         "of": len(per),
         "holds_in": holds,
         "holds_with_confidence_in": sum(bool(p["holds_with_confidence"]) for p in per),
-        "ok": holds >= required,
+        "ok": holds >= required and verdict.state != UNTESTED,
         "binding": {k: bind[k] for k in ("index", "values", "seed", "margin", "binds_at")},
         "failures": failures,
         "scenarios": per,
@@ -164,6 +170,11 @@ def print_check_across(summary: dict[str, Any]) -> None:
                       p["binds_at"] or "-",
                       style="" if p["ok"] else "red")
     console = fitted_console(table)
+    v = summary.get("verdict")
+    if v:  # the verdict first, in the words of every report
+        console.print(v["headline"], style="bold green" if v["state"] == "holds with confidence"
+                      else "bold red" if v["state"] == "fails" else "bold yellow",
+                      markup=False, highlight=False)
     console.print(f"check over {summary['of']} scenarios, {summary['rocks']:,} rocks each, "
                   f"run seed {summary['seed']}", style="bold", markup=False, highlight=False)
     console.print(table)

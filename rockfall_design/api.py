@@ -326,19 +326,39 @@ class CheckResult(SimulationResult):
 
     command = "check"
 
-    def __init__(self, project: Project, evaluation: Evaluation) -> None:
+    def __init__(self, project: Project, evaluation: Evaluation,
+                 registry: Registry | None = None) -> None:
         super().__init__(project, evaluation.study)
         self.evaluation = evaluation
         self._evaluation = evaluation
+        #: The plugins the check ran with (for the report's provenance); None if not known.
+        self.registry = registry
 
     @cached_property
     def summary(self) -> dict[str, Any]:
-        """The JSON-ready summary: the same dict as ``rockfall-design check --json``."""
-        return self.evaluation.summary()
+        """The JSON-ready summary: the same dict as ``rockfall-design check --json``.
+
+        It begins with ``verdict`` (:func:`rockfall_design.judge.verdict.verdict_of`);
+        a check of nothing (``untested``) is not ``ok``.
+        """
+        from .judge.verdict import with_verdict
+
+        return with_verdict(self.evaluation.summary())
+
+    @property
+    def verdict(self) -> Any:
+        """The verdict (:class:`~rockfall_design.judge.verdict.DesignVerdict`): one of
+        "holds with confidence", "holds on point values only", "fails", "untested"."""
+        from .judge.verdict import verdict_of
+
+        return verdict_of(self.summary)
 
     @property
     def ok(self) -> bool:
-        """True when every check holds and the residual is within what is allowed."""
+        """True when every check holds and the residual is within what is allowed.
+
+        False when nothing was tested (no measure met and no protected zone).
+        """
         return bool(self.summary["ok"])
 
     @property
@@ -401,16 +421,72 @@ class OptimiseResult:
 
     @cached_property
     def summary(self) -> dict[str, Any]:
-        """The JSON-ready summary: the same dict as ``rockfall-design optimise --json``."""
-        return self.result.summary()
+        """The JSON-ready summary: the same dict as ``rockfall-design optimise --json``.
+
+        It begins with ``verdict`` (the chosen design's, see :attr:`verdict`)
+        and has the chosen design's ``bill`` beside ``best`` (None without one).
+        """
+        summary = self.result.summary()
+        out = {"verdict": self.verdict.as_dict(), **summary}
+        out["bill"] = self.bill
+        return out
+
+    @cached_property
+    def verdict(self) -> Any:
+        """The verdict on the chosen design (:class:`~rockfall_design.judge.verdict.DesignVerdict`).
+
+        The chosen design's check on the rocks that decided it, as ``check``
+        gives it; a design that then fails on the fresh rocks holds on point
+        values only; without a chosen design, ``fails`` with the reason.
+        """
+        from dataclasses import replace
+
+        from .judge.verdict import FAILS, HOLDS_ON_POINT_VALUES, DesignVerdict, verdict_of
+
+        best = self.result.best
+        if best is None:
+            reason = self.result.reason or "no family meets the targets"
+            return DesignVerdict(FAILS, f"Fails: no admissible design: {reason}",
+                                 confidence=float(self.result.confidence))
+        design = self.design
+        assert design is not None
+        verdict = verdict_of(design.summary)
+        if best.holds_on_fresh_rocks is False and verdict.holds:
+            verdict = replace(
+                verdict, state=HOLDS_ON_POINT_VALUES,
+                headline="Holds on point values only: admitted on its deciding rocks, but it "
+                f"does not hold on {best.fresh_rocks:,} fresh rocks (seed {best.fresh_seed}).",
+                details=(*best.fresh_failures, *verdict.details))
+        return verdict
+
+    @cached_property
+    def bill(self) -> dict[str, Any] | None:
+        """The bill of the chosen design (None without one).
+
+        ``items`` (``measure``, ``quantity``, ``unit``, ``count``,
+        ``unit_price``, ``amount``, ``per_m``, ``source``), ``total`` (the
+        chosen design's cost), ``currency``, ``length_m`` (the site length,
+        m): see :func:`rockfall_design.design.design_bill`.
+        """
+        best = self.result.best
+        if best is None:
+            return None
+        from .design import design_bill, resolve_design
+        from .simulation import section_from_project
+
+        d = self.project.design
+        source = (f"catalogue {d.costs.file}" if d.costs.file else "design.costs.params")
+        bill = design_bill(self._registry, resolve_design(self.project, self._registry),
+                           best.measures, section_from_project(self.project), source)
+        return {**bill, "currency": self.result.currency or ""}
 
     @property
     def seed(self) -> int:
-        return int(self.summary["seed"])
+        return int(self.result.seed)
 
     @property
     def n_rocks(self) -> int:
-        return int(self.summary["rocks"])
+        return int(self.result.rocks)
 
     @property
     def ok(self) -> bool:
@@ -444,7 +520,7 @@ class OptimiseResult:
         project = self.design_project()
         ev = evaluate(project, self._registry, rocks=self.n_rocks, seed=self.seed,
                       n_trajectories=DEFAULT_TRAJECTORIES)
-        return CheckResult(project, ev)
+        return CheckResult(project, ev, self._registry)
 
     def design_project(self) -> Project:
         """The project with the chosen measures in ``measures:``, as ``check`` would read it."""
@@ -621,9 +697,10 @@ def check(
     _checked(seed=seed, trajectories=trajectories)
     p = _project(project, registry)
     n = _count(p, rocks)
-    ev = _call(progress, n, evaluate, project=p, registry=registry or default_registry(),
+    reg = registry or default_registry()
+    ev = _call(progress, n, evaluate, project=p, registry=reg,
                rocks=n, seed=seed, n_trajectories=trajectories)
-    return CheckResult(p, ev)
+    return CheckResult(p, ev, reg)
 
 
 def optimise(

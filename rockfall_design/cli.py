@@ -227,6 +227,23 @@ def build_parser() -> argparse.ArgumentParser:
                      "plugins as one JSON object on stdout instead of tables")
     _add_block_option(plg)
     plg.set_defaults(func=cmd_plugins)
+    srv = sub.add_parser(
+        "serve",
+        help="design in the browser: the section, the rocks, and measures dragged along it",
+        description="Start the browser app on the projects (needs the web extra: "
+        'pip install "rockfall-design[web]") and print its address, with a per-run token '
+        "that keeps other local users and other sites out. Ctrl-C stops it.",
+    )
+    srv.add_argument("project", type=Path, nargs="*",
+                     help="project files (YAML), one or more; default: those of the current "
+                     "directory")
+    srv.add_argument("--port", type=_int_at_least(0, "port", 65535), metavar="N",
+                     help="port to listen on (default: the first free one from 8765; "
+                     "0: any free port)")
+    srv.add_argument("--host", default="127.0.0.1", metavar="H",
+                     help="address to listen on (default: 127.0.0.1, this machine only)")
+    _add_block_option(srv)
+    srv.set_defaults(func=cmd_serve)
     return parser
 
 
@@ -342,6 +359,18 @@ def _figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet)
 def _warn_failures(registry: Any) -> None:
     for f in registry.failures:
         sys.stderr.write(f"{PROG}: warning: plugin {f.plugin!r} was not loaded: {f.reason}\n")
+
+
+def _requirement_warnings(project: Any, args: argparse.Namespace) -> list[str]:
+    """One line per requirement that can never hold with confidence (an allowed fraction 0).
+
+    Found when the project is loaded and written once the run has ended, so
+    that a run that fails on bad input or a plugin fault still says one line.
+    """
+    from .judge.verdict import requirement_warnings
+
+    command = "check" if args.command == "check" else "optimise"
+    return [f"{PROG}: warning: {line}\n" for line in requirement_warnings(project, command)]
 
 
 def _plugins_for(project: Any, args: argparse.Namespace) -> Any:
@@ -532,6 +561,7 @@ def cmd_check(args: argparse.Namespace) -> int:
         from .across import cli_check_scenarios
 
         return cli_check_scenarios(args, project, registry)
+    warnings = _requirement_warnings(project, args)
     n = args.rocks or project.rocks.count
     _in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
                      len(project.analysis.stations))
@@ -553,13 +583,15 @@ def cmd_check(args: argparse.Namespace) -> int:
             record["project_hash"] = evaluation.resolved_project().resolved_hash()
             files.write_json(out / "summary.json", {**summary, "run": record})
         _figures_and_report(result, args, files)
+    sys.stderr.writelines(warnings)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
         from .report.terminal import print_check
 
         print_check(summary)
-    return int(ExitCode.OK if evaluation.ok else ExitCode.CHECK_FAILED)
+    # result.ok: the checks hold on their point values, and something was tested
+    return int(ExitCode.OK if result.ok else ExitCode.CHECK_FAILED)
 
 
 def cmd_optimise(args: argparse.Namespace) -> int:
@@ -576,6 +608,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         raise project.error_at((), "the project has no design: section to optimise "
                                    "(see the README, 'Designing protection')")
     registry = _plugins_for(project, args)
+    warnings = _requirement_warnings(project, args)
     if getattr(args, "max_rocks", None):
         if args.max_rocks < (args.rocks or project.rocks.count):
             raise InputError(f"--max-rocks {args.max_rocks:,}: expected at least the "
@@ -591,10 +624,11 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         _reserve(files, args.report, REPORT_FILES)
         _reserve(files, args.plot, _figure_files(_FIGURES, args))
         report = optimise_with_files(project, args, registry, files, args.project)
+    sys.stderr.writelines(warnings)
     if args.json:
         sys.stdout.write(json.dumps(report.summary, allow_nan=False) + "\n")
     else:
-        print_optimised(report.result, project)
+        print_optimised(report.result, project, report.summary)
     return int(ExitCode.OK if report.result.best is not None else ExitCode.CHECK_FAILED)
 
 
@@ -646,7 +680,8 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
             files.write_text(out / "design.yaml", across_design_yaml(result, source, project))
         elif result.best is not None:
             files.write_text(out / "design.yaml", design_yaml(result.best, source,
-                                                              result.search_rocks))
+                                                              result.search_rocks,
+                                                              result.looks))
         else:
             # A design.yaml of an earlier run must not sit beside a
             # summary that says there is no design.
@@ -666,11 +701,12 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     return report
 
 
-def print_optimised(result: Any, project: Any) -> None:
-    """The terminal report of ``optimise``: the alternatives, and the scenarios if any."""
+def print_optimised(result: Any, project: Any, summary: dict[str, Any] | None = None) -> None:
+    """The terminal report of ``optimise``: the verdict, the alternatives, the chosen
+    design's bill (from ``summary``), and the scenarios if any."""
     from .report.terminal import print_optimise
 
-    print_optimise(result, project)
+    print_optimise(result, project, summary=summary)
     if project.design.scenarios is not None:
         from .across import print_across
 
@@ -714,6 +750,13 @@ def cmd_plugins(args: argparse.Namespace) -> int:
         table = plugins_table(registry)
         fitted_console(table).print(table)
     return int(ExitCode.OK)
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    """Serve the browser app until Ctrl-C (the web extra, imported only here)."""
+    from .serve import serve
+
+    return serve(args.project, host=args.host, port=args.port, block=args.block)
 
 
 def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:

@@ -128,7 +128,11 @@ def corridor_summary(corridor: Corridor, command: str, seed: int,
                                           else b["binding"]["margin"], b["index"]))
         totals["binding"] = {"section": bind["name"], **bind["binding"]}
         totals["failures"] = [f"{b['name']}: {f}" for b in blocks for f in b["failures"]]
-        return {"name": corridor.name, "command": command, "scenarios": True,
+        verdict = _corridor_verdict(blocks, command)
+        if verdict is not None and verdict["state"] == "untested":
+            totals["ok"] = False
+        return {**({"verdict": verdict} if verdict else {}), "name": corridor.name,
+                "command": command, "scenarios": True,
                 "seed": int(seed), "sections": list(blocks), "totals": totals}
     if command in ("simulate", "check"):
         reaching = [b["protect"]["reaching"] for b in blocks if b.get("protect")]
@@ -146,8 +150,35 @@ def corridor_summary(corridor: Corridor, command: str, seed: int,
                     for b, c in zip(blocks, costs, strict=True) if c is None]
     if command in ("check", "optimise"):
         totals["failures"] = failures
-    return {"name": corridor.name, "command": command, "seed": int(seed),
-            "sections": list(blocks), "totals": totals}
+    if command == "optimise":  # the corridor's bill: each section's, and the total
+        bills = [(b["name"], b.get("bill")) for b in blocks]
+        if all(bill is not None for _, bill in bills):
+            totals["bill"] = {
+                "sections": [{"section": name, "total": bill["total"], "items": bill["items"]}
+                             for name, bill in bills],
+                "total": float(sum(bill["total"] for _, bill in bills)),
+                "currency": totals["currency"]}
+    verdict = _corridor_verdict(blocks, command)
+    if command == "check" and verdict is not None and verdict["state"] == "untested":
+        totals["ok"] = False
+    return {**({"verdict": verdict} if verdict else {}), "name": corridor.name,
+            "command": command, "seed": int(seed), "sections": list(blocks), "totals": totals}
+
+
+def _corridor_verdict(blocks: Sequence[dict[str, Any]], command: str) -> dict[str, Any] | None:
+    """The corridor's verdict (its weakest section's), each block given its own verdict."""
+    if command not in ("check", "optimise"):
+        return None
+    from .judge.verdict import DesignVerdict, verdict_of, verdict_of_sections
+
+    items = []
+    for b in blocks:
+        if "verdict" not in b and command == "check":
+            b["verdict"] = verdict_of(b).as_dict()
+        if "verdict" not in b:
+            return None
+        items.append((str(b["name"]), DesignVerdict.from_dict(b["verdict"])))
+    return verdict_of_sections(items).as_dict()
 
 
 def _print_totals(summary: dict[str, Any]) -> None:
@@ -201,12 +232,22 @@ def _print_totals(summary: dict[str, Any]) -> None:
         last += ["", "-" if totals["cost"] is None else f"{totals['cost']:,.0f}"]
     table.add_row(*last, style="bold")
     console = fitted_console(table)
+    _print_verdict(console, summary)
     console.print(f"{summary['name']}: {totals['sections']} sections, run seed "
                   f"{summary['seed']} (each section's seed derives from it)",
                   style="bold", markup=False, highlight=False)
     console.print(table)
     for line in totals.get("failures", []):
         console.print(line, style="red", markup=False, highlight=False)
+
+
+def _print_verdict(console: Any, summary: dict[str, Any]) -> None:
+    """The corridor's verdict first, in the words of every report."""
+    v = summary.get("verdict")
+    if v:
+        console.print(v["headline"], style="bold green" if v["state"] == "holds with confidence"
+                      else "bold red" if v["state"] == "fails" else "bold yellow",
+                      markup=False, highlight=False)
 
 
 def _margin(b: dict[str, Any]) -> str:
@@ -235,6 +276,7 @@ def _print_scenario_totals(summary: dict[str, Any]) -> None:
                   f"{bind['section']} {_margin(bind)}", bind["binds_at"] or "-",
                   "yes" if totals["ok"] else "NO", style="bold")
     console = fitted_console(table)
+    _print_verdict(console, summary)
     console.print(f"{summary['name']}: {totals['sections']} sections checked over their "
                   f"scenarios, run seed {summary['seed']} (each section's seed derives from "
                   "it, each scenario's from its section's)", style="bold", markup=False,
@@ -595,7 +637,8 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
                                      {"section": run.section.name})
         result = report.result
         cost = None if result.best is None else float(result.best.cost)
-        return SectionDone(report.summary, lambda: print_optimised(result, project), cost)
+        return SectionDone(report.summary,
+                           lambda: print_optimised(result, project, report.summary), cost)
 
     summary = each_section(args, corridor, "optimise", body, guard=guard,
                            out_files=("design.yaml", "alternatives.csv", "summary.json"),

@@ -75,6 +75,7 @@ __all__ = [
     "DeclaredDesign",
     "build_candidate_measure",
     "declared_design",
+    "design_bill",
     "design_cost",
     "resolve_design",
     "unknown_measure_type",
@@ -323,6 +324,89 @@ def design_cost(
             value = guard(registry).cost_model(model).cost(m, quantities, spec.length_m)
         total += float(value)
     return total
+
+
+def design_bill(
+    registry: Registry, spec: DesignSpec, measures: Sequence[ProtectiveMeasure], section: Section,
+    source: str = "",
+) -> dict[str, Any]:
+    """The bill of a design: per measure its quantities, unit prices and amounts.
+
+    Built from the very numbers :func:`design_cost` adds up: each measure's
+    amount is the cost model's ``price`` of its whole bill, as there. A cost
+    model that prices by bill (``price``) is asked again with the fixed part
+    alone (an empty bill) and with each quantity alone, which itemises the
+    measure's price into its fixed cost and one line per quantity; when
+    those lines do not add up to the whole (a model with discounts, say), or
+    the model prices the older way (``cost``), the measure is one lump-sum
+    line of its price.
+
+    Parameters
+    ----------
+    registry, spec, measures, section
+        As :func:`design_cost`.
+    source : str
+        Where the prices come from (the cost catalogue file), for the bill's
+        ``source`` of each line.
+
+    Returns
+    -------
+    dict
+        ``items``: one dict per line, ``measure`` (its label), ``quantity``
+        (what is billed), ``count`` (how many ``unit``: over the whole site
+        length), ``unit``, ``unit_price`` (currency per unit), ``amount``
+        (currency), ``per_m`` (amount of the quantity per running metre of
+        slope, or None), ``source``; ``total`` (the sum of the measures'
+        prices, what :func:`design_cost` returns), ``length_m``, ``model``.
+
+    Raises
+    ------
+    KeyError or ValueError
+        From the cost model, as :func:`design_cost`.
+    """
+    model, length = spec.cost_model, spec.length_m
+    priced = guard(registry).cost_model(model)
+    by_bill = type(model).price is not CostModel.price
+    where = f"cost model {model.name}" + (f", {source}" if source else "")
+    items: list[dict[str, Any]] = []
+    total = 0.0
+    for m in measures:
+        label = guard(registry).measure(m).label()
+        quantities = guard(registry).measure(m).quantities(section)
+        if by_bill:
+            bill = guard(registry).measure(m).bill(section)
+            whole = float(priced.price(m, bill, quantities, length))
+        else:
+            bill = []
+            whole = float(priced.cost(m, quantities, length))
+        total += whole
+        lines: list[dict[str, Any]] = []
+        if by_bill:
+            try:
+                fixed = float(priced.price(m, [], quantities, length))
+                parts = [float(priced.price(m, [q], quantities, length)) - fixed for q in bill]
+            except (KeyError, ValueError):
+                parts = None
+            if parts is not None and math.isclose(fixed + sum(parts), whole, rel_tol=1e-9,
+                                                  abs_tol=1e-6):
+                if fixed:
+                    lines.append({"measure": label, "quantity": "fixed cost of the measure",
+                                  "count": 1.0, "unit": "each", "unit_price": fixed,
+                                  "amount": fixed, "per_m": None, "source": where})
+                for q, amount in zip(bill, parts, strict=True):
+                    count = q.amount * length
+                    what = " ".join(str(b) for b in (
+                        q.name, q.product, None if q.size is None else f"{q.size:g} m")
+                        if b is not None)
+                    lines.append({"measure": label, "quantity": what, "count": count,
+                                  "unit": q.unit, "unit_price": amount / count if count else 0.0,
+                                  "amount": amount, "per_m": q.amount, "source": where})
+        if not lines:
+            lines.append({"measure": label, "quantity": "the measure as priced", "count": 1.0,
+                          "unit": "lump sum", "unit_price": whole, "amount": whole,
+                          "per_m": None, "source": where})
+        items += lines
+    return {"items": items, "total": total, "length_m": length, "model": model.name}
 
 
 def _sample_params(spec: CandidateSpec) -> list[dict[str, Any]]:

@@ -56,6 +56,7 @@ from rockfall_design import (
     hookimpl,
     quantile_lower_bound,
     quantile_upper_bound,
+    quantile_with_bounds,
     rocks_to_bound_quantile,
 )
 
@@ -184,8 +185,12 @@ def _factor_check(
     values = np.asarray(values, dtype=float)
     if values.size == 0:
         return Check(name, None, target, True, "-", _NO_ROCK, None, True)
-    demand = _statistic(values, statistic)
-    upper = _statistic_bound(values, statistic, confidence)
+    if statistic == "max" or float(statistic[1:]) >= 100.0:
+        demand = upper = lower = float(np.max(values))
+    else:
+        # One partial sort for the percentile and both its bounds.
+        demand, lower, upper = quantile_with_bounds(values, float(statistic[1:]) / 100.0,
+                                                    confidence)
     bound_text = ("" if statistic == "max" or upper is None else
                   f" (upper bound {_num(upper, unit)} at {100 * confidence:g} %)")
     detail = (
@@ -202,7 +207,6 @@ def _factor_check(
     factor = provided / demand
     # The most favourable factor at this confidence: over the lower bound of
     # the statistic. It fails with confidence only when even that misses.
-    lower = _statistic_lower(values, statistic, confidence)
     f_best = None if lower is None else (math.inf if not lower > 0.0 else provided / lower)
     fails = f_best is not None and bool(f_best < target)
     if upper is None:
@@ -302,18 +306,21 @@ class SpangConcept(SafetyConcept):
             description="Target of berm or ditch width / reach of the rocks (the statistic "
             "of the concept) (-).", json_schema_extra={"unit": "-"},
         )
+        # p95 by default, as the README advises: the sample maximum grows with the
+        # number of rocks and has no confidence bound.
         statistic: Literal["max", "p95", "p99"] = Field(
-            "max",
+            "p95",
             description="Statistic of the passing heights and energies of the rocks that "
             "met the measure giving the critical height and the design energy: the "
-            "maximum or the 95th/99th percentile.", json_schema_extra={"unit": None},
+            "95th/99th percentile (default p95) or the maximum.",
+            json_schema_extra={"unit": None},
         )
 
     example: ClassVar[dict[str, Any]] = {
         "height_factor": 2.0,
         "energy_factor": 1.0,
         "reach_factor": 1.0,
-        "statistic": "max",
+        "statistic": "p95",
         "confidence": 0.95,
     }
 

@@ -45,6 +45,7 @@ __all__ = [
     "quantile_lower_index",
     "quantile_upper_bound",
     "quantile_upper_index",
+    "quantile_with_bounds",
     "rocks_to_bound_quantile",
     "rocks_to_show_fraction",
 ]
@@ -310,6 +311,49 @@ def quantile_lower_bound(values: np.ndarray, q: float, confidence: float) -> flo
     if k is None:
         return None
     return float(np.partition(v, k)[k])
+
+
+def quantile_with_bounds(values: np.ndarray, q: float, confidence: float
+                         ) -> tuple[float, float | None, float | None]:
+    """The q-quantile of ``values`` with its lower and upper confidence bounds, in one pass.
+
+    The same numbers as ``numpy.percentile(values, 100 q)`` (linear, type 7),
+    :func:`quantile_lower_bound` and :func:`quantile_upper_bound`, from one
+    partial sort around the four order statistics they need: the optimiser
+    asks for tens of thousands of them.
+
+    Parameters
+    ----------
+    values : array_like
+        The sample, not empty (any unit; the results have the same).
+    q : float
+        Quantile, 0 < q < 1.
+    confidence : float
+        One-sided confidence of each bound, 0 < c < 1.
+
+    Returns
+    -------
+    value, lower, upper : float, float or None, float or None
+        A bound is None when the sample is too small to give it.
+
+    See Also
+    --------
+    quantile_lower_bound, quantile_upper_bound : the bounds alone.
+    """
+    v = np.asarray(values, dtype=float).ravel()
+    n = int(v.size)
+    if n == 0:
+        raise ValueError("quantile of an empty sample")
+    h = (n - 1) * float(q)
+    lo = int(math.floor(h))
+    hi = min(lo + 1, n - 1)
+    k_up = quantile_upper_index(n, float(q), float(confidence))
+    k_low = quantile_lower_index(n, float(q), float(confidence))
+    kth = sorted({lo, hi} | {k for k in (k_up, k_low) if k is not None})
+    part = np.partition(v, kth)
+    value = float(part[lo] + (h - lo) * (part[hi] - part[lo]))
+    return (value, None if k_low is None else float(part[k_low]),
+            None if k_up is None else float(part[k_up]))
 
 
 def fraction_upper_bound(x: int, n: int, confidence: float) -> float:

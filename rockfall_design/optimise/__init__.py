@@ -70,7 +70,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
     from ..project import Project
 
-from .decide import Decider, Decision, decide, look_concept, rocks_to_decide
+from .decide import Decider, Decision, decide, look_concept, look_values, rocks_to_decide
 from .screening import RESTART_STEP_M, Screening, ScreenResult
 from .search import (
     MAX_EXACT_PER_LEVEL,
@@ -130,6 +130,12 @@ SEARCH_SEED = 20261124
 FRESH_OFFSET = 1000003
 #: Marginal designs a family keeps for the report (the cheapest).
 MAX_MARGINAL_PER_FAMILY = 5
+#: Deferred designs decided per cost (one catalogue combination at several stations
+#: or geometries; the closest to holding first), so that the family's budget of
+#: deferred decisions reaches as many of its cheaper combinations as it can.
+MAX_DEFERRED_PER_COST = 1
+#: Cheaper designs a budget left undecided that a family lists (one per cost, cheapest).
+MAX_UNDECIDED_LISTED = 40
 
 
 @dataclass
@@ -159,6 +165,7 @@ class Alternative:
     dominated: str = ""
     marginal: list[dict[str, Any]] = field(default_factory=list)
     rejected: int = 0
+    undecided: int = 0  # cheaper designs left undecided by a budget (cheapest listed)
 
     @property
     def holds(self) -> bool:
@@ -185,6 +192,7 @@ class Alternative:
             "evaluations": self.evaluations,
             "exact_evaluations": self.exact_evaluations,
             "marginal": self.marginal,
+            "undecided": self.undecided,
         }
 
 
@@ -208,6 +216,7 @@ class OptimisationResult:
     looks: LookSchedule | None = None
     marginal: list[dict[str, Any]] = field(default_factory=list)
     decided: int = 0
+    bare_slope: dict[str, Any] | None = None
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -229,6 +238,7 @@ class OptimisationResult:
             "reason": self.reason,
             "decided": self.decided,
             "marginal": self.marginal,
+            "bare_slope": self.bare_slope,
             "looks": None if self.looks is None else {
                 "rocks": list(self.looks.sizes), "confidence": self.looks.confidence,
                 "look_confidence": self.looks.look_confidence},
@@ -284,11 +294,23 @@ def _proof(alt: Alternative, tally: _Tally, looks: LookSchedule, currency: str) 
     space = ("designs the search over its ground edits evaluated"
              if tally.searched else "designs in the space")
     conf = f"{100 * looks.confidence:g} %"
-    marginal = (f", or is marginal ({len(alt.marginal)}, listed)" if alt.marginal else "")
+    k = sum(1 for m in alt.marginal if m.get("decided", True))
+    marginal = ""
+    if k or alt.undecided:
+        parts = [f"is marginal ({k})"] if k else []
+        if alt.undecided:
+            parts.append(f"was not decided ({alt.undecided:,})")
+        marginal = ", or " + " or ".join(parts) + " (the cheapest that may hold listed)"
     return (f"cheapest admitted of {tally.designs:,} {space} ({alt.exact_evaluations} "
             f"evaluated exactly); every cheaper design fails with {conf} confidence "
             f"(looks of {looks.sizes[0]:,} to {looks.sizes[-1]:,} rocks){marginal}: "
             f"{top or 'none cheaper'}{capped}")
+
+
+def fresh_failures(fresh: Evaluation) -> str:
+    """What fails on the fresh rocks: the point failures, or that some bound misses."""
+    return "; ".join(fresh.failures()) or (
+        "its point values hold, but not every check or the residual with its bound")
 
 
 def _marginal_entry(alt_name: str, d: Any, dec: Decision) -> dict[str, Any]:
@@ -297,7 +319,36 @@ def _marginal_entry(alt_name: str, d: Any, dec: Decision) -> dict[str, Any]:
                          for m in d.measures],
             "labels": list(d.result.labels), "cost": round(float(d.cost), 2),
             "rocks": dec.rocks, "rocks_to_decide": rocks_to_decide(dec.values),
-            "values": dec.values, "reason": dec.reason}
+            "values": dec.values, "reason": dec.reason, "decided": True}
+
+
+def _undecided_entry(alt_name: str, d: Any, why: str, screen: Screening) -> dict[str, Any]:
+    """A cheaper design that a budget left undecided, as the search rocks saw it.
+
+    Listed beside the marginal designs so that the report names every cheaper
+    design it did not reject with confidence: a checker who reruns with
+    another seed and gets it chosen finds it here.
+    """
+    sr = d.result
+    residual = None if screen.project.protect is None else int(sr.residual)
+    values = look_values(sr.checks, sr.labels, residual, screen.n, screen.allowed_fraction,
+                         screen.confidence)
+    conf = f"{100 * screen.confidence:.4g} %"
+    return {"name": alt_name, "family": alt_name,
+            "measures": [{"type": m.kind, **m.params.model_dump(mode="json")}
+                         for m in d.measures],
+            "labels": list(sr.labels), "cost": round(float(d.cost), 2),
+            "rocks": screen.n, "rocks_to_decide": rocks_to_decide(values), "values": values,
+            "reason": (f"not decided ({why}); on the {screen.n:,} search rocks it neither "
+                       f"holds nor fails with {conf} confidence"),
+            "decided": False}
+
+
+def _keep_cheapest(alt: Alternative, entry: dict[str, Any]) -> None:
+    """Add a marginal or undecided entry; the family keeps the cheapest ones."""
+    alt.marginal.append(entry)
+    alt.marginal.sort(key=lambda m: m["cost"])
+    del alt.marginal[MAX_MARGINAL_PER_FAMILY:]
 
 
 def _settle(
@@ -342,17 +393,53 @@ def _settle(
             break
     top = alt.cost if alt.holds_on_fresh_rocks or alt.dominated else math.inf
     budget = MAX_DEFERRED_PER_FAMILY
-    for d in sorted(deferred, key=lambda d: d.cost):
+    per_cost: Counter = Counter()
+    # Cheapest first; among designs of one cost (one catalogue combination at
+    # several stations) the one closest to holding first, and at most
+    # MAX_DEFERRED_PER_COST of them, so that the budget reaches the family's
+    # other combinations.
+    why = "misses its targets on the point values of the search rocks, not with confidence"
+    for d in sorted(deferred, key=lambda d: (d.cost, d.result.violation)):
         if d.cost >= top:
             break
-        if budget <= 0:
-            tally.reasons["not decided: misses its targets on the point values of the search "
-                          "rocks, not with confidence"] += 1
+        if budget <= 0 or per_cost[round(d.cost, 2)] >= MAX_DEFERRED_PER_COST:
+            tally.reasons[f"not decided: {why}"] += 1
+            state.skipped.append((d, why))
             continue
         budget -= 1
+        per_cost[round(d.cost, 2)] += 1
         if state.decide(d):
             top = alt.cost
+    _list_undecided(alt, state.skipped, top, decider.screen)
     return state.simulated
+
+
+def _list_undecided(alt: Alternative, skipped: list[tuple[Any, str]], top: float,
+                    screen: Screening) -> None:
+    """Count the cheaper designs a budget left undecided; list the cheapest, one per cost.
+
+    They are listed beside the marginal designs (which keep their own places):
+    the family's report then names every cost below its design that may hold,
+    up to :data:`MAX_UNDECIDED_LISTED` of them. A design that fails with
+    confidence on the search rocks as the screening counts them (rocks whose
+    paths it approximates included: a rock let through a net with its full
+    energy, say) is counted but not listed: the screening alone may not reject
+    it, but it is no candidate a checker would look for.
+    """
+    cheaper = sorted(((d, why) for d, why in skipped if d.cost < top),
+                     key=lambda t: (t[0].cost, t[0].result.violation))
+    alt.undecided = len(cheaper)
+    decided = {round(m["cost"], 2) for m in alt.marginal}
+    listed: list[dict[str, Any]] = []
+    for d, why in cheaper:
+        key = round(float(d.cost), 2)
+        if key in decided or len(listed) >= MAX_UNDECIDED_LISTED:
+            continue
+        if screen.rejects(d.result.checks, int(d.result.residual)):
+            continue
+        decided.add(key)
+        listed.append(_undecided_entry(alt.name, d, why, screen))
+    alt.marginal = sorted(alt.marginal + listed, key=lambda m: m["cost"])
 
 
 @dataclass
@@ -369,12 +456,15 @@ class _SettleState:
     simulated: int = 0
     unjudged_failures: int = 0
     per_level: Counter = field(default_factory=Counter)
+    skipped: list[tuple[Any, str]] = field(default_factory=list)  # (design, why not decided)
 
     def decide(self, d: Any) -> bool:
         """Decide one design; True when it is the family's (holds, or dominated)."""
         alt, tally = self.alt, self.tally
         if self.per_level[d.level] >= MAX_EXACT_PER_LEVEL:
-            tally.reasons["not decided: the catalogue combination's decisions were used up"] += 1
+            why = "the catalogue combination's decisions were used up"
+            tally.reasons[f"not decided: {why}"] += 1
+            self.skipped.append((d, why))
             return False
         # Too few rocks met one of its measures in the screening to bound its
         # checks: the screening could not judge it. After a few such designs
@@ -382,8 +472,9 @@ class _SettleState:
         unjudged = any(c.bound is None and c.value is not None
                        for cs in d.result.checks for c in cs)
         if unjudged and self.unjudged_failures >= MAX_UNJUDGED_FAILURES:
-            tally.reasons["not decided: too few rocks at a measure to judge in the "
-                          "screening"] += 1
+            why = "too few rocks at a measure to judge in the screening"
+            tally.reasons[f"not decided: {why}"] += 1
+            self.skipped.append((d, why))
             return False
         self.per_level[d.level] += 1
         self.decisions += 1
@@ -393,8 +484,10 @@ class _SettleState:
         self.simulated += dec.simulated
         if dec.verdict is Verdict.MARGINAL:
             tally.reasons["marginal"] += 1
-            if len(alt.marginal) < MAX_MARGINAL_PER_FAMILY:
-                alt.marginal.append(_marginal_entry(alt.name, d, dec))
+            # The cheapest ones are kept: deferred designs are decided after
+            # dearer contenders, and a cheaper marginal design is the one the
+            # report must name.
+            _keep_cheapest(alt, _marginal_entry(alt.name, d, dec))
             if not alt.holds_on_fresh_rocks:
                 alt.reason = dec.reason
             self.unjudged_failures += unjudged
@@ -426,12 +519,12 @@ class _SettleState:
                                 rocks=fresh_n, seed=self.fresh_seed)
         alt.exact_evaluations += 1
         self.simulated += fresh_n
-        if not fresh.ok:
+        if not fresh.holds_with_confidence:
             # Not chosen: it fits the noise of the search rocks. Decide the next one.
             tally.reasons["fails on fresh rocks"] += 1
             if not alt.holds_on_fresh_rocks:
-                alt.reason = ("the cheapest admitted design fails on fresh rocks: "
-                              + "; ".join(fresh.failures()))
+                alt.reason = ("the cheapest admitted design does not hold with confidence on "
+                              "fresh rocks: " + fresh_failures(fresh))
             return False
         alt.measures = sorted(d.measures, key=lambda m: m.x)
         alt.cost = d.cost
@@ -571,7 +664,31 @@ def optimise(
         search_rocks=n, confidence=confidence, exact_evaluations=exact_total,
         rocks_simulated=simulated + screen.edit_rocks + decider.simulated,
         looks=looks, marginal=marginal, decided=sum(a.exact_evaluations for a in alternatives),
+        bare_slope=_bare_slope(screen, allowed, confidence),
     )
+
+
+def _bare_slope(screen: Screening, allowed: float, confidence: float) -> dict[str, Any] | None:
+    """The bare slope's residual on the search rocks, and whether it already meets the target.
+
+    A project whose bare slope meets its residual target with confidence
+    needs no measure for it; every design then holds by the residual alone,
+    and the cheapest is only the cheapest place where a measure meets no rock.
+    The report says so at its head. One look at the search rocks with the
+    Clopper-Pearson upper bound at ``confidence``.
+
+    Returns ``{x, reaching, rocks, upper, allowed, holds}`` (None without a
+    protected zone).
+    """
+    from ..judge.bounds import fraction_upper_bound
+
+    if screen.project.protect is None:
+        return None
+    reach = reaches_protected_zone(screen.bare.max_x, screen.bare.status, screen.protect_x)
+    k, n = int(np.count_nonzero(reach)), screen.n
+    upper = fraction_upper_bound(k, n, confidence)
+    return {"x": float(screen.protect_x), "reaching": k, "rocks": n, "upper": upper,
+            "allowed": float(allowed), "holds": bool(upper <= allowed)}
 
 
 def _why(sr: ScreenResult) -> str:

@@ -49,15 +49,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..evaluate import Evaluation, evaluate_design
-from ..judge.sequential import LookSchedule, plan_looks
+from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..safety import DEFAULT_CONFIDENCE
 from . import (
     MAX_EXACT_PER_FAMILY,
+    MAX_MARGINAL_PER_FAMILY,
     MAX_NEAR_PER_FAMILY,
     MAX_UNJUDGED_FAILURES,
     SEARCH_SEED,
     Alternative,
     OptimisationResult,
+    fresh_failures,
 )
 from .decide import decide, look_concept
 from .screening import Screening
@@ -267,6 +269,7 @@ class _Verdict:
     exact: int = 0
     feasible: bool = False  # passes the screening (not only within its margin) in enough
     unjudged: bool = False  # too few rocks at a measure in a screening to judge it
+    undecided: str = ""  # not held, but not rejected with confidence in enough scenarios: why
 
 
 def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure],
@@ -299,7 +302,7 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
     held_back = gate(feasible, unjudged) if gate is not None else ""
     if held_back:
         return _Verdict(False, rows, failed, held_back, [None] * k, feasible=feasible,
-                        unjudged=unjudged)
+                        unjudged=unjudged, undecided=f"not decided ({held_back})")
     # The scenario nearest to failing first: its failure ends the design soonest.
     passing.sort(key=lambda j: (-screened[j].violation, screened[j].feasible))
     decisions: list[Any] = [None] * k
@@ -325,8 +328,18 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
                 break
     if len(admitted) < required:
         why = "; ".join(f"scenario {scs[j].run.index}: {rows[j]['reason']}" for j in failed)
+        # Rejected with confidence only where the screening or the decision said
+        # so; a scenario where the design is marginal, or that was not decided
+        # after the others failed, may still hold.
+        marginal = [j for j in failed
+                    if decisions[j] is not None and decisions[j].verdict is Verdict.MARGINAL]
+        rejected = len(failed) - len(marginal)
+        undecided = ""
+        if marginal and k - rejected >= required:
+            undecided = ("marginal in scenario(s) "
+                         + ", ".join(str(scs[j].run.index) for j in marginal))
         return _Verdict(False, rows, failed, why, decisions, simulated, exact, feasible,
-                        unjudged)
+                        unjudged, undecided)
     holding = 0
     for j in admitted:
         sc = scs[j]
@@ -335,12 +348,13 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
                                 seed=sc.fresh_seed)
         simulated += fresh_n
         exact += 1
-        rows[j].update(holds_on_fresh_rocks=fresh.ok, fresh_seed=sc.fresh_seed,
+        rows[j].update(holds_on_fresh_rocks=fresh.holds_with_confidence, fresh_seed=sc.fresh_seed,
                        fresh_rocks=fresh_n)
-        if fresh.ok:
+        if fresh.holds_with_confidence:
             holding += 1
         else:
-            rows[j]["reason"] = "fails on fresh rocks: " + "; ".join(fresh.failures())
+            rows[j]["reason"] = ("does not hold with confidence on fresh rocks: "
+                                 + fresh_failures(fresh))
             failed.append(j)
     if holding < required:
         why = "; ".join(f"scenario {scs[j].run.index}: {rows[j]['reason']}" for j in failed
@@ -412,6 +426,7 @@ def optimise_across(
         # The single optimiser's limits on exact decisions (see _settle): per level
         # of catalogue choices, of designs within the margin only, of unjudged ones.
         per_level: Counter = Counter()
+        undecided: list[tuple[Any, str]] = []  # (design, why): not rejected with confidence
         state = {"near": 0, "unjudged_failures": 0}
         gate = functools.partial(_gate, state)
 
@@ -427,8 +442,12 @@ def optimise_across(
                 break
             level = (j_src, d.level)
             if per_level[level] >= MAX_EXACT_PER_LEVEL:
+                undecided.append((d, "not decided (the catalogue combination's decisions "
+                                     "were used up)"))
                 continue
             verdict = _judge_design(scs, d.measures, required, registry, gate)
+            if not verdict.holds and verdict.undecided:
+                undecided.append((d, verdict.undecided))
             simulated += verdict.simulated
             alt.exact_evaluations += verdict.exact
             if verdict.exact:
@@ -447,12 +466,14 @@ def optimise_across(
                     "failed_in": [scs[j].run.index for j in verdict.failed_in],
                     "reason": verdict.reason}
                 continue
+            _list_undecided(alt, undecided, d.cost)
             _fill(alt, d, verdict, scs, per_family, last_failed, reasons, designs, currency)
             limit = min(limit, alt.cost)
             break
         alt.evaluations = sum(sc.screen.evaluations for sc in scs) - ev0
         alt.wall_s = time.perf_counter() - ft
         if not alt.holds_on_fresh_rocks:
+            _list_undecided(alt, undecided, math.inf)
             alt.reason = alt.reason or (
                 "no design of this family passes the screening in "
                 f"{required} of {len(scs)} scenarios")
@@ -480,7 +501,37 @@ def optimise_across(
         edit_runs=sum(sc.screen.edit_runs for sc in scs), currency=currency,
         search_rocks=n, confidence=confidence, exact_evaluations=exact_total,
         rocks_simulated=simulated + sum(sc.screen.edit_rocks for sc in scs),
-        share=share, required=required, runs=runs, per_family=per_family)
+        share=share, required=required, runs=runs, per_family=per_family,
+        marginal=sorted((m for a in alternatives for m in a.marginal
+                         if best is None or m["cost"] < best.cost), key=lambda m: m["cost"]),
+        decided=sum(a.exact_evaluations for a in alternatives))
+
+
+def _list_undecided(alt: Alternative, undecided: Sequence[tuple[Any, str]], top: float) -> None:
+    """Count the designs cheaper than ``top`` not rejected with confidence; list the cheapest.
+
+    One per cost, at most :data:`MAX_MARGINAL_PER_FAMILY`, with why each is
+    undecided (marginal in some scenarios, or held back by a budget of
+    decisions), as ``alt.marginal`` entries (``values`` None: a design across
+    scenarios has one set of values per scenario; ``--json``'s
+    ``scenarios`` block has them for the chosen design).
+    """
+    cheaper = sorted(((d, why) for d, why in undecided if d.cost < top),
+                     key=lambda t: t[0].cost)
+    alt.undecided = len(cheaper)
+    seen: set[float] = set()
+    for d, why in cheaper:
+        key = round(float(d.cost), 2)
+        if key in seen or len(alt.marginal) >= MAX_MARGINAL_PER_FAMILY:
+            continue
+        seen.add(key)
+        alt.marginal.append({
+            "name": alt.name, "family": alt.name,
+            "measures": [{"type": m.kind, **m.params.model_dump(mode="json")}
+                         for m in d.measures],
+            "labels": [m.label() for m in d.measures], "cost": key, "rocks": None,
+            "rocks_to_decide": None, "values": None, "reason": why,
+            "decided": why.startswith("marginal")})
 
 
 def _gate(state: dict[str, int], feasible: bool, unjudged: bool) -> str:
@@ -514,9 +565,11 @@ def _fill(alt: Alternative, d: Any, verdict: _Verdict, scs: Sequence[_Scenario],
     alt.screened_feasible = True
     alt.reason = ""
     top = ", ".join(f"{k} ({v:,})" for k, v in reasons.most_common(4) if v)
+    undecided = (f", or is marginal or was not decided in enough of them ({alt.undecided:,}; "
+                 "the cheapest listed)" if alt.undecided else "")
     alt.proof = (f"cheapest of {designs:,} designs screened in all {len(scs)} scenarios "
-                 f"({alt.exact_evaluations} exact runs); every cheaper design fails in too "
-                 f"many scenarios: {top or 'none cheaper'}")
+                 f"({alt.exact_evaluations} exact runs); every cheaper design fails with "
+                 f"confidence in too many scenarios{undecided}: {top or 'none cheaper'}")
     run = scs[bind].run
     per_family[alt.name] = {
         "per_scenario": rows,

@@ -138,6 +138,8 @@ class Screening:
         seed: int,
         progress: Callable[[str], None] | None = None,
         stations: np.ndarray | None = None,
+        rock_progress: Callable[[int], None] | None = None,
+        restart_stations: np.ndarray | None = None,
     ) -> None:
         """Run the search rocks on the bare slope and keep the table (see the class docs).
 
@@ -145,6 +147,11 @@ class Screening:
         candidate's range on the grid) and drops the restart stations: a
         later look at a few barrier designs with more rocks needs only
         their stations (and memory grows with rocks x stations).
+        ``rock_progress``, when given, is called with the rocks done of the
+        bare run after each batch; an exception it raises stops the run
+        (``rockfall-design serve`` shows progress and cancels this way).
+        ``restart_stations`` (m), when given with ``stations``, are kept as
+        restart stations, so that ground edits can still be judged.
         """
         from ..design import build_candidate_measure
 
@@ -185,12 +192,15 @@ class Screening:
                 restarts.append(np.arange(lo_r, hi + 1e-9, RESTART_STEP_M))
         if stations is not None:
             sts, restarts = [np.asarray(stations, dtype=float)], [np.zeros(0)]
+            if restart_stations is not None:
+                restarts = [np.asarray(restart_stations, dtype=float)]
         self.grid = np.unique(np.clip(np.concatenate(sts + [np.array([self.protect_x])]), x0, x1))
         self.restart_x = np.unique(np.clip(np.concatenate(restarts), x0, x1))
         t0 = time.perf_counter()
         bare = run_ensemble(
             self.section, self.releases, key=self.key, grid=self.grid,
             restart_stations=self.restart_x, settings=self.settings, record_speed=True,
+            progress=rock_progress,
         )
         self.bare_runtime_s = time.perf_counter() - t0
         cols = np.searchsorted(bare.grid, self.grid)

@@ -212,7 +212,17 @@ def _through(reach: np.ndarray, passes: Sequence[np.ndarray]) -> np.ndarray:
 
     ``sum_r reach[r] * P1[a, r] * P2[b, r] * ...``: one matrix product for
     one or two barriers (float32 counts are exact below 2**24 rocks).
+    Only the rocks that reach the zone and that some option of every barrier
+    lets on can count: the sum runs over those alone (often a few dozen of
+    thousands once a barrier stands upslope; the others add zero to every
+    combination).
     """
+    cols = reach > 0
+    for p in passes:
+        cols &= p.any(axis=0)
+    keep = np.flatnonzero(cols)
+    reach = reach[keep]
+    passes = [p[:, keep] for p in passes]
     first = passes[0] * reach
     if len(passes) == 1:
         return np.rint(first.sum(axis=1)).astype(np.int64)

@@ -26,7 +26,8 @@ from .tables import measure_text, round_value
 if TYPE_CHECKING:  # pragma: no cover
     from ..outputs import OutputSet
 
-__all__ = ["Table", "report_context", "render_html", "render_markdown", "write_report"]
+__all__ = ["Table", "MODEL_LIMITS", "report_context", "render_html", "render_markdown",
+           "write_report"]
 
 
 @dataclass
@@ -60,78 +61,226 @@ def _fixed(v: Any, digits: int) -> str:
     return "-" if v is None else f"{float(v):,.{digits}f}"
 
 
+#: The report's section "Model and limits": (heading, bullets). docs/model-and-limits.md
+#: carries every bullet word for word (tests/report/test_model_limits.py).
+MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("What is modelled", (
+        "A 2-D slope section: every rock moves in the vertical plane of the section, over "
+        "straight ground segments with their own material.",
+        "The rock is a rigid sphere (mass 4/3 pi r^3 rho, moment of inertia 2/5 m r^2): free "
+        "fall, bouncing, rolling and sliding and every transition between them, after Spang "
+        "& Rautenstrauch (1988), each phase solved in closed form from one event to the next "
+        "(no time step).",
+        "Impacts by Newton restitution and Coulomb friction with the spin that friction "
+        "gives the rock (impact_model spang), or by normal and tangential restitution "
+        "(rn_rt), optionally scaled with the impact speed (Pfeiffer & Bowen 1989).",
+        "Scatter: restitution, friction and rolling resistance are drawn per impact from "
+        "truncated normals with the standard deviations of scatter:, and the impact normal "
+        "is tilted by the roughness; every draw comes from a seeded stream per rock.",
+        "Fences and walls are barriers at a station with a nominal height and an energy "
+        "capacity; ditches and berms reshape the ground; boulder rows are blocks with gaps.",
+        "Design values are statistics of the rocks that met a measure, stated with one-sided "
+        "order-statistic confidence bounds; the fraction of rocks reaching the protected "
+        "zone with a Clopper-Pearson bound.",
+    )),
+    ("What is not modelled", (
+        "Nothing across the section: no lateral spreading, no convergence of paths in "
+        "gullies, no path that leaves the plane; the site length only multiplies the "
+        "quantities and the cost.",
+        "No shape but the sphere (slabs, discs and columns only through the scatter of the "
+        "ground parameters), no fragmentation of a rock on impact, no rock hitting another.",
+        "No trees or forest, no air drag, no ground that deforms or is cratered beyond what "
+        "restitution and friction represent.",
+        "A fence is a line at its station: no braking distance (maximum elongation), no "
+        "residual height after an impact, no difference between hitting a post, a cable or "
+        "the middle of the net, no load on posts, anchors or foundations. The catalogue's "
+        "capacity_kj is one number; SEL and MEL are not told apart.",
+        "A wall is rigid: no structural check of the wall, the embankment or its foundation; "
+        "a ditch or berm holds a rock that comes to rest in it, with no check of its slopes.",
+    )),
+    ("Safety concepts and the standards they follow", (
+        "spang follows Spang & Rautenstrauch (1988): height factor = nominal height / "
+        "critical height (the statistic of the passing heights of the rock centres), "
+        "target height_factor (the paper: 2 to 3 in normal cases); energy factor = "
+        "capacity_kj / design energy (the statistic of the kinetic energies), target "
+        "energy_factor; reach factor = width of a ditch or berm / the statistic of the "
+        "reach, target reach_factor. The paper took the maximum over a few hundred paths; "
+        "here statistic chooses the maximum or the 95th or 99th percentile.",
+        "uni11211 follows UNI 11211-4 (2018), with Peila & Ronco (2009): design speed and "
+        "passing height are the percentile times gamma_F = gamma_tr gamma_dp, the design "
+        "mass the percentile times gamma_volf gamma_gamma; the design energy E_d = 1/2 m_d "
+        "v_d^2 must not exceed capacity_kj / gamma_e, with capacity_kj the product's MEL; the "
+        "nominal height must be at least h_d + f, f = max(f_min_m, half the design block).",
+        "Fence classes follow ETAG 027, now EAD 340059: a kit is tested at its service "
+        "energy level SEL and its maximum energy level MEL (SEL = MEL / 3); the MEL test "
+        "gives the maximum elongation (braking distance) and the residual height (category "
+        "A at least 50 % of the nominal height, B 30 to 50 %, C at most 30 %). This version "
+        "checks the energy against capacity_kj and the height against the nominal height; "
+        "it does not use the elongation or the residual height.",
+    )),
+)
+
+
 # ---- the parts of the context -------------------------------------------------
 
 
-def _inputs(project: Any, command: str) -> list[Table]:
-    d = project.resolved_dict()
+def _text(v: Any) -> str:
+    """A value of the project as compact text: lists joined, mappings as key value pairs."""
+    if isinstance(v, dict):
+        return "; ".join(f"{k} {_text(x)}" for k, x in v.items()) or "-"
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(_text(x) for x in v) + "]"
+    if isinstance(v, float):
+        return format(v, ".10g")  # every digit a survey or a catalogue may give
+    return "-" if v is None else str(v)
+
+
+def _flat(d: Mapping[str, Any], prefix: str = "") -> list[list[str]]:
+    """Rows ``[key.path, value]`` of every leaf of a nested mapping (lists kept whole)."""
+    rows: list[list[str]] = []
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict) and v:
+            rows += _flat(v, key + ".")
+        else:
+            rows.append([key, _text(v)])
+    return rows
+
+
+def _inputs(project: Any, command: str, resolved: Mapping[str, Any] | None = None,
+            concepts: Mapping[str, str] | None = None) -> list[Table]:
+    """Every input of the run, so that the report alone rebuilds the project.
+
+    ``resolved`` is the project as run (measures and safety concept with
+    every parameter resolved, defaults included); ``concepts`` the summary
+    line of each safety concept (what it follows).
+    """
+    d = dict(resolved) if resolved is not None else project.resolved_dict()
     out = []
     slope = d["slope"]
     pts = slope["points"]
-    rows = [[_fixed(p[0], 1), _fixed(p[1], 1), slope["materials"][i] if i < len(pts) - 1 else ""]
-            for i, p in enumerate(pts)]
+    rows = [[_text(float(p[0])), _text(float(p[1])),
+             slope["materials"][i] if i < len(pts) - 1 else ""] for i, p in enumerate(pts)]
     out.append(Table("Slope section", ["x (m)", "elevation (m)", "material of the next segment"],
-                     rows))
+                     rows, note=f"{len(pts)} points, as resolved from the project's slope "
+                     "(a survey file's points included)."))
     mats = d["materials"]
-    keys = ["restitution", "friction", "rolling_resistance", "roughness_deg", "impact_model"]
-    out.append(Table("Ground materials", ["material", *keys],
-                     [[name, *(str(m.get(k, "-")) for k in keys)] for name, m in mats.items()],
-                     note="Restitution, friction and rolling resistance are dimensionless; "
-                     "roughness in degrees. Scatter as in the project file."))
+    keys = list(dict.fromkeys(k for m in mats.values() for k in m if k != "scatter"))
+    sc_keys = list(dict.fromkeys(k for m in mats.values() for k in (m.get("scatter") or {})))
+    out.append(Table(
+        "Ground materials", ["material", *keys, *(f"scatter of {k}" for k in sc_keys)],
+        [[name, *(_text(m.get(k)) for k in keys),
+          *(_text((m.get("scatter") or {}).get(k, 0.0)) for k in sc_keys)]
+         for name, m in mats.items()],
+        note="Restitution, friction and rolling resistance are dimensionless; roughness_deg "
+        "in degrees, roughness_height_m and velocity_scaling_k as named. Scatter: the "
+        "standard deviation of each parameter, drawn per impact (truncated normal)."))
     r = d["rocks"]
-    size = next(((q, r[q]) for q in ("radius", "volume", "mass") if r.get(q) is not None),
-                ("size", None))
-    unit = {"radius": "m", "volume": "m3", "mass": "kg"}.get(size[0], "")
-    dist = size[1]
-    if isinstance(dist, dict):  # {lognormal: [a, b]} -> "lognormal 0.6, 0.4"
-        dist = "; ".join(f"{k} " + ", ".join(f"{v:g}" for v in (vals if isinstance(vals, list)
-                                                               else [vals]))
-                         for k, vals in dist.items())
-    rows = [["density (kg/m3)", _num(r["density"], "m")],
-            [f"{size[0]} ({unit})", str(dist)]]
+    rows = [[k, _text(r[k])] for k in r if k != "release"]
     for i, z in enumerate(r["release"]):
-        rows.append([f"release zone {i + 1}",
-                     f"x {z['x'][0]:g} to {z['x'][1]:g} m, height {z['height']:g} m, velocity "
-                     f"{z['velocity']} m/s, spin {z['spin']}, weight {z['weight']:g}"])
-    out.append(Table("Rocks", ["quantity", "value"], rows))
+        rows.append([f"release zone {i + 1}", _text(z)])
+    out.append(Table("Rocks", ["quantity", "value"], rows,
+                     note="density kg/m3; radius m, volume m3 or mass kg (a number or a "
+                     "distribution with its parameters); release: x (m, a range is sampled "
+                     "uniformly), height above the ground (m), velocity [vx, vy] (m/s), spin "
+                     "(rad/s), weight (share of the rocks). count and seed as written; the run "
+                     "table gives the rocks and seeds used."))
     a = d["analysis"]
-    rows = [["analysis stations x (m)", ", ".join(f"{x:g}" for x in a["stations"]) or "-"],
-            ["percentiles (%)", ", ".join(f"{q:g}" for q in a["percentiles"])],
-            ["envelope points", str(a["envelope_points"])],
-            ["fewest rocks for an envelope point", str(a.get("min_rocks_envelope", "-"))]]
+    rows = [[k, _text(v)] for k, v in a.items()]
     if d.get("protect"):
-        rows.append(["protected zone from x (m)", f"{d['protect']['x']:g}"])
+        rows += [[f"protect.{k}", _text(v)] for k, v in d["protect"].items()]
     out.append(Table("Analysis", ["setting", "value"], rows))
-    if command == "check" and d.get("measures"):
-        out.append(Table("Measures checked", ["measure", "parameters"],
-                         [[m["type"], ", ".join(f"{k} {v}" for k, v in m.items() if k != "type")]
+    out.append(Table("Engine", ["setting", "value"], _flat(d.get("engine") or {})))
+    if d.get("measures"):
+        out.append(Table("Measures checked" if command == "check" else "Measures of the project",
+                         ["measure", "parameters"],
+                         [[m["type"], ", ".join(f"{k} {_text(v)}" for k, v in m.items()
+                                                if k != "type")]
                           for m in d["measures"]]))
     if command in ("check", "optimise"):
-        s = d.get("safety") or {}
-        out.append(Table("Safety concept", ["parameter", "value"],
-                         [[k, str(v)] for k, v in s.items()]))
+        sft = d.get("safety") or {}
+        name = str(sft.get("concept", "spang"))
+        rows = [[k, _text(v)] for k, v in sft.items()]
+        if concepts and concepts.get(name):
+            rows.append(["follows", concepts[name]])
+        out.append(Table("Safety concept", ["parameter", "value"], rows,
+                         note="Its standard or paper, and how its factors map to it: the "
+                         "section 'Model and limits' below."))
     if command == "optimise" and d.get("design"):
-        des = d["design"]
-        rows = [[c.get("type", "?"), ", ".join(f"{k} {v}" for k, v in c.items() if k != "type")]
-                for c in des.get("candidates", [])]
-        out.append(Table("Candidate measures of the design", ["type", "range"], rows,
-                         note=f"At most {des.get('max_measures')} measures in one design; "
-                         f"residual target {des.get('residual')}."))
+        des = dict(d["design"])
+        rows = [[c.get("type", "?"), ", ".join(f"{k} {_text(v)}" for k, v in c.items()
+                                               if k != "type")]
+                for c in des.pop("candidates", [])]
+        out.append(Table("Candidate measures of the design", ["type", "range"], rows))
+        products = des.pop("products", None) or {}
+        costs = des.pop("costs", None) or {}
+        out.append(Table("Design settings", ["setting", "value"], _flat(des)))
+        if products:
+            out.append(Table("Product catalogue", ["measure type", "product", "properties"],
+                             [[kind, name, _text(p)] for kind, table in products.items()
+                              for name, p in table.items()],
+                             note="capacity_kj: energy class (kJ); heights: nominal heights "
+                             "(m) on offer."))
+        if costs:
+            out.append(Table("Cost catalogue", ["price", "value"], _flat(costs),
+                             note="Prices in the catalogue's currency, per the unit each key "
+                             "names; a barrier's by product and height (m), per running metre."))
     return out
 
 
+def _plugin_rows(registry: Any, used: list[tuple[str, str]]) -> list[list[str]]:
+    """One row per plugin the run used: its kind and name, distribution and version."""
+    rows = []
+    for key, name in dict.fromkeys(used):
+        origin = registry.origins.get((key, name)) if registry is not None else None
+        dist = "-" if origin is None else (
+            f"{origin.distribution or origin.plugin} {origin.version or ''}".strip())
+        rows.append([f"plugin: {key} {name}", dist])
+    return rows
+
+
+def _used_plugins(d: Mapping[str, Any], command: str) -> list[tuple[str, str]]:
+    used = [("measure", str(m["type"])) for m in d.get("measures") or []]
+    if command == "optimise" and d.get("design"):
+        used += [("measure", str(c["type"])) for c in d["design"].get("candidates", [])]
+        used.append(("cost", str((d["design"].get("costs") or {}).get("model", "unit_prices"))))
+    if command in ("check", "optimise"):
+        used.append(("safety", str((d.get("safety") or {}).get("concept", "spang"))))
+    return used
+
+
 def _run_table(result: Any, summary: Mapping[str, Any]) -> Table:
+    import platform
+
     project = result.project
-    rows = [["program", f"rockfall-design {__version__}, command {result.command}"],
+    rows = [["program", f"rockfall-design {__version__}, command {result.command}; Python "
+             f"{platform.python_version()}"],
             ["project file", str(project.source)],
             ["project hash (sha256 of the resolved project)",
-             str(summary.get("project_hash") or project.resolved_hash())],
-            ["rocks", f"{int(summary['rocks']):,}"],
-            ["seed", str(summary["seed"])]]
+             str(summary.get("project_hash") or project.resolved_hash())]]
+    conf = summary.get("confidence")
     if result.command == "optimise":
-        rows += [["fresh rocks (verification)", f"{int(summary['fresh_rocks']):,}"],
-                 ["fresh seed", str(summary["fresh_seed"])],
-                 ["designs screened", f"{int(summary.get('designs_evaluated', 0)):,}"]]
+        design = getattr(result, "design", None)
+        rows += [["search rocks and seed", f"{int(summary.get('search_rocks') or 0):,} rocks, "
+                  f"seed {summary['seed']}"],
+                 ["decision rocks and seed", f"{int(summary['rocks']):,} rocks, seed "
+                  f"{summary['seed']}" + (" (the chosen design's statistics below)"
+                                          if design is not None else "")],
+                 ["verification (fresh rocks) and seed",
+                  f"{int(summary['fresh_rocks']):,} rocks, seed {summary['fresh_seed']}"],
+                 ["designs screened", f"{int(summary.get('designs_evaluated', 0)):,}; "
+                  f"{int(summary.get('exact_evaluations') or 0):,} evaluated exactly"]]
+        looks = summary.get("looks")
+        if looks:
+            rows.append(["sequential looks (rocks)", ", ".join(f"{n:,}" for n in looks["rocks"])
+                         + f"; each at {100 * float(looks['look_confidence']):.4g} %"])
+    else:
+        rows += [["rocks", f"{int(summary['rocks']):,}"],
+                 ["seed", str(summary["seed"])]]
+    if conf is not None:
+        rows.append(["confidence (one-sided, of every bound)", f"{100 * float(conf):g} %"])
+    if summary.get("runtime_s") is not None:
+        rows.append(["run time", f"{float(summary['runtime_s']):,.1f} s"])
     stats = summary.get("statistics") or {}
     if stats.get("method") == "histograms":
         rows.append(["statistics", "streamed in chunks: counts, means and maxima exact, "
@@ -144,6 +293,8 @@ def _run_table(result: Any, summary: Mapping[str, Any]) -> Table:
     rows.append(["engine", f"exact events (flight parabolas, impacts, rolling and sliding in "
                  f"closed form); v_contact {e.v_contact:g} m/s, v_stop {e.v_stop:g} m/s, "
                  f"max_events {e.max_events:,}"])
+    registry = getattr(result, "registry", None) or getattr(result, "_registry", None)
+    rows += _plugin_rows(registry, _used_plugins(project.resolved_dict(), result.command))
     return Table("", ["item", "value"], rows)
 
 
@@ -285,6 +436,24 @@ def _chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
     return head, [measure_text(m) for m in alt.get("measures") or []]
 
 
+def _resolved_inputs(result: Any) -> tuple[dict[str, Any], dict[str, str]]:
+    """The project as run (every parameter resolved) and each safety concept's summary."""
+    d = result.project.resolved_dict()
+    evaluation = getattr(result, "evaluation", None)
+    if result.command == "optimise" and getattr(result, "best", None) is not None:
+        evaluation = result.design.evaluation
+    if evaluation is not None:
+        run = evaluation.resolved_project().resolved_dict()
+        if result.command == "check":
+            d["measures"] = run.get("measures") or []
+        d["safety"] = run.get("safety") or d.get("safety")
+    registry = getattr(result, "registry", None) or getattr(result, "_registry", None)
+    concepts = {} if registry is None else {
+        name: str(getattr(cls, "summary", "") or "")
+        for name, cls in registry.safety_concepts.items()}
+    return d, concepts
+
+
 def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Everything the report templates show, as plain data.
 
@@ -309,11 +478,14 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
         "version": __version__,
         "generated": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "run": _run_table(result, summary),
-        "inputs": _inputs(project, command),
+        "inputs": _inputs(project, command, *_resolved_inputs(result)),
         "results": [],
         "protect": "",
         "verdict": "",
+        "verdict_state": "",
         "failures": [],
+        "bill": None,
+        "limits": [],
         "chosen": "",
         "chosen_measures": [],
     }
@@ -332,17 +504,58 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
         if ct is not None:
             ctx["results"].append(ct)
         ctx["protect"] = _protect_text(stats_summary)
-    if command == "check":
-        ctx["verdict"] = ("Design holds: every check passes." if summary["ok"]
+    _set_verdict(ctx, summary.get("verdict"))
+    if command == "check" and not summary.get("verdict"):  # a summary from before verdicts
+        ctx["verdict"] = ("Design holds on the point values." if summary["ok"]
                           else "Design fails.")
         ctx["failures"] = list(summary.get("failures", []))
+    if summary.get("bill"):
+        ctx["bill"] = _bill_table(summary["bill"])
     if design is not None:
-        ctx["results_note"] = ("Statistics, checks and figures of the chosen design, on the "
-                               "search rocks.")
+        ctx["results_note"] = (
+            "Statistics, checks and figures of the chosen design on the "
+            f"{int(design.summary['rocks']):,} rocks that decided it (seed "
+            f"{design.summary['seed']}); the search used {int(summary.get('search_rocks') or 0):,} "
+            f"rocks and the verification {int(summary.get('fresh_rocks') or 0):,} fresh rocks "
+            f"(seed {summary.get('fresh_seed')}); confidence "
+            f"{100 * float(summary.get('confidence') or 0.95):g} %.")
+    if command in ("check", "optimise"):
+        ctx["limits"] = [{"heading": h, "items": list(items)} for h, items in MODEL_LIMITS]
     figs = figures if figures is not None else result.figures()
     ctx["figures"] = [{"name": name, "caption": CAPTIONS.get(name, ""), "fig": fig}
                       for name, fig in figs.items()]
     return ctx
+
+
+def _set_verdict(ctx: dict[str, Any], verdict: Mapping[str, Any] | None) -> None:
+    """The verdict (``summary["verdict"]``) as the report's first lines."""
+    if not verdict:
+        return
+    ctx["verdict"] = verdict["headline"]
+    ctx["verdict_state"] = verdict["state"]
+    ctx["verdict_ok"] = verdict["state"] == "holds with confidence"
+    ctx["failures"] = list(verdict.get("details") or [])
+
+
+def _money(v: float) -> str:
+    return f"{v:,.2f}"
+
+
+def _bill_table(bill: Mapping[str, Any]) -> Table:
+    """The chosen design's bill: a line per quantity and fixed cost, and the total."""
+    cur = bill.get("currency") or ""
+    unit = f" ({cur})" if cur else ""
+    rows = [[str(it["measure"]), str(it["quantity"]), _money(it["count"]), str(it["unit"]),
+             _money(it["unit_price"]), _money(it["amount"]), str(it.get("source") or "")]
+            for it in bill["items"]]
+    rows.append(["total", "", "", "", "", _money(bill["total"]), ""])
+    return Table(f"Bill of the chosen design (site length {bill['length_m']:g} m)",
+                 ["measure", "quantity", "count", "unit", f"unit price{unit}",
+                  f"amount{unit}", "price from"], rows,
+                 note="count: the quantity over the whole site length (running metres, m3, "
+                 "or each); amount = count x unit price; the total is the design's cost as the "
+                 f"optimiser compared it, priced by the cost model {bill.get('model', '')}.",
+                 highlight=[False] * len(bill["items"]) + [True])
 
 
 def _values_text(values: Mapping[str, Any]) -> str:
@@ -448,6 +661,10 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
         + _margin_text(b["margin"], b["binds_at"]) + ".")
     ctx["verdict_ok"] = ok
     ctx["failures"] = list(summary.get("failures", []))
+    if summary.get("verdict"):
+        ctx["scenarios_note"] = ctx["verdict"]
+        _set_verdict(ctx, summary["verdict"])
+        ctx["failures"] = [ctx["scenarios_note"], *ctx["failures"]]
     for f in ctx["figures"]:
         f["caption"] = f"{name[0].upper()}{name[1:]}: {f['caption']}"
     if "margins" in figs:  # first: the report begins with every scenario

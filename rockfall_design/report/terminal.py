@@ -36,6 +36,9 @@ __all__ = [
 MAX_FILE_WIDTH = 200
 
 
+#: Marginal or undecided cheaper designs the optimise panel shows (the cheapest).
+_MARGINAL_SHOWN = 6
+
 def fitted_console(renderable: Any, file: Any = None) -> Console:
     """A console as wide as the report's output can show it.
 
@@ -164,9 +167,48 @@ def _value(v: float | None, unit: str) -> str:
     return f"{v:,.2f}" if unit == "-" else f"{v:,.2f} {unit}"
 
 
+#: The style of each verdict's headline (rockfall_design.judge.verdict.STATES).
+_VERDICT_STYLE = {"holds with confidence": "bold green",
+                  "holds on point values only": "bold yellow",
+                  "fails": "bold red", "untested": "bold magenta"}
+
+
+def _verdict_parts(verdict: dict[str, Any] | None) -> list[Any]:
+    """The verdict's headline and details: the first lines of a report."""
+    if not verdict:
+        return []
+    parts: list[Any] = [Text(verdict["headline"], style=_VERDICT_STYLE.get(verdict["state"],
+                                                                          "bold"))]
+    for line in verdict.get("details") or []:
+        parts.append(Text(f"  - {line}", style="red" if verdict["state"] == "fails" else ""))
+    return parts
+
+
+def _bill_table(bill: dict[str, Any]) -> Table:
+    """The bill of the chosen design: a line per quantity and fixed cost, the total."""
+    cur = bill.get("currency") or ""
+    tab = Table(title=f"Bill ({bill['model']}; site length {bill['length_m']:g} m)",
+                title_justify="left", show_edge=False, caption="count: over the whole site "
+                "length; unit prices as the catalogue gives them", caption_justify="left")
+    for col, just in (("measure", "left"), ("quantity", "left"), ("count", "right"),
+                      ("unit", "left"), (f"unit price {cur}".strip(), "right"),
+                      (f"amount {cur}".strip(), "right")):
+        tab.add_column(col, justify=just)
+    last = None
+    for it in bill["items"]:
+        tab.add_row("" if it["measure"] == last else it["measure"], it["quantity"],
+                    f"{it['count']:,.2f}", it["unit"], f"{it['unit_price']:,.2f}",
+                    f"{it['amount']:,.2f}")
+        last = it["measure"]
+    tab.add_row("total", "", "", "", "", f"{bill['total']:,.2f}", style="bold")
+    return tab
+
+
 def check_renderable(summary: dict[str, Any]) -> Group:
-    """The rich renderable of a ``check`` summary (measures, checks, verdict)."""
-    parts: list[Any] = list(simulation_renderable(summary).renderables)
+    """The rich renderable of a ``check`` summary (verdict first, measures, checks)."""
+    verdict = _verdict_parts(summary.get("verdict"))
+    parts: list[Any] = [*verdict, Text("")] if verdict else []
+    parts += list(simulation_renderable(summary).renderables)
     tab = Table(
         title=f"Measures (safety concept: {summary['safety_concept']})",
         title_justify="left",
@@ -215,14 +257,11 @@ def check_renderable(summary: dict[str, Any]) -> Group:
         for c in m["checks"]:
             if c["detail"]:
                 parts.append(Text(f"  {m['label']}: {c['name']}: {c['detail']}", style="dim"))
-    verdict = (
-        Text("Design holds: every check passes.", style="bold green")
-        if summary["ok"]
-        else Text("Design fails:", style="bold red")
-    )
-    parts += [Text(""), verdict]
-    for line in summary.get("failures", []):
-        parts.append(Text(f"  - {line}", style="red"))
+    if not verdict:  # a summary from before verdicts: the point values' word
+        parts += [Text(""), Text("Design holds on the point values." if summary["ok"]
+                                 else "Design fails:", style="bold")]
+        for line in summary.get("failures", []):
+            parts.append(Text(f"  - {line}", style="red"))
     return Group(*parts)
 
 
@@ -259,8 +298,13 @@ def _factors(alt: Any) -> str:
     return " ".join(out)
 
 
-def print_optimise(result: Any, project: Any, console: Console | None = None) -> None:
-    """The optimiser's comparison of alternatives, the chosen one marked."""
+def print_optimise(result: Any, project: Any, console: Console | None = None,
+                   summary: dict[str, Any] | None = None) -> None:
+    """The optimiser's comparison of alternatives, the chosen one marked.
+
+    With the command's ``summary`` (``OptimiseResult.summary``) the report
+    opens with its verdict and shows the chosen design's bill.
+    """
     cur = result.currency or ""
     tab = Table(show_edge=False, title="Alternatives (cheapest design of each family)",
                 title_justify="left", caption="factors: h height, e energy, r reach "
@@ -280,7 +324,9 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
         tab.add_row(star, a.name, cost if a.holds else f"({cost})",
                     "\n".join(_measure_short(m) for m in a.measures) or "-", _factors(a) or "-",
                     "-" if a.residual is None else f"{a.residual}", fresh, style=style)
-    parts: list[Any] = [
+    verdict = _verdict_parts((summary or {}).get("verdict"))
+    parts: list[Any] = [*verdict, Text("")] if verdict else []
+    parts += [
         Text.assemble((project.name, "bold"),
                       f"   search: {result.search_rocks or result.rocks:,} rocks, seed "
                       f"{result.seed}; chosen design decided with {result.rocks:,} rocks, "
@@ -291,6 +337,15 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
                       f"edits simulated, {result.wall_s:.1f} s"),
         Text(""), tab, Text(""),
     ]
+    bare = getattr(result, "bare_slope", None)
+    if bare and bare["holds"]:
+        parts.append(Text(
+            f"The bare slope already meets the residual target: {bare['reaching']:,} of "
+            f"{bare['rocks']:,} search rocks reach x = {bare['x']:g} m, at most "
+            f"{100 * bare['upper']:.3f} % with {100 * result.confidence:g} % confidence "
+            f"(allowed {100 * bare['allowed']:.3f} %). No measure is needed for the "
+            "residual; a family's cheapest design may be one that meets few or no rocks.",
+            style="bold yellow"))
     if result.best is not None:
         b = result.best
         parts.append(Text(f"Chosen: {b.name}, {b.cost:,.0f} {cur}: "
@@ -300,14 +355,23 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
         if b.holds_on_fresh_rocks is False:
             parts.append(Text("Warning: the chosen design does not hold on the fresh rocks: "
                               + "; ".join(b.fresh_failures), style="bold yellow"))
+        if (summary or {}).get("bill"):
+            parts += [Text(""), _bill_table(summary["bill"]), Text("")]
     else:
         parts.append(Text(f"No admissible design: {result.reason}", style="bold red"))
-    for m in getattr(result, "marginal", None) or []:
-        parts.append(Text(f"Marginal, cheaper: {m['name']} {m['cost']:,.0f} {cur}: "
+    marginal = getattr(result, "marginal", None) or []
+    for m in marginal[:_MARGINAL_SHOWN]:
+        head = "Marginal, cheaper" if m.get("decided", True) else "Not decided, cheaper"
+        parts.append(Text(f"{head}: {m['name']} {m['cost']:,.0f} {cur}: "
                           f"{'; '.join(m['labels'])}: {_marginal_values(m)}; "
                           + (f"about {m['rocks_to_decide']:,} rocks would decide it "
                              "(--max-rocks)" if m["rocks_to_decide"] else
-                             "its point value sits on the target"), style="yellow"))
+                             "its point value sits on the target" if m["values"] else
+                             "more rocks (--max-rocks) may decide it"), style="yellow"))
+    if len(marginal) > _MARGINAL_SHOWN:
+        parts.append(Text(f"... and {len(marginal) - _MARGINAL_SHOWN} more cheaper designs "
+                          "marginal or not decided (listed under 'marginal' in --json and "
+                          "summary.json)", style="yellow"))
     for a in order:
         if (not a.holds or a.dominated) and a.reason:
             parts.append(Text(f"  {a.name}: {a.reason}", style="dim"))
@@ -318,6 +382,8 @@ def print_optimise(result: Any, project: Any, console: Console | None = None) ->
 def _marginal_values(m: dict[str, Any]) -> str:
     """A marginal design's point values and bounds, one phrase each (see optimise.decide)."""
     v = m["values"]
+    if v is None:  # a design across scenarios: why it is undecided
+        return m["reason"]
     parts = []
     for c in v["checks"]:
         if c["value"] is None:
@@ -342,8 +408,14 @@ def alternatives_table(result: Any) -> Any:
     return alternatives_frame(result.summary())
 
 
-def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -> str:
-    """The project with the chosen measures, as YAML that ``check`` accepts."""
+def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
+                looks: Any = None) -> str:
+    """The project with the chosen measures, as YAML that ``check`` accepts.
+
+    Its head records how the design was decided (the looks of the sequential
+    decision, see :mod:`rockfall_design.judge.sequential`) and how to repeat
+    the verification on fresh rocks.
+    """
     from ..project import dump_yaml
 
     ev = best.evaluation
@@ -361,7 +433,11 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None) -
         f"cost {best.cost:,.0f}.\n"
         f"# rocks: below are the rocks that decided it (seed {ev.study.seed}, "
         f"{ev.study.result.n} rocks; search: {search_rocks} rocks).\n"
-        f"# verification: seed {best.fresh_seed}, {best.fresh_rocks} rocks: "
+        + (f"# decision: admitted at the look of {ev.study.result.n} rocks of the looks "
+           f"{', '.join(str(k) for k in looks.sizes)}, each at "
+           f"{100 * looks.look_confidence:.4g} % (together {100 * looks.confidence:g} %)\n"
+           if looks is not None else "")
+        + f"# verification: seed {best.fresh_seed}, {best.fresh_rocks} rocks: "
         f"{'holds' if best.holds_on_fresh_rocks else 'FAILS'}; reproduce with\n"
         f"#   rockfall-design check design.yaml --seed {best.fresh_seed} "
         f"--rocks {best.fresh_rocks}\n"

@@ -44,6 +44,12 @@ def _text(value: Any) -> str:
     return json.dumps(value, sort_keys=True)
 
 
+
+def envelope_percentile(project: Project) -> float:
+    """The percentile of the study's envelope figure: p95 if configured, else the highest."""
+    pcts = [float(q) for q in project.analysis.percentiles]
+    return 95.0 if 95.0 in pcts or not pcts else max(pcts)
+
 class StudyResult:
     """The scenarios of a parametric study, their results and the sensitivity.
 
@@ -201,7 +207,6 @@ class StudyResult:
         from matplotlib import colormaps
 
         from ..report.figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure
-        from .run import envelope_percentile
 
         if any("envelope" not in result for result in self.results):
             raise ValueError("this study ran without its envelopes (envelopes=False); run it "
@@ -408,19 +413,14 @@ def _interval(entry: dict[str, Any]) -> str:
 
 
 def _by_target(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Sensitivity entries grouped by design value, each group largest effect first.
+    """Sensitivity entries in the one order of ``--json`` (:func:`.sensitivity.rank`)."""
+    from .sensitivity import rank
 
-    The groups are ordered by their largest effect relative to the design
-    value's size, so that metres, kilojoules and fractions compare.
-    """
-    groups: dict[str, list[dict[str, Any]]] = {}
-    for e in entries:
-        groups.setdefault(e["target"], []).append(e)
-    order = sorted(groups, key=lambda t: -max(_relative(e) for e in groups[t]))
-    return [e for t in order for e in sorted(groups[t], key=lambda e: -e["effect"])]
+    return rank(list(entries))
 
 
 def _relative(entry: dict[str, Any]) -> float:
-    """An effect relative to its target's size (to compare targets of different units)."""
-    size = max(abs(entry["low"]), abs(entry["high"]))
-    return entry["effect"] / size if size > 0 else 0.0
+    """An effect relative to its target's size (see :func:`.sensitivity.relative_effect`)."""
+    from .sensitivity import relative_effect
+
+    return relative_effect(entry)

@@ -25,6 +25,7 @@ import numpy as np
 from ..errors import ProjectError
 from ..project import Project
 from .paths import scenario_base, with_values
+from .result import envelope_percentile
 from .scenarios import Scenario, scenarios
 
 __all__ = ["ScenarioTask", "prepare", "prepare_lazily", "run_parametric", "run_scenario",
@@ -384,12 +385,6 @@ def _order_bounds(samples: Sequence[np.ndarray], qs: Sequence[float], confidence
                                                               strict=True)]
         out.append((picked_low[0], picked_high[0], picked_low[1:], picked_high[1:]))
     return out
-
-
-def envelope_percentile(project: Project) -> float:
-    """The percentile of the study's envelope figure: p95 if configured, else the highest."""
-    pcts = [float(q) for q in project.analysis.percentiles]
-    return 95.0 if 95.0 in pcts or not pcts else max(pcts)
 
 
 def _finite_counts(values: np.ndarray) -> np.ndarray:

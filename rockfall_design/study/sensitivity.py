@@ -310,9 +310,13 @@ def sensitivity(
     list of dict
         ``{parameter, target, effect, unit, low, high, effect_low,
         effect_high, resolved}`` (and ``S1``, ``S1_conf`` with indices),
-        sorted by ``effect``, largest first (ties: by target, then
-        parameter, in study order). ``low`` and ``high`` are the lowest and
-        highest level means; ``effect`` is ``high - low``, in ``unit``.
+        ranked by :func:`rank`: grouped by target, the targets by their
+        largest ``relative_effect``, each target's inputs by ``effect``,
+        largest first (ties: in study order). ``low`` and ``high`` are the lowest and
+        highest level means; ``effect`` is ``high - low``, in ``unit``;
+        ``relative_effect`` is it relative to the design value's size
+        (:func:`relative_effect`, unit-free), by which the design values are
+        ranked (:func:`rank`).
         ``effect_low`` and ``effect_high`` bound the effect of the true
         design values at the safety concept's confidence c, for all the
         inputs of a target together (:func:`effect_interval` of the
@@ -353,5 +357,38 @@ def sensitivity(
             if path in s1:
                 entry["S1"], entry["S1_conf"] = s1[path]
             out.append(entry)
-    out.sort(key=lambda e: (-e["effect"], order[(e["target"], e["parameter"])]))
-    return out
+    for e in out:
+        e["relative_effect"] = relative_effect(e)
+    return rank(out, order)
+
+
+def relative_effect(entry: Mapping[str, Any]) -> float:
+    """An effect relative to its design value's size, unit-free (-).
+
+    ``effect / max(|low|, |high|)``: an energy that moves from 400 to 800 kJ
+    and a height from 2 to 4 m are both 0.5, whatever their units; 0 where
+    the design value is 0 at every level.
+    """
+    size = max(abs(entry["low"]), abs(entry["high"]))
+    return float(entry["effect"] / size) if size > 0 else 0.0
+
+
+def rank(entries: Sequence[dict[str, Any]],
+         order: Mapping[tuple[str, str], tuple[int, int]] | None = None) -> list[dict[str, Any]]:
+    """The sensitivity's one order, for ``--json`` and the terminal alike.
+
+    Grouped by design value (target), the groups by their largest
+    :func:`relative_effect` (unit-free, so that metres, kilojoules and
+    fractions compare), each group by its raw ``effect`` (one unit within a
+    group), largest first; ties in the study's order of targets and inputs.
+    """
+    order = order or {(e["target"], e["parameter"]): (i, i) for i, e in enumerate(entries)}
+    groups: dict[str, list[dict[str, Any]]] = {}
+    for e in entries:
+        groups.setdefault(e["target"], []).append(e)
+    targets_ranked = sorted(groups, key=lambda t: (-max(relative_effect(e) for e in groups[t]),
+                                                   min(order[(e["target"], e["parameter"])]
+                                                       for e in groups[t])))
+    return [e for t in targets_ranked
+            for e in sorted(groups[t], key=lambda e: (-e["effect"],
+                                                      order[(e["target"], e["parameter"])]))]

@@ -58,7 +58,8 @@ def test_plot_and_report_show_the_binding_scenario_and_every_margin(tmp_path, ca
     # figures: the margins, then the binding scenario's own
     assert md.index("(margins.svg)") < md.index("(profile.svg)")
     assert html.count("<svg") == 4
-    assert ('<p class="ok">Design holds' in html) == out["ok"]
+    assert ('<p id="verdict" class="verdict ok">Holds with confidence' in html) == (
+        out["verdict"]["state"] == "holds with confidence")
     assert "<link" not in html and "<script" not in html and 'src="http' not in html
 
 

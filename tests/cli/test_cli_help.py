@@ -110,6 +110,12 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--json": ["JSON", "stdout", "measures", "safety concepts", "cost models", "failed"],
         "--block": ["plugin"],
     },
+    "serve": {
+        "project": ["project files", "current directory"],
+        "--port": ["port", "8765", "any free port"],
+        "--host": ["127.0.0.1", "this machine only"],
+        "--block": ["plugin"],
+    },
 }
 
 _FILE = re.compile(r"\b[\w-]+\.(?:csv|json|yaml|png|svg|pdf|html|md)\b")

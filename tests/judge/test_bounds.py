@@ -9,6 +9,7 @@ from scipy import stats
 
 from rockfall_design import (
     fraction_upper_bound,
+    quantile_lower_bound,
     quantile_upper_bound,
     rocks_to_bound_quantile,
     rocks_to_show_fraction,
@@ -71,3 +72,17 @@ def test_coverage_of_the_quantile_bound():
     hits = sum(quantile_upper_bound(rng.exponential(size=200), 0.95, 0.95) >= true
                for _ in range(2000))
     assert hits / 2000 >= 0.95 - 3 * np.sqrt(0.95 * 0.05 / 2000)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-1e6, 1e6, allow_nan=False), min_size=1, max_size=400),
+       st.sampled_from([0.5, 0.9, 0.95, 0.99]), st.sampled_from([0.9, 0.95, 0.99, 0.999]))
+def test_quantile_with_bounds_is_the_percentile_and_both_bounds(values, q, confidence):
+    """One partial sort gives what numpy.percentile and the two bound functions give."""
+    from rockfall_design import quantile_with_bounds
+
+    v = np.array(values)
+    value, lower, upper = quantile_with_bounds(v, q, confidence)
+    assert value == pytest.approx(float(np.percentile(v, 100 * q)), rel=1e-12, abs=1e-9)
+    assert lower == quantile_lower_bound(v, q, confidence)
+    assert upper == quantile_upper_bound(v, q, confidence)

@@ -112,13 +112,15 @@ rocks:
 
 
 def test_wide_berm_holds_every_rock_and_a_narrow_one_does_not(registry):
-    wide = evaluate(project("measures: [{type: berm, x: 25, width: 20}]", count=200,
+    # The reach factor over the maximum reach (spang's default is p95 since issue 25).
+    maximum = "\nsafety: {concept: spang, statistic: max}"
+    wide = evaluate(project("measures: [{type: berm, x: 25, width: 20}]" + maximum, count=200,
                             template=BERM_SLOPE), registry)
     # 0.5 m, not 1.5 m since issue 14: with rolling resistance acting while the
     # rock slips (the physics changed), no rock rolls further than 1.4 m on a
     # 1.5 m berm; on 0.5 m a few still go over.
-    narrow = evaluate(project("measures: [{type: berm, x: 25, width: 0.5}]", count=200,
-                              template=BERM_SLOPE), registry)
+    narrow = evaluate(project("measures: [{type: berm, x: 25, width: 0.5}]" + maximum,
+                              count=200, template=BERM_SLOPE), registry)
     w, n = wide.results[0], narrow.results[0]
     assert w.met == 200 and w.caught == 200
     assert n.met == 200 and n.caught < 200
@@ -155,7 +157,7 @@ def test_example_that_passes_and_example_that_fails(capsys, tmp_path):
                 "--out", str(tmp_path / "o"), "--plot", str(tmp_path / "f")])
     report = capsys.readouterr().out
     assert bad == 1
-    assert "Design fails" in report and "height_factor" in report
+    assert "Fails: " in report and "height_factor" in report
     summary = json.loads((tmp_path / "o" / "summary.json").read_text())
     assert summary["ok"] is False and summary["failures"]
     assert summary["run"]["project"]["measures"][0]["type"] == "fence"

@@ -157,6 +157,8 @@ def test_chosen_design_holds_with_a_fresh_seed_and_twice_the_rocks(tmp_path, cap
     # verification are recorded beside them.
     assert f"count: {s['rocks']}" in text and f"seed: {s['seed']}" in text
     assert f"verification: seed {s['fresh_seed']}, {s['fresh_rocks']} rocks" in text
+    looks = ", ".join(str(k) for k in s["looks"]["rocks"])
+    assert f"# decision: admitted at the look of {s['rocks']} rocks of the looks {looks}" in text
     for seed in (977, 978):
         code = main(["check", str(tmp_path / "design.yaml"), "--rocks", str(2 * s["rocks"]),
                      "--seed", str(seed), "--json"])

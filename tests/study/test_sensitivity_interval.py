@@ -227,8 +227,17 @@ def test_the_json_keeps_its_keys_and_gains_the_bounds():
     s = result.summary
     json.dumps(s, allow_nan=False)
     assert s["sensitivity_confidence"] == 0.95
-    effects = [e["effect"] for e in s["sensitivity"]]
-    assert effects == sorted(effects, reverse=True)  # the ranking is as it was
+    # ranked unit-free (issue 25): the design values by their largest relative effect,
+    # each design value's inputs by the raw effect, which stays beside it
+    ranked = s["sensitivity"]
+    targets = list(dict.fromkeys(e["target"] for e in ranked))
+    assert [e["target"] for e in ranked] == sorted((e["target"] for e in ranked),
+                                                   key=targets.index)
+    tops = [max(e["relative_effect"] for e in ranked if e["target"] == t) for t in targets]
+    assert tops == sorted(tops, reverse=True)
+    for t in targets:
+        effects = [e["effect"] for e in ranked if e["target"] == t]
+        assert effects == sorted(effects, reverse=True)
     for e in s["sensitivity"]:
         assert {"parameter", "target", "effect", "unit", "low", "high", "effect_low",
                 "effect_high", "resolved"} <= set(e)

@@ -60,8 +60,20 @@ def test_a_grid_of_two_inputs_of_three_values_is_nine_scenarios(talus):
         assert list(block["values"]) == ["materials.talus.restitution", "rocks.volume"]
         assert {"seed", "stations", "stops", "protect", "measures"} <= set(block)
     assert len({b["seed"] for b in s["scenarios"]}) == 9
-    effects = [e["effect"] for e in s["sensitivity"]]
-    assert effects == sorted(effects, reverse=True)
+    # ranked unit-free (issue 25): the design values by their largest relative effect,
+    # each design value's inputs by the raw effect, which stays beside it
+    ranked = s["sensitivity"]
+    targets = list(dict.fromkeys(e["target"] for e in ranked))
+    assert [e["target"] for e in ranked] == sorted((e["target"] for e in ranked),
+                                                   key=targets.index)
+    tops = [max(e["relative_effect"] for e in ranked if e["target"] == t) for t in targets]
+    assert tops == sorted(tops, reverse=True)
+    for t in targets:
+        effects = [e["effect"] for e in ranked if e["target"] == t]
+        assert effects == sorted(effects, reverse=True)
+    from rockfall_design.study.result import _by_target  # the terminal's order
+
+    assert _by_target(ranked) == ranked
     assert {e["target"] for e in s["sensitivity"]} >= {
         "x=100 energy_kj p95", "x=100 passing_height_m p99",
         "measures[0] x=160 energy_kj p95", "x=200 residual"}

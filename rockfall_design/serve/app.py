@@ -1,0 +1,391 @@
+"""The ASGI application of ``rockfall-design serve``: the page, its assets and the API.
+
+Every request must carry the run's token: in the address the command
+prints (``?token=...``), after which the page keeps it in a cookie
+(HttpOnly, SameSite=Strict), as Jupyter does. A request without it gets
+403, so other local users and other sites' pages cannot use the app.
+
+API (JSON; an error is ``{"error": "one line"}`` with a 4xx status and
+changes nothing):
+
+==========================================  ==========================================
+``GET  /api/projects``                      the projects served
+``GET  /api/projects/{id}``                 section, releases, stations, protected
+                                            zone, measures, latest run and job
+``POST /api/projects/{id}/simulate``        start a run ``{"rocks", "seed"}``: a job
+``GET  /api/jobs/{job}``                    its progress
+``POST /api/jobs/{job}/cancel``             stop it
+``GET  /api/projects/{id}/run``             envelopes, stops and paths of the last run
+``POST /api/projects/{id}/check``           ``{"measures", "rocks", "seed"}``: a job whose
+                                            result is ``check --json``
+``POST /api/projects/{id}/optimise``        ``{"rocks", "seed"}``: a job whose result is
+                                            ``optimise --json``
+``GET  /api/jobs/{job}/files/design.yaml``  the chosen design, as ``--out`` writes it
+``POST /api/place``                         ``{"project", "measure", "x"}`` or
+                                            ``{"project", "measures": [...]}``: checks,
+                                            bounds and residual from the run's table
+``GET  /api/plugins``                       ``plugins --json``: measures and their
+                                            parameters, for the forms
+``GET  /api/projects/{id}/file``            the project file's text
+``POST /api/projects/{id}/validate``        ``{"text"}``: the command line's one-line
+                                            error, or ok
+``POST /api/projects/{id}/save``            ``{"text", "path"}``: write it, only inside
+                                            the project's directory
+``POST /api/projects/{id}/upload``          ``{"path", "text", "replace"}``: import a
+                                            CSV or DXF section or a library there
+==========================================  ==========================================
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import secrets
+from collections.abc import Sequence
+from http.cookies import SimpleCookie
+from importlib import resources
+from typing import Any
+from urllib.parse import parse_qs
+
+from starlette.applications import Starlette
+from starlette.requests import Request
+from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
+from starlette.routing import Route
+
+from .workbench import MAX_BODY_BYTES, ProjectEntry, ServeError
+
+#: Name of the cookie that carries the token after the first request.
+COOKIE = "rockfall_design_token"
+
+_STATIC_FILES = {"app.js": "text/javascript", "style.css": "text/css",
+                 "index.html": "text/html"}
+
+
+# The page loads nothing but this app's own files (no CDN, no inline script),
+# may not be framed by another site, and is not kept in a cache.
+_PAGE_HEADERS = {
+    "Cache-Control": "no-store",
+    "Content-Security-Policy": "default-src 'self'; img-src 'self' data:; "
+                               "style-src 'self' 'unsafe-inline'; frame-ancestors 'none'",
+    "X-Content-Type-Options": "nosniff",
+    "Referrer-Policy": "no-referrer",
+}
+
+
+class TokenGuard:
+    """ASGI middleware: 403 for any request without the run's token.
+
+    The token is accepted from the ``token`` query parameter (the printed
+    address) or the cookie; a request that brought it in the address gets
+    the cookie set, so that the page's own requests need not repeat it.
+    """
+
+    def __init__(self, app: Any, token: str) -> None:
+        self.app = app
+        self.token = token
+
+    async def __call__(self, scope: dict, receive: Any, send: Any) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+        from_query = query.get("token", [""])[0]
+        cookie = ""
+        for name, value in scope.get("headers", []):
+            if name == b"cookie":
+                jar: SimpleCookie = SimpleCookie()
+                try:
+                    jar.load(value.decode("latin-1"))
+                except Exception:  # noqa: BLE001 -- a malformed cookie is no token
+                    continue
+                if COOKIE in jar:
+                    cookie = jar[COOKIE].value
+        ok_query = bool(from_query) and secrets.compare_digest(from_query, self.token)
+        ok_cookie = bool(cookie) and secrets.compare_digest(cookie, self.token)
+        if not (ok_query or ok_cookie):
+            resp = PlainTextResponse(
+                "403: this address needs the token that rockfall-design serve printed "
+                "(open the address it printed)\n", status_code=403)
+            await resp(scope, receive, send)
+            return
+        if ok_query and not ok_cookie:
+            header = (f"{COOKIE}={self.token}; Path=/; HttpOnly; SameSite=Strict").encode()
+
+            async def send_with_cookie(message: dict) -> None:
+                if message["type"] == "http.response.start":
+                    message = dict(message)
+                    message["headers"] = list(message.get("headers", [])) + [
+                        (b"set-cookie", header)]
+                await send(message)
+
+            await self.app(scope, receive, send_with_cookie)
+            return
+        await self.app(scope, receive, send)
+
+
+def _error(exc: ServeError) -> JSONResponse:
+    return JSONResponse({"error": exc.message}, status_code=exc.status)
+
+
+def _clean(v: Any) -> Any:
+    """JSON-safe: NaN and infinities become null (JSON has neither)."""
+    if isinstance(v, float):
+        return v if math.isfinite(v) else None
+    if isinstance(v, dict):
+        return {k: _clean(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_clean(x) for x in v]
+    return v
+
+
+def _json(data: Any, status: int = 200) -> JSONResponse:
+    return JSONResponse(_clean(data), status_code=status)
+
+
+async def _body(request: Request) -> dict[str, Any]:
+    """The request's JSON object, refused when too large or not an object.
+
+    Raises
+    ------
+    ServeError
+        413 above :data:`MAX_BODY_BYTES`; 400 for a body that is not a JSON object.
+    """
+    declared = request.headers.get("content-length")
+    if declared is not None:
+        try:
+            if int(declared) > MAX_BODY_BYTES:
+                raise ServeError(413, f"request body of {int(declared):,} bytes is larger than "
+                                 f"the {MAX_BODY_BYTES:,} bytes allowed")
+        except ValueError:
+            raise ServeError(400, "malformed Content-Length header") from None
+    chunks, size = [], 0
+    async for chunk in request.stream():
+        size += len(chunk)
+        if size > MAX_BODY_BYTES:
+            raise ServeError(413, f"request body is larger than the {MAX_BODY_BYTES:,} bytes "
+                             "allowed")
+        chunks.append(chunk)
+    raw = b"".join(chunks)
+    if not raw:
+        return {}
+    try:
+        data = json.loads(raw)
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ServeError(400, f"malformed JSON body: {exc}") from None
+    if not isinstance(data, dict):
+        raise ServeError(400, "expected a JSON object as the request body")
+    return data
+
+
+def _optional_int(data: dict[str, Any], key: str) -> int | None:
+    v = data.get(key)
+    if v is None:
+        return None
+    if isinstance(v, bool) or not isinstance(v, int | float) or v != int(v):
+        raise ServeError(400, f"{key}: expected a whole number, got {v!r}")
+    return int(v)
+
+
+def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any:
+    """The app serving ``entries``, guarded by ``token`` (a new random one if None).
+
+    Returns the ASGI application; its token is ``app.state.token`` of the
+    inner Starlette app, also as the attribute ``token`` of the returned object.
+    """
+    token = token or secrets.token_urlsafe(24)
+    by_id = {e.id: e for e in entries}
+    jobs: dict[str, Any] = {}
+
+    def entry(pid: str) -> ProjectEntry:
+        e = by_id.get(pid)
+        if e is None:
+            known = ", ".join(by_id) or "none"
+            raise ServeError(404, f"unknown project {pid!r} (served: {known})")
+        return e
+
+    def handle(fn: Any) -> Any:
+        async def endpoint(request: Request) -> Response:
+            try:
+                return await fn(request)
+            except ServeError as exc:
+                return _error(exc)
+        return endpoint
+
+    async def page(request: Request) -> Response:
+        return _static("index.html")
+
+    async def static(request: Request) -> Response:
+        name = request.path_params["name"]
+        if name not in _STATIC_FILES:
+            raise ServeError(404, f"no asset {name!r}")
+        return _static(name)
+
+    async def projects(request: Request) -> Response:
+        return _json({"projects": [{"id": e.id, "name": e.project.name, "file": e.path.name}
+                                   for e in entries]})
+
+    async def project(request: Request) -> Response:
+        return _json(entry(request.path_params["pid"]).describe())
+
+    async def run(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        if e.bench is None:
+            raise ServeError(409, f"{e.id} has not been simulated yet (POST .../simulate)")
+        return _json(e.run_dict())
+
+    async def simulate(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        job = e.start_run(_optional_int(data, "rocks"), _optional_int(data, "seed"))
+        jobs[job.id] = job
+        return _json(job.as_dict(), 202)
+
+    async def check(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        raws = data.get("measures")
+        if raws is not None and not isinstance(raws, list):
+            raise ServeError(400, "measures: expected a list of measures")
+        job = e.start_check(raws, _optional_int(data, "rocks"), _optional_int(data, "seed"))
+        jobs[job.id] = job
+        return _json(job.as_dict(), 202)
+
+    async def optimise(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        job = e.start_optimise(_optional_int(data, "rocks"), _optional_int(data, "seed"))
+        jobs[job.id] = job
+        return _json(job.as_dict(), 202)
+
+    async def job_file(request: Request) -> Response:
+        j = job_of(request)
+        name = request.path_params["name"]
+        if name not in j.files:
+            raise ServeError(404, f"job {j.id} has no {name}")
+        return Response(j.files[name], media_type="application/yaml",
+                        headers={"Content-Disposition": f'attachment; filename="{name}"'})
+
+    def job_of(request: Request) -> Any:
+        job = jobs.get(request.path_params["jid"])
+        if job is None:
+            raise ServeError(404, f"unknown job {request.path_params['jid']!r}")
+        return job
+
+    async def job(request: Request) -> Response:
+        return _json(job_of(request).as_dict())
+
+    async def cancel(request: Request) -> Response:
+        j = job_of(request)
+        j.cancel_event.set()
+        return _json(j.as_dict())
+
+    async def place(request: Request) -> Response:
+        data = await _body(request)
+        pid = data.get("project")
+        if not isinstance(pid, str):
+            raise ServeError(400, "project: expected the id of a served project")
+        e = entry(pid)
+        if "measures" in data:
+            raws = data["measures"]
+            if not isinstance(raws, list) or not raws:
+                raise ServeError(400, "measures: expected a non-empty list of measures")
+        else:
+            m = data.get("measure")
+            if not isinstance(m, dict):
+                raise ServeError(400, "measure: expected an object such as "
+                                 '{"type": "fence", "height": 5, "capacity_kj": 2000}')
+            x = data.get("x", m.get("x"))
+            if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
+                raise ServeError(400, f"x: expected the station in m, got {x!r}")
+            raws = [{**m, "x": float(x)}]
+        bench = e.bench
+        if bench is None:
+            raise ServeError(409, f"{e.id} has not been simulated yet (POST "
+                             f"/api/projects/{e.id}/simulate first)")
+        # A few milliseconds of numpy: run here, on the event loop, for the
+        # lowest latency while the mouse moves.
+        return _json(bench.place(e, raws))
+
+    async def plugins(request: Request) -> Response:
+        from ..plugins import plugins_json
+
+        reg = entries[0].registry if entries else None
+        if reg is None:
+            raise ServeError(404, "no project served")
+        return _json(plugins_json(reg))
+
+    async def file(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        name = request.query_params.get("path", e.path.name)
+        target = _inside(e, name)
+        if not target.is_file():
+            raise ServeError(404, f"no file {name!r} in the project's directory")
+        if target.stat().st_size > MAX_BODY_BYTES:
+            raise ServeError(413, f"{name}: larger than {MAX_BODY_BYTES:,} bytes")
+        try:
+            text = target.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise ServeError(400, f"{name}: not a UTF-8 text file") from None
+        return _json({"path": name, "text": text})
+
+    async def validate(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        e.validate(data.get("text"))
+        return _json({"ok": True})
+
+    async def save(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        name = data.get("path")
+        if name is not None and not isinstance(name, str):
+            raise ServeError(400, "path: expected a file name inside the project's directory")
+        target = e.save(data.get("text"), name)
+        return _json({"ok": True, "path": str(target.relative_to(e.directory))})
+
+    async def upload(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        name = data.get("path")
+        if not isinstance(name, str):
+            raise ServeError(400, "path: expected a file name inside the project's directory")
+        target = e.upload(name, data.get("text"), bool(data.get("replace", False)))
+        return _json({"ok": True, "path": str(target.relative_to(e.directory))})
+
+    routes = [
+        Route("/", handle(page)),
+        Route("/static/{name}", handle(static)),
+        Route("/api/projects", handle(projects)),
+        Route("/api/projects/{pid}", handle(project)),
+        Route("/api/projects/{pid}/run", handle(run)),
+        Route("/api/projects/{pid}/simulate", handle(simulate), methods=["POST"]),
+        Route("/api/projects/{pid}/file", handle(file)),
+        Route("/api/projects/{pid}/validate", handle(validate), methods=["POST"]),
+        Route("/api/projects/{pid}/save", handle(save), methods=["POST"]),
+        Route("/api/projects/{pid}/upload", handle(upload), methods=["POST"]),
+        Route("/api/projects/{pid}/check", handle(check), methods=["POST"]),
+        Route("/api/projects/{pid}/optimise", handle(optimise), methods=["POST"]),
+        Route("/api/jobs/{jid}", handle(job)),
+        Route("/api/jobs/{jid}/files/{name}", handle(job_file)),
+        Route("/api/jobs/{jid}/cancel", handle(cancel), methods=["POST"]),
+        Route("/api/place", handle(place), methods=["POST"]),
+        Route("/api/plugins", handle(plugins)),
+    ]
+    inner = Starlette(routes=routes)
+    inner.state.token = token
+    inner.state.entries = list(entries)
+    app = TokenGuard(inner, token)
+    app.state = inner.state  # type: ignore[attr-defined]
+    return app
+
+
+def _inside(e: ProjectEntry, name: str) -> Any:
+    from .workbench import inside
+
+    return inside(e.directory, name)
+
+
+def _static(name: str) -> Response:
+    path = resources.files("rockfall_design.serve").joinpath("static", name)
+    with resources.as_file(path) as p:
+        return FileResponse(p, media_type=_STATIC_FILES[name], headers=_PAGE_HEADERS)

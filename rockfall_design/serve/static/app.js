@@ -1,0 +1,578 @@
+// rockfall-design serve: the page. Plain JavaScript and SVG, no library, no network
+// beyond this app's own API (the token travels in a cookie the first request set).
+"use strict";
+
+const SVG = "http://www.w3.org/2000/svg";
+const $ = (id) => document.getElementById(id);
+const MATERIAL_COLOURS = ["#8d6e63", "#c2a36b", "#7cb342", "#90a4ae", "#b0876b", "#5d8aa8",
+  "#d4a373", "#6d9886"];
+const W = 900;                      // drawing width (SVG units = px at 100 %)
+const PAD = { l: 48, r: 12, t: 12, b: 26 };
+
+const state = {
+  projects: [], project: null, plugins: null, run: null, job: null,
+  placed: null,                     // {type, params, x}
+  chosen: null,                     // the optimiser's chosen measures
+  inflight: false, pendingX: null, lastResult: null, lastMs: null,
+  sx: null,                         // x scale of every drawing: m -> px
+};
+
+// ---- helpers --------------------------------------------------------------------
+async function api(path, body) {
+  const opts = body === undefined ? {} : {
+    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body),
+  };
+  const resp = await fetch(path, opts);
+  let data = null;
+  try { data = await resp.json(); } catch (e) { data = { error: resp.statusText }; }
+  if (!resp.ok) throw new Error(data && data.error ? data.error : resp.statusText);
+  return data;
+}
+function el(tag, attrs, parent) {
+  const e = document.createElementNS(SVG, tag);
+  for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+  if (parent) parent.appendChild(e);
+  return e;
+}
+function clear(svg) { while (svg.firstChild) svg.removeChild(svg.firstChild); }
+function fmt(v, d = 2) { return v === null || v === undefined ? "–" : Number(v).toFixed(d); }
+function pct(v) { return (100 * v).toPrecision(2) + " %"; }
+function showError(msg) { $("error").textContent = msg || ""; }
+function groundAt(x) {
+  const g = state.project.ground;
+  if (x <= g[0][0]) return g[0][1];
+  for (let i = 1; i < g.length; i++) {
+    if (x <= g[i][0]) {
+      const t = (x - g[i - 1][0]) / (g[i][0] - g[i - 1][0]);
+      return g[i - 1][1] + t * (g[i][1] - g[i - 1][1]);
+    }
+  }
+  return g[g.length - 1][1];
+}
+
+// ---- the section, to scale ---------------------------------------------------------
+function drawSection() {
+  const p = state.project, svg = $("section");
+  clear(svg);
+  const xs = p.ground.map((q) => q[0]), ys = p.ground.map((q) => q[1]);
+  const x0 = Math.min(...xs), x1 = Math.max(...xs);
+  const y0 = Math.min(...ys) - 5, y1 = Math.max(...ys) + 15;
+  // One scale for x and y: the section to scale.
+  const k = Math.min((W - PAD.l - PAD.r) / (x1 - x0), 520 / (y1 - y0));
+  const H = Math.ceil((y1 - y0) * k) + PAD.t + PAD.b;
+  svg.setAttribute("viewBox", `0 0 ${W} ${H}`);
+  const X = (x) => PAD.l + (x - x0) * k, Y = (y) => PAD.t + (y1 - y) * k;
+  state.sx = { x0, x1, k, X, Y, H, inv: (px) => x0 + (px - PAD.l) / k };
+  // ground: filled below, each segment in its material's colour
+  const fill = p.ground.map((q) => `${X(q[0])},${Y(q[1])}`).join(" ");
+  el("polygon", { points: `${X(x0)},${Y(y0)} ${fill} ${X(x1)},${Y(y0)}`, fill: "#eceae4" }, svg);
+  const names = [...new Set(p.materials)];
+  for (let i = 1; i < p.ground.length; i++) {
+    const c = MATERIAL_COLOURS[names.indexOf(p.materials[i - 1]) % MATERIAL_COLOURS.length];
+    el("line", { x1: X(p.ground[i - 1][0]), y1: Y(p.ground[i - 1][1]), x2: X(p.ground[i][0]),
+      y2: Y(p.ground[i][1]), stroke: c, "stroke-width": 4, "data-material": p.materials[i - 1] },
+      svg);
+  }
+  // axes: x along the bottom, elevation on the left
+  for (let x = Math.ceil(x0 / 50) * 50; x <= x1; x += 50) {
+    el("line", { x1: X(x), y1: H - PAD.b, x2: X(x), y2: H - PAD.b + 4, stroke: "#555" }, svg);
+    el("text", { x: X(x), y: H - 8, "text-anchor": "middle" }, svg).textContent = `${x} m`;
+  }
+  for (let y = Math.ceil(y0 / 50) * 50; y <= y1; y += 50) {
+    el("text", { x: 4, y: Y(y) + 4 }, svg).textContent = `${y}`;
+  }
+  // protected zone
+  if (p.protect) {
+    el("rect", { x: X(p.protect.x), y: PAD.t, width: Math.max(2, X(x1) - X(p.protect.x)),
+      height: H - PAD.t - PAD.b, fill: "rgba(220,40,40,0.12)", id: "protect-zone" }, svg);
+    el("text", { x: X(p.protect.x) + 3, y: PAD.t + 12, fill: "#a11" }, svg).textContent =
+      `protected zone x ≥ ${p.protect.x} m`;
+  }
+  // release zones
+  for (const r of p.releases) {
+    const [a, b] = r.x;
+    const pts = [];
+    for (let x = a; x <= b + 1e-9; x += Math.max((b - a) / 10, 0.1)) pts.push(`${X(x)},${Y(groundAt(x)) - 5}`);
+    el("polyline", { points: pts.join(" "), fill: "none", stroke: "#f57c00", "stroke-width": 5,
+      class: "release" }, svg);
+  }
+  // stations
+  for (const s of p.stations) {
+    el("line", { x1: X(s), y1: Y(groundAt(s)), x2: X(s), y2: Y(groundAt(s)) - 30,
+      stroke: "#1565c0", "stroke-dasharray": "3,2" }, svg);
+    el("text", { x: X(s), y: Y(groundAt(s)) - 33, "text-anchor": "middle", fill: "#1565c0" },
+      svg).textContent = `${s}`;
+  }
+  // the project's own measures
+  for (const m of p.measures) drawMeasure(svg, m, "#555", false);
+  // the run: rock paths and where they stop
+  if (state.run) {
+    const g = el("g", { id: "paths", opacity: 0.55 }, svg);
+    for (const path of state.run.paths) {
+      el("polyline", { points: path.map((q) => `${X(q[0])},${Y(q[1])}`).join(" "), fill: "none",
+        stroke: "#6a1b9a", "stroke-width": 0.8 }, g);
+    }
+    const s = state.run.stops;
+    for (let i = 0; i < s.counts.length; i++) {
+      if (!s.counts[i]) continue;
+      const xm = 0.5 * (s.edges[i] + s.edges[i + 1]);
+      el("circle", { cx: X(xm), cy: Y(groundAt(xm)) - 2, r: Math.min(6, 1 + Math.log10(1 + s.counts[i]) * 1.6),
+        fill: "#00897b", opacity: 0.7 }, svg);
+    }
+  }
+  for (const m of state.chosen || []) drawMeasure(svg, m, "#2e7d32", false);
+  if (state.placed) drawMeasure(svg, { ...state.placed.params, type: state.placed.type, x: state.placed.x },
+    "#c62828", true);
+  svg.onmousemove = (ev) => hover(ev);
+  drawLegend(names);
+}
+
+function drawMeasure(svg, m, colour, draggable) {
+  const { X, Y, k } = state.sx;
+  const x = Number(m.x), g = groundAt(x);
+  const h = Number(m.height || m.block_size || m.depth || 2);
+  const grp = el("g", { class: draggable ? "placed" : "measure", id: draggable ? "placed" : "" }, svg);
+  if (m.type === "ditch" || m.type === "berm") {
+    const w = Number(m.width || 4);
+    el("rect", { x: X(x), y: Y(g) - 3, width: w * k, height: 6, fill: colour, opacity: 0.6 }, grp);
+  } else {
+    el("line", { x1: X(x), y1: Y(g), x2: X(x), y2: Y(g + h), stroke: colour,
+      "stroke-width": m.type === "wall" ? 4 : 2.5 }, grp);
+  }
+  const label = el("text", { x: X(x) + 4, y: Y(g + h) - 4, fill: colour }, grp);
+  label.textContent = draggable ? `${m.type} ${fmt(x, 1)} m` : (m.label || `${m.type} ${fmt(x, 1)} m`);
+  const tip = el("title", {}, grp);
+  tip.textContent = m.label || `${m.type} at x = ${fmt(x, 1)} m`;
+  if (draggable) {
+    // A wide, invisible grip: easy to catch with the mouse.
+    const grip = el("rect", { x: X(x) - 9, y: Y(g + h) - 14, width: 18, height: Y(g) - Y(g + h) + 20,
+      fill: "rgba(198,40,40,0.15)", class: "handle", id: "placed-handle" }, grp);
+    grip.addEventListener("pointerdown", startDrag);
+  }
+}
+
+function drawLegend(names) {
+  // Built node by node: names come from the project file, never parsed as HTML.
+  const items = names.map((n, i) => [MATERIAL_COLOURS[i % MATERIAL_COLOURS.length], n]);
+  items.push(["#f57c00", "release zone"], ["#1565c0", "station"], ["rgba(220,40,40,0.3)", "protected zone"]);
+  if (state.run) items.push(["#6a1b9a", "rock paths"], ["#00897b", "stops"]);
+  const legend = $("legend");
+  legend.textContent = "";
+  for (const [colour, name] of items) {
+    const span = document.createElement("span"), swatch = document.createElement("i");
+    swatch.style.background = colour;
+    span.append(swatch, name);
+    legend.appendChild(span);
+  }
+}
+
+// ---- envelopes and stops ------------------------------------------------------------
+function drawChart(svg, xs, series, ylabel, marker) {
+  clear(svg);
+  const { X } = state.sx, H = 150;
+  svg.setAttribute("viewBox", `0 0 ${W} ${H}`);
+  let ymax = 0;
+  for (const s of series) for (const v of s.values) if (v !== null && v > ymax) ymax = v;
+  ymax = ymax > 0 ? ymax * 1.05 : 1;
+  const Y = (v) => H - PAD.b - (v / ymax) * (H - PAD.t - PAD.b);
+  el("line", { x1: PAD.l, y1: H - PAD.b, x2: W - PAD.r, y2: H - PAD.b, stroke: "#999" }, svg);
+  el("text", { x: 4, y: PAD.t + 4 }, svg).textContent = fmt(ymax, ymax < 10 ? 1 : 0);
+  el("text", { x: 4, y: H - PAD.b }, svg).textContent = "0";
+  for (const s of series) {
+    if (s.bars) {
+      for (let i = 0; i < s.values.length; i++) {
+        if (!s.values[i]) continue;
+        el("rect", { x: X(xs[i]), y: Y(s.values[i]), width: Math.max(1, X(xs[i + 1]) - X(xs[i]) - 0.5),
+          height: H - PAD.b - Y(s.values[i]), fill: s.colour }, svg);
+      }
+      continue;
+    }
+    let d = "", pen = false;
+    for (let i = 0; i < xs.length; i++) {
+      const v = s.values[i];
+      if (v === null) { pen = false; continue; }
+      d += `${pen ? "L" : "M"}${X(xs[i]).toFixed(1)},${Y(v).toFixed(1)}`;
+      pen = true;
+    }
+    el("path", { d, fill: "none", stroke: s.colour, "stroke-width": s.width || 1.5 }, svg);
+  }
+  let lx = W - PAD.r - 8;
+  for (const s of series.slice().reverse()) {
+    const t = el("text", { x: lx, y: PAD.t + 4, "text-anchor": "end", fill: s.colour }, svg);
+    t.textContent = s.name;
+    lx -= 12 + 7 * s.name.length;
+  }
+  if (marker !== null && marker !== undefined) {
+    el("line", { x1: X(marker), y1: PAD.t, x2: X(marker), y2: H - PAD.b, stroke: "#c62828",
+      "stroke-dasharray": "4,3" }, svg);
+  }
+  svg.onmousemove = (ev) => hover(ev);
+}
+
+function drawRun() {
+  const r = state.run, mark = state.placed ? state.placed.x : null;
+  if (!r) { for (const id of ["env-height", "env-energy", "stops"]) clear($(id)); return; }
+  const e = r.envelopes, colours = ["#90caf9", "#1565c0", "#0d47a1", "#000"];
+  const series = (q) => e.percentiles.map((p, i) => ({ name: p, values: q[p], colour: colours[i % 3] }))
+    .concat([{ name: "max", values: q.max, colour: "#888", width: 1 }]);
+  drawChart($("env-height"), e.x, series(e.height), "m", mark);
+  drawChart($("env-energy"), e.x, series(e.energy), "kJ", mark);
+  drawChart($("stops"), r.stops.edges, [{ name: "stopped rocks", values: r.stops.counts, colour: "#00897b",
+    bars: true }], "rocks", mark);
+}
+
+function hover(ev) {
+  if (!state.sx) return;
+  const svg = ev.currentTarget, pt = svg.createSVGPoint();
+  pt.x = ev.clientX; pt.y = ev.clientY;
+  const p = pt.matrixTransform(svg.getScreenCTM().inverse());
+  const x = state.sx.inv(p.x);
+  if (x < state.sx.x0 || x > state.sx.x1) return;
+  let text = `x = ${x.toFixed(1)} m, ground ${groundAt(x).toFixed(1)} m`;
+  if (state.run) {
+    const e = state.run.envelopes, j = Math.max(0, Math.min(e.x.length - 1, Math.round((x - e.x[0]) / (e.x[1] - e.x[0] || 1))));
+    const hb = e.height_p95_bounds[j], eb = e.energy_p95_bounds[j], c = Math.round(100 * e.confidence);
+    text += ` | passing ${e.crossings[j]} rocks, height p95 ${fmt(e.height.p95[j])} m` +
+      ` [${fmt(hb[0])}, ${fmt(hb[1])}] (max ${fmt(e.height.max[j])}),` +
+      ` energy p95 ${fmt(e.energy.p95[j], 0)} kJ [${fmt(eb[0], 0)}, ${fmt(eb[1], 0)}] (max ${fmt(e.energy.max[j], 0)});` +
+      ` bounds at ${c} %`;
+  }
+  $("readout").textContent = text;
+}
+
+// ---- placing and dragging ----------------------------------------------------------
+function measureParams() {
+  const params = {};
+  for (const input of $("measure-form").querySelectorAll("[name]")) {
+    if (input.value === "") continue;
+    const t = input.dataset.type || "";
+    params[input.name] = t.includes("number") || t.includes("integer") ? Number(input.value) : input.value;
+  }
+  return params;
+}
+
+function buildForm() {
+  const form = $("measure-form"), kind = $("measure-type").value;
+  form.innerHTML = "";
+  const m = state.plugins.measures.find((q) => q.kind === kind);
+  if (!m) return;
+  const defaults = { height: 5, capacity_kj: 2000 };
+  for (const prm of m.parameters) {
+    if (prm.name === "x") continue;
+    const label = document.createElement("label");
+    label.title = prm.description || "";
+    label.textContent = `${prm.name}${prm.unit ? " (" + prm.unit + ")" : ""}${prm.required ? " *" : ""} `;
+    let input;
+    if (prm.options) {
+      input = document.createElement("select");
+      for (const o of prm.options) { const op = document.createElement("option"); op.value = o; op.textContent = o; input.appendChild(op); }
+    } else {
+      input = document.createElement("input");
+      if (String(prm.type).includes("number") || String(prm.type).includes("integer")) {
+        input.type = "number"; input.step = "any";
+        if (prm.minimum !== null) input.min = prm.minimum;
+        if (prm.maximum !== null) input.max = prm.maximum;
+      }
+      const d = prm.default !== null ? prm.default
+        : (prm.design && prm.design.bounds ? prm.design.bounds[0] : defaults[prm.name]);
+      if (d !== undefined && d !== null) input.value = d;
+    }
+    input.name = prm.name;
+    input.dataset.type = prm.type;
+    label.appendChild(input);
+    form.appendChild(label);
+  }
+  form.onchange = () => { if (state.placed) { state.placed.params = measureParams(); requestPlace(state.placed.x); } };
+}
+
+function placeMeasure() {
+  const p = state.project;
+  const x = state.placed ? state.placed.x : Math.round(p.ground[0][0] + 0.45 * (p.ground[p.ground.length - 1][0] - p.ground[0][0]));
+  state.placed = { type: $("measure-type").value, params: measureParams(), x };
+  drawSection(); drawRun();
+  requestPlace(x);
+}
+
+function startDrag(ev) {
+  ev.preventDefault();
+  const svg = $("section");
+  const grip = ev.currentTarget;
+  grip.setPointerCapture(ev.pointerId);
+  const move = (e) => {
+    const pt = svg.createSVGPoint(); pt.x = e.clientX; pt.y = e.clientY;
+    const p = pt.matrixTransform(svg.getScreenCTM().inverse());
+    const x = Math.max(state.sx.x0, Math.min(state.sx.x1, state.sx.inv(p.x)));
+    state.placed.x = Math.round(x * 2) / 2;
+    moveMarker();
+    requestPlace(state.placed.x);
+  };
+  const up = () => {
+    grip.removeEventListener("pointermove", move);
+    grip.removeEventListener("pointerup", up);
+    drawSection(); drawRun();
+  };
+  grip.addEventListener("pointermove", move);
+  grip.addEventListener("pointerup", up);
+}
+
+function moveMarker() {
+  // Move the dragged measure without redrawing everything (the grip keeps the pointer).
+  const { X, Y } = state.sx, m = state.placed, g = groundAt(m.x);
+  const h = Number(m.params.height || m.params.block_size || 2);
+  const grp = $("placed");
+  if (!grp) return;
+  const line = grp.querySelector("line"), text = grp.querySelector("text"), grip = $("placed-handle");
+  const bed = grp.querySelector("rect:not(.handle)");
+  if (bed) { bed.setAttribute("x", X(m.x)); bed.setAttribute("y", Y(g) - 3); }
+  if (line) { line.setAttribute("x1", X(m.x)); line.setAttribute("x2", X(m.x)); line.setAttribute("y1", Y(g)); line.setAttribute("y2", Y(g + h)); }
+  if (text) { text.setAttribute("x", X(m.x) + 4); text.setAttribute("y", Y(g + h) - 4); text.textContent = `${m.type} ${fmt(m.x, 1)} m`; }
+  grip.setAttribute("x", X(m.x) - 9); grip.setAttribute("y", Y(g + h) - 14);
+  grip.setAttribute("height", Y(g) - Y(g + h) + 20);
+}
+
+// Latest wins: while a request is out, only the newest position waits for its turn.
+function requestPlace(x) {
+  if (state.inflight) { state.pendingX = x; return; }
+  state.inflight = true;
+  const t0 = performance.now();
+  const m = state.placed;
+  // The design on the section: the project's own measures (when asked) and the placed one.
+  const own = $("with-own").checked ? state.project.measures.map((q) => ({ ...q })) : [];
+  api("/api/place", { project: state.project.id, measures: [...own, { type: m.type, ...m.params, x }] })
+    .then((r) => { state.lastMs = performance.now() - t0; showPlace(r); showError(""); })
+    .catch((e) => { showError(e.message); $("residual").textContent = "—"; $("residual").className = "residual"; })
+    .finally(() => {
+      state.inflight = false;
+      if (state.pendingX !== null) { const nx = state.pendingX; state.pendingX = null; requestPlace(nx); }
+    });
+}
+
+function showPlace(r) {
+  state.lastResult = r;
+  const res = r.residual, div = $("residual");
+  div.textContent = (res.protected_zone ? `At the protected zone (x ≥ ${res.x} m): `
+    : `No protected zone (protect:); past the foot of the section (x = ${res.x} m): `) +
+    `${res.reaching} of ${res.rocks} rocks ` +
+    `(${pct(res.fraction)}, upper bound ${pct(res.upper_bound)} at ${Math.round(res.confidence * 100)} %); ` +
+    `allowed ${pct(res.allowed_fraction)}. ` +
+    (r.admitted ? "The design holds with confidence."
+      : r.rejected ? "The design fails with confidence (a check or the residual)."
+        : "Undecided: more rocks would decide it.");
+  div.className = "residual " + (r.admitted ? "ok" : r.rejected ? "fail" : "");
+  div.dataset.reaching = res.reaching;
+  const body = $("checks").querySelector("tbody");
+  body.innerHTML = "";
+  for (const m of r.measures) {
+    const head = document.createElement("tr"), td = document.createElement("td"), b = document.createElement("b");
+    td.colSpan = 5;
+    b.textContent = m.label;
+    td.append(b, m.reshapes_ground ? ` (${r.rerun_rocks} rocks run again from above it)` : ` (table at ${m.x_table} m)`);
+    head.appendChild(td);
+    body.appendChild(head);
+    for (const c of m.checks) {
+      const tr = document.createElement("tr");
+      tr.title = c.detail;
+      const verdict = cell(c.holds_with_confidence ? "holds" : c.ok ? "bound fails" : "fails");
+      verdict.className = c.holds_with_confidence ? "ok" : c.ok ? "" : "fail";
+      tr.append(cell(c.name), cell(fmt(c.value)), cell(fmt(c.bound)), cell(fmt(c.target)), verdict);
+      body.appendChild(tr);
+    }
+  }
+  const m0 = r.measures[r.measures.length - 1];
+  $("counts").textContent = m0 ? `met ${m0.met}, caught ${m0.caught}, over ${m0.passed_over}, ` +
+    `through ${m0.broken_through}` + (r.cost !== null ? `; cost ${Math.round(r.cost).toLocaleString()}` : "") : "";
+  $("latency").textContent = `judged in ${fmt(r.elapsed_ms, 1)} ms on the server, ${fmt(state.lastMs, 0)} ms round trip`;
+  $("latency").dataset.serverMs = r.elapsed_ms;
+  $("latency").dataset.roundTripMs = state.lastMs;
+}
+
+// ---- runs: simulate, check, optimise --------------------------------------------------
+function runOptions() {
+  const body = {};
+  if ($("rocks").value) body.rocks = Number($("rocks").value);
+  if ($("seed").value) body.seed = Number($("seed").value);
+  return body;
+}
+
+async function startJob(kind, body) {
+  showError("");
+  try {
+    state.job = await api(`/api/projects/${state.project.id}/${kind}`, body);
+  } catch (e) { showError(e.message); return; }
+  for (const id of ["simulate", "check", "optimise"]) $(id).disabled = true;
+  $("cancel").disabled = false;
+  $("status").dataset.state = "running";
+  poll();
+}
+
+function simulate() { startJob("simulate", runOptions()); }
+
+function checkDesign() {
+  const measures = $("with-own").checked ? state.project.measures.map((m) => ({ ...m })) : [];
+  if (state.placed) measures.push({ type: state.placed.type, ...state.placed.params, x: state.placed.x });
+  startJob("check", { ...runOptions(), measures });
+}
+
+function optimiseDesign() { startJob("optimise", runOptions()); }
+
+async function poll() {
+  let job;
+  try {
+    job = await api(`/api/jobs/${state.job.id}`);
+  } catch (e) {
+    // The server may be busy for a moment: say so and ask again.
+    showError(`progress: ${e.message}`);
+    setTimeout(poll, 1000);
+    return;
+  }
+  state.job = job;
+  $("progress").max = job.total; $("progress").value = job.done;
+  const what = job.kind === "optimise" ? `${job.stage || "search"} ${job.done} of ${job.total}`
+    : `${job.done} of ${job.total} rocks`;
+  $("status").textContent = `${job.kind} ${job.state}: ${what} (${fmt(job.runtime_s, 1)} s)`;
+  if (job.state === "running") { setTimeout(poll, 250); return; }
+  $("cancel").disabled = true; $("simulate").disabled = false;
+  $("optimise").disabled = !state.project.has_design;
+  $("check").disabled = false;
+  if (job.state === "failed") showError(job.error);
+  if (job.state !== "done") { $("status").dataset.state = job.state; return; }
+  if (job.kind === "simulate") {
+    state.run = await api(`/api/projects/${state.project.id}/run`);
+    $("status").textContent = `done: ${state.run.rocks} rocks, seed ${state.run.seed}, ${fmt(state.run.runtime_s, 1)} s`;
+    $("place").disabled = false;
+    drawSection(); drawRun();
+    if (state.placed) requestPlace(state.placed.x);
+  } else if (job.kind === "check") {
+    showCheck(job.result);
+  } else {
+    showOptimise(job);
+  }
+  // Said last: a test (or a user's script) that waits for "done" finds everything drawn.
+  $("status").dataset.state = "done";
+}
+
+function cell(v) { const td = document.createElement("td"); td.textContent = v; return td; }
+
+function showCheck(s) {
+  const div = $("results");
+  const p = s.protect;
+  div.innerHTML = "";
+  const head = document.createElement("p");
+  head.className = s.ok ? "ok" : "fail";
+  head.textContent = `check (${s.rocks} rocks, seed ${s.seed}): ${s.ok ? "every check holds" : "fails"}` +
+    (p ? `; ${p.reaching} rocks reach x ≥ ${p.x} m (upper bound ${pct(p.upper_fraction)})` : "");
+  div.appendChild(head);
+  for (const f of s.failures) { const q = document.createElement("p"); q.className = "fail"; q.textContent = f; div.appendChild(q); }
+  const table = document.createElement("table");
+  table.id = "check-table";
+  for (const m of s.measures) {
+    for (const c of m.checks) {
+      const tr = document.createElement("tr");
+      tr.append(cell(m.label), cell(c.name), cell(fmt(c.value)), cell(fmt(c.bound)), cell(fmt(c.target)), cell(c.ok ? "ok" : "fails"));
+      table.appendChild(tr);
+    }
+  }
+  div.appendChild(table);
+}
+
+function showOptimise(job) {
+  const s = job.result, div = $("results");
+  const best = s.best === null ? null : s.alternatives.find((a) => a.name === s.best);
+  div.innerHTML = "";
+  const head = document.createElement("p");
+  head.id = "chosen";
+  head.textContent = best ? `chosen: ${best.name}, cost ${Math.round(best.cost).toLocaleString()} ${s.currency || ""}` :
+    `no admissible design: ${s.reason || ""}`;
+  div.appendChild(head);
+  const table = document.createElement("table");
+  table.id = "alternatives";
+  const hr = document.createElement("tr");
+  for (const h of ["family", "cost", "residual", "holds", "why not"]) { const th = document.createElement("th"); th.textContent = h; hr.appendChild(th); }
+  table.appendChild(hr);
+  for (const a of s.alternatives) {
+    const tr = document.createElement("tr");
+    if (best && a.name === best.name) tr.className = "ok";
+    tr.append(cell(a.name), cell(a.cost === null ? "–" : Math.round(a.cost).toLocaleString()),
+      cell(a.residual === undefined || a.residual === null ? "–" : a.residual),
+      cell(a.feasible ? (a.holds_on_fresh_rocks ? "yes" : "not on fresh rocks") : "no"), cell(a.reason || ""));
+    table.appendChild(tr);
+  }
+  div.appendChild(table);
+  if (job.files.includes("design.yaml")) {
+    const a = document.createElement("a");
+    a.href = `/api/jobs/${job.id}/files/design.yaml`; a.textContent = "download design.yaml"; a.download = "design.yaml";
+    div.appendChild(a);
+  }
+  state.chosen = best ? best.measures : null;
+  drawSection(); drawRun();
+}
+
+async function cancel() { if (state.job) await api(`/api/jobs/${state.job.id}/cancel`, {}); }
+
+// ---- the project file ------------------------------------------------------------------
+async function loadYaml() {
+  const f = await api(`/api/projects/${state.project.id}/file`);
+  $("yaml").value = f.text;
+}
+async function validateYaml() {
+  try { await api(`/api/projects/${state.project.id}/validate`, { text: $("yaml").value }); $("yaml-status").textContent = "valid"; }
+  catch (e) { $("yaml-status").textContent = e.message; }
+}
+async function saveYaml() {
+  const body = { text: $("yaml").value };
+  if ($("save-path").value) body.path = $("save-path").value;
+  try { const r = await api(`/api/projects/${state.project.id}/save`, body); $("yaml-status").textContent = `saved ${r.path}`; }
+  catch (e) { $("yaml-status").textContent = e.message; }
+}
+
+async function uploadFile() {
+  const f = $("upload").files[0];
+  if (!f) return;
+  try {
+    const r = await api(`/api/projects/${state.project.id}/upload`, { path: f.name, text: await f.text() });
+    $("yaml-status").textContent = `imported ${r.path}`;
+  } catch (e) { $("yaml-status").textContent = e.message; }
+}
+
+// ---- start ---------------------------------------------------------------------------
+async function selectProject(id) {
+  state.project = await api(`/api/projects/${id}`);
+  state.run = state.project.run; state.placed = null; state.chosen = null;
+  $("results").innerHTML = "";
+  $("title").textContent = state.project.name;
+  $("description").textContent = state.project.description;
+  $("rocks").value = state.project.rocks; $("seed").value = state.project.seed;
+  $("place").disabled = !state.run;
+  $("check").disabled = false;
+  $("optimise").disabled = !state.project.has_design;
+  $("with-own-label").hidden = !state.project.measures.length;
+  drawSection(); drawRun();
+  loadYaml().catch((e) => showError(e.message));
+}
+
+async function start() {
+  try {
+    const [list, plugins] = await Promise.all([api("/api/projects"), api("/api/plugins")]);
+    state.projects = list.projects; state.plugins = plugins;
+    for (const p of list.projects) {
+      const o = document.createElement("option"); o.value = p.id; o.textContent = `${p.name} (${p.file})`;
+      $("project").appendChild(o);
+    }
+    for (const m of plugins.measures) {
+      const o = document.createElement("option"); o.value = m.kind; o.textContent = `${m.kind}: ${m.summary}`;
+      $("measure-type").appendChild(o);
+    }
+    $("measure-type").value = plugins.measures.some((m) => m.kind === "fence") ? "fence" : plugins.measures[0].kind;
+    buildForm();
+    $("measure-type").onchange = () => { buildForm(); if (state.placed) placeMeasure(); };
+    $("project").onchange = () => selectProject($("project").value);
+    $("simulate").onclick = simulate; $("cancel").onclick = cancel; $("place").onclick = placeMeasure;
+    $("with-own").onchange = () => { if (state.placed && state.run) requestPlace(state.placed.x); };
+    $("check").onclick = checkDesign; $("optimise").onclick = optimiseDesign;
+    $("upload").onchange = uploadFile;
+    $("validate").onclick = validateYaml; $("save").onclick = saveYaml;
+    if (list.projects.length) await selectProject(list.projects[0].id);
+    document.body.dataset.ready = "1";
+  } catch (e) { showError(e.message); }
+}
+start();

@@ -1,0 +1,145 @@
+"""What the optimiser says about designs it did not reject with confidence, and about a bare
+slope that needs no measure."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+from rockfall_design.design import resolve_design
+from rockfall_design.evaluate import build_concept
+from rockfall_design.optimise import Alternative, Screening, _bare_slope, _list_undecided
+from rockfall_design.project import load_project_text
+from rockfall_design.safety import Check
+
+PROJECTS = Path(__file__).resolve().parents[2] / "projects"
+
+
+def _ditch_project(protect_x: float):
+    text = (PROJECTS / "design_ditch_or_fence.yaml").read_text(encoding="utf-8")
+    assert "\n  x: 120\n" in text
+    text = text.replace("\n  x: 120\n", f"\n  x: {protect_x:g}\n")
+    return load_project_text(text, "ditch.yaml", base_dir=PROJECTS)
+
+
+@pytest.mark.parametrize(("protect_x", "holds"), [(150.0, True), (120.0, False)])
+def test_a_bare_slope_that_meets_the_residual_target_is_said(registry, protect_x, holds):
+    """At x = 150 m no rock of 50,000 arrives on the bare slope (the target is 0.1 %): no
+    measure is needed, and the result says so; at 120 m about 0.8 % arrive."""
+    project = _ditch_project(protect_x)
+    spec = resolve_design(project, registry)
+    concept = build_concept(project, registry)
+    project = project.model_copy(update={"protect": project.protect.model_copy(
+        update={"allowed_fraction": spec.residual_fraction})})
+    screen = Screening(project, registry, spec, concept, rocks=4603, seed=11)
+    bare = _bare_slope(screen, spec.residual_fraction, 0.95)
+    assert bare["holds"] is holds
+    assert bare["rocks"] == 4603 and bare["x"] == protect_x
+    assert (bare["upper"] <= bare["allowed"]) is holds
+    if not holds:
+        assert bare["reaching"] > 10
+
+
+@dataclass
+class _Design:
+    cost: float
+    level: int
+    result: Any
+    measures: list
+
+
+def _design(cost: float, level: int, violation: float, value: float = 1.2) -> _Design:
+    check = Check(name="height", value=value, target=1.0, ok=value >= 1.0, bound=0.9,
+                  optimistic=1.4)
+    result = SimpleNamespace(checks=[[check]], labels=[f"fence at {cost}"], residual=3,
+                             violation=violation)
+    return _Design(cost, level, result, [])
+
+
+def _screen() -> Any:
+    # rejects: the design of cost 30 fails with confidence as the screening counts its rocks.
+    return SimpleNamespace(project=SimpleNamespace(protect=object()), n=4603,
+                           allowed_fraction=0.001, confidence=0.99,
+                           rejects=lambda checks, residual: checks[0][0].value == 0.5)
+
+
+def test_cheaper_designs_a_budget_left_undecided_are_counted_and_listed_once_per_cost():
+    alt = Alternative(name="fence", family=(0,))
+    alt.marginal = [{"cost": 20.0, "decided": True, "labels": ["m"]}]
+    skipped = [(_design(10.0, 1, 0.5), "budget"), (_design(10.0, 2, 0.1), "budget"),
+               (_design(20.0, 3, 0.1), "budget"), (_design(30.0, 4, 0.1), "budget"),
+               (_design(35.0, 6, 0.1, value=0.5), "budget"), (_design(50.0, 5, 0.1), "budget")]
+    _list_undecided(alt, skipped, 40.0, _screen())
+    # Five designs are cheaper than the family's design (40); the one at 50 is not.
+    assert alt.undecided == 5
+    costs = [m["cost"] for m in alt.marginal]
+    # One entry per cost, the decided marginal one at 20 kept, sorted by cost; the one
+    # at 35, which fails with confidence as the screening counts it, is not listed.
+    assert costs == [10.0, 20.0, 30.0]
+    first = alt.marginal[0]
+    assert first["decided"] is False and first["labels"] == ["fence at 10.0"]
+    assert "not decided (budget)" in first["reason"] and "4,603 search rocks" in first["reason"]
+    assert first["values"]["residual"]["reaching"] == 3
+    assert alt.marginal[1]["decided"] is True
+
+
+def test_the_proof_line_names_marginal_and_undecided_designs():
+    from collections import Counter
+
+    from rockfall_design.judge.sequential import plan_looks
+    from rockfall_design.optimise import _proof
+
+    alt = Alternative(name="fence", family=(0,))
+    alt.marginal = [{"cost": 1.0, "decided": True}, {"cost": 2.0, "decided": False}]
+    alt.undecided = 7
+    tally = SimpleNamespace(reasons=Counter({"height": 3}), capped_levels=0, searched=False,
+                            designs=12)
+    text = _proof(alt, tally, plan_looks(4603, 50000, 0.95, 0.001), "EUR")
+    assert "or is marginal (1) or was not decided (7) (the cheapest that may hold listed)" in text
+
+
+@pytest.mark.slow
+def test_the_same_seed_gives_the_same_design_on_one_thread_and_on_two(monkeypatch):
+    """Bit for bit: the chosen design, its cost, the looks and what is listed as marginal."""
+    import rockfall_design as rd
+    from rockfall_design.engine.ensemble import THREADS_ENV
+
+    runs = []
+    for threads in ("1", "2"):
+        monkeypatch.setenv(THREADS_ENV, threads)
+        res = rd.optimise(PROJECTS / "design_ditch_or_fence.yaml", seed=11)
+        s = res.summary
+        s.pop("runtime_s")
+        for a in s["alternatives"]:
+            a.pop("wall_s", None)
+        runs.append(s)
+    assert runs[0] == runs[1]
+
+
+def test_across_scenarios_designs_not_rejected_with_confidence_are_listed():
+    """A design marginal in some scenarios, or held back by a budget, is not "fails in too many
+    scenarios": it is counted and the cheapest (one per cost) listed with why."""
+    import importlib
+
+    across = importlib.import_module("rockfall_design.optimise.across")
+
+    class _M:
+        kind = "fence"
+        params = SimpleNamespace(model_dump=lambda mode: {"x": 1.0})
+
+        def label(self) -> str:
+            return "fence at 1 m"
+
+    alt = Alternative(name="fence", family=(0,))
+    d = [SimpleNamespace(cost=c, measures=[_M()]) for c in (10.0, 10.0, 20.0, 90.0)]
+    undecided = [(d[0], "marginal in scenario(s) 2"), (d[1], "marginal in scenario(s) 3"),
+                 (d[2], "not decided (budget)"), (d[3], "marginal in scenario(s) 1")]
+    across._list_undecided(alt, undecided, 50.0)
+    assert alt.undecided == 3
+    assert [(m["cost"], m["decided"], m["values"]) for m in alt.marginal] == [
+        (10.0, True, None), (20.0, False, None)]
+    assert alt.marginal[0]["reason"] == "marginal in scenario(s) 2"

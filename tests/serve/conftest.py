@@ -1,0 +1,67 @@
+"""Fixtures of the browser app's tests: a copy of a bundled project in its own directory."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("starlette", reason="rockfall-design serve needs the web extra")
+
+#: The files design_two_zones.yaml reads (its catalogues).
+TWO_ZONES_FILES = ("design_two_zones.yaml", "catalogue_products.yaml", "catalogue_costs.yaml")
+
+
+@pytest.fixture(scope="module")
+def project_copy(tmp_path_factory: pytest.TempPathFactory, projects_dir: Path) -> Path:
+    """design_two_zones.yaml and its catalogues, copied into a directory of their own.
+
+    The directory sits one level below a parent that holds a file too
+    (``outside.txt``): what a request must never read or overwrite.
+    """
+    root = tmp_path_factory.mktemp("serve")
+    (root / "outside.txt").write_text("not the project's\n")
+    d = root / "project"
+    d.mkdir()
+    for name in TWO_ZONES_FILES:
+        shutil.copy(projects_dir / name, d / name)
+    return d / "design_two_zones.yaml"
+
+
+def start_server(*args: str, cwd: Path | None = None) -> tuple[subprocess.Popen, str]:
+    """``rockfall-design serve ARGS --port 0`` in a process of its own, and the address it printed.
+
+    The first lines of its stdout hold the address; the caller stops it
+    with :func:`stop_server`.
+    """
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "rockfall_design", "serve", *args, "--port", "0"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd)
+    lines = []
+    for _ in range(10):
+        line = proc.stdout.readline()
+        if not line:
+            break
+        lines.append(line)
+        match = re.search(r"(http://\S+)", line)
+        if match:
+            return proc, match.group(1)
+    proc.kill()
+    out, err = proc.communicate()
+    raise AssertionError(f"serve printed no address: {''.join(lines)}{out}{err}")
+
+
+def stop_server(proc: subprocess.Popen) -> tuple[int, str]:
+    """Stop the server as Ctrl-C does; its exit code and what it wrote on stderr."""
+    proc.send_signal(signal.SIGINT)
+    try:
+        _, err = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        _, err = proc.communicate()
+    return proc.returncode, err

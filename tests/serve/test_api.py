@@ -1,0 +1,546 @@
+"""The API of rockfall-design serve, through Starlette's test client (no server, no browser)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("httpx", reason="Starlette's test client needs httpx")
+
+from starlette.testclient import TestClient  # noqa: E402
+
+import rockfall_design as rd  # noqa: E402
+from rockfall_design.cli import main  # noqa: E402
+from rockfall_design.evaluate import place_measures  # noqa: E402
+from rockfall_design.serve.app import COOKIE, create_app  # noqa: E402
+from rockfall_design.serve.workbench import (  # noqa: E402
+    MAX_BODY_BYTES,
+    TABLE_STEP_M,
+    default_spec,
+    load_entries,
+)
+
+TOKEN = "test-token-0123456789"
+ROCKS = 1500
+SEED = 5
+FENCE = {"type": "fence", "height": 5.0, "capacity_kj": 2000.0}
+
+
+def _wait(client: TestClient, job_id: str) -> dict:
+    """Poll a job until it is no longer running (the run takes seconds)."""
+    for _ in range(2400):
+        job = client.get(f"/api/jobs/{job_id}").json()
+        if job["state"] != "running":
+            return job
+        time.sleep(0.05)
+    raise AssertionError(f"job {job_id} still running: {job}")
+
+
+@pytest.fixture(scope="module")
+def entries(project_copy, registry):
+    return load_entries([project_copy], registry)
+
+
+@pytest.fixture(scope="module")
+def client(entries):
+    """A client holding the token's cookie, with one finished run of the project."""
+    app = create_app(entries, TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1") as c:
+        assert c.get(f"/?token={TOKEN}").status_code == 200
+        r = c.post("/api/projects/design_two_zones/simulate", json={"rocks": ROCKS, "seed": SEED})
+        assert r.status_code == 202, r.text
+        job = _wait(c, r.json()["id"])
+        assert job["state"] == "done", job
+        yield c
+
+
+def _snapshot(directory):
+    """Every file under ``directory`` with its bytes: to show that nothing changed."""
+    return {p: p.read_bytes() for p in sorted(directory.rglob("*")) if p.is_file()}
+
+
+# ---- the token --------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("path", ["/", "/static/app.js", "/api/projects",
+                                  "/api/projects/design_two_zones", "/api/plugins"])
+def test_every_request_without_the_token_is_refused(entries, path):
+    app = create_app(entries, TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1") as c:
+        assert c.get(path).status_code == 403
+        assert c.get(path, params={"token": "wrong"}).status_code == 403
+        c.cookies.set(COOKIE, "wrong")
+        assert c.get(path).status_code == 403
+        assert c.post("/api/place", json={"project": "design_two_zones", "measure": FENCE,
+                                          "x": 50}).status_code == 403
+
+
+def test_the_token_in_the_address_sets_the_cookie_that_later_requests_use(entries):
+    app = create_app(entries, TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1") as c:
+        r = c.get("/", params={"token": TOKEN})
+        assert r.status_code == 200 and "<svg" in r.text
+        cookie = r.headers["set-cookie"]
+        assert f"{COOKIE}={TOKEN}" in cookie
+        assert "HttpOnly" in cookie and "SameSite=Strict" in cookie
+        # The client keeps the cookie: no token in the address any more.
+        assert c.get("/api/projects").json()["projects"][0]["id"] == "design_two_zones"
+
+
+def test_the_page_loads_only_its_own_files_and_leaks_no_token(client):
+    r = client.get("/")
+    csp = r.headers["content-security-policy"]
+    assert "default-src 'self'" in csp and "frame-ancestors 'none'" in csp
+    assert r.headers["referrer-policy"] == "no-referrer"
+    # No address of another site in the page (the SVG namespace is a name, not a request).
+    assert "http" not in r.text.replace("http://www.w3.org/2000/svg", "")
+    assert client.get("/static/app.js").headers["content-type"].startswith("text/javascript")
+    assert client.get("/static/../app.py").status_code == 404
+
+
+def test_each_app_has_its_own_random_token(entries):
+    a, b = create_app(entries), create_app(entries)
+    assert a.state.token != b.state.token and len(a.state.token) >= 24
+
+
+# ---- the section and the run ------------------------------------------------------------
+
+
+def test_the_project_describes_its_section(client, entries):
+    d = client.get("/api/projects/design_two_zones").json()
+    assert d["ground"][0] == [0.0, 200.0] and d["ground"][-1] == [310.0, 6.0]
+    assert d["materials"][:3] == ["rock", "rock", "talus"]
+    assert [r["x"] for r in d["releases"]] == [[1.0, 7.0], [96.0, 101.0]]
+    assert d["stations"] == [30.0, 90.0, 120.0, 240.0]
+    assert d["protect"] == {"x": 290.0}
+    assert d["run"]["rocks"] == ROCKS
+
+
+def test_the_run_gives_envelopes_stops_and_paths(client):
+    r = client.get("/api/projects/design_two_zones/run").json()
+    env = r["envelopes"]
+    assert env["x"][0] == 0.0 and env["x"][1] == TABLE_STEP_M
+    assert len(env["height"]["p95"]) == len(env["x"]) == len(env["energy"]["max"])
+    # Below both release zones every rock has passed.
+    j = env["x"].index(150.0)
+    assert env["crossings"][j] == ROCKS
+    assert env["height"]["p50"][j] <= env["height"]["p95"][j] <= env["height"]["max"][j]
+    assert sum(r["stops"]["counts"]) == r["stops"]["stopped"]
+    assert len(r["paths"]) == 40 and len(r["paths"][0][0]) == 2
+
+
+def test_a_run_reports_progress_and_can_be_cancelled(entries, registry, project_copy):
+    (entry,) = load_entries([project_copy], registry)
+    app = create_app([entry], TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        job = c.post("/api/projects/design_two_zones/simulate", json={"rocks": 30000}).json()
+        assert job["total"] == 30000 and job["state"] == "running"
+        # A second run of the same project while one is under way is refused.
+        assert c.post("/api/projects/design_two_zones/simulate", json={}).status_code == 409
+        c.post(f"/api/jobs/{job['id']}/cancel", json={})
+        job = _wait(c, job["id"])
+        assert job["state"] == "cancelled" and job["done"] < 30000
+        assert entry.bench is None
+        assert c.get("/api/projects/design_two_zones/run").status_code == 409
+
+
+# ---- placing a measure ----------------------------------------------------------------------
+
+
+def test_place_judges_a_fence_from_the_table_as_the_optimisers_screening(client, entries):
+    r = client.post("/api/place", json={"project": "design_two_zones", "measure": FENCE,
+                                        "x": 60.2})
+    assert r.status_code == 200, r.text
+    out = r.json()
+    (m,) = out["measures"]
+    assert m["x"] == 60.2 and m["x_table"] == 60.0
+    assert {c["name"] for c in m["checks"]} == {"height_factor", "energy_factor"}
+    for c in m["checks"]:
+        assert c["bound"] is not None and c["target"] > 0
+    res = out["residual"]
+    assert res["rocks"] == ROCKS and res["lower_bound"] <= res["fraction"] <= res["upper_bound"]
+    # The same numbers as the optimiser's screening of that fence on the same table.
+    entry = entries[0]
+    sc = entry.bench.screening
+    placed = place_measures(entry.project, entry.registry,
+                            [entry.build_measure({**FENCE, "x": 60.2}, 0)], sc.section)
+    ref = sc.screen_placed(placed, sc.bare, 0.0)
+    assert res["reaching"] == ref.residual
+    assert [c["value"] for c in m["checks"]] == pytest.approx(
+        [c.value for c in ref.checks[0]])
+    assert out["admitted"] == ref.feasible
+    assert sc.n == ROCKS and default_spec(entry.project, entry.registry).residual_fraction
+
+
+def test_a_fence_no_rock_gets_through_gives_what_check_gives(client, project_copy):
+    """Where the table is exact (no rock breaks through or comes back), it is check's answer."""
+    strong = {"type": "fence", "height": 8.0, "capacity_kj": 50000.0}
+    out = client.post("/api/place", json={"project": "design_two_zones", "measure": strong,
+                                          "x": 200}).json()
+    assert not out["approximate"] and out["measures"][0]["broken_through"] == 0
+    text = project_copy.read_text() + (
+        "measures:\n  - {type: fence, x: 200, height: 8.0, capacity_kj: 50000}\n")
+    path = project_copy.parent / "check_me.yaml"
+    path.write_text(text)
+    try:
+        exact = rd.check(path, rocks=ROCKS, seed=SEED, progress=False)
+    finally:
+        path.unlink()
+    assert out["residual"]["reaching"] == exact.summary["protect"]["reaching"]
+    (m,) = exact.summary["measures"]
+    assert out["measures"][0]["caught"] == m["caught"]
+    assert out["measures"][0]["met"] == m["met"]
+
+
+def test_a_ditch_reruns_only_the_rocks_below_and_gives_what_check_gives(client,
+                                                                       project_copy):
+    ditch = {"type": "ditch", "width": 8.0, "depth": 1.5}
+    out = client.post("/api/place", json={"project": "design_two_zones", "measure": ditch,
+                                          "x": 200}).json()
+    assert out["reshapes_ground"] and 0 < out["rerun_rocks"] <= ROCKS
+    text = project_copy.read_text() + (
+        "measures:\n  - {type: ditch, x: 200, width: 8.0, depth: 1.5}\n")
+    path = project_copy.parent / "check_ditch.yaml"
+    path.write_text(text)
+    try:
+        exact = rd.check(path, rocks=ROCKS, seed=SEED, progress=False)
+    finally:
+        path.unlink()
+    assert out["residual"]["reaching"] == exact.summary["protect"]["reaching"]
+    (m,) = exact.summary["measures"]
+    assert (out["measures"][0]["met"], out["measures"][0]["caught"]) == (m["met"], m["caught"])
+
+
+def test_moving_the_fence_changes_the_residual(client):
+    def reaching(x: float) -> int:
+        r = client.post("/api/place", json={"project": "design_two_zones",
+                                            "measures": [{**FENCE, "x": x}]})
+        return r.json()["residual"]["reaching"]
+
+    # Above the lower release zone the fence cannot hold that zone's rocks.
+    assert reaching(60) > reaching(280)
+
+
+@pytest.mark.parametrize("body,status,words", [
+    ({"project": "nowhere", "measure": FENCE, "x": 50}, 404, "unknown project 'nowhere'"),
+    ({"measure": FENCE, "x": 50}, 400, "project:"),
+    ({"project": "design_two_zones", "x": 50}, 400, "measure:"),
+    ({"project": "design_two_zones", "measure": FENCE, "x": "fifty"}, 400, "x: expected"),
+    ({"project": "design_two_zones", "measure": FENCE, "x": True}, 400, "x: expected"),
+    ({"project": "design_two_zones", "measure": {"type": "fense"}, "x": 50}, 400,
+     "unknown measure 'fense'"),
+    ({"project": "design_two_zones", "measure": {**FENCE, "height": -1}, "x": 50}, 400,
+     "height"),
+    ({"project": "design_two_zones", "measure": {**FENCE, "colour": "red"}, "x": 50}, 400,
+     "colour"),
+    ({"project": "design_two_zones", "measure": FENCE, "x": 5000}, 400, "outside the section"),
+    ({"project": "design_two_zones", "measures": []}, 400, "measures:"),
+    ({"project": "design_two_zones",
+      "measure": {"type": "ditch", "width": 3, "depth": 1.5}, "x": 200}, 400,
+     "ditch too narrow"),
+])
+def test_bad_place_requests_get_one_clear_line(client, body, status, words):
+    r = client.post("/api/place", json=body)
+    assert r.status_code == status, r.text
+    assert words in r.json()["error"] and "\n" not in r.json()["error"]
+
+
+@pytest.mark.parametrize("raw", [b"{not json", b"[1, 2]", b"\xff\xfe"])
+def test_a_malformed_body_is_refused(client, raw):
+    r = client.post("/api/place", content=raw, headers={"content-type": "application/json"})
+    assert r.status_code == 400
+    assert "JSON" in r.json()["error"]
+
+
+def test_place_before_any_run_says_to_simulate_first(entries, registry, project_copy):
+    app = create_app(load_entries([project_copy], registry), TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        r = c.post("/api/place", json={"project": "design_two_zones", "measure": FENCE, "x": 50})
+        assert r.status_code == 409 and "simulated" in r.json()["error"]
+
+
+@pytest.mark.parametrize("body,words", [({"rocks": 0}, "rocks"), ({"rocks": 10**7}, "rocks"),
+                                        ({"seed": -1}, "seed"), ({"rocks": 1.5}, "rocks")])
+def test_a_run_with_bad_rocks_or_seed_is_refused(client, body, words):
+    r = client.post("/api/projects/design_two_zones/simulate", json=body)
+    assert r.status_code == 400 and r.json()["error"].startswith(words)
+
+
+def test_unknown_project_and_job(client):
+    for path in ("/api/projects/nowhere", "/api/projects/nowhere/run", "/api/jobs/nope"):
+        r = client.get(path)
+        assert r.status_code == 404 and "unknown" in r.json()["error"]
+
+
+# ---- files: only inside the project's directory ---------------------------------------------
+
+
+def test_the_project_file_is_read_and_nothing_outside(client, project_copy):
+    r = client.get("/api/projects/design_two_zones/file")
+    assert r.status_code == 200 and r.json()["text"] == project_copy.read_text()
+    ok = client.get("/api/projects/design_two_zones/file",
+                    params={"path": "catalogue_products.yaml"})
+    assert ok.status_code == 200
+    for bad in ("../outside.txt", "/etc/passwd", "sub/../../outside.txt"):
+        r = client.get("/api/projects/design_two_zones/file", params={"path": bad})
+        assert r.status_code == 403 and "outside the project's directory" in r.json()["error"]
+
+
+def test_a_link_out_of_the_directory_is_refused(client, project_copy):
+    link = project_copy.parent / "link.txt"
+    link.symlink_to(project_copy.parent.parent / "outside.txt")
+    try:
+        r = client.get("/api/projects/design_two_zones/file", params={"path": "link.txt"})
+        assert r.status_code == 403
+        before = _snapshot(project_copy.parent.parent)
+        r = client.post("/api/projects/design_two_zones/save",
+                        json={"text": project_copy.read_text(), "path": "link.txt"})
+        assert r.status_code == 403
+        assert _snapshot(project_copy.parent.parent) == before
+    finally:
+        link.unlink()
+
+
+@pytest.mark.parametrize("path", ["../outside.txt", "../new.yaml", "/tmp/x.yaml", ""])
+def test_save_outside_the_directory_changes_nothing(client, project_copy, path):
+    root = project_copy.parent.parent
+    before = _snapshot(root)
+    r = client.post("/api/projects/design_two_zones/save",
+                    json={"text": project_copy.read_text(), "path": path})
+    assert r.status_code in (400, 403)
+    assert _snapshot(root) == before
+
+
+def test_a_project_that_names_a_file_outside_is_not_saved(client, project_copy):
+    root = project_copy.parent.parent
+    before = _snapshot(root)
+    text = project_copy.read_text().replace("products: catalogue_products.yaml",
+                                            "products: ../outside.txt")
+    for endpoint in ("validate", "save"):
+        r = client.post(f"/api/projects/design_two_zones/{endpoint}", json={"text": text})
+        assert r.status_code == 403 and "../outside.txt" in r.json()["error"]
+    assert _snapshot(root) == before
+
+
+def test_an_invalid_project_gets_the_command_lines_one_line_error(client, project_copy):
+    root = project_copy.parent.parent
+    before = _snapshot(root)
+    text = project_copy.read_text().replace("  count: 3000", "  count: -3")
+    r = client.post("/api/projects/design_two_zones/save", json={"text": text})
+    assert r.status_code == 400
+    msg = r.json()["error"]
+    assert msg.startswith("design_two_zones.yaml:") and "rocks.count" in msg
+    assert _snapshot(root) == before
+
+
+def test_an_oversized_upload_is_refused_and_changes_nothing(client, project_copy):
+    root = project_copy.parent.parent
+    before = _snapshot(root)
+    text = project_copy.read_text() + "#" * MAX_BODY_BYTES
+    r = client.post("/api/projects/design_two_zones/save", json={"text": text})
+    assert r.status_code == 413 and "bytes" in r.json()["error"]
+    assert _snapshot(root) == before
+
+
+def test_save_writes_a_valid_project_inside_the_directory(client, project_copy):
+    text = project_copy.read_text().replace("count: 3000", "count: 2000")
+    r = client.post("/api/projects/design_two_zones/validate", json={"text": text})
+    assert r.json() == {"ok": True}
+    r = client.post("/api/projects/design_two_zones/save",
+                    json={"text": text, "path": "edited.yaml"})
+    assert r.status_code == 200 and r.json()["path"] == "edited.yaml"
+    assert (project_copy.parent / "edited.yaml").read_text() == text
+    assert "count: 3000" in project_copy.read_text()  # the project's own file is untouched
+
+
+def test_plugins_lists_the_measures_parameters(client):
+    d = client.get("/api/plugins").json()
+    fence = next(m for m in d["measures"] if m["kind"] == "fence")
+    assert {"x", "height", "capacity_kj"} <= {p["name"] for p in fence["parameters"]}
+    json.dumps(d, allow_nan=False)
+
+
+def test_place_answers_the_envelope_of_the_table(client):
+    """The envelope the page draws is the table the fence is judged on."""
+    env = client.get("/api/projects/design_two_zones/run").json()["envelopes"]
+    j = env["x"].index(60.0)
+    out = client.post("/api/place", json={"project": "design_two_zones", "measure": FENCE,
+                                          "x": 60}).json()
+    assert out["measures"][0]["met"] == env["crossings"][j]
+    assert np.isfinite(env["height"]["p95"][j])
+
+
+# ---- check and optimise from the page ---------------------------------------------------------
+
+
+def test_check_from_the_page_is_rockfall_design_check(client, project_copy, capsys):
+    fence = {**FENCE, "x": 150.0}
+    r = client.post("/api/projects/design_two_zones/check",
+                    json={"measures": [fence], "rocks": 800, "seed": 2})
+    assert r.status_code == 202, r.text
+    job = _wait(client, r.json()["id"])
+    assert job["state"] == "done", job
+    path = project_copy.parent / "with_fence.yaml"
+    path.write_text(project_copy.read_text()
+                    + "measures:\n  - {type: fence, x: 150, height: 5.0, capacity_kj: 2000}\n")
+    try:
+        assert main(["check", str(path), "--rocks", "800", "--seed", "2", "--json"]) in (0, 1)
+    finally:
+        path.unlink()
+    cli = json.loads(capsys.readouterr().out)
+    page = job["result"]
+    assert page["protect"] == cli["protect"] and page["ok"] == cli["ok"]
+    assert page["measures"] == cli["measures"]
+
+
+def test_check_with_a_measure_that_does_not_fit_starts_nothing(client):
+    r = client.post("/api/projects/design_two_zones/check",
+                    json={"measures": [{**FENCE, "x": -50.0}]})
+    assert r.status_code == 400 and "outside the section" in r.json()["error"]
+    r = client.post("/api/projects/design_two_zones/check", json={"measures": {"x": 1}})
+    assert r.status_code == 400
+
+
+def test_optimise_can_be_cancelled(entries, registry, project_copy):
+    (entry,) = load_entries([project_copy], registry)
+    app = create_app([entry], TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        job = c.post("/api/projects/design_two_zones/optimise", json={"rocks": 3000}).json()
+        assert job["kind"] == "optimise"
+        c.post(f"/api/jobs/{job['id']}/cancel", json={})
+        job = _wait(c, job["id"])
+        assert job["state"] == "cancelled" and job["result"] is None
+        assert c.get(f"/api/jobs/{job['id']}/files/design.yaml").status_code == 404
+
+
+def test_optimise_without_a_design_section(tmp_path, registry, projects_dir):
+    shutil.copy(projects_dir / "standard_slope.yaml", tmp_path / "standard_slope.yaml")
+    app = create_app(load_entries([tmp_path / "standard_slope.yaml"], registry), TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        r = c.post("/api/projects/standard_slope/optimise", json={})
+        assert r.status_code == 400 and "no design: section" in r.json()["error"]
+
+
+@pytest.mark.slow
+def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registry,
+                                                               projects_dir, capsys):
+    for name in ("design_quarry.yaml", "catalogue_products.yaml", "catalogue_costs.yaml"):
+        shutil.copy(projects_dir / name, tmp_path / name)
+    app = create_app(load_entries([tmp_path / "design_quarry.yaml"], registry), TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        job = c.post("/api/projects/design_quarry/optimise",
+                     json={"rocks": 500, "seed": 3}).json()
+        job = _wait(c, job["id"])
+        assert job["state"] == "done", job
+        page = job["result"]
+        design = c.get(f"/api/jobs/{job['id']}/files/design.yaml")
+    out = tmp_path / "out"
+    main(["optimise", str(tmp_path / "design_quarry.yaml"), "--rocks", "500", "--seed", "3",
+          "--json", "--out", str(out)])
+    cli = json.loads(capsys.readouterr().out)
+    assert page["best"] == cli["best"] and page["best"] is not None
+    assert page["alternatives"] == cli["alternatives"]
+    assert design.status_code == 200
+    # The same design.yaml but for the first line's "chosen from" (the file name as given).
+    ours, theirs = design.text.splitlines(), (out / "design.yaml").read_text().splitlines()
+    assert ours[0].startswith("# Chosen by rockfall-design optimise from design_quarry.yaml")
+    assert ours[1:] == theirs[1:]
+
+
+def test_a_yaml_bomb_is_refused_without_expanding_it(client, project_copy):
+    root = project_copy.parent.parent
+    before = _snapshot(root)
+    lines = ['a0: &a0 ["../outside.txt", "x"]']
+    for i in range(1, 40):
+        lines.append(f"a{i}: &a{i} [*a{i - 1}, *a{i - 1}]")
+    text = "\n".join(lines) + "\n"
+    r = client.post("/api/projects/design_two_zones/save", json={"text": text})
+    assert r.status_code == 403 and "../outside.txt" in r.json()["error"]
+    safe = text.replace("../outside.txt", "fine")
+    r = client.post("/api/projects/design_two_zones/save", json={"text": safe})
+    assert r.status_code == 400
+    assert _snapshot(root) == before
+
+
+def test_save_into_a_missing_directory_or_onto_a_directory(client, project_copy):
+    before = _snapshot(project_copy.parent.parent)
+    for path in ("nosuch/x.yaml", "."):
+        r = client.post("/api/projects/design_two_zones/save",
+                        json={"text": project_copy.read_text(), "path": path})
+        assert r.status_code == 400, r.text
+    assert _snapshot(project_copy.parent.parent) == before
+
+
+def test_a_binary_file_is_not_read_as_text(client, project_copy):
+    (project_copy.parent / "blob.bin").write_bytes(b"\xff\xfe\x00\x81")
+    try:
+        r = client.get("/api/projects/design_two_zones/file", params={"path": "blob.bin"})
+        assert r.status_code == 400 and "UTF-8" in r.json()["error"]
+        r = client.get("/api/projects/design_two_zones/file", params={"path": "none.yaml"})
+        assert r.status_code == 404
+    finally:
+        (project_copy.parent / "blob.bin").unlink()
+
+
+def test_the_projects_own_measures_come_with_their_labels(registry, projects_dir):
+    (entry,) = load_entries([projects_dir / "quarry_fence_ditch.yaml"], registry)
+    d = entry.describe()
+    assert [m["label"] for m in d["measures"]] == [
+        "fence (6 m, 5000 kJ) at x = 100 m", "ditch (8 m wide, 1.5 m deep) at x = 124 m"]
+    assert d["has_design"] is False and d["protect"] == {"x": 135.0}
+
+
+def test_import_a_section_beside_the_project_and_use_it(client, project_copy, projects_dir):
+    csv = (projects_dir / "survey_section.csv").read_text()
+    r = client.post("/api/projects/design_two_zones/upload",
+                    json={"path": "survey.csv", "text": csv})
+    assert r.status_code == 200 and r.json()["path"] == "survey.csv"
+    assert (project_copy.parent / "survey.csv").read_text() == csv
+    # Not over an existing file unless asked, never the project file, never outside.
+    again = client.post("/api/projects/design_two_zones/upload",
+                        json={"path": "survey.csv", "text": "x,y\n"})
+    assert again.status_code == 409
+    before = _snapshot(project_copy.parent.parent)
+    for body, status in (({"path": "../survey.csv", "text": csv}, 403),
+                         ({"path": "design_two_zones.yaml", "text": "x", "replace": True}, 400),
+                         ({"path": "run.sh", "text": "echo"}, 400),
+                         ({"path": "s.csv", "text": 5}, 400),
+                         ({"text": csv}, 400)):
+        r = client.post("/api/projects/design_two_zones/upload", json=body)
+        assert r.status_code == status, (body, r.text)
+    assert _snapshot(project_copy.parent.parent) == before
+    # The edited project may name it: it is inside the directory.
+    text = (projects_dir / "survey_slope.yaml").read_text().replace("survey_section.csv",
+                                                                   "survey.csv")
+    text = text.replace("library: materials.yaml", "library: lib.yaml")
+    shutil.copy(projects_dir / "materials.yaml", project_copy.parent / "lib.yaml")
+    r = client.post("/api/projects/design_two_zones/validate", json={"text": text})
+    assert r.json() == {"ok": True}, r.text
+    (project_copy.parent / "survey.csv").unlink()
+    (project_copy.parent / "lib.yaml").unlink()
+
+
+def test_the_envelopes_come_with_bounds_of_the_95th_percentile(client):
+    env = client.get("/api/projects/design_two_zones/run").json()["envelopes"]
+    j = env["x"].index(150.0)
+    for q in ("height", "energy"):
+        lo, hi = env[f"{q}_p95_bounds"][j]
+        assert lo <= env[q]["p95"][j] <= hi
+    assert env["height_p95_bounds"][0] == [None, None]  # no rock passes the crest's x = 0
+
+
+def test_a_project_without_a_protected_zone_runs_and_says_so(registry, projects_dir):
+    (entry,) = load_entries([projects_dir / "calibrate_quarry.yaml"], registry)
+    assert entry.project.protect is None
+    app = create_app([entry], TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        job = c.post("/api/projects/calibrate_quarry/simulate", json={"rocks": 300}).json()
+        assert _wait(c, job["id"])["state"] == "done"
+        out = c.post("/api/place", json={"project": "calibrate_quarry", "measure": FENCE,
+                                         "x": 20}).json()
+    assert out["residual"]["protected_zone"] is False
+    assert out["residual"]["x"] == entry.describe()["ground"][-1][0]
