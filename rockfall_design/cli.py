@@ -754,9 +754,14 @@ def cmd_plugins(args: argparse.Namespace) -> int:
 
 def cmd_serve(args: argparse.Namespace) -> int:
     """Serve the browser app until Ctrl-C (the web extra, imported only here)."""
+    from .outputs import forget_interrupts
     from .serve import serve
 
-    return serve(args.project, host=args.host, port=args.port, block=args.block)
+    code = serve(args.project, host=args.host, port=args.port, block=args.block)
+    # Ctrl-C is how the server is stopped (uvicorn raises it again once it has
+    # shut down): its normal end, not an interrupted command.
+    forget_interrupts()
+    return code
 
 
 def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 from pathlib import Path
 
@@ -118,9 +119,11 @@ def hopeless(directory: Path) -> Path:
     """A design project no family can meet (fences upslope of the release)."""
     text = (PROJECTS / "design_ditch_or_fence.yaml").read_text()
     text = text[: text.index("    - type: ditch")]
-    text = (text.replace("      x: [50, 145]", "      x: [2, 10]")
-            .replace("protect:\n  x: 150", "protect:\n  x: 50")
-            .replace("catalogue_", f"{PROJECTS}/catalogue_"))
+    # by pattern: the project's stations change with its design
+    text = re.sub(r"\n      x: \[[0-9., ]+\]", "\n      x: [2, 10]", text, count=1)
+    text = re.sub(r"protect:\n  x: [0-9.]+", "protect:\n  x: 50", text, count=1)
+    text = text.replace("catalogue_", f"{PROJECTS}/catalogue_")
+    assert "x: [2, 10]" in text and "protect:\n  x: 50" in text
     path = directory / "hopeless.yaml"
     path.write_text(text)
     return path
