@@ -22,6 +22,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .arguments import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .errors import InputError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -610,6 +611,7 @@ def simulate(
     """
     from .simulation import EXACT_ROCKS
 
+    _checked(seed=seed, trajectories=trajectories)
     p = _project(project)
     n = _count(p, rocks)
     tables: list[pd.DataFrame] | None = None
@@ -639,10 +641,29 @@ def run_simulation(project: Project, *, rocks: int | None, seed: int | None,
 
 
 def _count(project: Project, rocks: int | None) -> int:
-    n = int(project.rocks.count if rocks is None else rocks)
-    if n < 1:
-        raise InputError(f"the number of rocks must be at least 1, got {n}")
-    return n
+    """``rocks``, checked as ``--rocks`` is, or the project's ``rocks.count``."""
+    if rocks is None:
+        return int(project.rocks.count)
+    return whole_number(rocks, "rocks", 1, MAX_ROCKS)
+
+
+def _checked(*, seed: Any = None, workers: Any = None, bootstrap: Any = None,
+             trajectories: Any = None) -> None:
+    """Check the numbers a run takes as the command line checks its options.
+
+    Raises
+    ------
+    ArgumentError
+        An :class:`InputError` naming the keyword, in the command line's words.
+    """
+    if seed is not None:
+        whole_number(seed, "seed", 0, what="seed")
+    if workers is not None:
+        whole_number(workers, "workers", 1, what="number of workers")
+    if bootstrap is not None:
+        whole_number(bootstrap, "bootstrap", 0, MAX_BOOTSTRAP, "number of replicates")
+    if trajectories is not None:
+        whole_number(trajectories, "trajectories", 0, what="number")
 
 
 def check(
@@ -673,6 +694,7 @@ def check(
     """
     from .evaluate import evaluate
 
+    _checked(seed=seed, trajectories=trajectories)
     p = _project(project, registry)
     n = _count(p, rocks)
     reg = registry or default_registry()
@@ -718,6 +740,7 @@ def optimise(
     """
     from .optimise import optimise as _optimise
 
+    _checked(seed=seed)
     p = _project(project, registry)
     if p.design is not None and p.design.scenarios is not None:
         # design.scenarios: the cheapest design that holds across the study's scenarios
@@ -727,6 +750,11 @@ def optimise(
                              "(see the README, 'Designing protection')")
     reg = registry or default_registry()
     n = _count(p, rocks)
+    if "max_rocks" in p.design.model_fields_set and p.design.max_rocks < n:
+        # The last look of a decision with fewer rocks than the search: no look at all.
+        raise p.error_at(("design", "max_rocks"), f"expected at least the {n:,} rocks of the "
+                         f"search, got {p.design.max_rocks:,}: a decision looks at more rocks "
+                         "than the search, never fewer")
     result = _call(progress, n, _optimise, stages=True, project=p, registry=reg, rocks=n,
                    seed=seed)
     return OptimiseResult(p, result, reg)
@@ -789,6 +817,7 @@ def study(
     """
     from .study.run import run_parametric
 
+    _checked(seed=seed, workers=workers)
     registry = registry or default_registry()
     p = _project(project, registry)
     n = _count(p, rocks)
@@ -851,6 +880,9 @@ def calibrate(
     """
     from .calibration.run import run_calibration
 
+    _checked(seed=seed, workers=workers, bootstrap=bootstrap)
+    if rocks is not None:
+        whole_number(rocks, "rocks", 1, MAX_ROCKS)
     p = _project(project, registry or default_registry())
     kw = dict(observed=observed, rocks=rocks, bootstrap=bootstrap, seed=seed, workers=workers,
               scheduler=scheduler, pool=pool)
@@ -889,6 +921,9 @@ def compare(
     """
     from .calibration.run import run_comparison
 
+    _checked(seed=seed)
+    if rocks is not None:
+        whole_number(rocks, "rocks", 1, MAX_ROCKS)
     p = _project(project, registry or default_registry())
     kind = p.calibrate.distance if p.calibrate is not None else "energy"
     confidence = p.calibrate.confidence if p.calibrate is not None else 0.95

@@ -12,6 +12,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
 from . import __version__
+
+# The project's limit (rockfall_design.project.MAX_ROCKS), from a module
+# light enough for every --help (no pydantic).
+from .arguments import MAX_ROCKS as _MAX_ROCKS
 from .errors import ExitCode, InputError, Interrupted, RockfallError
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -33,22 +37,21 @@ def _int_at_least(low: int, what: str, high: int | None = None):
     """An argparse type: a whole number >= ``low`` ("expected a {what} >= {low}"), <= ``high``."""
 
     def parse(text: str) -> int:
+        from .arguments import bounds_problem
+
         try:
             v = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        if v < low:
-            raise argparse.ArgumentTypeError(f"expected a {what} >= {low}, got {v}")
-        if high is not None and v > high:
-            raise argparse.ArgumentTypeError(f"expected a {what} <= {high:,}, got {v:,}")
+        # The API's checks and words (rockfall_design.arguments).
+        problem = bounds_problem(v, low, high, what)
+        if problem is not None:
+            raise argparse.ArgumentTypeError(problem)
         return v
 
     return parse
 
 
-# The project's limit (rockfall_design.project.MAX_ROCKS), here without
-# importing pydantic for every --help.
-_MAX_ROCKS = 1_000_000_000
 _positive_int = _int_at_least(1, "number", _MAX_ROCKS)
 
 
@@ -295,12 +298,23 @@ def _rich_progress(elapsed: bool) -> Any:
 
 
 def _progress(console_needed: bool, total: int):
-    """A rich progress bar on stderr for long interactive runs, else nothing."""
+    """A rich progress bar on stderr for long interactive runs (or None), and its callback.
+
+    The callback is also a safe point: between batches of rocks it stops the
+    run if an interrupt was noted whose exception got lost.
+    """
+    from .outputs import check_interrupt
+
     if not console_needed:
-        return None, None
+        return None, (lambda done: check_interrupt())
     prog = _rich_progress(elapsed=False)
     task = prog.add_task("rocks", total=total)
-    return prog, (lambda done: prog.update(task, completed=done))
+
+    def update(done: int) -> None:
+        check_interrupt()
+        prog.update(task, completed=done)
+
+    return prog, update
 
 
 def _run(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:
@@ -313,7 +327,7 @@ def _run(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:
     kw.update(rocks=n, seed=args.seed, trajectories=DEFAULT_TRAJECTORIES if drawn else 0)
     prog, callback = _progress(sys.stderr.isatty() and n >= 20_000, n)
     if prog is None:
-        return run(project, progress=False, **kw)
+        return run(project, progress=callback, **kw)
     with prog:
         return run(project, progress=callback, **kw)
 
@@ -327,14 +341,19 @@ def _figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet)
     if not (args.plot or args.report):
         return
     figures = result.figures()  # drawn once for both
-    if args.plot:
-        from .report.figures import save_figures
-
-        save_figures(figures, args.plot, args.plot_format, files)
     if args.report:
         from .report.documents import write_report
 
         write_report(result, args.report, outputs=files, figures=figures)
+    if args.plot:
+        from .report.figures import save_figures
+
+        # --plot and --report into one directory with --plot-format svg: the
+        # report has written those figures already, from the same drawings.
+        for fmt in args.plot_format:
+            todo = {name: fig for name, fig in figures.items()
+                    if args.plot / f"{name}.{fmt}" not in files}
+            save_figures(todo, args.plot, (fmt,), files)
 
 
 def _warn_failures(registry: Any) -> None:
@@ -475,18 +494,36 @@ def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
     try:
         from .inputs import read_text
 
-        recorded = json.loads(read_text(path))
+        recorded = json.loads(read_text(path, "summary to repeat"))
         run = recorded["run"]
         text = dump_yaml(run["project"])
-        seed, rocks = int(run["seed"]), int(run["rocks"])
+        seed, rocks = run["seed"], run["rocks"]
+        # Whole JSON numbers only: a message never quotes what an edited
+        # (or any other) file holds.
+        if not all(isinstance(v, int) and not isinstance(v, bool) for v in (seed, rocks)):
+            raise ValueError("run.seed and run.rocks must be whole numbers")
         if not (seed >= 0 and 1 <= rocks <= _MAX_ROCKS):
             raise ValueError("seed or rock count out of range")
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise InputError(f"{path}: not a summary.json with a run record ({exc})") from None
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}:{exc.lineno}: not a summary.json with a run record "
+                         f"(invalid JSON at column {exc.colno})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a summary.json with a run record (not UTF-8 "
+                         "text)") from None
+    except KeyError as exc:
+        raise InputError(f"{path}: not a summary.json with a run record (no key "
+                         f"{exc.args[0]!r})") from None
+    except (OSError, ValueError, TypeError, AttributeError) as exc:
+        reason = (exc.strerror or type(exc).__name__) if isinstance(exc, OSError) else (
+            str(exc) if isinstance(exc, ValueError) else "not a mapping")
+        raise InputError(f"{path}: not a summary.json with a run record ({reason})") from None
     if run.get("version") != __version__:
         sys.stderr.write(f"{PROG}: warning: {path} was written by version "
                          f"{run.get('version')}, this is {__version__}\n")
-    project = load_project_text(text, f"{path} (run.project)")
+    from .project.messages import _unquoted
+
+    with _unquoted():  # a value of the recorded project is not quoted back either
+        project = load_project_text(text, f"{path} (run.project)")
     args.seed = seed if args.seed is None else args.seed
     args.rocks = rocks if args.rocks is None else args.rocks
     args.project = path
@@ -573,6 +610,10 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     registry = _plugins_for(project, args)
     warnings = _requirement_warnings(project, args)
     if getattr(args, "max_rocks", None):
+        if args.max_rocks < (args.rocks or project.rocks.count):
+            raise InputError(f"--max-rocks {args.max_rocks:,}: expected at least the "
+                             f"{args.rocks or project.rocks.count:,} rocks of the search; a "
+                             "decision looks at more rocks than the search, never fewer")
         project = project.model_copy(update={"design": project.design.model_copy(
             update={"max_rocks": args.max_rocks})})
     n = args.rocks or project.rocks.count
@@ -622,7 +663,8 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     n = args.rocks or project.rocks.count
     prog, callback = _stage_progress(sys.stderr.isatty())
     if prog is None:
-        report = optimise(project, rocks=n, seed=args.seed, registry=registry)
+        report = optimise(project, rocks=n, seed=args.seed, registry=registry,
+                          progress=callback)
     else:
         with prog:
             report = optimise(project, rocks=n, seed=args.seed, registry=registry,
@@ -672,13 +714,20 @@ def print_optimised(result: Any, project: Any, summary: dict[str, Any] | None = 
 
 
 def _stage_progress(interactive: bool):
-    """A rich progress display of the optimiser's stages on stderr."""
+    """A rich progress display of the optimiser's stages on stderr (or None), and its callback.
+
+    The callback is also a safe point, between families: it stops the run if
+    an interrupt was noted whose exception got lost.
+    """
+    from .outputs import check_interrupt
+
     if not interactive:
-        return None, None
+        return None, (lambda stage, done, total: check_interrupt())
     prog = _rich_progress(elapsed=True)
     tasks: dict[str, Any] = {}
 
     def callback(stage: str, done: int, total: int) -> None:
+        check_interrupt()
         label = {"search": "searching families", "check": "exact and fresh checks"}.get(
             stage, stage)
         if stage not in tasks:
@@ -705,9 +754,14 @@ def cmd_plugins(args: argparse.Namespace) -> int:
 
 def cmd_serve(args: argparse.Namespace) -> int:
     """Serve the browser app until Ctrl-C (the web extra, imported only here)."""
+    from .outputs import forget_interrupts
     from .serve import serve
 
-    return serve(args.project, host=args.host, port=args.port, block=args.block)
+    code = serve(args.project, host=args.host, port=args.port, block=args.block)
+    # Ctrl-C is how the server is stopped (uvicorn raises it again once it has
+    # shut down): its normal end, not an interrupted command.
+    forget_interrupts()
+    return code
 
 
 def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:
@@ -744,6 +798,12 @@ def _on_signal(signum: int, frame: Any) -> None:
     # discarded and the previous results stay as they were.
     if _exiting[0]:
         return  # the command is over, its output complete: nothing to stop
+    from .outputs import note_interrupt
+
+    # Noted first: the exception may be swallowed where it lands (numpy does,
+    # in its __array_ufunc__ lookup); the note stops the next safe point and
+    # every commit all the same.
+    note_interrupt(signum)
     raise _Interrupted(signum)
 
 
@@ -799,11 +859,15 @@ def _silence_stdout() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rockfall-design`` console script."""
-    from .outputs import committed_sets
+    from .outputs import check_interrupt, committed_sets, forget_interrupts
 
     parser = build_parser()
     args = parser.parse_args(argv)
     committed_before = committed_sets()
+    from .inputs import forget_inputs
+
+    forget_inputs()  # the files this command reads are noted anew
+    forget_interrupts()
     handled = [signal.SIGTERM]
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:
         # An ignored SIGINT (a background job of a non-interactive shell) stays so.
@@ -812,14 +876,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     stdout = sys.stdout
     sys.stdout = _GuardedStdout(stdout)
     try:
+        if getattr(args, "block", None):
+            from .plugins import check_blocked_names
+
+            check_blocked_names(args.block)
         code = int(args.func(args))
         sys.stdout.flush()  # here, where a failure can still be reported
+        # An interrupt whose exception was swallowed: the command still ends as interrupted.
+        check_interrupt()
         return code
     except RockfallError as exc:
         if isinstance(exc, _StdoutFailed):
             sys.stdout = stdout
             _silence_stdout()
-        msg = " ".join(str(exc).split("\n"))
+        from .inputs import strip_controls
+
+        # One line, and nothing in it that steers the terminal (a name from a file).
+        msg = strip_controls(" ".join(str(exc).split("\n")))
         sys.stderr.write(f"{PROG}: error: {msg}\n")
         return int(exc.exit_code)
     except KeyboardInterrupt:
@@ -835,6 +908,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         # Set first, without a call: a signal from here on cannot raise.
         _exiting[0] = True
+        forget_interrupts()  # this command's: they must not stop what the process does next
         sys.stdout = stdout
         for s, handler in previous.items():
             # Run as the program (no argv), the process exits next: a Ctrl-C

@@ -474,9 +474,7 @@ def _resolve_cost_model(project: Project, registry: Registry) -> CostModel:
     name = design.costs.model
     cls = registry.cost_models.get(name)
     if cls is None:
-        raise project.unknown_name(
-            ("design", "costs", "model"), name, registry.cost_models, "cost model"
-        )
+        raise unknown_plugin_name(project, registry, "cost", ("design", "costs", "model"), name)
     params = design.costs_locator.validate_params((), cls.Params, design.cost_params)
     return guard(registry).instantiate(cls, params)
 
@@ -504,13 +502,31 @@ def unknown_measure_type(
     rockfall-catchnet, which is blocked (--block)"); otherwise it is an
     unknown name with "did you mean".
     """
-    provider = blocked_provider(registry, "measure", kind) if registry.blocked else None
+    return unknown_plugin_name(project, registry, "measure", at, kind)
+
+
+#: What each registry section's names are, in messages.
+_WHAT = {"measure": "measure type", "safety": "safety concept", "cost": "cost model"}
+
+
+def unknown_plugin_name(project: Project, registry: Registry, section: str,
+                        at: Sequence[str | int], name: Any) -> Exception:
+    """The error for a name no loaded plugin provides, at key path ``at``.
+
+    ``section`` is ``"measure"``, ``"safety"`` or ``"cost"``. When a blocked
+    plugin (``--block``) provides the name, the message says so ("safety
+    concept 'spang' is provided by rockfall-design, which is blocked
+    (--block)"); otherwise it is an unknown name with "did you mean".
+    """
+    what = _WHAT[section]
+    provider = (blocked_provider(registry, section, name)
+                if registry.blocked and isinstance(name, str) else None)
     if provider is not None:
         return project.error_at(
-            tuple(at),
-            f"measure type {kind!r} is provided by {provider}, which is blocked (--block)",
-        )
-    return project.unknown_name(at, kind, registry.measures, "measure type")
+            tuple(at), f"{what} {name!r} is provided by {provider}, which is blocked (--block)")
+    names = {"measure": registry.measures, "safety": registry.safety_concepts,
+             "cost": registry.cost_models}[section]
+    return project.unknown_name(at, name, names, what)
 
 
 def _resolve_candidate(

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .design import unknown_measure_type
+from .design import unknown_measure_type, unknown_plugin_name
 from .engine import Section, barrier_table, core
 from .judge.bounds import fraction_lower_bound, fraction_upper_bound
 from .judge.outcomes import Judgement, RockFates, judge_measures
@@ -91,9 +91,7 @@ def build_concept(project: Project, registry: Registry) -> SafetyConcept:
     name = raw.get("concept", "spang")
     cls = registry.safety_concepts.get(name)
     if cls is None:
-        raise project.unknown_name(
-            ("safety", "concept"), name, registry.safety_concepts, "safety concept"
-        )
+        raise unknown_plugin_name(project, registry, "safety", ("safety", "concept"), name)
     params = project.validate_params(("safety",), cls.Params, raw, drop=("concept",))
     return guard(registry).instantiate(cls, params)
 

@@ -12,11 +12,18 @@ refused all the same.
 The limit is ``RF_MAX_FILE_MB`` megabytes (10**6 bytes) from the environment,
 :data:`DEFAULT_MAX_FILE_MB` by default: far beyond any project or catalogue,
 small enough that a wrong path cannot exhaust the memory.
+
+Every file read is also noted (:func:`note_input`), by its device and inode,
+so that an output set can refuse to overwrite or remove a file the run reads
+(the project, its survey, library, catalogues, a summary to repeat): a
+command's results never replace what the user gave it. The command line
+forgets them (:func:`forget_inputs`) at the start of every command.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import stat
 
 from .errors import InputError
@@ -25,15 +32,84 @@ __all__ = [
     "DEFAULT_MAX_FILE_MB",
     "MAX_FILE_ENV",
     "UnreadableFile",
+    "forget_inputs",
+    "input_at",
     "max_file_bytes",
+    "note_input",
     "read_named_text",
     "read_text",
+    "strip_controls",
 ]
 
 #: Environment variable with the largest file (in MB, 10**6 bytes) the program reads.
 MAX_FILE_ENV = "RF_MAX_FILE_MB"
 #: The limit when the variable is not set.
 DEFAULT_MAX_FILE_MB = 50.0
+
+
+#: The files read so far: (device, inode) -> (what it is, the path as named).
+_inputs: dict[tuple[int, int], tuple[str, str]] = {}
+
+
+def note_input(path: str | os.PathLike[str], what: str, info: os.stat_result | None = None) -> None:
+    """Note that ``path`` (a ``what``: "project file", "survey section", ...) is read.
+
+    Parameters
+    ----------
+    path : path
+        The file, as the user named it.
+    what : str
+        What it is, for the message of an output that would overwrite it.
+    info : os.stat_result, optional
+        Its status, if already taken (from the open file, say).
+    """
+    try:
+        info = os.stat(path) if info is None else info
+    except OSError:
+        return  # nothing there: nothing an output could overwrite
+    _inputs.setdefault((info.st_dev, info.st_ino), (what, os.fspath(path)))
+
+
+def input_at(path: str | os.PathLike[str]) -> tuple[str, str] | None:
+    """``(what, path as named)`` if ``path`` is (a link to) a file noted as read, else None.
+
+    Compared by device and inode, so that another spelling of the path, a
+    symbolic or a hard link is found too.
+    """
+    if not _inputs:
+        return None
+    try:
+        info = os.stat(path)
+    except OSError:
+        return None
+    return _inputs.get((info.st_dev, info.st_ino))
+
+
+def forget_inputs() -> None:
+    """Forget every file noted as read (a new command starts)."""
+    _inputs.clear()
+
+
+#: Characters that steer a terminal or reorder text rather than show: the C0
+#: and C1 controls (ESC starts the sequences that set a window title or clear
+#: the screen), DEL, and the bidirectional overrides and isolates.
+_CONTROLS = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
+
+
+def strip_controls(text: str, *, lines: bool = False) -> str:
+    """``text`` without control characters, as it may be shown on a terminal.
+
+    Parameters
+    ----------
+    text : str
+        Text from a file (a project's name, description).
+    lines : bool
+        Keep line breaks and tabs (a description of several lines); else
+        they become spaces.
+    """
+    if not lines:
+        text = text.replace("\n", " ").replace("\t", " ").replace("\r", " ")
+    return _CONTROLS.sub("", text)
 
 
 class UnreadableFile(OSError):
@@ -83,8 +159,10 @@ def _kind(mode: int) -> str:
     return "a special file"
 
 
-def read_text(path: str | os.PathLike[str]) -> str:
+def read_text(path: str | os.PathLike[str], what: str = "input file") -> str:
     """The UTF-8 text of the regular file ``path``, if it is within the size limit.
+
+    The file is noted as an input (:func:`note_input`) as ``what``.
 
     Raises
     ------
@@ -103,9 +181,11 @@ def read_text(path: str | os.PathLike[str]) -> str:
     # O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer.
     fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     try:
-        mode = os.fstat(fd).st_mode
+        info = os.fstat(fd)
+        mode = info.st_mode
         if not stat.S_ISREG(mode):
             raise UnreadableFile(f"{_kind(mode)}, not a regular file")
+        note_input(path, what, info)
         too_large = UnreadableFile(
             f"larger than {limit / 1e6:g} MB, the largest file read "
             f"(set {MAX_FILE_ENV} to change it)"
@@ -146,7 +226,7 @@ def read_named_text(path: str | os.PathLike[str], what: str) -> str:
     """
     shown = os.fspath(path)
     try:
-        return read_text(path)
+        return read_text(path, what)
     except UnicodeDecodeError as exc:
         raise ValueError(f"cannot read the {what} {shown}: not UTF-8 text ({exc.reason})") from None
     except OSError as exc:

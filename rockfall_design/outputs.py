@@ -17,6 +17,16 @@ naming the file and the operating system's reason. If the failure comes in
 the middle of the commit, the files already renamed are put back: the old
 targets were moved aside, not overwritten, until the last rename succeeded.
 
+Two guards keep a command from destroying what it did not make. A target
+that is a file the run reads (the project, its survey, library or
+catalogues, a summary to repeat; see :func:`rockfall_design.inputs.note_input`)
+is refused when it is reserved or opened, before the command's work, with
+:class:`OutputError`. And every commit records what it wrote in a manifest
+per directory, :data:`MANIFEST` (name, size and modification time of each
+file); :meth:`OutputSet.remove` deletes a stale result only if that manifest
+lists it, unchanged since it was written, so that a file the user made
+under the same name (a figure of their own) stays.
+
 The single-file helpers (:func:`write_text`, :func:`write_json`,
 :func:`write_csv`, :func:`write_with`, :func:`atomic_writer`) are output sets
 of one file.
@@ -38,13 +48,17 @@ from pathlib import Path
 from types import FrameType, TracebackType
 from typing import IO, Any, Literal
 
-from .errors import InputError
+from .errors import InputError, Interrupted
 
 __all__ = [
+    "MANIFEST",
     "OutputError",
     "OutputSet",
     "atomic_writer",
+    "check_interrupt",
     "committed_sets",
+    "forget_interrupts",
+    "note_interrupt",
     "write_text",
     "write_json",
     "write_csv",
@@ -55,9 +69,47 @@ __all__ = [
 #: the polite kill, the two a user or a batch system sends to stop a run.
 _HELD = (signal.SIGINT, signal.SIGTERM)
 
+#: The manifest in every directory an output set writes to: which of its
+#: files this program wrote (and so may remove), as JSON.
+MANIFEST = ".rockfall-design-outputs.json"
+
 # How many non-empty output sets this process has committed (see
 # committed_sets()); only ever incremented, with the signals held.
 _committed = 0
+
+
+# The signals (SIGINT, SIGTERM) the command line's handler has received during
+# the current command, in order; see note_interrupt().
+_interrupts: list[int] = []
+
+
+def note_interrupt(signum: int) -> None:
+    """Note that the command was interrupted by ``signum``; no output set commits after it.
+
+    The command line's signal handler notes the signal before it raises
+    ``KeyboardInterrupt``. The exception may be swallowed where it lands
+    (numpy swallows one raised while it looks up ``__array_ufunc__``, say,
+    and a library's ``except BaseException`` would too); the note is not:
+    :meth:`OutputSet.commit` and :func:`check_interrupt` raise it again, so
+    the command still ends as interrupted (exit code 130) and replaces
+    nothing.
+    """
+    _interrupts.append(signum)
+
+
+def check_interrupt() -> None:
+    """Raise :class:`~rockfall_design.errors.Interrupted` if the command was interrupted.
+
+    Called at safe points of a run (between batches of rocks, families and
+    decisions of the optimiser, scenarios) and before every commit.
+    """
+    if _interrupts:
+        raise Interrupted(_interrupts[0])
+
+
+def forget_interrupts() -> None:
+    """Forget the noted signals (a new command starts)."""
+    _interrupts.clear()
 
 
 def committed_sets() -> int:
@@ -164,8 +216,9 @@ class _Entry:
     #: The temporary file beside the target; None if the target is to be removed.
     tmp: Path | None
     #: reserved: created, not written yet; open: being written; ready: closed
-    #: and synced to disk; remove: the target is to be deleted.
-    state: Literal["reserved", "open", "ready", "remove"]
+    #: and synced to disk; remove: the target is to be deleted; keep: it was
+    #: to be deleted, but this program did not write it (see the manifest).
+    state: Literal["reserved", "open", "ready", "remove", "keep"]
     fh: IO[Any] | None = None
 
 
@@ -222,7 +275,7 @@ class OutputSet:
     ...     _ = rows.write("a,b\\n1,2\\n")
     ...     files.write_json(out / "summary.json", {"rows": 1})
     >>> sorted(p.name for p in out.iterdir())
-    ['rows.csv', 'summary.json']
+    ['.rockfall-design-outputs.json', 'rows.csv', 'summary.json']
     """
 
     def __init__(self) -> None:
@@ -249,6 +302,13 @@ class OutputSet:
             self.commit()
         else:
             self.discard()
+
+    def __contains__(self, path: object) -> bool:
+        """True if ``path`` is written (or being written) in this set."""
+        if not isinstance(path, str | os.PathLike):
+            return False
+        entry = self._entries.get(_key(path))
+        return entry is not None and entry.state in ("open", "ready")
 
     # ---- adding files ----------------------------------------------------
     def reserve(self, *paths: str | os.PathLike[str]) -> None:
@@ -295,9 +355,18 @@ class OutputSet:
     def remove(self, path: str | os.PathLike[str]) -> None:
         """Delete ``path``, if it exists, at the commit: a stale result of an earlier run.
 
-        ``path`` may have been reserved, but not written.
+        ``path`` may have been reserved, but not written. It is deleted only
+        if the manifest of its directory (:data:`MANIFEST`) lists it as
+        written by this program and it has not changed since; a file of the
+        user's with the same name stays.
+
+        Raises
+        ------
+        OutputError
+            If ``path`` is a file the run reads.
         """
         key = _key(path)
+        _refuse_input(key)
         entry = self._entries.get(key)
         if entry is None:
             self._entries[key] = _Entry(key, None, "remove")
@@ -328,12 +397,18 @@ class OutputSet:
         """
         global _committed
         try:
+            # An interrupt whose exception was swallowed still stops the set.
+            check_interrupt()
             unwritten = [str(e.target) for e in self._entries.values() if e.state == "reserved"]
             if unwritten:
                 raise RuntimeError(f"reserved but never written: {', '.join(unwritten)}")
             for entry in self._entries.values():
                 _finish(entry)
+            # Recorded in the set, so that a failure from here on discards them too.
+            for manifest in _manifests(list(self._entries.values())):
+                self._entries[manifest.target] = manifest
             with _signals_held():
+                check_interrupt()  # one that came while the files were synced
                 backups = _swap_in(list(self._entries.values()))
                 if self._entries:
                     _committed += 1
@@ -368,6 +443,7 @@ class OutputSet:
         # file (or a directory) and recording it, which would leave it behind.
         if key.is_dir():
             raise OutputError(key, "it is a directory", "nothing was written")
+        _refuse_input(key)
         with _signals_held():
             try:
                 missing = [d for d in (key.parent, *key.parent.parents) if not d.exists()]
@@ -406,6 +482,99 @@ class OutputSet:
         _finish(entry)
 
 
+def _refuse_input(target: Path) -> None:
+    """Raise :class:`OutputError` if ``target`` is a file the run reads."""
+    from .inputs import input_at
+
+    found = input_at(target)
+    if found is not None:
+        what, shown = found
+        raise OutputError(
+            target, f"it is the {what} {shown} that this run reads; write the results "
+            "into another directory", "nothing was written")
+
+
+#: The largest manifest read (bytes); a larger one is not ours and counts as empty.
+_MANIFEST_LIMIT = 1 << 20
+
+
+def _read_manifest(directory: Path) -> dict[str, dict[str, int]]:
+    """The files of ``directory`` that its manifest lists: name -> {size, mtime_ns}.
+
+    A missing, unreadable or malformed manifest lists nothing: then no
+    file of the directory counts as written by this program.
+    """
+    try:
+        with open(directory / MANIFEST, "rb") as fh:
+            data = json.loads(fh.read(_MANIFEST_LIMIT + 1)[:_MANIFEST_LIMIT])
+        files = data["files"]
+        return {str(name): {"size": int(v["size"]), "mtime_ns": int(v["mtime_ns"])}
+                for name, v in files.items()}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return {}
+
+
+def _stamp(path: Path) -> dict[str, int] | None:
+    """Size (bytes) and modification time (ns) of the regular file ``path``, else None."""
+    try:
+        info = os.lstat(path)
+    except OSError:
+        return None
+    if not os.path.isfile(path) or os.path.islink(path):
+        return None
+    return {"size": info.st_size, "mtime_ns": info.st_mtime_ns}
+
+
+def _manifests(entries: list[_Entry]) -> list[_Entry]:
+    """The new manifest of every directory that ``entries`` write to or remove from.
+
+    Each lists the files written now (stamped from their temporary files:
+    a rename keeps size and time) and those of the old manifest that are
+    still there unchanged. A removal of a file the old manifest does not
+    list, or that changed since, becomes ``keep``: the file is the user's.
+    """
+    by_dir: dict[Path, list[_Entry]] = {}
+    for entry in entries:
+        if entry.target.name != MANIFEST:
+            by_dir.setdefault(entry.target.parent, []).append(entry)
+    made: list[_Entry] = []
+    for directory, group in by_dir.items():
+        old = _read_manifest(directory)
+        # Only what is still there, as it was written.
+        listed = {name: v for name, v in old.items() if _stamp(directory / name) == v}
+        for entry in group:
+            name = entry.target.name
+            if entry.state == "remove":
+                if name not in listed:
+                    entry.state = "keep"
+                listed.pop(name, None)
+            elif entry.tmp is not None:
+                stamp = _stamp(entry.tmp)
+                if stamp is not None:
+                    listed[name] = stamp
+        target = directory / MANIFEST
+        if target.is_dir():
+            continue
+        try:
+            fd, name = tempfile.mkstemp(prefix=f".{MANIFEST}.", suffix=".tmp", dir=directory)
+        except OSError as exc:
+            raise OutputError(target, exc) from None
+        entry = _Entry(target, Path(name), "reserved")
+        made.append(entry)
+        os.close(fd)
+        os.chmod(name, 0o666 & ~_umask())
+        text = json.dumps({"written_by": "rockfall-design", "files": dict(sorted(listed.items()))},
+                          indent=1)
+        try:
+            entry.fh = _open_target(entry.tmp, target, "w")  # type: ignore[arg-type]
+        except OSError as exc:
+            raise OutputError(target, exc) from None
+        entry.state = "open"
+        entry.fh.write(text + "\n")
+        _finish(entry)
+    return made
+
+
 def _finish(entry: _Entry) -> None:
     """Flush, sync to disk and close an open entry's file."""
     if entry.fh is None:
@@ -431,6 +600,8 @@ def _swap_in(entries: list[_Entry]) -> list[Path]:
     current: Path | None = None
     try:
         for entry in entries:
+            if entry.state == "keep":
+                continue
             current = entry.target
             if os.path.lexists(entry.target):
                 if entry.target.is_dir() and not entry.target.is_symlink():

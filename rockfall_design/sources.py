@@ -55,6 +55,7 @@ from .project import (
     _to_project_error,
     _yaml_path,
 )
+from .project.messages import _unquoted
 
 __all__ = ["MAX_SURVEY_POINTS", "resolve_inputs"]
 
@@ -189,15 +190,18 @@ def _merge_library(materials: dict, where: _Where, base_dir: Path) -> dict[Any, 
     data, lines = _parse_yaml(text, shown)
     if data is None or data == {}:
         raise ProjectError(shown, 1, "", "the materials library is empty")
-    if not isinstance(data, dict):
-        raise ProjectError(
-            shown,
-            _line_of((), lines),
-            "",
-            f"expected a mapping of material names to materials, got {_describe(data)}",
-        )
-    for name, value in data.items():
-        _check_library_material(name, value, shown, lines)
+    # A library path may name any file (a key file, /etc/shadow): its
+    # messages say what is wrong where, never what the file holds.
+    with _unquoted():
+        if not isinstance(data, dict):
+            raise ProjectError(
+                shown,
+                _line_of((), lines),
+                "",
+                f"expected a mapping of material names to materials, got {_describe(data)}",
+            )
+        for name, value in data.items():
+            _check_library_material(name, value, shown, lines)
     # Inline materials replace library ones of the same name as a whole: a
     # project that redefines "talus" means its own talus, not a blend.
     return {**data, **inline}
@@ -377,21 +381,23 @@ class _CsvSection(_Section):
                 )
 
     def _header(self, cells: list[str], line: int) -> list[str]:
+        # The survey path may name any file (a key file, /etc/passwd): a
+        # header that is not one says where, never what the line holds.
         columns = [cell.lower() for cell in cells]
         if _is_number(cells[0]):
             raise ProjectError(
                 self.shown, line, "",
-                f"expected a header row naming the columns x, y (and material), got "
-                f"{_describe(cells[0])}",
+                "expected a header row naming the columns x, y (and material), got a number",
             )
-        for column in columns:
+        for number, column in enumerate(columns, start=1):
             if column not in CSV_COLUMNS:
                 hint = _did_you_mean(column, CSV_COLUMNS) or (
                     f"; expected {', '.join(CSV_COLUMNS)}"
                 )
                 if ";" in column or "\t" in column:
                     hint = "; the columns must be separated by commas"
-                raise ProjectError(self.shown, line, "", f"unknown column {column!r}{hint}")
+                raise ProjectError(self.shown, line, "",
+                                   f"column {number} of the header is not a known column{hint}")
             if columns.count(column) > 1:
                 raise ProjectError(self.shown, line, "", f"column {column!r} appears twice")
         for needed in ("x", "y"):
@@ -414,9 +420,7 @@ class _CsvSection(_Section):
             if not text:
                 raise ProjectError(self.shown, line, column, "no value")
             if not _is_number(text):
-                raise ProjectError(
-                    self.shown, line, column, f"expected a number, got {_describe(text)}"
-                )
+                raise ProjectError(self.shown, line, column, "expected a number")
             number = float(text)
             if not math.isfinite(number):
                 raise ProjectError(self.shown, line, column, f"must be finite, got {text}")
@@ -437,6 +441,25 @@ def _is_number(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def _dxf_problem(exc: BaseException) -> str:
+    """What is wrong with a DXF file ezdxf could not read, without quoting it.
+
+    A file cut short ends ezdxf's tag iterator (StopIteration) or its
+    stream; other failures are named by type and, where ezdxf says it, the
+    line. The file's own text is never repeated (the path may name any file).
+    """
+    if isinstance(exc, StopIteration | EOFError) or "ENDSEC" in str(exc) or "EOF" in str(exc):
+        return ("not a readable DXF drawing: the file ends before the drawing does "
+                "(is it cut short?)")
+    import re
+
+    found = re.search(r"line (\d+)", str(exc))
+    where = f" near line {found.group(1)}" if found else ""
+    if "not a DXF file" in str(exc):
+        return "not a readable DXF drawing: no DXF header"
+    return f"not a readable DXF drawing: {type(exc).__name__}{where}"
 
 
 class _DxfSection(_Section):
@@ -465,14 +488,15 @@ class _DxfSection(_Section):
                 "python -m pip install 'rockfall-design[dxf]' (or '.[dxf]' in the repository)",
             ) from None
         _check_file(path, where, ("slope", "dxf"), "drawing")
+        from .inputs import note_input
+
+        note_input(path, "survey drawing")
         try:
             doc = ezdxf.readfile(path)
         except Exception as exc:  # noqa: BLE001 - the parser of an untrusted file
             # ezdxf raises many kinds of exception for a damaged or foreign
             # file; every one of them is a problem with the file, not a bug here.
-            raise ProjectError(
-                self.shown, None, "", f"not a readable DXF drawing: {_one_line(exc)}"
-            ) from None
+            raise ProjectError(self.shown, None, "", _dxf_problem(exc)) from None
         units = doc.header.get("$INSUNITS", 0)
         if units not in (0, 6):  # unitless, metres
             name = ezdxf.units.unit_name(units)

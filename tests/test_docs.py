@@ -33,6 +33,7 @@ OTHER_PROGRAMS_OPTIONS = {
     "--seeds": "benchmarks/optimise.py",
     "--nthreads": "dask worker",
     "--nworkers": "dask worker",
+    "--host": "dask scheduler and dask worker",
     "--e": "examples/stops_from_points.py",
     "--n": "examples/stops_from_points.py",
     "--volume": "examples/stops_from_points.py",

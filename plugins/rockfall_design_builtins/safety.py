@@ -68,6 +68,16 @@ __all__ = [
 
 _NO_ROCK = "no rock reached the measure"
 
+# Upper bounds of the factors: far above any code's values (partial factors
+# of 1.0 to 1.5, safety factors of 1 to 3), low enough that no product of
+# them with an energy or a height can overflow into inf.
+#: Largest partial factor (-).
+_MAX_PARTIAL = 10.0
+#: Largest target of a safety factor (-).
+_MAX_FACTOR = 100.0
+#: Largest minimum freeboard (m).
+_MAX_FREEBOARD_M = 100.0
+
 
 class _Params(SafetyParams):
     """Strict parameters that also reject NaN and infinity."""
@@ -280,16 +290,19 @@ class SpangConcept(SafetyConcept):
         height_factor: float = Field(
             2.0,
             gt=0.0,
+            le=_MAX_FACTOR,
             description="Target of chosen height / critical height (-); the paper: 2 to 3 "
             "in normal cases.", json_schema_extra={"unit": "-"},
         )
         energy_factor: float = Field(
-            1.0, gt=0.0, description="Target of energy capacity / design energy (-).",
+            1.0, gt=0.0, le=_MAX_FACTOR,
+            description="Target of energy capacity / design energy (-).",
             json_schema_extra={"unit": "-"},
         )
         reach_factor: float = Field(
             1.0,
             gt=0.0,
+            le=_MAX_FACTOR,
             description="Target of berm or ditch width / reach of the rocks (the statistic "
             "of the concept) (-).", json_schema_extra={"unit": "-"},
         )
@@ -439,6 +452,7 @@ class Uni11211Concept(SafetyConcept):
         gamma_tr: float = Field(
             1.02,
             ge=1.0,
+            le=_MAX_PARTIAL,
             description="Partial factor on the trajectory simulation (-): 1.02 for "
             "simulations calibrated by back-analysis, 1.10 otherwise.",
             json_schema_extra={"unit": "-"},
@@ -446,28 +460,33 @@ class Uni11211Concept(SafetyConcept):
         gamma_dp: float = Field(
             1.02,
             ge=1.0,
+            le=_MAX_PARTIAL,
             description="Partial factor on the quality of the slope survey (-): 1.02 for a "
             "high-quality survey, 1.10 for a low-quality one.", json_schema_extra={"unit": "-"},
         )
         gamma_volf: float = Field(
             1.02,
             ge=1.0,
+            le=_MAX_PARTIAL,
             description="Partial factor on the precision of the block-volume survey (-): "
             "1.02 for a precise survey, 1.10 otherwise.", json_schema_extra={"unit": "-"},
         )
         gamma_gamma: float = Field(
-            1.0, ge=1.0, description="Partial factor on the unit weight of the rock (-).",
+            1.0, ge=1.0, le=_MAX_PARTIAL,
+            description="Partial factor on the unit weight of the rock (-).",
             json_schema_extra={"unit": "-"},
         )
         gamma_e: float = Field(
             1.2,
             ge=1.0,
+            le=_MAX_PARTIAL,
             description="Partial factor on the energy capacity of the product (-), applied "
             "to the capacity (MEL-based).", json_schema_extra={"unit": "-"},
         )
         f_min_m: float = Field(
             0.5,
             ge=0.0,
+            le=_MAX_FREEBOARD_M,
             description="Minimum freeboard between the design passing height and the top "
             "(m); the freeboard is also at least half the design block.",
             json_schema_extra={"unit": "m"},
@@ -482,6 +501,7 @@ class Uni11211Concept(SafetyConcept):
         reach_factor: float = Field(
             1.0,
             gt=0.0,
+            le=_MAX_FACTOR,
             description="Target of berm or ditch width / reach of the rocks (the statistic "
             "of the concept) (-).", json_schema_extra={"unit": "-"},
         )

@@ -40,6 +40,7 @@ def _common(p: argparse.ArgumentParser, what: str) -> None:
 
 def add_calibrate_parser(sub: Any) -> None:
     """Add the ``calibrate`` and ``compare`` commands to the subparsers ``sub``."""
+    from ..arguments import MAX_BOOTSTRAP
     from ..cli import _add_block_option, _int_at_least
 
     p = sub.add_parser(
@@ -55,7 +56,7 @@ def add_calibrate_parser(sub: Any) -> None:
     _common(p, "per evaluation (default: calibrate.rocks)")
     p.add_argument("--observed", type=Path, metavar="CSV",
                    help="observed stops to fit (default: calibrate.observed)")
-    p.add_argument("--bootstrap", type=_int_at_least(0, "number of replicates", 2000),
+    p.add_argument("--bootstrap", type=_int_at_least(0, "number of replicates", MAX_BOOTSTRAP),
                    metavar="B", help="bootstrap replicates (default: calibrate.bootstrap; 0: "
                    "the best fit only, no intervals)")
     p.add_argument("--out", type=Path, metavar="DIR",

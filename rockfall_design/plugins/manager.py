@@ -380,6 +380,38 @@ def blocked_provider(registry: Registry, section: str, name: str) -> str | None:
     return found.provider.get((section, name))
 
 
+def check_blocked_names(names: Iterable[str]) -> None:
+    """Refuse a ``--block`` name that no installed plugin has.
+
+    A misspelt name would otherwise block nothing, silently.
+
+    Parameters
+    ----------
+    names
+        The names given to ``--block``: entry-point or distribution names
+        (compared after PEP 503 normalisation).
+
+    Raises
+    ------
+    InputError
+        ``--block NAME: no installed plugin has this name (plugins: ...;
+        distributions: ...)``, with "did you mean".
+    """
+    from ..errors import InputError
+    from ..project.messages import _did_you_mean
+
+    eps = _entry_points(None)
+    plugins = sorted({ep.name for ep in eps})
+    dists = sorted({d for d in (_dist_name(ep) for ep in eps) if d})
+    known = {_normalise(n) for n in (*plugins, *dists)}
+    for name in names:
+        if _normalise(name) not in known:
+            hint = _did_you_mean(name, [*plugins, *dists])
+            raise InputError(
+                f"--block {name}: no installed plugin has this name{hint} (plugins: "
+                f"{', '.join(plugins) or 'none'}; distributions: {', '.join(dists) or 'none'})")
+
+
 def _entry_points(entry_points: Iterable[EntryPoint] | None) -> list[EntryPoint]:
     if entry_points is None:
         entry_points = importlib.metadata.entry_points(group=hookspecs.ENTRY_POINT_GROUP)

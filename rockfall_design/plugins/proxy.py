@@ -17,8 +17,11 @@ it; it is what the proxies call.
 
 from __future__ import annotations
 
+import dataclasses
 import reprlib
 from typing import Any
+
+import numpy as np
 
 from ..costs import CostModel
 from ..errors import PluginError
@@ -26,6 +29,39 @@ from ..measures import Barrier, ProfileEdit, ProtectiveMeasure, Quantity
 from ..safety import Check, SafetyConcept
 from .contract import _CONTRACTS, _NOUN, _identify
 from .manager import Registry, _describe_exception, is_real_interrupt, plugin_code
+
+#: numpy's message for a write into a read-only array.
+_READ_ONLY = "read-only"
+
+
+def _handed_arrays(args: tuple[Any, ...]) -> list[tuple[str, np.ndarray]]:
+    """The numpy arrays in ``args`` and, one level down, in their dataclass fields.
+
+    Named for messages: ``section.y``, ``MeasureResult.energy_kj``.
+    """
+    found: list[tuple[str, np.ndarray]] = []
+    for i, arg in enumerate(args):
+        if isinstance(arg, np.ndarray):
+            found.append((f"argument {i + 1}", arg))
+        elif dataclasses.is_dataclass(arg) and not isinstance(arg, type):
+            owner = "section" if type(arg).__name__ == "Section" else type(arg).__name__
+            for f in dataclasses.fields(arg):
+                value = getattr(arg, f.name, None)
+                if isinstance(value, np.ndarray):
+                    found.append((f"{owner}.{f.name}", value))
+    return found
+
+
+def _freeze(arrays: list[tuple[str, np.ndarray]]) -> None:
+    """Make every array read-only, for good: the core only reads them after the call.
+
+    For good, not for the call: two threads may hand the same section to
+    plugins at once, and one thread's "put back" would open it under the
+    other's plugin.
+    """
+    for _, array in arrays:
+        if array.flags.writeable:
+            array.flags.writeable = False
 
 
 def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any:
@@ -67,11 +103,21 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
     contract = _CONTRACTS[(key, method)]
     provider = registry.provider.get((key, name))
     who = f"{_NOUN[key]} {name!r}" + (f" (from {provider})" if provider else "")
+    # The ground and the rocks' results are the core's: a plugin that wrote
+    # into section.y would flatten the ground the engine then runs on.
+    handed = _handed_arrays(args)
+    _freeze(handed)
     try:
         with plugin_code():
             fn = plugin if method == "__init__" else getattr(plugin, method)
             value = fn(*args)
-    except (*contract.raises, PluginError):
+    except (*contract.raises, PluginError) as exc:
+        if isinstance(exc, ValueError) and _READ_ONLY in str(exc) and handed:
+            # Not "the measure does not fit": numpy refused a write.
+            raise PluginError(
+                f"{who} failed in {method}(): it wrote into an array it was handed "
+                f"({', '.join(n for n, _ in handed)} are read-only); this is a bug in the "
+                "plugin, not in the project") from exc
         # The contract's own exceptions mean something to the caller; a
         # PluginError comes from a nested call that already named its plugin.
         raise
@@ -80,10 +126,18 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
         # the plugin raises them; only a real Ctrl-C stops the run.
         if is_real_interrupt(exc):
             raise
+        wrote = (f" (it wrote into an array it was handed: "
+                 f"{', '.join(n for n, _ in handed)} are read-only)") if (
+            isinstance(exc, ValueError) and _READ_ONLY in str(exc) and handed) else ""
         raise PluginError(
-            f"{who} failed in {method}(): {_describe_exception(exc)}; "
+            f"{who} failed in {method}(): {_describe_exception(exc)}{wrote}; "
             "this is a bug in the plugin, not in the project"
         ) from exc
+    reopened = [n for n, array in handed if array.flags.writeable]
+    if reopened:
+        raise PluginError(
+            f"{who}: {method}() made {', '.join(reopened)} writeable again: the arrays a "
+            "plugin is handed are read-only; this is a bug in the plugin, not in the project")
     if contract.returns is not None and not contract.returns(value):
         shown = reprlib.repr(value)
         raise PluginError(

@@ -144,6 +144,11 @@ class Corridor:
         return [section_seed(run, s.index) for s in self.sections]
 
 
+#: The files a corridor writes beside its sections' directories (``--out``):
+#: no section's directory may take one of their names.
+_TOP_FILES = frozenset({"summary.json"})
+
+
 def slug(name: str) -> str:
     """A section name as a file name: runs of other characters than letters, digits,
     ``.``, ``-`` and ``_`` become ``_`` (leading dots too)."""
@@ -262,6 +267,10 @@ def split_sections(data: dict, lines: _Lines, source: str) -> list[tuple[str, di
         if slug(name) in slugs:
             raise error(at + ("name",), f"section names {slugs[slug(name)]!r} and {name!r} "
                         f"give the same directory name {slug(name)!r}")
+        if slug(name).lower() in _TOP_FILES:
+            raise error(at + ("name",), f"section {name!r}: its directory name "
+                        f"{slug(name)!r} is a file the corridor writes beside the sections' "
+                        "directories; rename the section")
         slugs[slug(name)] = name
         rocks = item.get("rocks")
         if isinstance(rocks, dict) and "seed" in rocks:

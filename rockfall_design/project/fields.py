@@ -11,9 +11,17 @@ import math
 from collections.abc import Callable
 from typing import Annotated, Any
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    model_validator,
+)
 from pydantic_core import PydanticCustomError
 
+from ..inputs import strip_controls
 from .messages import _describe, _did_you_mean, _fail, _fmt
 
 # --------------------------------------------------------------------------------------
@@ -96,6 +104,11 @@ Number = Annotated[float, BeforeValidator(_as_number)]
 Integer = Annotated[int, BeforeValidator(_as_integer)]
 String = Annotated[str, BeforeValidator(_as_string)]
 Boolean = Annotated[bool, BeforeValidator(_as_bool)]
+#: Text shown to people (a project's name): control characters, which would
+#: steer the terminal (window title, clear screen), removed; one line.
+Title = Annotated[String, AfterValidator(strip_controls)]
+#: Free text of several lines (a description): control characters removed.
+Prose = Annotated[String, AfterValidator(lambda s: strip_controls(s, lines=True))]
 Fraction = Annotated[Number, Field(ge=0.0, le=1.0)]
 NonNegative = Annotated[Number, Field(ge=0.0)]
 Positive = Annotated[Number, Field(gt=0.0)]

@@ -17,7 +17,7 @@ from pydantic import ValidationError
 from pydantic_core import PydanticCustomError
 
 from ..errors import ProjectError
-from ..inputs import read_named_text, read_text
+from ..inputs import read_named_text, read_text, strip_controls
 from .design import _check_products
 from .fields import _raw
 from .locator import Locator
@@ -508,10 +508,12 @@ def load_corridor_text(
         seed = section_seed(run_seed, index)
         project = project.model_copy(
             update={"rocks": project.rocks.model_copy(update={"seed": seed})})
-        sections.append(CorridorSection(name=name, index=index, project=project))
+        sections.append(CorridorSection(name=strip_controls(str(name)), index=index,
+                                        project=project))
     description = data.get("description")
-    return Corridor(name=str(data.get("name", "")),
-                    description=description if isinstance(description, str) else "",
+    return Corridor(name=strip_controls(str(data.get("name", ""))),
+                    description=(strip_controls(description, lines=True)
+                                 if isinstance(description, str) else ""),
                     source=source, seed=run_seed, sections=tuple(sections))
 
 
@@ -524,7 +526,7 @@ def load_corridor(path: str | os.PathLike[str]) -> "Corridor | Project":
 def _read_project(source: str) -> str:
     """The text of a project file; one located line when it cannot be read."""
     try:
-        return read_text(source)
+        return read_text(source, "project file")
     except UnicodeDecodeError as exc:
         raise ProjectError(
             source, None, "", f"cannot read file: not UTF-8 text ({exc.reason})"

@@ -19,7 +19,9 @@ from .calibrate import CalibrateSpec
 from .design import Design
 from .fields import (
     _DEFAULT_CONCEPT,
+    Prose,
     String,
+    Title,
     _Model,
     _none_as_empty,
     _parse_measures,
@@ -39,8 +41,8 @@ class Project(_Model):
     it came from is :attr:`source`.
     """
 
-    name: Annotated[String, Field(min_length=1)] = Field(description="Project name.")
-    description: Annotated[String, BeforeValidator(lambda v: "" if v is None else v)] = Field(
+    name: Annotated[Title, Field(min_length=1)] = Field(description="Project name.")
+    description: Annotated[Prose, BeforeValidator(lambda v: "" if v is None else v)] = Field(
         "", description="Free text."
     )
     slope: Slope = Field(description="The slope section.")
@@ -141,6 +143,14 @@ class Project(_Model):
                     raise _fail(
                         f"station range [{_fmt(low)}, {_fmt(high)}] is outside the slope "
                         f"section {section}",
+                        ("design", "candidates", i, "x"),
+                    )
+                if low > self.protect.x:
+                    # Rocks reach the zone before they reach such a measure.
+                    raise _fail(
+                        f"station range [{_fmt(low)}, {_fmt(high)}] lies inside the protected "
+                        f"zone (beyond protect.x = {_fmt(self.protect.x)} m): a measure there "
+                        "cannot keep rocks out of it; place the candidates upslope of it",
                         ("design", "candidates", i, "x"),
                     )
         return self

@@ -17,6 +17,7 @@ from pydantic import (
     model_validator,
 )
 
+from ..arguments import MAX_ROCKS as _ARGUMENT_MAX_ROCKS
 from .fields import (
     Boolean,
     Fraction,
@@ -126,9 +127,10 @@ MIN_RADIUS_M = 0.01
 MAX_DENSITY = 20_000.0
 #: Smallest rock density (kg/m3), below any rock's (pumice is about 250).
 MIN_DENSITY = 100.0
-#: Most rocks in one run (rocks.count, --rocks, design.fresh_rocks): a streamed
-#: run of a billion rocks takes about six hours on one core.
-MAX_ROCKS = 1_000_000_000
+#: Most rocks in one run (rocks.count, --rocks, rocks=, design.fresh_rocks): a
+#: streamed run of a billion rocks takes about six hours on one core. One
+#: value for the project file, the command line and the API.
+MAX_ROCKS = _ARGUMENT_MAX_ROCKS
 #: Most analysis stations: each adds a column per rock and its histograms.
 MAX_STATIONS = 1_000
 #: Most percentiles of the envelopes.

@@ -15,6 +15,7 @@ from __future__ import annotations
 import datetime as _dt
 import math
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -690,9 +691,28 @@ def _environment(markdown: bool) -> Any:
         lstrip_blocks=True,
         keep_trailing_newline=True,
         undefined=jinja2.StrictUndefined,
+        # report.md escapes what it shows as report.html does: a project's
+        # name or description with <script> or <iframe> stays text.
+        finalize=_md_text if markdown else None,
     )
     env.filters["md"] = _md_cell
     return env
+
+
+#: What could start HTML in Markdown: a tag, a closing tag, a comment or
+#: declaration (``<x``, ``</``, ``<!``, ``<?``) and an entity (``&name;``, ``&#``).
+_HTML_START = re.compile(r"<(?=[A-Za-z/!?])|&(?=#|[A-Za-z][A-Za-z0-9]*;)")
+
+
+def _md_text(value: Any) -> Any:
+    """A value shown in report.md, with whatever could start HTML as an entity.
+
+    ``<script>`` becomes ``&lt;script>``, as report.html escapes it; a
+    comparison (``e < 1``) or an ampersand between words stays as written.
+    """
+    if not isinstance(value, str):
+        return value
+    return _HTML_START.sub(lambda m: "&lt;" if m.group() == "<" else "&amp;", value)
 
 
 def _md_cell(text: Any) -> str:

@@ -107,7 +107,10 @@ def cmd_study(args: argparse.Namespace) -> int:
             "run; see 'Parametric studies' in the README)")
     n = args.rocks or project.rocks.count
     if args.scheduler is None:
-        at_once = args.workers or usable_cores()
+        from .scenarios import design_points
+
+        # No more at once than there are scenarios, whatever --workers says.
+        at_once = min(args.workers or usable_cores(), len(design_points(project.study)))
         _memory_guard(at_once * study_memory(project, n),
                       f"{at_once} scenarios of {n:,} rocks at once",
                       "Use fewer --workers, fewer rocks or fewer analysis.envelope_points.")

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import threading
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import (
     FIRST_COMPLETED,
@@ -48,10 +49,16 @@ from typing import Any
 from ..engine.ensemble import ENGINE_THREADS, THREADS_ENV
 from ..errors import InputError
 
-__all__ = ["run_tasks", "usable_cores", "EXTRA_HINT", "POOLS"]
+__all__ = ["run_tasks", "usable_cores", "EXTRA_HINT", "POOLS", "SCHEDULER_TIMEOUT_S"]
 
 #: How to install what a Dask cluster or SALib's indices need.
 EXTRA_HINT = "pip install 'rockfall-design[study]'"
+
+#: Seconds a Dask scheduler has to accept the connection, complete the
+#: handshake and answer (s): far more than a scheduler across a network needs,
+#: little enough that a wrong address (a web server, a silent port) is said
+#: at once instead of waiting for ever.
+SCHEDULER_TIMEOUT_S = 15.0
 
 #: The kinds of local pool :func:`run_tasks` runs tasks on.
 POOLS = ("threads", "processes")
@@ -233,6 +240,64 @@ def _dask_task(fn: Callable[[Any], Any], task: Any) -> Any:
     return fn(task)
 
 
+def _connect(client_class: Any, address: str) -> Any:
+    """A Dask client connected to ``address`` within :data:`SCHEDULER_TIMEOUT_S`, or one line.
+
+    Dask's own timeout covers the connection, not a peer that accepts and
+    never answers (a silent port) nor one that answers something else (an
+    HTTP or SSH server: Dask reads its first bytes as a frame length and
+    tries to allocate exabytes). So the client is made on a thread of its
+    own, waited for at most the timeout, and any failure is one line naming
+    the address.
+
+    Raises
+    ------
+    InputError
+        The scheduler cannot be reached, does not answer in time, or is
+        not a Dask scheduler.
+    """
+    box: dict[str, Any] = {}
+    done = threading.Event()
+
+    def connect() -> None:
+        try:
+            client = client_class(address, timeout=f"{SCHEDULER_TIMEOUT_S:g}s")
+        except BaseException as exc:  # noqa: BLE001 - reported below, on the caller's thread
+            box["error"] = exc
+        else:
+            if done.is_set():  # answered after we gave up: not ours any more
+                client.close()
+            box["client"] = client
+        finally:
+            done.set()
+
+    thread = threading.Thread(target=connect, name="rockfall-design dask connect", daemon=True)
+    thread.start()
+    answered = done.wait(SCHEDULER_TIMEOUT_S + 1.0)
+    if not answered:
+        done.set()
+        raise InputError(
+            f"the Dask scheduler at {address} did not answer within "
+            f"{SCHEDULER_TIMEOUT_S:g} s (is a Dask scheduler listening there, not another "
+            "service?)")
+    error = box.get("error")
+    if error is None:
+        return box["client"]
+    if isinstance(error, KeyboardInterrupt | SystemExit):
+        raise error
+    if isinstance(error, OSError | TimeoutError):
+        # Dask's words ("Timed out trying to connect to ..."), one line.
+        reason = " ".join(str(error).split()) or type(error).__name__
+        raise InputError(
+            f"cannot reach the Dask scheduler at {address}: {reason} (is 'dask scheduler' "
+            "running there?)") from None
+    # Anything else: what answered is not a Dask scheduler (a MemoryError for
+    # a banner read as a frame length, a protocol error, a bad address).
+    raise InputError(
+        f"{address} did not answer as a Dask scheduler ({type(error).__name__}); give the "
+        "address of a running 'dask scheduler', e.g. tcp://127.0.0.1:8786") from None
+
+
 def _on_dask(fn: Callable[[Any], Any], tasks: Sequence[Any], scheduler: Any,
              on_done: Callable[[int, Any], None] | None) -> list[Any]:
     try:
@@ -242,16 +307,7 @@ def _on_dask(fn: Callable[[Any], Any], tasks: Sequence[Any], scheduler: Any,
             f"--scheduler needs dask.distributed, which is not installed: {EXTRA_HINT}"
         ) from None
     own = not isinstance(scheduler, Client)
-    if own:
-        try:
-            client = Client(str(scheduler), timeout="10s")
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise InputError(
-                f"cannot reach the Dask scheduler at {scheduler}: {exc} (is 'dask scheduler' "
-                "running there?)"
-            ) from None
-    else:
-        client = scheduler
+    client = _connect(Client, str(scheduler)) if own else scheduler
     futures: list[Any] = []
     try:
         futures = client.map(_dask_task, [fn] * len(tasks), list(tasks), pure=False)

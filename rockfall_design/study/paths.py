@@ -31,7 +31,8 @@ from ..errors import ProjectError
 from ..project import Project
 from ..project.messages import _describe, _did_you_mean, _to_project_error
 
-__all__ = ["ALIASES", "PathError", "check_study", "parse_path", "set_input", "with_values"]
+__all__ = ["ALIASES", "NOT_VARIED", "PathError", "check_study", "parse_path", "set_input",
+           "with_values"]
 
 # one key: anything but dots and brackets, then any number of [i]
 _SEGMENT = re.compile(r"([^.\[\]]+)((?:\[\d+\])*)")
@@ -129,6 +130,27 @@ def _step(container: Any, key: str | int, done: tuple) -> Any:
         )
         raise PathError(f"no key {key!r} in {where}{hint}")
     raise PathError(f"{where} is a single value ({_describe(container)}), not a mapping or list")
+
+
+#: Inputs a study may not vary, by their keys from the top of the file, and why.
+#: ``name`` and ``description`` cannot change a scenario's result (its
+#: "effect" would be noise); the study sets each scenario's seed itself (see
+#: study.seeds) and runs every scenario with the run's rock count (--rocks),
+#: so a varied seed or count would be recorded but not applied.
+NOT_VARIED: dict[tuple[str, ...], str] = {
+    ("name",): "the project's name cannot change a scenario's result",
+    ("description",): "the project's description cannot change a scenario's result",
+    ("rocks", "seed"): "the study sets each scenario's seed itself (study.seeds: "
+    "independent or common; the run's seed is --seed or rocks.seed)",
+    ("rocks", "count"): "every scenario runs the run's number of rocks (--rocks or "
+    "rocks.count); to compare rock counts, run the study once per count",
+}
+
+
+def _refused(path: str, data: Mapping[str, Any]) -> str | None:
+    """Why ``path`` may not be varied by a study, or None if it may."""
+    keys = _absolute(parse_path(path), data)
+    return NOT_VARIED.get(tuple(str(k) for k in keys))
 
 
 def _set(data: dict[str, Any], path: str, value: Any) -> None:
@@ -232,6 +254,9 @@ def with_values(project: Project, values: Mapping[str, Any], *,
     data = copy.deepcopy(base)
     for path, value in values.items():
         try:
+            why = _refused(path, data)
+            if why is not None:
+                raise located(path, f"cannot be varied: {why}")
             _set(data, path, copy.deepcopy(value))
         except PathError as exc:
             raise located(path, f"not an input of the project: {exc}") from None

@@ -24,7 +24,7 @@ import pytest
 
 from rockfall_design.cli import main
 from rockfall_design.errors import InputError
-from rockfall_design.outputs import OutputSet, committed_sets
+from rockfall_design.outputs import MANIFEST, OutputSet, committed_sets
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"
@@ -49,17 +49,27 @@ def _ctrl_c_raises():
 
 
 def _previous_set(directory: Path, names: list[str]) -> dict[str, bytes]:
-    """Fill ``directory`` with a complete set of files of known content, as a run had left."""
+    """Fill ``directory`` with a complete set of files of known content, as a run had left.
+
+    Written as a run writes them, through an output set, so that its
+    manifest lists them as the program's own.
+    """
     directory.mkdir(parents=True, exist_ok=True)
     files = {name: f"previous {name} of an earlier run\n".encode() for name in names}
-    for name, data in files.items():
-        (directory / name).write_bytes(data)
+    with OutputSet() as earlier:
+        for name, data in files.items():
+            earlier.write_with(directory / name, lambda fh, data=data: fh.write(data))
     return files
 
 
 def _contents(directory: Path) -> dict[str, bytes]:
-    """Every file in ``directory`` (hidden temporary files included) and its bytes."""
-    return {p.name: p.read_bytes() for p in directory.iterdir()}
+    """Every file in ``directory`` (hidden temporary files included, not the manifest)."""
+    return {p.name: p.read_bytes() for p in directory.iterdir() if p.name != MANIFEST}
+
+
+def _names(directory: Path) -> list[str]:
+    """The files in ``directory``, sorted, without the manifest of the output sets."""
+    return sorted(p.name for p in directory.iterdir() if p.name != MANIFEST)
 
 
 def _temporaries(directory: Path) -> list[Path]:
@@ -205,7 +215,8 @@ def _signal_on_first_replace(monkeypatch, signum: int, directory: Path,
 
     def replace(src, dst) -> None:
         # (The commit first moves each old file aside, to a name ending .old.)
-        mine = Path(dst).parent == directory and not Path(dst).name.endswith(".old")
+        mine = (Path(dst).parent == directory and not Path(dst).name.endswith(".old")
+                and Path(dst).name != MANIFEST)
         if mine and not renamed:
             send(signum)
         real_replace(src, dst)
@@ -251,7 +262,7 @@ def test_an_interrupt_during_the_commit_is_reported_as_after_it(tmp_path, monkey
     assert "interrupted" in captured.err and "written completely" in captured.err
     assert captured.out == ""  # interrupted before the report
     assert sorted(p.name for p in renamed) == ["crossings.csv", "rocks.csv", "summary.json"]
-    assert sorted(p.name for p in out.iterdir()) == ["crossings.csv", "rocks.csv", "summary.json"]
+    assert _names(out) == ["crossings.csv", "rocks.csv", "summary.json"]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["run"]["rocks"] == 50
     assert len(pd.read_csv(out / "rocks.csv")) == 50
@@ -345,5 +356,5 @@ def test_optimise_without_a_design_removes_an_earlier_design_yaml(tmp_path, caps
     code = main(["optimise", str(project), "--rocks", "200", "--out", str(out), "--json"])
     s = json.loads(capsys.readouterr().out)
     assert code == 1 and s["best"] is None
-    assert sorted(p.name for p in out.iterdir()) == ["alternatives.csv", "summary.json"]
+    assert _names(out) == ["alternatives.csv", "summary.json"]
     assert json.loads((out / "summary.json").read_text())["best"] is None

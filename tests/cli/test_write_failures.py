@@ -21,7 +21,7 @@ import pytest
 
 from rockfall_design import outputs, simulation
 from rockfall_design.cli import main
-from rockfall_design.outputs import OutputError, OutputSet
+from rockfall_design.outputs import MANIFEST, OutputError, OutputSet
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"
@@ -37,8 +37,16 @@ def previous_set(directory: Path, names: list[str]) -> dict[str, bytes]:
 
 
 def contents(directory: Path) -> dict[str, bytes]:
-    """Every file in ``directory``, hidden temporaries and backups included."""
-    return {p.name: p.read_bytes() for p in sorted(directory.iterdir()) if p.is_file()}
+    """Every file in ``directory``, hidden temporaries and backups included (not the manifest)."""
+    return {p.name: p.read_bytes() for p in sorted(directory.iterdir())
+            if p.is_file() and p.name != MANIFEST}
+
+
+def written_earlier(directory: Path, names: list[str]) -> None:
+    """Files ``names`` in ``directory`` as an earlier run wrote them (listed in its manifest)."""
+    with OutputSet() as earlier:
+        for name in names:
+            earlier.write_text(directory / name, f"previous {name}\n")
 
 
 def one_line(capsys) -> str:
@@ -190,12 +198,13 @@ def test_optimise_without_a_design_removes_earlier_figures(tmp_path, capsys):
     project = tmp_path / "hopeless.yaml"
     project.write_text(text)
     plot = tmp_path / "figures"
-    previous_set(plot, ["envelopes.png", "profile.png", "stops.png", "mine.txt"])
+    written_earlier(plot, ["envelopes.png", "profile.png", "stops.png"])
+    previous_set(plot, ["mine.txt"])
     code = main(["optimise", str(project), "--rocks", "200", "--plot", str(plot), "--json"])
     s = json.loads(capsys.readouterr().out)
     assert code == 1 and s["best"] is None
     # Only the figure that compares the families (they all failed) is drawn.
-    assert sorted(p.name for p in plot.iterdir()) == ["alternatives.png", "mine.txt"]
+    assert sorted(contents(plot)) == ["alternatives.png", "mine.txt"]
 
 
 @pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")

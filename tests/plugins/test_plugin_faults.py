@@ -104,6 +104,10 @@ class BoomNet(ProtectiveMeasure):
             import time
             os.kill(os.getpid(), signal.SIGINT)
             time.sleep(10)  # the handler interrupts the sleep
+        if FAULT == "write_ground":  # flattens the ground the engine runs on
+            section.y[:] = section.y.min()
+        if FAULT == "reopen_ground":
+            section.y.flags.writeable = True
         x = self.params.x
         if FAULT.startswith("edit:"):
             g = section.ground_height
@@ -140,6 +144,8 @@ class BoomConcept(SafetyConcept):
 
     def checks(self, result):
         _step("checks")
+        if FAULT == "write_result":
+            result.energy_kj[:] = 0.0
         height = result.measure.design_properties()["height_m"]
         if FAULT == "checks_type":
             return {{"height_m": height}}
@@ -507,3 +513,19 @@ def test_a_real_ctrl_c_in_plugin_code_reaches_a_library_caller(install, default_
     with pytest.raises(Interrupted):
         evaluate(project, load_registry(), rocks=5)
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.parametrize("command", ["check", "optimise"])
+@pytest.mark.parametrize("fault, needles", [
+    ("write_ground", ("footprint()", "wrote into an array it was handed", "section.y")),
+    ("reopen_ground", ("footprint()", "made section.y writeable again")),
+    ("write_result", ("checks()", "wrote into an array it was handed", "energy_kj")),
+])
+def test_a_plugin_that_writes_what_it_was_handed_is_reported(install, capsys, command, fault,
+                                                             needles):
+    """Issue 27, item 5: a footprint that wrote section.y flattened the ground; now exit 3."""
+    dist, path = install(fault, command)
+    code = run(command, path)
+    err = capsys.readouterr().err
+    name = "boom_concept" if fault == "write_result" else "boom_net"
+    assert_one_line_fault(code, err, name, dist, "bug in the plugin", *needles)

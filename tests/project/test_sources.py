@@ -136,7 +136,7 @@ def test_csv_section_is_inline_in_the_resolved_project(tmp_path):
 
 
 @pytest.mark.parametrize("old, new, needle, key, fragment", [
-    ("60,30,talus", "60,3O,talus", "60,3O", "y", "expected a number, got string '3O'"),
+    ("60,30,talus", "60,3O,talus", "60,3O", "y", "expected a number"),
     ("60,30,talus", "60,nan,talus", "60,nan", "y", "must be finite"),
     ("60,30,talus", ",30,talus", ",30,talus", "x", "no value"),
     ("60,30,talus", "20,30,talus", "20,30", "x",
@@ -146,9 +146,9 @@ def test_csv_section_is_inline_in_the_resolved_project(tmp_path):
      "undefined material 'talas'; did you mean 'talus'?"),
     ("60,30,talus", "60,30,", "60,30,", "material", "no value"),
     ("60,30,talus", "60,30", "60,30", "", "expected 3 values (x, y, material), got 2"),
-    ("x,y,material", "x,z,material", "x,z", "", "unknown column 'z'"),
+    ("x,y,material", "x,z,material", "x,z", "", "column 2 of the header is not a known column"),
     ("x,y,material", "x,y,materials", "x,y,materials", "",
-     "unknown column 'materials'; did you mean 'material'?"),
+     "column 3 of the header is not a known column; did you mean 'material'?"),
     ("x,y,material", "x;y;material", "x;y", "", "separated by commas"),
     ("x,y,material", "x,material", "x,material", "", "no column 'y'"),
     ("x,y,material", "x,y,x", "x,y,x", "", "column 'x' appears twice"),
@@ -263,13 +263,13 @@ def test_a_material_called_library_is_still_a_material(tmp_path):
 
 @pytest.mark.parametrize("old, new, needle, key, fragment", [
     ("  restitution: 0.35", "  restitution: 1.35", "1.35", "talus.restitution",
-     "expected a number <= 1, got 1.35"),
+     "expected a number <= 1"),
     ("  friction: 0.58", "  fricton: 0.58", "fricton", "talus.fricton",
      "did you mean 'friction'?"),
     ("  friction: 0.58\n", "", "talus:", "talus.friction", "required key is missing"),
     ("meadow: {restitution: 0.25, friction: 0.6}", "meadow: 0.25", "meadow:", "meadow",
      "expected a mapping"),
-    ("meadow: {", "7: {", "7: {", "", "material names must be text, got 7"),
+    ("meadow: {", "7: {", "7: {", "", "material names must be text, got a number"),
 ])
 def test_library_errors_name_the_library_file_line_and_key(tmp_path, old, new, needle, key,
                                                            fragment):

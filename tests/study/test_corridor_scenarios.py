@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 from rockfall_design.cli import main
+from rockfall_design.outputs import MANIFEST
 from rockfall_design.project import dump_yaml, load_corridor, section_seed
 
 from .test_corridor import CORRIDOR
@@ -55,7 +56,7 @@ def test_every_section_is_checked_over_its_scenarios_as_alone(tmp_path, capsys):
                 if k not in ("name", "index")} == single
         recorded = json.loads((out_dir / section.slug / "summary.json").read_text())
         assert recorded["seed"] == section.seed and recorded["of"] == 2
-        assert {p.name for p in (plot / section.slug).iterdir()} == {
+        assert {p.name for p in (plot / section.slug).iterdir()} - {MANIFEST} == {
             "profile.png", "envelopes.png", "stops.png", "margins.png"}
     assert json.loads((out_dir / "summary.json").read_text())["totals"] == totals
 

@@ -1,0 +1,97 @@
+"""The numbers a run takes from its caller: one set of bounds and messages.
+
+The command line (``--rocks``, ``--seed``, ``--workers``, ``--bootstrap``)
+and the Python API (``rocks=``, ``seed=``, ``workers=``, ``bootstrap=``)
+check them here, so that both refuse the same values with the same words:
+``simulate(p, rocks=2.5)`` is "rocks: expected a whole number, got 2.5", as
+``--rocks 2.5`` is "argument --rocks: expected a whole number, got '2.5'".
+Light on purpose: the command line imports it to parse its options.
+"""
+
+from __future__ import annotations
+
+import operator
+from typing import Any
+
+from .errors import InputError
+
+__all__ = [
+    "MAX_BOOTSTRAP",
+    "MAX_ROCKS",
+    "ArgumentError",
+    "bounds_problem",
+    "whole_number",
+]
+
+#: Most rocks of one run (as ``rockfall_design.project.MAX_ROCKS``, here
+#: without importing pydantic for every ``--help``).
+MAX_ROCKS = 1_000_000_000
+#: Most bootstrap replicates of a calibration.
+MAX_BOOTSTRAP = 2000
+
+
+class ArgumentError(InputError):
+    """A number given to an API function that the command line would refuse too.
+
+    Exit code 2 (an :class:`~rockfall_design.errors.InputError`).
+
+    Attributes
+    ----------
+    key : str
+        The keyword argument, e.g. ``"rocks"``.
+    problem : str
+        What is wrong with it, in the command line's words.
+    """
+
+    def __init__(self, key: str, problem: str) -> None:
+        super().__init__(f"{key}: {problem}")
+        self.key = key
+        self.problem = problem
+
+
+def bounds_problem(value: int, low: int, high: int | None, what: str) -> str | None:
+    """What is wrong with the whole number ``value`` for ``low <= value <= high``, or None.
+
+    Parameters
+    ----------
+    value : int
+    low, high : int
+        The bounds (``high`` None: no upper bound).
+    what : str
+        What the number is ("number", "seed", "number of workers").
+    """
+    if value < low:
+        return f"expected a {what} >= {low}, got {value}"
+    if high is not None and value > high:
+        return f"expected a {what} <= {high:,}, got {value:,}"
+    return None
+
+
+def whole_number(value: Any, key: str, low: int, high: int | None = None,
+                 what: str = "number") -> int:
+    """``value`` as an int, if it is a whole number (not a bool, float or text) within bounds.
+
+    Parameters
+    ----------
+    value
+        What the caller gave: an int or numpy integer.
+    key : str
+        The keyword it was given as, for the message.
+    low, high, what
+        As :func:`bounds_problem`.
+
+    Raises
+    ------
+    ArgumentError
+        ``KEY: expected a whole number, got VALUE`` or a bound's message.
+    """
+    if isinstance(value, bool):
+        raise ArgumentError(key, f"expected a whole number, got {value!r} (a boolean)")
+    try:
+        number = operator.index(value)  # int and numpy integers; not 2.5, "10" or 10.0
+    except TypeError:
+        raise ArgumentError(key, f"expected a whole number, got {value!r}") from None
+    problem = bounds_problem(number, low, high, what)
+    if problem is not None:
+        raise ArgumentError(key, problem)
+    return number
