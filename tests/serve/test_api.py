@@ -490,7 +490,7 @@ def test_the_projects_own_measures_come_with_their_labels(registry, projects_dir
     (entry,) = load_entries([projects_dir / "quarry_fence_ditch.yaml"], registry)
     d = entry.describe()
     assert [m["label"] for m in d["measures"]] == [
-        "fence (6 m, 5000 kJ) at x = 100 m", "ditch (8 m wide, 1.5 m deep) at x = 124 m"]
+        "fence (6 m, 2000 kJ) at x = 117 m", "ditch (8 m wide, 1.5 m deep) at x = 124 m"]
     assert d["has_design"] is False and d["protect"] == {"x": 135.0}
 
 
