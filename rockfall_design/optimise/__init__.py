@@ -608,6 +608,20 @@ def optimise(
     alternatives: list[Alternative] = []
     exact_total, simulated = 0, n
     currency = getattr(spec.cost_model.params, "currency", "")
+    if allowed <= 0.0:
+        # No number of rocks shows that none reaches the zone: nothing can be
+        # admitted with confidence, whatever the search found. Say so, at once.
+        why = ("design.residual allows no rock to reach the protected zone: no number of "
+               "rocks shows that with confidence, so no design can be admitted; write the "
+               "fraction you can accept, e.g. residual: {fraction: 0.001}")
+        alternatives = [Alternative(name=family_name(spec.candidates, fam), family=fam,
+                                    reason=why) for fam in fams]
+        return OptimisationResult(
+            alternatives=alternatives, best=None, reason=why, rocks=n, seed=s,
+            fresh_rocks=2 * n, fresh_seed=fresh_seed, wall_s=time.perf_counter() - t0,
+            evaluations=0, edit_runs=0, currency=currency, search_rocks=n,
+            confidence=confidence, rocks_simulated=n, looks=looks,
+            bare_slope=_bare_slope(screen, allowed, confidence))
     # Families with fewer measures first: the cheapest design that holds so far
     # bounds what the later families need to look at (a dearer design cannot be
     # the answer), and the report says so for a family cut short by it.

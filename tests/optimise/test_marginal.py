@@ -143,3 +143,31 @@ def test_across_scenarios_designs_not_rejected_with_confidence_are_listed():
     assert [(m["cost"], m["decided"], m["values"]) for m in alt.marginal] == [
         (10.0, True, None), (20.0, False, None)]
     assert alt.marginal[0]["reason"] == "marginal in scenario(s) 2"
+
+
+def test_the_proof_lines_reasons_are_never_cut():
+    import importlib
+
+    across = importlib.import_module("rockfall_design.optimise.across")
+    long = ("scenario 2: fails with 99 % confidence on 4,603 rocks: fence: height_factor at "
+            "best 1.20, target 2.00; scenario 3: the same")
+    assert across._reason_key(long) == "fails with 99 % confidence on 4,603 rocks"
+    assert across._reason_key("fails the screening in scenario(s) 1, 2") == (
+        "fails the screening in scenario(s) 1, 2")
+    assert across._reason_key("") == "fails"
+
+
+def test_a_residual_of_nothing_is_said_at_once(registry):
+    """An allowed residual of 0 can never be shown with confidence: the optimiser says so
+    instead of 'no design of this family fits on the section', and searches nothing."""
+    from rockfall_design.optimise import optimise
+
+    text = (PROJECTS / "design_ditch_or_fence.yaml").read_text(encoding="utf-8")
+    assert "residual: {fraction: 0.001}" in text
+    project = load_project_text(text.replace("residual: {fraction: 0.001}",
+                                             "residual: {fraction: 0}"), "zero.yaml",
+                                base_dir=PROJECTS)
+    res = optimise(project, registry, rocks=200, seed=11)
+    assert res.best is None and res.evaluations == 0
+    assert "allows no rock to reach the protected zone" in res.reason
+    assert all("allows no rock" in a.reason for a in res.alternatives)
