@@ -554,7 +554,7 @@ class ProjectEntry:
             job.result = res.summary()
             if res.best is not None:
                 job.files["design.yaml"] = design_yaml(res.best, self.path.name,
-                                                       res.search_rocks)
+                                                       res.search_rocks, res.looks)
 
         return self._start("optimise", n, work)
 
