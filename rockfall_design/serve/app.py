@@ -21,6 +21,10 @@ changes nothing):
 ``POST /api/projects/{id}/optimise``        ``{"rocks", "seed"}``: a job whose result is
                                             ``optimise --json``
 ``GET  /api/jobs/{job}/files/design.yaml``  the chosen design, as ``--out`` writes it
+``GET  /api/jobs/{job}/files/report.html``  a check's or optimise's report, as
+                                            ``--report`` writes it
+``GET  /api/jobs/{job}/files/NAME.png``     its figures (``.svg`` too; the job lists
+                                            them in ``files``)
 ``POST /api/place``                         ``{"project", "measure", "x"}`` or
                                             ``{"project", "measures": [...]}``: checks,
                                             bounds and residual from the run's table
@@ -48,10 +52,12 @@ from typing import Any
 from urllib.parse import parse_qs
 
 from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
 from starlette.routing import Route
 
+from .reports import media_type
 from .workbench import MAX_BODY_BYTES, ProjectEntry, ServeError
 
 #: Name of the cookie that carries the token after the first request.
@@ -262,7 +268,15 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         name = request.path_params["name"]
         if name not in j.files:
             raise ServeError(404, f"job {j.id} has no {name}")
-        return Response(j.files[name], media_type="application/yaml",
+        content = j.files[name]
+        if callable(content):
+            # The report and figures are drawn on the first request (seconds):
+            # in a worker thread, so that the page's other requests go on.
+            try:
+                content = await run_in_threadpool(content)
+            except Exception as exc:  # noqa: BLE001 -- one line to the page, the app stays up
+                raise ServeError(500, f"{name}: {' '.join(str(exc).split())}") from None
+        return Response(content, media_type=media_type(name),
                         headers={"Content-Disposition": f'attachment; filename="{name}"'})
 
     def job_of(request: Request) -> Any:

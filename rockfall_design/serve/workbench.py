@@ -149,7 +149,9 @@ class Job:
     ``kind`` is ``simulate``, ``check`` or ``optimise``; ``stage`` the
     optimiser's stage (``search``, ``check``); ``result`` the JSON-ready
     answer of a finished check or optimise (their ``--json`` summaries) and
-    ``files`` what it offers for download (``design.yaml``).
+    ``files`` what it offers for download (``design.yaml``, ``report.html``
+    as ``--report`` writes it, and the figures as PNG and SVG, drawn on the
+    first request).
     """
 
     kind: str
@@ -160,7 +162,7 @@ class Job:
     state: str = "running"  # running, done, cancelled, failed
     error: str = ""
     result: dict[str, Any] | None = None
-    files: dict[str, str] = field(default_factory=dict)
+    files: dict[str, Any] = field(default_factory=dict)  # text, bytes, or a loader of bytes
     started: float = field(default_factory=time.monotonic)
     runtime_s: float = 0.0
     cancel_event: threading.Event = field(default_factory=threading.Event)
@@ -518,8 +520,13 @@ class ProjectEntry:
             project = project.model_copy(update={"measures": [dict(r) for r in raws]})
 
         def work(job: Job) -> None:
-            ev = evaluate(project, self.registry, rocks=n, seed=s, progress=job.progress)
-            job.result = ev.summary()
+            from .reports import REPORT_TRAJECTORIES, CheckReport, lazy_files
+
+            ev = evaluate(project, self.registry, rocks=n, seed=s, progress=job.progress,
+                          n_trajectories=REPORT_TRAJECTORIES)
+            report = CheckReport(project, ev, self.registry)
+            job.result = report.summary
+            job.files.update(lazy_files(report))
             job.done = n
 
         return self._start("check", n, work)
@@ -550,11 +557,15 @@ class ProjectEntry:
         project = self.project
 
         def work(job: Job) -> None:
+            from .reports import OptimiseReport, lazy_files
+
             res = optimise(project, self.registry, rocks=n, seed=s, progress=job.staged)
             job.result = res.summary()
             if res.best is not None:
                 job.files["design.yaml"] = design_yaml(res.best, self.path.name,
-                                                       res.search_rocks)
+                                                       res.search_rocks, res.looks)
+            # The report checks the chosen design again (for its figures): on request.
+            job.files.update(lazy_files(OptimiseReport(project, res, self.registry)))
 
         return self._start("optimise", n, work)
 

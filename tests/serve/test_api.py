@@ -397,6 +397,46 @@ def test_check_from_the_page_is_rockfall_design_check(client, project_copy, caps
     assert page["measures"] == cli["measures"]
 
 
+def test_the_report_and_figures_of_a_check_download_as_the_command_line_writes_them(
+        client, project_copy, tmp_path):
+    fence = {**FENCE, "x": 150.0}
+    r = client.post("/api/projects/design_two_zones/check",
+                    json={"measures": [fence], "rocks": 400, "seed": 3})
+    job = _wait(client, r.json()["id"])
+    assert job["state"] == "done", job
+    assert job["result"]["verdict"]["state"]  # check --json begins with the verdict
+    for name in ("report.html", "profile.png", "profile.svg", "envelopes.png", "stops.svg"):
+        assert name in job["files"]
+    page = client.get(f"/api/jobs/{job['id']}/files/report.html")
+    assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
+    assert "attachment" in page.headers["content-disposition"]
+    png = client.get(f"/api/jobs/{job['id']}/files/profile.png")
+    assert png.headers["content-type"] == "image/png" and png.content[:8] == b"\x89PNG\r\n\x1a\n"
+    svg = client.get(f"/api/jobs/{job['id']}/files/envelopes.svg")
+    assert svg.headers["content-type"].startswith("image/svg+xml") and b"<svg" in svg.content
+    assert client.get(f"/api/jobs/{job['id']}/files/../../outside.txt").status_code == 404
+    # The command line's report of the same check: the same document but for when it
+    # was made, the project file's name and the run time.
+    path = project_copy.parent / "with_fence.yaml"
+    path.write_text(project_copy.read_text()
+                    + "measures:\n  - {type: fence, x: 150, height: 5.0, capacity_kj: 2000}\n")
+    try:
+        main(["check", str(path), "--rocks", "400", "--seed", "3", "--report", str(tmp_path)])
+    finally:
+        path.unlink()
+    theirs = (tmp_path / "report.html").read_text()
+    ours = page.text
+
+    def headings(html):
+        import re
+
+        return re.findall(r"<h[1-3][^>]*>(.*?)</h[1-3]>", html)
+
+    assert headings(ours) == headings(theirs)
+    assert ours.count("<svg") == theirs.count("<svg") == 3
+    assert "Design" in ours and job["result"]["verdict"]["headline"].split(":")[0] in ours
+
+
 def test_check_with_a_measure_that_does_not_fit_starts_nothing(client):
     r = client.post("/api/projects/design_two_zones/check",
                     json={"measures": [{**FENCE, "x": -50.0}]})
@@ -438,6 +478,10 @@ def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registr
         assert job["state"] == "done", job
         page = job["result"]
         design = c.get(f"/api/jobs/{job['id']}/files/design.yaml")
+        assert {"report.html", "alternatives.png", "profile.svg"} <= set(job["files"])
+        report = c.get(f"/api/jobs/{job['id']}/files/report.html")
+        assert report.status_code == 200 and page["best"] in report.text
+        assert c.get(f"/api/jobs/{job['id']}/files/alternatives.png").content[:4] == b"\x89PNG"
     out = tmp_path / "out"
     main(["optimise", str(tmp_path / "design_quarry.yaml"), "--rocks", "500", "--seed", "3",
           "--json", "--out", str(out)])

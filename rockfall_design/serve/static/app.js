@@ -444,6 +444,7 @@ async function poll() {
     if (state.placed) requestPlace(state.placed.x);
   } else if (job.kind === "check") {
     showCheck(job.result);
+    showDownloads(job, $("results"));
   } else {
     showOptimise(job);
   }
@@ -475,6 +476,20 @@ function showCheck(s) {
   div.appendChild(table);
 }
 
+// The job's files: design.yaml, report.html (as --report writes it) and the figures.
+// The report and figures are drawn on the first click (a few seconds).
+function showDownloads(job, div) {
+  if (!job.files.length) return;
+  const p = document.createElement("p");
+  p.className = "downloads"; p.textContent = "download: ";
+  for (const name of job.files) {
+    const a = document.createElement("a");
+    a.href = `/api/jobs/${job.id}/files/${name}`; a.textContent = name; a.download = name;
+    p.append(a, " ");
+  }
+  div.appendChild(p);
+}
+
 function showOptimise(job) {
   const s = job.result, div = $("results");
   const best = s.best === null ? null : s.alternatives.find((a) => a.name === s.best);
@@ -498,11 +513,7 @@ function showOptimise(job) {
     table.appendChild(tr);
   }
   div.appendChild(table);
-  if (job.files.includes("design.yaml")) {
-    const a = document.createElement("a");
-    a.href = `/api/jobs/${job.id}/files/design.yaml`; a.textContent = "download design.yaml"; a.download = "design.yaml";
-    div.appendChild(a);
-  }
+  showDownloads(job, div);
   state.chosen = best ? best.measures : null;
   drawSection(); drawRun();
 }
