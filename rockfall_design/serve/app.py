@@ -37,6 +37,10 @@ changes nothing):
                                             the project's directory
 ``POST /api/projects/{id}/upload``          ``{"path", "text", "replace"}``: import a
                                             CSV or DXF section or a library there
+``GET  /api/projects/{id}/materials``       the entries of its materials library
+                                            (``?path=FILE``: another one), law, values
+``POST /api/projects/{id}/materials``       ``{"segment", "material", "library"}``: give
+                                            a segment that material, in memory only
 ==========================================  ==========================================
 """
 
@@ -357,6 +361,20 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         target = e.save(data.get("text"), name)
         return _json({"ok": True, "path": str(target.relative_to(e.directory))})
 
+    async def materials(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        return _json(e.library(request.query_params.get("path")))
+
+    async def apply_material(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        name, library = data.get("material"), data.get("library")
+        if not isinstance(name, str):
+            raise ServeError(400, "material: expected the name of a library entry")
+        if library is not None and not isinstance(library, str):
+            raise ServeError(400, "library: expected a file name inside the project's directory")
+        return _json(e.apply_material(data.get("segment"), name, library))
+
     async def upload(request: Request) -> Response:
         e = entry(request.path_params["pid"])
         data = await _body(request)
@@ -377,6 +395,8 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         Route("/api/projects/{pid}/validate", handle(validate), methods=["POST"]),
         Route("/api/projects/{pid}/save", handle(save), methods=["POST"]),
         Route("/api/projects/{pid}/upload", handle(upload), methods=["POST"]),
+        Route("/api/projects/{pid}/materials", handle(materials)),
+        Route("/api/projects/{pid}/materials", handle(apply_material), methods=["POST"]),
         Route("/api/projects/{pid}/check", handle(check), methods=["POST"]),
         Route("/api/projects/{pid}/optimise", handle(optimise), methods=["POST"]),
         Route("/api/jobs/{jid}", handle(job)),

@@ -361,6 +361,8 @@ class ProjectEntry:
     bench: Bench | None = None
     job: Job | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
+    #: Changes made in the page and not saved (the project in memory differs from its file).
+    edits: list[str] = field(default_factory=list)
 
     @property
     def directory(self) -> Path:
@@ -403,6 +405,8 @@ class ProjectEntry:
             "measures": measures,
             "rocks": int(p.rocks.count), "seed": int(p.rocks.seed),
             "has_design": p.design is not None,
+            "library": self.library_name(),
+            "edits": list(self.edits),
             "run": None if self.bench is None else self.run_dict(),
             "job": None if self.job is None else self.job.as_dict(),
         }
@@ -569,6 +573,143 @@ class ProjectEntry:
 
         return self._start("optimise", n, work)
 
+    # -- materials from a library ---------------------------------------------------
+    def library_name(self) -> str | None:
+        """The materials library the project file names (``materials: {library: FILE}``)."""
+        import yaml
+
+        try:
+            data = yaml.safe_load(self.path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, yaml.YAMLError):
+            return None
+        materials = data.get("materials") if isinstance(data, dict) else None
+        name = materials.get("library") if isinstance(materials, dict) else None
+        return name if isinstance(name, str) else None
+
+    def library(self, name: str | None = None) -> dict[str, Any]:
+        """The entries of a materials library in the project's directory, with their law
+        and values.
+
+        Parameters
+        ----------
+        name
+            The library file, relative to the project's directory; default
+            the one the project file names.
+
+        Returns
+        -------
+        dict
+            ``path`` and ``materials``: per entry its ``name``, ``law`` (the
+            impact law, ``impact_model``), ``values`` (every parameter, the
+            defaults filled in) and ``source`` (the entry's ``# source:``
+            comment line, empty without one).
+
+        Raises
+        ------
+        ServeError
+            404 without a library or file; 403 outside the directory; 400 for
+            a file that is not a library (the first bad entry, one line).
+        """
+        import yaml
+        from pydantic import ValidationError
+
+        from ..project.schema import Material
+
+        name = name or self.library_name()
+        if name is None:
+            raise ServeError(404, f"{self.path.name} names no materials library "
+                             "(materials: {library: FILE}); give its path")
+        target = inside(self.directory, name)
+        if not target.is_file():
+            raise ServeError(404, f"no materials library {name!r} in the project's directory")
+        if target.stat().st_size > MAX_BODY_BYTES:
+            raise ServeError(413, f"{name}: larger than {MAX_BODY_BYTES:,} bytes")
+        try:
+            text = target.read_text(encoding="utf-8")
+            # The composer first: an alias bomb is refused before it expands.
+            if referenced_outside(text, target.parent, self.directory) is not None:
+                raise ServeError(403, f"{name}: names a file outside the project's directory")
+            data = yaml.safe_load(text)
+        except UnicodeDecodeError:
+            raise ServeError(400, f"{name}: not a UTF-8 text file") from None
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None)
+            line = f":{mark.line + 1}" if mark is not None else ""
+            raise ServeError(400, f"{name}{line}: not valid YAML") from None
+        if not isinstance(data, dict) or not data:
+            raise ServeError(400, f"{name}: expected a mapping of material names to materials")
+        sources = _library_comments(text)
+        out = []
+        for key, value in data.items():
+            try:
+                m = Material.model_validate(value)
+            except ValidationError as exc:
+                err = exc.errors()[0]
+                where = ".".join(str(p) for p in err["loc"])
+                raise ServeError(400, f"{name}: {key}{'.' + where if where else ''}: "
+                                 f"{err['msg']}") from None
+            out.append({"name": str(key), "law": m.impact_model,
+                        "values": _plain(m.model_dump(mode="json", exclude_none=True)),
+                        "source": sources.get(str(key), "")})
+        return {"path": str(target.relative_to(self.directory)), "materials": out}
+
+    def apply_material(self, segment: int, material: str, library: str | None) -> dict[str, Any]:
+        """Give a segment of the section a material of the library, in memory.
+
+        The project the app works on changes (its run is dropped: the table
+        was of the old ground); its file does not. The answer carries the
+        changed project as YAML (every value resolved, the library's
+        material inline) for the editor, where Save writes it on request.
+
+        Raises
+        ------
+        ServeError
+            400 for a segment out of range or a material the library lacks;
+            409 while a job of this project runs.
+        """
+        from ..errors import RockfallError
+        from ..evaluate import validate_project
+        from ..project import dump_yaml
+
+        p = self.project
+        n = len(p.slope.materials)
+        if isinstance(segment, bool) or not isinstance(segment, int) or not 0 <= segment < n:
+            raise ServeError(400, f"segment: expected 0 to {n - 1}, got {segment!r}")
+        lib = self.library(library)
+        entry = next((m for m in lib["materials"] if m["name"] == material), None)
+        if entry is None:
+            names = ", ".join(m["name"] for m in lib["materials"])
+            raise ServeError(400, f"material: {material!r} is not in {lib['path']} "
+                             f"(it has {names})")
+        from ..project.schema import Material
+
+        # A material of the project with that name but other values stays the
+        # project's under a name of its own: the library's comes in as NAME
+        # from LIBRARY.
+        new = Material.model_validate(entry["values"])
+        name = material
+        if name in p.materials and p.materials[name] != new:
+            name = f"{material} ({Path(lib['path']).stem})"
+        with self.lock:
+            if self.job is not None and self.job.state == "running":
+                raise ServeError(409, f"a {self.job.kind} of {self.id} is under way "
+                                 f"(job {self.job.id})")
+            names = list(p.slope.materials)
+            names[segment] = name
+            slope = p.slope.model_copy(update={"materials": names})
+            used = set(names)
+            # Materials no segment uses any more drop out, as a file would not keep them.
+            materials = {k: v for k, v in {**p.materials, name: new}.items() if k in used}
+            project = p.model_copy(update={"slope": slope, "materials": materials})
+            try:
+                validate_project(project, self.registry)
+            except RockfallError as exc:
+                raise ServeError(400, " ".join(str(exc).split())) from None
+            self.project, self.bench = project, None
+            self.edits.append(f"segment {segment + 1}: {p.slope.materials[segment]} -> "
+                              f"{name} from {lib['path']}")
+        return {**self.describe(), "yaml": dump_yaml(project.resolved_dict())}
+
     # -- the project file -----------------------------------------------------------
     def save(self, text: str, name: str | None) -> Path:
         """Validate ``text`` as a project and write it to ``name`` in the project's directory.
@@ -590,7 +731,7 @@ class ProjectEntry:
         project = self.validate(text, target)
         _write_atomically(target, text)
         if target == self.path.resolve():
-            self.project, self.bench = project, None
+            self.project, self.bench, self.edits = project, None, []
         return target
 
     def upload(self, name: str, text: str, replace: bool = False) -> Path:
@@ -644,6 +785,23 @@ class ProjectEntry:
         except RockfallError as exc:
             raise ServeError(400, " ".join(str(exc).split())) from None
         return project
+
+
+def _library_comments(text: str) -> dict[str, str]:
+    """Each library entry's ``# source:`` comment line (the bundled library's convention)."""
+    out: dict[str, str] = {}
+    source = ""
+    for line in text.splitlines():
+        m = re.match(r"#\s*source:\s*(.*)$", line)
+        if m:
+            source = m.group(1).strip()
+            continue
+        m = re.match(r"([A-Za-z0-9_][^:#\s]*)\s*:", line)
+        if m:
+            if source:
+                out[m.group(1)] = source
+            source = ""
+    return out
 
 
 def _write_atomically(target: Path, text: str) -> None:

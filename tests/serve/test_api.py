@@ -588,3 +588,78 @@ def test_a_project_without_a_protected_zone_runs_and_says_so(registry, projects_
                                          "x": 20}).json()
     assert out["residual"]["protected_zone"] is False
     assert out["residual"]["x"] == entry.describe()["ground"][-1][0]
+
+
+# ---- materials from the library ---------------------------------------------------------
+
+
+@pytest.fixture()
+def survey(tmp_path, registry, projects_dir):
+    """survey_slope.yaml, its section and its materials library, in a directory of their own."""
+    for name in ("survey_slope.yaml", "survey_section.csv", "materials.yaml"):
+        shutil.copy(projects_dir / name, tmp_path / name)
+    (entry,) = load_entries([tmp_path / "survey_slope.yaml"], registry)
+    app = create_app([entry], TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        yield c, entry, tmp_path
+
+
+def test_the_library_the_project_names_lists_its_entries_with_law_and_values(survey):
+    c, entry, _ = survey
+    r = c.get("/api/projects/survey_slope/materials")
+    assert r.status_code == 200, r.text
+    lib = r.json()
+    assert lib["path"] == "materials.yaml"
+    by_name = {m["name"]: m for m in lib["materials"]}
+    assert by_name["talus"]["law"] == "spang"
+    assert by_name["talus"]["values"]["restitution"] == 0.33
+    assert by_name["meadow_rn_rt"]["law"] == "rn_rt"
+    assert "tangential_restitution" in by_name["meadow_rn_rt"]["values"]
+    assert by_name["bedrock"]["source"].startswith("ILLUSTRATIVE")
+    assert c.get("/api/projects/survey_slope").json()["library"] == "materials.yaml"
+
+
+def test_a_material_from_the_library_goes_onto_a_segment_in_memory_only(survey):
+    c, entry, d = survey
+    before = _snapshot(d)
+    c.post("/api/projects/survey_slope/simulate", json={"rocks": 50, "seed": 1})
+    assert _wait(c, entry.job.id)["state"] == "done"
+    seg = entry.project.slope.materials.index("talus")
+    r = c.post("/api/projects/survey_slope/materials",
+               json={"segment": seg, "material": "asphalt"})
+    assert r.status_code == 200, r.text
+    out = r.json()
+    assert out["materials"][seg] == "asphalt" and out["run"] is None  # the old run is dropped
+    assert entry.project.slope.materials[seg] == "asphalt"
+    assert entry.project.materials["asphalt"].restitution == 0.4
+    assert out["edits"] and "asphalt" in out["edits"][0]
+    assert _snapshot(d) == before  # nothing written: saving stays on request
+    # The YAML it offers for the editor is a valid project that has the change.
+    from rockfall_design.project.loading import load_project_text
+
+    changed = load_project_text(out["yaml"], "survey_slope.yaml", base_dir=d)
+    assert changed.slope.materials[seg] == "asphalt"
+    # A run of the changed project starts.
+    r = c.post("/api/projects/survey_slope/simulate", json={"rocks": 50, "seed": 1})
+    assert _wait(c, r.json()["id"])["state"] == "done"
+
+
+@pytest.mark.parametrize("body, status, words", [
+    ({"segment": 999, "material": "talus"}, 400, "segment: expected 0 to"),
+    ({"segment": 0, "material": "granite"}, 400, "'granite' is not in materials.yaml"),
+    ({"segment": 0}, 400, "material: expected"),
+    ({"segment": 0, "material": "talus", "library": "../outside.yaml"}, 403, "outside"),
+    ({"segment": 0, "material": "talus", "library": "nothere.yaml"}, 404, "no materials library"),
+])
+def test_bad_material_requests_get_one_clear_line_and_change_nothing(survey, body, status,
+                                                                    words):
+    c, entry, _ = survey
+    project = entry.project
+    r = c.post("/api/projects/survey_slope/materials", json=body)
+    assert r.status_code == status and words in r.json()["error"], r.text
+    assert entry.project is project
+
+
+def test_a_project_without_a_library_says_so(client):
+    r = client.get("/api/projects/design_two_zones/materials")
+    assert r.status_code == 404 and "names no materials library" in r.json()["error"]

@@ -90,6 +90,14 @@ def test_drag_a_fence_and_the_residual_follows(tmp_path):
                 after = page.inner_text("#residual")
                 assert after != before and "At the protected zone" in after
                 assert page.locator("#checks td").count() > 4
+                # Check that design with a few rocks; its report downloads from the page.
+                page.fill("#rocks", "300")
+                page.click("#check")
+                link = page.locator("#results .downloads a", has_text="report.html")
+                link.wait_for(timeout=300_000)
+                report = page.request.get(url.split("/?", 1)[0]
+                                          + link.get_attribute("href"))
+                assert report.status == 200 and "<svg" in report.text()
                 shot = page.screenshot(path=str(tmp_path / "serve.png"), full_page=True)
                 # Everything came from the app itself: it works with no network.
                 origin = url.split("/?", 1)[0]

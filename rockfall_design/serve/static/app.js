@@ -545,6 +545,54 @@ async function uploadFile() {
   } catch (e) { $("yaml-status").textContent = e.message; }
 }
 
+// ---- materials from the library -----------------------------------------------------------
+function fillSegments() {
+  const p = state.project, sel = $("segment");
+  sel.innerHTML = "";
+  p.materials.forEach((m, i) => {
+    const o = document.createElement("option"); o.value = i;
+    o.textContent = `${i + 1}: x ${fmt(p.ground[i][0], 0)} to ${fmt(p.ground[i + 1][0], 0)} m, ${m}`;
+    sel.appendChild(o);
+  });
+}
+function showMaterialValues() {
+  const m = (state.library || []).find((e) => e.name === $("library-material").value);
+  $("material-values").textContent = m ? `law ${m.law}: ` +
+    Object.entries(m.values).filter(([k]) => k !== "impact_model")
+      .map(([k, v]) => `${k} ${typeof v === "object" ? JSON.stringify(v) : v}`).join(", ") +
+    (m.source ? ` (source: ${m.source})` : "") : "";
+}
+async function loadLibrary() {
+  const path = $("library-path").value;
+  const sel = $("library-material");
+  sel.innerHTML = ""; state.library = null; $("apply-material").disabled = true;
+  try {
+    const lib = await api(`/api/projects/${state.project.id}/materials` +
+      (path ? `?path=${encodeURIComponent(path)}` : ""));
+    state.library = lib.materials; state.libraryPath = lib.path;
+    for (const m of lib.materials) {
+      const o = document.createElement("option"); o.value = m.name; o.textContent = `${m.name} (${m.law})`;
+      sel.appendChild(o);
+    }
+    $("apply-material").disabled = false;
+    $("material-status").textContent = `${lib.materials.length} materials in ${lib.path}`;
+  } catch (e) { $("material-status").textContent = e.message; }
+  showMaterialValues();
+}
+async function applyMaterial() {
+  const body = { segment: Number($("segment").value), material: $("library-material").value,
+    library: state.libraryPath };
+  try {
+    const r = await api(`/api/projects/${state.project.id}/materials`, body);
+    const { yaml, ...project } = r;
+    state.project = project; state.run = null; $("place").disabled = true;
+    $("yaml").value = yaml;
+    $("yaml-status").textContent = "changed in the page, not saved: Save writes this file";
+    $("material-status").textContent = project.edits[project.edits.length - 1] + "; simulate again";
+    fillSegments(); drawSection(); drawRun();
+  } catch (e) { $("material-status").textContent = e.message; }
+}
+
 // ---- start ---------------------------------------------------------------------------
 async function selectProject(id) {
   state.project = await api(`/api/projects/${id}`);
@@ -557,7 +605,10 @@ async function selectProject(id) {
   $("check").disabled = false;
   $("optimise").disabled = !state.project.has_design;
   $("with-own-label").hidden = !state.project.measures.length;
-  drawSection(); drawRun();
+  drawSection(); drawRun(); fillSegments();
+  $("library-path").value = ""; $("library-material").innerHTML = ""; state.library = null;
+  $("apply-material").disabled = true; $("material-status").textContent = "";
+  if (state.project.library) loadLibrary();
   loadYaml().catch((e) => showError(e.message));
 }
 
@@ -582,6 +633,8 @@ async function start() {
     $("check").onclick = checkDesign; $("optimise").onclick = optimiseDesign;
     $("upload").onchange = uploadFile;
     $("validate").onclick = validateYaml; $("save").onclick = saveYaml;
+    $("library-load").onclick = loadLibrary; $("apply-material").onclick = applyMaterial;
+    $("library-material").onchange = showMaterialValues;
     if (list.projects.length) await selectProject(list.projects[0].id);
     document.body.dataset.ready = "1";
   } catch (e) { showError(e.message); }
