@@ -20,6 +20,10 @@ changes nothing):
                                             result is ``check --json``
 ``POST /api/projects/{id}/optimise``        ``{"rocks", "seed"}``: a job whose result is
                                             ``optimise --json``
+``POST /api/projects/{id}/study``           ``{"rocks", "seed"}``: a job whose result is
+                                            ``study --json``, with ``tables``
+``POST /api/projects/{id}/calibrate``       ``{"rocks", "seed", "bootstrap"}``: a job
+                                            whose result is ``calibrate --json``
 ``GET  /api/jobs/{job}/files/design.yaml``  the chosen design, as ``--out`` writes it
 ``GET  /api/jobs/{job}/files/report.html``  a check's or optimise's report, as
                                             ``--report`` writes it
@@ -267,6 +271,21 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         jobs[job.id] = job
         return _json(job.as_dict(), 202)
 
+    async def study(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        job = e.start_study(_optional_int(data, "rocks"), _optional_int(data, "seed"))
+        jobs[job.id] = job
+        return _json(job.as_dict(), 202)
+
+    async def calibrate(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        job = e.start_calibrate(_optional_int(data, "rocks"), _optional_int(data, "seed"),
+                                _optional_int(data, "bootstrap"))
+        jobs[job.id] = job
+        return _json(job.as_dict(), 202)
+
     async def job_file(request: Request) -> Response:
         j = job_of(request)
         name = request.path_params["name"]
@@ -399,6 +418,8 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         Route("/api/projects/{pid}/materials", handle(apply_material), methods=["POST"]),
         Route("/api/projects/{pid}/check", handle(check), methods=["POST"]),
         Route("/api/projects/{pid}/optimise", handle(optimise), methods=["POST"]),
+        Route("/api/projects/{pid}/study", handle(study), methods=["POST"]),
+        Route("/api/projects/{pid}/calibrate", handle(calibrate), methods=["POST"]),
         Route("/api/jobs/{jid}", handle(job)),
         Route("/api/jobs/{jid}/files/{name}", handle(job_file)),
         Route("/api/jobs/{jid}/cancel", handle(cancel), methods=["POST"]),

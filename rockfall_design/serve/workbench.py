@@ -146,9 +146,11 @@ def referenced_outside(text: str, base: Path, root: Path) -> str | None:
 class Job:
     """Work in a background thread: progress, cancel, and its result or error.
 
-    ``kind`` is ``simulate``, ``check`` or ``optimise``; ``stage`` the
-    optimiser's stage (``search``, ``check``); ``result`` the JSON-ready
-    answer of a finished check or optimise (their ``--json`` summaries) and
+    ``kind`` is ``simulate``, ``check``, ``optimise``, ``study`` or
+    ``calibrate``; ``stage`` the optimiser's stage (``search``, ``check``);
+    ``result`` the JSON-ready answer of a finished check, optimise, study or
+    calibration (their ``--json`` summaries), ``tables`` what the page shows
+    of a study or calibration (``title``, ``columns``, ``rows``) and
     ``files`` what it offers for download (``design.yaml``, ``report.html``
     as ``--report`` writes it, and the figures as PNG and SVG, drawn on the
     first request).
@@ -163,6 +165,7 @@ class Job:
     error: str = ""
     result: dict[str, Any] | None = None
     files: dict[str, Any] = field(default_factory=dict)  # text, bytes, or a loader of bytes
+    tables: list[dict[str, Any]] = field(default_factory=list)
     started: float = field(default_factory=time.monotonic)
     runtime_s: float = 0.0
     cancel_event: threading.Event = field(default_factory=threading.Event)
@@ -182,7 +185,8 @@ class Job:
         return {"id": self.id, "kind": self.kind, "state": self.state, "done": self.done,
                 "total": self.total, "stage": self.stage, "error": self.error,
                 "runtime_s": round(self.runtime_s or time.monotonic() - self.started, 3),
-                "result": self.result, "files": sorted(self.files)}
+                "result": self.result, "files": sorted(self.files),
+                "tables": self.tables}
 
 
 # ---- a run's table and what is placed on it -------------------------------------
@@ -405,6 +409,8 @@ class ProjectEntry:
             "measures": measures,
             "rocks": int(p.rocks.count), "seed": int(p.rocks.seed),
             "has_design": p.design is not None,
+            "has_study": p.study is not None,
+            "has_calibrate": p.calibrate is not None,
             "library": self.library_name(),
             "edits": list(self.edits),
             "run": None if self.bench is None else self.run_dict(),
@@ -572,6 +578,80 @@ class ProjectEntry:
             job.files.update(lazy_files(OptimiseReport(project, res, self.registry)))
 
         return self._start("optimise", n, work)
+
+    def start_study(self, rocks: int | None, seed: int | None) -> Job:
+        """Start the project's parametric study, as ``rockfall-design study`` runs it.
+
+        The job counts scenarios; a cancel stops it once the scenarios
+        under way finish. Its result is the summary ``study --json`` prints,
+        and ``tables`` the scenarios and the sensitivity, for the page.
+
+        Raises
+        ------
+        ServeError
+            400 without a ``study:`` section or with rocks or seed out of
+            range; 409 while a job of this project runs.
+        """
+        from ..study.run import run_parametric
+
+        if self.project.study is None:
+            raise ServeError(400, f"{self.path.name}: the project has no study: section")
+        n, s = self._rocks_seed(rocks, seed)
+        project = self.project
+
+        def work(job: Job) -> None:
+            def progress(done: int, total: int, rocks_done: int) -> None:
+                job.total = int(total)
+                job.progress(done)
+
+            res = run_parametric(project, self.registry, rocks=n, seed=s, progress=progress,
+                                 envelopes=False)
+            job.result = res.summary
+            job.tables = study_tables(res)
+
+        job = self._start("study", 0, work)
+        job.stage = "scenarios"
+        return job
+
+    def start_calibrate(self, rocks: int | None, seed: int | None,
+                        bootstrap: int | None) -> Job:
+        """Start the calibration of the project's ``calibrate:`` inputs, as the command does.
+
+        The job counts the fit and its bootstrap replicates; a cancel stops
+        it once the replicates under way finish. Its result is the summary
+        ``calibrate --json`` prints, and ``tables`` the fitted values with
+        their intervals and the fit's distance, for the page.
+
+        Raises
+        ------
+        ServeError
+            400 without a ``calibrate:`` section or with rocks, seed or
+            bootstrap out of range; 409 while a job runs.
+        """
+        from ..arguments import MAX_BOOTSTRAP
+        from ..calibration.run import run_calibration
+
+        spec = self.project.calibrate
+        if spec is None:
+            raise ServeError(400, f"{self.path.name}: the project has no calibrate: section")
+        n, s = self._rocks_seed(int(spec.rocks) if rocks is None else rocks, seed)
+        b = int(spec.bootstrap if bootstrap is None else bootstrap)
+        if not 0 <= b <= MAX_BOOTSTRAP:
+            raise ServeError(400, f"bootstrap: expected 0 to {MAX_BOOTSTRAP:,}, got {b:,}")
+        project = self.project
+
+        def work(job: Job) -> None:
+            def on_done(done: int, total: int) -> None:
+                job.total = int(total)
+                job.progress(done)
+
+            res = run_calibration(project, rocks=n, bootstrap=b, seed=s, on_done=on_done)
+            job.result = res.summary
+            job.tables = calibration_tables(res.summary)
+
+        job = self._start("calibrate", b + 1, work)
+        job.stage = "replicates"
+        return job
 
     # -- materials from a library ---------------------------------------------------
     def library_name(self) -> str | None:
@@ -785,6 +865,42 @@ class ProjectEntry:
         except RockfallError as exc:
             raise ServeError(400, " ".join(str(exc).split())) from None
         return project
+
+
+def study_tables(res: Any) -> list[dict[str, Any]]:
+    """A study's scenarios (the varied values and the statistics at every station,
+    without their bounds) and its sensitivity, as tables for the page."""
+    sc = res.scenarios
+    cols = [c for c in sc.columns if c != "seed" and not str(c).endswith((" upper", " lower"))]
+    sens = res.sensitivity
+    scols = [c for c in ("parameter", "target", "effect", "unit", "low", "high", "resolved")
+             if c in sens.columns]
+    return [_table("Scenarios", sc[cols]), _table("Sensitivity", sens[scols])]
+
+
+def calibration_tables(summary: dict[str, Any]) -> list[dict[str, Any]]:
+    """A calibration's fitted values with their bootstrap intervals, and its fit."""
+    rows = [[p["path"], p["value"], p["low"], p["high"], p["range"], p["identified"],
+             p.get("at_bound") or ""] for p in summary["parameters"]]
+    fit = summary["fit"]
+    fit_rows = [[k, fit[k]] for k in ("distance_kind", "distance", "ks_statistic", "ks_pvalue")
+                if k in fit]
+    return [{"title": "Fitted inputs", "rows": _plain(rows),
+             "columns": ["input", "value", "low", "high", "range", "identified", "at bound"]},
+            {"title": "Fit", "columns": ["item", "value"], "rows": _plain(fit_rows)}]
+
+
+def _table(title: str, frame: Any) -> dict[str, Any]:
+    rows = [[_cell(v) for v in row] for row in frame.itertuples(index=False)]
+    return {"title": title, "columns": [str(c) for c in frame.columns], "rows": rows}
+
+
+def _cell(v: Any) -> Any:
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return _plain(v)
 
 
 def _library_comments(text: str) -> dict[str, str]:

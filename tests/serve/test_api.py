@@ -663,3 +663,72 @@ def test_bad_material_requests_get_one_clear_line_and_change_nothing(survey, bod
 def test_a_project_without_a_library_says_so(client):
     r = client.get("/api/projects/design_two_zones/materials")
     assert r.status_code == 404 and "names no materials library" in r.json()["error"]
+
+
+# ---- study and calibrate from the page ---------------------------------------------------
+
+
+def _served(tmp_path, registry, projects_dir, *names):
+    for name in names:
+        shutil.copy(projects_dir / name, tmp_path / name)
+    return create_app(load_entries([tmp_path / names[0]], registry), TOKEN)
+
+
+def test_a_study_from_the_page_is_rockfall_design_study(tmp_path, registry, projects_dir,
+                                                        capsys):
+    app = _served(tmp_path, registry, projects_dir, "study_talus.yaml")
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        r = c.post("/api/projects/study_talus/study", json={"rocks": 60, "seed": 4})
+        assert r.status_code == 202, r.text
+        job = _wait(c, r.json()["id"])
+    assert job["state"] == "done", job
+    assert job["kind"] == "study" and job["done"] == job["total"] == 9
+    assert main(["study", str(tmp_path / "study_talus.yaml"), "--rocks", "60", "--seed", "4",
+                 "--json"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    page = job["result"]
+    assert page["scenarios"] == cli["scenarios"] and page["sensitivity"] == cli["sensitivity"]
+    scenarios, sensitivity = job["tables"]
+    assert scenarios["title"] == "Scenarios" and len(scenarios["rows"]) == 9
+    assert "materials.talus.restitution" in scenarios["columns"]
+    assert not any(c.endswith(" upper") for c in scenarios["columns"])
+    assert sensitivity["rows"] and sensitivity["columns"][0] == "parameter"
+
+
+def test_a_calibration_from_the_page_is_rockfall_design_calibrate(tmp_path, registry,
+                                                                  projects_dir, capsys):
+    app = _served(tmp_path, registry, projects_dir, "calibrate_quarry.yaml",
+                  "quarry_stops_a.csv", "quarry_stops_b.csv")
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        r = c.post("/api/projects/calibrate_quarry/calibrate",
+                   json={"rocks": 80, "seed": 2, "bootstrap": 2})
+        assert r.status_code == 202, r.text
+        job = _wait(c, r.json()["id"])
+    assert job["state"] == "done", job
+    assert job["kind"] == "calibrate" and job["done"] == job["total"] == 3
+    main(["calibrate", str(tmp_path / "calibrate_quarry.yaml"), "--rocks", "80", "--seed", "2",
+          "--bootstrap", "2", "--json"])
+    cli = json.loads(capsys.readouterr().out)
+    assert job["result"]["parameters"] == cli["parameters"]
+    fitted, fit = job["tables"]
+    assert [row[0] for row in fitted["rows"]] == [p["path"] for p in cli["parameters"]]
+    assert fitted["rows"][0][1] == cli["parameters"][0]["value"]
+    assert fit["rows"][0][0] == "distance_kind"
+
+
+def test_study_and_calibration_can_be_cancelled(tmp_path, registry, projects_dir):
+    app = _served(tmp_path, registry, projects_dir, "study_talus.yaml")
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        job = c.post("/api/projects/study_talus/study", json={"rocks": 3000}).json()
+        c.post(f"/api/jobs/{job['id']}/cancel", json={})
+        job = _wait(c, job["id"])
+        assert job["state"] == "cancelled" and job["result"] is None and job["tables"] == []
+
+
+def test_study_or_calibrate_without_their_section_or_with_bad_numbers(client):
+    r = client.post("/api/projects/design_two_zones/study", json={})
+    assert r.status_code == 400 and "no study: section" in r.json()["error"]
+    r = client.post("/api/projects/design_two_zones/calibrate", json={})
+    assert r.status_code == 400 and "no calibrate: section" in r.json()["error"]
+    r = client.post("/api/projects/design_two_zones/study", json={"rocks": "many"})
+    assert r.status_code == 400 and "rocks" in r.json()["error"]

@@ -399,7 +399,7 @@ async function startJob(kind, body) {
   try {
     state.job = await api(`/api/projects/${state.project.id}/${kind}`, body);
   } catch (e) { showError(e.message); return; }
-  for (const id of ["simulate", "check", "optimise"]) $(id).disabled = true;
+  for (const id of ["simulate", "check", "optimise", "study", "calibrate"]) $(id).disabled = true;
   $("cancel").disabled = false;
   $("status").dataset.state = "running";
   poll();
@@ -414,6 +414,44 @@ function checkDesign() {
 }
 
 function optimiseDesign() { startJob("optimise", runOptions()); }
+function studyProject() { startJob("study", runOptions()); }
+// Calibrate with its own rocks (calibrate.rocks) unless the field was changed.
+function calibrateProject() {
+  const body = runOptions();
+  if (body.rocks === state.project.rocks) delete body.rocks;
+  startJob("calibrate", body);
+}
+function enableJobs() {
+  const p = state.project;
+  $("check").disabled = false; $("optimise").disabled = !p.has_design;
+  $("study").disabled = !p.has_study; $("calibrate").disabled = !p.has_calibrate;
+}
+
+// A study's or calibration's tables, as they come (numbers to 4 significant digits).
+function showTables(job) {
+  const div = $("results");
+  div.innerHTML = "";
+  const head = document.createElement("p");
+  head.textContent = `${job.kind} done in ${fmt(job.runtime_s, 1)} s`;
+  div.appendChild(head);
+  for (const t of job.tables) {
+    const h = document.createElement("h4"); h.textContent = t.title; div.appendChild(h);
+    const table = document.createElement("table");
+    table.className = "job-table"; table.dataset.title = t.title;
+    const hr = document.createElement("tr");
+    for (const c of t.columns) { const th = document.createElement("th"); th.textContent = c; hr.appendChild(th); }
+    table.appendChild(hr);
+    for (const row of t.rows) {
+      const tr = document.createElement("tr");
+      for (const v of row) {
+        tr.appendChild(cell(v === null ? "–" : typeof v === "number" ? Number(v.toPrecision(4)).toString()
+          : typeof v === "object" ? JSON.stringify(v) : String(v)));
+      }
+      table.appendChild(tr);
+    }
+    div.appendChild(table);
+  }
+}
 
 async function poll() {
   let job;
@@ -427,13 +465,12 @@ async function poll() {
   }
   state.job = job;
   $("progress").max = job.total; $("progress").value = job.done;
-  const what = job.kind === "optimise" ? `${job.stage || "search"} ${job.done} of ${job.total}`
+  const what = job.kind !== "simulate" && job.kind !== "check" ? `${job.stage || "search"} ${job.done} of ${job.total}`
     : `${job.done} of ${job.total} rocks`;
   $("status").textContent = `${job.kind} ${job.state}: ${what} (${fmt(job.runtime_s, 1)} s)`;
   if (job.state === "running") { setTimeout(poll, 250); return; }
   $("cancel").disabled = true; $("simulate").disabled = false;
-  $("optimise").disabled = !state.project.has_design;
-  $("check").disabled = false;
+  enableJobs();
   if (job.state === "failed") showError(job.error);
   if (job.state !== "done") { $("status").dataset.state = job.state; return; }
   if (job.kind === "simulate") {
@@ -442,6 +479,8 @@ async function poll() {
     $("place").disabled = false;
     drawSection(); drawRun();
     if (state.placed) requestPlace(state.placed.x);
+  } else if (job.kind === "study" || job.kind === "calibrate") {
+    showTables(job);
   } else if (job.kind === "check") {
     showCheck(job.result);
     showDownloads(job, $("results"));
@@ -602,8 +641,7 @@ async function selectProject(id) {
   $("description").textContent = state.project.description;
   $("rocks").value = state.project.rocks; $("seed").value = state.project.seed;
   $("place").disabled = !state.run;
-  $("check").disabled = false;
-  $("optimise").disabled = !state.project.has_design;
+  enableJobs();
   $("with-own-label").hidden = !state.project.measures.length;
   drawSection(); drawRun(); fillSegments();
   $("library-path").value = ""; $("library-material").innerHTML = ""; state.library = null;
@@ -631,6 +669,7 @@ async function start() {
     $("simulate").onclick = simulate; $("cancel").onclick = cancel; $("place").onclick = placeMeasure;
     $("with-own").onchange = () => { if (state.placed && state.run) requestPlace(state.placed.x); };
     $("check").onclick = checkDesign; $("optimise").onclick = optimiseDesign;
+    $("study").onclick = studyProject; $("calibrate").onclick = calibrateProject;
     $("upload").onchange = uploadFile;
     $("validate").onclick = validateYaml; $("save").onclick = saveYaml;
     $("library-load").onclick = loadLibrary; $("apply-material").onclick = applyMaterial;
