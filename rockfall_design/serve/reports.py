@@ -13,6 +13,7 @@ the figures. The HTML is then made by the same code as ``--report``.
 from __future__ import annotations
 
 import io
+import threading
 from collections.abc import Callable
 from dataclasses import replace
 from functools import cached_property
@@ -181,8 +182,6 @@ def report_names(result: CheckReport | OptimiseReport) -> list[str]:
 def lazy_files(result: CheckReport | OptimiseReport) -> dict[str, Callable[[], bytes]]:
     """A loader per file of :func:`report_names`: drawn together on the first request."""
     cache: dict[str, bytes] = {}
-    import threading
-
     lock = threading.Lock()
 
     def loader(name: str) -> Callable[[], bytes]:
