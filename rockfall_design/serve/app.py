@@ -20,7 +20,15 @@ changes nothing):
                                             result is ``check --json``
 ``POST /api/projects/{id}/optimise``        ``{"rocks", "seed"}``: a job whose result is
                                             ``optimise --json``
+``POST /api/projects/{id}/study``           ``{"rocks", "seed"}``: a job whose result is
+                                            ``study --json``, with ``tables``
+``POST /api/projects/{id}/calibrate``       ``{"rocks", "seed", "bootstrap"}``: a job
+                                            whose result is ``calibrate --json``
 ``GET  /api/jobs/{job}/files/design.yaml``  the chosen design, as ``--out`` writes it
+``GET  /api/jobs/{job}/files/report.html``  a check's or optimise's report, as
+                                            ``--report`` writes it
+``GET  /api/jobs/{job}/files/NAME.png``     its figures (``.svg`` too; the job lists
+                                            them in ``files``)
 ``POST /api/place``                         ``{"project", "measure", "x"}`` or
                                             ``{"project", "measures": [...]}``: checks,
                                             bounds and residual from the run's table
@@ -33,6 +41,10 @@ changes nothing):
                                             the project's directory
 ``POST /api/projects/{id}/upload``          ``{"path", "text", "replace"}``: import a
                                             CSV or DXF section or a library there
+``GET  /api/projects/{id}/materials``       the entries of its materials library
+                                            (``?path=FILE``: another one), law, values
+``POST /api/projects/{id}/materials``       ``{"segment", "material", "library"}``: give
+                                            a segment that material, in memory only
 ==========================================  ==========================================
 """
 
@@ -48,10 +60,12 @@ from typing import Any
 from urllib.parse import parse_qs
 
 from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
 from starlette.routing import Route
 
+from .reports import media_type
 from .workbench import MAX_BODY_BYTES, ProjectEntry, ServeError
 
 #: Name of the cookie that carries the token after the first request.
@@ -257,12 +271,35 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         jobs[job.id] = job
         return _json(job.as_dict(), 202)
 
+    async def study(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        job = e.start_study(_optional_int(data, "rocks"), _optional_int(data, "seed"))
+        jobs[job.id] = job
+        return _json(job.as_dict(), 202)
+
+    async def calibrate(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        job = e.start_calibrate(_optional_int(data, "rocks"), _optional_int(data, "seed"),
+                                _optional_int(data, "bootstrap"))
+        jobs[job.id] = job
+        return _json(job.as_dict(), 202)
+
     async def job_file(request: Request) -> Response:
         j = job_of(request)
         name = request.path_params["name"]
         if name not in j.files:
             raise ServeError(404, f"job {j.id} has no {name}")
-        return Response(j.files[name], media_type="application/yaml",
+        content = j.files[name]
+        if callable(content):
+            # The report and figures are drawn on the first request (seconds):
+            # in a worker thread, so that the page's other requests go on.
+            try:
+                content = await run_in_threadpool(content)
+            except Exception as exc:  # noqa: BLE001 -- one line to the page, the app stays up
+                raise ServeError(500, f"{name}: {' '.join(str(exc).split())}") from None
+        return Response(content, media_type=media_type(name),
                         headers={"Content-Disposition": f'attachment; filename="{name}"'})
 
     def job_of(request: Request) -> Any:
@@ -343,6 +380,20 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         target = e.save(data.get("text"), name)
         return _json({"ok": True, "path": str(target.relative_to(e.directory))})
 
+    async def materials(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        return _json(e.library(request.query_params.get("path")))
+
+    async def apply_material(request: Request) -> Response:
+        e = entry(request.path_params["pid"])
+        data = await _body(request)
+        name, library = data.get("material"), data.get("library")
+        if not isinstance(name, str):
+            raise ServeError(400, "material: expected the name of a library entry")
+        if library is not None and not isinstance(library, str):
+            raise ServeError(400, "library: expected a file name inside the project's directory")
+        return _json(e.apply_material(data.get("segment"), name, library))
+
     async def upload(request: Request) -> Response:
         e = entry(request.path_params["pid"])
         data = await _body(request)
@@ -363,8 +414,12 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         Route("/api/projects/{pid}/validate", handle(validate), methods=["POST"]),
         Route("/api/projects/{pid}/save", handle(save), methods=["POST"]),
         Route("/api/projects/{pid}/upload", handle(upload), methods=["POST"]),
+        Route("/api/projects/{pid}/materials", handle(materials)),
+        Route("/api/projects/{pid}/materials", handle(apply_material), methods=["POST"]),
         Route("/api/projects/{pid}/check", handle(check), methods=["POST"]),
         Route("/api/projects/{pid}/optimise", handle(optimise), methods=["POST"]),
+        Route("/api/projects/{pid}/study", handle(study), methods=["POST"]),
+        Route("/api/projects/{pid}/calibrate", handle(calibrate), methods=["POST"]),
         Route("/api/jobs/{jid}", handle(job)),
         Route("/api/jobs/{jid}/files/{name}", handle(job_file)),
         Route("/api/jobs/{jid}/cancel", handle(cancel), methods=["POST"]),

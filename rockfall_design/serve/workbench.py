@@ -146,10 +146,14 @@ def referenced_outside(text: str, base: Path, root: Path) -> str | None:
 class Job:
     """Work in a background thread: progress, cancel, and its result or error.
 
-    ``kind`` is ``simulate``, ``check`` or ``optimise``; ``stage`` the
-    optimiser's stage (``search``, ``check``); ``result`` the JSON-ready
-    answer of a finished check or optimise (their ``--json`` summaries) and
-    ``files`` what it offers for download (``design.yaml``).
+    ``kind`` is ``simulate``, ``check``, ``optimise``, ``study`` or
+    ``calibrate``; ``stage`` the optimiser's stage (``search``, ``check``);
+    ``result`` the JSON-ready answer of a finished check, optimise, study or
+    calibration (their ``--json`` summaries), ``tables`` what the page shows
+    of a study or calibration (``title``, ``columns``, ``rows``) and
+    ``files`` what it offers for download (``design.yaml``, ``report.html``
+    as ``--report`` writes it, and the figures as PNG and SVG, drawn on the
+    first request).
     """
 
     kind: str
@@ -160,7 +164,8 @@ class Job:
     state: str = "running"  # running, done, cancelled, failed
     error: str = ""
     result: dict[str, Any] | None = None
-    files: dict[str, str] = field(default_factory=dict)
+    files: dict[str, Any] = field(default_factory=dict)  # text, bytes, or a loader of bytes
+    tables: list[dict[str, Any]] = field(default_factory=list)
     started: float = field(default_factory=time.monotonic)
     runtime_s: float = 0.0
     cancel_event: threading.Event = field(default_factory=threading.Event)
@@ -180,7 +185,8 @@ class Job:
         return {"id": self.id, "kind": self.kind, "state": self.state, "done": self.done,
                 "total": self.total, "stage": self.stage, "error": self.error,
                 "runtime_s": round(self.runtime_s or time.monotonic() - self.started, 3),
-                "result": self.result, "files": sorted(self.files)}
+                "result": self.result, "files": sorted(self.files),
+                "tables": self.tables}
 
 
 # ---- a run's table and what is placed on it -------------------------------------
@@ -359,6 +365,8 @@ class ProjectEntry:
     bench: Bench | None = None
     job: Job | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
+    #: Changes made in the page and not saved (the project in memory differs from its file).
+    edits: list[str] = field(default_factory=list)
 
     @property
     def directory(self) -> Path:
@@ -401,6 +409,10 @@ class ProjectEntry:
             "measures": measures,
             "rocks": int(p.rocks.count), "seed": int(p.rocks.seed),
             "has_design": p.design is not None,
+            "has_study": p.study is not None,
+            "has_calibrate": p.calibrate is not None,
+            "library": self.library_name(),
+            "edits": list(self.edits),
             "run": None if self.bench is None else self.run_dict(),
             "job": None if self.job is None else self.job.as_dict(),
         }
@@ -518,8 +530,13 @@ class ProjectEntry:
             project = project.model_copy(update={"measures": [dict(r) for r in raws]})
 
         def work(job: Job) -> None:
-            ev = evaluate(project, self.registry, rocks=n, seed=s, progress=job.progress)
-            job.result = ev.summary()
+            from .reports import REPORT_TRAJECTORIES, CheckReport, lazy_files
+
+            ev = evaluate(project, self.registry, rocks=n, seed=s, progress=job.progress,
+                          n_trajectories=REPORT_TRAJECTORIES)
+            report = CheckReport(project, ev, self.registry)
+            job.result = report.summary
+            job.files.update(lazy_files(report))
             job.done = n
 
         return self._start("check", n, work)
@@ -550,13 +567,228 @@ class ProjectEntry:
         project = self.project
 
         def work(job: Job) -> None:
+            from .reports import OptimiseReport, lazy_files
+
             res = optimise(project, self.registry, rocks=n, seed=s, progress=job.staged)
             job.result = res.summary()
             if res.best is not None:
                 job.files["design.yaml"] = design_yaml(res.best, self.path.name,
                                                        res.search_rocks, res.looks)
+            # The report checks the chosen design again (for its figures): on request.
+            job.files.update(lazy_files(OptimiseReport(project, res, self.registry)))
 
         return self._start("optimise", n, work)
+
+    def start_study(self, rocks: int | None, seed: int | None) -> Job:
+        """Start the project's parametric study, as ``rockfall-design study`` runs it.
+
+        The job counts scenarios; a cancel stops it once the scenarios
+        under way finish. Its result is the summary ``study --json`` prints,
+        and ``tables`` the scenarios and the sensitivity, for the page.
+
+        Raises
+        ------
+        ServeError
+            400 without a ``study:`` section or with rocks or seed out of
+            range; 409 while a job of this project runs.
+        """
+        from ..study.run import run_parametric
+
+        if self.project.study is None:
+            raise ServeError(400, f"{self.path.name}: the project has no study: section")
+        n, s = self._rocks_seed(rocks, seed)
+        project = self.project
+
+        def work(job: Job) -> None:
+            def progress(done: int, total: int, rocks_done: int) -> None:
+                job.total = int(total)
+                job.progress(done)
+
+            res = run_parametric(project, self.registry, rocks=n, seed=s, progress=progress,
+                                 envelopes=False)
+            job.result = res.summary
+            job.tables = study_tables(res)
+
+        job = self._start("study", 0, work)
+        job.stage = "scenarios"
+        return job
+
+    def start_calibrate(self, rocks: int | None, seed: int | None,
+                        bootstrap: int | None) -> Job:
+        """Start the calibration of the project's ``calibrate:`` inputs, as the command does.
+
+        The job counts the fit and its bootstrap replicates; a cancel stops
+        it once the replicates under way finish. Its result is the summary
+        ``calibrate --json`` prints, and ``tables`` the fitted values with
+        their intervals and the fit's distance, for the page.
+
+        Raises
+        ------
+        ServeError
+            400 without a ``calibrate:`` section or with rocks, seed or
+            bootstrap out of range; 409 while a job runs.
+        """
+        from ..arguments import MAX_BOOTSTRAP
+        from ..calibration.run import run_calibration
+
+        spec = self.project.calibrate
+        if spec is None:
+            raise ServeError(400, f"{self.path.name}: the project has no calibrate: section")
+        n, s = self._rocks_seed(int(spec.rocks) if rocks is None else rocks, seed)
+        b = int(spec.bootstrap if bootstrap is None else bootstrap)
+        if not 0 <= b <= MAX_BOOTSTRAP:
+            raise ServeError(400, f"bootstrap: expected 0 to {MAX_BOOTSTRAP:,}, got {b:,}")
+        project = self.project
+
+        def work(job: Job) -> None:
+            def on_done(done: int, total: int) -> None:
+                job.total = int(total)
+                job.progress(done)
+
+            res = run_calibration(project, rocks=n, bootstrap=b, seed=s, on_done=on_done)
+            job.result = res.summary
+            job.tables = calibration_tables(res.summary)
+
+        job = self._start("calibrate", b + 1, work)
+        job.stage = "replicates"
+        return job
+
+    # -- materials from a library ---------------------------------------------------
+    def library_name(self) -> str | None:
+        """The materials library the project file names (``materials: {library: FILE}``)."""
+        import yaml
+
+        try:
+            data = yaml.safe_load(self.path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, yaml.YAMLError):
+            return None
+        materials = data.get("materials") if isinstance(data, dict) else None
+        name = materials.get("library") if isinstance(materials, dict) else None
+        return name if isinstance(name, str) else None
+
+    def library(self, name: str | None = None) -> dict[str, Any]:
+        """The entries of a materials library in the project's directory, with their law
+        and values.
+
+        Parameters
+        ----------
+        name
+            The library file, relative to the project's directory; default
+            the one the project file names.
+
+        Returns
+        -------
+        dict
+            ``path`` and ``materials``: per entry its ``name``, ``law`` (the
+            impact law, ``impact_model``), ``values`` (every parameter, the
+            defaults filled in) and ``source`` (the entry's ``# source:``
+            comment line, empty without one).
+
+        Raises
+        ------
+        ServeError
+            404 without a library or file; 403 outside the directory; 400 for
+            a file that is not a library (the first bad entry, one line).
+        """
+        import yaml
+        from pydantic import ValidationError
+
+        from ..project.schema import Material
+
+        name = name or self.library_name()
+        if name is None:
+            raise ServeError(404, f"{self.path.name} names no materials library "
+                             "(materials: {library: FILE}); give its path")
+        target = inside(self.directory, name)
+        if not target.is_file():
+            raise ServeError(404, f"no materials library {name!r} in the project's directory")
+        if target.stat().st_size > MAX_BODY_BYTES:
+            raise ServeError(413, f"{name}: larger than {MAX_BODY_BYTES:,} bytes")
+        try:
+            text = target.read_text(encoding="utf-8")
+            # The composer first: an alias bomb is refused before it expands.
+            if referenced_outside(text, target.parent, self.directory) is not None:
+                raise ServeError(403, f"{name}: names a file outside the project's directory")
+            data = yaml.safe_load(text)
+        except UnicodeDecodeError:
+            raise ServeError(400, f"{name}: not a UTF-8 text file") from None
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None)
+            line = f":{mark.line + 1}" if mark is not None else ""
+            raise ServeError(400, f"{name}{line}: not valid YAML") from None
+        if not isinstance(data, dict) or not data:
+            raise ServeError(400, f"{name}: expected a mapping of material names to materials")
+        sources = _library_comments(text)
+        out = []
+        for key, value in data.items():
+            try:
+                m = Material.model_validate(value)
+            except ValidationError as exc:
+                err = exc.errors()[0]
+                where = ".".join(str(p) for p in err["loc"])
+                raise ServeError(400, f"{name}: {key}{'.' + where if where else ''}: "
+                                 f"{err['msg']}") from None
+            out.append({"name": str(key), "law": m.impact_model,
+                        "values": _plain(m.model_dump(mode="json", exclude_none=True)),
+                        "source": sources.get(str(key), "")})
+        return {"path": str(target.relative_to(self.directory)), "materials": out}
+
+    def apply_material(self, segment: int, material: str, library: str | None) -> dict[str, Any]:
+        """Give a segment of the section a material of the library, in memory.
+
+        The project the app works on changes (its run is dropped: the table
+        was of the old ground); its file does not. The answer carries the
+        changed project as YAML (every value resolved, the library's
+        material inline) for the editor, where Save writes it on request.
+
+        Raises
+        ------
+        ServeError
+            400 for a segment out of range or a material the library lacks;
+            409 while a job of this project runs.
+        """
+        from ..errors import RockfallError
+        from ..evaluate import validate_project
+        from ..project import dump_yaml
+
+        p = self.project
+        n = len(p.slope.materials)
+        if isinstance(segment, bool) or not isinstance(segment, int) or not 0 <= segment < n:
+            raise ServeError(400, f"segment: expected 0 to {n - 1}, got {segment!r}")
+        lib = self.library(library)
+        entry = next((m for m in lib["materials"] if m["name"] == material), None)
+        if entry is None:
+            names = ", ".join(m["name"] for m in lib["materials"])
+            raise ServeError(400, f"material: {material!r} is not in {lib['path']} "
+                             f"(it has {names})")
+        from ..project.schema import Material
+
+        # A material of the project with that name but other values stays the
+        # project's under a name of its own: the library's comes in as NAME
+        # from LIBRARY.
+        new = Material.model_validate(entry["values"])
+        name = material
+        if name in p.materials and p.materials[name] != new:
+            name = f"{material} ({Path(lib['path']).stem})"
+        with self.lock:
+            if self.job is not None and self.job.state == "running":
+                raise ServeError(409, f"a {self.job.kind} of {self.id} is under way "
+                                 f"(job {self.job.id})")
+            names = list(p.slope.materials)
+            names[segment] = name
+            slope = p.slope.model_copy(update={"materials": names})
+            used = set(names)
+            # Materials no segment uses any more drop out, as a file would not keep them.
+            materials = {k: v for k, v in {**p.materials, name: new}.items() if k in used}
+            project = p.model_copy(update={"slope": slope, "materials": materials})
+            try:
+                validate_project(project, self.registry)
+            except RockfallError as exc:
+                raise ServeError(400, " ".join(str(exc).split())) from None
+            self.project, self.bench = project, None
+            self.edits.append(f"segment {segment + 1}: {p.slope.materials[segment]} -> "
+                              f"{name} from {lib['path']}")
+        return {**self.describe(), "yaml": dump_yaml(project.resolved_dict())}
 
     # -- the project file -----------------------------------------------------------
     def save(self, text: str, name: str | None) -> Path:
@@ -579,7 +811,7 @@ class ProjectEntry:
         project = self.validate(text, target)
         _write_atomically(target, text)
         if target == self.path.resolve():
-            self.project, self.bench = project, None
+            self.project, self.bench, self.edits = project, None, []
         return target
 
     def upload(self, name: str, text: str, replace: bool = False) -> Path:
@@ -633,6 +865,59 @@ class ProjectEntry:
         except RockfallError as exc:
             raise ServeError(400, " ".join(str(exc).split())) from None
         return project
+
+
+def study_tables(res: Any) -> list[dict[str, Any]]:
+    """A study's scenarios (the varied values and the statistics at every station,
+    without their bounds) and its sensitivity, as tables for the page."""
+    sc = res.scenarios
+    cols = [c for c in sc.columns if c != "seed" and not str(c).endswith((" upper", " lower"))]
+    sens = res.sensitivity
+    scols = [c for c in ("parameter", "target", "effect", "unit", "low", "high", "resolved")
+             if c in sens.columns]
+    return [_table("Scenarios", sc[cols]), _table("Sensitivity", sens[scols])]
+
+
+def calibration_tables(summary: dict[str, Any]) -> list[dict[str, Any]]:
+    """A calibration's fitted values with their bootstrap intervals, and its fit."""
+    rows = [[p["path"], p["value"], p["low"], p["high"], p["range"], p["identified"],
+             p.get("at_bound") or ""] for p in summary["parameters"]]
+    fit = summary["fit"]
+    fit_rows = [[k, fit[k]] for k in ("distance_kind", "distance", "ks_statistic", "ks_pvalue")
+                if k in fit]
+    return [{"title": "Fitted inputs", "rows": _plain(rows),
+             "columns": ["input", "value", "low", "high", "range", "identified", "at bound"]},
+            {"title": "Fit", "columns": ["item", "value"], "rows": _plain(fit_rows)}]
+
+
+def _table(title: str, frame: Any) -> dict[str, Any]:
+    rows = [[_cell(v) for v in row] for row in frame.itertuples(index=False)]
+    return {"title": title, "columns": [str(c) for c in frame.columns], "rows": rows}
+
+
+def _cell(v: Any) -> Any:
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return _plain(v)
+
+
+def _library_comments(text: str) -> dict[str, str]:
+    """Each library entry's ``# source:`` comment line (the bundled library's convention)."""
+    out: dict[str, str] = {}
+    source = ""
+    for line in text.splitlines():
+        m = re.match(r"#\s*source:\s*(.*)$", line)
+        if m:
+            source = m.group(1).strip()
+            continue
+        m = re.match(r"([A-Za-z0-9_][^:#\s]*)\s*:", line)
+        if m:
+            if source:
+                out[m.group(1)] = source
+            source = ""
+    return out
 
 
 def _write_atomically(target: Path, text: str) -> None:

@@ -397,6 +397,46 @@ def test_check_from_the_page_is_rockfall_design_check(client, project_copy, caps
     assert page["measures"] == cli["measures"]
 
 
+def test_the_report_and_figures_of_a_check_download_as_the_command_line_writes_them(
+        client, project_copy, tmp_path):
+    fence = {**FENCE, "x": 150.0}
+    r = client.post("/api/projects/design_two_zones/check",
+                    json={"measures": [fence], "rocks": 400, "seed": 3})
+    job = _wait(client, r.json()["id"])
+    assert job["state"] == "done", job
+    assert job["result"]["verdict"]["state"]  # check --json begins with the verdict
+    for name in ("report.html", "profile.png", "profile.svg", "envelopes.png", "stops.svg"):
+        assert name in job["files"]
+    page = client.get(f"/api/jobs/{job['id']}/files/report.html")
+    assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
+    assert "attachment" in page.headers["content-disposition"]
+    png = client.get(f"/api/jobs/{job['id']}/files/profile.png")
+    assert png.headers["content-type"] == "image/png" and png.content[:8] == b"\x89PNG\r\n\x1a\n"
+    svg = client.get(f"/api/jobs/{job['id']}/files/envelopes.svg")
+    assert svg.headers["content-type"].startswith("image/svg+xml") and b"<svg" in svg.content
+    assert client.get(f"/api/jobs/{job['id']}/files/../../outside.txt").status_code == 404
+    # The command line's report of the same check: the same document but for when it
+    # was made, the project file's name and the run time.
+    path = project_copy.parent / "with_fence.yaml"
+    path.write_text(project_copy.read_text()
+                    + "measures:\n  - {type: fence, x: 150, height: 5.0, capacity_kj: 2000}\n")
+    try:
+        main(["check", str(path), "--rocks", "400", "--seed", "3", "--report", str(tmp_path)])
+    finally:
+        path.unlink()
+    theirs = (tmp_path / "report.html").read_text()
+    ours = page.text
+
+    def headings(html):
+        import re
+
+        return re.findall(r"<h[1-3][^>]*>(.*?)</h[1-3]>", html)
+
+    assert headings(ours) == headings(theirs)
+    assert ours.count("<svg") == theirs.count("<svg") == 3
+    assert "Design" in ours and job["result"]["verdict"]["headline"].split(":")[0] in ours
+
+
 def test_check_with_a_measure_that_does_not_fit_starts_nothing(client):
     r = client.post("/api/projects/design_two_zones/check",
                     json={"measures": [{**FENCE, "x": -50.0}]})
@@ -438,6 +478,10 @@ def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registr
         assert job["state"] == "done", job
         page = job["result"]
         design = c.get(f"/api/jobs/{job['id']}/files/design.yaml")
+        assert {"report.html", "alternatives.png", "profile.svg"} <= set(job["files"])
+        report = c.get(f"/api/jobs/{job['id']}/files/report.html")
+        assert report.status_code == 200 and page["best"] in report.text
+        assert c.get(f"/api/jobs/{job['id']}/files/alternatives.png").content[:4] == b"\x89PNG"
     out = tmp_path / "out"
     main(["optimise", str(tmp_path / "design_quarry.yaml"), "--rocks", "500", "--seed", "3",
           "--json", "--out", str(out)])
@@ -544,3 +588,147 @@ def test_a_project_without_a_protected_zone_runs_and_says_so(registry, projects_
                                          "x": 20}).json()
     assert out["residual"]["protected_zone"] is False
     assert out["residual"]["x"] == entry.describe()["ground"][-1][0]
+
+
+# ---- materials from the library ---------------------------------------------------------
+
+
+@pytest.fixture()
+def survey(tmp_path, registry, projects_dir):
+    """survey_slope.yaml, its section and its materials library, in a directory of their own."""
+    for name in ("survey_slope.yaml", "survey_section.csv", "materials.yaml"):
+        shutil.copy(projects_dir / name, tmp_path / name)
+    (entry,) = load_entries([tmp_path / "survey_slope.yaml"], registry)
+    app = create_app([entry], TOKEN)
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        yield c, entry, tmp_path
+
+
+def test_the_library_the_project_names_lists_its_entries_with_law_and_values(survey):
+    c, entry, _ = survey
+    r = c.get("/api/projects/survey_slope/materials")
+    assert r.status_code == 200, r.text
+    lib = r.json()
+    assert lib["path"] == "materials.yaml"
+    by_name = {m["name"]: m for m in lib["materials"]}
+    assert by_name["talus"]["law"] == "spang"
+    assert by_name["talus"]["values"]["restitution"] == 0.33
+    assert by_name["meadow_rn_rt"]["law"] == "rn_rt"
+    assert "tangential_restitution" in by_name["meadow_rn_rt"]["values"]
+    assert by_name["bedrock"]["source"].startswith("ILLUSTRATIVE")
+    assert c.get("/api/projects/survey_slope").json()["library"] == "materials.yaml"
+
+
+def test_a_material_from_the_library_goes_onto_a_segment_in_memory_only(survey):
+    c, entry, d = survey
+    before = _snapshot(d)
+    c.post("/api/projects/survey_slope/simulate", json={"rocks": 50, "seed": 1})
+    assert _wait(c, entry.job.id)["state"] == "done"
+    seg = entry.project.slope.materials.index("talus")
+    r = c.post("/api/projects/survey_slope/materials",
+               json={"segment": seg, "material": "asphalt"})
+    assert r.status_code == 200, r.text
+    out = r.json()
+    assert out["materials"][seg] == "asphalt" and out["run"] is None  # the old run is dropped
+    assert entry.project.slope.materials[seg] == "asphalt"
+    assert entry.project.materials["asphalt"].restitution == 0.4
+    assert out["edits"] and "asphalt" in out["edits"][0]
+    assert _snapshot(d) == before  # nothing written: saving stays on request
+    # The YAML it offers for the editor is a valid project that has the change.
+    from rockfall_design.project.loading import load_project_text
+
+    changed = load_project_text(out["yaml"], "survey_slope.yaml", base_dir=d)
+    assert changed.slope.materials[seg] == "asphalt"
+    # A run of the changed project starts.
+    r = c.post("/api/projects/survey_slope/simulate", json={"rocks": 50, "seed": 1})
+    assert _wait(c, r.json()["id"])["state"] == "done"
+
+
+@pytest.mark.parametrize("body, status, words", [
+    ({"segment": 999, "material": "talus"}, 400, "segment: expected 0 to"),
+    ({"segment": 0, "material": "granite"}, 400, "'granite' is not in materials.yaml"),
+    ({"segment": 0}, 400, "material: expected"),
+    ({"segment": 0, "material": "talus", "library": "../outside.yaml"}, 403, "outside"),
+    ({"segment": 0, "material": "talus", "library": "nothere.yaml"}, 404, "no materials library"),
+])
+def test_bad_material_requests_get_one_clear_line_and_change_nothing(survey, body, status,
+                                                                    words):
+    c, entry, _ = survey
+    project = entry.project
+    r = c.post("/api/projects/survey_slope/materials", json=body)
+    assert r.status_code == status and words in r.json()["error"], r.text
+    assert entry.project is project
+
+
+def test_a_project_without_a_library_says_so(client):
+    r = client.get("/api/projects/design_two_zones/materials")
+    assert r.status_code == 404 and "names no materials library" in r.json()["error"]
+
+
+# ---- study and calibrate from the page ---------------------------------------------------
+
+
+def _served(tmp_path, registry, projects_dir, *names):
+    for name in names:
+        shutil.copy(projects_dir / name, tmp_path / name)
+    return create_app(load_entries([tmp_path / names[0]], registry), TOKEN)
+
+
+def test_a_study_from_the_page_is_rockfall_design_study(tmp_path, registry, projects_dir,
+                                                        capsys):
+    app = _served(tmp_path, registry, projects_dir, "study_talus.yaml")
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        r = c.post("/api/projects/study_talus/study", json={"rocks": 60, "seed": 4})
+        assert r.status_code == 202, r.text
+        job = _wait(c, r.json()["id"])
+    assert job["state"] == "done", job
+    assert job["kind"] == "study" and job["done"] == job["total"] == 9
+    assert main(["study", str(tmp_path / "study_talus.yaml"), "--rocks", "60", "--seed", "4",
+                 "--json"]) == 0
+    cli = json.loads(capsys.readouterr().out)
+    page = job["result"]
+    assert page["scenarios"] == cli["scenarios"] and page["sensitivity"] == cli["sensitivity"]
+    scenarios, sensitivity = job["tables"]
+    assert scenarios["title"] == "Scenarios" and len(scenarios["rows"]) == 9
+    assert "materials.talus.restitution" in scenarios["columns"]
+    assert not any(c.endswith(" upper") for c in scenarios["columns"])
+    assert sensitivity["rows"] and sensitivity["columns"][0] == "parameter"
+
+
+def test_a_calibration_from_the_page_is_rockfall_design_calibrate(tmp_path, registry,
+                                                                  projects_dir, capsys):
+    app = _served(tmp_path, registry, projects_dir, "calibrate_quarry.yaml",
+                  "quarry_stops_a.csv", "quarry_stops_b.csv")
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        r = c.post("/api/projects/calibrate_quarry/calibrate",
+                   json={"rocks": 80, "seed": 2, "bootstrap": 2})
+        assert r.status_code == 202, r.text
+        job = _wait(c, r.json()["id"])
+    assert job["state"] == "done", job
+    assert job["kind"] == "calibrate" and job["done"] == job["total"] == 3
+    main(["calibrate", str(tmp_path / "calibrate_quarry.yaml"), "--rocks", "80", "--seed", "2",
+          "--bootstrap", "2", "--json"])
+    cli = json.loads(capsys.readouterr().out)
+    assert job["result"]["parameters"] == cli["parameters"]
+    fitted, fit = job["tables"]
+    assert [row[0] for row in fitted["rows"]] == [p["path"] for p in cli["parameters"]]
+    assert fitted["rows"][0][1] == cli["parameters"][0]["value"]
+    assert fit["rows"][0][0] == "distance_kind"
+
+
+def test_study_and_calibration_can_be_cancelled(tmp_path, registry, projects_dir):
+    app = _served(tmp_path, registry, projects_dir, "study_talus.yaml")
+    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+        job = c.post("/api/projects/study_talus/study", json={"rocks": 3000}).json()
+        c.post(f"/api/jobs/{job['id']}/cancel", json={})
+        job = _wait(c, job["id"])
+        assert job["state"] == "cancelled" and job["result"] is None and job["tables"] == []
+
+
+def test_study_or_calibrate_without_their_section_or_with_bad_numbers(client):
+    r = client.post("/api/projects/design_two_zones/study", json={})
+    assert r.status_code == 400 and "no study: section" in r.json()["error"]
+    r = client.post("/api/projects/design_two_zones/calibrate", json={})
+    assert r.status_code == 400 and "no calibrate: section" in r.json()["error"]
+    r = client.post("/api/projects/design_two_zones/study", json={"rocks": "many"})
+    assert r.status_code == 400 and "rocks" in r.json()["error"]

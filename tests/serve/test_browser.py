@@ -90,6 +90,14 @@ def test_drag_a_fence_and_the_residual_follows(tmp_path):
                 after = page.inner_text("#residual")
                 assert after != before and "At the protected zone" in after
                 assert page.locator("#checks td").count() > 4
+                # Check that design with a few rocks; its report downloads from the page.
+                page.fill("#rocks", "300")
+                page.click("#check")
+                link = page.locator("#results .downloads a", has_text="report.html")
+                link.wait_for(timeout=300_000)
+                report = page.request.get(url.split("/?", 1)[0]
+                                          + link.get_attribute("href"))
+                assert report.status == 200 and "<svg" in report.text()
                 shot = page.screenshot(path=str(tmp_path / "serve.png"), full_page=True)
                 # Everything came from the app itself: it works with no network.
                 origin = url.split("/?", 1)[0]
@@ -103,3 +111,44 @@ def test_drag_a_fence_and_the_residual_follows(tmp_path):
     assert "Traceback" not in err, err
     # Not blank: the ground, the materials, the envelopes, the residual box.
     assert _distinct_colours(shot) > 50
+
+
+def test_study_and_library_materials_from_the_page():
+    """A study's scenarios table, and a library material put on a segment, in the page."""
+    sync_playwright = _browser_or_skip()
+    proc, url = start_server("projects/study_talus.yaml", "projects/survey_slope.yaml",
+                             cwd=ROOT)
+    errors: list[str] = []
+    try:
+        with sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=str(CHROMIUM),
+                                         args=["--no-sandbox", "--disable-gpu"])
+            try:
+                page = browser.new_page(viewport={"width": 1400, "height": 1000})
+                page.on("pageerror", lambda e: errors.append(str(e)))
+                page.goto(url)
+                page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+                page.fill("#rocks", "40")
+                page.click("#study")
+                page.wait_for_selector("#status[data-state='done']", timeout=300_000)
+                rows = page.locator(".job-table[data-title='Scenarios'] tr")
+                assert rows.count() == 10  # the header and nine scenarios
+                # The surveyed slope names a library: its entries are listed.
+                page.select_option("#project", "survey_slope")
+                page.locator("#library-material option[value='asphalt']").wait_for(
+                    state="attached", timeout=30_000)
+                page.click("#materials-box summary")
+                page.select_option("#segment", "0")
+                page.select_option("#library-material", "asphalt")
+                assert "law spang" in page.inner_text("#material-values")
+                page.click("#apply-material")
+                page.wait_for_function(
+                    "() => document.getElementById('material-status').textContent"
+                    ".includes('asphalt from')", timeout=30_000)
+                assert "asphalt" in page.input_value("#yaml")
+            finally:
+                browser.close()
+    finally:
+        code, err = stop_server(proc)
+    assert not errors, errors
+    assert "Traceback" not in err, err

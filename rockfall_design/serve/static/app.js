@@ -399,7 +399,7 @@ async function startJob(kind, body) {
   try {
     state.job = await api(`/api/projects/${state.project.id}/${kind}`, body);
   } catch (e) { showError(e.message); return; }
-  for (const id of ["simulate", "check", "optimise"]) $(id).disabled = true;
+  for (const id of ["simulate", "check", "optimise", "study", "calibrate"]) $(id).disabled = true;
   $("cancel").disabled = false;
   $("status").dataset.state = "running";
   poll();
@@ -414,6 +414,44 @@ function checkDesign() {
 }
 
 function optimiseDesign() { startJob("optimise", runOptions()); }
+function studyProject() { startJob("study", runOptions()); }
+// Calibrate with its own rocks (calibrate.rocks) unless the field was changed.
+function calibrateProject() {
+  const body = runOptions();
+  if (body.rocks === state.project.rocks) delete body.rocks;
+  startJob("calibrate", body);
+}
+function enableJobs() {
+  const p = state.project;
+  $("check").disabled = false; $("optimise").disabled = !p.has_design;
+  $("study").disabled = !p.has_study; $("calibrate").disabled = !p.has_calibrate;
+}
+
+// A study's or calibration's tables, as they come (numbers to 4 significant digits).
+function showTables(job) {
+  const div = $("results");
+  div.innerHTML = "";
+  const head = document.createElement("p");
+  head.textContent = `${job.kind} done in ${fmt(job.runtime_s, 1)} s`;
+  div.appendChild(head);
+  for (const t of job.tables) {
+    const h = document.createElement("h4"); h.textContent = t.title; div.appendChild(h);
+    const table = document.createElement("table");
+    table.className = "job-table"; table.dataset.title = t.title;
+    const hr = document.createElement("tr");
+    for (const c of t.columns) { const th = document.createElement("th"); th.textContent = c; hr.appendChild(th); }
+    table.appendChild(hr);
+    for (const row of t.rows) {
+      const tr = document.createElement("tr");
+      for (const v of row) {
+        tr.appendChild(cell(v === null ? "–" : typeof v === "number" ? Number(v.toPrecision(4)).toString()
+          : typeof v === "object" ? JSON.stringify(v) : String(v)));
+      }
+      table.appendChild(tr);
+    }
+    div.appendChild(table);
+  }
+}
 
 async function poll() {
   let job;
@@ -427,13 +465,12 @@ async function poll() {
   }
   state.job = job;
   $("progress").max = job.total; $("progress").value = job.done;
-  const what = job.kind === "optimise" ? `${job.stage || "search"} ${job.done} of ${job.total}`
+  const what = job.kind !== "simulate" && job.kind !== "check" ? `${job.stage || "search"} ${job.done} of ${job.total}`
     : `${job.done} of ${job.total} rocks`;
   $("status").textContent = `${job.kind} ${job.state}: ${what} (${fmt(job.runtime_s, 1)} s)`;
   if (job.state === "running") { setTimeout(poll, 250); return; }
   $("cancel").disabled = true; $("simulate").disabled = false;
-  $("optimise").disabled = !state.project.has_design;
-  $("check").disabled = false;
+  enableJobs();
   if (job.state === "failed") showError(job.error);
   if (job.state !== "done") { $("status").dataset.state = job.state; return; }
   if (job.kind === "simulate") {
@@ -442,8 +479,11 @@ async function poll() {
     $("place").disabled = false;
     drawSection(); drawRun();
     if (state.placed) requestPlace(state.placed.x);
+  } else if (job.kind === "study" || job.kind === "calibrate") {
+    showTables(job);
   } else if (job.kind === "check") {
     showCheck(job.result);
+    showDownloads(job, $("results"));
   } else {
     showOptimise(job);
   }
@@ -475,6 +515,20 @@ function showCheck(s) {
   div.appendChild(table);
 }
 
+// The job's files: design.yaml, report.html (as --report writes it) and the figures.
+// The report and figures are drawn on the first click (a few seconds).
+function showDownloads(job, div) {
+  if (!job.files.length) return;
+  const p = document.createElement("p");
+  p.className = "downloads"; p.textContent = "download: ";
+  for (const name of job.files) {
+    const a = document.createElement("a");
+    a.href = `/api/jobs/${job.id}/files/${name}`; a.textContent = name; a.download = name;
+    p.append(a, " ");
+  }
+  div.appendChild(p);
+}
+
 function showOptimise(job) {
   const s = job.result, div = $("results");
   const best = s.best === null ? null : s.alternatives.find((a) => a.name === s.best);
@@ -498,11 +552,7 @@ function showOptimise(job) {
     table.appendChild(tr);
   }
   div.appendChild(table);
-  if (job.files.includes("design.yaml")) {
-    const a = document.createElement("a");
-    a.href = `/api/jobs/${job.id}/files/design.yaml`; a.textContent = "download design.yaml"; a.download = "design.yaml";
-    div.appendChild(a);
-  }
+  showDownloads(job, div);
   state.chosen = best ? best.measures : null;
   drawSection(); drawRun();
 }
@@ -534,6 +584,54 @@ async function uploadFile() {
   } catch (e) { $("yaml-status").textContent = e.message; }
 }
 
+// ---- materials from the library -----------------------------------------------------------
+function fillSegments() {
+  const p = state.project, sel = $("segment");
+  sel.innerHTML = "";
+  p.materials.forEach((m, i) => {
+    const o = document.createElement("option"); o.value = i;
+    o.textContent = `${i + 1}: x ${fmt(p.ground[i][0], 0)} to ${fmt(p.ground[i + 1][0], 0)} m, ${m}`;
+    sel.appendChild(o);
+  });
+}
+function showMaterialValues() {
+  const m = (state.library || []).find((e) => e.name === $("library-material").value);
+  $("material-values").textContent = m ? `law ${m.law}: ` +
+    Object.entries(m.values).filter(([k]) => k !== "impact_model")
+      .map(([k, v]) => `${k} ${typeof v === "object" ? JSON.stringify(v) : v}`).join(", ") +
+    (m.source ? ` (source: ${m.source})` : "") : "";
+}
+async function loadLibrary() {
+  const path = $("library-path").value;
+  const sel = $("library-material");
+  sel.innerHTML = ""; state.library = null; $("apply-material").disabled = true;
+  try {
+    const lib = await api(`/api/projects/${state.project.id}/materials` +
+      (path ? `?path=${encodeURIComponent(path)}` : ""));
+    state.library = lib.materials; state.libraryPath = lib.path;
+    for (const m of lib.materials) {
+      const o = document.createElement("option"); o.value = m.name; o.textContent = `${m.name} (${m.law})`;
+      sel.appendChild(o);
+    }
+    $("apply-material").disabled = false;
+    $("material-status").textContent = `${lib.materials.length} materials in ${lib.path}`;
+  } catch (e) { $("material-status").textContent = e.message; }
+  showMaterialValues();
+}
+async function applyMaterial() {
+  const body = { segment: Number($("segment").value), material: $("library-material").value,
+    library: state.libraryPath };
+  try {
+    const r = await api(`/api/projects/${state.project.id}/materials`, body);
+    const { yaml, ...project } = r;
+    state.project = project; state.run = null; $("place").disabled = true;
+    $("yaml").value = yaml;
+    $("yaml-status").textContent = "changed in the page, not saved: Save writes this file";
+    $("material-status").textContent = project.edits[project.edits.length - 1] + "; simulate again";
+    fillSegments(); drawSection(); drawRun();
+  } catch (e) { $("material-status").textContent = e.message; }
+}
+
 // ---- start ---------------------------------------------------------------------------
 async function selectProject(id) {
   state.project = await api(`/api/projects/${id}`);
@@ -543,10 +641,12 @@ async function selectProject(id) {
   $("description").textContent = state.project.description;
   $("rocks").value = state.project.rocks; $("seed").value = state.project.seed;
   $("place").disabled = !state.run;
-  $("check").disabled = false;
-  $("optimise").disabled = !state.project.has_design;
+  enableJobs();
   $("with-own-label").hidden = !state.project.measures.length;
-  drawSection(); drawRun();
+  drawSection(); drawRun(); fillSegments();
+  $("library-path").value = ""; $("library-material").innerHTML = ""; state.library = null;
+  $("apply-material").disabled = true; $("material-status").textContent = "";
+  if (state.project.library) loadLibrary();
   loadYaml().catch((e) => showError(e.message));
 }
 
@@ -569,8 +669,11 @@ async function start() {
     $("simulate").onclick = simulate; $("cancel").onclick = cancel; $("place").onclick = placeMeasure;
     $("with-own").onchange = () => { if (state.placed && state.run) requestPlace(state.placed.x); };
     $("check").onclick = checkDesign; $("optimise").onclick = optimiseDesign;
+    $("study").onclick = studyProject; $("calibrate").onclick = calibrateProject;
     $("upload").onchange = uploadFile;
     $("validate").onclick = validateYaml; $("save").onclick = saveYaml;
+    $("library-load").onclick = loadLibrary; $("apply-material").onclick = applyMaterial;
+    $("library-material").onchange = showMaterialValues;
     if (list.projects.length) await selectProject(list.projects[0].id);
     document.body.dataset.ready = "1";
   } catch (e) { showError(e.message); }
