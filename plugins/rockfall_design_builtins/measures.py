@@ -28,7 +28,7 @@ import math
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
-from pydantic import ConfigDict, Field
+from pydantic import ConfigDict, Field, SerializerFunctionWrapHandler, model_serializer
 
 from rockfall_design import (
     Barrier,
@@ -224,6 +224,20 @@ class FenceParams(_Params):
         "product where it has one.",
         json_schema_extra={"unit": "-"},
     )
+
+    @model_serializer(mode="wrap")
+    def _without_absent_mel_figures(self, handler: SerializerFunctionWrapHandler) -> Any:
+        """The parameters, without MEL-test figures the product does not give.
+
+        So that a fence without them is written (summaries, design.yaml) as
+        before they existed.
+        """
+        data = handler(self)
+        if isinstance(data, dict):
+            for key in ("max_elongation_m", "residual_height_fraction"):
+                if data.get(key, 0) is None:
+                    del data[key]
+        return data
 
 
 class Fence(ProtectiveMeasure):

@@ -57,6 +57,14 @@ def test_without_figures_the_fence_declares_what_it_did():
     assert fence().design_properties() == {"height_m": 4.0, "capacity_kj": 1000.0}
 
 
+def test_without_figures_the_fence_is_written_as_before():
+    # summaries and design.yaml list the parameters: no null figures in them
+    assert fence().params.model_dump(mode="json") == {
+        "x": 100.0, "height": 4.0, "capacity_kj": 1000.0, "product": "RX-T"}
+    dumped = fence(max_elongation_m=6.5).params.model_dump(mode="json")
+    assert dumped["max_elongation_m"] == 6.5 and "residual_height_fraction" not in dumped
+
+
 def test_figures_become_design_properties():
     props = fence(max_elongation_m=6.5, residual_height_fraction=0.6).design_properties()
     assert props == {"height_m": 4.0, "capacity_kj": 1000.0, "max_elongation_m": 6.5,
