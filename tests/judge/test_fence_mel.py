@@ -213,3 +213,39 @@ def test_check_names_the_product_whose_net_reaches_the_protected_zone(tmp_path, 
     assert check.target == pytest.approx(150.0 - x)
     assert check.ok is ok
     assert "product RX-T" in check.detail
+
+
+# --------------------------------------------------------------------------------------
+# The optimiser rejects a product whose net would reach the protected zone
+# --------------------------------------------------------------------------------------
+
+def _small(tmp_path, rx050: str):
+    from ..optimise.test_optimise import PROJECTS, SMALL
+
+    products = (PROJECTS / "catalogue_products.yaml").read_text()
+    old = "RX-050: {capacity_kj: 500, heights: [2, 3, 4]}"
+    assert old in products
+    (tmp_path / "products.yaml").write_text(products.replace(old, rx050))
+    text = (SMALL.replace("SEED", "3")
+            .replace("PRODUCTS", str(tmp_path / "products.yaml"))
+            .replace("COSTS", str(PROJECTS / "catalogue_costs.yaml")))
+    return load_project_text(text, "small.yaml")
+
+
+def test_optimiser_passes_over_a_product_whose_net_reaches_the_protected_zone(tmp_path,
+                                                                              registry):
+    from rockfall_design.optimise import optimise
+
+    # The fence stands at 58..64 m and the protected zone starts at 150 m.
+    plain = optimise(_small(tmp_path, "RX-050: {capacity_kj: 500, heights: [2, 3, 4]}"),
+                     registry)
+    assert plain.best.measures[0].params.product == "RX-050"  # the cheapest, without figures
+    short = optimise(_small(tmp_path, "RX-050: {capacity_kj: 500, heights: [2, 3, 4], "
+                                      "max_elongation_m: 80}"), registry)
+    assert short.best.cost == plain.best.cost  # 80 m of braking fits in 86..92 m
+    names = [c["name"] for c in short.best.checks]
+    assert "braking_distance" in names
+    long = optimise(_small(tmp_path, "RX-050: {capacity_kj: 500, heights: [2, 3, 4], "
+                                     "max_elongation_m: 95}"), registry)
+    assert long.best.measures[0].params.product != "RX-050"
+    assert long.best.cost > plain.best.cost
