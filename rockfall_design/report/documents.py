@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
-from .tables import measure_text, round_value
+from .tables import chosen_name, measure_text, round_value
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..outputs import OutputSet
@@ -396,7 +396,7 @@ def _checks_table(summary: Mapping[str, Any]) -> Table | None:
 
 def _alternatives_table(summary: Mapping[str, Any]) -> Table:
     cur = summary.get("currency") or ""
-    best = summary.get("best")
+    best = chosen_name(summary)
     alts = sorted(summary.get("alternatives", []),
                   key=lambda a: (not a.get("feasible"), a.get("cost") is None,
                                  a.get("cost") or 0))
@@ -439,7 +439,7 @@ def _alternatives_table(summary: Mapping[str, Any]) -> Table:
 
 
 def _chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
-    best = summary.get("best")
+    best = chosen_name(summary)
     if best is None:
         return f"No admissible design: {summary.get('reason', '')}", []
     alt = next(a for a in summary["alternatives"] if a.get("name") == best)
