@@ -542,7 +542,7 @@ class OptimiseResult:
         from .report.figures import alternatives_figure
 
         s = self.summary
-        return alternatives_figure(s["alternatives"], s.get("best"), s.get("currency", ""),
+        return alternatives_figure(s["alternatives"], s["best_name"], s.get("currency", ""),
                                    self.project.name)
 
     def figures(self) -> dict[str, Figure]:

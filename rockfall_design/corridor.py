@@ -185,6 +185,7 @@ def _print_totals(summary: dict[str, Any]) -> None:
     """The corridor's table: one row per section, and the total."""
     from rich.table import Table
 
+    from .report.tables import chosen_name
     from .report.terminal import fitted_console
 
     command, totals = summary["command"], summary["totals"]
@@ -217,7 +218,7 @@ def _print_totals(summary: dict[str, Any]) -> None:
         if command == "check":
             row.append("yes" if block["ok"] else "NO")
         if command == "optimise":
-            best = block.get("best")
+            best = chosen_name(block)
             cost = next((a["cost"] for a in block["alternatives"] if a["name"] == best), None)
             row += [best or "none", "-" if cost is None else f"{cost:,.0f}"]
         table.add_row(*row)

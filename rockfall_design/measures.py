@@ -333,6 +333,11 @@ class MeasureResult:
         Profile edits: how far beyond ``x_start`` each rock that met the
         measure went (its largest x minus x_start, m); a rock that left the
         caught stretch has a reach beyond it. Empty for barriers.
+    clearance_m : float or None
+        Barriers: how far downslope of the station the protected zone starts
+        (``protect.x`` - x, m; negative if the station is inside it), for the
+        braking-distance check of a fence; None for profile edits and
+        without a protected zone.
     """
 
     measure: ProtectiveMeasure
@@ -350,6 +355,7 @@ class MeasureResult:
     mass_kg: np.ndarray = field(default_factory=lambda: np.zeros(0))
     radius_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
     reach_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    clearance_m: float | None = None
 
 
 class ProtectiveMeasure(ABC):

@@ -102,7 +102,8 @@ def test_plot_leaves_the_backend_as_it_was(backend, two_zones):
 @pytest.mark.slow
 def test_the_issues_done_when(two_zones):
     r = two_zones
-    assert r.best is not None and r.best["name"] == r.summary["best"]
+    assert r.best is not None and r.best == r.summary["best"]
+    assert r.summary["best_name"] == r.best["name"]
     assert isinstance(r.alternatives, pd.DataFrame)
     assert len(r.alternatives) == len(r.summary["alternatives"])
     assert r.alternatives["chosen"].sum() == 1

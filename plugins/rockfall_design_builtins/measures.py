@@ -28,7 +28,7 @@ import math
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
-from pydantic import ConfigDict, Field
+from pydantic import ConfigDict, Field, SerializerFunctionWrapHandler, model_serializer
 
 from rockfall_design import (
     Barrier,
@@ -211,6 +211,33 @@ class FenceParams(_Params):
         default=None, description="Catalogue name of the product (for reports), optional.",
         json_schema_extra={"unit": None, "design": "catalogue"},
     )
+    max_elongation_m: float | None = Field(
+        default=None, gt=0,
+        description="Maximum elongation of the kit in its MEL test (m): the braking distance "
+        "downslope of the fence; optional, set from the catalogue product where it has one.",
+        json_schema_extra={"unit": "m"},
+    )
+    residual_height_fraction: float | None = Field(
+        default=None, gt=0, le=1,
+        description="Residual height after the MEL test over the nominal height (-), EAD "
+        "340059 (category A >= 0.5, B 0.3 to 0.5, C <= 0.3); optional, set from the catalogue "
+        "product where it has one.",
+        json_schema_extra={"unit": "-"},
+    )
+
+    @model_serializer(mode="wrap")
+    def _without_absent_mel_figures(self, handler: SerializerFunctionWrapHandler) -> Any:
+        """The parameters, without MEL-test figures the product does not give.
+
+        So that a fence without them is written (summaries, design.yaml) as
+        before they existed.
+        """
+        data = handler(self)
+        if isinstance(data, dict):
+            for key in ("max_elongation_m", "residual_height_fraction"):
+                if data.get(key, 0) is None:
+                    del data[key]
+        return data
 
 
 class Fence(ProtectiveMeasure):
@@ -226,6 +253,12 @@ class Fence(ProtectiveMeasure):
         Energy capacity (kJ), > 0: the MEL energy class of the product.
     product : str, optional
         Catalogue name.
+    max_elongation_m : float, optional
+        Maximum elongation in the kit's MEL test (m), > 0: how far downslope
+        of ``x`` the net may reach while braking a rock.
+    residual_height_fraction : float, optional
+        Residual height after the MEL test over the nominal height (-), in
+        (0, 1].
 
     Notes
     -----
@@ -238,6 +271,11 @@ class Fence(ProtectiveMeasure):
 
     Quantities per running metre: ``height_m``, ``capacity_kj`` and the net
     area ``area_m2_per_m`` = height.
+
+    The engine keeps the fence a line at ``x`` with its nominal height; the
+    MEL-test figures, where given, reach the safety concepts as design
+    properties (``max_elongation_m``; ``residual_height_m`` = fraction x
+    height), which check the braking distance and the residual height.
     """
 
     kind: ClassVar[str] = "fence"
@@ -260,8 +298,19 @@ class Fence(ProtectiveMeasure):
         )
 
     def design_properties(self) -> dict[str, float]:
-        """``height_m`` (m) and ``capacity_kj`` (kJ)."""
-        return {"height_m": self.params.height, "capacity_kj": self.params.capacity_kj}
+        """``height_m`` (m), ``capacity_kj`` (kJ) and, where given, the MEL-test figures.
+
+        ``max_elongation_m`` (m) and ``residual_height_m`` (m, the residual
+        height fraction times the nominal height) only when the product has
+        them, so that a fence without them is checked as before.
+        """
+        p = self.params
+        props = {"height_m": p.height, "capacity_kj": p.capacity_kj}
+        if p.max_elongation_m is not None:
+            props["max_elongation_m"] = p.max_elongation_m
+        if p.residual_height_fraction is not None:
+            props["residual_height_m"] = p.residual_height_fraction * p.height
+        return props
 
     def quantities(self, section: SectionLike) -> dict[str, float]:
         """``height_m`` (m), ``capacity_kj`` (kJ), ``area_m2_per_m`` (m^2/m)."""

@@ -17,6 +17,10 @@ see ``ProtectiveMeasure.design_properties``):
   partial factors on the trajectory, the slope survey, the block volume and
   unit weight, and the product's energy capacity.
 
+Both also check the braking distance of a fence whose catalogue product gives
+its maximum elongation in the MEL test (``max_elongation_m``): the protected
+zone must not start within it (``braking_distance``).
+
 Conventions shared by both:
 
 * a design property that is absent or not finite (e.g. ``capacity_kj = inf``,
@@ -229,6 +233,40 @@ def _reach_check(
                          target, confidence)
 
 
+def _product(result: MeasureResult) -> str:
+    """``"product NAME"`` of the measure, or its kind where it names no product."""
+    name = getattr(getattr(result.measure, "params", None), "product", None)
+    return f"product {name}" if name else f"this {result.measure.kind}"
+
+
+def _braking_check(result: MeasureResult, elongation_m: float | None) -> list[Check]:
+    """The braking distance against the protected zone: ``[]`` or one check.
+
+    A fence stops a rock by stretching downslope by up to its maximum
+    elongation (ETAG 027 / EAD 340059, measured in the MEL test); what stands
+    within that distance is hit by the net even when the rock is caught. The
+    only thing a project declares downslope is its protected zone
+    (``protect.x``), so the check is that the zone starts no nearer than the
+    elongation: value the elongation, target the clearance ``protect.x - x``
+    (m), holds if value <= target. It is geometry, not a statistic of the
+    rocks: it holds or fails with confidence alike, rocks or none.
+
+    No check without an elongation or without a protected zone
+    (``result.clearance_m`` None).
+    """
+    clearance = result.clearance_m
+    if elongation_m is None or clearance is None:
+        return []
+    ok = bool(elongation_m <= clearance)
+    detail = (f"maximum elongation {_num(elongation_m, 'm')} of {_product(result)} "
+              f"(catalogue, MEL test) against {_num(clearance, 'm')} from the fence to the "
+              f"protected zone (protect.x)")
+    if not ok:
+        detail = f"{detail}: the net would reach into the protected zone while braking a rock"
+    return [Check("braking_distance", elongation_m, clearance, ok, "m", detail, elongation_m,
+                  ok, None, elongation_m, not ok)]
+
+
 # ---------------------------------------------------------------------------
 # Spang & Rautenstrauch (1988): safety factors
 # ---------------------------------------------------------------------------
@@ -253,6 +291,15 @@ class SpangConcept(SafetyConcept):
         upslope edge (the paper's maximum grows with the number of rocks);
         holds if >= ``reach_factor`` (values above 1 are normally
         uneconomic).
+    ``braking_distance`` (``max_elongation_m`` present and a protected zone)
+        The fence's maximum elongation (m) must not reach the protected
+        zone: holds if it is <= ``protect.x`` - x.
+
+    The height factor stays on the nominal height even where the product
+    gives a residual height (``residual_height_m``): the paper predates the
+    fence classes of ETAG 027 and its factor of 2 to 3 on the nominal height
+    is its margin for what the net loses in height; taking the residual
+    height as well would count that margin twice.
 
     Parameters
     ----------
@@ -339,7 +386,8 @@ class SpangConcept(SafetyConcept):
         list of Check
             ``height_factor``, ``energy_factor``, ``reach_factor`` (unit "-"),
             in that order, for those of ``height_m``, ``capacity_kj``,
-            ``width_m`` the measure declares.
+            ``width_m`` the measure declares; then ``braking_distance`` (m)
+            for a ``max_elongation_m`` with a protected zone.
         """
         params = self.params
         properties = result.measure.design_properties()
@@ -376,6 +424,7 @@ class SpangConcept(SafetyConcept):
         if width_m is not None:
             checks.append(_reach_check(result, width_m, params.reach_factor, params.statistic,
                                        params.confidence))
+        checks += _braking_check(result, _finite_property(properties, "max_elongation_m"))
         return checks
 
 
@@ -397,9 +446,16 @@ class Uni11211Concept(SafetyConcept):
     ``design_height`` (``height_m`` present)
         Design passing height plus freeboard, :math:`h_d + f`; holds if the
         nominal height :math:`h_{nom} \\ge h_d + f`. Value :math:`h_d + f`,
-        target :math:`h_{nom}` (m).
+        target :math:`h_{nom}` (m). Where the product gives its residual
+        height after the MEL test (``residual_height_m``), the target is
+        that residual height instead, and the detail says so.
     ``reach_factor`` (``width_m`` present)
         Width over the ``percentile`` of the reach, as in ``spang``.
+    ``braking_distance`` (``max_elongation_m`` present and a protected zone)
+        The fence's maximum elongation (m) must not reach the protected
+        zone: holds if it is <= ``protect.x`` - x (the distance :math:`d_A`
+        of Peila & Ronco (2009) against the elongation; no partial factor
+        on the elongation is applied).
 
     Parameters
     ----------
@@ -430,6 +486,15 @@ class Uni11211Concept(SafetyConcept):
     the block size"; we read the standard as requiring the centre to pass
     at least half a block below the top and use the maximum. **This reading
     is flagged for review.**
+
+    The residual height in place of the nominal height is the height a net
+    keeps after an impact at its MEL: a block of the design height must
+    still be intercepted by a net that has already been loaded. The
+    references at hand state the height check on the nominal height; this
+    use of the residual height, where the catalogue gives it, is the
+    conservative reading and **is flagged for review** against the text of
+    UNI 11211-4:2018. Without a residual height the check is the nominal
+    one, as before.
 
     References
     ----------
@@ -533,7 +598,8 @@ class Uni11211Concept(SafetyConcept):
         list of Check
             ``design_energy`` (kJ), ``design_height`` (m), ``reach_factor``
             (-), in that order, for those of ``capacity_kj``, ``height_m``,
-            ``width_m`` the measure declares.
+            ``width_m`` the measure declares; then ``braking_distance`` (m)
+            for a ``max_elongation_m`` with a protected zone.
         """
         params = self.params
         properties = result.measure.design_properties()
@@ -543,11 +609,13 @@ class Uni11211Concept(SafetyConcept):
             checks.append(self._energy_check(result, capacity_kj))
         height_m = _finite_property(properties, "height_m")
         if height_m is not None:
-            checks.append(self._height_check(result, height_m))
+            checks.append(self._height_check(
+                result, height_m, _finite_property(properties, "residual_height_m")))
         width_m = _finite_property(properties, "width_m")
         if width_m is not None:
             checks.append(_reach_check(result, width_m, params.reach_factor,
                                        _label(params.percentile), params.confidence))
+        checks += _braking_check(result, _finite_property(properties, "max_elongation_m"))
         return checks
 
     @property
@@ -599,10 +667,20 @@ class Uni11211Concept(SafetyConcept):
         """h_d + f (m) from a characteristic passing height and radius (m)."""
         return height_m * self.gamma_f + max(self.params.f_min_m, radius_m)
 
-    def _height_check(self, result: MeasureResult, height_m: float) -> Check:
+    def _height_check(self, result: MeasureResult, nominal_m: float,
+                      residual_m: float | None = None) -> Check:
+        """h_d + f against the residual height where given, else the nominal height (m)."""
         params = self.params
         heights = np.asarray(result.passing_height_m, dtype=float)
         radii = np.asarray(result.radius_m, dtype=float)
+        if residual_m is None:
+            height_m = nominal_m
+            against = f"nominal height {_num(nominal_m, 'm')}"
+        else:
+            height_m = residual_m
+            against = (f"residual height after the MEL test {_num(residual_m, 'm')} of "
+                       f"{_product(result)} (catalogue; nominal height "
+                       f"{_num(nominal_m, 'm')}), used in place of the nominal height")
         if heights.size == 0:
             return Check("design_height", None, height_m, True, "m", _NO_ROCK, None, True)
         p = _label(params.percentile)
@@ -615,7 +693,7 @@ class Uni11211Concept(SafetyConcept):
             f"h_d + f = {_num(required, 'm')} with h_d = {p} passing height "
             f"{_num(height, 'm')} x gamma_F {self.gamma_f:.4g}, f = max({params.f_min_m:g} m, "
             f"d_d/2 = {_num(d_d / 2.0, 'm')}), over {_rocks(heights.size)}; "
-            f"nominal height {_num(height_m, 'm')}"
+            f"{against}"
         )
         height_b = _statistic_bound(heights, p, params.confidence)
         radius_b = _statistic_bound(radii, p, params.confidence) if radii.size else 0.0

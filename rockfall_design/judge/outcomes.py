@@ -231,7 +231,8 @@ def judge_measures(
         None for a profile edit.
     fates : RockFates
     protect_x : float or None
-        Start of the protected zone (m).
+        Start of the protected zone (m); also gives each barrier's
+        ``clearance_m`` (None: no protected zone, no clearance).
 
     Returns
     -------
@@ -252,6 +253,8 @@ def judge_measures(
             res.passing_height_m = rec[met, 0]
             res.velocity_ms = rec[met, 1]
             res.energy_kj = rec[met, 2]
+            if protect_x is not None:
+                res.clearance_m = float(protect_x - fp.x)
         else:
             out = edit_outcomes(fp, fates)
             met = out != Outcome.NOT_MET

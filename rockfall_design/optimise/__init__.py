@@ -233,7 +233,10 @@ class OptimisationResult:
             "edit_runs": self.edit_runs,
             "currency": self.currency,
             "alternatives": [a.as_dict() for a in self.alternatives],
-            "best": None if self.best is None else self.best.name,
+            # the chosen design, the same object as the Python API's ``best``;
+            # ``best_name`` is the string ``best`` was, kept for older readers
+            "best": None if self.best is None else self.best.as_dict(),
+            "best_name": None if self.best is None else self.best.name,
             "proof": "" if self.best is None else self.best.proof,
             "reason": self.reason,
             "decided": self.decided,

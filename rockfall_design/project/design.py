@@ -65,11 +65,48 @@ class Site(_Model):
 _CATALOGUE_FORM = "measure type -> product name -> {capacity_kj: E, heights: [h, ...]}"
 
 
+#: Optional figures of a fence kit's MEL test (ETAG 027 / EAD 340059): key -> (low, high,
+#: what it is), the value in (low, high]; checked here so that a bad figure is an error
+#: at its line.
+_MEL_KEYS = {
+    "max_elongation_m": (0.0, MAX_COORDINATE_M,
+                         "maximum elongation (braking distance) in the MEL test, m"),
+    "residual_height_fraction": (0.0, 1.0,
+                                 "residual height after the MEL test as a fraction of the "
+                                 "nominal height, e.g. 0.5 for category A"),
+}
+
+
+def _mel_figures(entry: dict[str, Any], where: tuple) -> dict[str, float]:
+    """The optional MEL-test figures of a product, checked: ``{key: number}``.
+
+    ``max_elongation_m`` (m) is a number > 0; ``residual_height_fraction``
+    (-) a number in (0, 1]: the residual height after the MEL test over the
+    nominal height, as EAD 340059 states it (category A >= 0.5, B 0.3 to
+    0.5, C <= 0.3).
+    """
+    out: dict[str, float] = {}
+    for key, (low, high, what) in _MEL_KEYS.items():
+        if key not in entry:
+            continue
+        value = _as_number(entry[key], where + (key,))
+        if not low < value <= high:
+            raise _fail(
+                f"expected a number > {_fmt(low)} and <= {_fmt(high)} (the product's {what}), "
+                f"got {_fmt(value)}",
+                where + (key,),
+            )
+        out[key] = value
+    return out
+
+
 def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
     """A product catalogue, normalised: ``{kind: {name: {capacity_kj, heights, ...}}}``.
 
     ``capacity_kj`` (kJ) is a number > 0, ``heights`` (m) a non-empty list of
-    distinct numbers > 0; other keys of a product are kept as plain data.
+    distinct numbers > 0; the optional MEL-test figures ``max_elongation_m``
+    (m) and ``residual_height_fraction`` (-) are checked by :func:`_mel_figures`;
+    other keys of a product are kept as plain data.
     """
     if not isinstance(value, dict):
         raise _fail(f"expected a mapping {_CATALOGUE_FORM}, got {_describe(value)}")
@@ -125,6 +162,7 @@ def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
                 "capacity_kj": capacity,
                 "heights": heights,
                 **_raw(rest, where),
+                **_mel_figures(entry, where),
             }
         catalogue[kind] = products
     return catalogue

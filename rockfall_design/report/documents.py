@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .. import __version__
-from .tables import measure_text, round_value
+from .tables import chosen_name, measure_text, round_value
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..outputs import OutputSet
@@ -92,10 +92,13 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "ground parameters), no fragmentation of a rock on impact, no rock hitting another.",
         "No trees or forest, no air drag, no ground that deforms or is cratered beyond what "
         "restitution and friction represent.",
-        "A fence is a line at its station: no braking distance (maximum elongation), no "
-        "residual height after an impact, no difference between hitting a post, a cable or "
-        "the middle of the net, no load on posts, anchors or foundations. The catalogue's "
-        "capacity_kj is one number; SEL and MEL are not told apart.",
+        "A fence is a line at its station: in the simulation a rock is stopped where its "
+        "centre crosses the station, with no braking distance (maximum elongation) and no "
+        "loss of height (residual height) after an impact, no difference between hitting a "
+        "post, a cable or the middle of the net, no load on posts, anchors or foundations. "
+        "Where the product gives its maximum elongation and residual height, the checks use "
+        "them (below). The catalogue's capacity_kj is one number; SEL and MEL are not told "
+        "apart.",
         "A wall is rigid: no structural check of the wall, the embankment or its foundation; "
         "a ditch or berm holds a rock that comes to rest in it, with no check of its slopes.",
     )),
@@ -106,18 +109,28 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "capacity_kj / design energy (the statistic of the kinetic energies), target "
         "energy_factor; reach factor = width of a ditch or berm / the statistic of the "
         "reach, target reach_factor. The paper took the maximum over a few hundred paths; "
-        "here statistic chooses the maximum or the 95th or 99th percentile.",
+        "here statistic chooses the maximum or the 95th or 99th percentile. The height "
+        "factor stays on the nominal height, as in the paper, also where the product gives "
+        "a residual height.",
         "uni11211 follows UNI 11211-4 (2018), with Peila & Ronco (2009): design speed and "
         "passing height are the percentile times gamma_F = gamma_tr gamma_dp, the design "
         "mass the percentile times gamma_volf gamma_gamma; the design energy E_d = 1/2 m_d "
         "v_d^2 must not exceed capacity_kj / gamma_e, with capacity_kj the product's MEL; the "
-        "nominal height must be at least h_d + f, f = max(f_min_m, half the design block).",
+        "nominal height must be at least h_d + f, f = max(f_min_m, half the design block); "
+        "where the product gives its residual height, the residual height must be at least "
+        "h_d + f instead (the conservative reading, flagged for review against the text of "
+        "the standard).",
         "Fence classes follow ETAG 027, now EAD 340059: a kit is tested at its service "
         "energy level SEL and its maximum energy level MEL (SEL = MEL / 3); the MEL test "
         "gives the maximum elongation (braking distance) and the residual height (category "
-        "A at least 50 % of the nominal height, B 30 to 50 %, C at most 30 %). This version "
-        "checks the energy against capacity_kj and the height against the nominal height; "
-        "it does not use the elongation or the residual height.",
+        "A at least 50 % of the nominal height, B 30 to 50 %, C at most 30 %). The energy "
+        "is checked against capacity_kj. Where the catalogue gives a fence product's "
+        "max_elongation_m and residual_height_fraction (or a checked fence has them), both "
+        "concepts check that the protected zone (protect.x) does not start within the "
+        "maximum elongation downslope of the fence (braking_distance, naming the product), "
+        "and uni11211 checks the design height against the residual height; without them "
+        "the braking distance is not checked and the height is checked against the nominal "
+        "height.",
     )),
 )
 
@@ -383,7 +396,7 @@ def _checks_table(summary: Mapping[str, Any]) -> Table | None:
 
 def _alternatives_table(summary: Mapping[str, Any]) -> Table:
     cur = summary.get("currency") or ""
-    best = summary.get("best")
+    best = chosen_name(summary)
     alts = sorted(summary.get("alternatives", []),
                   key=lambda a: (not a.get("feasible"), a.get("cost") is None,
                                  a.get("cost") or 0))
@@ -426,7 +439,7 @@ def _alternatives_table(summary: Mapping[str, Any]) -> Table:
 
 
 def _chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
-    best = summary.get("best")
+    best = chosen_name(summary)
     if best is None:
         return f"No admissible design: {summary.get('reason', '')}", []
     alt = next(a for a in summary["alternatives"] if a.get("name") == best)

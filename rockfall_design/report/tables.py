@@ -17,6 +17,7 @@ from typing import Any
 import pandas as pd
 
 __all__ = [
+    "chosen_name",
     "round_value",
     "check_columns",
     "measure_text",
@@ -27,6 +28,18 @@ __all__ = [
 
 #: Decimals kept for a value of a unit (unknown units keep 3 significant decimals).
 _DECIMALS = {"-": 2, "m": 2, "kJ": 0, "kj": 0, "m/s": 1, "%": 2}
+
+
+def chosen_name(summary: Mapping[str, Any]) -> str | None:
+    """Family name of an optimise summary's chosen design (None without one).
+
+    ``best`` is the chosen design's object (with its ``name``); a summary
+    written before it was has the name itself there, which is read too.
+    """
+    best = summary.get("best")
+    if best is None or isinstance(best, str):
+        return best
+    return best.get("name")
 
 
 def round_value(value: Any, unit: str = "-") -> Any:
@@ -124,7 +137,7 @@ def alternatives_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
         (every check as ``name=value/target:ok``, for readers of earlier
         files).
     """
-    best = summary.get("best")
+    best = chosen_name(summary)
     rows: list[dict[str, Any]] = []
     for a in summary.get("alternatives", []):
         row: dict[str, Any] = {

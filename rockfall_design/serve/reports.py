@@ -148,7 +148,7 @@ class OptimiseReport:
         from ..report.figures import alternatives_figure
 
         s = self.summary
-        out = {"alternatives": alternatives_figure(s["alternatives"], s.get("best"),
+        out = {"alternatives": alternatives_figure(s["alternatives"], s["best_name"],
                                                    s.get("currency", ""), self.project.name)}
         if self.design is not None:
             out.update(self.design.figures())

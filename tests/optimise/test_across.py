@@ -178,7 +178,7 @@ def test_a_share_of_the_scenarios_never_costs_more_than_all(tmp_path, capsys):
         path = _write(tmp_path, _text(3, share))
         assert main(["optimise", str(path), "--json"]) == 0
         out = _json(capsys)
-        best = next(a for a in out["alternatives"] if a["name"] == out["best"])
+        best = next(a for a in out["alternatives"] if a["name"] == out["best"]["name"])
         costs[share] = best["cost"]
         assert sum(r["holds_on_fresh_rocks"] is True
                    for r in out["scenarios"]["per_scenario"]) >= out["scenarios"]["required"]

@@ -168,8 +168,14 @@ def test_chosen_design_holds_with_a_fresh_seed_and_twice_the_rocks(tmp_path, cap
     code = main(["check", str(tmp_path / "design.yaml"), "--rocks", str(s["fresh_rocks"]),
                  "--seed", str(s["fresh_seed"]), "--json"])
     chk = json.loads(capsys.readouterr().out)
-    (best,) = [a for a in s["alternatives"] if a["name"] == s["best"]]
+    (best,) = [a for a in s["alternatives"] if a["name"] == s["best"]["name"]]
     assert chk["ok"] is True and best["holds_on_fresh_rocks"] is True
+    # best is the chosen design, the same object in --json as in Python; best_name the old string
+    assert s["best"] == best and s["best_name"] == best["name"]
+    assert {"name", "cost", "measures", "checks", "feasible"} <= set(s["best"])
+    import rockfall_design as rd
+
+    assert json.loads(json.dumps(rd.optimise(proj).best)) == s["best"]
 
 
 def test_family_without_a_design_names_its_binding_check(registry):

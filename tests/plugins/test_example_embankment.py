@@ -104,7 +104,7 @@ def test_optimise_chooses_it_and_check_accepts_the_design(installed, tmp_path, c
     assert main(["optimise", str(PROJECT), "--out", str(out), "--json"]) == 0
     summary = json.loads(capsys.readouterr().out)
     alternatives = {a["name"]: a for a in summary["alternatives"]}
-    assert summary["best"] == "embankment"
+    assert summary["best"]["name"] == summary["best_name"] == "embankment"
     assert alternatives["embankment"]["cost"] < alternatives["fence"]["cost"]
     (m,) = alternatives["embankment"]["measures"]
     assert m["type"] == "embankment" and 1.5 <= m["height"] <= 6.0

@@ -291,7 +291,7 @@ def test_the_plugin_works_when_nothing_fails(install, capsys, command):
     if command == "check":
         assert summary["measures"][0]["type"] == "boom_net"
     else:
-        assert summary["best"] == "boom_net"
+        assert summary["best"]["name"] == "boom_net"
 
 
 @pytest.mark.parametrize(("command", "fault", "name", "method"), CASES)

@@ -162,7 +162,7 @@ def test_optimise_chooses_it_and_check_accepts_the_design(installed, tmp_path, c
     # One layer (90 kJ) cannot take the rocks where the net may stand, nor can
     # the lowest net: both its own variables were searched.
     assert m["layers"] > 1 and m["height"] > 1.0
-    assert net["cost"] < fence["cost"] and summary["best"] == "ring_net"
+    assert net["cost"] < fence["cost"] and summary["best"]["name"] == "ring_net"
     assert main(["check", str(out / "design.yaml"), "--json"]) == 0
     checked = json.loads(capsys.readouterr().out)
     assert [x["type"] for x in checked["measures"]] == ["ring_net"]

@@ -92,7 +92,7 @@ def test_the_bill_in_report_html_adds_up_to_the_stated_cost(run):
     if command != "optimise" or summary["best"] is None:
         pytest.skip("a chosen design's bill")
     bill = summary["bill"]
-    cost = next(a["cost"] for a in summary["alternatives"] if a["name"] == summary["best"])
+    cost = next(a["cost"] for a in summary["alternatives"] if a["name"] == summary["best"]["name"])
     assert bill["total"] == pytest.approx(cost, abs=0.01)
     assert set(bill) >= {"items", "total", "currency"}
     for it in bill["items"]:

@@ -480,7 +480,7 @@ def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registr
         design = c.get(f"/api/jobs/{job['id']}/files/design.yaml")
         assert {"report.html", "alternatives.png", "profile.svg"} <= set(job["files"])
         report = c.get(f"/api/jobs/{job['id']}/files/report.html")
-        assert report.status_code == 200 and page["best"] in report.text
+        assert report.status_code == 200 and page["best"]["name"] in report.text
         assert c.get(f"/api/jobs/{job['id']}/files/alternatives.png").content[:4] == b"\x89PNG"
     out = tmp_path / "out"
     main(["optimise", str(tmp_path / "design_quarry.yaml"), "--rocks", "500", "--seed", "3",

@@ -261,7 +261,7 @@ def test_optimise_a_corridor_writes_a_design_per_section_that_check_accepts(tmp_
     assert totals["ok"] is True and totals["currency"] == "EUR"
     costs = []
     for block in out["sections"]:
-        best = next(a for a in block["alternatives"] if a["name"] == block["best"])
+        best = next(a for a in block["alternatives"] if a["name"] == block["best"]["name"])
         costs.append(best["cost"])
     assert totals["cost"] == pytest.approx(sum(costs))
     assert totals["failures"] == []

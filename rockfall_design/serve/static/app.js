@@ -531,7 +531,9 @@ function showDownloads(job, div) {
 
 function showOptimise(job) {
   const s = job.result, div = $("results");
-  const best = s.best === null ? null : s.alternatives.find((a) => a.name === s.best);
+  // best is the chosen design itself (with its name); a summary from before was its name
+  const chosen = s.best === null || typeof s.best === "string" ? s.best : s.best.name;
+  const best = chosen === null ? null : s.alternatives.find((a) => a.name === chosen);
   div.innerHTML = "";
   const head = document.createElement("p");
   head.id = "chosen";
