@@ -100,6 +100,12 @@ def _screen_verdict(sr: ScreenResult) -> Verdict:
     return Verdict.UNDECIDED if sr.near else Verdict.REJECTED
 
 
+def _finite(x: float | None) -> float | None:
+    """``x``, or None where it is not a finite number (JSON has no infinity: a factor
+    over a demand whose lower bound is 0 is unbounded)."""
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
 def look_values(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
                 n: int, allowed: float | None, confidence: float) -> dict[str, Any]:
     """Point values and both bounds of a look, for the report of a marginal design.
@@ -108,8 +114,9 @@ def look_values(checks: Sequence[Sequence[Check]], labels: Sequence[str], residu
     optimistic, target}], residual: {reaching, fraction, lower, upper,
     allowed}}`` (``residual`` None without a protected zone).
     """
-    rows = [{"measure": lab, "name": c.name, "value": c.value, "bound": c.bound,
-             "optimistic": c.optimistic, "target": c.target, "unit": c.unit}
+    rows = [{"measure": lab, "name": c.name, "value": _finite(c.value),
+             "bound": _finite(c.bound), "optimistic": _finite(c.optimistic),
+             "target": c.target, "unit": c.unit}
             for lab, cs in zip(labels, checks, strict=True) for c in cs]
     res = None
     if residual is not None and allowed is not None:

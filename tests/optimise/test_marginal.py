@@ -171,3 +171,18 @@ def test_a_residual_of_nothing_is_said_at_once(registry):
     assert res.best is None and res.evaluations == 0
     assert "allows no rock to reach the protected zone" in res.reason
     assert all("allows no rock" in a.reason for a in res.alternatives)
+
+
+def test_a_marginal_designs_values_are_json_whatever_its_bounds():
+    """An unbounded favourable factor (demand's lower bound 0) is null, never Infinity."""
+    import json
+    import math
+
+    from rockfall_design.optimise.decide import look_values, rocks_to_decide
+
+    c = Check(name="energy_factor", value=0.9, target=1.0, ok=False, bound=0.5,
+              optimistic=math.inf)
+    v = look_values([[c]], ["fence"], 3, 4603, 0.001, 0.99)
+    json.dumps(v, allow_nan=False)
+    assert v["checks"][0]["optimistic"] is None and v["checks"][0]["bound"] == 0.5
+    rocks_to_decide(v)
