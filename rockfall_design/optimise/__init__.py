@@ -53,7 +53,7 @@ from __future__ import annotations
 import math
 import time
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -175,8 +175,7 @@ class Alternative:
     def as_dict(self) -> dict[str, Any]:
         return {
             "name": self.name,
-            "measures": [{"type": m.kind, **m.params.model_dump(mode="json")}
-                         for m in self.measures],
+            "measures": measure_dicts(self.measures),
             "cost": None if not math.isfinite(self.cost) else round(self.cost, 2),
             "feasible": self.feasible,
             "holds_on_fresh_rocks": self.holds_on_fresh_rocks,
@@ -316,13 +315,28 @@ def fresh_failures(fresh: Evaluation) -> str:
         "its point values hold, but not every check or the residual with its bound")
 
 
+def measure_dicts(measures: Sequence[ProtectiveMeasure]) -> list[dict[str, Any]]:
+    """Measures as the project file writes them: ``{type, **params}`` each."""
+    return [{"type": m.kind, **m.params.model_dump(mode="json")} for m in measures]
+
+
+def listed_entry(family: str, measures: Sequence[ProtectiveMeasure], labels: Sequence[str],
+                 cost: float, *, rocks: int | None, values: dict[str, Any] | None,
+                 reason: str, decided: bool) -> dict[str, Any]:
+    """A cheaper design listed as marginal or undecided (``marginal`` in --json).
+
+    ``values`` are the look's point values and bounds (:func:`look_values`), None
+    for a design across scenarios; ``rocks_to_decide`` follows from them.
+    """
+    return {"name": family, "family": family, "measures": measure_dicts(measures),
+            "labels": list(labels), "cost": round(float(cost), 2), "rocks": rocks,
+            "rocks_to_decide": None if values is None else rocks_to_decide(values),
+            "values": values, "reason": reason, "decided": decided}
+
+
 def _marginal_entry(alt_name: str, d: Any, dec: Decision) -> dict[str, Any]:
-    return {"name": alt_name, "family": alt_name,
-            "measures": [{"type": m.kind, **m.params.model_dump(mode="json")}
-                         for m in d.measures],
-            "labels": list(d.result.labels), "cost": round(float(d.cost), 2),
-            "rocks": dec.rocks, "rocks_to_decide": rocks_to_decide(dec.values),
-            "values": dec.values, "reason": dec.reason, "decided": True}
+    return listed_entry(alt_name, d.measures, d.result.labels, d.cost, rocks=dec.rocks,
+                        values=dec.values, reason=dec.reason, decided=True)
 
 
 def _undecided_entry(alt_name: str, d: Any, why: str, screen: Screening) -> dict[str, Any]:
@@ -337,14 +351,10 @@ def _undecided_entry(alt_name: str, d: Any, why: str, screen: Screening) -> dict
     values = look_values(sr.checks, sr.labels, residual, screen.n, screen.allowed_fraction,
                          screen.confidence)
     conf = f"{100 * screen.confidence:.4g} %"
-    return {"name": alt_name, "family": alt_name,
-            "measures": [{"type": m.kind, **m.params.model_dump(mode="json")}
-                         for m in d.measures],
-            "labels": list(sr.labels), "cost": round(float(d.cost), 2),
-            "rocks": screen.n, "rocks_to_decide": rocks_to_decide(values), "values": values,
-            "reason": (f"not decided ({why}); on the {screen.n:,} search rocks it neither "
-                       f"holds nor fails with {conf} confidence"),
-            "decided": False}
+    return listed_entry(alt_name, d.measures, sr.labels, d.cost, rocks=screen.n,
+                        values=values, decided=False,
+                        reason=(f"not decided ({why}); on the {screen.n:,} search rocks it "
+                                f"neither holds nor fails with {conf} confidence"))
 
 
 def _keep_cheapest(alt: Alternative, entry: dict[str, Any]) -> None:

@@ -60,6 +60,8 @@ from . import (
     Alternative,
     OptimisationResult,
     fresh_failures,
+    listed_entry,
+    measure_dicts,
 )
 from .decide import decide, look_concept
 from .screening import Screening
@@ -460,8 +462,7 @@ def optimise_across(
                 alt.reason = verdict.reason
                 # the next cheaper design than the one chosen, for the report
                 last_failed = {
-                    "measures": [{"type": m.kind, **m.params.model_dump(mode="json")}
-                                 for m in d.measures],
+                    "measures": measure_dicts(d.measures),
                     "cost": round(d.cost, 2),
                     "failed_in": [scs[j].run.index for j in verdict.failed_in],
                     "reason": verdict.reason}
@@ -539,13 +540,10 @@ def _list_undecided(alt: Alternative, undecided: Sequence[tuple[Any, str]], top:
         if key in seen or len(alt.marginal) >= MAX_MARGINAL_PER_FAMILY:
             continue
         seen.add(key)
-        alt.marginal.append({
-            "name": alt.name, "family": alt.name,
-            "measures": [{"type": m.kind, **m.params.model_dump(mode="json")}
-                         for m in d.measures],
-            "labels": [m.label() for m in d.measures], "cost": key, "rocks": None,
-            "rocks_to_decide": None, "values": None, "reason": why,
-            "decided": why.startswith("marginal")})
+        alt.marginal.append(listed_entry(alt.name, d.measures,
+                                         [m.label() for m in d.measures], key, rocks=None,
+                                         values=None, reason=why,
+                                         decided=why.startswith("marginal")))
 
 
 def _gate(state: dict[str, int], feasible: bool, unjudged: bool) -> str:
