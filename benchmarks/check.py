@@ -18,7 +18,7 @@ from pathlib import Path
 from rockfall_design.evaluate import evaluate
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
-from rockfall_design.simulation import run_study
+from rockfall_design.run.simulation import run_study
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -67,7 +67,7 @@ def kernel(n: int, threads: int | None) -> tuple[float, int, int]:
     from rockfall_design.engine import run_ensemble
     from rockfall_design.engine.ensemble import default_threads
     from rockfall_design.project import load_project
-    from rockfall_design.releases import (
+    from rockfall_design.run.releases import (
         ReleaseStream,
         draw_releases,
         engine_key,
@@ -102,7 +102,7 @@ def kernel_cpu(n: int, repeats: int = 5) -> tuple[float, int]:
     """
     from rockfall_design.engine import run_ensemble
     from rockfall_design.project import load_project
-    from rockfall_design.releases import (
+    from rockfall_design.run.releases import (
         draw_releases,
         engine_key,
         engine_settings,

@@ -69,7 +69,7 @@ def _engine(seed: int) -> dict[str, str]:
     from rockfall_design.engine import barrier_table, run_ensemble
     from rockfall_design.engine.ensemble import EnsembleResult
     from rockfall_design.project import load_project
-    from rockfall_design.releases import (
+    from rockfall_design.run.releases import (
         draw_releases,
         engine_key,
         engine_settings,

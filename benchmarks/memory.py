@@ -48,7 +48,7 @@ def _peak_mib() -> float:
 
 def one(name: str, rocks: int) -> dict[str, float]:
     """Run one size in this process; return its figures."""
-    from rockfall_design.simulation import EXACT_ROCKS, simulate, study_memory
+    from rockfall_design.run.simulation import EXACT_ROCKS, simulate, study_memory
 
     project = _project(name)
     simulate(project, rocks=10)  # compile or load numba's cache

@@ -41,7 +41,7 @@ from rockfall_design.evaluate import build_concept, evaluate_design
 from rockfall_design.optimise import Screening, optimise
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
-from rockfall_design.simulation import run_study
+from rockfall_design.run.simulation import run_study
 
 ROOT = Path(__file__).resolve().parents[1]
 PROJECTS = sorted((ROOT / "projects").glob("design_*.yaml"))

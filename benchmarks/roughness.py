@@ -37,7 +37,7 @@ QS = (5, 25, 50, 75, 95, 99)
 def ours(convention: str, rocks: int) -> dict[str, float]:
     from rockfall_design.engine.columns import STOPPED
     from rockfall_design.project import load_project_text
-    from rockfall_design.simulation import run_study
+    from rockfall_design.run.simulation import run_study
 
     text = PROJECT.read_text()
     if convention == "height":

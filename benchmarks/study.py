@@ -42,7 +42,7 @@ from pathlib import Path
 import rockfall_design as rd
 from rockfall_design.engine.ensemble import ENGINE_THREADS
 from rockfall_design.project import load_project_text
-from rockfall_design.simulation import simulate
+from rockfall_design.run.simulation import simulate
 from rockfall_design.study.executors import usable_cores
 from rockfall_design.study.run import ScenarioTask, prepare
 

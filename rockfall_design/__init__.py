@@ -20,13 +20,7 @@ The public API is what this module exports:
 import sys
 import types
 from importlib import import_module
-from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
-
-try:
-    __version__ = version("rockfall-design")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0+unknown"
 
 from .costs import CostModel, CostParams
 from .hookspecs import hookimpl
@@ -41,6 +35,7 @@ from .measures import (
     Quantity,
 )
 from .safety import Check, SafetyConcept, SafetyParams
+from .version import __version__
 
 # The engineer's functions and the statistics helpers are imported on first
 # use (PEP 562), so that importing the package, or a module of it such as

@@ -33,7 +33,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .optimise import OptimisationResult
     from .plugins import Registry
     from .project import Project
-    from .simulation import StreamedStudy, Study
+    from .run.simulation import Study
+    from .run.streamed import StreamedStudy
 
 __all__ = [
     "load_project",
@@ -220,7 +221,7 @@ class SimulationResult:
     @property
     def streamed(self) -> bool:
         """True for a run of more than ``EXACT_ROCKS`` rocks (statistics from histograms)."""
-        from .simulation import StreamedStudy
+        from .run.streamed import StreamedStudy
 
         return isinstance(self.study, StreamedStudy)
 
@@ -247,7 +248,7 @@ class SimulationResult:
 
     @staticmethod
     def _exact_rocks() -> int:
-        from .simulation import EXACT_ROCKS
+        from .run.simulation import EXACT_ROCKS
 
         return EXACT_ROCKS
 
@@ -472,7 +473,7 @@ class OptimiseResult:
         if best is None:
             return None
         from .design import design_bill, resolve_design
-        from .simulation import section_from_project
+        from .run.releases import section_from_project
 
         d = self.project.design
         source = (f"catalogue {d.costs.file}" if d.costs.file else "design.costs.params")
@@ -609,7 +610,7 @@ def simulate(
         ``.summary`` (as ``--json``), ``.rocks`` (one row per rock),
         ``.stations``, ``.crossings``, ``.envelopes``, ``.plot()``.
     """
-    from .simulation import EXACT_ROCKS
+    from .run.simulation import EXACT_ROCKS
 
     _checked(seed=seed, trajectories=trajectories)
     p = _project(project)
@@ -633,7 +634,7 @@ def run_simulation(project: Project, *, rocks: int | None, seed: int | None,
                    progress: bool | Callable[[int], None], trajectories: int,
                    on_chunk: Callable[[Study], None] | None = None) -> Study | StreamedStudy:
     """The run behind :func:`simulate` (and the CLI, which streams its tables to files)."""
-    from .simulation import simulate as _simulate
+    from .run.simulation import simulate as _simulate
 
     n = _count(project, rocks)
     return _call(progress, n, _simulate, project=project, rocks=n, seed=seed,

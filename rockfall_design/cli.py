@@ -11,12 +11,11 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
-from . import __version__
-
 # The project's limit (rockfall_design.project.MAX_ROCKS), from a module
 # light enough for every --help (no pydantic).
 from .arguments import MAX_ROCKS as _MAX_ROCKS
 from .errors import ExitCode, InputError, Interrupted, RockfallError
+from .version import __version__
 
 if TYPE_CHECKING:  # pragma: no cover
     from .outputs import OutputSet
@@ -393,7 +392,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .api import SimulationResult, run_simulation
     from .outputs import OutputSet
     from .project import Project
-    from .simulation import study_memory
+    from .run.simulation import study_memory
 
     recorded = None
     if getattr(args, "repeat", None):

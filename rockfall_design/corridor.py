@@ -532,7 +532,7 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
     from .api import SimulationResult, run_simulation
     from .cli import _FIGURES, _figures_and_report, _memory_guard, _run, _table_writers, run_record
     from .report.terminal import print_simulation
-    from .simulation import EXACT_ROCKS, study_memory
+    from .run.simulation import EXACT_ROCKS, study_memory
 
     def guard(section: CorridorSection) -> None:
         project = section.project

@@ -438,7 +438,7 @@ def _check_prices(
     on the section is left to the search (which reports designs that do not
     fit, or have no price).
     """
-    from .simulation import section_from_project
+    from .run.releases import section_from_project
 
     design = project.design
     assert design is not None

@@ -23,8 +23,9 @@ from .judge.outcomes import Judgement, RockFates, judge_measures
 from .judge.plan import plan_for
 from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from .plugins import guard
+from .run.releases import section_from_project
+from .run.simulation import Study, run_study
 from .safety import DEFAULT_CONFIDENCE, Check, SafetyConcept
-from .simulation import Study, run_study, section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
     from .measures import ProtectiveMeasure

@@ -14,14 +14,14 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from numpy.testing import assert_allclose
 
-from rockfall_design import simulation
 from rockfall_design.cli import main
-from rockfall_design.histograms import LinearHistogram, LogHistogram
 from rockfall_design.outputs import MANIFEST
 from rockfall_design.project import load_project
-from rockfall_design.releases import ReleaseStream, draw_releases
-from rockfall_design.simulation import simulate
-from rockfall_design.streamed import STREAM_REL_ERROR
+from rockfall_design.run import simulation
+from rockfall_design.run.histograms import LinearHistogram, LogHistogram
+from rockfall_design.run.releases import ReleaseStream, draw_releases
+from rockfall_design.run.simulation import simulate
+from rockfall_design.run.streamed import STREAM_REL_ERROR
 
 ROOT = Path(__file__).resolve().parents[1]
 QUARRY = ROOT / "projects" / "quarry_road.yaml"

@@ -99,7 +99,7 @@ def add_calibrate_parser(sub: Any) -> None:
 def run_record(args: argparse.Namespace, project: Any, seed: int, rocks: int
                ) -> dict[str, Any]:
     """What is needed to repeat the command exactly: version, seed, rocks, project."""
-    from .. import __version__
+    from ..version import __version__
 
     return {"command": args.command, "version": __version__, "seed": seed, "rocks": rocks,
             "project_file": str(args.project), "project_hash": project.resolved_hash(),

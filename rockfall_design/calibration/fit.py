@@ -170,7 +170,7 @@ def problem_for(project: Project, fit_ranges: Mapping[str, tuple[float, float]],
 def simulated_stops(problem: FitProblem, values: Mapping[str, float], seed: int
                     ) -> np.ndarray:
     """Stop stations (m) of ``problem.rocks`` rocks with the inputs set to ``values``."""
-    from ..simulation import run_study
+    from ..run.simulation import run_study
 
     project = with_values(problem.project, values, base=problem.base)
     run = run_study(project, rocks=problem.rocks, seed=seed).result

@@ -24,7 +24,9 @@ rocks reach the protected zone are decided here and nowhere else:
   start of that stretch;
 * a rock reaches the protected zone when its centre gets to ``protect.x``,
   or when its path ended unresolved short of it (an unfinished path is no
-  evidence that the rock stops short).
+  evidence that the rock stops short). That rule is a fact of the path, so
+  it is written once in the run (:mod:`rockfall_design.run.reach`, which
+  ``simulate`` also counts with) and used here, never restated.
 """
 
 from __future__ import annotations
@@ -35,8 +37,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..engine.core import EXIT_DOWNSLOPE, STOPPED, UNRESOLVED
+from ..engine.columns import EXIT_DOWNSLOPE, STOPPED
 from ..measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
+from ..run.reach import protected_zone_counts
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..evaluate import PlacedMeasure
@@ -48,8 +51,6 @@ __all__ = [
     "edit_outcomes",
     "held_by",
     "judge_measures",
-    "protected_zone_counts",
-    "reaches_protected_zone",
 ]
 
 
@@ -101,36 +102,6 @@ class Judgement:
     outcomes: list[np.ndarray]
     reaching: int
     unresolved: int
-
-
-def reaches_protected_zone(max_x: np.ndarray, status: np.ndarray, x: float) -> np.ndarray:
-    """Which rocks count as reaching the protected zone at ``x`` (m).
-
-    A rock reaches it when its centre got to ``x``; a path that ended
-    unresolved (at the event limit) short of ``x`` counts too, because an
-    unfinished path is no evidence that the rock would have stopped short:
-    the design is judged on the safe side, and the report says how many.
-
-    Parameters
-    ----------
-    max_x : ndarray
-        Farthest x (m) each rock's centre reached.
-    status : ndarray
-        Engine status code of each path.
-    x : float
-        Start of the protected zone (m).
-
-    Returns
-    -------
-    ndarray of bool
-    """
-    return (max_x >= x) | (status == UNRESOLVED)
-
-
-def protected_zone_counts(max_x: np.ndarray, status: np.ndarray, x: float) -> tuple[int, int]:
-    """(rocks counted as reaching x, unresolved paths among them that had not reached it)."""
-    short = (status == UNRESOLVED) & (max_x < x)
-    return int(reaches_protected_zone(max_x, status, x).sum()), int(short.sum())
 
 
 def barrier_outcomes(

@@ -91,7 +91,7 @@ def plan_for(project: Project, registry: Registry) -> Plan:
     # plugins, and `rockfall_design.judge` stays cheap to import.
     from ..design import resolve_design
     from ..evaluate import build_concept, build_measures, edited_section, place_measures
-    from ..simulation import section_from_project
+    from ..run.releases import section_from_project
 
     measures = build_measures(project, registry)
     concept = build_concept(project, registry)

@@ -60,8 +60,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..evaluate import Evaluation, evaluate_design
-from ..judge.outcomes import reaches_protected_zone
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
+from ..run.reach import reaches_protected_zone
 from ..safety import DEFAULT_CONFIDENCE
 
 if TYPE_CHECKING:  # pragma: no cover

@@ -33,12 +33,12 @@ from ..judge.outcomes import (
     RockFates,
     barrier_outcomes,
     judge_measures,
-    reaches_protected_zone,
 )
 from ..measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from ..plugins import guard
+from ..run.reach import reaches_protected_zone
+from ..run.releases import draw_releases, engine_key, engine_settings, section_from_project
 from ..safety import DEFAULT_CONFIDENCE, Check
-from ..simulation import draw_releases, engine_key, engine_settings, section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import DesignSpec

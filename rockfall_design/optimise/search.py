@@ -31,10 +31,10 @@ from ..judge.outcomes import (
     RockFates,
     barrier_outcomes,
     judge_measures,
-    reaches_protected_zone,
 )
 from ..measures import Barrier, BarrierBehaviour, Outcome, ProfileEdit
 from ..plugins import guard
+from ..run.reach import reaches_protected_zone
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..measures import ProtectiveMeasure

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .. import __version__
+from ..version import __version__
 from .tables import chosen_name, measure_text, round_value
 
 if TYPE_CHECKING:  # pragma: no cover

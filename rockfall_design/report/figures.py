@@ -32,7 +32,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from ..evaluate import Evaluation
     from ..outputs import OutputSet
-    from ..simulation import StreamedStudy, Study
+    from ..run.simulation import Study
+    from ..run.streamed import StreamedStudy
 
 __all__ = [
     "RockfallFigure",

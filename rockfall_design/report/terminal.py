@@ -19,7 +19,8 @@ from ..outputs import OutputSet
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
-    from ..simulation import StreamedStudy, Study
+    from ..run.simulation import Study
+    from ..run.streamed import StreamedStudy
 
 __all__ = [
     "print_simulation",

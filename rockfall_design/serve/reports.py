@@ -134,7 +134,7 @@ class OptimiseReport:
 
     def _bill(self) -> dict[str, Any]:
         from ..design import design_bill, resolve_design
-        from ..simulation import section_from_project
+        from ..run.releases import section_from_project
 
         d = self.project.design
         source = f"catalogue {d.costs.file}" if d.costs.file else "design.costs.params"

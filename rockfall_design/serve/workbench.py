@@ -376,7 +376,7 @@ class ProjectEntry:
     # -- what the page draws ------------------------------------------------------
     def describe(self) -> dict[str, Any]:
         """The section and everything on it, in metres, for the page."""
-        from ..simulation import section_from_project
+        from ..run.releases import section_from_project
 
         p = self.project
         sec = section_from_project(p)
@@ -517,7 +517,7 @@ class ProjectEntry:
         """
         from ..errors import ProjectError
         from ..evaluate import evaluate, place_measures
-        from ..simulation import section_from_project
+        from ..run.releases import section_from_project
 
         n, s = self._rocks_seed(rocks, seed)
         project = self.project
@@ -976,7 +976,7 @@ def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
     from ..engine.trajectory import centre_points
     from ..evaluate import build_concept
     from ..optimise.screening import Screening
-    from ..simulation import section_from_project
+    from ..run.releases import section_from_project
 
     section = section_from_project(project)
     x0, x1 = float(section.x[0]), float(section.x[-1])
@@ -1014,7 +1014,7 @@ def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
     counts, edges = np.histogram(t.x_end[stopped], bins=STOP_BINS, range=(x0, x1))
     reach = 0
     if project.protect is not None:
-        from ..judge.outcomes import reaches_protected_zone
+        from ..run.reach import reaches_protected_zone
 
         reach = int(reaches_protected_zone(t.max_x, t.status, float(project.protect.x)).sum())
     stops = {"edges": [round(float(e), 4) for e in edges], "counts": counts.tolist(),

@@ -14,7 +14,7 @@ from ..engine.ensemble import THREADS_ENV
 os.environ[THREADS_ENV] = "1"
 
 from ..project import load_project_text  # noqa: E402
-from ..simulation import simulate  # noqa: E402
+from ..run.simulation import simulate  # noqa: E402
 from . import run as _run  # noqa: E402, F401  (the task's module, unpickled by reference)
 
 _TINY = """

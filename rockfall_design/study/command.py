@@ -71,7 +71,7 @@ def add_study_parser(sub: Any) -> argparse.ArgumentParser:
 
 def run_record(result: Any, args: argparse.Namespace) -> dict[str, Any]:
     """What is needed to repeat a study exactly: version, seed, rocks, project."""
-    from .. import __version__
+    from ..version import __version__
 
     return {
         "command": "study",
@@ -90,7 +90,7 @@ def cmd_study(args: argparse.Namespace) -> int:
     from ..cli import PROG, _figure_files, _load, _memory_guard, _plugins_for, _reserve
     from ..outputs import OutputSet
     from ..project import Project
-    from ..simulation import study_memory
+    from ..run.simulation import study_memory
     from .executors import EXTRA_HINT, usable_cores
     from .result import FIGURES
     from .sensitivity import salib_available

@@ -106,7 +106,7 @@ class StudyResult:
         ``sensitivity_confidence``, the c at which its ``effect_low`` ..
         ``effect_high`` hold (None if no scenario has bounds).
         """
-        from .. import __version__
+        from ..version import __version__
         from .sensitivity import joint_bounds
 
         study = self.project.resolved_dict()["study"]

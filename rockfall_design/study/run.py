@@ -103,7 +103,7 @@ def _barriers(project: Project, registry: Any) -> tuple[tuple[int, str, float], 
     """The barriers of a project, checked and placed as every command does."""
     from ..evaluate import build_measures, place_measures, validate_project
     from ..measures import Barrier
-    from ..simulation import section_from_project
+    from ..run.releases import section_from_project
 
     validate_project(project, registry)
     measures = build_measures(project, registry)
@@ -211,7 +211,7 @@ def run_scenario(task: ScenarioTask) -> dict[str, Any]:
         ``runtime_s`` (not part of the study's JSON: it differs between
         runs).
     """
-    from ..simulation import simulate
+    from ..run.simulation import simulate
 
     project = task.project
     own = [float(x) for x in project.analysis.stations]
@@ -251,16 +251,16 @@ def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> dict[str
     At a station of the project (``own``) every block, as ``simulate
     --json`` gives it; at a station added for a barrier only the blocks the
     study keeps (:data:`QUANTITIES`), the others left empty (None). Each
-    block is computed as :meth:`~rockfall_design.simulation.Study.summary`
+    block is computed as :meth:`~rockfall_design.run.simulation.Study.summary`
     computes it, so the numbers are the same to the bit (a test holds the
     scenario to ``simulate``). A streamed run: its own summary, whole.
     ``project_hash``: the hash the summary gives, the scenario's project's
     (not that of its copy with the barriers' stations).
     """
     from ..engine.columns import STOPPED
-    from ..judge.outcomes import protected_zone_counts
-    from ..simulation import Study
-    from ..summary import _STATION_QUANTITIES, STATISTICS, _stat_block, _summary
+    from ..run.reach import protected_zone_counts
+    from ..run.simulation import Study
+    from ..run.summary import _STATION_QUANTITIES, STATISTICS, _stat_block, _summary
 
     if not isinstance(study, Study):
         return {**study.summary(), "project_hash": project_hash}
@@ -316,7 +316,7 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
         ``upper`` at the one-sided confidence 1 - (1 - c) / (2k) each. It is
         left out of the study's JSON.
     """
-    from ..simulation import Study
+    from ..run.simulation import Study
     from .sensitivity import LADDER, TARGET_STATISTICS, ladder_confidences, place_names
 
     rungs = [task.scenarios] if task.scenarios > 0 else list(LADDER)
@@ -422,7 +422,7 @@ def _column_percentile(values: np.ndarray, q: float,
 
 def _envelope(study: Any, q: float) -> dict[str, list[float]]:
     """x (m), crossings and the ``q`` envelopes of height (m) and energy (kJ) of a run."""
-    from ..simulation import Study
+    from ..run.simulation import Study
 
     label = f"{q:g}".replace(".", "_")
     if isinstance(study, Study):

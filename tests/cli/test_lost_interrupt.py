@@ -72,7 +72,7 @@ def test_a_swallowed_interrupt_during_optimise_still_stops_it(tmp_path, monkeypa
 
 
 def test_a_swallowed_interrupt_during_simulate_still_stops_it(tmp_path, monkeypatch, capsys):
-    from rockfall_design import simulation
+    from rockfall_design.run import simulation
 
     out = tmp_path / "out"
     real = simulation.run_ensemble
@@ -94,7 +94,7 @@ def test_a_swallowed_interrupt_during_simulate_still_stops_it(tmp_path, monkeypa
 
 
 def test_a_swallowed_interrupt_without_files_is_still_exit_130(monkeypatch, capsys):
-    from rockfall_design import simulation
+    from rockfall_design.run import simulation
 
     real = simulation.run_ensemble
 

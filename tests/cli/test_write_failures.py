@@ -19,9 +19,10 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design import outputs, simulation
+from rockfall_design import outputs
 from rockfall_design.cli import main
 from rockfall_design.outputs import MANIFEST, OutputError, OutputSet
+from rockfall_design.run import simulation
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"

@@ -7,7 +7,7 @@ import pytest
 
 from rockfall_design.engine import Material, columns, run_ensemble
 from rockfall_design.project import load_project
-from rockfall_design.releases import draw_releases, engine_key, section_from_project
+from rockfall_design.run.releases import draw_releases, engine_key, section_from_project
 
 from ..engine_helpers import one_rock, run_one, section
 

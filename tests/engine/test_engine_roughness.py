@@ -13,7 +13,7 @@ from rockfall_design.engine.impact import impact
 from rockfall_design.engine.rng import next_uniform
 from rockfall_design.errors import InputError
 from rockfall_design.project import load_project_text
-from rockfall_design.releases import section_from_project
+from rockfall_design.run.releases import section_from_project
 
 from ..engine_helpers import one_rock, run_one, section
 

@@ -22,7 +22,7 @@ from rockfall_design.cli import main
 from rockfall_design.design import build_candidate_measure, design_cost, resolve_design
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
-from rockfall_design.releases import section_from_project
+from rockfall_design.run.releases import section_from_project
 
 from ..plugin_helpers import EMBANKMENT_EXAMPLE, install_embankment_example
 

@@ -202,7 +202,7 @@ def test_the_readme_catch_net_is_a_candidate_searched_by_its_own_height(tmp_path
     import re
 
     from rockfall_design.design import build_candidate_measure, design_cost
-    from rockfall_design.releases import section_from_project
+    from rockfall_design.run.releases import section_from_project
 
     guide = (ROOT / "docs" / "plugins.md").read_text(encoding="utf-8")
     tail = guide[guide.index("`rockfall_catchnet/__init__.py`"):]

@@ -331,8 +331,8 @@ def test_mutated_projects_with_measures_check_or_fail_with_one_line(tmp_path_fac
 def test_a_long_tailed_size_distribution_is_cut_off_at_the_largest_rock():
     """A lognormal with a huge sigma would otherwise draw rocks of astronomic mass."""
     from rockfall_design.project import MAX_RADIUS_M, load_project_text
-    from rockfall_design.releases import draw_releases
-    from rockfall_design.simulation import simulate
+    from rockfall_design.run.releases import draw_releases
+    from rockfall_design.run.simulation import simulate
 
     text = STANDARD.replace("radius: 0.5 ", "volume: {lognormal: [2.0, 30.0]} ")
     project = load_project_text(text, "p.yaml")
@@ -343,7 +343,7 @@ def test_a_long_tailed_size_distribution_is_cut_off_at_the_largest_rock():
     assert all(v is None or np.isfinite(v) for v in s["stations"][0]["energy_kj"].values())
     # A realistic distribution is not touched: its draws are the untruncated ones.
     plain = load_project_text(STANDARD.replace("radius: 0.5 ", "radius: {lognormal: [0.5, 0.4]} "))
-    from rockfall_design import releases
+    from rockfall_design.run import releases
 
     u = np.random.default_rng(releases._children(1)[releases._SEED_SIZE]).random(2000)
     from scipy.stats import norm
@@ -401,7 +401,7 @@ def test_the_optimiser_refuses_more_families_than_it_can_search(tmp_path, capsys
 def test_draws_below_the_smallest_rock_are_raised_to_it():
     """A normal size with a wide spread reaches towards 0; those draws become 1 cm rocks."""
     from rockfall_design.project import MIN_RADIUS_M, load_project_text
-    from rockfall_design.releases import draw_releases
+    from rockfall_design.run.releases import draw_releases
 
     project = load_project_text(STANDARD.replace("radius: 0.5 ", "radius: {normal: [0.05, 0.1]} "))
     radius = draw_releases(project, 2000, 1).radius

@@ -210,7 +210,7 @@ def test_a_plugin_that_raises_is_named_and_stops_the_run_with_exit_3(tmp_path, m
 def test_an_unresolved_path_counts_as_reaching_the_protected_zone(streamed, tmp_path, capsys,
                                                                   monkeypatch):
     """A path cut off by the event limit is no evidence that the rock stopped short."""
-    from rockfall_design import simulation
+    from rockfall_design.run import simulation
 
     from .test_bad_input import STANDARD
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import ast
-import importlib
 import subprocess
 import sys
 from pathlib import Path
@@ -55,12 +54,6 @@ def test_importing_the_package_loads_none_of_its_modules():
     assert _loaded_after("import rockfall_design.report", heavy) == []
 
 
-#: The modules that moved into the room, each still importable from where it was.
-MOVED = {"rockfall_design.tables": "rockfall_design.report.tables",
-         "rockfall_design.figures": "rockfall_design.report.figures",
-         "rockfall_design.documents": "rockfall_design.report.documents"}
-
-
 def _public_definitions(module: object) -> set[str]:
     """The names a module's own source defines at its top level, leading underscore aside."""
     tree = ast.parse(Path(module.__file__).read_text(encoding="utf-8"))
@@ -73,18 +66,6 @@ def _public_definitions(module: object) -> set[str]:
         elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
             names.add(node.target.id)
     return {n for n in names if not n.startswith("_")}
-
-
-@pytest.mark.parametrize("old, new", MOVED.items())
-def test_a_moved_module_is_still_importable_where_it_was(old, new):
-    """The old module hands on every public name of the new one, the very same objects."""
-    shim, module = importlib.import_module(old), importlib.import_module(new)
-    assert shim.__all__ == module.__all__
-    public = _public_definitions(module)
-    assert set(module.__all__) <= public
-    for name in public:
-        assert getattr(shim, name) is getattr(module, name), name
-    assert new in shim.__doc__
 
 
 def test_the_package_offers_every_public_name_of_the_terminal():
@@ -105,22 +86,6 @@ def _imported_modules(path: Path, package: str) -> set[str]:
         elif isinstance(node, ast.Import):
             names.update(a.name for a in node.names)
     return names
-
-
-def test_no_code_of_the_program_imports_a_moved_module_where_it_was():
-    """The old places are for users; the program and its plugins import the new ones."""
-    old = set(MOVED)
-    offenders = []
-    for root in (ROOT / "rockfall_design", ROOT / "plugins" / "rockfall_design_builtins"):
-        for path in root.rglob("*.py"):
-            parts = path.relative_to(root.parent).with_suffix("").parts
-            if ".".join(parts) in old:
-                continue  # the compatibility module itself
-            # The package that the file's relative imports start from.
-            package = ".".join(parts[:-1])
-            hits = _imported_modules(path, package) & old
-            offenders += [f"{path.relative_to(ROOT)}: {h}" for h in sorted(hits)]
-    assert offenders == []
 
 
 def test_the_templates_are_package_data_where_the_loader_looks():

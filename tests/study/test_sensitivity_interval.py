@@ -258,7 +258,7 @@ def test_a_scenario_bounds_are_the_order_statistics_of_its_rocks():
     result = _study(VOLUME_FRICTION, 300, 2)
     block = result.summary["scenarios"][3]
     project = load_project_text(VOLUME_FRICTION, "runout.yaml")
-    from rockfall_design.simulation import simulate
+    from rockfall_design.run.simulation import simulate
     from rockfall_design.study import with_values
 
     run = simulate(with_values(project, block["values"]), rocks=300, seed=block["seed"])

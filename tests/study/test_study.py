@@ -221,7 +221,7 @@ def test_study_command_draws_the_envelopes_it_computes_only_for_plot(tmp_path, c
 def test_a_streamed_run_keeps_the_engine_threads_of_its_scenario(monkeypatch):
     # A streamed run computes its chunks on a helper thread: that thread must
     # run the engine on the scenario's one thread too, not on every core.
-    import rockfall_design.simulation as simulation
+    import rockfall_design.run.simulation as simulation
     from rockfall_design.engine.ensemble import ENGINE_THREADS, default_threads
 
     seen = []

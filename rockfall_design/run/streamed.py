@@ -7,17 +7,17 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .engine.columns import STATUS_NAMES, STOPPED
-from .engine.trajectory import centre_points, end_counts
+from ..engine.columns import STATUS_NAMES, STOPPED
+from ..engine.trajectory import centre_points, end_counts
 from .histograms import LinearHistogram, LogHistogram
-from .judge.outcomes import protected_zone_counts
+from .reach import protected_zone_counts
 from .summary import _STATION_QUANTITIES, _hist_blocks, _pct_label, _summary
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
-    from .engine import Section
-    from .project import Project
+    from ..engine import Section
+    from ..project import Project
     from .simulation import Study
 
 #: Relative error of the streamed percentiles of heights, speeds and energies.

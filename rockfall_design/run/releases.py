@@ -13,10 +13,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .engine import EngineSettings, Material, Releases, Section
+from ..engine import EngineSettings, Material, Releases, Section
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .project import Project
+    from ..project import Project
 
 __all__ = [
     "ReleaseStream",

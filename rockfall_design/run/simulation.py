@@ -22,18 +22,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .engine import EnsembleResult, Releases, Section, run_ensemble
-from .engine.columns import C_H, C_T, C_VX, C_VY, C_W, STATUS_NAMES, STOPPED
-from .engine.trajectory import centre_points, end_counts
+from ..engine import EnsembleResult, Releases, Section, run_ensemble
+from ..engine.columns import C_H, C_T, C_VX, C_VY, C_W, STATUS_NAMES, STOPPED
+from ..engine.trajectory import centre_points, end_counts
 from .histograms import LogHistogram
-from .judge.outcomes import protected_zone_counts, reaches_protected_zone
-
-# Re-exported, with private names that tests and older code reach for here.
-from .releases import (  # noqa: F401
-    _SEED_SIZE,
+from .reach import protected_zone_counts, reaches_protected_zone
+from .releases import (
     ReleaseStream,
-    _children,
-    _draw_size,
     draw_releases,
     engine_key,
     engine_settings,
@@ -45,7 +40,7 @@ from .summary import _STATION_QUANTITIES, STATISTICS, _pct_label, _stat_block, _
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
-    from .project import Project
+    from ..project import Project
 
 # pandas and scipy are imported where a table or a size distribution needs
 # them: together they cost more than a second at start-up, and `simulate`

@@ -6,8 +6,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import __version__
-from .engine.columns import CAUGHT, EXIT_DOWNSLOPE, EXIT_UPSLOPE, STOPPED, UNRESOLVED
+from ..engine.columns import CAUGHT, EXIT_DOWNSLOPE, EXIT_UPSLOPE, STOPPED, UNRESOLVED
+from ..version import __version__
 from .histograms import LinearHistogram, LogHistogram
 
 if TYPE_CHECKING:  # pragma: no cover
