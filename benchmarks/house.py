@@ -70,8 +70,8 @@ LOOSE = {
     "streamed.py": "run", "summary.py": "run", "histograms.py": "run", "version.py": "errors",
     "arguments.py": "api",
     "costs.py": "plugins", "measures.py": "plugins", "safety.py": "plugins",
-    "hookspecs.py": "plugins", "parameters.py": "plugins", "sources.py": "project",
-    "inputs.py": "project", "figures.py": "report", "documents.py": "report",
+    "hookspecs.py": "plugins", "parameters.py": "plugins", 
+"figures.py": "report", "documents.py": "report",
     "tables.py": "report",
 }
 

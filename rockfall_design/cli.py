@@ -491,7 +491,7 @@ def _load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
 
     path: Path = args.repeat
     try:
-        from .inputs import read_text
+        from .project.inputs import read_text
 
         recorded = json.loads(read_text(path, "summary to repeat"))
         run = recorded["run"]
@@ -863,7 +863,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     committed_before = committed_sets()
-    from .inputs import forget_inputs
+    from .project.inputs import forget_inputs
 
     forget_inputs()  # the files this command reads are noted anew
     forget_interrupts()
@@ -888,7 +888,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if isinstance(exc, _StdoutFailed):
             sys.stdout = stdout
             _silence_stdout()
-        from .inputs import strip_controls
+        from .project.inputs import strip_controls
 
         # One line, and nothing in it that steers the terminal (a name from a file).
         msg = strip_controls(" ".join(str(exc).split("\n")))

@@ -19,7 +19,7 @@ targets were moved aside, not overwritten, until the last rename succeeded.
 
 Two guards keep a command from destroying what it did not make. A target
 that is a file the run reads (the project, its survey, library or
-catalogues, a summary to repeat; see :func:`rockfall_design.inputs.note_input`)
+catalogues, a summary to repeat; see :func:`rockfall_design.project.inputs.note_input`)
 is refused when it is reserved or opened, before the command's work, with
 :class:`OutputError`. And every commit records what it wrote in a manifest
 per directory, :data:`MANIFEST` (name, size and modification time of each
@@ -484,7 +484,7 @@ class OutputSet:
 
 def _refuse_input(target: Path) -> None:
     """Raise :class:`OutputError` if ``target`` is a file the run reads."""
-    from .inputs import input_at
+    from .project.inputs import input_at
 
     found = input_at(target)
     if found is not None:

@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import ProjectError
-from ..inputs import read_named_text
+from ..project.inputs import read_named_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..project import Project

@@ -59,7 +59,7 @@ The package, one room each (the names above are all importable from here):
 
 # The package's face: every name callers import from ``rockfall_design.project``.
 # The public ones are listed in __all__; the others (limits, field types, and a
-# few private helpers used by rockfall_design.sources and the tests) are
+# few private helpers used by rockfall_design.project.sources and the tests) are
 # re-exported by name.
 from ..errors import ProjectError as ProjectError
 from .calibrate import CalibrateSpec
@@ -72,9 +72,7 @@ from .fields import NonNegative as NonNegative
 from .fields import Number as Number
 from .fields import Positive as Positive
 from .fields import String as String
-from .loading import _LIBYAML_FROM as _LIBYAML_FROM
-from .loading import _parse_yaml as _parse_yaml
-from .loading import dump_yaml, load_corridor, load_corridor_text, load_project, load_project_text
+from .loading import load_corridor, load_corridor_text, load_project, load_project_text
 from .locator import Locator, params_problem
 from .messages import _ERROR_TYPE as _ERROR_TYPE
 from .messages import _describe as _describe
@@ -114,6 +112,7 @@ from .schema import (
 )
 from .schema import SizeField as SizeField
 from .study import Range, Sample, StudySpec
+from .yaml_file import dump_yaml
 
 __all__ = [
     "Corridor",

@@ -21,7 +21,7 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
-from ..inputs import strip_controls
+from .inputs import strip_controls
 from .messages import _describe, _did_you_mean, _fail, _fmt
 
 # --------------------------------------------------------------------------------------

@@ -93,7 +93,7 @@ def test_a_file_over_the_limit_is_refused_and_the_limit_is_configurable(tmp_path
 
 def test_a_file_that_grows_while_it_is_read_is_refused(tmp_path, monkeypatch):
     """No more than limit + 1 bytes are read, whatever the size was when it was checked."""
-    from rockfall_design import inputs
+    from rockfall_design.project import inputs
 
     path = tmp_path / "p.yaml"
     path.write_text("a: 1\n" * 100)  # 500 bytes
@@ -228,11 +228,11 @@ def test_a_file_of_many_values_is_refused_as_it_is_read(values):
 
 def test_a_large_file_reads_as_the_small_one():
     """Over 1 MB, libyaml parses: the same project, the same line numbers."""
-    from rockfall_design import project as project_module
+    from rockfall_design.project.yaml_file import LIBYAML_FROM
 
     text = (PROJECTS / "quarry_road.yaml").read_text(encoding="utf-8")
     padded = text + "# padding\n" * 120_000
-    assert len(padded) > project_module._LIBYAML_FROM
+    assert len(padded) > LIBYAML_FROM
     assert (load_project_text(padded).resolved_dict()
             == load_project_text(text).resolved_dict())
     bad = text.replace("  seed: 7\n", "  seed: 7\n  seed: 8\n")

@@ -41,21 +41,20 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from .errors import ProjectError
-from .project import (
+from ..errors import ProjectError
+from .messages import (
     _ERROR_TYPE,
-    Material,
-    Slope,
     _describe,
     _did_you_mean,
     _key_text,
     _line_of,
     _message,
-    _parse_yaml,
     _to_project_error,
+    _unquoted,
     _yaml_path,
 )
-from .project.messages import _unquoted
+from .schema import Material, Slope
+from .yaml_file import parse_yaml
 
 __all__ = ["MAX_SURVEY_POINTS", "resolve_inputs"]
 
@@ -187,7 +186,7 @@ def _merge_library(materials: dict, where: _Where, base_dir: Path) -> dict[Any, 
     path = _resolve(relative, base_dir)
     shown = os.fspath(path)
     text = _read_text(path, where, ("materials", "library"), "materials library")
-    data, lines = _parse_yaml(text, shown)
+    data, lines = parse_yaml(text, shown)
     if data is None or data == {}:
         raise ProjectError(shown, 1, "", "the materials library is empty")
     # A library path may name any file (a key file, /etc/shadow): its

@@ -26,7 +26,7 @@ import os
 import re
 import stat
 
-from .errors import InputError
+from ..errors import InputError
 
 __all__ = [
     "DEFAULT_MAX_FILE_MB",
