@@ -66,11 +66,11 @@ LOOSE = {
     "__init__.py": "api", "__main__.py": "cli", "api.py": "api", "cli.py": "cli",
     "corridor.py": "cli", "across.py": "cli", "outputs.py": "cli", "testing.py": "testing",
     "errors.py": "errors", "evaluate.py": "judge", "design.py": "optimiser",
-    "declared.py": "optimiser", "simulation.py": "run", "releases.py": "run",
+     "simulation.py": "run", "releases.py": "run",
     "streamed.py": "run", "summary.py": "run", "histograms.py": "run", "version.py": "errors",
     "arguments.py": "api",
-    "costs.py": "plugins", "measures.py": "plugins", "safety.py": "plugins",
-    "hookspecs.py": "plugins", "parameters.py": "plugins", 
+    
+    "parameters.py": "plugins",
 "figures.py": "report", "documents.py": "report",
     "tables.py": "report",
 }

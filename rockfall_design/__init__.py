@@ -22,9 +22,10 @@ import types
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
-from .costs import CostModel, CostParams
-from .hookspecs import hookimpl
-from .measures import (
+from .plugins.concept import Check, SafetyConcept, SafetyParams
+from .plugins.cost_model import CostModel, CostParams
+from .plugins.hookspecs import hookimpl
+from .plugins.measure import (
     Barrier,
     BarrierBehaviour,
     MeasureParams,
@@ -34,7 +35,6 @@ from .measures import (
     ProtectiveMeasure,
     Quantity,
 )
-from .safety import Check, SafetyConcept, SafetyParams
 from .version import __version__
 
 # The engineer's functions and the statistics helpers are imported on first

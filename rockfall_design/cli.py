@@ -738,7 +738,8 @@ def _stage_progress(interactive: bool):
 
 def cmd_plugins(args: argparse.Namespace) -> int:
     """List the plugins; exit 0 even if some failed (they are listed), 3 on duplicates."""
-    from .plugins import load_registry, plugins_json, plugins_table
+    from .plugins import load_registry, plugins_json
+    from .report.terminal import plugins_table
 
     registry = load_registry(blocked=args.block)  # PluginError -> exit 3 in main()
     if args.json:

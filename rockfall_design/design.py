@@ -15,9 +15,9 @@ What a plugin declares
 ----------------------
 Each field of a measure's ``Params`` may declare its design role in its
 metadata, ``json_schema_extra={"design": ...}`` (read by
-:func:`~rockfall_design.measures.design_role`; the vocabulary is in
+:func:`~rockfall_design.plugins.measure.design_role`; the vocabulary is in
 ``hookspecs.py``): a free variable with bounds or options, or a catalogue
-choice. :func:`~rockfall_design.declared.declared_design` collects them per
+choice. :func:`~rockfall_design.plugins.declared.declared_design` collects them per
 measure class. A plugin written before these declarations keeps today's
 conventions: a field named ``product`` is the catalogue product, ``height``
 its height and ``capacity_kj`` its energy class, and ``design_variables``
@@ -54,18 +54,18 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from .costs import CostModel
-from .declared import DeclaredDesign, declared_design
 from .errors import PluginError
 from .plugins import blocked_provider, guard
+from .plugins.cost_model import CostModel
+from .plugins.declared import DeclaredDesign, declared_design
 from .project import params_problem
 
 if TYPE_CHECKING:  # pragma: no cover
     from collections.abc import Sequence
 
     from .engine import Section
-    from .measures import ProtectiveMeasure
     from .plugins import Registry
+    from .plugins.measure import ProtectiveMeasure
     from .project import Project
 
 __all__ = [

@@ -4,7 +4,7 @@ The measures of a project are resolved to plain objects once, through their
 plugins: barriers become rows of the engine's barrier table, profile edits
 are spliced into the ground. Then the same rocks as ``simulate`` (same seed,
 same draws) run once on the edited section with the barriers in place, and
-each measure's :class:`~rockfall_design.measures.MeasureResult` goes through
+each measure's :class:`~rockfall_design.plugins.measure.MeasureResult` goes through
 the project's safety concept.
 """
 
@@ -21,15 +21,15 @@ from .engine import Section, barrier_table, core
 from .judge.bounds import fraction_lower_bound, fraction_upper_bound
 from .judge.outcomes import Judgement, RockFates, judge_measures
 from .judge.plan import plan_for
-from .measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from .plugins import guard
+from .plugins.concept import DEFAULT_CONFIDENCE, Check, SafetyConcept
+from .plugins.measure import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from .run.releases import section_from_project
 from .run.simulation import Study, run_study
-from .safety import DEFAULT_CONFIDENCE, Check, SafetyConcept
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .measures import ProtectiveMeasure
     from .plugins import Registry
+    from .plugins.measure import ProtectiveMeasure
     from .project import Project
 
 __all__ = [

@@ -144,7 +144,7 @@ def make_registry(*plugins: object, blocked: Iterable[str] = (),
 
 def _measure_dicts(measures: Any) -> tuple[list[dict[str, Any]], list[type]]:
     """(the measures as project entries, the classes of those given as objects)."""
-    from .measures import ProtectiveMeasure
+    from .plugins.measure import ProtectiveMeasure
 
 
     if measures is None:

@@ -239,7 +239,7 @@ def _routes(text: str) -> str:
 
 def test_the_guide_marks_current_and_older_routes_as_the_manual_does():
     """The plugin guide and hookspecs.py give the same routes, with their version markers."""
-    from rockfall_design import hookspecs
+    from rockfall_design.plugins import hookspecs
 
     guide = _routes(_text(PLUGINS))
     assert guide == _routes(hookspecs.__doc__)

@@ -44,7 +44,7 @@ UNRESOLVED = 4  #: reached the event limit
 CAUGHT = 5  #: stopped by a barrier (fence net, block of a boulder row)
 STATUS_NAMES = ("running", "stopped", "exit_upslope", "exit_downslope", "unresolved", "caught")
 
-# Barrier behaviours (see rockfall_design.measures.BarrierBehaviour).
+# Barrier behaviours (see rockfall_design.plugins.measure.BarrierBehaviour).
 B_NET = 0
 B_RIGID = 1
 B_BLOCKS = 2
@@ -60,7 +60,7 @@ BR_GAP = 6  #: clear gap between blocks (m)
 BR_SPACING = 7  #: block spacing (m)
 N_BARRIER_COLS = 8
 
-# Outcome of a rock's first meeting with a barrier (rockfall_design.measures.Outcome).
+# Outcome of a rock's first meeting with a barrier (rockfall_design.plugins.measure.Outcome).
 O_NOT_MET = 0
 O_CAUGHT = 1
 O_PASSED_OVER = 2

@@ -4,7 +4,7 @@ Both the exact run (``check``, the optimiser's verification) and the
 optimiser's screening hand their per-rock facts to :func:`judge_measures`:
 
 * for a barrier, the outcome of each rock's first meeting (an
-  :class:`~rockfall_design.measures.Outcome` code) and its passing height,
+  :class:`~rockfall_design.plugins.measure.Outcome` code) and its passing height,
   speed and energy there. The exact run takes them from the engine, which
   applies the barrier while the rock moves; the screening derives them from
   the rock's bare-slope passage with :func:`barrier_outcomes`, the same rule
@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..engine.columns import EXIT_DOWNSLOPE, STOPPED
-from ..measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
+from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from ..run.reach import protected_zone_counts
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -140,7 +140,7 @@ def barrier_outcomes(
     Returns
     -------
     ndarray of int8
-        :class:`~rockfall_design.measures.Outcome` codes.
+        :class:`~rockfall_design.plugins.measure.Outcome` codes.
     """
     met = alive & np.isfinite(height_m)
     over = met & (height_m > fp.height_m)

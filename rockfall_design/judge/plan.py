@@ -20,10 +20,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..design import DesignSpec
     from ..engine import Section
     from ..evaluate import PlacedMeasure
-    from ..measures import ProtectiveMeasure
     from ..plugins import Registry
+    from ..plugins.concept import SafetyConcept
+    from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
-    from ..safety import SafetyConcept
 
 __all__ = ["Plan", "plan_for"]
 

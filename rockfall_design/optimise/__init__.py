@@ -61,13 +61,13 @@ import numpy as np
 
 from ..evaluate import Evaluation, evaluate_design
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
+from ..plugins.concept import DEFAULT_CONFIDENCE
 from ..run.reach import reaches_protected_zone
-from ..safety import DEFAULT_CONFIDENCE
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import DesignSpec
-    from ..measures import ProtectiveMeasure
     from ..plugins import Registry
+    from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
 
 from .decide import Decider, Decision, decide, look_concept, look_values, rocks_to_decide

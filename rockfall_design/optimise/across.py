@@ -50,7 +50,7 @@ import numpy as np
 
 from ..evaluate import Evaluation, evaluate_design
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
-from ..safety import DEFAULT_CONFIDENCE
+from ..plugins.concept import DEFAULT_CONFIDENCE
 from . import (
     MAX_EXACT_PER_FAMILY,
     MAX_MARGINAL_PER_FAMILY,
@@ -69,8 +69,8 @@ from .search import MAX_EXACT_PER_LEVEL, _barrier_designs, _BarrierSlots, _edit_
 from .space import families, family_name
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..measures import ProtectiveMeasure
     from ..plugins import Registry
+    from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
 
 __all__ = ["ScenarioRun", "AcrossResult", "margin", "optimise_across", "required_scenarios",

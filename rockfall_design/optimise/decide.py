@@ -28,14 +28,14 @@ import numpy as np
 from ..evaluate import Evaluation, evaluate_design
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
-from ..measures import Barrier
 from ..plugins import guard
+from ..plugins.measure import Barrier
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..measures import ProtectiveMeasure
     from ..plugins import Registry
+    from ..plugins.concept import Check, SafetyConcept
+    from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
-    from ..safety import Check, SafetyConcept
 
 from .screening import Screening, ScreenResult
 

@@ -34,16 +34,16 @@ from ..judge.outcomes import (
     barrier_outcomes,
     judge_measures,
 )
-from ..measures import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from ..plugins import guard
+from ..plugins.concept import DEFAULT_CONFIDENCE, Check
+from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
 from ..run.reach import reaches_protected_zone
 from ..run.releases import draw_releases, engine_key, engine_settings, section_from_project
-from ..safety import DEFAULT_CONFIDENCE, Check
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import DesignSpec
-    from ..measures import ProtectiveMeasure
     from ..plugins import Registry
+    from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
 
 from .space import STATION_STEP_M, _decode, _variables

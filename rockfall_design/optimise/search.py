@@ -32,12 +32,12 @@ from ..judge.outcomes import (
     barrier_outcomes,
     judge_measures,
 )
-from ..measures import Barrier, BarrierBehaviour, Outcome, ProfileEdit
 from ..plugins import guard
+from ..plugins.measure import Barrier, BarrierBehaviour, Outcome, ProfileEdit
 from ..run.reach import reaches_protected_zone
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..measures import ProtectiveMeasure
+    from ..plugins.measure import ProtectiveMeasure
 
 from .screening import Screening, ScreenResult, _Table
 from .space import STATION_STEP_M, _decode, _discrete_choices, _lattice, _Option, _variables

@@ -18,11 +18,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..measures import Barrier
+from ..plugins.measure import Barrier
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..design import CandidateSpec
-    from ..measures import ProtectiveMeasure
+    from ..plugins.measure import ProtectiveMeasure
 
 #: Spacing (m) of the stations where barrier candidates may stand.
 STATION_STEP_M = 0.5

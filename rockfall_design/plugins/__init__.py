@@ -11,36 +11,37 @@ Rooms:
 * :mod:`~rockfall_design.plugins.listing`: the registry as plain data
   (``plugins --json``).
 
-The plugin author's manual is :mod:`rockfall_design.hookspecs`. Every name
-this module had when it was one file is still importable from here.
+The plugin author's manual is :mod:`rockfall_design.plugins.hookspecs`. Every name
+this package offers is loaded on first use.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from .contract import footprint_problem
-from .listing import plugins_json
-from .manager import (
-    PluginFailure,
-    PluginOrigin,
-    Registry,
-    UnknownNameError,
-    blocked_provider,
-    check_blocked_names,
-    default_registry,
-    is_real_interrupt,
-    load_registry,
-    plugin_code,
-)
-from .proxy import (
-    Guard,
-    GuardedConcept,
-    GuardedCostModel,
-    GuardedMeasure,
-    call_plugin,
-    guard,
-)
+# Names are loaded on first use (PEP 562), so that importing a plugin base
+# class (``plugins.measure`` and its siblings, which the public face imports)
+# does not load the manager, pluggy and the entry points.
+_WHERE = {
+    "Guard": ".proxy",
+    "GuardedConcept": ".proxy",
+    "GuardedCostModel": ".proxy",
+    "GuardedMeasure": ".proxy",
+    "PluginFailure": ".manager",
+    "PluginOrigin": ".manager",
+    "Registry": ".manager",
+    "UnknownNameError": ".manager",
+    "blocked_provider": ".manager",
+    "call_plugin": ".proxy",
+    "check_blocked_names": ".manager",
+    "default_registry": ".manager",
+    "footprint_problem": ".contract",
+    "guard": ".proxy",
+    "is_real_interrupt": ".manager",
+    "load_registry": ".manager",
+    "plugin_code": ".manager",
+    "plugins_json": ".listing",
+}
 
 __all__ = [
     "Guard",
@@ -61,15 +62,18 @@ __all__ = [
     "load_registry",
     "plugin_code",
     "plugins_json",
-    "plugins_table",
 ]
 
 
 def __getattr__(name: str) -> Any:
-    # The terminal's tables live with the other terminal output (report); rich
-    # is imported only when they are drawn.
-    if name == "plugins_table":
-        from ..report.terminal import plugins_table
+    if name in _WHERE:
+        from importlib import import_module
 
-        return plugins_table
+        value = getattr(import_module(_WHERE[name], __name__), name)
+        globals()[name] = value
+        return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from ..measures import Barrier, BarrierBehaviour, ProfileEdit, Quantity
-from ..safety import Check
+from .concept import Check
 from .manager import _SECTIONS
+from .measure import Barrier, BarrierBehaviour, ProfileEdit, Quantity
 
 
 def _is_number(value: Any) -> bool:

@@ -22,7 +22,7 @@ def _parameter_names(cls: type) -> list[str]:
 
 def _parameter_list(cls: type) -> list[dict[str, Any]]:
     """The described parameters of a class; an empty list if its model cannot be read."""
-    from ..parameters import describe_parameters
+    from .parameters import describe_parameters
 
     try:
         return describe_parameters(cls.Params)  # type: ignore[attr-defined]
@@ -52,7 +52,7 @@ def plugins_json(registry: Registry) -> dict[str, Any]:
     ``parameters``: one object per field of its ``Params`` with ``name``,
     ``type``, ``unit``, ``default``, ``required``, ``minimum``,
     ``maximum``, ``exclusive_minimum``, ``exclusive_maximum``, ``options``
-    and ``description`` (see :func:`rockfall_design.parameters.describe_parameters`).
+    and ``description`` (see :func:`rockfall_design.plugins.parameters.describe_parameters`).
     A measure also has ``design_variables``: ``{name, low, high}`` with None
     for a bound the project supplies.
     """

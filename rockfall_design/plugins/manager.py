@@ -39,11 +39,11 @@ from typing import Any
 import pluggy
 from pydantic import BaseModel, ValidationError
 
-from .. import hookspecs
-from ..costs import CostModel
 from ..errors import Interrupted, PluginError
-from ..measures import ProtectiveMeasure, design_role
-from ..safety import SafetyConcept
+from . import hookspecs
+from .concept import SafetyConcept
+from .cost_model import CostModel
+from .measure import ProtectiveMeasure, design_role
 
 log = logging.getLogger(__name__)
 

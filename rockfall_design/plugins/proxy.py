@@ -23,12 +23,12 @@ from typing import Any
 
 import numpy as np
 
-from ..costs import CostModel
 from ..errors import PluginError
-from ..measures import Barrier, ProfileEdit, ProtectiveMeasure, Quantity
-from ..safety import Check, SafetyConcept
+from .concept import Check, SafetyConcept
 from .contract import _CONTRACTS, _NOUN, _identify
+from .cost_model import CostModel
 from .manager import Registry, _describe_exception, is_real_interrupt, plugin_code
+from .measure import Barrier, ProfileEdit, ProtectiveMeasure, Quantity
 
 #: numpy's message for a write into a read-only array.
 _READ_ONLY = "read-only"

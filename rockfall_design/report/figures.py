@@ -130,7 +130,7 @@ def _measure_text(placed: Any) -> str:
     does not give the height and capacity gets them from the footprint, so
     every barrier on a figure says how high it is and what it takes.
     """
-    from ..measures import Barrier
+    from ..plugins.measure import Barrier
 
     text = str(placed.label).split(" at x = ")[0]
     fp = placed.footprint
@@ -148,7 +148,7 @@ def _measure_text(placed: Any) -> str:
 def _draw_measures(ax: Axes, evaluation: Evaluation, label: bool = True,
                    annotate: bool = True) -> None:
     """Barriers as bars of their height; edited ground over the original (dashed)."""
-    from ..measures import Barrier
+    from ..plugins.measure import Barrier
 
     sec0 = evaluation.original_section
     ax.plot(sec0.x, sec0.y, color=_GROUND_LINE, lw=0.9, ls="--", zorder=3,
@@ -177,7 +177,7 @@ def _measure_lines(ax: Axes, evaluation: Evaluation | None) -> None:
     """A vertical line at each measure's station (for the envelope panels)."""
     if evaluation is None:
         return
-    from ..measures import Barrier
+    from ..plugins.measure import Barrier
 
     for p in evaluation.placed:
         fp = p.footprint

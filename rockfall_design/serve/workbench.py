@@ -276,7 +276,7 @@ class Bench:
         from ..errors import ProjectError
         from ..evaluate import edited_section, place_measures
         from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
-        from ..measures import Barrier, ProfileEdit
+        from ..plugins.measure import Barrier, ProfileEdit
 
         t0 = time.perf_counter()
         sc = self.screening

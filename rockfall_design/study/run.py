@@ -102,7 +102,7 @@ def _relocated(project: Project, scenario: Scenario, exc: ProjectError) -> Proje
 def _barriers(project: Project, registry: Any) -> tuple[tuple[int, str, float], ...]:
     """The barriers of a project, checked and placed as every command does."""
     from ..evaluate import build_measures, place_measures, validate_project
-    from ..measures import Barrier
+    from ..plugins.measure import Barrier
     from ..run.releases import section_from_project
 
     validate_project(project, registry)

@@ -26,7 +26,7 @@ from rockfall_design import (
     ProtectiveMeasure,
     SafetyConcept,
 )
-from rockfall_design import hookspecs as hookspecs_module
+from rockfall_design.plugins import hookspecs as hookspecs_module
 
 RTOL = 1e-12
 K = np.arange(1, 22, dtype=float)  # 1..21

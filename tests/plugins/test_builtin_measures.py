@@ -16,8 +16,9 @@ from pydantic import ValidationError
 from rockfall_design_builtins import measures as builtin
 from rockfall_design_builtins.measures import Berm, BoulderRow, Ditch, Fence, Wall, cut_and_fill
 
-from rockfall_design import Barrier, BarrierBehaviour, ProfileEdit, ProtectiveMeasure, hookspecs
+from rockfall_design import Barrier, BarrierBehaviour, ProfileEdit, ProtectiveMeasure
 from rockfall_design.engine import Material, Section
+from rockfall_design.plugins import hookspecs
 
 ALL = [Fence, Wall, Ditch, Berm, BoulderRow]
 

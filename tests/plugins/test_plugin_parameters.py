@@ -13,8 +13,8 @@ import pytest
 from pydantic import BaseModel
 
 from rockfall_design.cli import main
-from rockfall_design.parameters import describe_parameters, unit_from_description
 from rockfall_design.plugins import load_registry, plugins_json
+from rockfall_design.plugins.parameters import describe_parameters, unit_from_description
 
 from ..plugin_helpers import write_distribution
 

@@ -17,7 +17,7 @@ from importlib.metadata import EntryPoint
 
 import pytest
 
-import rockfall_design.hookspecs as hookspecs
+import rockfall_design.plugins.hookspecs as hookspecs
 from rockfall_design import (
     Barrier,
     BarrierBehaviour,
@@ -38,8 +38,8 @@ from rockfall_design.plugins import (
     default_registry,
     load_registry,
     plugins_json,
-    plugins_table,
 )
+from rockfall_design.report.terminal import plugins_table
 
 from ..plugin_helpers import write_distribution
 

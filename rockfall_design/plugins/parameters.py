@@ -220,7 +220,7 @@ def _unit(info: FieldInfo, description: str | None) -> str | None:
 
 def _design(model: type[BaseModel], name: str) -> dict[str, Any] | None:
     """The field's declared design role as JSON (see ``measures.design_role``), or None."""
-    from .measures import design_role
+    from .measure import design_role
 
     try:
         role = design_role(model, name)

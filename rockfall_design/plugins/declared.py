@@ -4,7 +4,7 @@
 take the catalogue product, one of the product's heights and its energy class,
 and which are free variables with default bounds or options. The declarations
 are in each field's metadata (``json_schema_extra={"design": ...}``, parsed by
-:func:`~rockfall_design.measures.design_role`); a plugin that declares nothing
+:func:`~rockfall_design.plugins.measure.design_role`); a plugin that declares nothing
 keeps the conventions of plugins written before declarations existed (fields
 named ``product``, ``height``, ``capacity_kj``; ``design_variables`` bounds).
 :mod:`rockfall_design.design` resolves a project's candidates with them.
@@ -16,7 +16,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from .measures import design_role
+from .measure import design_role
 
 __all__ = ["DeclaredDesign", "declared_design"]
 

@@ -34,7 +34,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .engine import Section
+    from ..engine import Section
 
 __all__ = [
     "BarrierBehaviour",

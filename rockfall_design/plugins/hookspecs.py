@@ -247,9 +247,9 @@ from __future__ import annotations
 
 import pluggy
 
-from .costs import CostModel
-from .measures import ProtectiveMeasure
-from .safety import SafetyConcept
+from .concept import SafetyConcept
+from .cost_model import CostModel
+from .measure import ProtectiveMeasure
 
 __all__ = [
     "ENTRY_POINT_GROUP",

@@ -21,7 +21,7 @@ from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict
 
-from .measures import ProtectiveMeasure, Quantity
+from .measure import ProtectiveMeasure, Quantity
 
 __all__ = ["CostModel", "CostParams"]
 

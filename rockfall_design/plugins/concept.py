@@ -1,7 +1,7 @@
 """The contract of a safety concept: turning what the rocks did into checks.
 
 A safety concept receives, for each measure, a
-:class:`~rockfall_design.measures.MeasureResult` (the passing heights,
+:class:`~rockfall_design.plugins.measure.MeasureResult` (the passing heights,
 energies, masses and reaches of the rocks that met it, and the measure's
 design properties) and returns a list of :class:`Check`: a named factor or
 design value, its target, and whether it holds.
@@ -19,7 +19,7 @@ from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from .measures import MeasureResult
+from .measure import MeasureResult
 
 __all__ = ["Check", "SafetyConcept", "SafetyParams", "DEFAULT_CONFIDENCE"]
 
