@@ -15,7 +15,7 @@ import argparse
 import time
 from pathlib import Path
 
-from rockfall_design.evaluate import evaluate
+from rockfall_design.judge.evaluation import evaluate
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
 from rockfall_design.run.simulation import run_study

@@ -65,7 +65,7 @@ MOVED = {"study/command.py": "cli"}
 LOOSE = {
     "__init__.py": "api", "__main__.py": "cli", "api.py": "api", "cli.py": "cli",
     "corridor.py": "cli", "across.py": "cli", "outputs.py": "cli", "testing.py": "testing",
-    "errors.py": "errors", "evaluate.py": "judge", "design.py": "optimiser",
+    "errors.py": "errors", "design.py": "optimiser",
      "simulation.py": "run", "releases.py": "run",
     "streamed.py": "run", "summary.py": "run", "histograms.py": "run", "version.py": "errors",
     "arguments.py": "api",

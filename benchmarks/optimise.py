@@ -37,7 +37,8 @@ import numpy as np
 
 from rockfall_design.design import resolve_design
 from rockfall_design.errors import ProjectError
-from rockfall_design.evaluate import build_concept, evaluate_design
+from rockfall_design.judge.evaluation import evaluate_design
+from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimise import Screening, optimise
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project

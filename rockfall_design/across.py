@@ -62,7 +62,7 @@ def _check_task(task: tuple[Any, int | None, tuple[str, ...]]) -> dict[str, Any]
     loaded where the task runs, as the command loads them.
     """
     from .api import default_registry
-    from .evaluate import evaluate
+    from .judge.evaluation import evaluate
     from .judge.verdict import with_verdict
     from .optimise.across import margin
 
@@ -102,7 +102,8 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
     dict
         The JSON object of ``check --scenarios --json``.
     """
-    from .evaluate import evaluate, validate_project
+    from .api import validate_project
+    from .judge.evaluation import evaluate
     from .judge.verdict import with_verdict
     from .optimise.across import margin, required_scenarios, scenario_runs
     from .study.executors import run_tasks

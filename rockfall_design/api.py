@@ -29,7 +29,7 @@ if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
     from matplotlib.figure import Figure
 
-    from .evaluate import Evaluation
+    from .judge.evaluation import Evaluation
     from .optimise import OptimisationResult
     from .plugins import Registry
     from .project import Project
@@ -96,8 +96,8 @@ def load_project(path: str | os.PathLike[str], *, registry: Registry | None = No
     ProjectError
         The file is not a valid project: one line ``file:line: key.path: message``.
     """
-    from .evaluate import validate_project
     from .project import load_project as _load
+
 
     project = _load(path)
     validate_project(project, registry or default_registry())
@@ -516,7 +516,7 @@ class OptimiseResult:
         best = self.best
         if best is None:
             return None
-        from .evaluate import evaluate
+        from .judge.evaluation import evaluate
 
         project = self.design_project()
         ev = evaluate(project, self._registry, rocks=self.n_rocks, seed=self.seed,
@@ -693,7 +693,7 @@ def check(
         (DataFrames), ``.rocks`` (with ``caught_by_measure``), ``.crossings``,
         ``.plot()``.
     """
-    from .evaluate import evaluate
+    from .judge.evaluation import evaluate
 
     _checked(seed=seed, trajectories=trajectories)
     p = _project(project, registry)
@@ -967,3 +967,32 @@ def _study_progress(progress: bool | Callable[[int, int, int], None]) -> tuple[A
         bar.update(task[0], completed=done, rate=rate)
 
     return bar, callback
+
+
+def validate_project(project: Project, registry: Registry) -> None:
+    """Check the sections of a project that its plugins own, whatever the command.
+
+    Loading a project validates the core sections; ``measures:``, ``safety:``
+    and ``design:`` belong to plugins and are checked here: every measure's
+    parameters and its place on the section (fit, overlaps), the safety
+    concept's parameters, and the design's candidates, catalogues and cost
+    model. Every command calls it, so a bad project file is reported by
+    ``simulate`` too, although ``simulate`` runs the bare slope.
+
+    Raises
+    ------
+    ProjectError
+        Exit code 2, located at the offending key.
+    PluginError
+        Exit code 3, if a plugin misbehaves.
+    """
+    from .design import resolve_design
+    from .judge.plan import plan_for
+    from .study.paths import check_study
+
+    plan_for(project, registry)
+    if project.design is not None:
+        resolve_design(project, registry)
+    if project.study is not None:
+        # the study's paths and values, against this project (after the sections above it)
+        check_study(project, registry)

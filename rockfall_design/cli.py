@@ -379,7 +379,7 @@ def _plugins_for(project: Any, args: argparse.Namespace) -> Any:
     and ``design:`` included, so that a bad file is reported whichever
     command reads it (``simulate`` runs the bare slope but still says so).
     """
-    from .evaluate import validate_project
+    from .api import validate_project
     from .plugins import load_registry
 
     registry = load_registry(blocked=args.block)

@@ -361,8 +361,8 @@ def _on_executors(fn: Callable[[Any], Any], corridor: Corridor,
 
 def _registry(corridor: Corridor, args: argparse.Namespace) -> Registry:
     """The plugins, loaded once, with every section's plugin sections checked."""
+    from .api import validate_project
     from .cli import _warn_failures
-    from .evaluate import validate_project
     from .plugins import load_registry
 
     registry = load_registry(blocked=args.block)

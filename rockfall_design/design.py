@@ -55,7 +55,8 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from .errors import PluginError
-from .plugins import blocked_provider, guard
+from .judge.placing import unknown_measure_type, unknown_plugin_name
+from .plugins import guard
 from .plugins.cost_model import CostModel
 from .plugins.declared import DeclaredDesign, declared_design
 from .project import params_problem
@@ -490,43 +491,6 @@ def _declared(registry: Registry, cls: Any, kind: str) -> DeclaredDesign:
             f"{who}: bad design declaration in its Params: {exc}; "
             "this is a bug in the plugin, not in the project"
         ) from None
-
-
-def unknown_measure_type(
-    project: Project, registry: Registry, at: Sequence[str | int], kind: str
-) -> Exception:
-    """The error for an unknown measure type at key path ``at``.
-
-    When plugins are blocked (``--block``) and one of them provides ``kind``,
-    the message names it ("measure type 'catch_net' is provided by
-    rockfall-catchnet, which is blocked (--block)"); otherwise it is an
-    unknown name with "did you mean".
-    """
-    return unknown_plugin_name(project, registry, "measure", at, kind)
-
-
-#: What each registry section's names are, in messages.
-_WHAT = {"measure": "measure type", "safety": "safety concept", "cost": "cost model"}
-
-
-def unknown_plugin_name(project: Project, registry: Registry, section: str,
-                        at: Sequence[str | int], name: Any) -> Exception:
-    """The error for a name no loaded plugin provides, at key path ``at``.
-
-    ``section`` is ``"measure"``, ``"safety"`` or ``"cost"``. When a blocked
-    plugin (``--block``) provides the name, the message says so ("safety
-    concept 'spang' is provided by rockfall-design, which is blocked
-    (--block)"); otherwise it is an unknown name with "did you mean".
-    """
-    what = _WHAT[section]
-    provider = (blocked_provider(registry, section, name)
-                if registry.blocked and isinstance(name, str) else None)
-    if provider is not None:
-        return project.error_at(
-            tuple(at), f"{what} {name!r} is provided by {provider}, which is blocked (--block)")
-    names = {"measure": registry.measures, "safety": registry.safety_concepts,
-             "cost": registry.cost_models}[section]
-    return project.unknown_name(at, name, names, what)
 
 
 def _resolve_candidate(

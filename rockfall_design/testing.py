@@ -219,7 +219,7 @@ def tiny_slope(
         a bad measure raises :class:`~rockfall_design.errors.ProjectError`
         naming the key, e.g. ``<tiny_slope>:1: measures[0].height: ...``.
     """
-    from .evaluate import validate_project
+    from .api import validate_project
     from .project import load_project_text
 
     entries, classes = _measure_dicts(measures)

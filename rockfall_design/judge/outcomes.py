@@ -42,7 +42,7 @@ from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, Outcome,
 from ..run.reach import protected_zone_counts
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..evaluate import PlacedMeasure
+    from .placing import PlacedMeasure
 
 __all__ = [
     "Judgement",

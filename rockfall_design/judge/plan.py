@@ -3,9 +3,9 @@
 Every command validates the whole project file against the plugins (the
 measures' parameters and footprints, the safety concept, the design
 section) before it runs a rock. What that validation builds is the plan:
-the measures and their footprints on the bare section, the edited section,
-the safety concept and, for a project with a ``design:`` section, the
-resolved design. :func:`plan_for` builds it once and keeps it with the
+the measures and their footprints on the bare section, the edited section
+and the safety concept (the ``design:`` section is the optimiser's, resolved
+by :func:`rockfall_design.design.resolve_design`). :func:`plan_for` builds it once and keeps it with the
 project, so the run that follows uses the same objects instead of asking
 the plugins again (a plugin is asked for a measure's footprint once per
 command, and a misbehaving one fails before any rock runs).
@@ -17,13 +17,12 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..design import DesignSpec
     from ..engine import Section
-    from ..evaluate import PlacedMeasure
     from ..plugins import Registry
     from ..plugins.concept import SafetyConcept
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
+    from .placing import PlacedMeasure
 
 __all__ = ["Plan", "plan_for"]
 
@@ -47,8 +46,6 @@ class Plan:
         The slope section as the project gives it.
     section : Section
         The section with the measures' profile edits applied.
-    design : DesignSpec or None
-        The resolved ``design:`` section; None without one.
     """
 
     project: Project
@@ -58,7 +55,6 @@ class Plan:
     concept: SafetyConcept
     bare: Section
     section: Section
-    design: DesignSpec | None
 
     @property
     def protect_x(self) -> float | None:
@@ -78,7 +74,7 @@ def plan_for(project: Project, registry: Registry) -> Plan:
     ------
     ProjectError
         Exit code 2, located at the offending key (see
-        :func:`rockfall_design.evaluate.validate_project`).
+        :func:`rockfall_design.judge.evaluation.validate_project`).
     PluginError
         Exit code 3, if a plugin misbehaves.
     """
@@ -89,18 +85,15 @@ def plan_for(project: Project, registry: Registry) -> Plan:
         return cached
     # Imported here: the judgement sits downstream of the project and the
     # plugins, and `rockfall_design.judge` stays cheap to import.
-    from ..design import resolve_design
-    from ..evaluate import build_concept, build_measures, edited_section, place_measures
     from ..run.releases import section_from_project
+    from .placing import build_concept, build_measures, edited_section, place_measures
 
     measures = build_measures(project, registry)
     concept = build_concept(project, registry)
     bare = section_from_project(project)
     placed = place_measures(project, registry, measures, bare)
     section = edited_section(project, bare, placed)
-    design = resolve_design(project, registry) if project.design is not None else None
     plan = Plan(project=project, registry=registry, measures=tuple(measures),
-                placed=tuple(placed), concept=concept, bare=bare, section=section,
-                design=design)
+                placed=tuple(placed), concept=concept, bare=bare, section=section)
     project._plan = plan
     return plan

@@ -22,7 +22,7 @@ the tool stands behind:
     listed as untested under any verdict: its checks say nothing.
 
 The verdict is computed from the JSON-ready summary of a check (what
-:meth:`rockfall_design.evaluate.Evaluation.summary` returns and ``check
+:meth:`rockfall_design.judge.evaluation.Evaluation.summary` returns and ``check
 --json`` prints), so it reads the same numbers as the report; it imports
 nothing from the optimiser or the study rooms.
 """

@@ -59,7 +59,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..evaluate import Evaluation, evaluate_design
+from ..judge.evaluation import Evaluation, evaluate_design
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins.concept import DEFAULT_CONFIDENCE
 from ..run.reach import reaches_protected_zone
@@ -593,7 +593,7 @@ def optimise(
     t0 = time.perf_counter()
     plan = plan_for(project, registry)
     # Without a design section, resolve_design says so at the project's line.
-    spec = plan.design if plan.design is not None else resolve_design(project, registry)
+    spec = resolve_design(project, registry)
     concept = plan.concept
     confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
     n = int(project.rocks.count if rocks is None else rocks)

@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..evaluate import Evaluation, evaluate_design
+from ..judge.evaluation import Evaluation, evaluate_design
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins.concept import DEFAULT_CONFIDENCE
 from . import (
@@ -226,7 +226,7 @@ class AcrossResult(OptimisationResult):
 def _build(run: ScenarioRun, registry: Registry, rocks: int | None) -> tuple[_Scenario, int]:
     """A scenario's screening with the rocks that can show its residual target."""
     from ..design import resolve_design
-    from ..evaluate import build_concept
+    from ..judge.placing import build_concept
 
     project = run.project
     spec = resolve_design(project, registry)

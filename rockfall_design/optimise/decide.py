@@ -25,8 +25,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..evaluate import Evaluation, evaluate_design
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
+from ..judge.evaluation import Evaluation, evaluate_design
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins import guard
 from ..plugins.measure import Barrier

@@ -22,11 +22,6 @@ import numpy as np
 
 from ..engine import Releases, Section, core, run_ensemble
 from ..errors import ProjectError
-from ..evaluate import (
-    PlacedMeasure,
-    edited_section,
-    place_measures,
-)
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
 from ..judge.outcomes import (
     Judgement,
@@ -34,6 +29,7 @@ from ..judge.outcomes import (
     barrier_outcomes,
     judge_measures,
 )
+from ..judge.placing import PlacedMeasure, edited_section, place_measures
 from ..plugins import guard
 from ..plugins.concept import DEFAULT_CONFIDENCE, Check
 from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit

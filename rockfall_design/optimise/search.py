@@ -21,17 +21,12 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from ..errors import ProjectError
-from ..evaluate import (
-    MIN_BARRIER_SPACING_M,
-    PlacedMeasure,
-    edited_section,
-    place_measures,
-)
 from ..judge.outcomes import (
     RockFates,
     barrier_outcomes,
     judge_measures,
 )
+from ..judge.placing import MIN_BARRIER_SPACING_M, PlacedMeasure, edited_section, place_measures
 from ..plugins import guard
 from ..plugins.measure import Barrier, BarrierBehaviour, Outcome, ProfileEdit
 from ..run.reach import reaches_protected_zone

@@ -131,7 +131,7 @@ def _x_problem(x: float, name: str, measure: Any, section: Any) -> str | None:
     """A station outside the section is the plugin's fault when the measure's own x is inside.
 
     (When the measure's ``x`` is outside too, it is the project's:
-    :func:`~rockfall_design.evaluate.place_measures` says so.)
+    :func:`~rockfall_design.judge.evaluation.place_measures` says so.)
     """
     x0, x1 = float(section.x[0]), float(section.x[-1])
     if x0 <= x <= x1:

@@ -30,7 +30,7 @@ from ..engine.trajectory import end_counts
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
-    from ..evaluate import Evaluation
+    from ..judge.evaluation import Evaluation
     from ..outputs import OutputSet
     from ..run.simulation import Study
     from ..run.streamed import StreamedStudy

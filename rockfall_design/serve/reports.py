@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-    from ..evaluate import Evaluation
+    from ..judge.evaluation import Evaluation
     from ..plugins import Registry
     from ..project import Project
 
@@ -93,7 +93,7 @@ class OptimiseReport:
         """The chosen design checked on the search rocks (None without one)."""
         if self.best is None:
             return None
-        from ..evaluate import evaluate
+        from ..judge.evaluation import evaluate
 
         p = self.project
         d = p.design

@@ -274,8 +274,8 @@ class Bench:
         every move (``reshapes_ground`` in the answer says so).
         """
         from ..errors import ProjectError
-        from ..evaluate import edited_section, place_measures
         from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
+        from ..judge.placing import edited_section, place_measures
         from ..plugins.measure import Barrier, ProfileEdit
 
         t0 = time.perf_counter()
@@ -392,7 +392,7 @@ class ProjectEntry:
             releases.append({k: d.get(k) for k in ("x", "height", "weight")})
         measures = [{k: _plain(v) for k, v in dict(raw).items()} for raw in p.measures]
         # Their labels, as the reports write them (the project validated when loaded).
-        from ..evaluate import build_measures, place_measures
+        from ..judge.placing import build_measures, place_measures
 
         placed = place_measures(p, self.registry, build_measures(p, self.registry), sec)
         labels = {q.index: q.label for q in placed}
@@ -516,7 +516,8 @@ class ProjectEntry:
             range; 409 while a job of this project runs.
         """
         from ..errors import ProjectError
-        from ..evaluate import evaluate, place_measures
+        from ..judge.evaluation import evaluate
+        from ..judge.placing import place_measures
         from ..run.releases import section_from_project
 
         n, s = self._rocks_seed(rocks, seed)
@@ -747,8 +748,8 @@ class ProjectEntry:
             400 for a segment out of range or a material the library lacks;
             409 while a job of this project runs.
         """
+        from ..api import validate_project
         from ..errors import RockfallError
-        from ..evaluate import validate_project
         from ..project import dump_yaml
 
         p = self.project
@@ -848,8 +849,8 @@ class ProjectEntry:
             403 when it names a file outside the project's directory; 400
             with the command line's one-line message when it is not valid.
         """
+        from ..api import validate_project
         from ..errors import RockfallError
-        from ..evaluate import validate_project
         from ..project.loading import load_project_text
 
         target = target or self.path.resolve()
@@ -974,7 +975,7 @@ def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
     from ..engine import Releases, run_ensemble
     from ..engine.columns import STOPPED
     from ..engine.trajectory import centre_points
-    from ..evaluate import build_concept
+    from ..judge.placing import build_concept
     from ..optimise.screening import Screening
     from ..run.releases import section_from_project
 
@@ -1043,7 +1044,7 @@ def load_entries(paths: Sequence[Path], registry: Registry) -> list[ProjectEntry
     ProjectError
         A file is not a valid project (the command line's one-line message).
     """
-    from ..evaluate import validate_project
+    from ..api import validate_project
     from ..project import load_project
 
     out: list[ProjectEntry] = []

@@ -23,13 +23,18 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import ValidationError
 
 from ..errors import ProjectError
+from ..judge.plan import plan_for
 from ..project import Project
 from ..project.messages import _describe, _did_you_mean, _to_project_error
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..plugins import Registry
+    from ..project import Project
 
 __all__ = ["ALIASES", "NOT_VARIED", "PathError", "check_study", "parse_path", "set_input",
            "with_values"]
@@ -310,12 +315,23 @@ def check_study(project: Project, registry: Any = None) -> None:
             varied = with_values(project, {path: value}, base=base)
             if registry is None:
                 continue
-            from ..evaluate import validate_project
-
             try:
-                validate_project(varied, registry)
+                validate_plugin_sections(varied, registry)
             except ProjectError as exc:
                 where = f"{exc.key}: " if exc.key else ""
                 raise project.error_at(
                     ("study", "vary", path), f"value {_describe(value)}: {where}{exc.message}"
                 ) from None
+
+
+def validate_plugin_sections(project: Project, registry: Registry) -> None:
+    """The checks of the sections that plugins own, for one varied project.
+
+    The same as :func:`rockfall_design.api.validate_project` without the
+    study (a scenario has none): measures, safety concept and design.
+    """
+    plan_for(project, registry)
+    if project.design is not None:
+        from ..design import resolve_design
+
+        resolve_design(project, registry)

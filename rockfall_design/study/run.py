@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import ProjectError
 from ..project import Project
-from .paths import scenario_base, with_values
+from .paths import scenario_base, validate_plugin_sections, with_values
 from .result import envelope_percentile
 from .scenarios import Scenario, scenarios
 
@@ -101,11 +101,11 @@ def _relocated(project: Project, scenario: Scenario, exc: ProjectError) -> Proje
 
 def _barriers(project: Project, registry: Any) -> tuple[tuple[int, str, float], ...]:
     """The barriers of a project, checked and placed as every command does."""
-    from ..evaluate import build_measures, place_measures, validate_project
+    from ..judge.placing import build_measures, place_measures
     from ..plugins.measure import Barrier
     from ..run.releases import section_from_project
 
-    validate_project(project, registry)
+    validate_plugin_sections(project, registry)
     measures = build_measures(project, registry)
     placed = place_measures(project, registry, measures, section_from_project(project))
     return tuple(

@@ -11,7 +11,7 @@ from numpy.testing import assert_allclose
 
 from rockfall_design.cli import main
 from rockfall_design.engine import G
-from rockfall_design.evaluate import evaluate
+from rockfall_design.judge.evaluation import evaluate
 from rockfall_design.project import load_project_text
 
 from ..plugin_helpers import write_distribution

@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 
 from rockfall_design.design import resolve_design
-from rockfall_design.evaluate import build_concept
+from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimise import Alternative, Screening, _bare_slope, _list_undecided
 from rockfall_design.plugins.concept import Check
 from rockfall_design.project import load_project_text

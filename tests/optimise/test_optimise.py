@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 
 from rockfall_design.cli import main
 from rockfall_design.design import build_candidate_measure, resolve_design
-from rockfall_design.evaluate import build_concept, evaluate_design
+from rockfall_design.judge.evaluation import evaluate_design
+from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimise import STATION_STEP_M, Screening, decide, optimise
 from rockfall_design.project import load_project_text
 

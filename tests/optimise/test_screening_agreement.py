@@ -25,7 +25,8 @@ import numpy as np
 import pytest
 
 from rockfall_design.design import resolve_design
-from rockfall_design.evaluate import build_concept, evaluate_design
+from rockfall_design.judge.evaluation import evaluate_design
+from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimise import STATION_STEP_M, Screening
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project_text

@@ -504,7 +504,7 @@ def test_a_real_ctrl_c_in_plugin_code_reaches_a_library_caller(install, default_
     import signal
 
     from rockfall_design.errors import Interrupted
-    from rockfall_design.evaluate import evaluate
+    from rockfall_design.judge.evaluation import evaluate
     from rockfall_design.plugins import load_registry
     from rockfall_design.project import load_project
 

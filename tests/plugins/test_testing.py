@@ -132,7 +132,7 @@ def test_import_is_light():
 
     code = ("import sys, rockfall_design.testing\n"
             "heavy = ('numba', 'pandas', 'scipy', 'rockfall_design.engine', "
-            "'rockfall_design.evaluate', 'rockfall_design.api')\n"
+            "'rockfall_design.judge.evaluation', 'rockfall_design.api')\n"
             "print([m for m in heavy if m in sys.modules])")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout

@@ -33,8 +33,8 @@ from hypothesis import strategies as st
 from pydantic import BaseModel
 
 from rockfall_design import project as project_module
+from rockfall_design.api import validate_project
 from rockfall_design.errors import RockfallError
-from rockfall_design.evaluate import validate_project
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import Project, ProjectError, load_project_text
 

@@ -156,8 +156,8 @@ def test_a_point_moved_onto_its_neighbour_is_reported_at_a_related_key(tmp_path,
 
 def _project_error(path):
     """The error the loader and the whole-file validation give for ``path``, if any."""
+    from rockfall_design.api import validate_project
     from rockfall_design.errors import ProjectError
-    from rockfall_design.evaluate import validate_project
     from rockfall_design.plugins import default_registry
     from rockfall_design.project import load_project
 

@@ -15,7 +15,7 @@ from starlette.testclient import TestClient  # noqa: E402
 
 import rockfall_design as rd  # noqa: E402
 from rockfall_design.cli import main  # noqa: E402
-from rockfall_design.evaluate import place_measures  # noqa: E402
+from rockfall_design.judge.placing import place_measures
 from rockfall_design.serve.app import COOKIE, create_app  # noqa: E402
 from rockfall_design.serve.workbench import (  # noqa: E402
     MAX_BODY_BYTES,
