@@ -53,7 +53,7 @@ def _study_project(path: Path, directory: Path) -> Path:
 
 def _check(design: Path, rocks: int, seed: int) -> dict:
     out = subprocess.run(
-        [sys.executable, "-m", "rockfall_design.cli", "check", str(design), "--scenarios",
+        [sys.executable, "-m", "rockfall_design", "check", str(design), "--scenarios",
          "--rocks", str(rocks), "--seed", str(seed), "--json"],
         capture_output=True, text=True, check=False)
     return json.loads(out.stdout)
@@ -93,7 +93,7 @@ def main() -> None:
         b = block["binding"]
         print(f"binding scenario {b['index']} {b['values']}: margin {100 * b['margin']:+.1f} % "
               f"at {b['binds_at']}")
-        from rockfall_design.across import across_design_yaml
+        from rockfall_design.cli.scenario_commands import across_design_yaml
 
         design = tmpdir / "design.yaml"
         design.write_text(across_design_yaml(across.result, path, across_project))

@@ -51,7 +51,7 @@ GRID_M = 2.0
 
 def _check(design: Path, rocks: int, seed: int) -> dict:
     out = subprocess.run(
-        [sys.executable, "-m", "rockfall_design.cli", "check", str(design), "--rocks",
+        [sys.executable, "-m", "rockfall_design", "check", str(design), "--rocks",
          str(rocks), "--seed", str(seed), "--json"],
         capture_output=True, text=True, check=False)
     return json.loads(out.stdout)
@@ -186,7 +186,7 @@ def main() -> None:
               f"{'holds' if best.holds_on_fresh_rocks else 'FAILS'}")
         with tempfile.TemporaryDirectory() as tmp:
             code = subprocess.run(
-                [sys.executable, "-m", "rockfall_design.cli", "optimise", str(path), "--out",
+                [sys.executable, "-m", "rockfall_design", "optimise", str(path), "--out",
                  tmp, "--json"], capture_output=True, text=True, check=False).returncode
             design = Path(tmp) / "design.yaml"
             if code != 0 or not design.exists():

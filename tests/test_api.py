@@ -13,7 +13,7 @@ import pytest
 from matplotlib.figure import Figure
 
 import rockfall_design as rd
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.errors import ProjectError
 
 ROOT = Path(__file__).resolve().parents[1]

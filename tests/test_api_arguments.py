@@ -15,7 +15,7 @@ import pytest
 
 import rockfall_design as rd
 from rockfall_design.arguments import ArgumentError
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.errors import ExitCode, InputError
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import build_parser, main
+from rockfall_design.cli.program import build_parser, main
 
 from .plugin_helpers import write_distribution
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.project import Project, load_corridor
 
 from .plugin_helpers import install_embankment_example

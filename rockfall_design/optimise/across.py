@@ -389,7 +389,6 @@ def optimise_across(
     progress : callable, optional
         Called as ``progress(stage, done, total)``.
     """
-    from ..corridor import run_tasks
 
     t0 = time.perf_counter()
     share = project.design.scenario_share if project.design is not None else None
@@ -397,7 +396,7 @@ def optimise_across(
     s = int(project.rocks.seed if seed is None else seed)
     runs = scenario_runs(project, s)
     required = required_scenarios(share, len(runs))
-    built = run_tasks(lambda run: _build(run, registry, rocks), runs)
+    built = [_build(run, registry, rocks) for run in runs]
     scs = [b for b, _ in built]
     n = max(m for _, m in built)
     spec = scs[0].spec

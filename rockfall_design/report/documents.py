@@ -25,7 +25,7 @@ from ..version import __version__
 from .tables import chosen_name, measure_text, round_value
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..outputs import OutputSet
+    from .outputs import OutputSet
 
 __all__ = ["Table", "MODEL_LIMITS", "report_context", "render_html", "render_markdown",
            "write_report"]
@@ -770,8 +770,8 @@ def write_report(result: Any, directory: str | os.PathLike[str],
     -------
     list of Path
     """
-    from ..outputs import OutputSet
     from .figures import save_figures
+    from .outputs import OutputSet
 
     if outputs is None:
         with OutputSet() as own:

@@ -31,9 +31,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
     from ..judge.evaluation import Evaluation
-    from ..outputs import OutputSet
     from ..run.simulation import Study
     from ..run.streamed import StreamedStudy
+    from .outputs import OutputSet
 
 __all__ = [
     "RockfallFigure",
@@ -608,7 +608,7 @@ def save_figures(
     list of Path
         The files written, in order.
     """
-    from ..outputs import OutputSet
+    from .outputs import OutputSet
 
     if outputs is None:
         with OutputSet() as own:

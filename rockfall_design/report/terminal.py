@@ -15,7 +15,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from ..outputs import OutputSet
+from .outputs import OutputSet
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry

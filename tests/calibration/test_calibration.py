@@ -13,9 +13,9 @@ import pytest
 import yaml
 
 import rockfall_design as rd
-from rockfall_design.cli import main
-from rockfall_design.outputs import MANIFEST
+from rockfall_design.cli.program import main
 from rockfall_design.project import load_project
+from rockfall_design.report.outputs import MANIFEST
 
 from .calibration_helpers import TRUTH, observed_stops, write_site
 

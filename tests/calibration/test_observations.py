@@ -16,7 +16,7 @@ from rockfall_design.calibration.distances import (
     wilson_interval,
 )
 from rockfall_design.calibration.observations import parse_observations, size_distribution
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.errors import ProjectError
 
 from .calibration_helpers import SITE

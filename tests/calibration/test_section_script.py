@@ -62,7 +62,7 @@ def test_too_few_points_are_refused(tmp_path):
 def test_from_map_points_to_compare(tmp_path, capsys):
     """Terrain points and deposit points in map coordinates become a project whose
     section and stops `compare` reads: the way docs/calibration.md shows for a site."""
-    from rockfall_design.cli import main
+    from rockfall_design.cli.program import main
 
     rng = np.random.default_rng(2)
     pts = _terrain(rng)

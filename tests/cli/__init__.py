@@ -1,1 +1,1 @@
-"""Tests of the command line (rockfall_design.cli)."""
+"""Tests of the command line (rockfall_design.cli.program)."""

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"

@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 from numpy.testing import assert_allclose
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 
 ROOT = Path(__file__).resolve().parents[2]
 STANDARD = ROOT / "projects" / "standard_slope.yaml"
@@ -158,7 +158,7 @@ def test_ctrl_c_right_at_exit_prints_no_traceback():
     """Once the command is over, the process exits: a Ctrl-C then changes nothing."""
     script = (
         "import os, signal, sys\n"
-        "from rockfall_design.cli import main\n"
+        "from rockfall_design.cli.program import main\n"
         "sys.argv = ['rockfall-design', 'plugins', '--json']\n"
         "code = main()\n"
         "os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C as the program ends\n"
@@ -171,7 +171,7 @@ def test_ctrl_c_right_at_exit_prints_no_traceback():
 
 
 def test_a_signal_after_the_command_is_ignored():
-    from rockfall_design import cli
+    from rockfall_design.cli import program as cli
 
     cli._exiting[0] = True
     try:

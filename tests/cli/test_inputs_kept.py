@@ -17,8 +17,8 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
-from rockfall_design.outputs import MANIFEST, OutputSet
+from rockfall_design.cli.program import main
+from rockfall_design.report.outputs import MANIFEST, OutputSet
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"

@@ -22,9 +22,10 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.errors import InputError
-from rockfall_design.outputs import MANIFEST, OutputSet, committed_sets
+from rockfall_design.report.interrupts import committed_sets
+from rockfall_design.report.outputs import MANIFEST, OutputSet
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.optimise.screening import Screening
-from rockfall_design.outputs import MANIFEST
+from rockfall_design.report.outputs import MANIFEST
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"
@@ -110,8 +110,8 @@ def test_a_swallowed_interrupt_without_files_is_still_exit_130(monkeypatch, caps
 
 
 def test_the_next_command_is_not_stopped_by_an_old_interrupt(monkeypatch, capsys):
-    from rockfall_design import outputs
+    from rockfall_design.report import interrupts
 
-    outputs.note_interrupt(signal.SIGINT)  # left over from an earlier command in this process
+    interrupts.note_interrupt(signal.SIGINT)  # left over from an earlier command in this process
     assert main(["simulate", str(PROJECTS / "standard_slope.yaml"), "--rocks", "20",
                  "--json"]) == 0

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.project import load_project
 
 ROOT = Path(__file__).resolve().parents[2]

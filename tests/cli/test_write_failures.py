@@ -19,9 +19,9 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design import outputs
-from rockfall_design.cli import main
-from rockfall_design.outputs import MANIFEST, OutputError, OutputSet
+from rockfall_design.cli.program import main
+from rockfall_design.report import outputs
+from rockfall_design.report.outputs import MANIFEST, OutputError, OutputSet
 from rockfall_design.run import simulation
 
 ROOT = Path(__file__).resolve().parents[2]

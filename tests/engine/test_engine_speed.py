@@ -257,7 +257,7 @@ def test_simulate_of_a_bare_slope_loads_neither_pandas_nor_scipy(tmp_path):
     root = Path(__file__).resolve().parents[2]
     code = (
         "import sys\n"
-        "from rockfall_design.cli import main\n"
+        "from rockfall_design.cli.program import main\n"
         f"main(['simulate', {str(root / 'projects' / 'benchmark.yaml')!r}, '--rocks', '1',"
         " '--json'])\n"
         "loaded = [m for m in ('pandas', 'scipy.stats', 'scipy.special', 'scipy.optimize',"

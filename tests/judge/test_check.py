@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from numpy.testing import assert_allclose
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.engine import G
 from rockfall_design.judge.evaluation import evaluate
 from rockfall_design.project import load_project_text

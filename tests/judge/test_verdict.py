@@ -7,7 +7,7 @@ import textwrap
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.judge.bounds import fraction_upper_bound
 from rockfall_design.judge.verdict import (
     FAILS,

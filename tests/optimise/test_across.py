@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.errors import ProjectError
 from rockfall_design.optimise.across import required_scenarios
 from rockfall_design.project import load_project_text

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.design import build_candidate_measure, resolve_design
 from rockfall_design.judge.evaluation import evaluate_design
 from rockfall_design.judge.placing import build_concept

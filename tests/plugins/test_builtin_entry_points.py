@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from rockfall_design import ProtectiveMeasure, hookimpl
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.plugins import load_registry
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from rockfall_design import testing
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.design import build_candidate_measure, design_cost, resolve_design
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project

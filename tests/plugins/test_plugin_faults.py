@@ -3,7 +3,7 @@
 Each test installs a real third-party distribution (``plugin_helpers``) with a
 measure, a safety concept and a cost model, all of which work except for the
 one method the test makes fail, and runs ``check`` or ``optimise`` through
-``rockfall_design.cli.main``. A fault is one line on stderr naming the
+``rockfall_design.cli.program.main``. A fault is one line on stderr naming the
 plugin's class, the method and the exception, with exit code 3
 (``ExitCode.PLUGIN_FAULT``), never a traceback and never "an infeasible
 design"; what the contracts allow (a footprint's ValueError: the measure does
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.errors import ExitCode
 
 from ..plugin_helpers import write_distribution

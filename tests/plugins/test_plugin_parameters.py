@@ -12,7 +12,7 @@ import sys
 import pytest
 from pydantic import BaseModel
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.plugins import load_registry, plugins_json
 from rockfall_design.plugins.parameters import describe_parameters, unit_from_description
 

@@ -30,7 +30,7 @@ from rockfall_design import (
     SafetyParams,
     hookimpl,
 )
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.errors import ExitCode, PluginError
 from rockfall_design.plugins import (
     PluginFailure,

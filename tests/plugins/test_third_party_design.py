@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.design import resolve_design
 from rockfall_design.errors import ExitCode
 from rockfall_design.optimise.space import _discrete_choices

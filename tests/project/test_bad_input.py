@@ -18,7 +18,7 @@ import pytest
 import yaml
 from hypothesis import HealthCheck, given, settings
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 
 from .test_project import mutated_projects
 

@@ -224,7 +224,7 @@ def test_schema_trees_load_or_fail_with_one_line(data):
 
 DRIVER = """\
 import contextlib, io, json, sys
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 
 results = []
 for path in sys.argv[1:]:

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.engine import EngineSettings, Material, columns
 
 from ..engine_helpers import one_rock, run_one, section

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.errors import ProjectError
 from rockfall_design.project import dump_yaml, load_project, load_project_text
 

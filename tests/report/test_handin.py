@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.judge.verdict import STATES
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -14,7 +14,7 @@ pytest.importorskip("httpx", reason="Starlette's test client needs httpx")
 from starlette.testclient import TestClient  # noqa: E402
 
 import rockfall_design as rd  # noqa: E402
-from rockfall_design.cli import main  # noqa: E402
+from rockfall_design.cli.program import main  # noqa: E402
 from rockfall_design.judge.placing import place_measures
 from rockfall_design.serve.app import COOKIE, create_app  # noqa: E402
 from rockfall_design.serve.workbench import (  # noqa: E402

@@ -9,7 +9,7 @@ from urllib.parse import urlsplit
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 
 from .conftest import start_server, stop_server
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.errors import ProjectError
 from rockfall_design.project import load_project
 from rockfall_design.study.paths import with_values

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.errors import InputError
 from rockfall_design.study import executors
 

@@ -11,7 +11,7 @@ import pytest
 from scipy import stats
 
 import rockfall_design as rd
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.judge.bounds import (
     fraction_bounds,
     fraction_lower_bound,

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rockfall_design as rd
-from rockfall_design.cli import main
+from rockfall_design.cli.program import main
 from rockfall_design.project import load_project, load_project_text
 from rockfall_design.study import with_values
 

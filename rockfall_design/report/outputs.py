@@ -48,79 +48,24 @@ from pathlib import Path
 from types import FrameType, TracebackType
 from typing import IO, Any, Literal
 
-from .errors import InputError, Interrupted
+from ..errors import InputError
+from .interrupts import HELD_SIGNALS, check_interrupt, note_commit
 
 __all__ = [
     "MANIFEST",
     "OutputError",
     "OutputSet",
     "atomic_writer",
-    "check_interrupt",
-    "committed_sets",
-    "forget_interrupts",
-    "note_interrupt",
     "write_text",
     "write_json",
     "write_csv",
     "write_with",
 ]
 
-#: The signals held while an output set is renamed into place: Ctrl-C and
-#: the polite kill, the two a user or a batch system sends to stop a run.
-_HELD = (signal.SIGINT, signal.SIGTERM)
 
 #: The manifest in every directory an output set writes to: which of its
 #: files this program wrote (and so may remove), as JSON.
 MANIFEST = ".rockfall-design-outputs.json"
-
-# How many non-empty output sets this process has committed (see
-# committed_sets()); only ever incremented, with the signals held.
-_committed = 0
-
-
-# The signals (SIGINT, SIGTERM) the command line's handler has received during
-# the current command, in order; see note_interrupt().
-_interrupts: list[int] = []
-
-
-def note_interrupt(signum: int) -> None:
-    """Note that the command was interrupted by ``signum``; no output set commits after it.
-
-    The command line's signal handler notes the signal before it raises
-    ``KeyboardInterrupt``. The exception may be swallowed where it lands
-    (numpy swallows one raised while it looks up ``__array_ufunc__``, say,
-    and a library's ``except BaseException`` would too); the note is not:
-    :meth:`OutputSet.commit` and :func:`check_interrupt` raise it again, so
-    the command still ends as interrupted (exit code 130) and replaces
-    nothing.
-    """
-    _interrupts.append(signum)
-
-
-def check_interrupt() -> None:
-    """Raise :class:`~rockfall_design.errors.Interrupted` if the command was interrupted.
-
-    Called at safe points of a run (between batches of rocks, families and
-    decisions of the optimiser, scenarios) and before every commit.
-    """
-    if _interrupts:
-        raise Interrupted(_interrupts[0])
-
-
-def forget_interrupts() -> None:
-    """Forget the noted signals (a new command starts)."""
-    _interrupts.clear()
-
-
-def committed_sets() -> int:
-    """How many output sets with at least one file this process has committed.
-
-    The command line reads it before and after a command: if it grew, an
-    interrupt came after the command's results were completely in place,
-    otherwise no file was changed.
-    """
-    return _committed
-
 
 class OutputError(InputError):
     """A result file could not be written: ``cannot write FILE: REASON``.
@@ -196,7 +141,7 @@ def _signals_held() -> Iterator[None]:
             signal.raise_signal(signum)
 
     try:
-        for s in _HELD:
+        for s in HELD_SIGNALS:
             if signal.getsignal(s) is not None:
                 originals[s] = signal.signal(s, defer)
         yield
@@ -395,7 +340,6 @@ class OutputSet:
             If a file cannot be synced or renamed into place; every target
             is then as it was before the commit.
         """
-        global _committed
         try:
             # An interrupt whose exception was swallowed still stops the set.
             check_interrupt()
@@ -411,7 +355,7 @@ class OutputSet:
                 check_interrupt()  # one that came while the files were synced
                 backups = _swap_in(list(self._entries.values()))
                 if self._entries:
-                    _committed += 1
+                    note_commit()
                 # Nothing is left to clean up: the entries are in place and
                 # the directories made for them are theirs.
                 self._finalizer.detach()
@@ -484,7 +428,7 @@ class OutputSet:
 
 def _refuse_input(target: Path) -> None:
     """Raise :class:`OutputError` if ``target`` is a file the run reads."""
-    from .project.inputs import input_at
+    from ..project.inputs import input_at
 
     found = input_at(target)
     if found is not None:

@@ -32,132 +32,30 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .errors import ExitCode
+from ..errors import ExitCode
+from ..study.scenario_checks import _values_text, check_across
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .optimise.across import AcrossResult
-    from .outputs import OutputSet
-    from .plugins import Registry
-    from .project import Project
+    from ..optimise.across import AcrossResult
+    from ..plugins import Registry
+    from ..project import Project
+    from ..report.outputs import OutputSet
 
 __all__ = ["check_across", "cli_check_scenarios", "across_design_yaml", "print_across",
            "ScenariosCheckResult", "SCENARIO_FIGURES", "check_scenarios_with_files",
            "print_check_across"]
 
 
-def _values_text(values: dict[str, Any]) -> str:
-    return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
-
-
-def _check_task(task: tuple[Any, int | None, tuple[str, ...]]) -> dict[str, Any]:
-    """One scenario's check (a task for a pool or a cluster): its JSON block and margin.
-
-    ``task`` is (scenario run, rocks, blocked plugins); the plugins are
-    loaded where the task runs, as the command loads them.
-    """
-    from .api import default_registry
-    from .judge.evaluation import evaluate
-    from .judge.verdict import with_verdict
-    from .optimise.across import margin
-
-    run, rocks, block = task
-    ev = evaluate(run.project, default_registry(block), rocks=rocks)
-    slack, what = margin(ev)
-    return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
-            "binds_at": what, **with_verdict(ev.summary())}
-
-
-def check_across(project: Project, registry: Registry, *, rocks: int | None = None,
-                 seed: int | None = None, block: tuple[str, ...] = (),
-                 workers: int | None = 1, scheduler: Any = None) -> dict[str, Any]:
-    """Check the project's measures in every scenario of its study (see the module's text).
-
-    Parameters
-    ----------
-    project
-        With a ``study:`` section (and ``measures:`` to check).
-    registry
-        The plugins.
-    rocks
-        Rocks of every scenario (default ``rocks.count``).
-    seed
-        The run seed the scenarios' seeds derive from (default ``rocks.seed``).
-    block
-        Plugins not loaded (``--block``), where the scenarios run.
-    workers, scheduler
-        Where the scenarios run (see
-        :func:`rockfall_design.study.executors.run_tasks`): 1 (the default
-        here) in this process with ``registry``, N on a local pool of N
-        processes (None: one per core), or on the Dask cluster of
-        ``scheduler``; the numbers are the same wherever they run.
-
-    Returns
-    -------
-    dict
-        The JSON object of ``check --scenarios --json``.
-    """
-    from .api import validate_project
-    from .judge.evaluation import evaluate
-    from .judge.verdict import with_verdict
-    from .optimise.across import margin, required_scenarios, scenario_runs
-    from .study.executors import run_tasks
-
-    runs = scenario_runs(project, seed)
-    for run in runs:  # every scenario's plugin sections, before anything runs
-        validate_project(run.project, registry)
-    share = project.design.scenario_share if project.design is not None else None
-    share = 1.0 if share is None else share
-    required = required_scenarios(share, len(runs))
-    if scheduler is None and workers == 1:
-        def one(run: Any) -> dict[str, Any]:
-            ev = evaluate(run.project, registry, rocks=rocks)
-            slack, what = margin(ev)
-            return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
-                    "binds_at": what, **with_verdict(ev.summary())}
-
-        per = [one(run) for run in runs]
-    else:
-        per = run_tasks(_check_task, [(run, rocks, tuple(block)) for run in runs],
-                        workers=workers, scheduler=scheduler)
-    holds = sum(bool(p["ok"]) for p in per)
-    # The binding scenario decides the required count: the one of the required-th
-    # largest margin (with every scenario required, the least margin). Below it are
-    # the scenarios a share allows the design to fail in.
-    ranked = sorted(per, key=lambda p: (-(math.inf if p["margin"] is None else p["margin"]),
-                                        -p["index"]))  # ties: the first scenario binds
-    bind = ranked[min(required, len(ranked)) - 1]
-    failures = [f"scenario {p['index']} ({_values_text(p['values'])}): {f}"
-                for p in per for f in p.get("failures", [])]
-    from .judge.verdict import UNTESTED, verdict_of_scenarios
-
-    verdict = verdict_of_scenarios(per, required)
-    return {
-        "verdict": verdict.as_dict(),
-        "rocks": int(per[0]["rocks"]),
-        "seed": int(project.rocks.seed if seed is None else seed),
-        "share": share,
-        "required": required,
-        "of": len(per),
-        "holds_in": holds,
-        "holds_with_confidence_in": sum(bool(p["holds_with_confidence"]) for p in per),
-        "ok": holds >= required and verdict.state != UNTESTED,
-        "binding": {k: bind[k] for k in ("index", "values", "seed", "margin", "binds_at")},
-        "failures": failures,
-        "scenarios": per,
-    }
-
-
 def print_check_across(summary: dict[str, Any]) -> None:
     """The terminal report of ``check --scenarios``: a row per scenario, the verdict."""
     from rich.table import Table
 
-    from .report.terminal import fitted_console
+    from ..report.terminal import fitted_console
 
     table = Table(show_edge=False)
     for col, just in (("#", "right"), ("values", "left"), ("seed", "right"),
@@ -223,8 +121,8 @@ class ScenariosCheckResult:
         Its own project (the study's values set) and its own seed and rocks:
         the same rocks as in :func:`check_across`, so the same numbers.
         """
-        from .api import DEFAULT_TRAJECTORIES, check
-        from .optimise.across import scenario_runs
+        from ..api import DEFAULT_TRAJECTORIES, check
+        from ..optimise.across import scenario_runs
 
         b = self.summary["binding"]
         run = next(r for r in scenario_runs(self.project, self.summary["seed"])
@@ -234,7 +132,7 @@ class ScenariosCheckResult:
 
     def plot_margins(self) -> Any:
         """A bar per scenario: the margin, the binding scenario, the count required."""
-        from .report.figures import margins_figure
+        from ..report.figures import margins_figure
 
         s = self.summary
         return margins_figure(s["scenarios"], s["required"], s["binding"]["index"],
@@ -247,11 +145,11 @@ class ScenariosCheckResult:
 
 def reserve_scenarios_files(files: OutputSet, args: argparse.Namespace) -> None:
     """Reserve the files of ``check --scenarios`` (``--out``, ``--plot``, ``--report``)."""
-    from .cli import REPORT_FILES, _figure_files, _reserve
+    from .common import REPORT_FILES, figure_files, reserve
 
-    _reserve(files, args.out, ("summary.json",))
-    _reserve(files, args.report, REPORT_FILES)
-    _reserve(files, args.plot, _figure_files(SCENARIO_FIGURES, args))
+    reserve(files, args.out, ("summary.json",))
+    reserve(files, args.report, REPORT_FILES)
+    reserve(files, args.plot, figure_files(SCENARIO_FIGURES, args))
 
 
 def check_scenarios_with_files(project: Project, args: argparse.Namespace, registry: Registry,
@@ -263,20 +161,20 @@ def check_scenarios_with_files(project: Project, args: argparse.Namespace, regis
     (:data:`SCENARIO_FIGURES` in every ``--plot-format``) and ``report``.
     Returns the JSON object of ``check --scenarios``.
     """
-    from .cli import _figures_and_report
+    from .common import figures_and_report
 
     summary = check_across(project, registry, rocks=args.rocks, seed=args.seed,
                            block=tuple(args.block), workers=args.workers,
                            scheduler=args.scheduler)
     if args.out:
         files.write_json(args.out / "summary.json", summary)
-    _figures_and_report(ScenariosCheckResult(project, summary, registry), args, files)
+    figures_and_report(ScenariosCheckResult(project, summary, registry), args, files)
     return summary
 
 
 def cli_check_scenarios(args: argparse.Namespace, project: Project, registry: Registry) -> int:
     """``check --scenarios``: exit 0 when the design holds in the required scenarios, else 1."""
-    from .outputs import OutputSet
+    from ..report.outputs import OutputSet
 
     if project.study is None:
         raise project.error_at((), "check --scenarios needs a study: section (its scenarios)")
@@ -294,7 +192,7 @@ def print_across(result: AcrossResult) -> None:
     """The scenario lines of the optimiser's report: where the chosen design binds."""
     from rich.text import Text
 
-    from .report.terminal import fitted_console
+    from ..report.terminal import fitted_console
 
     block = result.scenarios_block()
     lines = [f"Scenarios: a design must hold in {block['required']} of {block['of']} "
@@ -322,7 +220,7 @@ def across_design_yaml(result: AcrossResult, project_file: Path | str,
     seed the scenarios' seeds derive from and ``rocks.count`` the most rocks
     that decided the design in a scenario.
     """
-    from .project import dump_yaml
+    from ..project import dump_yaml
 
     best = result.best
     assert best is not None and best.evaluation is not None

@@ -22,11 +22,11 @@ OUT_FILES = ("calibrated.yaml", "parameters.csv", "replicates.csv", "summary.jso
 
 def _common(p: argparse.ArgumentParser, what: str) -> None:
     """--rocks, --seed, --json, --plot, --plot-format of both commands."""
-    from ..cli import _formats, _positive_int, _seed
+    from .options import formats, positive_int, seed_number
 
-    p.add_argument("--rocks", type=_positive_int, metavar="N",
+    p.add_argument("--rocks", type=positive_int, metavar="N",
                    help=f"simulated rocks {what}")
-    p.add_argument("--seed", type=_seed, metavar="S",
+    p.add_argument("--seed", type=seed_number, metavar="S",
                    help="random seed (default: rocks.seed of the project); recorded")
     p.add_argument("--json", action="store_true",
                    help="print the result as one JSON object on stdout instead of the report")
@@ -34,14 +34,14 @@ def _common(p: argparse.ArgumentParser, what: str) -> None:
                    help="draw calibration_stops (ECDF and histogram of the observed and "
                    "simulated stops) into DIR; calibrate also calibration_cloud (the bootstrap "
                    "cloud of the fitted inputs)")
-    p.add_argument("--plot-format", type=_formats, default=("png",), metavar="FMT[,FMT]",
+    p.add_argument("--plot-format", type=formats, default=("png",), metavar="FMT[,FMT]",
                    help="file formats of the --plot figures: png, svg, pdf (default: png)")
 
 
 def add_calibrate_parser(sub: Any) -> None:
     """Add the ``calibrate`` and ``compare`` commands to the subparsers ``sub``."""
     from ..arguments import MAX_BOOTSTRAP
-    from ..cli import _add_block_option, _int_at_least
+    from .options import add_block_option, int_at_least
 
     p = sub.add_parser(
         "calibrate",
@@ -56,7 +56,7 @@ def add_calibrate_parser(sub: Any) -> None:
     _common(p, "per evaluation (default: calibrate.rocks)")
     p.add_argument("--observed", type=Path, metavar="CSV",
                    help="observed stops to fit (default: calibrate.observed)")
-    p.add_argument("--bootstrap", type=_int_at_least(0, "number of replicates", MAX_BOOTSTRAP),
+    p.add_argument("--bootstrap", type=int_at_least(0, "number of replicates", MAX_BOOTSTRAP),
                    metavar="B", help="bootstrap replicates (default: calibrate.bootstrap; 0: "
                    "the best fit only, no intervals)")
     p.add_argument("--out", type=Path, metavar="DIR",
@@ -69,14 +69,14 @@ def add_calibrate_parser(sub: Any) -> None:
     p.add_argument("--keep-scatter", action="store_true",
                    help="write calibrated.yaml and --save-materials with the materials' "
                    "scatter as it was, without the spread of the fit")
-    p.add_argument("--workers", type=_int_at_least(1, "number of workers"), metavar="N",
+    p.add_argument("--workers", type=int_at_least(1, "number of workers"), metavar="N",
                    help="fit N replicates at once on the local pool (default: one per core)")
     p.add_argument("--pool", choices=("threads", "processes"), default="threads",
                    help="the local pool: threads (default) or processes (same results)")
     p.add_argument("--scheduler", metavar="ADDRESS",
                    help="fit the replicates on the Dask cluster of this scheduler instead "
                    "(same results); needs the study extra")
-    _add_block_option(p)
+    add_block_option(p)
     p.set_defaults(func=cmd_calibrate)
 
     c = sub.add_parser(
@@ -92,7 +92,7 @@ def add_calibrate_parser(sub: Any) -> None:
                    help="the observed stops (x, optionally volume_m3 or mass_kg)")
     _common(c, "(default: rocks.count of the project)")
     c.add_argument("--out", type=Path, metavar="DIR", help="write summary.json into DIR")
-    _add_block_option(c)
+    add_block_option(c)
     c.set_defaults(func=cmd_compare)
 
 
@@ -118,15 +118,15 @@ def _header(result: Any, spread: bool) -> str:
 
 def _one_section(args: argparse.Namespace) -> tuple[Any, Any]:
     """The project of ``args.project`` and its plugins; a corridor is refused."""
-    from ..cli import _load, _plugins_for
     from ..errors import InputError
     from ..project import Project
+    from .common import load, plugins_for
 
-    project = _load(args.project)
+    project = load(args.project)
     if not isinstance(project, Project):
         raise InputError(f"{args.project}: a corridor of sections: {args.command} one "
                          "section's project at a time")
-    return project, _plugins_for(project, args)
+    return project, plugins_for(project, args)
 
 
 def _save_plots(args: argparse.Namespace, result: Any, files: Any) -> None:
@@ -149,15 +149,15 @@ def _show(args: argparse.Namespace, summary: dict[str, Any], result: Any) -> int
 def cmd_calibrate(args: argparse.Namespace) -> int:
     """Calibrate; exit 0 (a calibration has no pass or fail: its warnings say what to doubt)."""
     from ..api import calibrate
-    from ..cli import _figure_files, _reserve
-    from ..outputs import OutputSet
+    from ..calibration.result import FIGURES
     from ..project import dump_yaml
-    from .result import FIGURES
+    from ..report.outputs import OutputSet
+    from .common import figure_files, reserve
 
     project, registry = _one_section(args)
     with OutputSet() as files:
-        _reserve(files, args.out, OUT_FILES)
-        _reserve(files, args.plot, _figure_files(FIGURES, args))
+        reserve(files, args.out, OUT_FILES)
+        reserve(files, args.plot, figure_files(FIGURES, args))
         if args.save_materials is not None:
             files.reserve(args.save_materials)
         result = calibrate(project, observed=args.observed, rocks=args.rocks,
@@ -184,14 +184,14 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 def cmd_compare(args: argparse.Namespace) -> int:
     """Compare; exit 0 (the statistics say how good the prediction is)."""
     from ..api import compare
-    from ..cli import _figure_files, _reserve
-    from ..outputs import OutputSet
-    from .result import FIGURES
+    from ..calibration.result import FIGURES
+    from ..report.outputs import OutputSet
+    from .common import figure_files, reserve
 
     project, registry = _one_section(args)
     with OutputSet() as files:
-        _reserve(files, args.out, ("summary.json",))
-        _reserve(files, args.plot, _figure_files(FIGURES[:1], args))
+        reserve(files, args.out, ("summary.json",))
+        reserve(files, args.plot, figure_files(FIGURES[:1], args))
         result = compare(project, args.observed, rocks=args.rocks, seed=args.seed,
                          registry=registry)
         summary = result.summary

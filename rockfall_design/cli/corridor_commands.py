@@ -4,7 +4,7 @@ A corridor file (``sections:``, see :mod:`rockfall_design.project.corridor`)
 loads as one complete :class:`~rockfall_design.project.Project` per section,
 so each section runs through the same ``simulate``, ``check`` and
 ``optimise`` as a single project; this module runs them as independent tasks
-(:func:`run_tasks`) and adds them up:
+(see :func:`each_section`) and adds them up:
 
 - ``--json`` prints ``{name, seed, command, sections: [...], totals: {...}}``,
   each item of ``sections`` the section's usual JSON object with its
@@ -16,7 +16,7 @@ so each section runs through the same ``simulate``, ``check`` and
   null unless every section has a design) and ``failures`` (one line each,
   naming the section);
 - ``check --scenarios``: every section checked over its study's scenarios
-  (:mod:`rockfall_design.across`); ``"scenarios": true``, each section's
+  (:mod:`rockfall_design.cli.scenario_commands`); ``"scenarios": true``, each section's
   block the JSON of ``check --scenarios``, and ``totals`` with ``sections``,
   ``scenarios``, ``rocks`` (of every scenario), ``ok``, ``binding`` (the
   corridor's binding scenario: of the sections' binding ones, the least margin, with its
@@ -30,8 +30,7 @@ project file that ``check`` reads.
 
 Sections are independent tasks: ``simulate`` and ``check`` run them on a
 local pool of processes by default (``--workers N``, ``--scheduler
-ADDRESS`` for a Dask cluster), ``optimise`` in this process (see
-:func:`run_tasks`).
+ADDRESS`` for a Dask cluster), ``optimise`` in this process.
 
 A single-section project (no ``sections:``) never comes here: its commands,
 files and JSON are exactly those of a project file.
@@ -43,39 +42,20 @@ import argparse
 import json
 import math
 import sys
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
-from .errors import ExitCode, InputError
+from ..errors import ExitCode, InputError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .outputs import OutputSet
-    from .plugins import Registry
-    from .project import Corridor, CorridorSection
+    from ..plugins import Registry
+    from ..project import Corridor, CorridorSection
+    from ..report.outputs import OutputSet
 
-__all__ = ["run_tasks", "corridor_summary", "each_section", "SectionRun", "SectionDone",
-           "cli_simulate", "cli_check", "cli_optimise", "cli_study"]
-
-T = TypeVar("T")
-R = TypeVar("R")
-
-
-def run_tasks(task: Callable[[T], R], items: Iterable[T]) -> list[R]:
-    """Run ``task`` on every item, independently; the results in the items' order.
-
-    The loop of the runs that stay in this process: ``optimise``'s sections
-    (each search keeps its screening, plugins and evaluations here), the
-    sections of ``simulate`` and ``check`` with ``--workers 1``, and those of
-    a ``simulate`` of more than ``EXACT_ROCKS`` rocks per section (streamed
-    to its files as it runs). Otherwise ``simulate`` and ``check`` run their
-    sections as tasks on the study's executors
-    (:func:`rockfall_design.study.executors.run_tasks`: a local pool, one
-    process per core, or a Dask cluster with ``--scheduler``) and write and
-    print them here; the numbers are the same wherever a section runs.
-    """
-    return [task(item) for item in items]
+__all__ = ["corridor_summary", "each_section", "SectionRun", "SectionDone",
+           "cli_simulate", "cli_check", "cli_optimise"]
 
 
 # ---- summaries -------------------------------------------------------------------
@@ -169,7 +149,7 @@ def _corridor_verdict(blocks: Sequence[dict[str, Any]], command: str) -> dict[st
     """The corridor's verdict (its weakest section's), each block given its own verdict."""
     if command not in ("check", "optimise"):
         return None
-    from .judge.verdict import DesignVerdict, verdict_of, verdict_of_sections
+    from ..judge.verdict import DesignVerdict, verdict_of, verdict_of_sections
 
     items = []
     for b in blocks:
@@ -185,8 +165,8 @@ def _print_totals(summary: dict[str, Any]) -> None:
     """The corridor's table: one row per section, and the total."""
     from rich.table import Table
 
-    from .report.tables import chosen_name
-    from .report.terminal import fitted_console
+    from ..report.tables import chosen_name
+    from ..report.terminal import fitted_console
 
     command, totals = summary["command"], summary["totals"]
     if summary.get("scenarios"):
@@ -259,7 +239,7 @@ def _print_scenario_totals(summary: dict[str, Any]) -> None:
     """The corridor's table of ``check --scenarios``: a row per section, and the total."""
     from rich.table import Table
 
-    from .report.terminal import fitted_console
+    from ..report.terminal import fitted_console
 
     totals = summary["totals"]
     table = Table(show_edge=False)
@@ -296,7 +276,7 @@ def _section_rule(section: CorridorSection, of: int, seed: int) -> None:
     """The heading of a section's report; ``seed`` is the one it ran with (``--seed`` too)."""
     from rich.rule import Rule
 
-    from .report.terminal import fitted_console
+    from ..report.terminal import fitted_console
 
     rule = Rule(f"section {section.index + 1} of {of}: {section.name} (seed {seed})")
     fitted_console(rule).print(rule)
@@ -311,14 +291,14 @@ def _pooled(args: argparse.Namespace) -> bool:
 
 
 def _trajectories(args: argparse.Namespace) -> int:
-    from .api import DEFAULT_TRAJECTORIES
+    from ..api import DEFAULT_TRAJECTORIES
 
     return DEFAULT_TRAJECTORIES if (args.plot or args.report) else 0
 
 
 def _simulate_task(task: tuple[Any, int, int, int]) -> Any:
     """One section's run of ``simulate`` (a task for a pool or a cluster): its Study."""
-    from .api import run_simulation
+    from ..api import run_simulation
 
     project, rocks, seed, trajectories = task
     return run_simulation(project, rocks=rocks, seed=seed, progress=False,
@@ -330,7 +310,7 @@ def _check_task(task: tuple[Any, int, int, int, tuple[str, ...]]) -> Any:
 
     The plugins are loaded where the task runs, as the command loads them.
     """
-    from .api import check, default_registry
+    from ..api import check, default_registry
 
     project, rocks, seed, trajectories, block = task
     return check(project, rocks=rocks, seed=seed, trajectories=trajectories,
@@ -344,7 +324,7 @@ def _on_executors(fn: Callable[[Any], Any], corridor: Corridor,
     Each section carries its project, rocks and seed, so the numbers are
     those of the run in this process, wherever it runs.
     """
-    from .study.executors import run_tasks as run_elsewhere
+    from ..study.executors import run_tasks as run_elsewhere
 
     tasks = []
     for section, sub in zip(corridor.sections, subs, strict=True):
@@ -361,12 +341,12 @@ def _on_executors(fn: Callable[[Any], Any], corridor: Corridor,
 
 def _registry(corridor: Corridor, args: argparse.Namespace) -> Registry:
     """The plugins, loaded once, with every section's plugin sections checked."""
-    from .api import validate_project
-    from .cli import _warn_failures
-    from .plugins import load_registry
+    from ..api import validate_project
+    from ..plugins import load_registry
+    from .common import warn_failures
 
     registry = load_registry(blocked=args.block)
-    _warn_failures(registry)
+    warn_failures(registry)
     for section in corridor.sections:
         validate_project(section.project, registry)
     return registry
@@ -485,8 +465,8 @@ def each_section(
     dict
         The corridor's JSON object.
     """
-    from .cli import REPORT_FILES, _figure_files, _reserve
-    from .outputs import OutputSet
+    from ..report.outputs import OutputSet
+    from .common import REPORT_FILES, figure_files, reserve
 
     registry = _registry(corridor, args)
     run_seed, seeds = _seeds(corridor, args)
@@ -497,11 +477,11 @@ def each_section(
         subs = [_section_args(args, s, seed) for s, seed in
                 zip(corridor.sections, seeds, strict=True)]
         for sub in subs:
-            _reserve(files, sub.out, out_files)
+            reserve(files, sub.out, out_files)
             if report:
-                _reserve(files, sub.report, REPORT_FILES)
-            _reserve(files, sub.plot, _figure_files(figures, sub))
-        _reserve(files, args.out, ("summary.json",))
+                reserve(files, sub.report, REPORT_FILES)
+            reserve(files, sub.plot, figure_files(figures, sub))
+        reserve(files, args.out, ("summary.json",))
         ran = elsewhere(subs) if elsewhere is not None else None
 
         def one(i: int) -> SectionDone:
@@ -513,7 +493,10 @@ def each_section(
                 done.show()
             return done
 
-        done = run_tasks(one, range(len(subs)))
+        # In this process, in order: the bodies write and print; where the
+        # runs themselves went elsewhere (a pool or a cluster, see
+        # _on_executors), the numbers are the same wherever a section ran.
+        done = [one(i) for i in range(len(subs))]
         summary = corridor_summary(
             corridor, command, run_seed, [section_block(s, d.summary) for s, d in
                                           zip(corridor.sections, done, strict=True)],
@@ -529,15 +512,22 @@ def each_section(
 
 def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
     """``simulate`` of a corridor: every section's run, files and report, then the totals."""
-    from .api import SimulationResult, run_simulation
-    from .cli import _FIGURES, _figures_and_report, _memory_guard, _run, _table_writers, run_record
-    from .report.terminal import print_simulation
-    from .run.simulation import EXACT_ROCKS, study_memory
+    from ..api import SimulationResult, run_simulation
+    from ..report.terminal import print_simulation
+    from ..run.simulation import EXACT_ROCKS, study_memory
+    from .common import (
+        FIGURES,
+        figures_and_report,
+        memory_guard,
+        run_record,
+        run_with_progress,
+        table_writers,
+    )
 
     def guard(section: CorridorSection) -> None:
         project = section.project
         n = args.rocks or project.rocks.count
-        _memory_guard(study_memory(project, n), f"section {section.name!r}: {n:,} rocks "
+        memory_guard(study_memory(project, n), f"section {section.name!r}: {n:,} rocks "
                       f"with {project.analysis.envelope_points} envelope points",
                       "Use fewer analysis.envelope_points or analysis.stations.")
 
@@ -554,30 +544,30 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
                 files.write_csv(sub.out / "rocks.csv", study.rocks_table())
                 files.write_csv(sub.out / "crossings.csv", study.crossings_table())
         else:
-            on_chunk = _table_writers(files, sub.out) if sub.out else None
-            study = _run(run_simulation, section.project, sub, on_chunk=on_chunk)
+            on_chunk = table_writers(files, sub.out) if sub.out else None
+            study = run_with_progress(run_simulation, section.project, sub, on_chunk=on_chunk)
         result = SimulationResult(section.project, study)
         summary = result.summary
         if sub.out:
             files.write_json(sub.out / "summary.json",
                              {**summary, "run": run_record(study, sub)})
-        _figures_and_report(result, sub, files)
+        figures_and_report(result, sub, files)
         return SectionDone(summary, lambda: print_simulation(summary))
 
     each_section(args, corridor, "simulate", body, guard=guard, elsewhere=elsewhere,
-                 out_files=("rocks.csv", "crossings.csv", "summary.json"), figures=_FIGURES)
+                 out_files=("rocks.csv", "crossings.csv", "summary.json"), figures=FIGURES)
     return int(ExitCode.OK)
 
 
 def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
     """``check`` of a corridor: every section checked; exit 0 only if every section holds."""
-    from .api import CheckResult, check
-    from .cli import _FIGURES, _figures_and_report, _in_memory_guard, _run, run_record
-    from .report.terminal import print_check
+    from ..api import CheckResult, check
+    from ..report.terminal import print_check
+    from .common import FIGURES, figures_and_report, in_memory_guard, run_record, run_with_progress
 
     def guard(section: CorridorSection) -> None:
         a = section.project.analysis
-        _in_memory_guard(args.rocks or section.project.rocks.count,
+        in_memory_guard(args.rocks or section.project.rocks.count,
                          a.envelope_points + len(a.stations), len(a.stations))
 
     if getattr(args, "scenarios", False):
@@ -591,7 +581,7 @@ def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
         if run.ran is not None:  # run elsewhere
             result = CheckResult(section.project, run.ran)
         else:
-            result = _run(check, section.project, sub, registry=run.registry)
+            result = run_with_progress(check, section.project, sub, registry=run.registry)
         evaluation = result.evaluation
         summary = result.summary
         if sub.out:
@@ -603,12 +593,12 @@ def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
             record["project"] = evaluation.resolved_project().resolved_dict()
             record["project_hash"] = evaluation.resolved_project().resolved_hash()
             files.write_json(out / "summary.json", {**summary, "run": record})
-        _figures_and_report(result, sub, files)
+        figures_and_report(result, sub, files)
         return SectionDone(summary, lambda: print_check(summary))
 
     summary = each_section(args, corridor, "check", body, guard=guard, elsewhere=elsewhere,
                            out_files=("rocks.csv", "crossings.csv", "measures.csv",
-                                      "summary.json"), figures=_FIGURES)
+                                      "summary.json"), figures=FIGURES)
     return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
 
 
@@ -618,7 +608,8 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
     Sections share no measure, so the corridor's cheapest design is the
     cheapest design of every section; exit 0 only if every section has one.
     """
-    from .cli import _FIGURES, _in_memory_guard, optimise_with_files, print_optimised
+    from .common import FIGURES, in_memory_guard
+    from .optimised import optimise_with_files, print_optimised
 
     for section in corridor.sections:
         if section.project.design is None:
@@ -628,7 +619,7 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
 
     def guard(section: CorridorSection) -> None:
         a = section.project.analysis
-        _in_memory_guard(args.rocks or section.project.rocks.count,
+        in_memory_guard(args.rocks or section.project.rocks.count,
                          a.envelope_points + 400, len(a.stations))
 
     def body(run: SectionRun) -> SectionDone:
@@ -643,50 +634,8 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
 
     summary = each_section(args, corridor, "optimise", body, guard=guard,
                            out_files=("design.yaml", "alternatives.csv", "summary.json"),
-                           figures=_FIGURES)
+                           figures=FIGURES)
     return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
-
-
-def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
-    """``study`` of a corridor: every section's parametric study, then the totals.
-
-    Each section runs the study of its merged project (the shared
-    ``study:`` or its own) with its own seed; its scenarios run on the
-    study's executors (a local pool, ``--workers``, ``--scheduler``), one
-    section after the other. A study has no pass or fail: exit 0.
-    """
-    from .api import study
-    from .study.command import OUT_FILES, run_record
-    from .study.result import FIGURES
-
-    for section in corridor.sections:
-        if section.project.study is None:
-            raise section.project.error_at(
-                (), "the section has no study: section (give study: at the top level, or "
-                "in every section)")
-
-    def body(run: SectionRun) -> SectionDone:
-        section, sub, files = run.section, run.args, run.files
-        project = section.project
-        result = study(project, rocks=sub.rocks or project.rocks.count, seed=sub.seed,
-                       workers=args.workers, scheduler=args.scheduler,
-                       progress=sys.stderr.isatty(), registry=run.registry,
-                       pool=args.pool, envelopes=sub.plot is not None)
-        summary = result.summary
-        if sub.out:
-            files.write_csv(sub.out / "scenarios.csv", result.scenarios)
-            files.write_csv(sub.out / "sensitivity.csv", result.sensitivity)
-            record = {**run_record(result, sub), "section": section.name}
-            files.write_json(sub.out / "summary.json", {**summary, "run": record})
-        if sub.plot:
-            from .report.figures import save_figures
-
-            save_figures(result.figures(), sub.plot, args.plot_format, files)
-        return SectionDone(summary, result.print)
-
-    each_section(args, corridor, "study", body, out_files=OUT_FILES, figures=FIGURES,
-                 report=False)
-    return int(ExitCode.OK)
 
 
 def _check_scenarios(args: argparse.Namespace, corridor: Corridor,
@@ -702,7 +651,7 @@ def _check_scenarios(args: argparse.Namespace, corridor: Corridor,
     runs (exit 2), as is a section without one: checking it plainly would
     hide that nothing varies there.
     """
-    from .across import SCENARIO_FIGURES, check_scenarios_with_files, print_check_across
+    from .scenario_commands import SCENARIO_FIGURES, check_scenarios_with_files, print_check_across
 
     missing = [s for s in corridor.sections if s.project.study is None]
     if len(missing) == len(corridor.sections):
