@@ -39,7 +39,8 @@ from rockfall_design.design import resolve_design
 from rockfall_design.errors import ProjectError
 from rockfall_design.judge.evaluation import evaluate_design
 from rockfall_design.judge.placing import build_concept
-from rockfall_design.optimise import Screening, optimise
+from rockfall_design.optimise import Screening
+from rockfall_design.optimise.section import optimise
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
 from rockfall_design.run.simulation import run_study

@@ -30,7 +30,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from .judge.evaluation import Evaluation
-    from .optimise import OptimisationResult
+    from .optimise.alternatives import OptimisationResult
     from .plugins import Registry
     from .project import Project
     from .run.simulation import Study
@@ -739,7 +739,7 @@ def optimise(
     ProjectError
         The project has no ``design:`` section.
     """
-    from .optimise import optimise as _optimise
+    from .optimise.section import optimise as _optimise
 
     _checked(seed=seed)
     p = _project(project, registry)

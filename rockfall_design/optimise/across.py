@@ -46,17 +46,15 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from ..judge.evaluation import Evaluation, evaluate_design
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins.concept import DEFAULT_CONFIDENCE
-from . import (
+from .alternatives import (
+    FRESH_OFFSET,
     MAX_EXACT_PER_FAMILY,
     MAX_MARGINAL_PER_FAMILY,
     MAX_NEAR_PER_FAMILY,
     MAX_UNJUDGED_FAILURES,
-    SEARCH_SEED,
     Alternative,
     OptimisationResult,
     fresh_failures,
@@ -64,9 +62,10 @@ from . import (
     measure_dicts,
 )
 from .decide import decide, look_concept
+from .driver import FamilyTask, search_families
 from .screening import Screening
 from .search import MAX_EXACT_PER_LEVEL, _barrier_designs, _BarrierSlots, _edit_designs, _Tally
-from .space import families, family_name
+from .space import families
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
@@ -79,7 +78,6 @@ __all__ = ["ScenarioRun", "AcrossResult", "margin", "optimise_across", "required
 #: Designs of one family screened in every scenario, at most.
 MAX_DESIGNS_PER_FAMILY = 400
 #: Offset of a scenario's fresh seed from its own seed (as the single optimiser's).
-FRESH_OFFSET = 1000003
 
 
 @dataclass(frozen=True)
@@ -403,22 +401,12 @@ def optimise_across(
     currency = getattr(spec.cost_model.params, "currency", "")
     confidence = scs[0].screen.confidence
     fams = families(spec.candidates, spec.max_measures)
-    order = sorted(range(len(fams)), key=lambda i: (len(fams[i]), i))
-    found: dict[int, Alternative] = {}
     per_family: dict[str, dict[str, Any]] = {}
-    limit = math.inf
-    exact_total = 0
-    simulated = sum(sc.screen.n for sc in scs)
-    for done, fi in enumerate(order):
-        fam = fams[fi]
-        if progress:
-            progress("search", done, len(fams))
-        ft = time.perf_counter()
-        ev0 = sum(sc.screen.evaluations for sc in scs)
-        alt = Alternative(name=family_name(spec.candidates, fam), family=fam)
+
+    def search_family(alt: Alternative, task: FamilyTask) -> int:
+        simulated = 0
         tallies = [_Tally() for _ in scs]
-        fam_seed = int(np.random.SeedSequence([SEARCH_SEED, fi]).generate_state(1)[0])
-        streams = [((j, d) for d in _designs(sc, fam, fam_seed, limit, t))
+        streams = [((j, d) for d in _designs(sc, task.family, task.seed, task.limit, t))
                    for j, (sc, t) in enumerate(zip(scs, tallies, strict=True))]
         seen: set[tuple] = set()
         reasons: Counter = Counter()
@@ -468,43 +456,39 @@ def optimise_across(
                 continue
             _list_undecided(alt, undecided, d.cost)
             _fill(alt, d, verdict, scs, per_family, last_failed, reasons, designs, currency)
-            limit = min(limit, alt.cost)
             break
-        alt.evaluations = sum(sc.screen.evaluations for sc in scs) - ev0
-        alt.wall_s = time.perf_counter() - ft
         if not alt.holds_on_fresh_rocks:
             _list_undecided(alt, undecided, math.inf)
             alt.reason = alt.reason or (
                 "no design of this family passes the screening in "
                 f"{required} of {len(scs)} scenarios")
-            if math.isfinite(limit):
-                alt.reason = (f"no design of this family cheaper than the best so far "
-                              f"({limit:,.0f} {currency}) holds: {alt.reason}")
-        exact_total += alt.exact_evaluations
-        found[fi] = alt
-        if progress:
-            progress("check", done + 1, len(fams))
-    alternatives = [found[i] for i in range(len(fams))]
-    pool = [a for a in alternatives if a.holds]
-    best = min(pool, key=lambda a: a.cost) if pool else None
-    reason = "" if best is not None else (
-        f"no family of candidate measures has a design that holds in {required} of "
-        f"{len(scs)} scenarios with {100 * confidence:g} % confidence and on fresh rocks; "
-        "see each family's reason")
+        return simulated
+
+    searched = search_families(fams, spec.candidates, currency, search_family,
+                               lambda: sum(sc.screen.evaluations for sc in scs), progress)
+    alternatives, best = searched.alternatives, searched.best
     return AcrossResult(
-        alternatives=alternatives, best=best, reason=reason,
+        alternatives=alternatives, best=best,
+        reason="" if best is not None else _no_design(required, len(scs), confidence),
         rocks=best.decision_rocks if best is not None else n, seed=s,
         fresh_rocks=best.fresh_rocks if best is not None else 2 * n,
         fresh_seed=best.fresh_seed if best is not None else s + FRESH_OFFSET,
         wall_s=time.perf_counter() - t0,
         evaluations=sum(sc.screen.evaluations for sc in scs),
         edit_runs=sum(sc.screen.edit_runs for sc in scs), currency=currency,
-        search_rocks=n, confidence=confidence, exact_evaluations=exact_total,
-        rocks_simulated=simulated + sum(sc.screen.edit_rocks for sc in scs),
+        search_rocks=n, confidence=confidence, exact_evaluations=searched.exact_evaluations,
+        rocks_simulated=(sum(sc.screen.n for sc in scs) + searched.rocks_simulated
+                         + sum(sc.screen.edit_rocks for sc in scs)),
         share=share, required=required, runs=runs, per_family=per_family,
-        marginal=sorted((m for a in alternatives for m in a.marginal
-                         if best is None or m["cost"] < best.cost), key=lambda m: m["cost"]),
+        marginal=searched.marginal,
         decided=sum(a.exact_evaluations for a in alternatives))
+
+
+def _no_design(required: int, k: int, confidence: float) -> str:
+    """Why no design was chosen across the scenarios."""
+    return (f"no family of candidate measures has a design that holds in {required} of "
+            f"{k} scenarios with {100 * confidence:g} % confidence and on fresh rocks; "
+            "see each family's reason")
 
 
 def _reason_key(reason: str) -> str:

@@ -555,7 +555,7 @@ class ProjectEntry:
             400 without a ``design:`` section, or with ``design.scenarios``
             (optimise those with the command line); 409 while a job runs.
         """
-        from ..optimise import optimise
+        from ..optimise.section import optimise
         from ..report.terminal import design_yaml
 
         if self.project.design is None:

@@ -12,7 +12,9 @@ import pytest
 
 from rockfall_design.design import resolve_design
 from rockfall_design.judge.placing import build_concept
-from rockfall_design.optimise import Alternative, Screening, _bare_slope, _list_undecided
+from rockfall_design.optimise import Screening
+from rockfall_design.optimise.section import _bare_slope, _list_undecided
+from rockfall_design.optimise.alternatives import Alternative
 from rockfall_design.plugins.concept import Check
 from rockfall_design.project import load_project_text
 
@@ -91,7 +93,7 @@ def test_the_proof_line_names_marginal_and_undecided_designs():
     from collections import Counter
 
     from rockfall_design.judge.sequential import plan_looks
-    from rockfall_design.optimise import _proof
+    from rockfall_design.optimise.section import _proof
 
     alt = Alternative(name="fence", family=(0,))
     alt.marginal = [{"cost": 1.0, "decided": True}, {"cost": 2.0, "decided": False}]
@@ -160,7 +162,7 @@ def test_the_proof_lines_reasons_are_never_cut():
 def test_a_residual_of_nothing_is_said_at_once(registry):
     """An allowed residual of 0 can never be shown with confidence: the optimiser says so
     instead of 'no design of this family fits on the section', and searches nothing."""
-    from rockfall_design.optimise import optimise
+    from rockfall_design.optimise.section import optimise
 
     text = (PROJECTS / "design_ditch_or_fence.yaml").read_text(encoding="utf-8")
     assert "residual: {fraction: 0.001}" in text

@@ -1,0 +1,202 @@
+"""The optimiser's results and the limits every driver shares.
+
+:class:`Alternative` is one family's outcome (its cheapest design that holds,
+or why none does; the marginal and undecided designs cheaper than it),
+:class:`OptimisationResult` a whole search; the constants bound the work of
+one family whatever the driver (one section or the scenarios of a study)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from ..judge.evaluation import Evaluation
+from ..judge.sequential import LookSchedule
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..plugins.measure import ProtectiveMeasure
+from .decide import rocks_to_decide
+
+#: Designs the screening left undecided that are decided, per family (the rest are
+#: counted in the report as not decided).
+MAX_NEAR_PER_FAMILY = 40
+
+
+#: Designs that miss their targets on the point values of the search rocks, but not
+#: with confidence, decided per family when cheaper than its design (cheapest first).
+MAX_DEFERRED_PER_FAMILY = 8
+
+
+#: Such designs kept aside while the family's stream is read.
+MAX_DEFERRED_KEPT = 400
+
+
+#: The search runs at least this many times the rocks that show the residual target.
+SEARCH_FACTOR = 1
+
+
+#: Designs the screening could not judge (too few rocks at a measure) that may fail
+#: exactly before the family's other such designs are no longer decided.
+MAX_UNJUDGED_FAILURES = 3
+
+
+#: Sequential decisions of one family, at most.
+MAX_EXACT_PER_FAMILY = 40
+
+
+#: Seed of the search over ground edits (with the family's index), whatever the run seed.
+SEARCH_SEED = 20261124
+
+
+#: Offset of the fresh rocks' seed from the search seed (``design.fresh_seed`` overrides).
+FRESH_OFFSET = 1000003
+
+
+#: Marginal designs a family keeps for the report (the cheapest).
+MAX_MARGINAL_PER_FAMILY = 5
+
+
+#: Deferred designs decided per cost (one catalogue combination at several stations
+#: or geometries; the closest to holding first), so that the family's budget of
+#: deferred decisions reaches as many of its cheaper combinations as it can.
+MAX_DEFERRED_PER_COST = 1
+
+
+#: Cheaper designs a budget left undecided that a family lists (one per cost, cheapest).
+MAX_UNDECIDED_LISTED = 40
+
+
+@dataclass
+class Alternative:
+    """The cheapest admissible design of one family, decided exactly and verified."""
+
+    name: str
+    family: tuple[int, ...]
+    measures: list[ProtectiveMeasure] = field(default_factory=list)
+    cost: float = math.inf
+    screened_feasible: bool = False
+    feasible: bool = False
+    holds_on_fresh_rocks: bool | None = None
+    checks: list[dict[str, Any]] = field(default_factory=list)
+    residual: int | None = None
+    fresh_residual: int | None = None
+    fresh_failures: list[str] = field(default_factory=list)
+    reason: str = ""
+    evaluations: int = 0
+    exact_evaluations: int = 0
+    wall_s: float = 0.0
+    evaluation: Evaluation | None = None
+    decision_rocks: int | None = None
+    fresh_rocks: int | None = None
+    fresh_seed: int | None = None
+    proof: str = ""
+    dominated: str = ""
+    marginal: list[dict[str, Any]] = field(default_factory=list)
+    rejected: int = 0
+    undecided: int = 0  # cheaper designs left undecided by a budget (cheapest listed)
+
+    @property
+    def holds(self) -> bool:
+        """Admitted with confidence, verified on fresh rocks, not dominated."""
+        return self.feasible and bool(self.holds_on_fresh_rocks) and not self.dominated
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "measures": measure_dicts(self.measures),
+            "cost": None if not math.isfinite(self.cost) else round(self.cost, 2),
+            "feasible": self.feasible,
+            "holds_on_fresh_rocks": self.holds_on_fresh_rocks,
+            "checks": self.checks,
+            "residual": self.residual,
+            "decision_rocks": self.decision_rocks,
+            "fresh_residual": self.fresh_residual,
+            "fresh_rocks": self.fresh_rocks,
+            "fresh_seed": self.fresh_seed,
+            "reason": self.reason,
+            "proof": self.proof,
+            "dominated": self.dominated or None,
+            "evaluations": self.evaluations,
+            "exact_evaluations": self.exact_evaluations,
+            "marginal": self.marginal,
+            "undecided": self.undecided,
+        }
+
+
+@dataclass
+class OptimisationResult:
+    alternatives: list[Alternative]
+    best: Alternative | None
+    reason: str
+    rocks: int
+    seed: int
+    fresh_rocks: int
+    fresh_seed: int
+    wall_s: float
+    evaluations: int
+    edit_runs: int
+    currency: str = ""
+    search_rocks: int = 0
+    confidence: float = 0.95
+    exact_evaluations: int = 0
+    rocks_simulated: int = 0
+    looks: LookSchedule | None = None
+    marginal: list[dict[str, Any]] = field(default_factory=list)
+    decided: int = 0
+    bare_slope: dict[str, Any] | None = None
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "rocks": self.rocks,
+            "seed": self.seed,
+            "search_rocks": self.search_rocks,
+            "fresh_rocks": self.fresh_rocks,
+            "fresh_seed": self.fresh_seed,
+            "confidence": self.confidence,
+            "runtime_s": round(self.wall_s, 3),
+            "designs_evaluated": self.evaluations,
+            "exact_evaluations": self.exact_evaluations,
+            "rocks_simulated": self.rocks_simulated,
+            "edit_runs": self.edit_runs,
+            "currency": self.currency,
+            "alternatives": [a.as_dict() for a in self.alternatives],
+            # the chosen design, the same object as the Python API's ``best``;
+            # ``best_name`` is the string ``best`` was, kept for older readers
+            "best": None if self.best is None else self.best.as_dict(),
+            "best_name": None if self.best is None else self.best.name,
+            "proof": "" if self.best is None else self.best.proof,
+            "reason": self.reason,
+            "decided": self.decided,
+            "marginal": self.marginal,
+            "bare_slope": self.bare_slope,
+            "looks": None if self.looks is None else {
+                "rocks": list(self.looks.sizes), "confidence": self.looks.confidence,
+                "look_confidence": self.looks.look_confidence},
+        }
+
+
+def fresh_failures(fresh: Evaluation) -> str:
+    """What fails on the fresh rocks: the point failures, or that some bound misses."""
+    return "; ".join(fresh.failures()) or (
+        "its point values hold, but not every check or the residual with its bound")
+
+
+def measure_dicts(measures: Sequence[ProtectiveMeasure]) -> list[dict[str, Any]]:
+    """Measures as the project file writes them: ``{type, **params}`` each."""
+    return [{"type": m.kind, **m.params.model_dump(mode="json")} for m in measures]
+
+
+def listed_entry(family: str, measures: Sequence[ProtectiveMeasure], labels: Sequence[str],
+                 cost: float, *, rocks: int | None, values: dict[str, Any] | None,
+                 reason: str, decided: bool) -> dict[str, Any]:
+    """A cheaper design listed as marginal or undecided (``marginal`` in --json).
+
+    ``values`` are the look's point values and bounds (:func:`look_values`), None
+    for a design across scenarios; ``rocks_to_decide`` follows from them.
+    """
+    return {"name": family, "family": family, "measures": measure_dicts(measures),
+            "labels": list(labels), "cost": round(float(cost), 2), "rocks": rocks,
+            "rocks_to_decide": None if values is None else rocks_to_decide(values),
+            "values": values, "reason": reason, "decided": decided}
