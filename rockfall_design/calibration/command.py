@@ -20,8 +20,8 @@ __all__ = ["add_calibrate_parser", "cmd_calibrate", "cmd_compare"]
 OUT_FILES = ("calibrated.yaml", "parameters.csv", "replicates.csv", "summary.json")
 
 
-def _common(p: argparse.ArgumentParser, what: str) -> None:
-    """--rocks, --seed, --json, --plot, --plot-format of both commands."""
+def _common(p: argparse.ArgumentParser, what: str, report: str) -> None:
+    """--rocks, --seed, --json, --plot, --plot-format, --report of both commands."""
     from ..cli import _formats, _positive_int, _seed
 
     p.add_argument("--rocks", type=_positive_int, metavar="N",
@@ -36,6 +36,9 @@ def _common(p: argparse.ArgumentParser, what: str) -> None:
                    "cloud of the fitted inputs)")
     p.add_argument("--plot-format", type=_formats, default=("png",), metavar="FMT[,FMT]",
                    help="file formats of the --plot figures: png, svg, pdf (default: png)")
+    p.add_argument("--report", type=Path, metavar="DIR",
+                   help="write DIR/report.html (self-contained: figures inline as SVG) and "
+                   f"DIR/report.md (its Markdown twin, figures beside it as SVG): {report}")
 
 
 def add_calibrate_parser(sub: Any) -> None:
@@ -53,7 +56,9 @@ def add_calibrate_parser(sub: Any) -> None:
         "observations do not pin down.",
     )
     p.add_argument("project", type=Path, help="project file (YAML) with a calibrate: section")
-    _common(p, "per evaluation (default: calibrate.rocks)")
+    _common(p, "per evaluation (default: calibrate.rocks)",
+            "the observed set, the fitted inputs with their intervals and correlation, the "
+            "fit statistics, the levels, the figures and how to repeat the run")
     p.add_argument("--observed", type=Path, metavar="CSV",
                    help="observed stops to fit (default: calibrate.observed)")
     p.add_argument("--bootstrap", type=_int_at_least(0, "number of replicates", MAX_BOOTSTRAP),
@@ -90,7 +95,9 @@ def add_calibrate_parser(sub: Any) -> None:
     c.add_argument("project", type=Path, help="project file (YAML), e.g. a calibrated.yaml")
     c.add_argument("--observed", type=Path, metavar="CSV", required=True,
                    help="the observed stops (x, optionally volume_m3 or mass_kg)")
-    _common(c, "(default: rocks.count of the project)")
+    _common(c, "(default: rocks.count of the project)",
+            "the observed set, the fit statistics, the levels, the figure and how to repeat "
+            "the run")
     c.add_argument("--out", type=Path, metavar="DIR", help="write summary.json into DIR")
     _add_block_option(c)
     c.set_defaults(func=cmd_compare)
@@ -130,11 +137,11 @@ def _one_section(args: argparse.Namespace) -> tuple[Any, Any]:
 
 
 def _save_plots(args: argparse.Namespace, result: Any, files: Any) -> None:
-    """The --plot figures, written through the command's output set."""
-    if args.plot:
-        from ..report.figures import save_figures
+    """The --plot figures and the --report documents, written through the command's output
+    set (the figures drawn once for both, as the other commands do)."""
+    from ..cli import _figures_and_report
 
-        save_figures(result.figures(), args.plot, args.plot_format, files)
+    _figures_and_report(result, args, files)
 
 
 def _show(args: argparse.Namespace, summary: dict[str, Any], result: Any) -> int:
@@ -149,7 +156,7 @@ def _show(args: argparse.Namespace, summary: dict[str, Any], result: Any) -> int
 def cmd_calibrate(args: argparse.Namespace) -> int:
     """Calibrate; exit 0 (a calibration has no pass or fail: its warnings say what to doubt)."""
     from ..api import calibrate
-    from ..cli import _figure_files, _reserve
+    from ..cli import REPORT_FILES, _figure_files, _reserve
     from ..outputs import OutputSet
     from ..project import dump_yaml
     from .result import FIGURES
@@ -158,6 +165,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     with OutputSet() as files:
         _reserve(files, args.out, OUT_FILES)
         _reserve(files, args.plot, _figure_files(FIGURES, args))
+        _reserve(files, args.report, REPORT_FILES)
         if args.save_materials is not None:
             files.reserve(args.save_materials)
         result = calibrate(project, observed=args.observed, rocks=args.rocks,
@@ -184,7 +192,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 def cmd_compare(args: argparse.Namespace) -> int:
     """Compare; exit 0 (the statistics say how good the prediction is)."""
     from ..api import compare
-    from ..cli import _figure_files, _reserve
+    from ..cli import REPORT_FILES, _figure_files, _reserve
     from ..outputs import OutputSet
     from .result import FIGURES
 
@@ -192,6 +200,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     with OutputSet() as files:
         _reserve(files, args.out, ("summary.json",))
         _reserve(files, args.plot, _figure_files(FIGURES[:1], args))
+        _reserve(files, args.report, REPORT_FILES)
         result = compare(project, args.observed, rocks=args.rocks, seed=args.seed,
                          registry=registry)
         summary = result.summary

@@ -22,6 +22,10 @@ from .fit import FitProblem
 from .observations import Observations, observed_file
 
 if TYPE_CHECKING:  # pragma: no cover
+    import os
+    from collections.abc import Mapping
+    from pathlib import Path
+
     import pandas as pd
     from matplotlib.figure import Figure
     from rich.console import Console
@@ -100,6 +104,18 @@ class ComparisonResult:
         return {FIGURES[0]: stops_figure(self.observations.x, self.simulated, levels,
                                          f"{self.project.name}: {self.observations.source}")}
 
+    def report_context(self, figures: Mapping[str, Figure] | None = None) -> dict[str, Any]:
+        """The report's context (:func:`~.document.report_context`)."""
+        from .document import report_context
+
+        return report_context(self, figures)
+
+    def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
+        """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
+        from ..report.documents import write_report
+
+        return write_report(self, directory)
+
     def print(self, console: Console | None = None) -> None:
         """The fit statistics and the levels as rich tables."""
         _print_fit(self.project.name, self.fit, self.levels, console,
@@ -171,7 +187,8 @@ class CalibrationResult:
                              "sizes": self.sizes},
             "method": {"distance": self.problem.kind, "rocks": self.problem.rocks,
                        "bootstrap": len(self.replicates) - 1, "confidence": self.confidence,
-                       "interval": "percentile bootstrap, each replicate refitted with its own "
+                       "interval": "expanded percentile bootstrap (Hesterberg 2015), each "
+                       "replicate refitted with its own "
                        "simulation seed", "seed": self.seed,
                        "evaluations": int(sum(r["evaluations"] for r in self.replicates))},
             "warnings": _warnings(self.parameters, self.fit, self.levels),
@@ -257,6 +274,18 @@ class CalibrationResult:
                                      f"{self.project.name}: best fit"),
             FIGURES[1]: cloud_figure(self.problem.paths, self.bootstrap, self.parameters),
         }
+
+    def report_context(self, figures: Mapping[str, Figure] | None = None) -> dict[str, Any]:
+        """The report's context (:func:`~.document.report_context`)."""
+        from .document import report_context
+
+        return report_context(self, figures)
+
+    def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
+        """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
+        from ..report.documents import write_report
+
+        return write_report(self, directory)
 
     def print(self, console: Console | None = None) -> None:
         """The parameters, the fit and the levels as rich tables."""

@@ -90,6 +90,7 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--out": ["calibrated.yaml", "parameters.csv", "replicates.csv", "summary.json", "DIR"],
         "--save-materials": ["materials library"],
         "--keep-scatter": ["calibrated.yaml", "scatter as it was"],
+        "--report": ["report.html", "report.md", "DIR", "fitted inputs"],
         "--workers": ["local pool", "one per core"],
         "--pool": ["threads", "processes", "same results"],
         "--scheduler": ["Dask", "same results", "study extra"],
@@ -104,6 +105,7 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--plot": ["calibration_stops", "DIR"],
         "--plot-format": ["png", "svg", "pdf", "--plot"],
         "--out": ["summary.json", "DIR"],
+        "--report": ["report.html", "report.md", "DIR", "fit statistics"],
         "--block": ["plugin"],
     },
     "plugins": {
