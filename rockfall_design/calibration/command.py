@@ -17,7 +17,8 @@ from ..errors import ExitCode
 __all__ = ["add_calibrate_parser", "cmd_calibrate", "cmd_compare"]
 
 #: The files of calibrate --out DIR.
-OUT_FILES = ("calibrated.yaml", "parameters.csv", "replicates.csv", "summary.json")
+OUT_FILES = ("calibrated.yaml", "materials.yaml", "parameters.csv", "replicates.csv",
+             "summary.json")
 
 
 def _common(p: argparse.ArgumentParser, what: str, report: str) -> None:
@@ -66,11 +67,13 @@ def add_calibrate_parser(sub: Any) -> None:
                    "the best fit only, no intervals)")
     p.add_argument("--out", type=Path, metavar="DIR",
                    help="write calibrated.yaml (the project with the fitted values, their "
-                   "spread added to the materials' scatter), parameters.csv, replicates.csv "
-                   "and summary.json (with the run record) into DIR")
+                   "spread added to the materials' scatter), materials.yaml (its materials as "
+                   "a library, each entry's source the observations, date and seed), "
+                   "parameters.csv, replicates.csv and summary.json (with the run record) "
+                   "into DIR")
     p.add_argument("--save-materials", type=Path, metavar="FILE",
                    help="write the calibrated project's materials as a materials library "
-                   "(materials: {library: FILE})")
+                   "(materials: {library: FILE}), as --out's materials.yaml")
     p.add_argument("--keep-scatter", action="store_true",
                    help="write calibrated.yaml and --save-materials with the materials' "
                    "scatter as it was, without the spread of the fit")
@@ -178,13 +181,15 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             out: Path = args.out
             files.write_text(out / "calibrated.yaml", _header(result, spread)
                              + dump_yaml(result.calibrated_data(str(out), spread=spread)))
+            files.write_text(out / "materials.yaml", _header(result, spread)
+                             + result.materials_library_text(spread=spread))
             files.write_csv(out / "parameters.csv", result.parameters_table())
             files.write_csv(out / "replicates.csv", result.replicates_table())
             record = run_record(args, project, result.seed, result.problem.rocks)
             files.write_json(out / "summary.json", {**summary, "run": record})
         if args.save_materials is not None:
             files.write_text(args.save_materials, _header(result, spread)
-                             + dump_yaml(result.materials_library(spread=spread)))
+                             + result.materials_library_text(spread=spread))
         _save_plots(args, result, files)
     return _show(args, summary, result)
 
