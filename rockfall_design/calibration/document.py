@@ -19,6 +19,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from .. import __version__
 from ..report.documents import MODEL_LIMITS, Table, _inputs
 
@@ -79,7 +81,7 @@ def _observed_tables(result: Any) -> list[Table]:
         unit = "m3" if obs.size_key == "volume" else "kg"
         rows.append([f"{obs.size_key} of the blocks ({unit})",
                      f"{_g(obs.size.min())} to {_g(obs.size.max())}, median "
-                     f"{_g(float(sorted(obs.size)[obs.n // 2]))}"])
+                     f"{_g(float(np.median(obs.size)))}"])
         rows.append(["simulated rock size (fitted to the observed)",
                      ", ".join(f"{k} {v}" for k, v in (result.sizes or {}).items())])
     tables = [Table("Observed blocks", ["item", "value"], rows,
@@ -219,7 +221,7 @@ def _run_table(result: Any, command: str) -> Table:
 
 
 def _verdict(result: Any, command: str, warnings: Sequence[str]) -> tuple[str, str]:
-    """The headline and its state (the templates' css: ok or warn)."""
+    """The headline and its state (the report.html template colours it: ok or warn)."""
     n = result.observations.n
     if command == "calibrate":
         params = result.parameters
@@ -232,7 +234,7 @@ def _verdict(result: Any, command: str, warnings: Sequence[str]) -> tuple[str, s
             head += ": every input pinned down by the observations"
         else:
             head += " (no bootstrap: no intervals)"
-        return head + ".", ("calibrated with warnings" if warnings else "calibrated")
+        return head + ".", ("fit with warnings" if warnings else "fit without warnings")
     fit = result.fit
     apart = float(fit["ks_pvalue"]) < 0.05
     head = (f"Prediction of {n:,} observed blocks: {fit['distance_kind']} distance "
@@ -240,7 +242,7 @@ def _verdict(result: Any, command: str, warnings: Sequence[str]) -> tuple[str, s
             f"{float(fit['ks_pvalue']):.2g}: "
             + ("the observations tell the prediction apart at 5 %." if apart else
                "the observations do not tell the prediction apart at 5 %."))
-    return head, ("calibrated with warnings" if apart or warnings else "calibrated")
+    return head, ("fit with warnings" if apart or warnings else "fit without warnings")
 
 
 def report_context(result: Any,

@@ -88,7 +88,7 @@ def test_an_input_not_pinned_down_is_flagged_and_headlined(result):
     loose = [{**result.parameters[0], "identified": False, "width_share": 0.9}]
     ctx = report_context(dataclasses.replace(result, parameters=loose), figures={})
     assert "not pinned down" in ctx["verdict"] and PATH in ctx["verdict"]
-    assert ctx["verdict_state"] == "calibrated with warnings"
+    assert ctx["verdict_state"] == "fit with warnings"
     assert any("not identified" in f for f in ctx["failures"])
     html = render_html(ctx)
     row = _row(_cells(html), PATH)
