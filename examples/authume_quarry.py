@@ -36,9 +36,10 @@ and writes into the output folder, for each profile:
   random into two halves (by block, ``--split-seed``), to calibrate on one
   (``calibrate authume_P1.yaml --observed stops_P1_a.csv``) and predict the
   other (``compare``);
-- ``authume_P2_calibrated.yaml``: profile P2's project on the materials that
-  ``calibrate --save-materials calibrated_materials.yaml`` writes, to
-  predict P2 with what was fitted on P1 (``compare``).
+- ``authume_P2_calibrated.yaml`` (and ``authume_P1_calibrated.yaml``): the
+  profile's project on the materials that ``calibrate --save-materials
+  calibrated_materials.yaml`` writes, to predict P2 with what was fitted on
+  P1 (``compare``).
 
 Coordinates in the dataset: x and z horizontal, y up (m). The stop positions
 lie about 2.8 m above the terrain surface beneath them (on the benches and
@@ -210,6 +211,11 @@ def levels(p: dict, shortest: float = 3.5) -> dict[str, list[float]]:
 
 
 def project_text(name: str, p: dict, materials: str, seed: int, calibrate: bool) -> str:
+    """The project file of profile ``name`` (section, materials library, rocks, calibrate:).
+
+    ``calibrate=False``: a project to ``compare`` with (its ``calibrate:``
+    section still gives the levels and the observed file).
+    """
     lv = levels(p)
     lines = [
         f"# Authume quarry, profile {name}: written by examples/authume_quarry.py from the",
