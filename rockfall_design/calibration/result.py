@@ -22,6 +22,10 @@ from .fit import FitProblem
 from .observations import Observations, observed_file
 
 if TYPE_CHECKING:  # pragma: no cover
+    import os
+    from collections.abc import Mapping
+    from pathlib import Path
+
     import pandas as pd
     from matplotlib.figure import Figure
     from rich.console import Console
@@ -100,6 +104,18 @@ class ComparisonResult:
         return {FIGURES[0]: stops_figure(self.observations.x, self.simulated, levels,
                                          f"{self.project.name}: {self.observations.source}")}
 
+    def report_context(self, figures: Mapping[str, Figure] | None = None) -> dict[str, Any]:
+        """The report's context (:func:`~.document.report_context`)."""
+        from .document import report_context
+
+        return report_context(self, figures)
+
+    def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
+        """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
+        from ..report.documents import write_report
+
+        return write_report(self, directory)
+
     def print(self, console: Console | None = None) -> None:
         """The fit statistics and the levels as rich tables."""
         _print_fit(self.project.name, self.fit, self.levels, console,
@@ -171,7 +187,8 @@ class CalibrationResult:
                              "sizes": self.sizes},
             "method": {"distance": self.problem.kind, "rocks": self.problem.rocks,
                        "bootstrap": len(self.replicates) - 1, "confidence": self.confidence,
-                       "interval": "percentile bootstrap, each replicate refitted with its own "
+                       "interval": "expanded percentile bootstrap (Hesterberg 2015), each "
+                       "replicate refitted with its own "
                        "simulation seed", "seed": self.seed,
                        "evaluations": int(sum(r["evaluations"] for r in self.replicates))},
             "warnings": _warnings(self.parameters, self.fit, self.levels),
@@ -247,6 +264,52 @@ class CalibrationResult:
         """The calibrated project's materials, as a library file holds them."""
         return self.calibrated_data(spread=spread)["materials"]
 
+    def materials_library_text(self, spread: bool = True, when: str | None = None) -> str:
+        """The calibrated materials as a library file, each entry with its law and source.
+
+        Every entry is preceded by the two comment lines the bundled library
+        has (``projects/materials.yaml``, docs/materials.md): ``law:`` (its
+        impact model) and ``source:``: for an entry with a fitted parameter,
+        "calibrated on FILE (N blocks), DATE, seed S" with the fitted
+        parameters, their values and intervals; for the others, that they
+        are the project's, not fitted.
+
+        Parameters
+        ----------
+        spread
+            As :meth:`calibrated_data`.
+        when
+            The date written (default: today, UTC, ``YYYY-MM-DD``).
+        """
+        import datetime as dt
+
+        from ..project import dump_yaml
+
+        day = when or dt.datetime.now(dt.UTC).strftime("%Y-%m-%d")
+        fitted: dict[str, list[str]] = {}
+        for p in self.parameters:
+            key = p["path"].split(".")
+            if len(key) != 3 or key[0] != "materials":
+                continue  # not a material's parameter (e.g. the release height)
+            key = key[1:]
+            interval = ("" if p["low"] is None else
+                        f" [{p['low']:.3g}, {p['high']:.3g}]")
+            flag = " NOT IDENTIFIED" if p["identified"] is False else ""
+            fitted.setdefault(key[0], []).append(f"{key[1]} {p['value']:.3g}{interval}{flag}")
+        observed = f"{self.observations.source} ({self.observations.n} blocks)"
+        parts = []
+        for name, entry in self.materials_library(spread=spread).items():
+            if name in fitted:
+                source = (f"calibrated on {observed}, {day}, seed {self.seed} (rockfall-design "
+                          f"calibrate; fitted: {'; '.join(fitted[name])}, "
+                          f"{100 * self.confidence:g} % intervals)")
+            else:
+                source = f"the project {self.project.source}, not fitted by this calibration"
+            law = entry.get("impact_model", "spang")
+            parts.append(f"# law: {law}\n# source: {' '.join(source.split())}\n"
+                         + dump_yaml({name: entry}))
+        return "".join(parts)
+
     def figures(self) -> dict[str, Figure]:
         """The stops' figure and the bootstrap cloud (:data:`FIGURES`)."""
         from .figures import cloud_figure, stops_figure
@@ -257,6 +320,18 @@ class CalibrationResult:
                                      f"{self.project.name}: best fit"),
             FIGURES[1]: cloud_figure(self.problem.paths, self.bootstrap, self.parameters),
         }
+
+    def report_context(self, figures: Mapping[str, Figure] | None = None) -> dict[str, Any]:
+        """The report's context (:func:`~.document.report_context`)."""
+        from .document import report_context
+
+        return report_context(self, figures)
+
+    def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
+        """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
+        from ..report.documents import write_report
+
+        return write_report(self, directory)
 
     def print(self, console: Console | None = None) -> None:
         """The parameters, the fit and the levels as rich tables."""

@@ -17,11 +17,12 @@ from ..errors import ExitCode
 __all__ = ["add_calibrate_parser", "cmd_calibrate", "cmd_compare"]
 
 #: The files of calibrate --out DIR.
-OUT_FILES = ("calibrated.yaml", "parameters.csv", "replicates.csv", "summary.json")
+OUT_FILES = ("calibrated.yaml", "materials.yaml", "parameters.csv", "replicates.csv",
+             "summary.json")
 
 
-def _common(p: argparse.ArgumentParser, what: str) -> None:
-    """--rocks, --seed, --json, --plot, --plot-format of both commands."""
+def _common(p: argparse.ArgumentParser, what: str, report: str) -> None:
+    """--rocks, --seed, --json, --plot, --plot-format, --report of both commands."""
     from .options import formats, positive_int, seed_number
 
     p.add_argument("--rocks", type=positive_int, metavar="N",
@@ -36,6 +37,9 @@ def _common(p: argparse.ArgumentParser, what: str) -> None:
                    "cloud of the fitted inputs)")
     p.add_argument("--plot-format", type=formats, default=("png",), metavar="FMT[,FMT]",
                    help="file formats of the --plot figures: png, svg, pdf (default: png)")
+    p.add_argument("--report", type=Path, metavar="DIR",
+                   help="write DIR/report.html (self-contained: figures inline as SVG) and "
+                   f"DIR/report.md (its Markdown twin, figures beside it as SVG): {report}")
 
 
 def add_calibrate_parser(sub: Any) -> None:
@@ -53,7 +57,9 @@ def add_calibrate_parser(sub: Any) -> None:
         "observations do not pin down.",
     )
     p.add_argument("project", type=Path, help="project file (YAML) with a calibrate: section")
-    _common(p, "per evaluation (default: calibrate.rocks)")
+    _common(p, "per evaluation (default: calibrate.rocks)",
+            "the observed set, the fitted inputs with their intervals and correlation, the "
+            "fit statistics, the levels, the figures and how to repeat the run")
     p.add_argument("--observed", type=Path, metavar="CSV",
                    help="observed stops to fit (default: calibrate.observed)")
     p.add_argument("--bootstrap", type=int_at_least(0, "number of replicates", MAX_BOOTSTRAP),
@@ -61,11 +67,13 @@ def add_calibrate_parser(sub: Any) -> None:
                    "the best fit only, no intervals)")
     p.add_argument("--out", type=Path, metavar="DIR",
                    help="write calibrated.yaml (the project with the fitted values, their "
-                   "spread added to the materials' scatter), parameters.csv, replicates.csv "
-                   "and summary.json (with the run record) into DIR")
+                   "spread added to the materials' scatter), materials.yaml (its materials as "
+                   "a library, each entry's source the observations, date and seed), "
+                   "parameters.csv, replicates.csv and summary.json (with the run record) "
+                   "into DIR")
     p.add_argument("--save-materials", type=Path, metavar="FILE",
                    help="write the calibrated project's materials as a materials library "
-                   "(materials: {library: FILE})")
+                   "(materials: {library: FILE}), as --out's materials.yaml")
     p.add_argument("--keep-scatter", action="store_true",
                    help="write calibrated.yaml and --save-materials with the materials' "
                    "scatter as it was, without the spread of the fit")
@@ -90,7 +98,9 @@ def add_calibrate_parser(sub: Any) -> None:
     c.add_argument("project", type=Path, help="project file (YAML), e.g. a calibrated.yaml")
     c.add_argument("--observed", type=Path, metavar="CSV", required=True,
                    help="the observed stops (x, optionally volume_m3 or mass_kg)")
-    _common(c, "(default: rocks.count of the project)")
+    _common(c, "(default: rocks.count of the project)",
+            "the observed set, the fit statistics, the levels, the figure and how to repeat "
+            "the run")
     c.add_argument("--out", type=Path, metavar="DIR", help="write summary.json into DIR")
     add_block_option(c)
     c.set_defaults(func=cmd_compare)
@@ -130,11 +140,11 @@ def _one_section(args: argparse.Namespace) -> tuple[Any, Any]:
 
 
 def _save_plots(args: argparse.Namespace, result: Any, files: Any) -> None:
-    """The --plot figures, written through the command's output set."""
-    if args.plot:
-        from ..report.figures import save_figures
+    """The --plot figures and the --report documents, written through the command's output
+    set (the figures drawn once for both, as the other commands do)."""
+    from .common import figures_and_report
 
-        save_figures(result.figures(), args.plot, args.plot_format, files)
+    figures_and_report(result, args, files)
 
 
 def _show(args: argparse.Namespace, summary: dict[str, Any], result: Any) -> int:
@@ -152,12 +162,13 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     from ..calibration.result import FIGURES
     from ..project import dump_yaml
     from ..report.outputs import OutputSet
-    from .common import figure_files, reserve
+    from .common import REPORT_FILES, figure_files, reserve
 
     project, registry = _one_section(args)
     with OutputSet() as files:
         reserve(files, args.out, OUT_FILES)
         reserve(files, args.plot, figure_files(FIGURES, args))
+        reserve(files, args.report, REPORT_FILES)
         if args.save_materials is not None:
             files.reserve(args.save_materials)
         result = calibrate(project, observed=args.observed, rocks=args.rocks,
@@ -170,13 +181,15 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             out: Path = args.out
             files.write_text(out / "calibrated.yaml", _header(result, spread)
                              + dump_yaml(result.calibrated_data(str(out), spread=spread)))
+            files.write_text(out / "materials.yaml", _header(result, spread)
+                             + result.materials_library_text(spread=spread))
             files.write_csv(out / "parameters.csv", result.parameters_table())
             files.write_csv(out / "replicates.csv", result.replicates_table())
             record = run_record(args, project, result.seed, result.problem.rocks)
             files.write_json(out / "summary.json", {**summary, "run": record})
         if args.save_materials is not None:
             files.write_text(args.save_materials, _header(result, spread)
-                             + dump_yaml(result.materials_library(spread=spread)))
+                             + result.materials_library_text(spread=spread))
         _save_plots(args, result, files)
     return _show(args, summary, result)
 
@@ -186,12 +199,13 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from ..api import compare
     from ..calibration.result import FIGURES
     from ..report.outputs import OutputSet
-    from .common import figure_files, reserve
+    from .common import REPORT_FILES, figure_files, reserve
 
     project, registry = _one_section(args)
     with OutputSet() as files:
         reserve(files, args.out, ("summary.json",))
         reserve(files, args.plot, figure_files(FIGURES[:1], args))
+        reserve(files, args.report, REPORT_FILES)
         result = compare(project, args.observed, rocks=args.rocks, seed=args.seed,
                          registry=registry)
         summary = result.summary

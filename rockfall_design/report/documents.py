@@ -709,6 +709,7 @@ def _environment(markdown: bool) -> Any:
         finalize=_md_text if markdown else None,
     )
     env.filters["md"] = _md_cell
+    env.filters["rendered"] = _Rendered
     return env
 
 
@@ -717,13 +718,19 @@ def _environment(markdown: bool) -> Any:
 _HTML_START = re.compile(r"<(?=[A-Za-z/!?])|&(?=#|[A-Za-z][A-Za-z0-9]*;)")
 
 
+class _Rendered(str):
+    """Markdown the template has escaped already (a macro's output, ``|rendered``)."""
+
+
 def _md_text(value: Any) -> Any:
     """A value shown in report.md, with whatever could start HTML as an entity.
 
     ``<script>`` becomes ``&lt;script>``, as report.html escapes it; a
     comparison (``e < 1``) or an ampersand between words stays as written.
+    A macro's output (a table) was escaped cell by cell and is left as it
+    is: escaped again, ``&lt;`` would show as itself.
     """
-    if not isinstance(value, str):
+    if not isinstance(value, str) or isinstance(value, _Rendered):
         return value
     return _HTML_START.sub(lambda m: "&lt;" if m.group() == "<" else "&amp;", value)
 
@@ -758,7 +765,8 @@ def write_report(result: Any, directory: str | os.PathLike[str],
 
     Parameters
     ----------
-    result : SimulationResult, CheckResult or OptimiseResult
+    result : SimulationResult, CheckResult, OptimiseResult, or a result with a
+        ``report_context(figures)`` method (CalibrationResult, ComparisonResult)
     directory : path
     outputs : OutputSet, optional
         The command's output set: the files land when it commits (all or
@@ -777,7 +785,10 @@ def write_report(result: Any, directory: str | os.PathLike[str],
         with OutputSet() as own:
             return write_report(result, directory, own, figures)
     out = Path(directory)
-    ctx = report_context(result, figures)
+    # A result that builds its own context (calibrate, compare) is rendered by
+    # the same templates; the others' context is built here.
+    own = getattr(result, "report_context", None)
+    ctx = own(figures) if callable(own) else report_context(result, figures)
     figs = {f["name"]: f["fig"] for f in ctx["figures"]}
     written = save_figures(figs, out, ("svg",), outputs)
     outputs.write_text(out / "report.html", render_html(ctx))

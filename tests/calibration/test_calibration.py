@@ -93,7 +93,8 @@ def test_json_out_plot_and_calibrated_project(site, tmp_path, capsys):
     assert [lv["name"] for lv in summary["levels"]] == ["bench", "floor"]
     assert set(summary["levels"][0]) >= {"observed_share", "low", "high", "simulated_share"}
     names = sorted(p.name for p in out.iterdir() if p.name != MANIFEST)
-    assert names == ["calibrated.yaml", "parameters.csv", "replicates.csv", "summary.json"]
+    assert names == ["calibrated.yaml", "materials.yaml", "parameters.csv", "replicates.csv",
+                     "summary.json"]
     names = sorted(p.name for p in plots.iterdir() if p.name != MANIFEST)
     assert names == ["calibration_cloud.png", "calibration_stops.png"]
     calibrated = load_project(out / "calibrated.yaml")
@@ -101,6 +102,15 @@ def test_json_out_plot_and_calibrated_project(site, tmp_path, capsys):
     assert soil.restitution == pytest.approx(summary["parameters"][0]["value"])
     assert soil.scatter.restitution == pytest.approx(summary["parameters"][0]["sd"])
     assert yaml.safe_load(lib.read_text())["soil"]["restitution"] == soil.restitution
+    # The library says where each entry comes from, as projects/materials.yaml does.
+    text = (out / "materials.yaml").read_text()
+    assert text == lib.read_text()
+    p = summary["parameters"][0]
+    assert (f"# law: spang\n# source: calibrated on {site.parent / 'stops.csv'} (40 blocks), "
+            in text and f"seed {summary['method']['seed']} " in text)
+    assert f"fitted: restitution {p['value']:.3g} [{p['low']:.3g}, {p['high']:.3g}]" in text
+    assert "# law: spang\n# source: the project " in text  # rock and unused: not fitted
+    assert set(yaml.safe_load(text)) == {"soil", "rock", "unused"}
     kept = rd.calibrate(site, workers=1, bootstrap=3).calibrated_project(spread=False)
     assert kept.materials["soil"].scatter.restitution == 0.0
     # compare: the calibrated project against the same observations, nothing fitted

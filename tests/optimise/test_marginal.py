@@ -13,8 +13,8 @@ import pytest
 from rockfall_design.design import resolve_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimise import Screening
-from rockfall_design.optimise.section import _bare_slope, _list_undecided
 from rockfall_design.optimise.alternatives import Alternative
+from rockfall_design.optimise.section import _bare_slope, _list_undecided
 from rockfall_design.plugins.concept import Check
 from rockfall_design.project import load_project_text
 

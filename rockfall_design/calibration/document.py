@@ -1,0 +1,325 @@
+"""The calibration's and the comparison's report: report.html and report.md.
+
+:func:`report_context` builds, from a :class:`~.result.CalibrationResult`
+or a :class:`~.result.ComparisonResult`, the same plain context the other
+commands' reports are rendered from (:mod:`rockfall_design.report.documents`,
+whose templates and escaping it shares): the observed set, the fitted
+inputs with their intervals and a flag for those the observations do not
+pin down, their correlation, the fit statistics, the level shares, the
+figures, and what is needed to repeat the run.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import math
+import platform
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import __version__
+from ..report.documents import MODEL_LIMITS, Table, _inputs
+
+__all__ = ["CALIBRATION_LIMITS", "report_context"]
+
+#: Stop positions per row of the table of observed blocks.
+_PER_ROW = 10
+
+#: The report's section "What the calibration says and does not": heading, bullets.
+CALIBRATION_LIMITS: tuple[str, tuple[str, ...]] = (
+    "What the calibration says and does not", (
+        "A fitted value is conditional on every input held fixed: with another value of an "
+        "input that was not fitted, the fitted ones change. What a fit gives is a set of "
+        "values that reproduces the observed stops on this section, not the ground's true "
+        "coefficients.",
+        "The intervals come from a bootstrap of the observed blocks (each replicate refitted "
+        "to a resample with its own simulation seed): they hold the luck of which blocks were "
+        "observed and which rocks were simulated, not the error of the model itself (a sphere "
+        "on a 2-D section).",
+        "An input whose refitted values spread over its range is flagged as not pinned down "
+        "(identified: no): the observations cannot tell its values apart, and its best value "
+        "must not be used as if it were known. Fit fewer inputs, or add another kind of "
+        "observation.",
+        "After a fit the Kolmogorov-Smirnov p-value is optimistic (the inputs were chosen to "
+        "match these very stops); the fair test is compare on observations the fit did not "
+        "see (a second profile or held-out blocks).",
+        "The fit runs on the bare slope (the project's measures are left out: the "
+        "observations are of the site as it was). A simulated rock that leaves the section "
+        "at its lower end counts as stopped at its end.",
+        "calibrated.yaml (--out) adds the bootstrap spread of a fitted material parameter "
+        "to its per-impact scatter: a simple way to carry the uncertainty into later runs; "
+        "a study over the interval's ends is the rigorous one.",
+    ))
+
+
+def _g(v: Any, digits: int = 3) -> str:
+    """A number with ``digits`` significant digits, or '-'."""
+    if v is None:
+        return "-"
+    v = float(v)
+    return f"{v:.{digits}g}" if math.isfinite(v) else str(v)
+
+
+def _sha256(path: str) -> str:
+    """The file's sha256, or why it could not be read (the report is still written)."""
+    try:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except OSError as exc:
+        return f"not readable when the report was written ({exc.strerror or exc})"
+
+
+def _observed_tables(result: Any) -> list[Table]:
+    """The observed blocks: file, count, sizes, and every stop position in file order."""
+    obs = result.observations
+    rows = [["file", obs.source], ["sha256 of the file", _sha256(obs.source)],
+            ["observed blocks", f"{obs.n:,}"]]
+    if obs.size is not None:
+        unit = "m3" if obs.size_key == "volume" else "kg"
+        rows.append([f"{obs.size_key} of the blocks ({unit})",
+                     f"{_g(obs.size.min())} to {_g(obs.size.max())}, median "
+                     f"{_g(float(np.median(obs.size)))}"])
+        rows.append(["simulated rock size (fitted to the observed)",
+                     ", ".join(f"{k} {v}" for k, v in (result.sizes or {}).items())])
+    tables = [Table("Observed blocks", ["item", "value"], rows,
+                    note="The simulated rocks take the observed blocks' sizes (a lognormal "
+                    "fitted to them) where the file gives them; otherwise the project's.")]
+    cols = ["blocks", "stop position x (m)"]
+    out = []
+    for i in range(0, obs.n, _PER_ROW):
+        part = obs.x[i:i + _PER_ROW]
+        row = [f"{i + 1}-{i + len(part)}", ", ".join(f"{x:g}" for x in part)]
+        if obs.size is not None:
+            row.append(", ".join(f"{s:g}" for s in obs.size[i:i + _PER_ROW]))
+        out.append(row)
+    if obs.size is not None:
+        cols.append(f"{obs.size_key} ({'m3' if obs.size_key == 'volume' else 'kg'})")
+    tables.append(Table("Observed stop positions (file order)", cols, out,
+                        note="As read from the file, so that the report alone repeats the "
+                        "run."))
+    return tables
+
+
+def _settings_table(result: Any) -> Table:
+    """The calibrate: section as run: fitted inputs and ranges, levels, method."""
+    p = result.problem
+    rows = [[f"fit: {path}", f"{lo:g} .. {hi:g}"] for path, lo, hi in zip(p.paths, p.low,
+                                                                         p.high, strict=True)]
+    rows += [[f"level: {name}", f"{lo:g} .. {hi:g} m"] for name, (lo, hi) in p.levels.items()]
+    m = result.summary["method"]
+    rows += [["distance", str(m["distance"])],
+             ["simulated rocks per evaluation", f"{int(m['rocks']):,}"],
+             ["bootstrap replicates", f"{int(m['bootstrap']):,}"],
+             ["confidence of the intervals", f"{100 * float(m['confidence']):g} %"],
+             ["interval", str(m["interval"])]]
+    return Table("Calibration settings", ["setting", "value"], rows,
+                 note="Ranges searched (the fitted inputs' values in the tables above are "
+                 "where the search started); levels: stretches [from, to) of x whose shares "
+                 "of the stops are compared and fitted.")
+
+
+def _parameters_table(result: Any) -> Table:
+    conf = f"{100 * result.confidence:g} %"
+    rows = []
+    for p in result.parameters:
+        ident = {True: "yes", False: "NO: not pinned down", None: "-"}[p["identified"]]
+        share = "-" if p["width_share"] is None else f"{100 * p['width_share']:.0f} %"
+        rows.append([p["path"], _g(p["value"]), _g(p["low"]), _g(p["high"]),
+                     f"{p['range'][0]:g} .. {p['range'][1]:g}", share, _g(p["sd"], 2), ident,
+                     p["at_bound"] or "-"])
+    return Table("Fitted inputs", ["input", "best value", f"low ({conf})", f"high ({conf})",
+                                   "range searched", "interval / range", "sd of refits",
+                                   "identified", "at bound"], rows,
+                 note="best value: the fit to the observed stops; low, high: the bootstrap "
+                 "interval; interval / range: how much of the searched range the interval "
+                 "fills; identified NO: the refits spread over the range (their standard "
+                 "deviation above half that of values spread evenly over it), so the "
+                 "observations do not pin the input down; at bound: the best value lies at "
+                 "that end of the range (widen it if the physics allows).")
+
+
+def _correlation_table(result: Any) -> Table | None:
+    if result.correlation is None:
+        return None
+    paths = result.problem.paths
+    rows = [[f"{i + 1} {path}", *(f"{v:+.2f}" for v in result.correlation[i])]
+            for i, path in enumerate(paths)]
+    return Table("Correlation of the fitted inputs (bootstrap refits)",
+                 ["input", *(str(j + 1) for j in range(len(paths)))], rows,
+                 note="Near +1 or -1: the observations fix a combination of the two inputs "
+                 "rather than each (e.g. a bouncier ground with more rolling resistance stops "
+                 "the blocks at the same places).")
+
+
+def _fit_table(fit: Mapping[str, Any], after_fit: bool) -> Table:
+    rows = []
+    for label in ("observed", "simulated"):
+        d = fit[label]
+        rows.append([label, f"{int(d['count']):,}",
+                     *(f"{float(d[k]):.1f}" for k in ("mean_m", "p5_m", "p25_m", "p50_m",
+                                                      "p75_m", "p95_m"))])
+    note = (f"{fit['distance_kind']} distance {float(fit['distance']):.2f} m; two-sample "
+            f"Kolmogorov-Smirnov D = {float(fit['ks_statistic']):.3f}, p = "
+            f"{float(fit['ks_pvalue']):.3g}")
+    if fit.get("beyond_section") is not None:
+        note += (f"; {100 * float(fit['beyond_section']):.1f} % of the simulated rocks left "
+                 "the section at its lower end (counted at its end)")
+    note += (". After a fit the p-value is optimistic (the inputs were chosen to match these "
+             "stops)." if after_fit else ". The project was not fitted to these "
+             "observations: the p-value is a fair test of the prediction.")
+    return Table("Fit statistics: observed and simulated stop positions (m)",
+                 ["", "count", "mean", "p5", "p25", "p50", "p75", "p95"], rows, note=note)
+
+
+def _levels_table(levels: Sequence[Any], confidence: float) -> Table | None:
+    if not levels:
+        return None
+    rows = [[s.name, f"{s.x[0]:g} .. {s.x[1]:g}", f"{s.observed_count:,}",
+             f"{s.observed_share:.2f}", f"{s.low:.2f} .. {s.high:.2f}",
+             f"{s.simulated_share:.2f}", "yes" if s.consistent else "NO: outside"]
+            for s in levels]
+    return Table("Levels: share of the stops", ["level", "x (m)", "observed blocks",
+                                                "observed share",
+                                                f"Wilson interval ({100 * confidence:g} %)",
+                                                "simulated share", "consistent"], rows,
+                 note="The observed share with its Wilson score interval (Wilson 1927); "
+                 "consistent: the simulated share lies in it.")
+
+
+def _run_table(result: Any, command: str) -> Table:
+    project = result.project
+    obs = result.observations
+    rows = [["program", f"rockfall-design {__version__}, command {command}; Python "
+             f"{platform.python_version()}"],
+            ["project file", str(project.source)],
+            ["project hash (sha256 of the resolved project)", project.resolved_hash()],
+            ["observations", f"{obs.source} ({obs.n:,} blocks)"],
+            ["seed", str(result.seed)]]
+    if command == "calibrate":
+        m = result.summary["method"]
+        rows += [["rocks per evaluation", f"{int(m['rocks']):,}"],
+                 ["bootstrap replicates", f"{int(m['bootstrap']):,}; replicate b has its own "
+                  "seed, derived from the seed above"],
+                 ["evaluations of the distance", f"{int(m['evaluations']):,}"],
+                 ["run time", f"{float(getattr(result, 'runtime_s', 0.0)):,.1f} s"]]
+        repeat = (f"rockfall-design calibrate {project.source} --observed {obs.source} "
+                  f"--seed {result.seed} --rocks {int(m['rocks'])} --bootstrap "
+                  f"{int(m['bootstrap'])}")
+    else:
+        rocks = int(result.summary["rocks"])
+        rows.append(["simulated rocks", f"{rocks:,}"])
+        repeat = (f"rockfall-design compare {project.source} --observed {obs.source} "
+                  f"--seed {result.seed} --rocks {rocks}")
+    e = project.engine
+    rows += [["engine", f"exact events; v_contact {e.v_contact:g} m/s, v_stop {e.v_stop:g} "
+              f"m/s, max_events {e.max_events:,}"],
+             ["to repeat", repeat + " (the same numbers wherever the replicates run)"]]
+    return Table("", ["item", "value"], rows)
+
+
+def _verdict(result: Any, command: str, warnings: Sequence[str]) -> tuple[str, str]:
+    """The headline and its state (the report.html template colours it: ok or warn)."""
+    n = result.observations.n
+    if command == "calibrate":
+        params = result.parameters
+        loose = [p["path"] for p in params if p["identified"] is False]
+        head = (f"Calibrated {len(params)} input{'s' if len(params) != 1 else ''} on {n:,} "
+                "observed blocks")
+        if loose:
+            head += f": {len(loose)} not pinned down by the observations ({', '.join(loose)})"
+        elif all(p["identified"] for p in params):
+            head += ": every input pinned down by the observations"
+        else:
+            head += " (no bootstrap: no intervals)"
+        return head + ".", ("fit with warnings" if warnings else "fit without warnings")
+    fit = result.fit
+    apart = float(fit["ks_pvalue"]) < 0.05
+    head = (f"Prediction of {n:,} observed blocks: {fit['distance_kind']} distance "
+            f"{float(fit['distance']):.2f} m, KS D = {float(fit['ks_statistic']):.2f}, p = "
+            f"{float(fit['ks_pvalue']):.2g}: "
+            + ("the observations tell the prediction apart at 5 %." if apart else
+               "the observations do not tell the prediction apart at 5 %."))
+    return head, ("fit with warnings" if apart or warnings else "fit without warnings")
+
+
+def report_context(result: Any,
+                   figures: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Everything the report templates show for ``calibrate`` or ``compare``, as plain data.
+
+    Parameters
+    ----------
+    result : CalibrationResult or ComparisonResult
+    figures : mapping of str to Figure, optional
+        Default: ``result.figures()``.
+
+    Returns
+    -------
+    dict
+        The context of :func:`rockfall_design.report.documents.render_html`
+        and :func:`~rockfall_design.report.documents.render_markdown`.
+
+    See Also
+    --------
+    rockfall_design.report.documents.report_context : the other commands' context.
+    """
+    from .figures import CAPTIONS
+
+    # A calibration has fitted inputs; a comparison (compare) has none. Told
+    # apart by that rather than by class, so that this module need not import
+    # the results that import it.
+    calibrated = hasattr(result, "parameters")
+    command = "calibrate" if calibrated else "compare"
+    project = result.project
+    summary = result.summary
+    warnings = list(summary.get("warnings") or [])
+    verdict, state = _verdict(result, command, warnings)
+    # What was simulated: the project as fitted (observed sizes set, measures left out).
+    resolved = result.problem.base if calibrated else None
+    inputs = _inputs(project, command, resolved)
+    inputs += _observed_tables(result)
+    results: list[Table] = []
+    if calibrated:
+        inputs.append(_settings_table(result))
+        results.append(_parameters_table(result))
+        corr = _correlation_table(result)
+        if corr is not None:
+            results.append(corr)
+    results.append(_fit_table(result.fit, calibrated))
+    confidence = result.confidence if calibrated else 0.95
+    levels = _levels_table(result.levels, confidence)
+    if levels is not None:
+        results.append(levels)
+    figs = figures if figures is not None else result.figures()
+    limits = [{"heading": CALIBRATION_LIMITS[0], "items": list(CALIBRATION_LIMITS[1])}]
+    limits += [{"heading": h, "items": list(items)} for h, items in MODEL_LIMITS[:2]]
+    if calibrated:
+        note = ("The fitted inputs first, then the statistics of the stops simulated at the "
+                "best fit against the observed ones.")
+    else:
+        note = ("The project as it is (nothing fitted) against observations: how well a "
+                "calibration predicts blocks it did not see.")
+    return {
+        "title": f"{project.name}: rockfall {'calibration' if calibrated else 'comparison'}",
+        "project": project.name,
+        "description": project.description,
+        "command": command,
+        "version": __version__,
+        "generated": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "run": _run_table(result, command),
+        "inputs": inputs,
+        "results": results,
+        "results_note": note,
+        "protect": "",
+        "verdict": verdict,
+        "verdict_state": state,
+        "failures": warnings,
+        "bill": None,
+        "limits": limits,
+        "chosen": "",
+        "chosen_measures": [],
+        "figures": [{"name": name, "caption": CAPTIONS.get(name, ""), "fig": fig}
+                    for name, fig in figs.items()],
+    }

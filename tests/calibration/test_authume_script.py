@@ -1,0 +1,132 @@
+"""examples/authume_quarry.py, the real-site example of docs/calibration.md, runs.
+
+The Authume dataset is not bundled (its repository states no licence), so the
+script runs here on a small synthetic stand-in in the dataset's own formats
+(ASCII STL zones, drop positions, endpoint rows), and the commands of the
+worked example run on what it writes, with few rocks.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from rockfall_design.cli import main
+from rockfall_design.project import load_project
+
+ROOT = Path(__file__).resolve().parents[2]
+SCRIPT = ROOT / "examples" / "authume_quarry.py"
+
+
+def _script():
+    spec = importlib.util.spec_from_file_location("authume_quarry", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["authume_quarry"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def _ground(x: np.ndarray) -> np.ndarray:
+    """A vegetated slope at 30 degrees, a 16 m wall, an 8 m bench, a 10 m wall, a floor."""
+    slope = 205.0 - np.tan(np.radians(30)) * (x + 6)
+    top = 205.0 - np.tan(np.radians(30)) * 34
+    return np.select([x < 28, x < 29, x < 37, x < 38],
+                     [slope, top - 16 * (x - 28), top - 16, top - 16 - 10 * (x - 37)],
+                     top - 26)
+
+
+def _stl(path: Path, triangles: list[np.ndarray]) -> None:
+    lines = ["solid zone"]
+    for t in triangles:
+        lines += ["facet normal 0 0 0", "outer loop",
+                  *(f"vertex {v[0]:.4f} {v[1]:.4f} {v[2]:.4f}" for v in t),
+                  "endloop", "endfacet"]
+    lines.append("endsolid zone")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def fake_dataset(root: Path) -> Path:
+    """The dataset's files (formats as published) for a made-up quarry."""
+    xs = np.arange(-8.0, 80.5, 0.5)
+    zs = np.arange(330.0, 411.0, 10.0)
+    zones: dict[str, list[np.ndarray]] = {"Blue": [], "Gray": [], "Red": []}
+    for x0, x1 in zip(xs[:-1], xs[1:], strict=True):
+        for z0, z1 in zip(zs[:-1], zs[1:], strict=True):
+            h0, h1 = _ground(np.array([x0, x1]))
+            a, b = np.array([x0, h0, z0]), np.array([x1, h1, z0])
+            c, d = np.array([x1, h1, z1]), np.array([x0, h0, z1])
+            zone = "Blue" if x1 <= 28 else "Red" if z0 >= 400 else "Gray"
+            zones[zone] += [np.array([a, b, c]), np.array([a, c, d])]
+    stl = root / "Geometries" / "STL"
+    stl.mkdir(parents=True)
+    for name, tris in zones.items():
+        _stl(stl / f"DTM_{name}_zone.stl", tris)
+    rng = np.random.default_rng(3)
+    (root / "Drop_conditions").mkdir()
+    (root / "EXP_endpoints").mkdir()
+    for name, z in (("P1", 370.0), ("P2", 350.0)):
+        corners = [(2, z + 2), (2, z - 2), (-2, z - 2), (-2, z + 2)]
+        (root / "Drop_conditions" / f"positions_{name}.xyz").write_text("".join(
+            f"{x:.4f} {float(_ground(np.array([0.0]))[0]) + 6.5:.4f} {zz:.4f}\n"
+            for x, zz in corners))
+        stops = np.r_[rng.uniform(30, 36.5, 12), rng.uniform(39, 60, 12)]
+        rows = [f"{x:.3f} {float(_ground(np.array([x]))[0]) + 2.8:.3f} "
+                f"{z + rng.normal(0, 4):.3f} {rng.uniform(200, 1500):.2f} 1 0.8 0.6\n"
+                for x in stops]
+        (root / "EXP_endpoints" / f"Endpoints_{name}.txt").write_text("".join(rows))
+    return root
+
+
+def test_the_section_stops_and_projects_from_the_dataset_files(tmp_path):
+    data = fake_dataset(tmp_path / "data")
+    out = tmp_path / "authume"
+    assert _script().main([str(data), str(out)]) == 0
+    project = load_project(out / "authume_P1.yaml")
+    x = np.array([p[0] for p in project.slope.points])
+    y = np.array([p[1] for p in project.slope.points])
+    assert np.all(np.diff(x) > 0) and x[0] == 0
+    # The walls are found where the made-up ground drops, the rest keeps its zone.
+    mats = project.slope.materials
+    walls = [x[i] for i, m in enumerate(mats) if m == "wall" and x[i] > 10]
+    assert walls and min(walls) >= 31.5 and max(walls) <= 42.5
+    assert "vegetated" in mats and "floor" in mats
+    assert abs(y.max() - y.min() - (34 * np.tan(np.radians(30)) + 26)) < 4
+    spec = yaml.safe_load((out / "authume_P1.yaml").read_text())["calibrate"]
+    assert list(spec["levels"]) == ["slope", "bench", "floor"]
+    stops = np.loadtxt(out / "stops_P1.csv", delimiter=",", skiprows=1)
+    assert stops.shape == (24, 3) and np.all(stops[:, 1] > 0)
+    a = np.loadtxt(out / "stops_P1_a.csv", delimiter=",", skiprows=1)
+    b = np.loadtxt(out / "stops_P1_b.csv", delimiter=",", skiprows=1)
+    assert len(a) == len(b) == 12
+    assert sorted(map(tuple, np.r_[a, b])) == sorted(map(tuple, stops))
+    # A stop's station is its distance from the section's start along the line.
+    assert abs(stops[:, 0].min() - 30 - 4) < 2.5
+
+
+def test_the_worked_example_runs_on_what_the_script_writes(tmp_path, capsys):
+    data = fake_dataset(tmp_path / "data")
+    out = tmp_path / "authume"
+    assert _script().main([str(data), str(out)]) == 0
+    capsys.readouterr()
+    # As docs/calibration.md: calibrate on P1, save the materials, predict P2.
+    code = main(["calibrate", str(out / "authume_P1.yaml"), "--rocks", "40", "--bootstrap",
+                 "2", "--workers", "1", "--json", "--save-materials",
+                 str(out / "calibrated_materials.yaml"), "--report", str(out / "report")])
+    assert code == 0
+    assert (out / "report" / "report.html").is_file()
+    code = main(["compare", str(out / "authume_P2_calibrated.yaml"), "--observed",
+                 str(out / "stops_P2.csv"), "--rocks", "60", "--json"])
+    assert code == 0
+    code = main(["compare", str(out / "authume_P2.yaml"), "--observed",
+                 str(out / "stops_P2.csv"), "--rocks", "60", "--json"])
+    assert code == 0
+
+
+def test_a_folder_without_the_dataset_is_one_line(tmp_path, capsys):
+    assert _script().main([str(tmp_path), str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "DTM_Blue_zone.stl: not found" in err
