@@ -29,7 +29,7 @@ back up when it goes from a room to one earlier in that chain; when a room
 beside the chain (project, plugins, report, errors) imports the commands or
 the API; when the engine imports anything outside itself (it is numpy and
 numba only); or when errors.py imports anything of the package. A file's
-room is its package (``optimise/`` is the optimiser, ``study/`` the
+room is its package (``optimiser/`` is the optimiser, ``studies/`` the
 studies); the files still loose at the top of the package are given the room
 they belong to in :data:`LOOSE` (unknown ones are reported as such).
 
@@ -67,7 +67,6 @@ MOVED: dict[str, str] = {}
 LOOSE = {
     "__init__.py": "api", "__main__.py": "cli", "api.py": "api", "testing.py": "testing",
     "errors.py": "errors", "version.py": "errors", "arguments.py": "arguments",
-    "design.py": "optimiser",
 }
 
 MAX_MODULE_LINES = 600

@@ -43,8 +43,8 @@ import rockfall_design as rd
 from rockfall_design.engine.ensemble import ENGINE_THREADS
 from rockfall_design.project import load_project_text
 from rockfall_design.run.simulation import simulate
-from rockfall_design.study.executors import usable_cores
-from rockfall_design.study.run import ScenarioTask, prepare
+from rockfall_design.studies.executors import usable_cores
+from rockfall_design.studies.runner import ScenarioTask, prepare
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -17,8 +17,6 @@ The public API is what this module exports:
 >>> r.best, r.alternatives, r.plot()                        # doctest: +SKIP
 """
 
-import sys
-import types
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
@@ -45,8 +43,8 @@ _LAZY: dict[str, str] = {
     **dict.fromkeys(("CheckResult", "OptimiseResult", "SimulationResult", "check",
                      "load_project", "optimise", "simulate", "study", "calibrate", "compare"),
                   ".api"),
-    **dict.fromkeys(("CalibrationResult", "ComparisonResult"), ".calibration.result"),
-    "StudyResult": ".study.result",
+    **dict.fromkeys(("CalibrationResult", "ComparisonResult"), ".calibration.calibrated"),
+    "StudyResult": ".studies.study_result",
     **dict.fromkeys(("Corridor", "load_corridor"), ".project"),
     **dict.fromkeys(("fraction_lower_bound", "fraction_upper_bound", "quantile_lower_bound",
                      "quantile_upper_bound", "quantile_with_bounds",
@@ -66,7 +64,7 @@ if TYPE_CHECKING:  # pragma: no cover
         simulate,
         study,
     )
-    from .calibration.result import CalibrationResult, ComparisonResult
+    from .calibration.calibrated import CalibrationResult, ComparisonResult
     from .judge.bounds import (
         fraction_lower_bound,
         fraction_upper_bound,
@@ -77,7 +75,7 @@ if TYPE_CHECKING:  # pragma: no cover
         rocks_to_show_fraction,
     )
     from .project import Corridor, load_corridor
-    from .study.result import StudyResult
+    from .studies.study_result import StudyResult
 
 
 def __getattr__(name: str) -> Any:
@@ -92,29 +90,6 @@ def __getattr__(name: str) -> Any:
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(_LAZY))
 
-
-#: Names of the API's functions that a subpackage shares.
-_FUNCTIONS_OVER_MODULES = frozenset({"optimise", "study"})
-
-
-class _Package(types.ModuleType):
-    """The package module: the names ``optimise`` and ``study`` belong to the functions.
-
-    The submodules ``rockfall_design.optimise`` and ``rockfall_design.study``
-    share their names with the functions :func:`optimise` and :func:`study`.
-    Importing a submodule sets the package's attribute of that name to the
-    module; that one assignment is declined here, so
-    ``rockfall_design.optimise`` is always the function, and the submodule is
-    found in ``sys.modules`` (``from rockfall_design.optimise import ...``).
-    """
-
-    def __setattr__(self, name: str, value: Any) -> None:
-        if name in _FUNCTIONS_OVER_MODULES and isinstance(value, types.ModuleType):
-            return
-        super().__setattr__(name, value)
-
-
-sys.modules[__name__].__class__ = _Package
 
 __all__ = [
     "__version__",

@@ -30,7 +30,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from .judge.evaluation import Evaluation
-    from .optimise.alternatives import OptimisationResult
+    from .optimiser.alternatives import OptimisationResult
     from .plugins import Registry
     from .project import Project
     from .run.simulation import Study
@@ -467,12 +467,12 @@ class OptimiseResult:
         ``items`` (``measure``, ``quantity``, ``unit``, ``count``,
         ``unit_price``, ``amount``, ``per_m``, ``source``), ``total`` (the
         chosen design's cost), ``currency``, ``length_m`` (the site length,
-        m): see :func:`rockfall_design.design.design_bill`.
+        m): see :func:`rockfall_design.optimiser.design_spec.design_bill`.
         """
         best = self.result.best
         if best is None:
             return None
-        from .design import design_bill, resolve_design
+        from .optimiser.design_spec import design_bill, resolve_design
         from .run.releases import section_from_project
 
         d = self.project.design
@@ -739,13 +739,13 @@ def optimise(
     ProjectError
         The project has no ``design:`` section.
     """
-    from .optimise.section import optimise as _optimise
+    from .optimiser.section import optimise as _optimise
 
     _checked(seed=seed)
     p = _project(project, registry)
     if p.design is not None and p.design.scenarios is not None:
         # design.scenarios: the cheapest design that holds across the study's scenarios
-        from .optimise.across import optimise_across as _optimise  # type: ignore[assignment]
+        from .optimiser.across import optimise_across as _optimise  # type: ignore[assignment]
     if p.design is None:
         raise p.error_at((), "the project has no design: section to optimise "
                              "(see the README, 'Designing protection')")
@@ -777,7 +777,7 @@ def study(
 
     Every scenario is a full Monte Carlo run of ``simulate`` with the
     scenario's values and its own seed; the scenarios run as independent
-    tasks (see :mod:`rockfall_design.study.executors`), with the same results
+    tasks (see :mod:`rockfall_design.studies.executors`), with the same results
     wherever they run.
 
     Parameters
@@ -788,7 +788,7 @@ def study(
         Rocks per scenario (default: ``rocks.count``).
     seed : int, optional
         The study's seed (default: ``rocks.seed``); scenario ``i`` runs with
-        the seed :func:`~rockfall_design.study.scenario_seed` derives from it.
+        the seed :func:`~rockfall_design.studies.scenario_seed` derives from it.
     workers : int, optional
         Scenarios run at once locally (default: every usable core); 1 runs
         them in this process, one after the other, each on every core.
@@ -816,7 +816,7 @@ def study(
         ``.summary`` (as ``--json``), ``.scenarios`` and ``.sensitivity``
         (DataFrames), ``.plot_envelopes()``, ``.plot_tornado()``, ``.print()``.
     """
-    from .study.run import run_parametric
+    from .studies.runner import run_parametric
 
     _checked(seed=seed, workers=workers)
     registry = registry or default_registry()
@@ -879,7 +879,7 @@ def calibrate(
         ``.summary`` (as ``--json``), ``.parameters``, ``.values``,
         ``.calibrated_project()``, ``.figures()``, ``.print()``.
     """
-    from .calibration.run import run_calibration
+    from .calibration.procedure import run_calibration
 
     _checked(seed=seed, workers=workers, bootstrap=bootstrap)
     if rocks is not None:
@@ -920,7 +920,7 @@ def compare(
     ComparisonResult
         ``.summary`` (``fit``, ``levels``), ``.figures()``, ``.print()``.
     """
-    from .calibration.run import run_comparison
+    from .calibration.procedure import run_comparison
 
     _checked(seed=seed)
     if rocks is not None:
@@ -986,12 +986,15 @@ def validate_project(project: Project, registry: Registry) -> None:
     PluginError
         Exit code 3, if a plugin misbehaves.
     """
-    from .design import resolve_design
     from .judge.plan import plan_for
-    from .study.paths import check_study
+    from .studies.paths import check_study
 
     plan_for(project, registry)
     if project.design is not None:
+        # Imported only here: the optimiser (scipy's optimisers with it) is not
+        # loaded for a project without a design section.
+        from .optimiser.design_spec import resolve_design
+
         resolve_design(project, registry)
     if project.study is not None:
         # the study's paths and values, against this project (after the sections above it)

@@ -281,7 +281,7 @@ def test_no_pyplot_and_no_backend_switch_in_a_fresh_process():
         "import sys, matplotlib\n"
         "matplotlib.use('svg')\n"
         "import rockfall_design as rd\n"
-        "from rockfall_design.optimise import optimise as search  # the submodule\n"
+        "from rockfall_design.optimiser import optimise as search  # the driver\n"
         "assert rd.optimise is not search and callable(rd.optimise)\n"
         "assert rd.optimise.__module__ == 'rockfall_design.api'\n"
         f"r = rd.check({str(QUARRY)!r}, rocks=30, seed=1)\n"

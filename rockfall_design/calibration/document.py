@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import __version__
 from ..report.documents import MODEL_LIMITS, Table, _inputs
+from ..version import __version__
 
 __all__ = ["CALIBRATION_LIMITS", "report_context"]
 
@@ -265,7 +265,7 @@ def report_context(result: Any,
     --------
     rockfall_design.report.documents.report_context : the other commands' context.
     """
-    from .figures import CAPTIONS
+    from .charts import CAPTIONS
 
     # A calibration has fitted inputs; a comparison (compare) has none. Told
     # apart by that rather than by class, so that this module need not import

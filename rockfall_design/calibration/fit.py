@@ -1,7 +1,7 @@
 """Fit: the parameter vector whose simulated stops are nearest the observed ones.
 
 One evaluation sets the fitted inputs of the project by their paths
-(:func:`~rockfall_design.study.paths.with_values`, so every rule of the
+(:func:`~rockfall_design.studies.paths.with_values`, so every rule of the
 project file applies to a tried value), runs the engine on the bare slope
 and measures the distance of its stops from the observed ones
 (:func:`~.distances.objective`).
@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import ProjectError
 from ..project import Project
-from ..study.paths import with_values
+from ..studies.paths import with_values
 from .distances import objective, spread, stop_positions
 
 __all__ = ["FitOutcome", "FitProblem", "fit", "minimise", "problem_for", "simulated_stops"]
@@ -61,7 +61,7 @@ class FitProblem:
         The project the values are set in (no study or calibrate section,
         the observed sizes already set), to validate each tried vector.
     base : dict
-        Its resolved data (:func:`~rockfall_design.study.paths.with_values`'s base).
+        Its resolved data (:func:`~rockfall_design.studies.paths.with_values`'s base).
     paths : tuple of str
         The fitted inputs.
     low, high : tuple of float

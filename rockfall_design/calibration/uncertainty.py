@@ -17,7 +17,7 @@ its own hypercube): its interval then fills most of the range, and it is
 flagged ``identified: false`` rather than given as a value.
 
 Every replicate is an independent task with its own seed, run by
-:func:`~rockfall_design.study.executors.run_tasks`: the numbers are the
+:func:`~rockfall_design.studies.executors.run_tasks`: the numbers are the
 same in this process, on a local pool, or on a Dask cluster.
 
 References
@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from ..study.scenarios import scenario_seed
+from ..studies.scenarios import scenario_seed
 from .fit import FitProblem, fit
 
 __all__ = ["IDENTIFIED_SD_SHARE", "ReplicateTask", "expanded_tail", "replicate_seed",

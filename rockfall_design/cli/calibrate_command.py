@@ -159,7 +159,7 @@ def _show(args: argparse.Namespace, summary: dict[str, Any], result: Any) -> int
 def cmd_calibrate(args: argparse.Namespace) -> int:
     """Calibrate; exit 0 (a calibration has no pass or fail: its warnings say what to doubt)."""
     from ..api import calibrate
-    from ..calibration.result import FIGURES
+    from ..calibration.calibrated import FIGURES
     from ..project import dump_yaml
     from ..report.outputs import OutputSet
     from .common import REPORT_FILES, figure_files, reserve
@@ -197,7 +197,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 def cmd_compare(args: argparse.Namespace) -> int:
     """Compare; exit 0 (the statistics say how good the prediction is)."""
     from ..api import compare
-    from ..calibration.result import FIGURES
+    from ..calibration.calibrated import FIGURES
     from ..report.outputs import OutputSet
     from .common import REPORT_FILES, figure_files, reserve
 

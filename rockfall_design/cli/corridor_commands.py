@@ -324,7 +324,7 @@ def _on_executors(fn: Callable[[Any], Any], corridor: Corridor,
     Each section carries its project, rocks and seed, so the numbers are
     those of the run in this process, wherever it runs.
     """
-    from ..study.executors import run_tasks as run_elsewhere
+    from ..studies.executors import run_tasks as run_elsewhere
 
     tasks = []
     for section, sub in zip(corridor.sections, subs, strict=True):

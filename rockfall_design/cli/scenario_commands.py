@@ -24,7 +24,7 @@ every scenario (:func:`~rockfall_design.report.figures.margins_figure`);
 (:class:`ScenariosCheckResult`, rendered by :mod:`rockfall_design.report.documents`).
 
 For ``optimise`` with ``design.scenarios`` (see
-:mod:`rockfall_design.optimise.across`) this module prints the scenario
+:mod:`rockfall_design.optimiser.across`) this module prints the scenario
 lines of the report and writes ``design.yaml``.
 """
 
@@ -38,10 +38,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExitCode
-from ..study.scenario_checks import _values_text, check_across
+from ..studies.scenario_checks import _values_text, check_across
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..optimise.across import AcrossResult
+    from ..optimiser.across import AcrossResult
     from ..plugins import Registry
     from ..project import Project
     from ..report.outputs import OutputSet
@@ -122,7 +122,7 @@ class ScenariosCheckResult:
         the same rocks as in :func:`check_across`, so the same numbers.
         """
         from ..api import DEFAULT_TRAJECTORIES, check
-        from ..optimise.across import scenario_runs
+        from ..optimiser.across import scenario_runs
 
         b = self.summary["binding"]
         run = next(r for r in scenario_runs(self.project, self.summary["seed"])

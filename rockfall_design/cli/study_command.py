@@ -94,9 +94,9 @@ def cmd_study(args: argparse.Namespace) -> int:
     from ..project import Project
     from ..report.outputs import OutputSet
     from ..run.simulation import study_memory
-    from ..study.executors import EXTRA_HINT, usable_cores
-    from ..study.result import FIGURES
-    from ..study.sensitivity import salib_available
+    from ..studies.executors import EXTRA_HINT, usable_cores
+    from ..studies.sensitivity import salib_available
+    from ..studies.study_result import FIGURES
     from .common import figure_files, load, memory_guard, plugins_for, reserve
     from .options import PROG
 
@@ -110,7 +110,7 @@ def cmd_study(args: argparse.Namespace) -> int:
             "run; see 'Parametric studies' in the README)")
     n = args.rocks or project.rocks.count
     if args.scheduler is None:
-        from ..study.scenarios import design_points
+        from ..studies.scenarios import design_points
 
         # No more at once than there are scenarios, whatever --workers says.
         at_once = min(args.workers or usable_cores(), len(design_points(project.study)))
@@ -153,7 +153,7 @@ def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
     section after the other. A study has no pass or fail: exit 0.
     """
     from ..api import study
-    from ..study.result import FIGURES
+    from ..studies.study_result import FIGURES
     from .study_command import OUT_FILES, run_record
 
     for section in corridor.sections:

@@ -176,7 +176,7 @@ def quantile_index_table(ns: Sequence[int], qs: Sequence[float],
     for every row and confidence together (a few hundred values a row for
     10,000 rocks), then searched; a row whose window misses an answer is
     bisected over all j instead. A scenario of a study bounds each of its
-    design values at some thirty confidences (:mod:`~rockfall_design.study.sensitivity`),
+    design values at some thirty confidences (:mod:`~rockfall_design.studies.sensitivity`),
     and a scenario's statistics are timed.
     """
     c = np.asarray(confidences, dtype=float).ravel()

@@ -5,7 +5,7 @@ measures' parameters and footprints, the safety concept, the design
 section) before it runs a rock. What that validation builds is the plan:
 the measures and their footprints on the bare section, the edited section
 and the safety concept (the ``design:`` section is the optimiser's,
-resolved by :func:`rockfall_design.design.resolve_design`). :func:`plan_for`
+resolved by :func:`rockfall_design.optimiser.design_spec.resolve_design`). :func:`plan_for`
 builds it once and keeps it with the project, so the run that follows uses
 the same objects instead of asking the plugins again (a plugin is asked for
 a measure's footprint once per command, and a misbehaving one fails before

@@ -17,7 +17,7 @@
 This module checks the section's shape; whether each path names an input
 of the project and each end of its range is valid there is checked against
 the project itself by :mod:`rockfall_design.calibration`, as the study's
-paths are (:func:`rockfall_design.study.paths.with_values`).
+paths are (:func:`rockfall_design.studies.paths.with_values`).
 """
 
 from typing import Annotated, Any, Literal

@@ -14,7 +14,7 @@ between keys, ``[i]`` or ``.i`` for list items); its value is a list of the
 values to try, or ``{range: [lo, hi]}`` (with ``levels: N``, evenly spaced
 values, for a grid). This module checks the section's shape; whether each
 path exists and each value is valid there is checked against the project
-itself, by :func:`rockfall_design.study.paths.with_values`.
+itself, by :func:`rockfall_design.studies.paths.with_values`.
 """
 
 import math

@@ -133,7 +133,7 @@ class OptimiseReport:
         return {"verdict": verdict.as_dict(), **res.summary(), "bill": bill}
 
     def _bill(self) -> dict[str, Any]:
-        from ..design import design_bill, resolve_design
+        from ..optimiser.design_spec import design_bill, resolve_design
         from ..run.releases import section_from_project
 
         d = self.project.design

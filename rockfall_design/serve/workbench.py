@@ -4,7 +4,7 @@ Nothing here knows about HTTP: :mod:`rockfall_design.serve.app` turns a
 :class:`ServeError` into a response with its status and one-line message.
 
 A run (:meth:`ProjectEntry.start_run`) is the optimiser's screening run
-(:class:`~rockfall_design.optimise.screening.Screening`) of the project's
+(:class:`~rockfall_design.optimiser.screening.Screening`) of the project's
 rocks on the bare slope, with its table stations every
 :data:`TABLE_STEP_M` along the whole section: per rock, its passing height,
 energy and speed at its first passage of every station. A fence or wall
@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..optimise.screening import Screening
+    from ..optimiser.screening import Screening
     from ..plugins import Registry
     from ..project import Project
 
@@ -555,7 +555,7 @@ class ProjectEntry:
             400 without a ``design:`` section, or with ``design.scenarios``
             (optimise those with the command line); 409 while a job runs.
         """
-        from ..optimise.section import optimise
+        from ..optimiser.section import optimise
         from ..report.terminal import design_yaml
 
         if self.project.design is None:
@@ -593,7 +593,7 @@ class ProjectEntry:
             400 without a ``study:`` section or with rocks or seed out of
             range; 409 while a job of this project runs.
         """
-        from ..study.run import run_parametric
+        from ..studies.runner import run_parametric
 
         if self.project.study is None:
             raise ServeError(400, f"{self.path.name}: the project has no study: section")
@@ -630,7 +630,7 @@ class ProjectEntry:
             bootstrap out of range; 409 while a job runs.
         """
         from ..arguments import MAX_BOOTSTRAP
-        from ..calibration.run import run_calibration
+        from ..calibration.procedure import run_calibration
 
         spec = self.project.calibrate
         if spec is None:
@@ -949,7 +949,7 @@ def default_spec(project: Project, registry: Registry) -> Any:
     Without ``design:`` no rock may reach the protected zone (a count of 0)
     and nothing is priced.
     """
-    from ..design import DesignSpec, resolve_design
+    from ..optimiser.design_spec import DesignSpec, resolve_design
 
     if project.design is not None:
         return resolve_design(project, registry)
@@ -976,7 +976,7 @@ def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
     from ..engine.columns import STOPPED
     from ..engine.trajectory import centre_points
     from ..judge.placing import build_concept
-    from ..optimise.screening import Screening
+    from ..optimiser.screening import Screening
     from ..run.releases import section_from_project
 
     section = section_from_project(project)

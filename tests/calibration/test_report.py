@@ -12,12 +12,12 @@ import html as html_lib
 import re
 
 import pytest
-from rockfall_design.report.outputs import MANIFEST
 
 import rockfall_design as rd
 from rockfall_design.calibration.document import report_context
 from rockfall_design.cli import main
 from rockfall_design.report.documents import render_html, render_markdown
+from rockfall_design.report.outputs import MANIFEST
 
 from .calibration_helpers import SITE, observed_stops, write_site
 

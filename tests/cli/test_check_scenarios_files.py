@@ -66,7 +66,7 @@ def test_plot_and_report_show_the_binding_scenario_and_every_margin(tmp_path, ca
 def test_the_figures_are_of_the_same_rocks_as_the_binding_scenario_checked(tmp_path, capsys,
                                                                             registry):
     from rockfall_design.cli.scenario_commands import ScenariosCheckResult
-    from rockfall_design.study.scenario_checks import check_across
+    from rockfall_design.studies.scenario_checks import check_across
 
     project = load_project(_weak(tmp_path, 4))
     summary = check_across(project, registry, rocks=120)

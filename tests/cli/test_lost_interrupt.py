@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from rockfall_design.cli.program import main
-from rockfall_design.optimise.screening import Screening
+from rockfall_design.optimiser.screening import Screening
 from rockfall_design.report.outputs import MANIFEST
 
 ROOT = Path(__file__).resolve().parents[2]

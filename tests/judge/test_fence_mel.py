@@ -15,9 +15,9 @@ from rockfall_design_builtins.measures import Fence, FenceParams
 from rockfall_design_builtins.safety import SpangConcept, Uni11211Concept
 
 from rockfall_design import MeasureResult
-from rockfall_design.design import build_candidate_measure, resolve_design
 from rockfall_design.errors import ProjectError
 from rockfall_design.judge.evaluation import evaluate
+from rockfall_design.optimiser.design_spec import build_candidate_measure, resolve_design
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project, load_project_text
 
@@ -234,7 +234,7 @@ def _small(tmp_path, rx050: str):
 
 def test_optimiser_passes_over_a_product_whose_net_reaches_the_protected_zone(tmp_path,
                                                                               registry):
-    from rockfall_design.optimise.section import optimise
+    from rockfall_design.optimiser.section import optimise
 
     # The fence stands at 58..64 m and the protected zone starts at 150 m.
     plain = optimise(_small(tmp_path, "RX-050: {capacity_kj: 500, heights: [2, 3, 4]}"),

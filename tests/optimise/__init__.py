@@ -1,1 +1,1 @@
-"""Tests of rockfall_design.optimise."""
+"""Tests of rockfall_design.optimiser."""

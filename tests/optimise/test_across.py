@@ -9,7 +9,7 @@ import pytest
 
 from rockfall_design.cli.program import main
 from rockfall_design.errors import ProjectError
-from rockfall_design.optimise.across import required_scenarios
+from rockfall_design.optimiser.across import required_scenarios
 from rockfall_design.project import load_project_text
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -1,4 +1,4 @@
-"""Tests of the design section resolved against the plugins (rockfall_design.design)."""
+"""Tests of the design section resolved against the plugins (optimiser.design_spec)."""
 
 from __future__ import annotations
 
@@ -10,14 +10,14 @@ from rockfall_design_builtins.costs import UnitPrices
 from rockfall_design_builtins.measures import Wall, WallParams
 
 from rockfall_design import hookimpl
-from rockfall_design.design import (
+from rockfall_design.errors import ProjectError
+from rockfall_design.optimiser.design_spec import (
     CandidateSpec,
     DesignSpec,
     Product,
     build_candidate_measure,
     resolve_design,
 )
-from rockfall_design.errors import ProjectError
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project, load_project_text
 

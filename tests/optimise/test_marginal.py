@@ -10,11 +10,11 @@ from typing import Any
 
 import pytest
 
-from rockfall_design.design import resolve_design
 from rockfall_design.judge.placing import build_concept
-from rockfall_design.optimise import Screening
-from rockfall_design.optimise.alternatives import Alternative
-from rockfall_design.optimise.section import _bare_slope, _list_undecided
+from rockfall_design.optimiser import Screening
+from rockfall_design.optimiser.alternatives import Alternative
+from rockfall_design.optimiser.design_spec import resolve_design
+from rockfall_design.optimiser.section import _bare_slope, _list_undecided
 from rockfall_design.plugins.concept import Check
 from rockfall_design.project import load_project_text
 
@@ -93,7 +93,7 @@ def test_the_proof_line_names_marginal_and_undecided_designs():
     from collections import Counter
 
     from rockfall_design.judge.sequential import plan_looks
-    from rockfall_design.optimise.section import _proof
+    from rockfall_design.optimiser.section import _proof
 
     alt = Alternative(name="fence", family=(0,))
     alt.marginal = [{"cost": 1.0, "decided": True}, {"cost": 2.0, "decided": False}]
@@ -127,7 +127,7 @@ def test_across_scenarios_designs_not_rejected_with_confidence_are_listed():
     scenarios": it is counted and the cheapest (one per cost) listed with why."""
     import importlib
 
-    across = importlib.import_module("rockfall_design.optimise.across")
+    across = importlib.import_module("rockfall_design.optimiser.across")
 
     class _M:
         kind = "fence"
@@ -150,7 +150,7 @@ def test_across_scenarios_designs_not_rejected_with_confidence_are_listed():
 def test_the_proof_lines_reasons_are_never_cut():
     import importlib
 
-    across = importlib.import_module("rockfall_design.optimise.across")
+    across = importlib.import_module("rockfall_design.optimiser.across")
     long = ("scenario 2: fails with 99 % confidence on 4,603 rocks: fence: height_factor at "
             "best 1.20, target 2.00; scenario 3: the same")
     assert across._reason_key(long) == "fails with 99 % confidence on 4,603 rocks"
@@ -162,7 +162,7 @@ def test_the_proof_lines_reasons_are_never_cut():
 def test_a_residual_of_nothing_is_said_at_once(registry):
     """An allowed residual of 0 can never be shown with confidence: the optimiser says so
     instead of 'no design of this family fits on the section', and searches nothing."""
-    from rockfall_design.optimise.section import optimise
+    from rockfall_design.optimiser.section import optimise
 
     text = (PROJECTS / "design_ditch_or_fence.yaml").read_text(encoding="utf-8")
     assert "residual: {fraction: 0.001}" in text
@@ -180,7 +180,7 @@ def test_a_marginal_designs_values_are_json_whatever_its_bounds():
     import json
     import math
 
-    from rockfall_design.optimise.decide import look_values, rocks_to_decide
+    from rockfall_design.optimiser.decide import look_values, rocks_to_decide
 
     c = Check(name="energy_factor", value=0.9, target=1.0, ok=False, bound=0.5,
               optimistic=math.inf)

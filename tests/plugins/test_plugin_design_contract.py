@@ -19,9 +19,13 @@ from rockfall_design import (
     Quantity,
     hookimpl,
 )
-from rockfall_design.design import build_candidate_measure, declared_design, resolve_design
 from rockfall_design.errors import PluginError
-from rockfall_design.optimise.space import _decode, _discrete_choices, _variables
+from rockfall_design.optimiser.design_spec import (
+    build_candidate_measure,
+    declared_design,
+    resolve_design,
+)
+from rockfall_design.optimiser.space import _decode, _discrete_choices, _variables
 from rockfall_design.plugins import call_plugin, load_registry
 from rockfall_design.plugins.measure import DesignRole, design_role
 from rockfall_design.project import load_project_text

@@ -1,1 +1,1 @@
-"""Tests of rockfall_design.study."""
+"""Tests of rockfall_design.studies."""

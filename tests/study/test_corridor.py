@@ -203,7 +203,7 @@ def test_study_runs_every_section_as_its_own_study(tmp_path, capsys):
 def test_a_corridor_study_heeds_pool_and_draws_the_envelopes(tmp_path, capsys, monkeypatch):
     import importlib
 
-    executors = importlib.import_module("rockfall_design.study.executors")
+    executors = importlib.import_module("rockfall_design.studies.executors")
     pools = []
     for name in ("_on_pool", "_on_threads"):
         real = getattr(executors, name)

@@ -15,7 +15,7 @@ import pytest
 from rockfall_design.cli.program import main
 from rockfall_design.errors import ProjectError
 from rockfall_design.project import load_project
-from rockfall_design.study.paths import with_values
+from rockfall_design.studies.paths import with_values
 
 ROOT = Path(__file__).resolve().parents[2]
 STUDY = ROOT / "projects" / "study_talus.yaml"

@@ -17,7 +17,7 @@ import pytest
 
 from rockfall_design.cli.program import main
 from rockfall_design.errors import InputError
-from rockfall_design.study import executors
+from rockfall_design.studies import executors
 
 ROOT = Path(__file__).resolve().parents[2]
 TALUS = ROOT / "projects" / "study_talus.yaml"

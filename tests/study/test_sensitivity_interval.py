@@ -24,7 +24,7 @@ from rockfall_design.judge.bounds import (
     quantile_upper_index,
 )
 from rockfall_design.project import load_project_text
-from rockfall_design.study.sensitivity import LADDER, effect_interval, joint_bounds
+from rockfall_design.studies.sensitivity import LADDER, effect_interval, joint_bounds
 
 from .test_study import RUNOUT
 
@@ -259,7 +259,7 @@ def test_a_scenario_bounds_are_the_order_statistics_of_its_rocks():
     block = result.summary["scenarios"][3]
     project = load_project_text(VOLUME_FRICTION, "runout.yaml")
     from rockfall_design.run.simulation import simulate
-    from rockfall_design.study import with_values
+    from rockfall_design.studies import with_values
 
     run = simulate(with_values(project, block["values"]), rocks=300, seed=block["seed"])
     energy = run.crossing_arrays()["energy_j"][:, list(run.stations).index(160.0)]

@@ -11,7 +11,7 @@ import pytest
 import rockfall_design as rd
 from rockfall_design.cli.program import main
 from rockfall_design.project import load_project, load_project_text
-from rockfall_design.study import with_values
+from rockfall_design.studies import with_values
 
 ROOT = Path(__file__).resolve().parents[2]
 TALUS = ROOT / "projects" / "study_talus.yaml"
@@ -71,7 +71,7 @@ def test_a_grid_of_two_inputs_of_three_values_is_nine_scenarios(talus):
     for t in targets:
         effects = [e["effect"] for e in ranked if e["target"] == t]
         assert effects == sorted(effects, reverse=True)
-    from rockfall_design.study.result import _by_target  # the terminal's order
+    from rockfall_design.studies.study_result import _by_target  # the terminal's order
 
     assert _by_target(ranked) == ranked
     assert {e["target"] for e in s["sensitivity"]} >= {
@@ -116,7 +116,7 @@ def _engine_threads(_task):
 
 def test_a_task_on_the_thread_pool_runs_the_engine_on_one_thread():
     from rockfall_design.engine.ensemble import default_threads
-    from rockfall_design.study.executors import run_tasks
+    from rockfall_design.studies.executors import run_tasks
 
     before = default_threads()
     assert run_tasks(_engine_threads, range(5), workers=2, pool="threads") == [1] * 5
@@ -282,13 +282,13 @@ def test_scheduler_without_dask_names_the_extra(monkeypatch, capsys):
 
 
 def test_the_function_keeps_its_name_over_the_package():
-    import rockfall_design.study.scenarios  # noqa: F401  (imports the subpackage)
+    import rockfall_design.studies.scenarios  # noqa: F401  (imports the subpackage)
 
     assert callable(rd.study) and rd.study is rd.api.study
 
 
 def test_the_scenario_envelope_percentile_is_numpys():
-    from rockfall_design.study.run import _column_percentile
+    from rockfall_design.studies.runner import _column_percentile
 
     rng = np.random.default_rng(3)
     table = rng.lognormal(size=(500, 6)).astype(np.float32)
@@ -319,7 +319,7 @@ def _sorted_percentile(values, q):
 def test_the_envelope_percentile_is_the_column_sorts_to_the_bit(seed):
     # The study's JSON numbers must not move: the same order statistics,
     # interpolated in the same float64 operations (float32 tables, as the engine's).
-    from rockfall_design.study.run import _column_percentile
+    from rockfall_design.studies.runner import _column_percentile
 
     rng = np.random.default_rng(seed)
     for shape in [(2000, 13), (40, 5), (3, 4), (1, 3)]:

@@ -5,7 +5,7 @@ import pytest
 
 from rockfall_design.errors import ExitCode, ProjectError
 from rockfall_design.project import load_project_text
-from rockfall_design.study import (
+from rockfall_design.studies import (
     PathError,
     check_study,
     parse_path,

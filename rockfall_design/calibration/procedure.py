@@ -3,7 +3,7 @@
 :func:`run_calibration` reads the observed stops of the project's
 ``calibrate:`` section, builds the fit (:func:`~.fit.problem_for`), and
 runs replicate 0 (the fit) and the B bootstrap replicates as independent
-tasks (:func:`~rockfall_design.study.executors.run_tasks`, locally or on
+tasks (:func:`~rockfall_design.studies.executors.run_tasks`, locally or on
 Dask), then summarises them (:func:`~.uncertainty.summarise`).
 :func:`run_comparison` runs the project as it is and measures how far its
 stops are from a set of observations: the validation of a calibration on
@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from ..project import Project
+from .calibrated import CalibrationResult, ComparisonResult
 from .distances import fit_statistics, level_shares
 from .observations import Observations, observed_file, read_observations, size_distribution
-from .result import CalibrationResult, ComparisonResult
 
 __all__ = ["run_calibration", "run_comparison"]
 
@@ -58,7 +58,7 @@ def run_calibration(
     seed
         The calibration's seed (default ``rocks.seed``).
     workers, scheduler, pool
-        Where the replicates run (:func:`~rockfall_design.study.executors.run_tasks`).
+        Where the replicates run (:func:`~rockfall_design.studies.executors.run_tasks`).
     on_done
         Called as ``on_done(done, total)`` as replicates finish.
 
@@ -68,7 +68,7 @@ def run_calibration(
         No ``calibrate:`` section, a bad observation file, a path that is
         not an input, or a range end that is not a valid value.
     """
-    from ..study.executors import run_tasks
+    from ..studies.executors import run_tasks
     from .fit import problem_for
     from .uncertainty import ReplicateTask, run_replicate, summarise
 

@@ -98,7 +98,7 @@ class ComparisonResult:
 
     def figures(self) -> dict[str, Figure]:
         """The stop positions' figure (:data:`FIGURES` [0])."""
-        from .figures import stops_figure
+        from .charts import stops_figure
 
         levels = {s.name: s.x for s in self.levels}
         return {FIGURES[0]: stops_figure(self.observations.x, self.simulated, levels,
@@ -236,7 +236,7 @@ class CalibrationResult:
         import copy
         import os
 
-        from ..study.paths import set_input
+        from ..studies.paths import set_input
 
         data = copy.deepcopy(self.problem.base)
         for p in self.parameters:
@@ -256,7 +256,7 @@ class CalibrationResult:
 
     def calibrated_project(self, spread: bool = True) -> Project:
         """:meth:`calibrated_data` validated as a project."""
-        from ..study.paths import with_values
+        from ..studies.paths import with_values
 
         return with_values(self.problem.project, {}, base=self.calibrated_data(spread=spread))
 
@@ -312,7 +312,7 @@ class CalibrationResult:
 
     def figures(self) -> dict[str, Figure]:
         """The stops' figure and the bootstrap cloud (:data:`FIGURES`)."""
-        from .figures import cloud_figure, stops_figure
+        from .charts import cloud_figure, stops_figure
 
         levels = {s.name: s.x for s in self.levels}
         return {

@@ -27,7 +27,7 @@ def _check_task(task: tuple[Any, int | None, tuple[str, ...]]) -> dict[str, Any]
     """
     from ..judge.evaluation import evaluate
     from ..judge.verdict import with_verdict
-    from ..optimise.across import margin
+    from ..optimiser.across import margin
     from ..plugins import default_registry
 
     run, rocks, block = task
@@ -56,7 +56,7 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
         Plugins not loaded (``--block``), where the scenarios run.
     workers, scheduler
         Where the scenarios run (see
-        :func:`rockfall_design.study.executors.run_tasks`): 1 (the default
+        :func:`rockfall_design.studies.executors.run_tasks`): 1 (the default
         here) in this process with ``registry``, N on a local pool of N
         processes (None: one per core), or on the Dask cluster of
         ``scheduler``; the numbers are the same wherever they run.
@@ -68,7 +68,7 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
     """
     from ..judge.evaluation import evaluate
     from ..judge.verdict import with_verdict
-    from ..optimise.across import margin, required_scenarios, scenario_runs
+    from ..optimiser.across import margin, required_scenarios, scenario_runs
     from .executors import run_tasks
     from .paths import validate_plugin_sections
 

@@ -4,7 +4,7 @@
 the screening cannot reject (sequentially, :mod:`.decide`), verifies the
 first admitted one on fresh rocks and reports the marginal and undecided
 designs cheaper than it. The loop over the families is
-:func:`~rockfall_design.optimise.alternatives.search_families`, shared with
+:func:`~rockfall_design.optimiser.alternatives.search_families`, shared with
 the scenarios' driver (:mod:`.across`)."""
 
 from __future__ import annotations
@@ -24,9 +24,9 @@ from ..plugins.concept import DEFAULT_CONFIDENCE
 from ..run.reach import reaches_protected_zone
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..design import DesignSpec
     from ..plugins import Registry
     from ..project import Project
+    from .design_spec import DesignSpec
 from .alternatives import (
     FRESH_OFFSET,
     MAX_DEFERRED_KEPT,
@@ -52,10 +52,7 @@ from .search import (
     _edit_designs,
     _Tally,
 )
-from .space import (
-    families,
-    family_name,
-)
+from .space import families, family_name
 
 
 def _cause(screen: Screening, slots: _BarrierSlots, fam: tuple[int, ...], tally: _Tally) -> str:
@@ -373,8 +370,8 @@ def optimise(
     order of cost is decided. The best design overall is the cheapest family
     design that holds.
     """
-    from ..design import resolve_design
     from ..judge.plan import plan_for
+    from .design_spec import resolve_design
 
     t0 = time.perf_counter()
     plan = plan_for(project, registry)

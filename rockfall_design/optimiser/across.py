@@ -3,8 +3,8 @@
 With a ``study:`` section and ``design.scenarios: all`` (or ``{share: S}``),
 a design must hold in every scenario of the study (or in at least
 ``ceil(S k)`` of its ``k`` scenarios). Each scenario is the project with the
-study's values set (:func:`~rockfall_design.study.with_values`) and its own
-rocks: its own seed (:func:`~rockfall_design.study.scenarios`), never rocks
+study's values set (:func:`~rockfall_design.studies.with_values`) and its own
+rocks: its own seed (:func:`~rockfall_design.studies.scenarios`), never rocks
 pooled across scenarios, so that a design is judged in each scenario as
 ``check`` judges it there.
 
@@ -31,7 +31,7 @@ the least margin (the smallest relative slack of a check, or of the
 residual, with the confidence bounds in place), and the scenarios that
 failed the next cheaper design decided.
 
-Without ``design.scenarios`` none of this runs: :func:`~rockfall_design.optimise.optimise`
+Without ``design.scenarios`` none of this runs: :func:`~rockfall_design.optimiser.optimise`
 is the single-scenario optimiser, untouched.
 """
 
@@ -108,7 +108,7 @@ def scenario_runs(project: Project, seed: int | None = None) -> list[ScenarioRun
         With a ``study:`` section.
     seed
         The run seed (default ``rocks.seed``); scenario ``i`` runs with
-        :func:`~rockfall_design.study.scenario_seed` ``(seed, i)``, as
+        :func:`~rockfall_design.studies.scenario_seed` ``(seed, i)``, as
         ``rockfall-design study`` runs it.
 
     Raises
@@ -116,7 +116,7 @@ def scenario_runs(project: Project, seed: int | None = None) -> list[ScenarioRun
     ProjectError
         No ``study:`` section, or values that do not fit together.
     """
-    from ..study import scenarios, with_values
+    from ..studies import scenarios, with_values
 
     if project.study is None:
         raise project.error_at(("design", "scenarios"), "the design's scenarios are those "
@@ -223,8 +223,8 @@ class AcrossResult(OptimisationResult):
 
 def _build(run: ScenarioRun, registry: Registry, rocks: int | None) -> tuple[_Scenario, int]:
     """A scenario's screening with the rocks that can show its residual target."""
-    from ..design import resolve_design
     from ..judge.placing import build_concept
+    from .design_spec import resolve_design
 
     project = run.project
     spec = resolve_design(project, registry)

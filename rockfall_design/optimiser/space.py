@@ -21,8 +21,8 @@ import numpy as np
 from ..plugins.measure import Barrier
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..design import CandidateSpec
     from ..plugins.measure import ProtectiveMeasure
+    from .design_spec import CandidateSpec
 
 #: Spacing (m) of the stations where barrier candidates may stand.
 STATION_STEP_M = 0.5

@@ -25,8 +25,8 @@ import numpy as np
 from ..errors import ProjectError
 from ..project import Project
 from .paths import scenario_base, validate_plugin_sections, with_values
-from .result import envelope_percentile
 from .scenarios import Scenario, scenarios
+from .study_result import envelope_percentile
 
 __all__ = ["ScenarioTask", "prepare", "prepare_lazily", "run_parametric", "run_scenario",
            "run_tasks_of"]
@@ -482,8 +482,8 @@ def run_parametric(
     called as ``progress(done, total, rocks_done)`` once the scenarios are
     known (``done`` 0) and as each finishes.
     """
-    from .result import StudyResult
     from .sensitivity import sensitivity
+    from .study_result import StudyResult
 
     t0 = time.perf_counter()
     chosen, tasks = prepare_lazily(project, registry, rocks=rocks, seed=seed,

@@ -332,6 +332,6 @@ def validate_plugin_sections(project: Project, registry: Registry) -> None:
     """
     plan_for(project, registry)
     if project.design is not None:
-        from ..design import resolve_design
+        from ..optimiser.design_spec import resolve_design
 
         resolve_design(project, registry)

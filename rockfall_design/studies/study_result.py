@@ -60,7 +60,7 @@ class StudyResult:
     scenario_list : list of Scenario
         Index, values and seed of each scenario.
     results : list of dict
-        Each scenario's result (:func:`~rockfall_design.study.run.run_scenario`).
+        Each scenario's result (:func:`~rockfall_design.studies.runner.run_scenario`).
     seed : int
         The run's seed, from which each scenario's seed was derived.
     runtime_s : float
@@ -102,7 +102,7 @@ class StudyResult:
         ``confidence`` and the ``lower`` and ``upper`` bounds of the
         intervals that hold for all scenarios together at c, from which the
         sensitivity's intervals come), ``sensitivity`` (see
-        :func:`~rockfall_design.study.sensitivity.sensitivity`) and
+        :func:`~rockfall_design.studies.sensitivity.sensitivity`) and
         ``sensitivity_confidence``, the c at which its ``effect_low`` ..
         ``effect_high`` hold (None if no scenario has bounds).
         """

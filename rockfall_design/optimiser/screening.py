@@ -1,7 +1,7 @@
 """Screening: every candidate design judged on the same search rocks, fast.
 
 One run of the search rocks on the bare slope keeps, at the table stations
-(every :data:`~rockfall_design.optimise.space.STATION_STEP_M` along every
+(every :data:`~rockfall_design.optimiser.space.STATION_STEP_M` along every
 barrier candidate's range), each rock's passing height, energy and speed at
 its first passage downslope, and at restart stations upslope of every
 ground-edit candidate each rock's full state. A design is judged through the
@@ -23,12 +23,7 @@ import numpy as np
 from ..engine import Releases, Section, core, run_ensemble
 from ..errors import ProjectError
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
-from ..judge.outcomes import (
-    Judgement,
-    RockFates,
-    barrier_outcomes,
-    judge_measures,
-)
+from ..judge.outcomes import Judgement, RockFates, barrier_outcomes, judge_measures
 from ..judge.placing import PlacedMeasure, edited_section, place_measures
 from ..plugins import guard
 from ..plugins.concept import DEFAULT_CONFIDENCE, Check
@@ -37,10 +32,10 @@ from ..run.reach import reaches_protected_zone
 from ..run.releases import draw_releases, engine_key, engine_settings, section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..design import DesignSpec
     from ..plugins import Registry
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
+    from .design_spec import DesignSpec
 
 from .space import STATION_STEP_M, _decode, _variables
 
@@ -149,7 +144,7 @@ class Screening:
         ``restart_stations`` (m), when given with ``stations``, are kept as
         restart stations, so that ground edits can still be judged.
         """
-        from ..design import build_candidate_measure
+        from .design_spec import build_candidate_measure
 
         self.project = project
         self.registry = registry
@@ -276,7 +271,7 @@ class Screening:
         KeyError or ValueError
             From the cost model: it has no price for one of the measures.
         """
-        from ..design import design_cost
+        from .design_spec import design_cost
 
         return design_cost(self.registry, self.spec, measures, self.section)
 

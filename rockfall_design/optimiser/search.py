@@ -21,11 +21,7 @@ import numpy as np
 from scipy.optimize import differential_evolution
 
 from ..errors import ProjectError
-from ..judge.outcomes import (
-    RockFates,
-    barrier_outcomes,
-    judge_measures,
-)
+from ..judge.outcomes import RockFates, barrier_outcomes, judge_measures
 from ..judge.placing import MIN_BARRIER_SPACING_M, PlacedMeasure, edited_section, place_measures
 from ..plugins import guard
 from ..plugins.measure import Barrier, BarrierBehaviour, Outcome, ProfileEdit

@@ -54,20 +54,20 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from .errors import PluginError
-from .judge.placing import unknown_measure_type, unknown_plugin_name
-from .plugins import guard
-from .plugins.cost_model import CostModel
-from .plugins.declared import DeclaredDesign, declared_design
-from .project import params_problem
+from ..errors import PluginError
+from ..judge.placing import unknown_measure_type, unknown_plugin_name
+from ..plugins import guard
+from ..plugins.cost_model import CostModel
+from ..plugins.declared import DeclaredDesign, declared_design
+from ..project import params_problem
 
 if TYPE_CHECKING:  # pragma: no cover
     from collections.abc import Sequence
 
-    from .engine import Section
-    from .plugins import Registry
-    from .plugins.measure import ProtectiveMeasure
-    from .project import Project
+    from ..engine import Section
+    from ..plugins import Registry
+    from ..plugins.measure import ProtectiveMeasure
+    from ..project import Project
 
 __all__ = [
     "CandidateSpec",
@@ -439,7 +439,7 @@ def _check_prices(
     on the section is left to the search (which reports designs that do not
     fit, or have no price).
     """
-    from .run.releases import section_from_project
+    from ..run.releases import section_from_project
 
     design = project.design
     assert design is not None

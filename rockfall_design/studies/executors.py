@@ -95,7 +95,7 @@ def _pool_context() -> multiprocessing.context.BaseContext:
     if "forkserver" in multiprocessing.get_all_start_methods():
         context = multiprocessing.get_context("forkserver")
         # Only heeded when the forkserver starts (the first pool of the process).
-        context.set_forkserver_preload(["rockfall_design.study._warm"])
+        context.set_forkserver_preload(["rockfall_design.studies._warm"])
         return context
     return multiprocessing.get_context("spawn")
 

@@ -24,12 +24,12 @@ from .paths import PathError, check_study, parse_path, with_values
 from .scenarios import Scenario, scenario_seed, scenarios
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .result import StudyResult
+    from .study_result import StudyResult
 
 
 def __getattr__(name: str) -> Any:
     if name == "StudyResult":  # with pandas and matplotlib behind it: on first use
-        from .result import StudyResult
+        from .study_result import StudyResult
 
         return StudyResult
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,7 +1,7 @@
 """The one family loop of the optimiser, for one section and for the scenarios of a study.
 
-Both drivers (:func:`rockfall_design.optimise.section.optimise` and
-:func:`rockfall_design.optimise.across.optimise_across`) search the families
+Both drivers (:func:`rockfall_design.optimiser.section.optimise` and
+:func:`rockfall_design.optimiser.across.optimise_across`) search the families
 of candidate measures the same way: families with fewer measures first, each
 with its own search seed, the cheapest design that holds so far bounding what
 the later families need to look at, progress by stage, and the best design
@@ -23,7 +23,7 @@ from .alternatives import SEARCH_SEED, Alternative
 from .space import family_name
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..design import CandidateSpec
+    from .design_spec import CandidateSpec
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ os.environ[THREADS_ENV] = "1"
 
 from ..project import load_project_text  # noqa: E402
 from ..run.simulation import simulate  # noqa: E402
-from . import run as _run  # noqa: E402, F401  (the task's module, unpickled by reference)
+from . import runner as _run  # noqa: E402, F401  (the task's module, unpickled by reference)
 
 _TINY = """
 name: warm-up
