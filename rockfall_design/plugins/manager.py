@@ -455,30 +455,47 @@ def load_registry(
         If two plugins (or two classes of one plugin) claim one measure kind,
         safety concept or cost-model name. The message names both providers.
     """
-    blocked_names = sorted(dict.fromkeys(str(b) for b in blocked))
-    blocked_norm = {_normalise(b) for b in blocked_names}
+    loader = _Loader(blocked)
+    for ep in _entry_points(entry_points):
+        loader.register(ep.name, _dist_name(ep), ep.load, _dist_version(ep))
+    for name, obj in extra_plugins:
+        loader.register(str(name), None, lambda obj=obj: obj)
+    return loader.registry()
 
-    pm = pluggy.PluginManager(hookspecs.PROJECT_NAME)
-    pm.add_hookspecs(hookspecs)
-    for name in blocked_names:
-        pm.set_blocked(name)
 
-    failures: list[PluginFailure] = []
-    plugins: dict[str, _Plugin] = {}
+class _Loader:
+    """The steps of :func:`load_registry`: register each plugin on its own, then collect.
 
-    def fail(plugin: str, dist: str | None, reason: str) -> None:
-        failures.append(PluginFailure(plugin, dist, _one_line(reason)))
+    Every failure is the plugin's own and is kept in :attr:`failures`; the
+    other plugins still load.
+    """
 
-    def register(name: str, dist: str | None, obtain: Callable[[], object],
+    def __init__(self, blocked: Iterable[str]) -> None:
+        self.blocked_names = sorted(dict.fromkeys(str(b) for b in blocked))
+        self.blocked_norm = {_normalise(b) for b in self.blocked_names}
+        self.pm = pluggy.PluginManager(hookspecs.PROJECT_NAME)
+        self.pm.add_hookspecs(hookspecs)
+        for name in self.blocked_names:
+            self.pm.set_blocked(name)
+        self.failures: list[PluginFailure] = []
+        self.plugins: dict[str, _Plugin] = {}
+
+    def fail(self, plugin: str, dist: str | None, reason: str) -> None:
+        self.failures.append(PluginFailure(plugin, dist, _one_line(reason)))
+
+    def register(self, name: str, dist: str | None, obtain: Callable[[], object],
                  version: str | None = None) -> None:
-        if _normalise(name) in blocked_norm or (dist and _normalise(dist) in blocked_norm):
+        """Import one plugin (``obtain``) and register it, or note why not."""
+        pm = self.pm
+        if (_normalise(name) in self.blocked_norm
+                or (dist and _normalise(dist) in self.blocked_norm)):
             pm.set_blocked(name)
             return
-        if pm.has_plugin(name) or name in plugins:
-            other = plugins.get(name)
+        if pm.has_plugin(name) or name in self.plugins:
+            other = self.plugins.get(name)
             where = f" (by {other.provider})" if other is not None else ""
-            fail(name, dist, f"plugin name {name!r} is already taken{where}; "
-                 "rename the entry point")
+            self.fail(name, dist, f"plugin name {name!r} is already taken{where}; "
+                      "rename the entry point")
             return
         try:
             with plugin_code():
@@ -487,7 +504,7 @@ def load_registry(
             if is_real_interrupt(exc):
                 raise
             log.debug("plugin %s failed to import", name, exc_info=True)
-            fail(name, dist, f"import failed: {_describe_exception(exc)}")
+            self.fail(name, dist, f"import failed: {_describe_exception(exc)}")
             return
         try:
             if pm.register(obj, name=name) is None:  # blocked by name
@@ -499,8 +516,18 @@ def load_registry(
                 reason = "the same object is already registered under another plugin name"
             else:
                 reason = f"cannot register: {_describe_exception(exc)}"
-            fail(name, dist, reason)
+            self.fail(name, dist, reason)
             return
+        why = self._hooks_problem(name, obj)
+        if why:
+            pm.unregister(name=name)
+            self.fail(name, dist, why)
+            return
+        self.plugins[name] = _Plugin(name, dist, version)
+
+    def _hooks_problem(self, name: str, obj: object) -> str:
+        """Why a registered plugin's hooks are unusable (misspelt, unmarked, none), or ""."""
+        pm = self.pm
         try:
             pm.check_pending()
         except pluggy.PluginValidationError:
@@ -509,105 +536,103 @@ def load_registry(
                 if not hname.startswith("_") and not caller.has_spec()
                 and any(impl.plugin_name == name for impl in caller.get_hookimpls())
             )
-            pm.unregister(name=name)
-            hint = _hook_hint(unknown)
-            fail(name, dist, f"unknown hook {', '.join(unknown)}{hint}")
-            return
+            return f"unknown hook {', '.join(unknown)}{_hook_hint(unknown)}"
         impls = [impl for caller in pm.get_hookcallers(obj) or [] for impl in
                  caller.get_hookimpls() if impl.plugin_name == name]
-        if not impls:
-            pm.unregister(name=name)
-            unmarked = [h for h in _hook_names() if callable(getattr(obj, h, None))]
-            if unmarked:
-                fail(name, dist, f"{', '.join(unmarked)} not marked with @hookimpl "
-                     "(from rockfall_design import hookimpl)")
-            else:
-                fail(name, dist, "implements no rockfall_design hook "
-                     f"({', '.join(_hook_names())})")
-            return
-        plugins[name] = _Plugin(name, dist, version)
+        if impls:
+            return ""
+        unmarked = [h for h in _hook_names() if callable(getattr(obj, h, None))]
+        if unmarked:
+            return (f"{', '.join(unmarked)} not marked with @hookimpl "
+                    "(from rockfall_design import hookimpl)")
+        return f"implements no rockfall_design hook ({', '.join(_hook_names())})"
 
-    for ep in _entry_points(entry_points):
-        register(ep.name, _dist_name(ep), ep.load, _dist_version(ep))
-    for name, obj in extra_plugins:
-        register(str(name), None, lambda obj=obj: obj)
+    def collect(self) -> dict[str, dict[str, list[tuple[_Plugin, type]]]]:
+        """Every class each plugin's hooks return, per section and name (duplicates kept).
 
-    # Call every hook implementation on its own, so that a failure is the
-    # plugin's own; collect everything, then check for duplicates and sort.
-    found: dict[str, dict[str, list[tuple[_Plugin, type]]]] = {}
-    for section, _what, hook_name, base, name_attr, _key in _SECTIONS:
-        claims = found.setdefault(section, {})
-        caller = getattr(pm.hook, hook_name)
-        for impl in caller.get_hookimpls():
-            plugin = plugins.get(impl.plugin_name)
-            if plugin is None:  # pragma: no cover - registered outside register()
-                continue
-            if impl.hookwrapper or impl.wrapper:
-                fail(plugin.name, plugin.distribution,
-                     f"{hook_name} must be a plain hook, not a wrapper")
-                continue
-            try:
-                with plugin_code():
-                    result = impl.function()
-            except BaseException as exc:
-                if is_real_interrupt(exc):
-                    raise
-                log.debug("hook %s of plugin %s raised", hook_name, plugin.name,
-                          exc_info=True)
-                fail(plugin.name, plugin.distribution,
-                     f"{hook_name} raised {_describe_exception(exc)}")
-                continue
-            if result is None:
-                continue
-            if not isinstance(result, list | tuple):
-                fail(plugin.name, plugin.distribution,
-                     f"{hook_name} returned {type(result).__name__}; return a list of classes")
-                continue
-            for cls in result:
-                why = _validate_class(cls, section, base, name_attr)
-                if why is not None:
-                    fail(plugin.name, plugin.distribution, f"{hook_name}: {why}")
+        Every hook implementation is called on its own, so that a failure is
+        the plugin's own.
+        """
+        found: dict[str, dict[str, list[tuple[_Plugin, type]]]] = {}
+        for section, _what, hook_name, base, name_attr, _key in _SECTIONS:
+            claims = found.setdefault(section, {})
+            for impl in getattr(self.pm.hook, hook_name).get_hookimpls():
+                plugin = self.plugins.get(impl.plugin_name)
+                if plugin is None:  # pragma: no cover - registered outside register()
                     continue
-                entries = claims.setdefault(getattr(cls, name_attr), [])
-                if not any(p is plugin and c is cls for p, c in entries):
-                    entries.append((plugin, cls))
+                for cls in self._classes(plugin, impl, hook_name):
+                    why = _validate_class(cls, section, base, name_attr)
+                    if why is not None:
+                        self.fail(plugin.name, plugin.distribution, f"{hook_name}: {why}")
+                        continue
+                    entries = claims.setdefault(getattr(cls, name_attr), [])
+                    if not any(p is plugin and c is cls for p, c in entries):
+                        entries.append((plugin, cls))
+        return found
 
-    duplicates = []
-    for section, what, _hook, _base, _attr, _key in _SECTIONS:
-        for name, entries in sorted(found[section].items()):
-            if len(entries) > 1:
-                who = sorted(
-                    f"{p.name} (distribution {p.distribution}, class {c.__qualname__})"
-                    if p.distribution else f"{p.name} (class {c.__qualname__})"
-                    for p, c in entries
-                )
-                duplicates.append(f"{what} {name!r} is provided by both " + " and ".join(who))
-    if duplicates:
-        raise PluginError(
-            "; ".join(duplicates) + ". Uninstall one of them, or block one with "
-            "`--block PLUGIN`."
+    def _classes(self, plugin: _Plugin, impl: Any, hook_name: str) -> list[Any]:
+        """What one hook implementation returns (its classes), or [] with the failure noted."""
+        if impl.hookwrapper or impl.wrapper:
+            self.fail(plugin.name, plugin.distribution,
+                      f"{hook_name} must be a plain hook, not a wrapper")
+            return []
+        try:
+            with plugin_code():
+                result = impl.function()
+        except BaseException as exc:
+            if is_real_interrupt(exc):
+                raise
+            log.debug("hook %s of plugin %s raised", hook_name, plugin.name, exc_info=True)
+            self.fail(plugin.name, plugin.distribution,
+                      f"{hook_name} raised {_describe_exception(exc)}")
+            return []
+        if result is None:
+            return []
+        if not isinstance(result, list | tuple):
+            self.fail(plugin.name, plugin.distribution,
+                      f"{hook_name} returned {type(result).__name__}; return a list of classes")
+            return []
+        return list(result)
+
+    def registry(self) -> Registry:
+        """The registry of what was collected; two claims of one name are an error."""
+        found = self.collect()
+        duplicates = []
+        for section, what, _hook, _base, _attr, _key in _SECTIONS:
+            for name, entries in sorted(found[section].items()):
+                if len(entries) > 1:
+                    who = sorted(
+                        f"{p.name} (distribution {p.distribution}, class {c.__qualname__})"
+                        if p.distribution else f"{p.name} (class {c.__qualname__})"
+                        for p, c in entries
+                    )
+                    duplicates.append(f"{what} {name!r} is provided by both "
+                                      + " and ".join(who))
+        if duplicates:
+            raise PluginError(
+                "; ".join(duplicates) + ". Uninstall one of them, or block one with "
+                "`--block PLUGIN`."
+            )
+        tables: dict[str, dict[str, type]] = {}
+        provider: dict[tuple[str, str], str] = {}
+        origins: dict[tuple[str, str], PluginOrigin] = {}
+        for section, _what, _hook, _base, _attr, key in _SECTIONS:
+            tables[section] = {}
+            for name, [(plugin, cls)] in sorted(found[section].items()):
+                tables[section][name] = cls
+                provider[(key, name)] = plugin.provider
+                origins[(key, name)] = PluginOrigin(plugin.name, plugin.distribution,
+                                                    plugin.version)
+        return Registry(
+            measures=tables["measures"],
+            safety_concepts=tables["safety_concepts"],
+            cost_models=tables["cost_models"],
+            provider=provider,
+            failures=sorted(self.failures,
+                            key=lambda f: (f.plugin, f.distribution or "", f.reason)),
+            blocked=self.blocked_names,
+            origins=origins,
         )
-
-    tables: dict[str, dict[str, type]] = {}
-    provider: dict[tuple[str, str], str] = {}
-    origins: dict[tuple[str, str], PluginOrigin] = {}
-    for section, _what, _hook, _base, _attr, key in _SECTIONS:
-        tables[section] = {}
-        for name, [(plugin, cls)] in sorted(found[section].items()):
-            tables[section][name] = cls
-            provider[(key, name)] = plugin.provider
-            origins[(key, name)] = PluginOrigin(plugin.name, plugin.distribution,
-                                                plugin.version)
-
-    return Registry(
-        measures=tables["measures"],
-        safety_concepts=tables["safety_concepts"],
-        cost_models=tables["cost_models"],
-        provider=provider,
-        failures=sorted(failures, key=lambda f: (f.plugin, f.distribution or "", f.reason)),
-        blocked=blocked_names,
-        origins=origins,
-    )
 
 
 def _hook_names() -> list[str]:

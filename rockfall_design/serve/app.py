@@ -200,94 +200,94 @@ def _optional_int(data: dict[str, Any], key: str) -> int | None:
     return int(v)
 
 
-def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any:
-    """The app serving ``entries``, guarded by ``token`` (a new random one if None).
+def _handle(fn: Any) -> Any:
+    """An endpoint that answers a ServeError with its status and message."""
+    async def endpoint(request: Request) -> Response:
+        try:
+            return await fn(request)
+        except ServeError as exc:
+            return _error(exc)
+    return endpoint
 
-    Returns the ASGI application; its token is ``app.state.token`` of the
-    inner Starlette app, also as the attribute ``token`` of the returned object.
-    """
-    token = token or secrets.token_urlsafe(24)
-    by_id = {e.id: e for e in entries}
-    jobs: dict[str, Any] = {}
 
-    def entry(pid: str) -> ProjectEntry:
-        e = by_id.get(pid)
+class _Endpoints:
+    """The app's endpoints over the served projects and their jobs (one per app)."""
+
+    def __init__(self, entries: Sequence[ProjectEntry]) -> None:
+        self.entries = list(entries)
+        self.by_id = {e.id: e for e in self.entries}
+        self.jobs: dict[str, Any] = {}
+
+    def entry(self, pid: str) -> ProjectEntry:
+        e = self.by_id.get(pid)
         if e is None:
-            known = ", ".join(by_id) or "none"
+            known = ", ".join(self.by_id) or "none"
             raise ServeError(404, f"unknown project {pid!r} (served: {known})")
         return e
 
-    def handle(fn: Any) -> Any:
-        async def endpoint(request: Request) -> Response:
-            try:
-                return await fn(request)
-            except ServeError as exc:
-                return _error(exc)
-        return endpoint
-
-    async def page(request: Request) -> Response:
+    async def page(self, request: Request) -> Response:
         return _static("index.html")
 
-    async def static(request: Request) -> Response:
+    async def static(self, request: Request) -> Response:
         name = request.path_params["name"]
         if name not in _STATIC_FILES:
             raise ServeError(404, f"no asset {name!r}")
         return _static(name)
 
-    async def projects(request: Request) -> Response:
+    async def projects(self, request: Request) -> Response:
         return _json({"projects": [{"id": e.id, "name": e.project.name, "file": e.path.name}
-                                   for e in entries]})
+                                   for e in self.entries]})
 
-    async def project(request: Request) -> Response:
-        return _json(entry(request.path_params["pid"]).describe())
+    async def project(self, request: Request) -> Response:
+        return _json(self.entry(request.path_params["pid"]).describe())
 
-    async def run(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def run(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         if e.bench is None:
             raise ServeError(409, f"{e.id} has not been simulated yet (POST .../simulate)")
         return _json(e.run_dict())
 
-    async def simulate(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def simulate(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         data = await _body(request)
         job = e.start_run(_optional_int(data, "rocks"), _optional_int(data, "seed"))
-        jobs[job.id] = job
+        self.jobs[job.id] = job
         return _json(job.as_dict(), 202)
 
-    async def check(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def check(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         data = await _body(request)
         raws = data.get("measures")
         if raws is not None and not isinstance(raws, list):
             raise ServeError(400, "measures: expected a list of measures")
         job = e.start_check(raws, _optional_int(data, "rocks"), _optional_int(data, "seed"))
-        jobs[job.id] = job
+        self.jobs[job.id] = job
         return _json(job.as_dict(), 202)
 
-    async def optimise(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def optimise(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         data = await _body(request)
         job = e.start_optimise(_optional_int(data, "rocks"), _optional_int(data, "seed"))
-        jobs[job.id] = job
+        self.jobs[job.id] = job
         return _json(job.as_dict(), 202)
 
-    async def study(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def study(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         data = await _body(request)
         job = e.start_study(_optional_int(data, "rocks"), _optional_int(data, "seed"))
-        jobs[job.id] = job
+        self.jobs[job.id] = job
         return _json(job.as_dict(), 202)
 
-    async def calibrate(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def calibrate(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         data = await _body(request)
         job = e.start_calibrate(_optional_int(data, "rocks"), _optional_int(data, "seed"),
                                 _optional_int(data, "bootstrap"))
-        jobs[job.id] = job
+        self.jobs[job.id] = job
         return _json(job.as_dict(), 202)
 
-    async def job_file(request: Request) -> Response:
-        j = job_of(request)
+    async def job_file(self, request: Request) -> Response:
+        j = self.job_of(request)
         name = request.path_params["name"]
         if name not in j.files:
             raise ServeError(404, f"job {j.id} has no {name}")
@@ -302,26 +302,26 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         return Response(content, media_type=media_type(name),
                         headers={"Content-Disposition": f'attachment; filename="{name}"'})
 
-    def job_of(request: Request) -> Any:
-        job = jobs.get(request.path_params["jid"])
+    def job_of(self, request: Request) -> Any:
+        job = self.jobs.get(request.path_params["jid"])
         if job is None:
             raise ServeError(404, f"unknown job {request.path_params['jid']!r}")
         return job
 
-    async def job(request: Request) -> Response:
-        return _json(job_of(request).as_dict())
+    async def job(self, request: Request) -> Response:
+        return _json(self.job_of(request).as_dict())
 
-    async def cancel(request: Request) -> Response:
-        j = job_of(request)
+    async def cancel(self, request: Request) -> Response:
+        j = self.job_of(request)
         j.cancel_event.set()
         return _json(j.as_dict())
 
-    async def place(request: Request) -> Response:
+    async def place(self, request: Request) -> Response:
         data = await _body(request)
         pid = data.get("project")
         if not isinstance(pid, str):
             raise ServeError(400, "project: expected the id of a served project")
-        e = entry(pid)
+        e = self.entry(pid)
         if "measures" in data:
             raws = data["measures"]
             if not isinstance(raws, list) or not raws:
@@ -343,16 +343,16 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         # lowest latency while the mouse moves.
         return _json(bench.place(e, raws))
 
-    async def plugins(request: Request) -> Response:
+    async def plugins(self, request: Request) -> Response:
         from ..plugins import plugins_json
 
-        reg = entries[0].registry if entries else None
+        reg = self.entries[0].registry if self.entries else None
         if reg is None:
             raise ServeError(404, "no project served")
         return _json(plugins_json(reg))
 
-    async def file(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def file(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         name = request.query_params.get("path", e.path.name)
         target = _inside(e, name)
         if not target.is_file():
@@ -365,14 +365,14 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
             raise ServeError(400, f"{name}: not a UTF-8 text file") from None
         return _json({"path": name, "text": text})
 
-    async def validate(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def validate(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         data = await _body(request)
         e.validate(data.get("text"))
         return _json({"ok": True})
 
-    async def save(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def save(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         data = await _body(request)
         name = data.get("path")
         if name is not None and not isinstance(name, str):
@@ -380,12 +380,12 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         target = e.save(data.get("text"), name)
         return _json({"ok": True, "path": str(target.relative_to(e.directory))})
 
-    async def materials(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def materials(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         return _json(e.library(request.query_params.get("path")))
 
-    async def apply_material(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def apply_material(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         data = await _body(request)
         name, library = data.get("material"), data.get("library")
         if not isinstance(name, str):
@@ -394,8 +394,8 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
             raise ServeError(400, "library: expected a file name inside the project's directory")
         return _json(e.apply_material(data.get("segment"), name, library))
 
-    async def upload(request: Request) -> Response:
-        e = entry(request.path_params["pid"])
+    async def upload(self, request: Request) -> Response:
+        e = self.entry(request.path_params["pid"])
         data = await _body(request)
         name = data.get("path")
         if not isinstance(name, str):
@@ -403,28 +403,38 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         target = e.upload(name, data.get("text"), bool(data.get("replace", False)))
         return _json({"ok": True, "path": str(target.relative_to(e.directory))})
 
+
+def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any:
+    """The app serving ``entries``, guarded by ``token`` (a new random one if None).
+
+    Returns the ASGI application; its token is ``app.state.token`` of the
+    inner Starlette app, also as the attribute ``token`` of the returned object.
+    """
+    token = token or secrets.token_urlsafe(24)
+    ep = _Endpoints(entries)
+
     routes = [
-        Route("/", handle(page)),
-        Route("/static/{name}", handle(static)),
-        Route("/api/projects", handle(projects)),
-        Route("/api/projects/{pid}", handle(project)),
-        Route("/api/projects/{pid}/run", handle(run)),
-        Route("/api/projects/{pid}/simulate", handle(simulate), methods=["POST"]),
-        Route("/api/projects/{pid}/file", handle(file)),
-        Route("/api/projects/{pid}/validate", handle(validate), methods=["POST"]),
-        Route("/api/projects/{pid}/save", handle(save), methods=["POST"]),
-        Route("/api/projects/{pid}/upload", handle(upload), methods=["POST"]),
-        Route("/api/projects/{pid}/materials", handle(materials)),
-        Route("/api/projects/{pid}/materials", handle(apply_material), methods=["POST"]),
-        Route("/api/projects/{pid}/check", handle(check), methods=["POST"]),
-        Route("/api/projects/{pid}/optimise", handle(optimise), methods=["POST"]),
-        Route("/api/projects/{pid}/study", handle(study), methods=["POST"]),
-        Route("/api/projects/{pid}/calibrate", handle(calibrate), methods=["POST"]),
-        Route("/api/jobs/{jid}", handle(job)),
-        Route("/api/jobs/{jid}/files/{name}", handle(job_file)),
-        Route("/api/jobs/{jid}/cancel", handle(cancel), methods=["POST"]),
-        Route("/api/place", handle(place), methods=["POST"]),
-        Route("/api/plugins", handle(plugins)),
+        Route("/", _handle(ep.page)),
+        Route("/static/{name}", _handle(ep.static)),
+        Route("/api/projects", _handle(ep.projects)),
+        Route("/api/projects/{pid}", _handle(ep.project)),
+        Route("/api/projects/{pid}/run", _handle(ep.run)),
+        Route("/api/projects/{pid}/simulate", _handle(ep.simulate), methods=["POST"]),
+        Route("/api/projects/{pid}/file", _handle(ep.file)),
+        Route("/api/projects/{pid}/validate", _handle(ep.validate), methods=["POST"]),
+        Route("/api/projects/{pid}/save", _handle(ep.save), methods=["POST"]),
+        Route("/api/projects/{pid}/upload", _handle(ep.upload), methods=["POST"]),
+        Route("/api/projects/{pid}/materials", _handle(ep.materials)),
+        Route("/api/projects/{pid}/materials", _handle(ep.apply_material), methods=["POST"]),
+        Route("/api/projects/{pid}/check", _handle(ep.check), methods=["POST"]),
+        Route("/api/projects/{pid}/optimise", _handle(ep.optimise), methods=["POST"]),
+        Route("/api/projects/{pid}/study", _handle(ep.study), methods=["POST"]),
+        Route("/api/projects/{pid}/calibrate", _handle(ep.calibrate), methods=["POST"]),
+        Route("/api/jobs/{jid}", _handle(ep.job)),
+        Route("/api/jobs/{jid}/files/{name}", _handle(ep.job_file)),
+        Route("/api/jobs/{jid}/cancel", _handle(ep.cancel), methods=["POST"]),
+        Route("/api/place", _handle(ep.place), methods=["POST"]),
+        Route("/api/plugins", _handle(ep.plugins)),
     ]
     inner = Starlette(routes=routes)
     inner.state.token = token
