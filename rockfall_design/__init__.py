@@ -40,9 +40,9 @@ from .version import __version__
 # rockfall_design.testing (which pytest loads in every run through its
 # pytest11 entry point), does not import the engine, numba, scipy and pandas.
 _LAZY: dict[str, str] = {
-    **dict.fromkeys(("CheckResult", "OptimiseResult", "SimulationResult", "check",
-                     "load_project", "optimise", "simulate", "study", "calibrate", "compare"),
-                  ".api"),
+    **dict.fromkeys(("check", "load_project", "optimise", "simulate", "study", "calibrate",
+                     "compare"), ".api"),
+    **dict.fromkeys(("CheckResult", "OptimiseResult", "SimulationResult"), ".results"),
     **dict.fromkeys(("CalibrationResult", "ComparisonResult"), ".calibration.calibrated"),
     "StudyResult": ".studies.study_result",
     **dict.fromkeys(("Corridor", "load_corridor"), ".project"),
@@ -52,18 +52,7 @@ _LAZY: dict[str, str] = {
 }
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .api import (
-        CheckResult,
-        OptimiseResult,
-        SimulationResult,
-        calibrate,
-        check,
-        compare,
-        load_project,
-        optimise,
-        simulate,
-        study,
-    )
+    from .api import calibrate, check, compare, load_project, optimise, simulate, study
     from .calibration.calibrated import CalibrationResult, ComparisonResult
     from .judge.bounds import (
         fraction_lower_bound,
@@ -75,6 +64,7 @@ if TYPE_CHECKING:  # pragma: no cover
         rocks_to_show_fraction,
     )
     from .project import Corridor, load_corridor
+    from .results import CheckResult, OptimiseResult, SimulationResult
     from .studies.study_result import StudyResult
 
 

@@ -98,7 +98,7 @@ def _progress(console_needed: bool, total: int):
 def run_with_progress(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:
     """Call the API's ``run(project, rocks=..., seed=..., ...)``, with a progress bar if
     interactive, keeping the paths of the first rocks when a figure will need them."""
-    from ..api import DEFAULT_TRAJECTORIES
+    from ..results import DEFAULT_TRAJECTORIES
 
     n = args.rocks or project.rocks.count
     drawn = args.plot or args.report

@@ -291,7 +291,7 @@ def _pooled(args: argparse.Namespace) -> bool:
 
 
 def _trajectories(args: argparse.Namespace) -> int:
-    from ..api import DEFAULT_TRAJECTORIES
+    from ..results import DEFAULT_TRAJECTORIES
 
     return DEFAULT_TRAJECTORIES if (args.plot or args.report) else 0
 
@@ -512,8 +512,9 @@ def each_section(
 
 def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
     """``simulate`` of a corridor: every section's run, files and report, then the totals."""
-    from ..api import SimulationResult, run_simulation
+    from ..api import run_simulation
     from ..report.terminal import print_simulation
+    from ..results import SimulationResult
     from ..run.simulation import EXACT_ROCKS, study_memory
     from .common import (
         FIGURES,
@@ -561,8 +562,9 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
 
 def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
     """``check`` of a corridor: every section checked; exit 0 only if every section holds."""
-    from ..api import CheckResult, check
+    from ..api import check
     from ..report.terminal import print_check
+    from ..results import CheckResult
     from .common import FIGURES, figures_and_report, in_memory_guard, run_record, run_with_progress
 
     def guard(section: CorridorSection) -> None:

@@ -121,8 +121,9 @@ class ScenariosCheckResult:
         Its own project (the study's values set) and its own seed and rocks:
         the same rocks as in :func:`check_across`, so the same numbers.
         """
-        from ..api import DEFAULT_TRAJECTORIES, check
+        from ..api import check
         from ..optimiser.across import scenario_runs
+        from ..results import DEFAULT_TRAJECTORIES
 
         b = self.summary["binding"]
         run = next(r for r in scenario_runs(self.project, self.summary["seed"])

@@ -40,9 +40,10 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from ..api import SimulationResult, run_simulation
+    from ..api import run_simulation
     from ..project import Project
     from ..report.outputs import OutputSet
+    from ..results import SimulationResult
     from ..run.simulation import study_memory
 
     recorded = None

@@ -612,7 +612,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
     """The report of ``check --scenarios``: every scenario, the binding one in full.
 
     The binding scenario's part is the report of ``check`` in that scenario
-    (:func:`report_context` of its :class:`~rockfall_design.api.CheckResult`),
+    (:func:`report_context` of its :class:`~rockfall_design.results.CheckResult`),
     its tables and figures titled with the scenario.
     """
     from types import SimpleNamespace

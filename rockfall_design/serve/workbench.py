@@ -531,11 +531,12 @@ class ProjectEntry:
             project = project.model_copy(update={"measures": [dict(r) for r in raws]})
 
         def work(job: Job) -> None:
-            from .reports import REPORT_TRAJECTORIES, CheckReport, lazy_files
+            from ..results import DEFAULT_TRAJECTORIES, CheckResult
+            from .reports import lazy_files
 
             ev = evaluate(project, self.registry, rocks=n, seed=s, progress=job.progress,
-                          n_trajectories=REPORT_TRAJECTORIES)
-            report = CheckReport(project, ev, self.registry)
+                          n_trajectories=DEFAULT_TRAJECTORIES)
+            report = CheckResult(project, ev, self.registry)
             job.result = report.summary
             job.files.update(lazy_files(report))
             job.done = n
@@ -568,7 +569,8 @@ class ProjectEntry:
         project = self.project
 
         def work(job: Job) -> None:
-            from .reports import OptimiseReport, lazy_files
+            from ..results import OptimiseResult
+            from .reports import lazy_files
 
             res = optimise(project, self.registry, rocks=n, seed=s, progress=job.staged)
             job.result = res.summary()
@@ -576,7 +578,7 @@ class ProjectEntry:
                 job.files["design.yaml"] = design_yaml(res.best, self.path.name,
                                                        res.search_rocks, res.looks)
             # The report checks the chosen design again (for its figures): on request.
-            job.files.update(lazy_files(OptimiseReport(project, res, self.registry)))
+            job.files.update(lazy_files(OptimiseResult(project, res, self.registry)))
 
         return self._start("optimise", n, work)
 
