@@ -339,7 +339,8 @@ class OptimiseResult:
         best = self.result.best
         if best is None:
             return None
-        from .optimiser.design_spec import design_bill, resolve_design
+        from .optimiser.costing import design_bill
+        from .optimiser.design_spec import resolve_design
         from .run.releases import section_from_project
 
         d = self.project.design
@@ -407,7 +408,7 @@ class OptimiseResult:
     # ---- figures ---------------------------------------------------------
     def plot_alternatives(self) -> Figure:
         """A bar per family: cost, residual and the check that binds or fails."""
-        from .report.figures import alternatives_figure
+        from .report.design_figures import alternatives_figure
 
         s = self.summary
         return alternatives_figure(s["alternatives"], s["best_name"], s.get("currency", ""),

@@ -16,7 +16,7 @@ from numpy.testing import assert_allclose
 
 from rockfall_design.cli.program import main
 from rockfall_design.project import load_project
-from rockfall_design.report.outputs import MANIFEST
+from rockfall_design.report.staging import MANIFEST
 from rockfall_design.run import simulation
 from rockfall_design.run.histograms import LinearHistogram, LogHistogram
 from rockfall_design.run.releases import ReleaseStream, draw_releases

@@ -21,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from ..report.documents import MODEL_LIMITS, Table, _inputs
+from ..report.documents import MODEL_LIMITS
+from ..report.sections import Table, _inputs
 from ..version import __version__
 
 __all__ = ["CALIBRATION_LIMITS", "report_context"]

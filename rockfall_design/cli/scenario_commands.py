@@ -19,7 +19,7 @@ lets the design fail in.
 ``scenarios``: per scenario ``index``, ``values``, ``seed``, ``margin``,
 ``binds_at`` and the JSON of ``check`` in that scenario. ``--plot`` draws the
 binding scenario's figures (as ``check --plot`` draws them) and the margin of
-every scenario (:func:`~rockfall_design.report.figures.margins_figure`);
+every scenario (:func:`~rockfall_design.report.design_figures.margins_figure`);
 ``--report`` writes the report of every scenario and the binding one in full
 (:class:`ScenariosCheckResult`, rendered by :mod:`rockfall_design.report.documents`).
 
@@ -133,7 +133,7 @@ class ScenariosCheckResult:
 
     def plot_margins(self) -> Any:
         """A bar per scenario: the margin, the binding scenario, the count required."""
-        from ..report.figures import margins_figure
+        from ..report.design_figures import margins_figure
 
         s = self.summary
         return margins_figure(s["scenarios"], s["required"], s["binding"]["index"],

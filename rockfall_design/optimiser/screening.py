@@ -144,7 +144,7 @@ class Screening:
         ``restart_stations`` (m), when given with ``stations``, are kept as
         restart stations, so that ground edits can still be judged.
         """
-        from .design_spec import build_candidate_measure
+        from .candidates import build_candidate_measure
 
         self.project = project
         self.registry = registry
@@ -271,7 +271,7 @@ class Screening:
         KeyError or ValueError
             From the cost model: it has no price for one of the measures.
         """
-        from .design_spec import design_cost
+        from .costing import design_cost
 
         return design_cost(self.registry, self.spec, measures, self.section)
 

@@ -22,7 +22,7 @@ from ..plugins.measure import Barrier
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
-    from .design_spec import CandidateSpec
+    from .candidates import CandidateSpec
 
 #: Spacing (m) of the stations where barrier candidates may stand.
 STATION_STEP_M = 0.5

@@ -15,7 +15,7 @@ import yaml
 import rockfall_design as rd
 from rockfall_design.cli.program import main
 from rockfall_design.project import load_project
-from rockfall_design.report.outputs import MANIFEST
+from rockfall_design.report.staging import MANIFEST
 
 from .calibration_helpers import TRUTH, observed_stops, write_site
 

@@ -17,7 +17,7 @@ import rockfall_design as rd
 from rockfall_design.calibration.document import report_context
 from rockfall_design.cli import main
 from rockfall_design.report.documents import render_html, render_markdown
-from rockfall_design.report.outputs import MANIFEST
+from rockfall_design.report.staging import MANIFEST
 
 from .calibration_helpers import SITE, observed_stops, write_site
 

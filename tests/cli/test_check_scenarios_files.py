@@ -81,7 +81,7 @@ def test_the_figures_are_of_the_same_rocks_as_the_binding_scenario_checked(tmp_p
 
 
 def test_margins_figure_marks_the_binding_scenario_and_the_count_required():
-    from rockfall_design.report.figures import margins_figure
+    from rockfall_design.report.design_figures import margins_figure
 
     scenarios = [
         {"index": 0, "values": {"materials.talus.restitution": 0.2}, "margin": 0.4,

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from rockfall_design.cli.program import build_parser, main
-from rockfall_design.report.outputs import MANIFEST
+from rockfall_design.report.staging import MANIFEST
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"

@@ -18,7 +18,8 @@ from pathlib import Path
 import pytest
 
 from rockfall_design.cli.program import main
-from rockfall_design.report.outputs import MANIFEST, OutputSet
+from rockfall_design.report.outputs import OutputSet
+from rockfall_design.report.staging import MANIFEST
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"

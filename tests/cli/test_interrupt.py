@@ -25,7 +25,8 @@ import pytest
 from rockfall_design.cli.program import main
 from rockfall_design.errors import InputError
 from rockfall_design.report.interrupts import committed_sets
-from rockfall_design.report.outputs import MANIFEST, OutputSet
+from rockfall_design.report.outputs import OutputSet
+from rockfall_design.report.staging import MANIFEST
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"

@@ -18,7 +18,7 @@ import pytest
 
 from rockfall_design.cli.program import main
 from rockfall_design.optimiser.screening import Screening
-from rockfall_design.report.outputs import MANIFEST
+from rockfall_design.report.staging import MANIFEST
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"

@@ -21,7 +21,8 @@ import pytest
 
 from rockfall_design.cli.program import main
 from rockfall_design.report import outputs
-from rockfall_design.report.outputs import MANIFEST, OutputError, OutputSet
+from rockfall_design.report.outputs import OutputSet
+from rockfall_design.report.staging import MANIFEST, OutputError
 from rockfall_design.run import simulation
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -11,13 +11,8 @@ from rockfall_design_builtins.measures import Wall, WallParams
 
 from rockfall_design import hookimpl
 from rockfall_design.errors import ProjectError
-from rockfall_design.optimiser.design_spec import (
-    CandidateSpec,
-    DesignSpec,
-    Product,
-    build_candidate_measure,
-    resolve_design,
-)
+from rockfall_design.optimiser.candidates import CandidateSpec, Product, build_candidate_measure
+from rockfall_design.optimiser.design_spec import DesignSpec, resolve_design
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project, load_project_text
 

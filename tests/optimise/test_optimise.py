@@ -15,7 +15,8 @@ from rockfall_design.cli.program import main
 from rockfall_design.judge.evaluation import evaluate_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import STATION_STEP_M, Screening, decide
-from rockfall_design.optimiser.design_spec import build_candidate_measure, resolve_design
+from rockfall_design.optimiser.candidates import build_candidate_measure
+from rockfall_design.optimiser.design_spec import resolve_design
 from rockfall_design.optimiser.section import optimise
 from rockfall_design.project import load_project_text
 

@@ -201,7 +201,8 @@ def test_the_readme_catch_net_is_a_candidate_searched_by_its_own_height(tmp_path
     """The plugin guide's catch net, unchanged: its height is its own, not a product's."""
     import re
 
-    from rockfall_design.optimiser.design_spec import build_candidate_measure, design_cost
+    from rockfall_design.optimiser.candidates import build_candidate_measure
+    from rockfall_design.optimiser.costing import design_cost
     from rockfall_design.run.releases import section_from_project
 
     guide = (ROOT / "docs" / "plugins.md").read_text(encoding="utf-8")

@@ -43,7 +43,7 @@ def test_the_section_is_in_the_reports_of_check_and_optimise():
                "chosen_measures": [], "bill": None, "run": None, "inputs": [], "results": [],
                "protect": "", "figures": [],
                "limits": [{"heading": h, "items": list(i)} for h, i in MODEL_LIMITS]}
-    from rockfall_design.report.documents import Table
+    from rockfall_design.report.sections import Table
 
     context["run"] = Table("", ["item", "value"], [])
     md = render_markdown(context)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from rockfall_design.cli.program import main
 from rockfall_design.project import dump_yaml, load_corridor, section_seed
-from rockfall_design.report.outputs import MANIFEST
+from rockfall_design.report.staging import MANIFEST
 
 from .test_corridor import CORRIDOR
 

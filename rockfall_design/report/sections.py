@@ -1,0 +1,436 @@
+"""The report's sections: tables and texts built from a result's summary.
+
+Each function reads what a command prints with ``--json`` (and the project
+and plugins it ran with) and returns a :class:`Table` or a text for the
+templates of :mod:`.documents`; numbers are formatted here, once."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+from ..version import __version__
+from .tables import chosen_name, measure_text, round_value
+
+if TYPE_CHECKING:  # pragma: no cover
+    pass
+
+
+@dataclass
+class Table:
+    """A table of the report: a title, column headers, rows of text, an optional note."""
+
+    title: str
+    columns: list[str]
+    rows: list[list[str]]
+    note: str = ""
+    highlight: list[bool] = field(default_factory=list)  # rows to emphasise (chosen design)
+
+
+def _num(v: Any, unit: str = "-", none: str = "-") -> str:
+    """A number as text, rounded for its unit (see :func:`tables.round_value`)."""
+    if v is None:
+        return none
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, float) and not math.isfinite(v):
+        return str(v)
+    r = round_value(v, unit)
+    if isinstance(r, int):
+        return f"{r:,}"
+    if isinstance(r, float):
+        return f"{r:,.2f}" if unit in ("-", "m") else f"{r:,g}"
+    return str(r)
+
+
+def _fixed(v: Any, digits: int) -> str:
+    return "-" if v is None else f"{float(v):,.{digits}f}"
+
+
+def _text(v: Any) -> str:
+    """A value of the project as compact text: lists joined, mappings as key value pairs."""
+    if isinstance(v, dict):
+        return "; ".join(f"{k} {_text(x)}" for k, x in v.items()) or "-"
+    if isinstance(v, list | tuple):
+        return "[" + ", ".join(_text(x) for x in v) + "]"
+    if isinstance(v, float):
+        return format(v, ".10g")  # every digit a survey or a catalogue may give
+    return "-" if v is None else str(v)
+
+
+def _flat(d: Mapping[str, Any], prefix: str = "") -> list[list[str]]:
+    """Rows ``[key.path, value]`` of every leaf of a nested mapping (lists kept whole)."""
+    rows: list[list[str]] = []
+    for k, v in d.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, dict) and v:
+            rows += _flat(v, key + ".")
+        else:
+            rows.append([key, _text(v)])
+    return rows
+
+
+def _inputs(project: Any, command: str, resolved: Mapping[str, Any] | None = None,
+            concepts: Mapping[str, str] | None = None) -> list[Table]:
+    """Every input of the run, so that the report alone rebuilds the project.
+
+    ``resolved`` is the project as run (measures and safety concept with
+    every parameter resolved, defaults included); ``concepts`` the summary
+    line of each safety concept (what it follows).
+    """
+    d = dict(resolved) if resolved is not None else project.resolved_dict()
+    out = []
+    slope = d["slope"]
+    pts = slope["points"]
+    rows = [[_text(float(p[0])), _text(float(p[1])),
+             slope["materials"][i] if i < len(pts) - 1 else ""] for i, p in enumerate(pts)]
+    out.append(Table("Slope section", ["x (m)", "elevation (m)", "material of the next segment"],
+                     rows, note=f"{len(pts)} points, as resolved from the project's slope "
+                     "(a survey file's points included)."))
+    mats = d["materials"]
+    keys = list(dict.fromkeys(k for m in mats.values() for k in m if k != "scatter"))
+    sc_keys = list(dict.fromkeys(k for m in mats.values() for k in (m.get("scatter") or {})))
+    out.append(Table(
+        "Ground materials", ["material", *keys, *(f"scatter of {k}" for k in sc_keys)],
+        [[name, *(_text(m.get(k)) for k in keys),
+          *(_text((m.get("scatter") or {}).get(k, 0.0)) for k in sc_keys)]
+         for name, m in mats.items()],
+        note="Restitution, friction and rolling resistance are dimensionless; roughness_deg "
+        "in degrees, roughness_height_m and velocity_scaling_k as named. Scatter: the "
+        "standard deviation of each parameter, drawn per impact (truncated normal)."))
+    r = d["rocks"]
+    rows = [[k, _text(r[k])] for k in r if k != "release"]
+    for i, z in enumerate(r["release"]):
+        rows.append([f"release zone {i + 1}", _text(z)])
+    out.append(Table("Rocks", ["quantity", "value"], rows,
+                     note="density kg/m3; radius m, volume m3 or mass kg (a number or a "
+                     "distribution with its parameters); release: x (m, a range is sampled "
+                     "uniformly), height above the ground (m), velocity [vx, vy] (m/s), spin "
+                     "(rad/s), weight (share of the rocks). count and seed as written; the run "
+                     "table gives the rocks and seeds used."))
+    a = d["analysis"]
+    rows = [[k, _text(v)] for k, v in a.items()]
+    if d.get("protect"):
+        rows += [[f"protect.{k}", _text(v)] for k, v in d["protect"].items()]
+    out.append(Table("Analysis", ["setting", "value"], rows))
+    out.append(Table("Engine", ["setting", "value"], _flat(d.get("engine") or {})))
+    if d.get("measures"):
+        out.append(Table("Measures checked" if command == "check" else "Measures of the project",
+                         ["measure", "parameters"],
+                         [[m["type"], ", ".join(f"{k} {_text(v)}" for k, v in m.items()
+                                                if k != "type")]
+                          for m in d["measures"]]))
+    if command in ("check", "optimise"):
+        sft = d.get("safety") or {}
+        name = str(sft.get("concept", "spang"))
+        rows = [[k, _text(v)] for k, v in sft.items()]
+        if concepts and concepts.get(name):
+            rows.append(["follows", concepts[name]])
+        out.append(Table("Safety concept", ["parameter", "value"], rows,
+                         note="Its standard or paper, and how its factors map to it: the "
+                         "section 'Model and limits' below."))
+    if command == "optimise" and d.get("design"):
+        des = dict(d["design"])
+        rows = [[c.get("type", "?"), ", ".join(f"{k} {_text(v)}" for k, v in c.items()
+                                               if k != "type")]
+                for c in des.pop("candidates", [])]
+        out.append(Table("Candidate measures of the design", ["type", "range"], rows))
+        products = des.pop("products", None) or {}
+        costs = des.pop("costs", None) or {}
+        out.append(Table("Design settings", ["setting", "value"], _flat(des)))
+        if products:
+            out.append(Table("Product catalogue", ["measure type", "product", "properties"],
+                             [[kind, name, _text(p)] for kind, table in products.items()
+                              for name, p in table.items()],
+                             note="capacity_kj: energy class (kJ); heights: nominal heights "
+                             "(m) on offer."))
+        if costs:
+            out.append(Table("Cost catalogue", ["price", "value"], _flat(costs),
+                             note="Prices in the catalogue's currency, per the unit each key "
+                             "names; a barrier's by product and height (m), per running metre."))
+    return out
+
+
+def _plugin_rows(registry: Any, used: list[tuple[str, str]]) -> list[list[str]]:
+    """One row per plugin the run used: its kind and name, distribution and version."""
+    rows = []
+    for key, name in dict.fromkeys(used):
+        origin = registry.origins.get((key, name)) if registry is not None else None
+        dist = "-" if origin is None else (
+            f"{origin.distribution or origin.plugin} {origin.version or ''}".strip())
+        rows.append([f"plugin: {key} {name}", dist])
+    return rows
+
+
+def _used_plugins(d: Mapping[str, Any], command: str) -> list[tuple[str, str]]:
+    used = [("measure", str(m["type"])) for m in d.get("measures") or []]
+    if command == "optimise" and d.get("design"):
+        used += [("measure", str(c["type"])) for c in d["design"].get("candidates", [])]
+        used.append(("cost", str((d["design"].get("costs") or {}).get("model", "unit_prices"))))
+    if command in ("check", "optimise"):
+        used.append(("safety", str((d.get("safety") or {}).get("concept", "spang"))))
+    return used
+
+
+def _run_table(result: Any, summary: Mapping[str, Any]) -> Table:
+    import platform
+
+    project = result.project
+    rows = [["program", f"rockfall-design {__version__}, command {result.command}; Python "
+             f"{platform.python_version()}"],
+            ["project file", str(project.source)],
+            ["project hash (sha256 of the resolved project)",
+             str(summary.get("project_hash") or project.resolved_hash())]]
+    conf = summary.get("confidence")
+    if result.command == "optimise":
+        design = getattr(result, "design", None)
+        rows += [["search rocks and seed", f"{int(summary.get('search_rocks') or 0):,} rocks, "
+                  f"seed {summary['seed']}"],
+                 ["decision rocks and seed", f"{int(summary['rocks']):,} rocks, seed "
+                  f"{summary['seed']}" + (" (the chosen design's statistics below)"
+                                          if design is not None else "")],
+                 ["verification (fresh rocks) and seed",
+                  f"{int(summary['fresh_rocks']):,} rocks, seed {summary['fresh_seed']}"],
+                 ["designs screened", f"{int(summary.get('designs_evaluated', 0)):,}; "
+                  f"{int(summary.get('exact_evaluations') or 0):,} evaluated exactly"]]
+        looks = summary.get("looks")
+        if looks:
+            rows.append(["sequential looks (rocks)", ", ".join(f"{n:,}" for n in looks["rocks"])
+                         + f"; each at {100 * float(looks['look_confidence']):.4g} %"])
+    else:
+        rows += [["rocks", f"{int(summary['rocks']):,}"],
+                 ["seed", str(summary["seed"])]]
+    if conf is not None:
+        rows.append(["confidence (one-sided, of every bound)", f"{100 * float(conf):g} %"])
+    if summary.get("runtime_s") is not None:
+        rows.append(["run time", f"{float(summary['runtime_s']):,.1f} s"])
+    stats = summary.get("statistics") or {}
+    if stats.get("method") == "histograms":
+        rows.append(["statistics", "streamed in chunks: counts, means and maxima exact, "
+                     f"percentiles within {100 * stats['relative_error']:g} %"])
+    elif stats:
+        rows.append(["statistics", "exact, over every rock"])
+    if summary.get("safety_concept"):
+        rows.append(["safety concept", str(summary["safety_concept"])])
+    e = project.engine
+    rows.append(["engine", f"exact events (flight parabolas, impacts, rolling and sliding in "
+                 f"closed form); v_contact {e.v_contact:g} m/s, v_stop {e.v_stop:g} m/s, "
+                 f"max_events {e.max_events:,}"])
+    registry = getattr(result, "registry", None) or getattr(result, "_registry", None)
+    rows += _plugin_rows(registry, _used_plugins(project.resolved_dict(), result.command))
+    return Table("", ["item", "value"], rows)
+
+
+def _stations_table(summary: Mapping[str, Any]) -> Table | None:
+    stations = summary.get("stations") or []
+    if not stations:
+        return None
+    cols = ["x (m)", "rocks passing", "h p50 (m)", "h p95 (m)", "h p99 (m)", "h max (m)",
+            "v p95 (m/s)", "v max (m/s)", "E p50 (kJ)", "E p95 (kJ)", "E p99 (kJ)",
+            "E max (kJ)"]
+    rows = []
+    for s in stations:
+        h, v, e = s["passing_height_m"], s["velocity_ms"], s["energy_kj"]
+        rows.append([f"{s['x']:g}", f"{s['crossings']:,}",
+                     *(_fixed(h[q], 2) for q in ("p50", "p95", "p99", "max")),
+                     _fixed(v["p95"], 1), _fixed(v["max"], 1),
+                     *(_fixed(e[q], 0) for q in ("p50", "p95", "p99", "max"))])
+    return Table("Analysis stations (first passage downslope)", cols, rows,
+                 note="h: passing height of the rock centre above the ground; v: speed; "
+                 "E: total kinetic energy. Percentiles over the rocks passing the station.")
+
+
+def _ends_table(summary: Mapping[str, Any]) -> Table:
+    st = summary["stops"]
+    n = max(int(summary["rocks"]), 1)
+    rows = []
+    for label, key in (("stopped on the section", "stopped"),
+                       ("left downslope end", "exit_downslope"),
+                       ("left upslope end", "exit_upslope"),
+                       ("caught by a barrier", "caught"),
+                       ("unresolved (event limit)", "unresolved")):
+        rows.append([label, f"{st[key]:,}", f"{100 * st[key] / n:.1f} %"])
+    sx = st["x"]
+    note = ("Stop position x of the rocks at rest (m): "
+            f"mean {_fixed(sx['mean'], 1)}, p50 {_fixed(sx['p50'], 1)}, "
+            f"p95 {_fixed(sx['p95'], 1)}, max {_fixed(sx['max'], 1)}.")
+    return Table("How the paths ended", ["end", "rocks", "share"], rows, note=note)
+
+
+def _protect_text(summary: Mapping[str, Any]) -> str:
+    p = summary.get("protect")
+    if not p:
+        return ""
+    text = (f"Protected zone x >= {p['x']:g} m: {p['reaching']:,} of {summary['rocks']:,} rocks "
+            f"reach it ({100 * p['fraction']:.2f} %)")
+    if p.get("upper_fraction") is not None:
+        text += f", upper confidence bound {100 * p['upper_fraction']:.2f} %"
+    if p.get("allowed_fraction") is not None:
+        text += f"; allowed {100 * p['allowed_fraction']:.2f} %"
+    if p.get("unresolved"):
+        text += f"; {p['unresolved']:,} unresolved paths counted as reaching it"
+    return text + "."
+
+
+def _checks_table(summary: Mapping[str, Any]) -> Table | None:
+    measures = summary.get("measures")
+    if measures is None:
+        return None
+    bounds = any(c.get("bound") is not None for m in measures for c in m.get("checks", []))
+    cols = ["measure", "met", "caught", "over", "through", "check", "value"]
+    cols += ["bound"] if bounds else []
+    cols += ["target", "unit", "verdict", "how"]
+    rows = []
+    for m in measures:
+        through = m.get("broken_through", 0) + m.get("passed_through_gap", 0)
+        head = [m.get("label", m.get("type", "?")), f"{m['met']:,}", f"{m['caught']:,}",
+                f"{m['passed_over']:,}", f"{through:,}"]
+        for k, c in enumerate(m.get("checks") or [None]):
+            first = head if k == 0 else [""] * 5
+            if c is None:
+                rows.append(first + ["(none)"] + [""] * (len(cols) - 6))
+                continue
+            unit = str(c.get("unit", "-"))
+            row = first + [str(c["name"]), _num(c.get("value"), unit)]
+            if bounds:
+                row.append(_num(c.get("bound"), unit))
+            row += [_num(c.get("target"), unit), unit, "ok" if c.get("ok") else "FAILS",
+                    str(c.get("detail", ""))]
+            rows.append(row)
+    return Table("Measures and their checks", cols, rows,
+                 note="met: rocks that reached the measure; over: passed over it; through: "
+                 "broke through or passed a gap. Value against target as the safety concept "
+                 "defines it.")
+
+
+def _alternatives_table(summary: Mapping[str, Any]) -> Table:
+    cur = summary.get("currency") or ""
+    best = chosen_name(summary)
+    alts = sorted(summary.get("alternatives", []),
+                  key=lambda a: (not a.get("feasible"), a.get("cost") is None,
+                                 a.get("cost") or 0))
+    names: list[tuple[str, str]] = []
+    for a in alts:
+        seen: dict[str, int] = {}
+        for c in a.get("checks") or []:
+            seen[c["name"]] = seen.get(c["name"], 0) + 1
+            key = c["name"] if seen[c["name"]] == 1 else f"{c['name']}_{seen[c['name']]}"
+            if key not in [n for n, _ in names]:
+                names.append((key, str(c.get("unit", "-"))))
+    cols = ["", "family", f"cost ({cur})" if cur else "cost", "measures", "residual",
+            "fresh rocks", *(n.removesuffix("_factor") + ("" if u == "-" else f" ({u})")
+                             for n, u in names), "reason"]
+    rows, marks = [], []
+    for a in alts:
+        values: dict[str, Any] = {}
+        seen = {}
+        for c in a.get("checks") or []:
+            seen[c["name"]] = seen.get(c["name"], 0) + 1
+            key = c["name"] if seen[c["name"]] == 1 else f"{c['name']}_{seen[c['name']]}"
+            values[key] = _num(c.get("value"), str(c.get("unit", "-"))) + (
+                "" if c.get("ok") else " !")
+        fresh = a.get("holds_on_fresh_rocks")
+        chosen = best is not None and a.get("name") == best
+        rows.append(["*" if chosen else "", str(a.get("name")),
+                     _num(a.get("cost"), "cost") if a.get("feasible")
+                     else f"({_num(a.get('cost'), 'cost')})",
+                     "; ".join(measure_text(m) for m in a.get("measures") or []) or "-",
+                     _num(a.get("residual"), "count"),
+                     "-" if fresh is None else ("holds" if fresh else "FAILS"),
+                     *(values.get(n, "") for n, _ in names),
+                     str(a.get("reason") or "")])
+        marks.append(chosen)
+    return Table("Alternatives: the cheapest design of each family", cols, rows,
+                 note="* the chosen design; a cost in brackets: not admissible; ! a check "
+                 "that misses its target; residual: rocks reaching the protected zone; fresh "
+                 "rocks: whether the design holds on rocks not used in the search.",
+                 highlight=marks)
+
+
+def _chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
+    best = chosen_name(summary)
+    if best is None:
+        return f"No admissible design: {summary.get('reason', '')}", []
+    alt = next(a for a in summary["alternatives"] if a.get("name") == best)
+    cur = summary.get("currency") or ""
+    head = f"Chosen design: {best}, cost {_num(alt.get('cost'), 'cost')} {cur}".rstrip() + "."
+    if summary.get("reason"):
+        head += f" Note: {summary['reason']}."
+    return head, [measure_text(m) for m in alt.get("measures") or []]
+
+
+def _resolved_inputs(result: Any) -> tuple[dict[str, Any], dict[str, str]]:
+    """The project as run (every parameter resolved) and each safety concept's summary."""
+    d = result.project.resolved_dict()
+    evaluation = getattr(result, "evaluation", None)
+    if result.command == "optimise" and getattr(result, "best", None) is not None:
+        evaluation = result.design.evaluation
+    if evaluation is not None:
+        run = evaluation.resolved_project().resolved_dict()
+        if result.command == "check":
+            d["measures"] = run.get("measures") or []
+        d["safety"] = run.get("safety") or d.get("safety")
+    registry = getattr(result, "registry", None) or getattr(result, "_registry", None)
+    concepts = {} if registry is None else {
+        name: str(getattr(cls, "summary", "") or "")
+        for name, cls in registry.safety_concepts.items()}
+    return d, concepts
+
+
+def _money(v: float) -> str:
+    return f"{v:,.2f}"
+
+
+def _bill_table(bill: Mapping[str, Any]) -> Table:
+    """The chosen design's bill: a line per quantity and fixed cost, and the total."""
+    cur = bill.get("currency") or ""
+    unit = f" ({cur})" if cur else ""
+    rows = [[str(it["measure"]), str(it["quantity"]), _money(it["count"]), str(it["unit"]),
+             _money(it["unit_price"]), _money(it["amount"]), str(it.get("source") or "")]
+            for it in bill["items"]]
+    rows.append(["total", "", "", "", "", _money(bill["total"]), ""])
+    return Table(f"Bill of the chosen design (site length {bill['length_m']:g} m)",
+                 ["measure", "quantity", "count", "unit", f"unit price{unit}",
+                  f"amount{unit}", "price from"], rows,
+                 note="count: the quantity over the whole site length (running metres, m3, "
+                 "or each); amount = count x unit price; the total is the design's cost as the "
+                 f"optimiser compared it, priced by the cost model {bill.get('model', '')}.",
+                 highlight=[False] * len(bill["items"]) + [True])
+
+
+def _values_text(values: Mapping[str, Any]) -> str:
+    return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
+
+
+def _margin_text(margin: Any, binds_at: Any) -> str:
+    return "no check to bind" if margin is None else (
+        f"margin {100 * float(margin):+.1f} % at {binds_at}")
+
+
+def _scenarios_table(summary: Mapping[str, Any], paths: list[str]) -> Table:
+    """Every scenario of ``check --scenarios``: values, seed, verdicts, margin, what binds."""
+    b = summary["binding"]["index"]
+    cols = ["", "#", *paths, "seed", "reaching", "holds", "with confidence", "margin",
+            "binds at"]
+    rows, marks = [], []
+    for p in summary["scenarios"]:
+        prot = p.get("protect")
+        rows.append(["*" if p["index"] == b else "", str(p["index"]),
+                     *(str(p["values"].get(k, "-")) for k in paths), str(p["seed"]),
+                     "-" if not prot else f"{prot['reaching']:,}",
+                     "yes" if p["ok"] else "FAILS",
+                     "yes" if p["holds_with_confidence"] else "no",
+                     "-" if p["margin"] is None else f"{100 * p['margin']:+.1f} %",
+                     str(p["binds_at"] or "-")])
+        marks.append(p["index"] == b)
+    return Table(f"Scenarios: {summary['of']}, each with its own rocks "
+                 f"({int(summary['rocks']):,} rocks, its own seed)", cols, rows,
+                 note="* the binding scenario (the one that decides the count required; with every "
+                 "scenario required, the least margin). holds: every check and the "
+                 "residual on the point values, as check judges them; with confidence: with "
+                 "the confidence bounds in place. margin: the smallest relative slack of a "
+                 "check or of the residual with the confidence bounds in place, negative "
+                 "where it fails. reaching: rocks reaching the protected zone.",
+                 highlight=marks)
