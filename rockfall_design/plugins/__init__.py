@@ -2,8 +2,10 @@
 
 Rooms:
 
-* :mod:`~rockfall_design.plugins.manager`: find, load, check and register
-  the plugins (:func:`load_registry`, :class:`Registry`);
+* :mod:`~rockfall_design.plugins.discovery`: find, load, check and register
+  the plugins (:func:`load_registry`);
+* :mod:`~rockfall_design.plugins.manager`: the :class:`Registry` and the
+  guard of plugin code;
 * :mod:`~rockfall_design.plugins.contract`: what each plugin method may
   raise and must return, and the checks of a footprint;
 * :mod:`~rockfall_design.plugins.proxy`: typed, guarded calls into plugin
@@ -31,14 +33,14 @@ _WHERE = {
     "PluginOrigin": ".manager",
     "Registry": ".manager",
     "UnknownNameError": ".manager",
-    "blocked_provider": ".manager",
+    "blocked_provider": ".discovery",
     "call_plugin": ".proxy",
-    "check_blocked_names": ".manager",
-    "default_registry": ".manager",
+    "check_blocked_names": ".discovery",
+    "default_registry": ".discovery",
     "footprint_problem": ".contract",
     "guard": ".proxy",
     "is_real_interrupt": ".manager",
-    "load_registry": ".manager",
+    "load_registry": ".discovery",
     "plugin_code": ".manager",
     "plugins_json": ".listing",
 }
