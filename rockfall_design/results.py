@@ -4,7 +4,8 @@ Each wraps what a command computed (the run's statistics, the judge's
 evaluation, the optimiser's alternatives) and offers it as a notebook or a
 script wants it: ``.summary`` (as the command's ``--json``), tables as
 pandas DataFrames, figures, the report. :mod:`rockfall_design.api`'s
-functions return them."""
+functions return them.
+"""
 
 from __future__ import annotations
 

@@ -2,7 +2,8 @@
 
 :func:`corridor_summary` adds the sections' JSON objects up (rocks, reaching,
 cost, failures, the binding scenario); the ``_print_*`` functions draw the
-totals in the terminal."""
+totals in the terminal.
+"""
 
 from __future__ import annotations
 

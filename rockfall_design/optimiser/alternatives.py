@@ -3,7 +3,8 @@
 :class:`Alternative` is one family's outcome (its cheapest design that holds,
 or why none does; the marginal and undecided designs cheaper than it),
 :class:`OptimisationResult` a whole search; the constants bound the work of
-one family whatever the driver (one section or the scenarios of a study)."""
+one family whatever the driver (one section or the scenarios of a study).
+"""
 
 from __future__ import annotations
 

@@ -3,7 +3,8 @@
 What a candidate may be built from (:class:`CandidateSpec`, its catalogue
 :class:`Product`s), resolved against the measure's plugin (its declared
 design variables), and one measure built from the values the optimiser
-picked (:func:`build_candidate_measure`)."""
+picked (:func:`build_candidate_measure`).
+"""
 
 from __future__ import annotations
 

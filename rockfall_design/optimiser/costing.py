@@ -3,7 +3,8 @@
 Before any search every candidate's sample design is priced
 (:func:`_check_prices`): a quantity the cost catalogue does not price is an
 error at ``design.costs``; then :func:`design_cost` prices the designs of
-the search and :func:`design_bill` itemises the chosen one."""
+the search and :func:`design_bill` itemises the chosen one.
+"""
 
 from __future__ import annotations
 

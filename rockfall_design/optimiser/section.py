@@ -5,7 +5,8 @@ the screening cannot reject (sequentially, :mod:`.decide`), verifies the
 first admitted one on fresh rocks and reports the marginal and undecided
 designs cheaper than it. The loop over the families is
 :func:`~rockfall_design.optimiser.alternatives.search_families`, shared with
-the scenarios' driver (:mod:`.across`)."""
+the scenarios' driver (:mod:`.across`).
+"""
 
 from __future__ import annotations
 

@@ -4,7 +4,8 @@
 cannot take the program down), checks its hooks (a misspelt or unmarked hook
 is named), calls every hook implementation on its own, validates the classes
 and refuses two claims of one name; :func:`default_registry` is the one the
-commands use."""
+commands use.
+"""
 
 from __future__ import annotations
 

@@ -2,7 +2,8 @@
 
 Each function reads what a command prints with ``--json`` (and the project
 and plugins it ran with) and returns a :class:`Table` or a text for the
-templates of :mod:`.documents`; numbers are formatted here, once."""
+templates of :mod:`.documents`; numbers are formatted here, once.
+"""
 
 from __future__ import annotations
 

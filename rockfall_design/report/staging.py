@@ -4,7 +4,8 @@ Each file of an output set is written to a temporary file in its target's
 directory (:class:`_TargetFile`), synced, and renamed into place with the
 others while Ctrl-C and SIGTERM are held (:func:`_swap_in`); the manifest of
 every directory says which files this program wrote, so that only those are
-ever replaced or removed, and no input of the run is overwritten."""
+ever replaced or removed, and no input of the run is overwritten.
+"""
 
 from __future__ import annotations
 

@@ -65,8 +65,9 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
 from starlette.routing import Route
 
+from .guards import MAX_BODY_BYTES, ServeError
 from .reports import media_type
-from .workbench import MAX_BODY_BYTES, ProjectEntry, ServeError
+from .workbench import ProjectEntry
 
 #: Name of the cookie that carries the token after the first request.
 COOKIE = "rockfall_design_token"
@@ -445,7 +446,7 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
 
 
 def _inside(e: ProjectEntry, name: str) -> Any:
-    from .workbench import inside
+    from .guards import inside
 
     return inside(e.directory, name)
 

@@ -15,14 +15,9 @@ milliseconds, without running a rock again.
 
 from __future__ import annotations
 
-import math
-import os
 import re
-import tempfile
 import threading
 import time
-import uuid
-import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,325 +25,35 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .bench import Bench, _placed_message, build_bench
+from .guards import (
+    MAX_BODY_BYTES,
+    UPLOAD_SUFFIXES,
+    ServeError,
+    _library_comments,
+    _write_atomically,
+    inside,
+    referenced_outside,
+)
+from .job_tables import _plain, calibration_tables, study_tables
+from .jobs import Cancelled, Job
+
 if TYPE_CHECKING:  # pragma: no cover
-    from ..optimiser.screening import Screening
     from ..plugins import Registry
     from ..project import Project
 
-#: Spacing (m) of the table stations along the whole section. A placed
-#: barrier is judged at the table station nearest to it; 1 m keeps a table of
-#: 10,000 rocks on a 300 m section near 75 MB.
-TABLE_STEP_M = 1.0
-
-#: Spacing (m) of the restart stations, where every rock's full state is kept
-#: so that a ditch or berm re-runs only the rocks from the station above it
-#: (14 numbers per rock and station: 10,000 rocks on 300 m near 35 MB).
-RESTART_STEP_M = 10.0
-
-#: Largest request body (bytes): a project file or a section to import.
-MAX_BODY_BYTES = 1_000_000
-
-#: Files that may be imported into a project's directory.
-UPLOAD_SUFFIXES = (".csv", ".dxf", ".yaml", ".yml")
 
 #: Most rocks one run of the app may have (the table holds rocks x stations).
 MAX_RUN_ROCKS = 50_000
-
-#: Rocks whose paths are drawn on the section (the first rocks of the run).
-PATHS_DRAWN = 40
-
-#: Bins of the where-rocks-stop histogram along the section.
-STOP_BINS = 120
-
-# A string in a project that names a file: no blanks, and a path separator
-# or a file extension the project format reads.
-_FILE_LIKE = re.compile(r"^[^\s]*(/|\\|\.(ya?ml|csv|dxf|json|txt))[^\s]*$", re.IGNORECASE)
-
-
-class ServeError(Exception):
-    """A request the app refuses: an HTTP status and one line saying why."""
-
-    def __init__(self, status: int, message: str) -> None:
-        super().__init__(message)
-        self.status = int(status)
-        self.message = message
-
-
-class Cancelled(Exception):
-    """Raised from a run's progress callback when its job was cancelled."""
 
 
 # ---- paths --------------------------------------------------------------------------
 
 
-def inside(base: Path, name: str) -> Path:
-    """``name`` resolved against ``base``, refused unless it stays inside ``base``.
-
-    Symbolic links are followed before the check, so a link that points out
-    of the directory is refused as well.
-
-    Raises
-    ------
-    ServeError
-        403 if the path leaves ``base``; 400 if it is empty or malformed.
-    """
-    if not isinstance(name, str) or not name.strip() or "\x00" in name:
-        raise ServeError(400, "path: expected a file name inside the project's directory")
-    root = base.resolve()
-    target = (root / name).resolve()
-    if not target.is_relative_to(root):
-        raise ServeError(403, f"path {name!r} lies outside the project's directory ({root})")
-    return target
-
-
-def referenced_outside(text: str, base: Path, root: Path) -> str | None:
-    """The first string of a project's YAML that names a file outside ``root``, or None.
-
-    A project names its survey section, materials library and catalogues as
-    paths relative to its own directory ``base``; an edited project must not
-    make the app read anything outside the project's directory ``root``.
-    The YAML is composed, not constructed, and every node visited once, so
-    that aliases cannot multiply the work (the loader's own limits come
-    after this check).
-    """
-    import yaml
-
-    try:
-        node = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
-        return None  # the project loader says where and why
-    seen: set[int] = set()
-    todo = [node] if node is not None else []
-    root = root.resolve()
-    while todo:
-        n = todo.pop()
-        if id(n) in seen:
-            continue
-        seen.add(id(n))
-        if isinstance(n, yaml.ScalarNode):
-            value = n.value
-            if isinstance(value, str) and _FILE_LIKE.match(value):
-                target = (base / value).resolve()
-                if not target.is_relative_to(root):
-                    return value
-        elif isinstance(n, yaml.SequenceNode):
-            todo.extend(n.value)
-        elif isinstance(n, yaml.MappingNode):
-            for k, v in n.value:
-                todo.extend((k, v))
-    return None
-
-
 # ---- jobs ---------------------------------------------------------------------------
 
 
-@dataclass
-class Job:
-    """Work in a background thread: progress, cancel, and its result or error.
-
-    ``kind`` is ``simulate``, ``check``, ``optimise``, ``study`` or
-    ``calibrate``; ``stage`` the optimiser's stage (``search``, ``check``);
-    ``result`` the JSON-ready answer of a finished check, optimise, study or
-    calibration (their ``--json`` summaries), ``tables`` what the page shows
-    of a study or calibration (``title``, ``columns``, ``rows``) and
-    ``files`` what it offers for download (``design.yaml``, ``report.html``
-    as ``--report`` writes it, and the figures as PNG and SVG, drawn on the
-    first request).
-    """
-
-    kind: str
-    total: int
-    id: str = field(default_factory=lambda: uuid.uuid4().hex[:12])
-    done: int = 0
-    stage: str = ""
-    state: str = "running"  # running, done, cancelled, failed
-    error: str = ""
-    result: dict[str, Any] | None = None
-    files: dict[str, Any] = field(default_factory=dict)  # text, bytes, or a loader of bytes
-    tables: list[dict[str, Any]] = field(default_factory=list)
-    started: float = field(default_factory=time.monotonic)
-    runtime_s: float = 0.0
-    cancel_event: threading.Event = field(default_factory=threading.Event)
-
-    def progress(self, done: int) -> None:
-        """Record ``done`` rocks; stop the run if the job was cancelled."""
-        self.done = int(done)
-        if self.cancel_event.is_set():
-            raise Cancelled
-
-    def staged(self, stage: str, done: int, total: int) -> None:
-        """The optimiser's progress (``stage``, ``done`` of ``total``); stop if cancelled."""
-        self.stage, self.total = stage, int(total)
-        self.progress(done)
-
-    def as_dict(self) -> dict[str, Any]:
-        return {"id": self.id, "kind": self.kind, "state": self.state, "done": self.done,
-                "total": self.total, "stage": self.stage, "error": self.error,
-                "runtime_s": round(self.runtime_s or time.monotonic() - self.started, 3),
-                "result": self.result, "files": sorted(self.files),
-                "tables": self.tables}
-
-
 # ---- a run's table and what is placed on it -------------------------------------
-
-
-def _finite_percentiles(a: np.ndarray, qs: Sequence[float]) -> dict[str, list[float | None]]:
-    """Per column of ``a`` (rocks x stations): the percentiles and maximum of its finite values."""
-    a = np.where(np.isfinite(a), a, np.nan)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # columns no rock passed
-        p = np.nanpercentile(a, list(qs), axis=0) if a.shape[0] else np.full((len(qs), 0), np.nan)
-        mx = np.nanmax(a, axis=0) if a.shape[0] else np.zeros(0)
-    out = {f"p{q:g}": _json_list(p[i]) for i, q in enumerate(qs)}
-    out["max"] = _json_list(mx)
-    return out
-
-
-def _p95_bounds(a: np.ndarray, confidence: float) -> list[list[float | None]]:
-    """Per column of ``a``: [lower, upper] confidence bound of the 95th percentile of its
-    finite values (None where too few rocks passed to bound it)."""
-    from ..judge.bounds import quantile_lower_bound, quantile_upper_bound
-
-    out = []
-    for j in range(a.shape[1]):
-        v = a[:, j]
-        v = v[np.isfinite(v)]
-        lo = quantile_lower_bound(v, 0.95, confidence) if v.size else None
-        hi = quantile_upper_bound(v, 0.95, confidence) if v.size else None
-        out.append([_num(lo), _num(hi)])
-    return out
-
-
-def _json_list(v: np.ndarray) -> list[float | None]:
-    return [None if not math.isfinite(float(x)) else round(float(x), 4) for x in v]
-
-
-def _num(v: float | None) -> float | None:
-    return None if v is None or not math.isfinite(float(v)) else float(v)
-
-
-@dataclass
-class Bench:
-    """One finished run: the screening table and what the page draws from it."""
-
-    screening: Screening
-    rocks: int
-    seed: int
-    runtime_s: float
-    envelopes: dict[str, Any]
-    stops: dict[str, Any]
-    paths: list[list[list[float]]]
-
-    def place(self, entry: ProjectEntry, raws: Sequence[Any]) -> dict[str, Any]:
-        """Judge fences and walls at the given stations from the table.
-
-        Parameters
-        ----------
-        entry
-            The project the run belongs to.
-        raws
-            Measures as the project file writes them (``{"type": "fence",
-            "x": 120, "height": 5, "capacity_kj": 2000}``); barriers only.
-
-        Returns
-        -------
-        dict
-            ``measures`` (label, station used, counts, checks with their
-            bounds), ``residual`` (rocks reaching the protected zone with
-            the Clopper-Pearson bounds and the target), ``admitted`` and
-            ``rejected`` as the optimiser's screening decides them, and
-            ``elapsed_ms``.
-
-        Raises
-        ------
-        ServeError
-            400 for a measure the plugins reject or one that does not fit.
-
-        Notes
-        -----
-        A ditch or berm (a measure that reshapes the ground) is judged by
-        running again only the rocks that pass the restart station just
-        above it, from their saved state, on the edited ground (the
-        screening's own way, cached per shape and place): a fraction of a
-        second, so the page sends it when the measure is let go, not on
-        every move (``reshapes_ground`` in the answer says so).
-        """
-        from ..errors import ProjectError
-        from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
-        from ..judge.placing import edited_section, place_measures
-        from ..plugins.measure import Barrier, ProfileEdit
-
-        t0 = time.perf_counter()
-        sc = self.screening
-        measures = [entry.build_measure(raw, i) for i, raw in enumerate(raws)]
-        try:
-            placed = place_measures(entry.project, entry.registry, measures, sc.section)
-        except ProjectError as exc:
-            raise ServeError(400, _placed_message(exc.message)) from None
-        edits = [p.footprint for p in placed if isinstance(p.footprint, ProfileEdit)]
-        table = sc.bare
-        if edits:
-            try:
-                # The screening's table for edited ground (its private helper: the
-                # one place that resumes rocks at a restart station).
-                table = sc._table_for(edits, edited_section(entry.project, sc.section, placed))
-            except ValueError as exc:
-                raise ServeError(400, f"{' + '.join(p.label for p in placed)}: {exc}") from None
-        cost = math.nan
-        if sc.spec.cost_model is not None:
-            try:
-                cost = sc.cost([p.measure for p in placed])
-            except (KeyError, ValueError):
-                cost = math.nan  # the cost model has no price for it: shown as unknown
-        res = sc.screen_placed(placed, table, cost)
-        n = sc.n
-        out_measures = []
-        for p, r, checks in zip(placed, res.results, res.checks, strict=True):
-            fp = p.footprint
-            x = float(fp.x) if isinstance(fp, Barrier) else float(fp.x_start)
-            out_measures.append({
-                "index": p.index, "label": p.label, "type": raws[p.index]["type"],
-                "x": x, "x_table": float(sc.grid[sc.station(x)]),
-                "reshapes_ground": not isinstance(fp, Barrier),
-                "met": int(r.met), "caught": int(r.caught), "passed_over": int(r.passed_over),
-                "broken_through": int(r.broken_through), "rebounded": int(r.rebounded),
-                "checks": [_check_dict(c) for c in checks],
-                "ok": all(c.ok for c in checks),
-            })
-        reaching = int(res.residual)
-        residual = {
-            "reaching": reaching, "rocks": n, "fraction": reaching / n if n else 0.0,
-            "upper_bound": fraction_upper_bound(reaching, n, sc.confidence),
-            "lower_bound": fraction_lower_bound(reaching, n, sc.confidence),
-            "allowed_fraction": sc.allowed_fraction, "allowed": sc.allowed_residual,
-            "confidence": sc.confidence, "x": sc.protect_x,
-            # Without protect: in the project, the foot of the section stands in.
-            "protected_zone": entry.project.protect is not None,
-        }
-        residual["ok"] = reaching <= sc.allowed_residual
-        residual["ok_with_confidence"] = residual["upper_bound"] <= sc.allowed_fraction
-        return {
-            "measures": out_measures, "residual": residual,
-            "admitted": bool(res.feasible), "near": bool(res.near),
-            "rejected": not res.feasible and not res.near,
-            "approximate": bool(res.approximate), "cost": _num(cost),
-            "reshapes_ground": bool(edits),
-            "rerun_rocks": int(table.rows.size) if table.rows is not None else 0,
-            "elapsed_ms": round((time.perf_counter() - t0) * 1e3, 3),
-        }
-
-
-def _placed_message(message: str) -> str:
-    """A placement error without the project file's line: the measure is the page's."""
-    return re.sub(r"^.*?:\d+: ", "", message)
-
-
-def _check_dict(c: Any) -> dict[str, Any]:
-    d = c.as_dict()
-    for k in ("value", "target", "bound", "optimistic"):
-        d[k] = _num(d.get(k))
-    d["holds_with_confidence"] = bool(c.holds_with_confidence)
-    return d
 
 
 # ---- one project ------------------------------------------------------------------
@@ -868,174 +573,6 @@ class ProjectEntry:
         except RockfallError as exc:
             raise ServeError(400, " ".join(str(exc).split())) from None
         return project
-
-
-def study_tables(res: Any) -> list[dict[str, Any]]:
-    """A study's scenarios (the varied values and the statistics at every station,
-    without their bounds) and its sensitivity, as tables for the page."""
-    sc = res.scenarios
-    cols = [c for c in sc.columns if c != "seed" and not str(c).endswith((" upper", " lower"))]
-    sens = res.sensitivity
-    scols = [c for c in ("parameter", "target", "effect", "unit", "low", "high", "resolved")
-             if c in sens.columns]
-    return [_table("Scenarios", sc[cols]), _table("Sensitivity", sens[scols])]
-
-
-def calibration_tables(summary: dict[str, Any]) -> list[dict[str, Any]]:
-    """A calibration's fitted values with their bootstrap intervals, and its fit."""
-    rows = [[p["path"], p["value"], p["low"], p["high"], p["range"], p["identified"],
-             p.get("at_bound") or ""] for p in summary["parameters"]]
-    fit = summary["fit"]
-    fit_rows = [[k, fit[k]] for k in ("distance_kind", "distance", "ks_statistic", "ks_pvalue")
-                if k in fit]
-    return [{"title": "Fitted inputs", "rows": _plain(rows),
-             "columns": ["input", "value", "low", "high", "range", "identified", "at bound"]},
-            {"title": "Fit", "columns": ["item", "value"], "rows": _plain(fit_rows)}]
-
-
-def _table(title: str, frame: Any) -> dict[str, Any]:
-    rows = [[_cell(v) for v in row] for row in frame.itertuples(index=False)]
-    return {"title": title, "columns": [str(c) for c in frame.columns], "rows": rows}
-
-
-def _cell(v: Any) -> Any:
-    if isinstance(v, np.generic):
-        v = v.item()
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    return _plain(v)
-
-
-def _library_comments(text: str) -> dict[str, str]:
-    """Each library entry's ``# source:`` comment line (the bundled library's convention)."""
-    out: dict[str, str] = {}
-    source = ""
-    for line in text.splitlines():
-        m = re.match(r"#\s*source:\s*(.*)$", line)
-        if m:
-            source = m.group(1).strip()
-            continue
-        m = re.match(r"([A-Za-z0-9_][^:#\s]*)\s*:", line)
-        if m:
-            if source:
-                out[m.group(1)] = source
-            source = ""
-    return out
-
-
-def _write_atomically(target: Path, text: str) -> None:
-    """Write ``text`` to ``target`` in one step: a reader sees the old file or the new one."""
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
-def _plain(v: Any) -> Any:
-    if isinstance(v, dict):
-        return {str(k): _plain(x) for k, x in v.items()}
-    if isinstance(v, list | tuple):
-        return [_plain(x) for x in v]
-    if isinstance(v, float | int | str | bool) or v is None:
-        return v
-    return str(v)
-
-
-def default_spec(project: Project, registry: Registry) -> Any:
-    """The project's design section, or targets alone for a project without one.
-
-    Without ``design:`` no rock may reach the protected zone (a count of 0)
-    and nothing is priced.
-    """
-    from ..optimiser.design_spec import DesignSpec, resolve_design
-
-    if project.design is not None:
-        return resolve_design(project, registry)
-    return DesignSpec(max_measures=4, residual_count=0, residual_fraction=None,
-                      fresh_rocks=None, fresh_seed=None, length_m=1.0, candidates=(),
-                      cost_model=None, products={})
-
-
-def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
-                progress: Callable[[int], None] | None = None) -> Bench:
-    """Run the rocks on the bare slope once and keep the screening table.
-
-    Parameters
-    ----------
-    project, registry
-        The project and its plugins.
-    rocks, seed
-        Rocks of the run and its seed (the same rocks as ``simulate`` and
-        the optimiser's screening draw for this seed).
-    progress
-        Called with the rocks done; an exception it raises stops the run.
-    """
-    from ..engine import Releases, run_ensemble
-    from ..engine.columns import STOPPED
-    from ..engine.trajectory import centre_points
-    from ..judge.placing import build_concept
-    from ..optimiser.screening import Screening
-    from ..run.releases import section_from_project
-
-    section = section_from_project(project)
-    x0, x1 = float(section.x[0]), float(section.x[-1])
-    stations = np.arange(x0, x1 + 1e-9, TABLE_STEP_M)
-    judged = project
-    if project.protect is None:
-        # The screening counts rocks reaching a protected zone; without one,
-        # the foot of the section stands in (the page says there is none).
-        from ..project.schema import Protect
-
-        judged = project.model_copy(update={"protect": Protect(x=x1)})
-    t0 = time.perf_counter()
-    sc = Screening(judged, registry, default_spec(project, registry),
-                   build_concept(project, registry), rocks=rocks, seed=seed,
-                   stations=stations, rock_progress=progress,
-                   restart_stations=np.arange(x0, x1 + 1e-9, RESTART_STEP_M))
-    runtime = time.perf_counter() - t0
-    qs = sorted({50.0, 95.0, *[float(q) for q in project.analysis.percentiles]})
-    t = sc.bare
-    ground = section.ground_height(sc.grid)
-    envelopes = {
-        "x": [round(float(v), 4) for v in sc.grid],
-        "ground": _json_list(ground),
-        "crossings": [int(c) for c in np.isfinite(t.h).sum(axis=0)],
-        "height": _finite_percentiles(t.h, qs),
-        "energy": _finite_percentiles(t.e_kj, qs),
-        "percentiles": [f"p{q:g}" for q in qs],
-        # The 95th percentile's distribution-free bounds at the project's
-        # confidence (the judge's order statistics), for the hover.
-        "confidence": sc.confidence,
-        "height_p95_bounds": _p95_bounds(t.h, sc.confidence),
-        "energy_p95_bounds": _p95_bounds(t.e_kj, sc.confidence),
-    }
-    stopped = t.status == STOPPED
-    counts, edges = np.histogram(t.x_end[stopped], bins=STOP_BINS, range=(x0, x1))
-    reach = 0
-    if project.protect is not None:
-        from ..run.reach import reaches_protected_zone
-
-        reach = int(reaches_protected_zone(t.max_x, t.status, float(project.protect.x)).sum())
-    stops = {"edges": [round(float(e), 4) for e in edges], "counts": counts.tolist(),
-             "stopped": int(stopped.sum()), "reaching": reach,
-             "p95_x": _num(float(np.percentile(t.x_end[stopped], 95))) if stopped.any() else None}
-    # The first rocks' paths, from the same random streams (rock i draws from
-    # stream i of the run's key): the rocks of the table, drawn.
-    k = min(PATHS_DRAWN, rocks)
-    rel = sc.releases
-    sub = Releases(radius=rel.radius[:k], density=rel.density, x=rel.x[:k],
-                   height=rel.height[:k], vx=rel.vx[:k], vy=rel.vy[:k], spin=rel.spin[:k],
-                   spin_rolling=rel.spin_rolling[:k])
-    tr = run_ensemble(section, sub, key=sc.key, settings=sc.settings, n_trajectories=k)
-    paths = []
-    for traj in tr.trajectories:
-        px, py = centre_points(traj, 12)
-        paths.append(np.column_stack([px, py]).round(3).tolist())
-    return Bench(sc, rocks, seed, runtime, envelopes, stops, paths)
 
 
 def load_entries(paths: Sequence[Path], registry: Registry) -> list[ProjectEntry]:

@@ -3,7 +3,8 @@
 Every scenario of the project's ``study:`` section is checked with its own
 rocks (its values set, its own seed, as ``rockfall-design study`` runs it),
 on this process or on the study's executors; the command's printing, files
-and report are in :mod:`rockfall_design.cli.scenario_commands`."""
+and report are in :mod:`rockfall_design.cli.scenario_commands`.
+"""
 
 from __future__ import annotations
 

@@ -17,12 +17,9 @@ import rockfall_design as rd  # noqa: E402
 from rockfall_design.cli.program import main  # noqa: E402
 from rockfall_design.judge.placing import place_measures
 from rockfall_design.serve.app import COOKIE, create_app  # noqa: E402
-from rockfall_design.serve.workbench import (  # noqa: E402
-    MAX_BODY_BYTES,
-    TABLE_STEP_M,
-    default_spec,
-    load_entries,
-)
+from rockfall_design.serve.bench import TABLE_STEP_M, default_spec
+from rockfall_design.serve.guards import MAX_BODY_BYTES
+from rockfall_design.serve.workbench import load_entries
 
 TOKEN = "test-token-0123456789"
 ROCKS = 1500

@@ -1,0 +1,57 @@
+"""Tables a job's page shows: a study's and a calibration's, as plain JSON rows."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+if TYPE_CHECKING:  # pragma: no cover
+    pass
+
+
+def study_tables(res: Any) -> list[dict[str, Any]]:
+    """A study's scenarios (the varied values and the statistics at every station,
+    without their bounds) and its sensitivity, as tables for the page."""
+    sc = res.scenarios
+    cols = [c for c in sc.columns if c != "seed" and not str(c).endswith((" upper", " lower"))]
+    sens = res.sensitivity
+    scols = [c for c in ("parameter", "target", "effect", "unit", "low", "high", "resolved")
+             if c in sens.columns]
+    return [_table("Scenarios", sc[cols]), _table("Sensitivity", sens[scols])]
+
+
+def calibration_tables(summary: dict[str, Any]) -> list[dict[str, Any]]:
+    """A calibration's fitted values with their bootstrap intervals, and its fit."""
+    rows = [[p["path"], p["value"], p["low"], p["high"], p["range"], p["identified"],
+             p.get("at_bound") or ""] for p in summary["parameters"]]
+    fit = summary["fit"]
+    fit_rows = [[k, fit[k]] for k in ("distance_kind", "distance", "ks_statistic", "ks_pvalue")
+                if k in fit]
+    return [{"title": "Fitted inputs", "rows": _plain(rows),
+             "columns": ["input", "value", "low", "high", "range", "identified", "at bound"]},
+            {"title": "Fit", "columns": ["item", "value"], "rows": _plain(fit_rows)}]
+
+
+def _table(title: str, frame: Any) -> dict[str, Any]:
+    rows = [[_cell(v) for v in row] for row in frame.itertuples(index=False)]
+    return {"title": title, "columns": [str(c) for c in frame.columns], "rows": rows}
+
+
+def _cell(v: Any) -> Any:
+    if isinstance(v, np.generic):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return _plain(v)
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {str(k): _plain(x) for k, x in v.items()}
+    if isinstance(v, list | tuple):
+        return [_plain(x) for x in v]
+    if isinstance(v, float | int | str | bool) or v is None:
+        return v
+    return str(v)
