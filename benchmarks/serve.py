@@ -46,8 +46,8 @@ def stats(ms: list[float]) -> str:
 
 def in_process(rocks: int, moves: int) -> None:
     from rockfall_design.plugins import load_registry
-    from rockfall_design.serve.workbench import load_entries
     from rockfall_design.serve.bench import build_bench
+    from rockfall_design.serve.workbench import load_entries
 
     registry = load_registry()
     (entry,) = load_entries([PROJECT], registry)

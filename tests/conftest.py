@@ -1,7 +1,7 @@
 """Fixtures shared by the whole suite.
 
 The suite mirrors the package: ``tests/engine``, ``tests/project``,
-``tests/judge``, ``tests/optimise``, ``tests/plugins``, ``tests/study`` and
+``tests/judge``, ``tests/optimiser``, ``tests/plugins``, ``tests/studies`` and
 ``tests/cli`` test the rooms of the same names; the tests at this level take
 the product as a user meets it (the public API, the bundled projects, the
 README, the notebook). Helpers that tests import live beside this file

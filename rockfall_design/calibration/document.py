@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..report.documents import MODEL_LIMITS
-from ..report.sections import Table, _inputs
+from ..report.sections import Table, inputs_table
 from ..version import __version__
 
 __all__ = ["CALIBRATION_LIMITS", "report_context"]
@@ -279,7 +279,7 @@ def report_context(result: Any,
     verdict, state = _verdict(result, command, warnings)
     # What was simulated: the project as fitted (observed sizes set, measures left out).
     resolved = result.problem.base if calibrated else None
-    inputs = _inputs(project, command, resolved)
+    inputs = inputs_table(project, command, resolved)
     inputs += _observed_tables(result)
     results: list[Table] = []
     if calibrated:

@@ -240,9 +240,9 @@ def load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
     if run.get("version") != __version__:
         sys.stderr.write(f"{PROG}: warning: {path} was written by version "
                          f"{run.get('version')}, this is {__version__}\n")
-    from ..project.messages import _unquoted
+    from ..project.messages import unquoted
 
-    with _unquoted():  # a value of the recorded project is not quoted back either
+    with unquoted():  # a value of the recorded project is not quoted back either
         project = load_project_text(text, f"{path} (run.project)")
     args.seed = seed if args.seed is None else args.seed
     args.rocks = rocks if args.rocks is None else args.rocks

@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExitCode
-from ..studies.scenario_checks import _values_text, check_across
+from ..studies.scenario_checks import check_across, values_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..optimiser.across import AcrossResult
@@ -63,7 +63,7 @@ def print_check_across(summary: dict[str, Any]) -> None:
                       ("binds at", "left")):
         table.add_column(col, justify=just)
     for p in summary["scenarios"]:
-        table.add_row(str(p["index"]), _values_text(p["values"]), str(p["seed"]),
+        table.add_row(str(p["index"]), values_text(p["values"]), str(p["seed"]),
                       "yes" if p["ok"] else "NO", "yes" if p["holds_with_confidence"] else "no",
                       "-" if p["margin"] is None else f"{100 * p['margin']:+.1f} %",
                       p["binds_at"] or "-",
@@ -78,7 +78,7 @@ def print_check_across(summary: dict[str, Any]) -> None:
                   f"run seed {summary['seed']}", style="bold", markup=False, highlight=False)
     console.print(table)
     b = summary["binding"]
-    console.print(f"Binding scenario {b['index']} ({_values_text(b['values'])}): "
+    console.print(f"Binding scenario {b['index']} ({values_text(b['values'])}): "
                   + ("no check to bind" if b["margin"] is None else
                      f"margin {100 * b['margin']:+.1f} % at {b['binds_at']}"),
                   markup=False, highlight=False)
@@ -200,7 +200,7 @@ def print_across(result: AcrossResult) -> None:
              f"(design.scenarios share {block['share']:g}), each with its own rocks."]
     if result.best is not None and block["binding"] is not None:
         b = block["binding"]
-        lines.append(f"Binding scenario {b['index']} ({_values_text(b['values'])}, seed "
+        lines.append(f"Binding scenario {b['index']} ({values_text(b['values'])}, seed "
                      f"{b['seed']}): " + ("no check to bind" if b["margin"] is None else
                                           f"margin {100 * b['margin']:+.1f} % at "
                                           f"{b['binds_at']}"))
@@ -242,7 +242,7 @@ def across_design_yaml(result: AcrossResult, project_file: Path | str,
         "of the study.\n"
         f"# Each scenario has its own rocks: seeds derived from rocks.seed ({result.seed}); "
         f"rocks.count is the most rocks that decided it in a scenario.\n"
-        f"# binding scenario {b['index']} ({_values_text(b['values'])}): "
+        f"# binding scenario {b['index']} ({values_text(b['values'])}): "
         + ("no check to bind" if b["margin"] is None else
            f"margin {100 * b['margin']:+.1f} % at {b['binds_at']}") + "\n"
         "# verification: each scenario's fresh rocks (its seed + 1000003, twice its rocks) "

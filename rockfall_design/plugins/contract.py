@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from .concept import Check
-from .manager import _SECTIONS
+from .manager import SECTIONS
 from .measure import Barrier, BarrierBehaviour, ProfileEdit, Quantity
 
 
@@ -106,7 +106,7 @@ _NOUN = {"measure": "measure", "safety": "safety concept", "cost": "cost model"}
 def _identify(plugin: Any) -> tuple[str, str]:
     """``(provider key, name)`` of a measure, safety concept or cost model (class or object)."""
     cls = plugin if inspect.isclass(plugin) else type(plugin)
-    for _section, _what, _hook, base, name_attr, key in _SECTIONS:
+    for _section, _what, _hook, base, name_attr, key in SECTIONS:
         if issubclass(cls, base):
             return key, str(getattr(cls, name_attr, "?"))
     raise TypeError(f"{cls.__qualname__} is not a measure, safety concept or cost model")

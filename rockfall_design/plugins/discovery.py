@@ -27,8 +27,8 @@ from ..errors import PluginError
 from . import hookspecs
 from .manager import (
     _NAME_RE,
-    _SECTIONS,
     _SELECTOR_KEY,
+    SECTIONS,
     PluginFailure,
     PluginOrigin,
     Registry,
@@ -280,7 +280,7 @@ class _Loader:
         the plugin's own.
         """
         found: dict[str, dict[str, list[tuple[_Plugin, type]]]] = {}
-        for section, _what, hook_name, base, name_attr, _key in _SECTIONS:
+        for section, _what, hook_name, base, name_attr, _key in SECTIONS:
             claims = found.setdefault(section, {})
             for impl in getattr(self.pm.hook, hook_name).get_hookimpls():
                 plugin = self.plugins.get(impl.plugin_name)
@@ -324,7 +324,7 @@ class _Loader:
         """The registry of what was collected; two claims of one name are an error."""
         found = self.collect()
         duplicates = []
-        for section, what, _hook, _base, _attr, _key in _SECTIONS:
+        for section, what, _hook, _base, _attr, _key in SECTIONS:
             for name, entries in sorted(found[section].items()):
                 if len(entries) > 1:
                     who = sorted(
@@ -342,7 +342,7 @@ class _Loader:
         tables: dict[str, dict[str, type]] = {}
         provider: dict[tuple[str, str], str] = {}
         origins: dict[tuple[str, str], PluginOrigin] = {}
-        for section, _what, _hook, _base, _attr, key in _SECTIONS:
+        for section, _what, _hook, _base, _attr, key in SECTIONS:
             tables[section] = {}
             for name, [(plugin, cls)] in sorted(found[section].items()):
                 tables[section][name] = cls
@@ -362,7 +362,7 @@ class _Loader:
 
 
 def _hook_names() -> list[str]:
-    return [section[2] for section in _SECTIONS]
+    return [section[2] for section in SECTIONS]
 
 
 def _hook_hint(unknown: list[str]) -> str:
@@ -445,7 +445,7 @@ def check_blocked_names(names: Iterable[str]) -> None:
         distributions: ...)``, with "did you mean".
     """
     from ..errors import InputError
-    from ..project.messages import _did_you_mean
+    from ..project.messages import did_you_mean
 
     eps = _entry_points(None)
     plugins = sorted({ep.name for ep in eps})
@@ -453,7 +453,7 @@ def check_blocked_names(names: Iterable[str]) -> None:
     known = {_normalise(n) for n in (*plugins, *dists)}
     for name in names:
         if _normalise(name) not in known:
-            hint = _did_you_mean(name, [*plugins, *dists])
+            hint = did_you_mean(name, [*plugins, *dists])
             raise InputError(
                 f"--block {name}: no installed plugin has this name{hint} (plugins: "
                 f"{', '.join(plugins) or 'none'}; distributions: {', '.join(dists) or 'none'})")

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from .manager import _SECTIONS, Registry, log
+from .manager import SECTIONS, Registry, log
 
 
 def _parameter_names(cls: type) -> list[str]:
@@ -20,7 +20,7 @@ def _parameter_names(cls: type) -> list[str]:
         return list(params.model_fields)
 
 
-def _parameter_list(cls: type) -> list[dict[str, Any]]:
+def parameter_list(cls: type) -> list[dict[str, Any]]:
     """The described parameters of a class; an empty list if its model cannot be read."""
     from .parameters import describe_parameters
 
@@ -57,7 +57,7 @@ def plugins_json(registry: Registry) -> dict[str, Any]:
     for a bound the project supplies.
     """
     out: dict[str, Any] = {}
-    for section, _what, _hook, _base, name_attr, key in _SECTIONS:
+    for section, _what, _hook, _base, name_attr, key in SECTIONS:
         entries = []
         for name, cls in getattr(registry, section).items():
             origin = registry.origins.get((key, name))
@@ -68,7 +68,7 @@ def plugins_json(registry: Registry) -> dict[str, Any]:
                 "plugin": origin.plugin if origin else None,
                 "distribution": origin.distribution if origin else None,
                 "version": origin.version if origin else None,
-                "parameters": _parameter_list(cls),
+                "parameters": parameter_list(cls),
                 "parameter_names": _parameter_names(cls),
             }
             if section == "measures":

@@ -90,7 +90,7 @@ class UnknownNameError(KeyError):
 
 
 # (registry attribute, what a user calls it, hook, base class, name attribute, provider key)
-_SECTIONS: tuple[tuple[str, str, str, type, str, str], ...] = (
+SECTIONS: tuple[tuple[str, str, str, type, str, str], ...] = (
     ("measures", "measure kind", "rockfall_design_measures", ProtectiveMeasure, "kind",
      "measure"),
     ("safety_concepts", "safety concept", "rockfall_design_safety_concepts", SafetyConcept,

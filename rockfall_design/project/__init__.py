@@ -75,14 +75,14 @@ from .fields import String as String
 from .loading import load_corridor, load_corridor_text, load_project, load_project_text
 from .locator import Locator, params_problem
 from .messages import _ERROR_TYPE as _ERROR_TYPE
-from .messages import _describe as _describe
-from .messages import _did_you_mean as _did_you_mean
 from .messages import _key_text as _key_text
 from .messages import _line_of as _line_of
 from .messages import _message as _message
 from .messages import _options as _options
-from .messages import _to_project_error as _to_project_error
 from .messages import _yaml_path as _yaml_path
+from .messages import describe as describe
+from .messages import did_you_mean as did_you_mean
+from .messages import to_project_error as to_project_error
 from .model import Project
 from .schema import MAX_COORDINATE_M as MAX_COORDINATE_M
 from .schema import MAX_DENSITY as MAX_DENSITY

@@ -25,7 +25,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BeforeValidator, Field, model_validator
 
 from .fields import Integer, String, _as_number, _choice, _Model
-from .messages import _describe, _fail, _fmt
+from .messages import _fail, describe, fmt
 
 #: Most inputs fitted at once: every one costs evaluations, and a few dozen
 #: observed stops cannot pin down more than a handful.
@@ -39,11 +39,11 @@ MAX_BOOTSTRAP = 2_000
 def _interval(value: Any) -> tuple[float, float]:
     """``[lo, hi]`` with lo < hi, both finite numbers."""
     if not isinstance(value, list | tuple) or len(value) != 2:
-        raise _fail(f"expected [lo, hi], got {_describe(value)}")
+        raise _fail(f"expected [lo, hi], got {describe(value)}")
     lo = _as_number(value[0], (0,))
     hi = _as_number(value[1], (1,))
     if not lo < hi:
-        raise _fail(f"expected [lo, hi] with lo < hi, got [{_fmt(lo)}, {_fmt(hi)}]")
+        raise _fail(f"expected [lo, hi] with lo < hi, got [{fmt(lo)}, {fmt(hi)}]")
     return (lo, hi)
 
 

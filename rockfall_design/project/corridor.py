@@ -44,7 +44,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ProjectError
-from .messages import _did_you_mean, _key_text, _line_of, _Lines
+from .messages import _key_text, _line_of, _Lines, did_you_mean
 
 __all__ = ["Corridor", "CorridorSection", "MAX_SECTIONS", "section_seed", "split_sections"]
 
@@ -254,7 +254,7 @@ def split_sections(data: dict, lines: _Lines, source: str) -> list[tuple[str, di
             raise error(at, "expected a mapping (a section with name, slope, ...)")
         for key in item:
             if key not in SECTION_KEYS:
-                hint = _did_you_mean(str(key), SECTION_KEYS) or (
+                hint = did_you_mean(str(key), SECTION_KEYS) or (
                     f"; a section takes {', '.join(SECTION_KEYS)}")
                 raise error(at + (key,), f"unknown key{hint}")
         name = item.get("name")

@@ -12,7 +12,7 @@ from pydantic import BeforeValidator, Field, PrivateAttr, WithJsonSchema, model_
 
 from .fields import Fraction, Integer, Positive, String, _as_number, _check_typed_item, _Model, _raw
 from .locator import Locator
-from .messages import _describe, _did_you_mean, _fail, _fmt
+from .messages import _fail, describe, did_you_mean, fmt
 from .schema import MAX_COORDINATE_M, MAX_DESIGN_MEASURES, MAX_FAMILIES, MAX_ROCKS
 
 # --------------------------------------------------------------------------------------
@@ -36,20 +36,20 @@ def _parse_residual(value: Any) -> Any:
     if isinstance(value, dict):
         for key in value:
             if key != "fraction":
-                hint = _did_you_mean(key, ["fraction"]) if isinstance(key, str) else ""
+                hint = did_you_mean(key, ["fraction"]) if isinstance(key, str) else ""
                 raise _fail(f"unknown key {key!r}{hint}; expected {forms}", (key,))
         if "fraction" not in value:
             raise _fail(f"required key 'fraction' is missing; expected {forms}")
         fraction = _as_number(value["fraction"], ("fraction",))
         if not 0.0 <= fraction <= 1.0:
-            raise _fail(f"expected a number in 0..1, got {_fmt(fraction)}", ("fraction",))
+            raise _fail(f"expected a number in 0..1, got {fmt(fraction)}", ("fraction",))
         return ResidualFraction(fraction=fraction)
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise _fail(f"expected {forms}, got {_describe(value)}")
+        raise _fail(f"expected {forms}, got {describe(value)}")
     if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
-        raise _fail(f"expected {forms}, got {_describe(value)}")
+        raise _fail(f"expected {forms}, got {describe(value)}")
     if value < 0:
-        raise _fail(f"expected {forms}, got {_fmt(value)}")
+        raise _fail(f"expected {forms}, got {fmt(value)}")
     return int(value)
 
 
@@ -92,8 +92,8 @@ def _mel_figures(entry: dict[str, Any], where: tuple) -> dict[str, float]:
         value = _as_number(entry[key], where + (key,))
         if not low < value <= high:
             raise _fail(
-                f"expected a number > {_fmt(low)} and <= {_fmt(high)} (the product's {what}), "
-                f"got {_fmt(value)}",
+                f"expected a number > {fmt(low)} and <= {fmt(high)} (the product's {what}), "
+                f"got {fmt(value)}",
                 where + (key,),
             )
         out[key] = value
@@ -109,15 +109,15 @@ def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
     other keys of a product are kept as plain data.
     """
     if not isinstance(value, dict):
-        raise _fail(f"expected a mapping {_CATALOGUE_FORM}, got {_describe(value)}")
+        raise _fail(f"expected a mapping {_CATALOGUE_FORM}, got {describe(value)}")
     catalogue: dict[str, dict[str, dict[str, Any]]] = {}
     for kind, table in value.items():
         if not isinstance(kind, str) or not kind.strip():
-            raise _fail(f"expected the name of a measure type, got {_describe(kind)}", (kind,))
+            raise _fail(f"expected the name of a measure type, got {describe(kind)}", (kind,))
         if not isinstance(table, dict):
             raise _fail(
                 f"expected a mapping of product name -> {{capacity_kj: E, heights: [h, ...]}}, "
-                f"got {_describe(table)}",
+                f"got {describe(table)}",
                 (kind,),
             )
         products: dict[str, dict[str, Any]] = {}
@@ -125,13 +125,13 @@ def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
             where = (kind, name)
             if not isinstance(name, str) or not name.strip():
                 raise _fail(
-                    f"expected a product name, got {_describe(name)} (quote names such as '100')",
+                    f"expected a product name, got {describe(name)} (quote names such as '100')",
                     where,
                 )
             if not isinstance(entry, dict):
                 raise _fail(
                     f"expected a mapping {{capacity_kj: E, heights: [h, ...]}}, "
-                    f"got {_describe(entry)}",
+                    f"got {describe(entry)}",
                     where,
                 )
             for key in ("capacity_kj", "heights"):
@@ -141,21 +141,21 @@ def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
             capacity = _as_number(entry["capacity_kj"], where + ("capacity_kj",))
             if capacity <= 0:
                 raise _fail(
-                    f"expected a number > 0, got {_fmt(capacity)}", where + ("capacity_kj",)
+                    f"expected a number > 0, got {fmt(capacity)}", where + ("capacity_kj",)
                 )
             heights_raw = entry["heights"]
             if not isinstance(heights_raw, list | tuple) or not heights_raw:
                 raise _fail(
-                    f"expected a non-empty list of heights (m), got {_describe(heights_raw)}",
+                    f"expected a non-empty list of heights (m), got {describe(heights_raw)}",
                     where + ("heights",),
                 )
             heights: list[float] = []
             for j, item in enumerate(heights_raw):
                 h = _as_number(item, where + ("heights", j))
                 if h <= 0:
-                    raise _fail(f"expected a number > 0, got {_fmt(h)}", where + ("heights", j))
+                    raise _fail(f"expected a number > 0, got {fmt(h)}", where + ("heights", j))
                 if h in heights:
-                    raise _fail(f"height {_fmt(h)} is listed twice", where + ("heights", j))
+                    raise _fail(f"height {fmt(h)} is listed twice", where + ("heights", j))
                 heights.append(h)
             rest = {k: v for k, v in entry.items() if k not in ("capacity_kj", "heights")}
             products[name] = {
@@ -179,7 +179,7 @@ def _parse_products(value: Any) -> Any:
     if not isinstance(value, dict):
         raise _fail(
             f"expected a catalogue file (a path) or a mapping {_CATALOGUE_FORM}, "
-            f"got {_describe(value)}"
+            f"got {describe(value)}"
         )
     return _check_products(value)
 
@@ -188,7 +188,7 @@ def _parse_cost_params(value: Any) -> Any:
     if value is None:
         return None
     if not isinstance(value, dict):
-        raise _fail(f"expected a mapping of the cost model's parameters, got {_describe(value)}")
+        raise _fail(f"expected a mapping of the cost model's parameters, got {describe(value)}")
     return _raw(value, number_keys=True)
 
 
@@ -223,7 +223,7 @@ def _check_options(value: Any, subpath: tuple) -> list:
     if set(value) != {"options"}:
         extra = next((k for k in value if k != "options"), None)
         if extra is not None:
-            hint = _did_you_mean(extra, ["options"]) if isinstance(extra, str) else ""
+            hint = did_you_mean(extra, ["options"]) if isinstance(extra, str) else ""
             raise _fail(
                 f"unknown key {extra!r}{hint}; expected {{options: [...]}}", subpath + (extra,)
             )
@@ -231,16 +231,16 @@ def _check_options(value: Any, subpath: tuple) -> list:
     options = value["options"]
     where = subpath + ("options",)
     if not isinstance(options, list | tuple) or not options:
-        raise _fail(f"expected a non-empty list of options, got {_describe(options)}", where)
+        raise _fail(f"expected a non-empty list of options, got {describe(options)}", where)
     seen: list = []
     for k, item in enumerate(options):
         if item is None or not isinstance(item, bool | int | float | str):
             raise _fail(
-                f"expected a number, string or boolean, got {_describe(item)}", where + (k,)
+                f"expected a number, string or boolean, got {describe(item)}", where + (k,)
             )
         _raw(item, where + (k,))
         if any(type(item) is type(s) and item == s for s in seen):
-            raise _fail(f"option {_fmt(item)} is listed twice", where + (k,))
+            raise _fail(f"option {fmt(item)} is listed twice", where + (k,))
         seen.append(item)
     return list(options)
 
@@ -250,21 +250,21 @@ def _check_candidate_value(value: Any, subpath: tuple) -> Any:
     if isinstance(value, list | tuple):
         if len(value) != 2:
             raise _fail(
-                f"expected a range [min, max] of two numbers, got {_describe(value)}; "
+                f"expected a range [min, max] of two numbers, got {describe(value)}; "
                 "for a choice write {options: [...]}",
                 subpath,
             )
         for k, item in enumerate(value):
             if isinstance(item, bool) or not isinstance(item, int | float):
                 raise _fail(
-                    f"a range [min, max] needs numbers, got {_describe(item)}; "
+                    f"a range [min, max] needs numbers, got {describe(item)}; "
                     "for a choice write {options: [...]}",
                     subpath + (k,),
                 )
         low, high = _as_number(value[0], subpath + (0,)), _as_number(value[1], subpath + (1,))
         if not low < high:
             raise _fail(
-                f"expected a range [min, max] with min < max, got [{_fmt(low)}, {_fmt(high)}]; "
+                f"expected a range [min, max] with min < max, got [{fmt(low)}, {fmt(high)}]; "
                 "for a fixed value give the number",
                 subpath,
             )
@@ -272,7 +272,7 @@ def _check_candidate_value(value: Any, subpath: tuple) -> Any:
     if isinstance(value, dict):
         return {"options": _check_options(value, subpath)}
     if value is None or not isinstance(value, bool | int | float | str):
-        raise _fail(f"expected {_VALUE_FORMS}, got {_describe(value)}", subpath)
+        raise _fail(f"expected {_VALUE_FORMS}, got {describe(value)}", subpath)
     return _raw(value, subpath)
 
 
@@ -287,13 +287,13 @@ def _check_product_choice(value: Any, subpath: tuple) -> Any:
         names = [value]
     elif not isinstance(value, list | tuple) or not value:
         raise _fail(
-            f"expected a product name or a non-empty list of names, got {_describe(value)}",
+            f"expected a product name or a non-empty list of names, got {describe(value)}",
             subpath,
         )
     for k, name in enumerate(names):
         at = where if isinstance(value, str) else where + (k,)
         if not isinstance(name, str) or not name.strip():
-            raise _fail(f"expected a product name, got {_describe(name)}", at)
+            raise _fail(f"expected a product name, got {describe(name)}", at)
         if name in names[:k]:
             raise _fail(f"product {name!r} is listed twice", at)
     return _raw(value, subpath)
@@ -304,7 +304,7 @@ def _parse_candidates(value: Any) -> list[dict[str, Any]]:
     if not isinstance(value, list | tuple) or not value:
         raise _fail(
             "expected a non-empty list of candidate measures (mappings such as "
-            f"{{type: fence, x: [60, 110]}}), got {_describe(value)}"
+            f"{{type: fence, x: [60, 110]}}), got {describe(value)}"
         )
     candidates = []
     for i, item in enumerate(value):
@@ -320,7 +320,7 @@ def _parse_candidates(value: Any) -> list[dict[str, Any]]:
         x = item["x"]
         if not isinstance(x, list | tuple) or len(x) != 2:
             raise _fail(
-                f"expected a station range [min, max] (m), got {_describe(x)}; the optimiser "
+                f"expected a station range [min, max] (m), got {describe(x)}; the optimiser "
                 "places the measure within it",
                 (i, "x"),
             )
@@ -328,7 +328,7 @@ def _parse_candidates(value: Any) -> list[dict[str, Any]]:
         if not low < high:
             raise _fail(
                 f"expected a station range [min, max] with min < max, "
-                f"got [{_fmt(low)}, {_fmt(high)}]",
+                f"got [{fmt(low)}, {fmt(high)}]",
                 (i, "x"),
             )
         candidate: dict[str, Any] = {"type": item["type"], "x": [x[0], x[1]]}
@@ -336,7 +336,7 @@ def _parse_candidates(value: Any) -> list[dict[str, Any]]:
             if key in ("type", "x"):
                 continue
             if not isinstance(key, str):
-                raise _fail(f"keys must be names, got {_describe(key)}", (i, key))
+                raise _fail(f"keys must be names, got {describe(key)}", (i, key))
             if key == "product":
                 candidate[key] = _check_product_choice(item_value, (i, key))
             else:
@@ -354,13 +354,13 @@ def _parse_scenarios(value: Any) -> Any:
         if (isinstance(share, int | float) and not isinstance(share, bool)
                 and math.isfinite(share) and 0 < share <= 1):
             return {"share": float(share)}
-        raise _fail(f"expected a number > 0 and <= 1, got {_describe(share)}", ("share",))
+        raise _fail(f"expected a number > 0 and <= 1, got {describe(share)}", ("share",))
     if isinstance(value, dict):
         extra = sorted(str(k) for k in value if k != "share")
         if extra:
             raise _fail(f"unknown key {extra[0]!r}; expected share", (extra[0],))
         raise _fail("expected {share: S}", ())
-    raise _fail(f"expected all or {{share: S}} (0 < S <= 1), got {_describe(value)}")
+    raise _fail(f"expected all or {{share: S}} (0 < S <= 1), got {describe(value)}")
 
 
 class Design(_Model):

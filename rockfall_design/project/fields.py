@@ -22,7 +22,7 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from .inputs import strip_controls
-from .messages import _describe, _did_you_mean, _fail, _fmt
+from .messages import _fail, describe, did_you_mean, fmt
 
 # --------------------------------------------------------------------------------------
 # Strict scalars and the base model
@@ -32,13 +32,13 @@ from .messages import _describe, _did_you_mean, _fail, _fmt
 def _as_number(value: Any, subpath: tuple = ()) -> float:
     """``value`` as a finite float; bools, strings and None are rejected."""
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise _fail(f"expected a number, got {_describe(value)}", subpath)
+        raise _fail(f"expected a number, got {describe(value)}", subpath)
     try:
         number = float(value)
     except OverflowError:
         raise _fail("number is too large", subpath) from None
     if not math.isfinite(number):
-        raise _fail(f"must be finite, got {_fmt(number)}", subpath)
+        raise _fail(f"must be finite, got {fmt(number)}", subpath)
     return number
 
 
@@ -46,23 +46,23 @@ def _as_integer(value: Any) -> int:
     """``value`` as an int; integral floats (``1000.0``) are accepted, bools are not."""
     if isinstance(value, float) and not isinstance(value, bool):
         if not math.isfinite(value):
-            raise _fail(f"must be finite, got {_fmt(value)}")
+            raise _fail(f"must be finite, got {fmt(value)}")
         if value.is_integer():
             return int(value)
     if isinstance(value, bool) or not isinstance(value, int):
-        raise _fail(f"expected an integer, got {_describe(value)}")
+        raise _fail(f"expected an integer, got {describe(value)}")
     return value
 
 
 def _as_string(value: Any) -> str:
     if not isinstance(value, str):
-        raise _fail(f"expected a string, got {_describe(value)}")
+        raise _fail(f"expected a string, got {describe(value)}")
     return value
 
 
 def _as_bool(value: Any) -> bool:
     if not isinstance(value, bool):
-        raise _fail(f"expected true or false, got {_describe(value)}")
+        raise _fail(f"expected true or false, got {describe(value)}")
     return value
 
 
@@ -70,7 +70,7 @@ def _as_list(value: Any) -> list:
     if isinstance(value, tuple):
         return list(value)
     if not isinstance(value, list):
-        raise _fail(f"expected a list, got {_describe(value)}")
+        raise _fail(f"expected a list, got {describe(value)}")
     return value
 
 
@@ -79,7 +79,7 @@ def _pair(what: str) -> Callable[[Any], tuple[float, float]]:
 
     def check(value: Any) -> tuple[float, float]:
         if not isinstance(value, list | tuple) or len(value) != 2:
-            raise _fail(f"expected a pair {what}, got {_describe(value)}")
+            raise _fail(f"expected a pair {what}, got {describe(value)}")
         return (_as_number(value[0], (0,)), _as_number(value[1], (1,)))
 
     return check
@@ -88,8 +88,8 @@ def _pair(what: str) -> Callable[[Any], tuple[float, float]]:
 def _choice(*options: str) -> Callable[[Any], str]:
     def check(value: Any) -> str:
         if value not in options or not isinstance(value, str):
-            hint = _did_you_mean(value, options) if isinstance(value, str) else ""
-            raise _fail(f"expected one of {', '.join(options)}, got {_describe(value)}{hint}")
+            hint = did_you_mean(value, options) if isinstance(value, str) else ""
+            raise _fail(f"expected one of {', '.join(options)}, got {describe(value)}{hint}")
         return value
 
     return check
@@ -125,12 +125,12 @@ class _Model(BaseModel):
         if isinstance(data, cls):
             return data
         if not isinstance(data, dict):
-            raise _fail(f"expected a mapping of key: value, got {_describe(data)}")
+            raise _fail(f"expected a mapping of key: value, got {describe(data)}")
         fields = list(cls.model_fields)
         for key in data:
             if key not in cls.model_fields:
                 if isinstance(key, str):
-                    hint = _did_you_mean(key, fields) or f"; expected one of {', '.join(fields)}"
+                    hint = did_you_mean(key, fields) or f"; expected one of {', '.join(fields)}"
                 else:
                     hint = f"; keys must be names, expected one of {', '.join(fields)}"
                 raise _fail(f"unknown key {key!r}{hint}", (key,))
@@ -155,7 +155,7 @@ def _raw(value: Any, subpath: tuple = (), *, number_keys: bool = False) -> Any:
         return value
     if isinstance(value, float):
         if not math.isfinite(value):
-            raise _fail(f"must be finite, got {_fmt(value)}", subpath)
+            raise _fail(f"must be finite, got {fmt(value)}", subpath)
         return value
     if isinstance(value, list | tuple):
         return [_raw(item, subpath + (i,), number_keys=number_keys) for i, item in enumerate(value)]
@@ -165,24 +165,24 @@ def _raw(value: Any, subpath: tuple = (), *, number_keys: bool = False) -> Any:
             number = isinstance(key, int | float) and not isinstance(key, bool)
             if number and number_keys:
                 if not math.isfinite(key):
-                    raise _fail(f"keys must be finite, got {_fmt(key)}", subpath + (key,))
+                    raise _fail(f"keys must be finite, got {fmt(key)}", subpath + (key,))
             elif not isinstance(key, str):
-                raise _fail(f"keys must be names, got {_describe(key)}", subpath + (key,))
+                raise _fail(f"keys must be names, got {describe(key)}", subpath + (key,))
             copied[key] = _raw(item, subpath + (key,), number_keys=number_keys)
         return copied
-    raise _fail(f"unsupported value: {_describe(value)}", subpath)
+    raise _fail(f"unsupported value: {describe(value)}", subpath)
 
 
 
 def _check_typed_item(item: Any, i: int, expected: str) -> None:
     """An entry of ``measures:`` or ``design.candidates``: a mapping with a string ``type``."""
     if not isinstance(item, dict):
-        raise _fail(f"expected {expected}, got {_describe(item)}", (i,))
+        raise _fail(f"expected {expected}, got {describe(item)}", (i,))
     if "type" not in item:
         raise _fail("required key 'type' is missing (the kind of measure, e.g. fence)", (i,))
     kind = item["type"]
     if not isinstance(kind, str):
-        raise _fail(f"expected the name of a measure type, got {_describe(kind)}", (i, "type"))
+        raise _fail(f"expected the name of a measure type, got {describe(kind)}", (i, "type"))
     if not kind.strip():
         raise _fail("must not be empty (the kind of measure, e.g. fence)", (i, "type"))
 
@@ -191,7 +191,7 @@ def _parse_measures(value: Any) -> list[dict[str, Any]]:
     if value is None:
         return []
     if not isinstance(value, list | tuple):
-        raise _fail(f"expected a list of measures (mappings with a type), got {_describe(value)}")
+        raise _fail(f"expected a list of measures (mappings with a type), got {describe(value)}")
     measures = []
     for i, item in enumerate(value):
         _check_typed_item(item, i, "a measure (a mapping such as {type: fence, x: 70, ...})")
@@ -208,12 +208,12 @@ def _parse_safety(value: Any) -> dict[str, Any]:
         return {"concept": _DEFAULT_CONCEPT}
     if not isinstance(value, dict):
         raise _fail(
-            f"expected a mapping (concept: NAME and its parameters), got {_describe(value)}"
+            f"expected a mapping (concept: NAME and its parameters), got {describe(value)}"
         )
     concept = value.get("concept", _DEFAULT_CONCEPT)
     if not isinstance(concept, str):
         raise _fail(
-            f"expected the name of a safety concept, got {_describe(concept)}", ("concept",)
+            f"expected the name of a safety concept, got {describe(concept)}", ("concept",)
         )
     if not concept.strip():
         raise _fail("must not be empty (the name of a safety concept, e.g. spang)", ("concept",))

@@ -18,14 +18,14 @@ from .fields import _raw
 from .inputs import read_named_text, read_text, strip_controls
 from .locator import Locator
 from .messages import (
-    _describe,
     _fail,
     _key_text,
     _line_of,
     _Lines,
-    _to_project_error,
-    _unquoted,
     _yaml_path,
+    describe,
+    to_project_error,
+    unquoted,
 )
 from .model import Project
 from .yaml_file import parse_yaml
@@ -87,8 +87,8 @@ def _parse_top(text: str, source: str) -> tuple[dict, _Lines]:
     if data is None:
         raise ProjectError(source, 1, "", "the project file is empty")
     if not isinstance(data, dict):
-        with _unquoted():  # not a project file at all: its content is not repeated
-            got = _describe(data)
+        with unquoted():  # not a project file at all: its content is not repeated
+            got = describe(data)
         raise ProjectError(
             source,
             _line_of((), lines),
@@ -108,13 +108,13 @@ def _validated(data: dict, lines: _Lines, source: str, base: Path) -> Project:
     try:
         project = Project.model_validate(data)
     except ValidationError as exc:
-        raise _to_project_error(exc, source, lines, Project) from exc
+        raise to_project_error(exc, source, lines, Project) from exc
     except RecursionError as exc:
         raise ProjectError(source, None, "", "the file is nested too deeply") from exc
     project._source = source
     project._lines = lines
     if project.design is not None:
-        _attach_catalogues(project, base)
+        attach_catalogues(project, base)
     return project
 
 
@@ -142,7 +142,7 @@ def _custom_error(exc: PydanticCustomError, source: str, lines: _Lines) -> Proje
     return ProjectError(source, _line_of(path, lines), _key_text(path, lines), exc.message())
 
 
-def _attach_catalogues(project: Project, base_dir: Path) -> None:
+def attach_catalogues(project: Project, base_dir: Path) -> None:
     """Read the design's catalogue files (or take the inline ones), keeping their lines."""
     design = project.design
     assert design is not None
@@ -151,7 +151,7 @@ def _attach_catalogues(project: Project, base_dir: Path) -> None:
             project, design.products, base_dir, ("design", "products"), "product catalogue"
         )
         try:
-            with _unquoted():
+            with unquoted():
                 design._catalogue = _check_products(data)
         except PydanticCustomError as exc:
             raise _custom_error(exc, shown, lines) from None
@@ -164,10 +164,10 @@ def _attach_catalogues(project: Project, base_dir: Path) -> None:
             project, design.costs.file, base_dir, ("design", "costs", "file"), "cost file"
         )
         try:
-            with _unquoted():
+            with unquoted():
                 if not isinstance(data, dict):
                     raise _fail(
-                        f"expected a mapping of the cost model's parameters, got {_describe(data)}"
+                        f"expected a mapping of the cost model's parameters, got {describe(data)}"
                     )
                 design._cost_params = _raw(data, number_keys=True)
         except PydanticCustomError as exc:

@@ -15,14 +15,14 @@ from pydantic import BaseModel, ValidationError
 
 from ..errors import Interrupted, PluginError, ProjectError
 from .messages import (
-    _describe,
-    _did_you_mean,
     _key_text,
     _line_of,
     _param_problems,
     _strict_problems,
-    _unquoted,
     _yaml_path,
+    describe,
+    did_you_mean,
+    unquoted,
 )
 
 
@@ -75,7 +75,7 @@ class Locator:
     ) -> ProjectError:
         """An unknown name with "did you mean" (see :meth:`Project.unknown_name`)."""
         names = [str(c) for c in candidates]
-        hint = _did_you_mean(name, names) if isinstance(name, str) else ""
+        hint = did_you_mean(name, names) if isinstance(name, str) else ""
         available = f" (available: {', '.join(names)})" if names else " (none available)"
         return self.error_at(path, f"unknown {what} {name!r}{hint}{available}")
 
@@ -90,10 +90,10 @@ class Locator:
         """Validate plugin parameters at ``path`` (see :meth:`Project.validate_params`)."""
         path = tuple(path)
         if not isinstance(data, Mapping):
-            raise self.error_at(path, f"expected a mapping of key: value, got {_describe(data)}")
+            raise self.error_at(path, f"expected a mapping of key: value, got {describe(data)}")
         dropped = set(drop)
         data = {key: value for key, value in data.items() if key not in dropped}
-        with contextlib.nullcontext() if self.quote else _unquoted():
+        with contextlib.nullcontext() if self.quote else unquoted():
             instance, problems = _check_params(model, data)
         if instance is not None:
             return instance

@@ -37,7 +37,7 @@ def _fail(message: str, subpath: tuple = ()) -> PydanticCustomError:
     return PydanticCustomError(_ERROR_TYPE, "{message}", {"message": message, "subpath": subpath})
 
 
-def _fmt(value: Any) -> str:
+def fmt(value: Any) -> str:
     """A number as the user would write it (``1`` rather than ``1.0``)."""
     if isinstance(value, bool):
         return "true" if value else "false"
@@ -57,8 +57,8 @@ _QUOTE_VALUES: contextvars.ContextVar[bool] = contextvars.ContextVar("quote", de
 
 
 @contextlib.contextmanager
-def _unquoted() -> Iterator[None]:
-    """Within the block, :func:`_describe` names a value's type, never the value."""
+def unquoted() -> Iterator[None]:
+    """Within the block, :func:`describe` names a value's type, never the value."""
     token = _QUOTE_VALUES.set(False)
     try:
         yield
@@ -66,7 +66,7 @@ def _unquoted() -> Iterator[None]:
         _QUOTE_VALUES.reset(token)
 
 
-def _describe(value: Any) -> str:
+def describe(value: Any) -> str:
     """A short, one-line description of a YAML value for "got ..." messages."""
     if value is None:
         return "null"
@@ -74,9 +74,9 @@ def _describe(value: Any) -> str:
         return "a boolean" if isinstance(value, bool) else (
             "a string" if isinstance(value, str) else "a number")
     if isinstance(value, bool):
-        return f"{_fmt(value)} (a boolean)"
+        return f"{fmt(value)} (a boolean)"
     if isinstance(value, int | float):
-        return _fmt(value)
+        return fmt(value)
     if isinstance(value, str):
         text = value if len(value) <= 40 else value[:37] + "..."
         return f"string {text!r}"
@@ -87,7 +87,7 @@ def _describe(value: Any) -> str:
     return f"a value of type {type(value).__name__}"
 
 
-def _did_you_mean(word: str, candidates: Any) -> str:
+def did_you_mean(word: str, candidates: Any) -> str:
     matches = difflib.get_close_matches(word, [str(c) for c in candidates], n=1)
     return f"; did you mean {matches[0]!r}?" if matches else ""
 
@@ -174,8 +174,8 @@ def _message(error: dict) -> str:
             "an integer" if isinstance(bound, int) and not isinstance(bound, bool) else "a number"
         )
         # (In a file the project names, the value is not repeated.)
-        got = f", got {_describe(value)}" if _QUOTE_VALUES.get() else ""
-        return f"expected {noun} {op} {_fmt(ctx[name])}{got}"
+        got = f", got {describe(value)}" if _QUOTE_VALUES.get() else ""
+        return f"expected {noun} {op} {fmt(ctx[name])}{got}"
     if kind == "too_short":
         if isinstance(value, str):
             return "must not be empty"
@@ -183,13 +183,13 @@ def _message(error: dict) -> str:
     if kind == "too_long":
         return f"expected at most {ctx.get('max_length')} item(s), got {ctx.get('actual_length')}"
     if kind in ("dict_type", "model_type", "model_attributes_type"):
-        return f"expected a mapping of key: value, got {_describe(value)}"
+        return f"expected a mapping of key: value, got {describe(value)}"
     if kind in ("list_type", "tuple_type"):
-        return f"expected a list, got {_describe(value)}"
+        return f"expected a list, got {describe(value)}"
     return str(error.get("msg", kind))
 
 
-def _to_project_error(
+def to_project_error(
     exc: ValidationError, source: str, lines: _Lines, model: type[BaseModel]
 ) -> ProjectError:
     located = []
@@ -278,24 +278,24 @@ def _field_of(model: type[BaseModel], key: Any) -> Any:
 def _strict_problems(annotation: Any, value: Any, loc: tuple, problems: list) -> None:
     """Append ``(loc, message, 1)`` for values pydantic's lax mode would wrongly accept."""
     if isinstance(value, float) and not math.isfinite(value):
-        problems.append((loc, f"must be finite, got {_fmt(value)}", 1))
+        problems.append((loc, f"must be finite, got {fmt(value)}", 1))
         return
     options = _options(annotation)
     kinds = _accepts(options)
     if isinstance(value, bool):
         if "number" in kinds and not kinds & {"bool", "any"}:
-            problems.append((loc, f"expected a number, got {_describe(value)}", 1))
+            problems.append((loc, f"expected a number, got {describe(value)}", 1))
         return
     if isinstance(value, str):
         if not kinds & {"str", "any"}:
             if "number" in kinds:
-                problems.append((loc, f"expected a number, got {_describe(value)}", 1))
+                problems.append((loc, f"expected a number, got {describe(value)}", 1))
             elif "bool" in kinds:
-                problems.append((loc, f"expected true or false, got {_describe(value)}", 1))
+                problems.append((loc, f"expected true or false, got {describe(value)}", 1))
         return
     if isinstance(value, int | float):
         if "bool" in kinds and not kinds & {"number", "any", "str"}:
-            problems.append((loc, f"expected true or false, got {_describe(value)}", 1))
+            problems.append((loc, f"expected true or false, got {describe(value)}", 1))
         return
     if isinstance(value, Mapping):
         model = next((o for o in options if _is_model(o)), None)
@@ -418,9 +418,9 @@ def _union_message(options: list[Any], value: Any) -> str:
         if text not in wanted:
             wanted.append(text)
     if choices:
-        wanted.append("one of " + ", ".join(_fmt(c) for c in choices))
-    hint = _did_you_mean(value, choices) if isinstance(value, str) and choices else ""
-    return f"expected {' or '.join(wanted)}, got {_describe(value)}{hint}"
+        wanted.append("one of " + ", ".join(fmt(c) for c in choices))
+    hint = did_you_mean(value, choices) if isinstance(value, str) and choices else ""
+    return f"expected {' or '.join(wanted)}, got {describe(value)}{hint}"
 
 
 def _missing_message(owner: Any, loc: tuple) -> str:
@@ -440,21 +440,21 @@ def _param_message(model: type[BaseModel], error: Any) -> tuple[tuple, str]:
         key = loc[-1]
         fields = list(owner.model_fields) if owner is not None else []
         listing = f"; expected one of {', '.join(fields)}" if fields else ""
-        hint = (_did_you_mean(key, fields) if isinstance(key, str) else "") or listing
+        hint = (did_you_mean(key, fields) if isinstance(key, str) else "") or listing
         return loc, f"unknown key {key!r}{hint}"
     if kind == "missing":
         if loc and isinstance(loc[-1], int):
             return loc[:-1], f"expected more items: item {loc[-1]} is missing"
         return loc, _missing_message(owner, loc)
     if kind == "finite_number":
-        return loc, f"must be finite, got {_describe(value)}"
+        return loc, f"must be finite, got {describe(value)}"
     if kind in _NUMBER_ERRORS or kind == "int_from_float":
         noun = "an integer" if kind.startswith("int") else "a number"
-        return loc, f"expected {noun}, got {_describe(value)}"
+        return loc, f"expected {noun}, got {describe(value)}"
     if kind in ("bool_type", "bool_parsing"):
-        return loc, f"expected true or false, got {_describe(value)}"
+        return loc, f"expected true or false, got {describe(value)}"
     if kind in ("string_type", "string_sub_type"):
-        return loc, f"expected a string, got {_describe(value)}"
+        return loc, f"expected a string, got {describe(value)}"
     if kind == "literal_error":
         choices = [
             v
@@ -463,10 +463,10 @@ def _param_message(model: type[BaseModel], error: Any) -> tuple[tuple, str]:
             for v in typing.get_args(o)
         ]
         if choices:
-            hint = _did_you_mean(value, choices) if isinstance(value, str) else ""
-            listing = ", ".join(_fmt(c) for c in choices)
-            return loc, f"expected one of {listing}, got {_describe(value)}{hint}"
-        return loc, f"expected {error['ctx']['expected']}, got {_describe(value)}"
+            hint = did_you_mean(value, choices) if isinstance(value, str) else ""
+            listing = ", ".join(fmt(c) for c in choices)
+            return loc, f"expected one of {listing}, got {describe(value)}{hint}"
+        return loc, f"expected {error['ctx']['expected']}, got {describe(value)}"
     if kind in ("value_error", "assertion_error"):
         message = str(error.get("msg", ""))
         for prefix in ("Value error, ", "Assertion failed, "):

@@ -29,7 +29,7 @@ from .fields import (
     _plain_copy,
 )
 from .locator import Locator
-from .messages import _did_you_mean, _fail, _fmt
+from .messages import _fail, did_you_mean, fmt
 from .schema import Analysis, EngineConfig, Material, Protect, Rocks, Slope
 from .study import StudySpec
 
@@ -99,16 +99,16 @@ class Project(_Model):
     def _check_references(self) -> "Project":
         for i, name in enumerate(self.slope.materials):
             if name not in self.materials:
-                hint = _did_you_mean(name, self.materials) or (
+                hint = did_you_mean(name, self.materials) or (
                     f"; defined: {', '.join(map(str, self.materials))}"
                 )
                 raise _fail(f"undefined material {name!r}{hint}", ("slope", "materials", i))
         first, last = self.slope.x_range
-        section = f"[{_fmt(first)}, {_fmt(last)}] m"
+        section = f"[{fmt(first)}, {fmt(last)}] m"
         for i, zone in enumerate(self.rocks.release):
             low, high = zone.x
             if low < first or high > last:
-                shown = _fmt(low) if low == high else f"[{_fmt(low)}, {_fmt(high)}]"
+                shown = fmt(low) if low == high else f"[{fmt(low)}, {fmt(high)}]"
                 raise _fail(
                     f"release x {shown} is outside the slope section {section}",
                     ("rocks", "release", i, "x"),
@@ -116,12 +116,12 @@ class Project(_Model):
         for i, x in enumerate(self.analysis.stations):
             if not first <= x <= last:
                 raise _fail(
-                    f"station x {_fmt(x)} is outside the slope section {section}",
+                    f"station x {fmt(x)} is outside the slope section {section}",
                     ("analysis", "stations", i),
                 )
         if self.protect is not None and not first <= self.protect.x <= last:
             raise _fail(
-                f"x {_fmt(self.protect.x)} is outside the slope section {section}",
+                f"x {fmt(self.protect.x)} is outside the slope section {section}",
                 ("protect", "x"),
             )
         if self.design is not None:
@@ -141,15 +141,15 @@ class Project(_Model):
                 low, high = candidate["x"]
                 if low < first or high > last:
                     raise _fail(
-                        f"station range [{_fmt(low)}, {_fmt(high)}] is outside the slope "
+                        f"station range [{fmt(low)}, {fmt(high)}] is outside the slope "
                         f"section {section}",
                         ("design", "candidates", i, "x"),
                     )
                 if low > self.protect.x:
                     # Rocks reach the zone before they reach such a measure.
                     raise _fail(
-                        f"station range [{_fmt(low)}, {_fmt(high)}] lies inside the protected "
-                        f"zone (beyond protect.x = {_fmt(self.protect.x)} m): a measure there "
+                        f"station range [{fmt(low)}, {fmt(high)}] lies inside the protected "
+                        f"zone (beyond protect.x = {fmt(self.protect.x)} m): a measure there "
                         "cannot keep rocks out of it; place the candidates upslope of it",
                         ("design", "candidates", i, "x"),
                     )
@@ -365,7 +365,7 @@ def _json_copy(value: Any) -> Any:
     """Plain data as JSON has it: mapping keys become strings."""
     if isinstance(value, dict):
         return {
-            (key if isinstance(key, str) else _fmt(key)): _json_copy(item)
+            (key if isinstance(key, str) else fmt(key)): _json_copy(item)
             for key, item in value.items()
         }
     if isinstance(value, list | tuple):

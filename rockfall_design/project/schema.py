@@ -33,7 +33,7 @@ from .fields import (
     _none_as_empty,
     _pair,
 )
-from .messages import _describe, _did_you_mean, _fail, _fmt
+from .messages import _fail, describe, did_you_mean, fmt
 
 # --------------------------------------------------------------------------------------
 # Sections
@@ -182,7 +182,7 @@ class Slope(_Model):
             for k, value in enumerate(point):
                 if abs(value) > MAX_COORDINATE_M:
                     raise _fail(
-                        f"{'xy'[k]} = {_fmt(value)} m is farther than {MAX_COORDINATE_M:,.0f} m "
+                        f"{'xy'[k]} = {fmt(value)} m is farther than {MAX_COORDINATE_M:,.0f} m "
                         "from the origin: give the section in metres, x measured along it "
                         "(from its top, say) and y as height",
                         ("points", i, k),
@@ -190,8 +190,8 @@ class Slope(_Model):
         for i in range(1, len(self.points)):
             if self.points[i][0] <= self.points[i - 1][0]:
                 raise _fail(
-                    f"x must increase strictly along the slope: x = {_fmt(self.points[i][0])} "
-                    f"follows x = {_fmt(self.points[i - 1][0])}",
+                    f"x must increase strictly along the slope: x = {fmt(self.points[i][0])} "
+                    f"follows x = {fmt(self.points[i - 1][0])}",
                     ("points", i),
                 )
         if len(self.materials) != self.n_segments:
@@ -259,17 +259,17 @@ _SIZE_KINDS = {
 def _size_problem(kind: str, a: float, b: float) -> str:
     if kind == "fixed":
         if a <= 0:
-            return f"expected a number > 0, got {_fmt(a)}"
+            return f"expected a number > 0, got {fmt(a)}"
         if a != b:
             return "a fixed size needs a == b"
     elif kind == "uniform":
         if not 0 < a <= b:
-            return f"uniform [min, max] needs 0 < min <= max, got [{_fmt(a)}, {_fmt(b)}]"
+            return f"uniform [min, max] needs 0 < min <= max, got [{fmt(a)}, {fmt(b)}]"
     elif a <= 0 or b < 0:
         first, second = _SIZE_KINDS[kind][1:-1].split(", ")
         return (
             f"{kind} {_SIZE_KINDS[kind]} needs {first} > 0 and {second} >= 0, "
-            f"got [{_fmt(a)}, {_fmt(b)}]"
+            f"got [{fmt(a)}, {fmt(b)}]"
         )
     return ""
 
@@ -286,13 +286,13 @@ def _parse_size(value: Any) -> Any:
             raise _fail(f"expected {forms}, got a mapping with {len(value)} keys")
         ((kind, params),) = value.items()
         if kind not in _SIZE_KINDS:
-            hint = _did_you_mean(kind, _SIZE_KINDS) if isinstance(kind, str) else ""
+            hint = did_you_mean(kind, _SIZE_KINDS) if isinstance(kind, str) else ""
             raise _fail(
                 f"unknown distribution {kind!r}{hint}; expected {', '.join(_SIZE_KINDS)}",
                 (kind,),
             )
         if not isinstance(params, list | tuple) or len(params) != 2:
-            raise _fail(f"expected {_SIZE_KINDS[kind]}, got {_describe(params)}", (kind,))
+            raise _fail(f"expected {_SIZE_KINDS[kind]}, got {describe(params)}", (kind,))
         a = _as_number(params[0], (kind, 0))
         b = _as_number(params[1], (kind, 1))
         problem = _size_problem(kind, a, b)
@@ -300,10 +300,10 @@ def _parse_size(value: Any) -> Any:
             raise _fail(problem, (kind,))
         return SizeSpec(kind=kind, a=a, b=b)
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise _fail(f"expected {forms}, got {_describe(value)}")
+        raise _fail(f"expected {forms}, got {describe(value)}")
     number = _as_number(value)
     if number <= 0:
-        raise _fail(f"expected a number > 0, got {_fmt(number)}")
+        raise _fail(f"expected a number > 0, got {fmt(number)}")
     return SizeSpec(kind="fixed", a=number, b=number)
 
 
@@ -337,10 +337,10 @@ def _parse_x_range(value: Any) -> tuple[float, float]:
     if isinstance(value, list | tuple):
         low, high = _pair("[min, max]")(value)
         if low > high:
-            raise _fail(f"expected [min, max] with min <= max, got [{_fmt(low)}, {_fmt(high)}]")
+            raise _fail(f"expected [min, max] with min <= max, got [{fmt(low)}, {fmt(high)}]")
         return (low, high)
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise _fail(f"expected a number or [min, max], got {_describe(value)}")
+        raise _fail(f"expected a number or [min, max], got {describe(value)}")
     x = _as_number(value)
     return (x, x)
 
@@ -349,10 +349,10 @@ def _parse_spin(value: Any) -> float | str:
     if value == "rolling" and isinstance(value, str):
         return "rolling"
     if isinstance(value, str):
-        raise _fail(f"expected a number (rad/s) or 'rolling', got {_describe(value)}")
+        raise _fail(f"expected a number (rad/s) or 'rolling', got {describe(value)}")
     spin = _as_number(value)
     if abs(spin) > MAX_RELEASE_SPIN:
-        raise _fail(f"expected a spin within +-{MAX_RELEASE_SPIN:g} rad/s, got {_fmt(spin)}")
+        raise _fail(f"expected a spin within +-{MAX_RELEASE_SPIN:g} rad/s, got {fmt(spin)}")
     return spin
 
 
@@ -362,7 +362,7 @@ def _release_velocity(value: Any) -> tuple[float, float]:
     for k, v in enumerate(velocity):
         if abs(v) > MAX_RELEASE_SPEED:
             raise _fail(
-                f"expected a speed within +-{MAX_RELEASE_SPEED:g} m/s, got {_fmt(v)}", (k,)
+                f"expected a speed within +-{MAX_RELEASE_SPEED:g} m/s, got {fmt(v)}", (k,)
             )
     return velocity
 
@@ -371,10 +371,10 @@ def _clearance(value: Any) -> float:
     """A release ``height``: the clearance (m) above the ground, so never negative."""
     height = _as_number(value)
     if height > MAX_RELEASE_HEIGHT_M:
-        raise _fail(f"expected a clearance <= {MAX_RELEASE_HEIGHT_M:,.0f} m, got {_fmt(height)}")
+        raise _fail(f"expected a clearance <= {MAX_RELEASE_HEIGHT_M:,.0f} m, got {fmt(height)}")
     if height < 0:
         raise _fail(
-            f"expected a clearance >= 0 (m), got {_fmt(height)}: the release would start "
+            f"expected a clearance >= 0 (m), got {fmt(height)}: the release would start "
             "the rock below the ground (height is measured from the ground up; "
             "0 = resting on it)"
         )
@@ -425,7 +425,7 @@ def _zones(value: Any) -> Any:
         if not value:
             raise _fail("expected at least one release zone, got an empty list")
         return list(value)
-    raise _fail(f"expected a release zone (mapping) or a list of zones, got {_describe(value)}")
+    raise _fail(f"expected a release zone (mapping) or a list of zones, got {describe(value)}")
 
 
 class Rocks(_Model):
@@ -468,16 +468,16 @@ class Rocks(_Model):
         least = spec.b if spec.kind == "uniform" else spec.a
         if least > top:
             raise _fail(
-                f"expected sizes up to {_fmt(float(f'{top:.6g}'))} {unit} (a sphere of "
-                f"{MAX_RADIUS_M:g} m radius), got {_fmt(least)}",
+                f"expected sizes up to {fmt(float(f'{top:.6g}'))} {unit} (a sphere of "
+                f"{MAX_RADIUS_M:g} m radius), got {fmt(least)}",
                 (self.size_quantity,),
             )
         # And the size it must reach at least: its fixed value, its minimum,
         # its mean or median (a tail below is cut off).
         if spec.a < bottom:
             raise _fail(
-                f"expected sizes of at least {_fmt(float(f'{bottom:.6g}'))} {unit} (a sphere "
-                f"of {MIN_RADIUS_M:g} m radius), got {_fmt(spec.a)}",
+                f"expected sizes of at least {fmt(float(f'{bottom:.6g}'))} {unit} (a sphere "
+                f"of {MIN_RADIUS_M:g} m radius), got {fmt(spec.a)}",
                 (self.size_quantity,),
             )
         return self

@@ -44,14 +44,14 @@ from pydantic import ValidationError
 from ..errors import ProjectError
 from .messages import (
     _ERROR_TYPE,
-    _describe,
-    _did_you_mean,
     _key_text,
     _line_of,
     _message,
-    _to_project_error,
-    _unquoted,
     _yaml_path,
+    describe,
+    did_you_mean,
+    to_project_error,
+    unquoted,
 )
 from .schema import Material, Slope
 from .yaml_file import parse_yaml
@@ -126,7 +126,7 @@ def resolve_inputs(data: dict[str, Any], lines: _Lines, source: str, base_dir: P
 
 def _file_name(value: Any, where: _Where, at: tuple, what: str) -> str:
     if not isinstance(value, str) or not value.strip():
-        raise where.error(at, f"expected the file name of {what}, got {_describe(value)}")
+        raise where.error(at, f"expected the file name of {what}, got {describe(value)}")
     return value
 
 
@@ -191,13 +191,13 @@ def _merge_library(materials: dict, where: _Where, base_dir: Path) -> dict[Any, 
         raise ProjectError(shown, 1, "", "the materials library is empty")
     # A library path may name any file (a key file, /etc/shadow): its
     # messages say what is wrong where, never what the file holds.
-    with _unquoted():
+    with unquoted():
         if not isinstance(data, dict):
             raise ProjectError(
                 shown,
                 _line_of((), lines),
                 "",
-                f"expected a mapping of material names to materials, got {_describe(data)}",
+                f"expected a mapping of material names to materials, got {describe(data)}",
             )
         for name, value in data.items():
             _check_library_material(name, value, shown, lines)
@@ -211,14 +211,14 @@ def _check_library_material(name: Any, value: Any, shown: str, lines: _Lines) ->
     if not isinstance(name, str) or not name:
         raise ProjectError(
             shown, _line_of((name,), lines), "",
-            f"material names must be text, got {_describe(name)}",
+            f"material names must be text, got {describe(name)}",
         )
     try:
         Material.model_validate(value)
     except ValidationError as exc:
         # Locate the problem within this material, then put its name in front.
         inner = {key[1:]: pos for key, pos in lines.items() if key[:1] == (name,)}
-        err = _to_project_error(exc, shown, inner, Material)
+        err = to_project_error(exc, shown, inner, Material)
         key = f"{name}.{err.key}" if err.key else name
         raise ProjectError(shown, err.line, key, err.message) from None
 
@@ -243,7 +243,7 @@ def _survey_slope(slope: dict, materials: Any, where: _Where, base_dir: Path) ->
             )
         if key not in allowed:
             if isinstance(key, str):
-                hint = _did_you_mean(key, allowed) or f"; expected one of {', '.join(allowed)}"
+                hint = did_you_mean(key, allowed) or f"; expected one of {', '.join(allowed)}"
             else:
                 hint = f"; keys must be names, expected one of {', '.join(allowed)}"
             raise where.error(("slope", key), f"unknown key {key!r}{hint}")
@@ -286,7 +286,7 @@ def _survey_slope(slope: dict, materials: Any, where: _Where, base_dir: Path) ->
         # (the project's own check would point at slope: in the project file).
         for i, name in enumerate(chosen):
             if name not in materials:
-                hint = _did_you_mean(name, materials) or (
+                hint = did_you_mean(name, materials) or (
                     f"; defined: {', '.join(map(str, materials))}"
                 )
                 problems.append(section.error(i, "material", f"undefined material {name!r}{hint}"))
@@ -390,7 +390,7 @@ class _CsvSection(_Section):
             )
         for number, column in enumerate(columns, start=1):
             if column not in CSV_COLUMNS:
-                hint = _did_you_mean(column, CSV_COLUMNS) or (
+                hint = did_you_mean(column, CSV_COLUMNS) or (
                     f"; expected {', '.join(CSV_COLUMNS)}"
                 )
                 if ";" in column or "\t" in column:
@@ -475,7 +475,7 @@ class _DxfSection(_Section):
         layer = slope["layer"]
         if not isinstance(layer, str) or not layer:
             raise where.error(
-                ("slope", "layer"), f"expected a layer name, got {_describe(layer)}"
+                ("slope", "layer"), f"expected a layer name, got {describe(layer)}"
             )
         self.layer = layer
         try:

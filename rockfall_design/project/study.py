@@ -31,7 +31,7 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from .fields import Integer, String, _as_integer, _as_number, _choice, _Model
-from .messages import _describe, _did_you_mean, _fail, _fmt
+from .messages import _fail, describe, did_you_mean, fmt
 
 #: Most scenarios in one study: each is a full Monte Carlo run.
 MAX_SCENARIOS = 10_000
@@ -55,12 +55,12 @@ class Range(_Model):
         if isinstance(data, dict) and "range" in data:
             value = data["range"]
             if not isinstance(value, list | tuple) or len(value) != 2:
-                raise _fail(f"expected [lo, hi], got {_describe(value)}", ("range",))
+                raise _fail(f"expected [lo, hi], got {describe(value)}", ("range",))
             lo = _as_number(value[0], ("range", 0))
             hi = _as_number(value[1], ("range", 1))
             if not lo < hi:
                 raise _fail(
-                    f"expected [lo, hi] with lo < hi, got [{_fmt(lo)}, {_fmt(hi)}]", ("range",)
+                    f"expected [lo, hi] with lo < hi, got [{fmt(lo)}, {fmt(hi)}]", ("range",)
                 )
             data = {**data, "range": (lo, hi)}
         return data
@@ -82,9 +82,9 @@ def _parse_levels(value: Any) -> Any:
         seen: list[Any] = []
         for i, item in enumerate(value):
             if isinstance(item, float) and not math.isfinite(item):
-                raise _fail(f"must be finite, got {_fmt(item)}", (i,))
+                raise _fail(f"must be finite, got {fmt(item)}", (i,))
             if any(type(item) is type(s) and item == s for s in seen):
-                raise _fail(f"value {_fmt(item)} is listed twice", (i,))
+                raise _fail(f"value {fmt(item)} is listed twice", (i,))
             seen.append(item)
         return list(value)
     if isinstance(value, dict):
@@ -93,7 +93,7 @@ def _parse_levels(value: Any) -> Any:
                 "expected a list of values or {range: [lo, hi]}, got a mapping without 'range'"
             )
         return Range.model_validate(value)
-    raise _fail(f"expected a list of values or {{range: [lo, hi]}}, got {_describe(value)}")
+    raise _fail(f"expected a list of values or {{range: [lo, hi]}}, got {describe(value)}")
 
 
 Levels = Annotated[list[Any] | Range, BeforeValidator(_parse_levels)]
@@ -125,17 +125,17 @@ def _parse_scenarios(value: Any) -> Any:
     if isinstance(value, Sample) or (value == "grid" and isinstance(value, str)):
         return value
     if not isinstance(value, dict):
-        raise _fail(f"expected {_SCENARIOS}, got {_describe(value)}")
+        raise _fail(f"expected {_SCENARIOS}, got {describe(value)}")
     for key in value:
         if key not in Sample.model_fields:
-            hint = _did_you_mean(str(key), list(Sample.model_fields)) or (
+            hint = did_you_mean(str(key), list(Sample.model_fields)) or (
                 f"; expected one of {', '.join(Sample.model_fields)}")
             raise _fail(f"unknown key {key!r}{hint}", (key,))
     if "sample" not in value:
         raise _fail(f"expected {_SCENARIOS}: 'sample' is missing")
     if value["sample"] != "latin_hypercube" or not isinstance(value["sample"], str):
         raise _fail(
-            f"expected latin_hypercube, got {_describe(value['sample'])}", ("sample",)
+            f"expected latin_hypercube, got {describe(value['sample'])}", ("sample",)
         )
     if "n" not in value:
         raise _fail("required key is missing (the number of scenarios drawn)", ("n",))

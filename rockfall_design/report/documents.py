@@ -27,14 +27,14 @@ from .sections import (
     _checks_table,
     _chosen_text,
     _ends_table,
-    _inputs,
     _margin_text,
     _protect_text,
     _resolved_inputs,
     _run_table,
     _scenarios_table,
     _stations_table,
-    _values_text,
+    inputs_table,
+    values_text,
 )
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -144,7 +144,7 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
         "version": __version__,
         "generated": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "run": _run_table(result, summary),
-        "inputs": _inputs(project, command, *_resolved_inputs(result)),
+        "inputs": inputs_table(project, command, *_resolved_inputs(result)),
         "results": [],
         "protect": "",
         "verdict": "",
@@ -220,7 +220,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
     b = summary["binding"]
     figs = dict(figures) if figures is not None else result.figures()
     ctx = report_context(binding, {k: v for k, v in figs.items() if k != "margins"})
-    name = f"binding scenario {b['index']} ({_values_text(b['values'])})"
+    name = f"binding scenario {b['index']} ({values_text(b['values'])})"
     # The run: the project as written, the run seed the scenarios' seeds derive from.
     head = SimpleNamespace(project=project, command="check")
     run = _run_table(head, {**binding.summary, "seed": summary["seed"],
@@ -236,13 +236,13 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
     run.rows[at:at] = [
         ["scenarios", f"{summary['of']}; the design must hold in {summary['required']} "
          f"(design.scenarios share {summary['share']:g})"],
-        ["binding scenario", f"{b['index']} ({_values_text(b['values'])}), seed {b['seed']}: "
+        ["binding scenario", f"{b['index']} ({values_text(b['values'])}), seed {b['seed']}: "
          + _margin_text(b["margin"], b["binds_at"])],
     ]
     ctx["run"] = run
     study = project.resolved_dict().get("study") or {}
     vary = study.get("vary") or {}
-    ctx["inputs"] = _inputs(project, "check") + [Table(
+    ctx["inputs"] = inputs_table(project, "check") + [Table(
         "Study: the varied inputs", ["input (path in the project)", "values"],
         [[k, ", ".join(map(str, v)) if isinstance(v, list) else str(v)]
          for k, v in vary.items()],

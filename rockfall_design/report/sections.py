@@ -73,7 +73,7 @@ def _flat(d: Mapping[str, Any], prefix: str = "") -> list[list[str]]:
     return rows
 
 
-def _inputs(project: Any, command: str, resolved: Mapping[str, Any] | None = None,
+def inputs_table(project: Any, command: str, resolved: Mapping[str, Any] | None = None,
             concepts: Mapping[str, str] | None = None) -> list[Table]:
     """Every input of the run, so that the report alone rebuilds the project.
 
@@ -401,7 +401,7 @@ def _bill_table(bill: Mapping[str, Any]) -> Table:
                  highlight=[False] * len(bill["items"]) + [True])
 
 
-def _values_text(values: Mapping[str, Any]) -> str:
+def values_text(values: Mapping[str, Any]) -> str:
     return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
 
 

@@ -477,12 +477,12 @@ def plot_study(
 
 def plugins_table(registry: Registry) -> Group:
     """The registry as rich tables (``rockfall-design plugins``)."""
-    from ..plugins.listing import _SECTIONS, _parameter_list
+    from ..plugins.listing import SECTIONS, parameter_list
 
     titles = {"measures": "Measures", "safety_concepts": "Safety concepts",
               "cost_models": "Cost models"}
     parts: list[Any] = []
-    for section, _what, _hook, _base, name_attr, key in _SECTIONS:
+    for section, _what, _hook, _base, name_attr, key in SECTIONS:
         table = Table(title=titles[section], title_justify="left", expand=False)
         table.add_column(name_attr, style="bold")
         table.add_column("summary")
@@ -494,7 +494,7 @@ def plugins_table(registry: Registry) -> Group:
         for name, cls in entries.items():
             shown = ", ".join(
                 p["name"] + (f" ({p['unit']})" if p["unit"] not in (None, "") else "")
-                for p in _parameter_list(cls))
+                for p in parameter_list(cls))
             origin = registry.origins.get((key, name))
             table.add_row(name, str(getattr(cls, "summary", "") or ""), shown,
                           registry.provider.get((key, name), ""),
@@ -502,7 +502,7 @@ def plugins_table(registry: Registry) -> Group:
         if not entries:
             table.add_row(Text("(none)", style="dim"), "", "", "", "")
         parts.append(table)
-    if not any(getattr(registry, section[0]) for section in _SECTIONS):
+    if not any(getattr(registry, section[0]) for section in SECTIONS):
         parts.append(Text(
             "No plugin provides anything. The built-in plugins are found through the "
             "entry points of the installed distribution: is rockfall-design installed "

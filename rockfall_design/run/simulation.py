@@ -35,7 +35,7 @@ from .releases import (
     section_from_project,
 )
 from .streamed import _STOP_BUCKETS, REST_SAMPLE, STREAM_REL_ERROR, StreamedStudy
-from .summary import _STATION_QUANTITIES, STATISTICS, _pct_label, _stat_block, _summary
+from .summary import STATION_QUANTITIES, STATISTICS, percentile_label, run_summary, stat_block
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -240,7 +240,7 @@ class Study:
                 col = np.full(r.grid.size, np.nan)
                 if has.any():
                     col[has] = np.nanpercentile(arr[:, has], q, axis=0)
-                out[f"{name}_p{_pct_label(q)}_{unit}"] = col
+                out[f"{name}_p{percentile_label(q)}_{unit}"] = col
         df = pd.DataFrame(out)
         self._cache["env"] = df
         return df
@@ -251,14 +251,14 @@ class Study:
         r = self.result
         a = self.crossing_arrays()
         blocks = {
-            key: [_stat_block(a[arr][:, j] / scale) for j in range(r.stations.size)]
-            for key, (arr, scale) in _STATION_QUANTITIES.items()
+            key: [stat_block(a[arr][:, j] / scale) for j in range(r.stations.size)]
+            for key, (arr, scale) in STATION_QUANTITIES.items()
         }
         crossings = np.isfinite(a["passing_height_m"]).sum(axis=0)
-        stop_block = _stat_block(r.x_end[r.status == STOPPED])
+        stop_block = stat_block(r.x_end[r.status == STOPPED])
         protect = self.project.protect
         reaching = None if protect is None else protected_zone_counts(r.max_x, r.status, protect.x)
-        return _summary(self, r.events_total, crossings, blocks, stop_block, reaching)
+        return run_summary(self, r.events_total, crossings, blocks, stop_block, reaching)
 
 
 def run_study(
@@ -354,7 +354,7 @@ def study_memory(project: Project, rocks: int) -> int:
     n_log = probe.n_buckets
     # The histograms, and while adding to one of them its temporaries and a
     # fresh count array of the same size (np.bincount).
-    histograms = 8 * n_log * (2 * s + len(_STATION_QUANTITIES) * u) + 8 * _STOP_BUCKETS
+    histograms = 8 * n_log * (2 * s + len(STATION_QUANTITIES) * u) + 8 * _STOP_BUCKETS
     adding = probe.ADD_TEMPORARY_BYTES + 8 * n_log * s
     # The engine computes the next chunk while this one is being added: its
     # float32 envelope values and crossings are held too.

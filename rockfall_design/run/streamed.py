@@ -11,7 +11,7 @@ from ..engine.columns import STATUS_NAMES, STOPPED
 from ..engine.trajectory import centre_points, end_counts
 from .histograms import LinearHistogram, LogHistogram
 from .reach import protected_zone_counts
-from .summary import _STATION_QUANTITIES, _hist_blocks, _pct_label, _summary
+from .summary import STATION_QUANTITIES, histogram_blocks, percentile_label, run_summary
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -67,7 +67,7 @@ class StreamedStudy:
 
     def __post_init__(self) -> None:
         u, s = self.stations.size, self.grid.size
-        self._station = {k: LogHistogram(u, STREAM_REL_ERROR) for k in _STATION_QUANTITIES}
+        self._station = {k: LogHistogram(u, STREAM_REL_ERROR) for k in STATION_QUANTITIES}
         self._env_h = LogHistogram(s, STREAM_REL_ERROR)
         self._env_e = LogHistogram(s, STREAM_REL_ERROR)
         self._stops = LinearHistogram(self.section.x[0], self.section.x[-1], _STOP_BUCKETS)
@@ -85,7 +85,7 @@ class StreamedStudy:
         """Add the rocks of one chunk (a :class:`Study` of consecutive rocks)."""
         r = part.result
         a = part.crossing_arrays()
-        for key, (arr, scale) in _STATION_QUANTITIES.items():
+        for key, (arr, scale) in STATION_QUANTITIES.items():
             self._station[key].add(a[arr], scale)
         self._env_h.add(r.grid_height)
         self._env_e.add(r.grid_energy, 1e3)
@@ -143,14 +143,14 @@ class StreamedStudy:
         for name, hist, unit in (("height", self._env_h, "m"), ("energy", self._env_e, "kj")):
             out[f"{name}_max_{unit}"] = hist.maximum()
             for q in self.project.analysis.percentiles:
-                out[f"{name}_p{_pct_label(q)}_{unit}"] = hist.percentile(q)
+                out[f"{name}_p{percentile_label(q)}_{unit}"] = hist.percentile(q)
         return pd.DataFrame(out)
 
     def summary(self) -> dict[str, Any]:
         """As :meth:`Study.summary`, from the histograms."""
-        blocks = {key: _hist_blocks(h) for key, h in self._station.items()}
+        blocks = {key: histogram_blocks(h) for key, h in self._station.items()}
         crossings = self._station["passing_height_m"].n
-        stop_block = _hist_blocks(self._stops)[0]
+        stop_block = histogram_blocks(self._stops)[0]
         reaching = (None if self.project.protect is None
                     else (self.reaching, self.reaching_unresolved))
-        return _summary(self, self.events, crossings, blocks, stop_block, reaching)
+        return run_summary(self, self.events, crossings, blocks, stop_block, reaching)

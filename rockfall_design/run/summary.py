@@ -18,7 +18,7 @@ if TYPE_CHECKING:  # pragma: no cover
 STATISTICS = ("mean", "p50", "p95", "p99", "max")
 
 
-def _stat_block(values: np.ndarray) -> dict[str, float | None]:
+def stat_block(values: np.ndarray) -> dict[str, float | None]:
     """mean, p50, p95, p99, max of the finite values (None if there are none)."""
     v = np.asarray(values, dtype=float)
     v = v[np.isfinite(v)]
@@ -35,7 +35,7 @@ def _stat_block(values: np.ndarray) -> dict[str, float | None]:
 
 
 # Per station: summary key -> (crossing array, divisor to the reported unit).
-_STATION_QUANTITIES: dict[str, tuple[str, float]] = {
+STATION_QUANTITIES: dict[str, tuple[str, float]] = {
     "passing_height_m": ("passing_height_m", 1.0),
     "velocity_ms": ("velocity_ms", 1.0),
     "energy_kj": ("energy_j", 1e3),
@@ -44,7 +44,7 @@ _STATION_QUANTITIES: dict[str, tuple[str, float]] = {
 }
 
 
-def _summary(
+def run_summary(
     study: Study | StreamedStudy,
     events: int,
     crossings: np.ndarray,
@@ -65,7 +65,7 @@ def _summary(
     stations = []
     for j, xs in enumerate(study.stations):
         st: dict[str, Any] = {"x": float(xs), "crossings": int(crossings[j])}
-        st.update({key: blocks[key][j] for key in _STATION_QUANTITIES})
+        st.update({key: blocks[key][j] for key in STATION_QUANTITIES})
         stations.append(st)
     out: dict[str, Any] = {
         "project": study.project.name,
@@ -99,12 +99,12 @@ def _summary(
     return out
 
 
-def _pct_label(q: float) -> str:
+def percentile_label(q: float) -> str:
     """'95' for 95.0, '99_9' for 99.9 (column-name safe)."""
     return f"{q:g}".replace(".", "_")
 
 
-def _hist_blocks(h: LogHistogram | LinearHistogram) -> list[dict[str, float | None]]:
+def histogram_blocks(h: LogHistogram | LinearHistogram) -> list[dict[str, float | None]]:
     """The statistics block of each column of a histogram (None where empty)."""
     cols = {
         "mean": h.mean(),

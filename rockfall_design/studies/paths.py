@@ -30,7 +30,7 @@ from pydantic import ValidationError
 from ..errors import ProjectError
 from ..judge.plan import plan_for
 from ..project import Project
-from ..project.messages import _describe, _did_you_mean, _to_project_error
+from ..project.messages import describe, did_you_mean, to_project_error
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
@@ -107,7 +107,7 @@ def _absolute(keys: tuple, data: Mapping[str, Any]) -> tuple:
     if first in ALIASES:
         return (*ALIASES[first], *keys[1:])
     sections = [k for k in data if isinstance(k, str)]
-    hint = _did_you_mean(str(first), sections) or f"; the sections are {', '.join(sections)}"
+    hint = did_you_mean(str(first), sections) or f"; the sections are {', '.join(sections)}"
     raise PathError(f"no section {first!r} in the project{hint}")
 
 
@@ -130,11 +130,11 @@ def _step(container: Any, key: str | int, done: tuple) -> Any:
         if done and done[0] in _PLUGIN_SECTIONS:
             return str(key) if isinstance(key, int) else key  # the plugin validates it
         keys = [k for k in container if isinstance(k, str)]
-        hint = _did_you_mean(str(key), keys) or (
+        hint = did_you_mean(str(key), keys) or (
             f"; expected one of {', '.join(keys)}" if keys else ""
         )
         raise PathError(f"no key {key!r} in {where}{hint}")
-    raise PathError(f"{where} is a single value ({_describe(container)}), not a mapping or list")
+    raise PathError(f"{where} is a single value ({describe(container)}), not a mapping or list")
 
 
 #: Inputs a study may not vary, by their keys from the top of the file, and why.
@@ -183,20 +183,20 @@ def set_input(data: dict[str, Any], path: str, value: Any) -> None:
 
 def _validate(project: Project, data: dict[str, Any]) -> Project:
     """``data`` as a validated Project that reports later problems in ``project``'s file."""
-    from ..project.loading import _attach_catalogues
+    from ..project.loading import attach_catalogues
 
     new = Project.model_validate(data)
     new._source = project._source
     new._lines = project._lines  # plugin problems are then located in the same file
     if new.design is not None:
         # the catalogues are inline in the resolved data: nothing is read again
-        _attach_catalogues(new, ".")
+        attach_catalogues(new, ".")
     return new
 
 
 def _problem(exc: ValidationError) -> str:
     """A validation error of resolved data as ``key.path: message``."""
-    err = _to_project_error(exc, "", {}, Project)
+    err = to_project_error(exc, "", {}, Project)
     return f"{err.key}: {err.message}" if err.key else err.message
 
 
@@ -276,8 +276,8 @@ def with_values(project: Project, values: Mapping[str, Any], *,
         try:
             Project.model_validate(alone)
         except ValidationError as exc:
-            raise located(path, f"value {_describe(value)}: {_problem(exc)}") from None
-    given = ", ".join(f"{path} = {_describe(value)}" for path, value in values.items())
+            raise located(path, f"value {describe(value)}: {_problem(exc)}") from None
+    given = ", ".join(f"{path} = {describe(value)}" for path, value in values.items())
     first = next(iter(values))
     raise located(first, f"the values {given} do not fit together: {combined}")
 
@@ -320,7 +320,7 @@ def check_study(project: Project, registry: Any = None) -> None:
             except ProjectError as exc:
                 where = f"{exc.key}: " if exc.key else ""
                 raise project.error_at(
-                    ("study", "vary", path), f"value {_describe(value)}: {where}{exc.message}"
+                    ("study", "vary", path), f"value {describe(value)}: {where}{exc.message}"
                 ) from None
 
 

@@ -80,7 +80,7 @@ def _relocated(project: Project, scenario: Scenario, exc: ProjectError) -> Proje
     on (``measures[0].height`` for a complaint at ``measures[0]``), else the
     first one; the message names the scenario and all its values.
     """
-    from ..project.messages import _describe
+    from ..project.messages import describe
     from .paths import ALIASES, _shown, parse_path
 
     def key_text(path: str) -> str:
@@ -93,7 +93,7 @@ def _relocated(project: Project, scenario: Scenario, exc: ProjectError) -> Proje
     blamed = next((p for p in paths if exc.key and (key_text(p).startswith(exc.key)
                                                     or exc.key.startswith(key_text(p)))),
                   paths[0])
-    given = ", ".join(f"{p} = {_describe(v)}" for p, v in scenario.values.items())
+    given = ", ".join(f"{p} = {describe(v)}" for p, v in scenario.values.items())
     where = f"{exc.key}: " if exc.key else ""
     return project.error_at(("study", "vary", blamed),
                             f"scenario {scenario.index} ({given}): {where}{exc.message}")
@@ -260,7 +260,7 @@ def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> dict[str
     from ..engine.columns import STOPPED
     from ..run.reach import protected_zone_counts
     from ..run.simulation import Study
-    from ..run.summary import _STATION_QUANTITIES, STATISTICS, _stat_block, _summary
+    from ..run.summary import STATION_QUANTITIES, STATISTICS, run_summary, stat_block
 
     if not isinstance(study, Study):
         return {**study.summary(), "project_hash": project_hash}
@@ -269,16 +269,16 @@ def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> dict[str
     kept = {float(x) for x in own}
     empty = dict.fromkeys(STATISTICS)
     blocks = {
-        key: [_stat_block(a[arr][:, j] / scale)
+        key: [stat_block(a[arr][:, j] / scale)
               if key in QUANTITIES or float(x) in kept else dict(empty)
               for j, x in enumerate(r.stations)]
-        for key, (arr, scale) in _STATION_QUANTITIES.items()
+        for key, (arr, scale) in STATION_QUANTITIES.items()
     }
     crossings = np.isfinite(a["passing_height_m"]).sum(axis=0)
-    stop_block = _stat_block(r.x_end[r.status == STOPPED])
+    stop_block = stat_block(r.x_end[r.status == STOPPED])
     protect = study.project.protect
     reaching = None if protect is None else protected_zone_counts(r.max_x, r.status, protect.x)
-    return _summary(study, r.events_total, crossings, blocks, stop_block, reaching,
+    return run_summary(study, r.events_total, crossings, blocks, stop_block, reaching,
                     project_hash)
 
 
@@ -345,9 +345,9 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
     protect = summary.get("protect")
     if protect is not None:
         from ..judge.bounds import fraction_bounds, fraction_lower_bound, fraction_upper_bound
-        from ..project.messages import _fmt
+        from ..project.messages import fmt
 
-        name = f"x={_fmt(protect['x'])} residual"
+        name = f"x={fmt(protect['x'])} residual"
         x, n = int(protect["reaching"]), int(summary["rocks"])
         out["upper"][name] = fraction_upper_bound(x, n, confidence)
         out["lower"][name] = fraction_lower_bound(x, n, confidence)

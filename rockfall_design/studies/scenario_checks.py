@@ -16,7 +16,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..project import Project
 
 
-def _values_text(values: dict[str, Any]) -> str:
+def values_text(values: dict[str, Any]) -> str:
     return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
 
 
@@ -97,7 +97,7 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
     ranked = sorted(per, key=lambda p: (-(math.inf if p["margin"] is None else p["margin"]),
                                         -p["index"]))  # ties: the first scenario binds
     bind = ranked[min(required, len(ranked)) - 1]
-    failures = [f"scenario {p['index']} ({_values_text(p['values'])}): {f}"
+    failures = [f"scenario {p['index']} ({values_text(p['values'])}): {f}"
                 for p in per for f in p.get("failures", [])]
     from ..judge.verdict import UNTESTED, verdict_of_scenarios
 

@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from ..project.messages import _fmt
+from ..project.messages import fmt
 from ..project.study import Range, StudySpec
 
 __all__ = ["targets", "sensitivity", "TARGET_STATISTICS", "salib_available", "LADDER",
@@ -74,9 +74,9 @@ def place_names(stations: Sequence[Mapping[str, Any]], barriers: Sequence[tuple[
     """(name, x) of the places of design values: ``x=100`` per station of ``stations``
     (the analysis stations of a summary), ``measures[0] x=160`` per barrier."""
     own = [float(x) for x in project.analysis.stations] if project is not None else None
-    out = [(f"x={_fmt(st['x'])}", float(st["x"])) for st in stations
+    out = [(f"x={fmt(st['x'])}", float(st["x"])) for st in stations
            if own is None or float(st["x"]) in own]
-    out += [(f"measures[{i}] x={_fmt(x)}", float(x)) for i, _, x in barriers]
+    out += [(f"measures[{i}] x={fmt(x)}", float(x)) for i, _, x in barriers]
     return out
 
 
@@ -92,8 +92,8 @@ def targets(results: Sequence[Mapping[str, Any]]) -> dict[str, tuple[str, np.nda
     units: dict[str, str] = {}
     for result in results:
         row: dict[str, float] = {}
-        places = [(f"x={_fmt(st['x'])}", st) for st in result["stations"]]
-        places += [(f"measures[{m['index']}] x={_fmt(m['x'])}", m)
+        places = [(f"x={fmt(st['x'])}", st) for st in result["stations"]]
+        places += [(f"measures[{m['index']}] x={fmt(m['x'])}", m)
                    for m in result.get("measures", ())]
         for where, block in places:
             for quantity, unit in _QUANTITIES:
@@ -103,7 +103,7 @@ def targets(results: Sequence[Mapping[str, Any]]) -> dict[str, tuple[str, np.nda
                     units[name] = unit
         protect = result.get("protect")
         if protect is not None:
-            name = f"x={_fmt(protect['x'])} residual"
+            name = f"x={fmt(protect['x'])} residual"
             row[name] = float(protect["fraction"])
             units[name] = "fraction"
         rows.append(row)

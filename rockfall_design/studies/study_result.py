@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..project import Project
-from ..project.messages import _fmt
+from ..project.messages import fmt
 from .scenarios import Scenario
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -40,7 +40,7 @@ _TORNADO_TARGETS = 4
 def _text(value: Any) -> str:
     """A varied value for a table cell or a legend: numbers as written, the rest as JSON."""
     if isinstance(value, bool | int | float | str):
-        return _fmt(value)
+        return fmt(value)
     return json.dumps(value, sort_keys=True)
 
 

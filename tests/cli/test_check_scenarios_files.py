@@ -8,7 +8,7 @@ from pathlib import Path
 from rockfall_design.cli.program import main
 from rockfall_design.project import load_project
 
-from ..optimise.test_across import _text
+from ..optimiser.test_across import _text
 
 FIGURES = ("profile", "envelopes", "stops", "margins")
 

@@ -221,7 +221,7 @@ def test_check_names_the_product_whose_net_reaches_the_protected_zone(tmp_path, 
 # --------------------------------------------------------------------------------------
 
 def _small(tmp_path, rx050: str):
-    from ..optimise.test_optimise import PROJECTS, SMALL
+    from ..optimiser.test_optimise import PROJECTS, SMALL
 
     products = (PROJECTS / "catalogue_products.yaml").read_text()
     old = "RX-050: {capacity_kj: 500, heights: [2, 3, 4]}"
