@@ -9,6 +9,8 @@ the same path whatever batch it runs in and whatever the other rocks do.
 from __future__ import annotations
 
 import os
+import threading
+import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from contextvars import ContextVar
@@ -19,6 +21,7 @@ from numba import njit
 
 from . import core
 from ._jit import CACHE, compile_notice
+from .flight import path_tree
 from .profile import centre_path
 from .records import (
     N_REL_COLS,
@@ -86,6 +89,55 @@ def default_threads() -> int:
         return max(1, os.cpu_count() or 1)
 
 STATUS_NAMES = core.STATUS_NAMES
+
+BATCH_SECONDS = 0.1
+"""Work per batch that the batch sizes aim at (s of one thread).
+
+A batch runs to its end once started (compiled code does not look at
+signals), so an interrupt takes effect within about this time after the
+running batches end, whatever the cost of a rock (issue 27, item 2). The
+size adapts to the measured cost per rock: 4096 rocks of the standard slope
+take about 0.01 s, one rock on a survey of 100,000 points several ms.
+"""
+
+FIRST_BATCH = 16
+"""Rocks in the first batch, before the cost of a rock is known."""
+
+
+class _Batches:
+    """Cuts rocks 0..n-1 into consecutive batches sized to :data:`BATCH_SECONDS`.
+
+    Thread-safe. The results do not depend on where the cuts fall (each rock
+    draws from its own stream), so sizing them by measured time is harmless.
+    """
+
+    def __init__(self, n: int, most: int) -> None:
+        self.n = n
+        self.most = max(1, int(most))
+        self.next = 0
+        self.size = min(self.most, FIRST_BATCH)
+        self.rocks = 0
+        self.seconds = 0.0
+        self.lock = threading.Lock()
+
+    def take(self) -> tuple[int, int] | None:
+        """The next batch (first rock, end), or None when every rock is given out."""
+        with self.lock:
+            if self.next >= self.n:
+                return None
+            a = self.next
+            self.next = min(self.n, a + self.size)
+            return a, self.next
+
+    def done(self, rocks: int, seconds: float) -> None:
+        """Record that ``rocks`` rocks took ``seconds`` (one thread); size the next batches."""
+        with self.lock:
+            self.rocks += rocks
+            self.seconds += seconds
+            per_rock = self.seconds / max(self.rocks, 1)
+            fit = int(BATCH_SECONDS / per_rock) if per_rock > 0.0 else self.most
+            # Grow at most 8-fold per batch: the first batches may be cheap ones.
+            self.size = max(1, min(self.most, fit, 8 * self.size))
 
 
 @dataclass(frozen=True)
@@ -360,13 +412,32 @@ class EnsembleResult:
 # writes only its own rows, and draws from its own stream, so the results do
 # not depend on how the rocks are shared among threads.
 @njit(cache=CACHE, nogil=True)
-def _run_batch(ground, settings, max_chord, key, first_index, rel, resume, stations, bars, out):
+def rock_path(ground, r, max_chord):
+    """The ground as a rock of radius ``r`` (m) meets it (``records.Path``).
+
+    Its centre path (``profile.centre_path``) and the tree of its highest
+    vertices (``flight.path_tree``); ``max_chord`` (rad) as in ``centre_path``.
+    """
+    px, py, pseg = centre_path(ground.x, ground.y, np.arange(ground.x.shape[0] - 1), r,
+                               max_chord)
+    return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
+
+
+@njit(cache=CACHE, nogil=True)
+def _run_batch(ground, path0, r0, settings, max_chord, key, first_index, rel, resume,
+               stations, bars, out):
     """Run the rocks of one batch (rows of ``rel``) and write their rows of ``out``.
 
     Parameters
     ----------
     ground : Ground
         The section (``records.Ground``).
+    path0 : Path
+        The ground as rocks of radius ``r0`` meet it (:func:`rock_path`),
+        made once per run: the rocks of that radius use it, the others have
+        theirs made here.
+    r0 : float
+        The radius of ``path0`` (m).
     settings : ndarray of float, shape (N_SETTINGS,)
     max_chord : float
         Largest turn (rad) of a chord of the centre path at a convex vertex.
@@ -386,11 +457,8 @@ def _run_batch(ground, settings, max_chord, key, first_index, rel, resume, stati
         The batch's rows of every output (``records.BatchOut``).
     """
     n = rel.shape[0]
-    nseg = ground.x.shape[0] - 1
-    seg_ids = np.arange(nseg)
-    r_prev = -1.0
-    path = Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
-                ground.mats)
+    path = path0
+    r_prev = r0
     ns = stations.x.shape[0]
     gh = np.empty(ns)
     ge = np.empty(ns)
@@ -404,8 +472,7 @@ def _run_batch(ground, settings, max_chord, key, first_index, rel, resume, stati
         r = rel[i, REL_R]
         if r != r_prev:
             # Rocks of one size share their centre path.
-            px, py, pseg = centre_path(ground.x, ground.y, seg_ids, r, max_chord)
-            path = Path(px, py, pseg, ground.seg_mat, ground.mats)
+            path = path0 if r == r0 else rock_path(ground, r, max_chord)
             r_prev = r
         if resume.mask[i]:
             rng[0] = resume.rngs[i]
@@ -495,8 +562,9 @@ def run_ensemble(
     max_trajectory_points : int
         Rows kept per recorded trajectory.
     batch_size : int
-        Rocks per compiled call (memory and progress granularity only; the
-        results do not depend on it).
+        Most rocks per compiled call (memory and progress granularity only;
+        the results do not depend on it). Batches are smaller where rocks are
+        costly, so that each takes about :data:`BATCH_SECONDS`.
     progress : callable, optional
         Called with the number of rocks done after each batch.
     first_index : int
@@ -577,6 +645,11 @@ def run_ensemble(
     max_chord = float(np.radians(settings.max_chord_deg))
 
     ground = Ground(section.x, section.y, section.segment_material, mats)
+    # The centre path of the first rock's radius, made once for the whole run
+    # (on a fixed size, for every rock): on a survey of many points it costs
+    # more than many rocks, and the batches stay short (see batch_size).
+    r0 = float(radius[0]) if n else 1.0
+    path0 = rock_path(ground, r0, max_chord) if n else None
     stations_rec = Stations(grid_all, st_yg, st_user, st_srow)
     resume_rec = Resume(res_mask, states0, rngs0)
     out = BatchOut(status, x_end, y_end, n_imp, n_ev, max_x, dur, caught_s, grid_h, grid_e,
@@ -592,38 +665,55 @@ def run_ensemble(
             else getattr(out, f)[sl]
             for f in BatchOut._fields
         )
-        return (ground, sv, max_chord, k64, int(first_index) + a, rel[sl],
+        return (ground, path0, r0, sv, max_chord, k64, int(first_index) + a, rel[sl],
                 Resume._make(x[sl] for x in resume_rec), stations_rec, bars, rows)
 
+    batches = _Batches(n, batch_size)
+
     def run(a: int, b: int) -> int:
+        t0 = time.perf_counter()
         _run_batch(*batch_args(a, b))
+        batches.done(b - a, time.perf_counter() - t0)
         return b - a
 
-    spans = [(a, min(a + batch_size, n)) for a in range(0, n, batch_size)]
     n_done = 0
-    if spans:
+    first = batches.take()
+    if first is not None:
         # The first batch runs alone if it compiles the kernel (said on stderr).
-        compiled = compile_notice(_run_batch, batch_args(*spans[0]))
+        compiled = compile_notice(_run_batch, batch_args(*first))
         if compiled is not None:
-            n_done += run(*spans[0])
+            n_done += run(*first)
             compiled()
             if progress is not None:
                 progress(n_done)
-            spans = spans[1:]
-    nthreads = min(len(spans), threads if threads is not None else default_threads())
+            first = batches.take()
+    left = n - (first[0] if first is not None else n)
+    nthreads = min(threads if threads is not None else default_threads(),
+                   -(-left // FIRST_BATCH))
     if nthreads <= 1:
-        for a, b in spans:
-            n_done += run(a, b)
+        span = first
+        while span is not None:
+            n_done += run(*span)
             if progress is not None:
                 progress(n_done)
+            span = batches.take()
     else:
         with ThreadPoolExecutor(max_workers=nthreads) as pool:
-            pending = {pool.submit(run, a, b) for a, b in spans}
+            # One batch per thread at a time, each cut when a thread is free,
+            # so that its size follows the measured cost of a rock.
+            pending = set()
+            span = first
+            while span is not None and len(pending) < nthreads:
+                pending.add(pool.submit(run, *span))
+                span = batches.take() if len(pending) < nthreads else None
             try:
                 while pending:
                     finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                     for f in finished:
                         n_done += f.result()
+                        nxt = batches.take()
+                        if nxt is not None:
+                            pending.add(pool.submit(run, *nxt))
                     if progress is not None:
                         progress(n_done)
             except BaseException:
