@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from . import core
-from ._jit import CACHE, compile_notice
+from . import _native, core
+from ._jit import CACHE, DIGEST, compile_notice
 from .flight import path_tree
 from .profile import centre_path
 from .records import (
@@ -102,6 +102,10 @@ take about 0.01 s, one rock on a survey of 100,000 points several ms.
 
 FIRST_BATCH = 16
 """Rocks in the first batch, before the cost of a rock is known."""
+
+SHARED_PATH_VERTICES = 256
+"""Sections of more vertices than this have the centre path of a run's first radius
+made once per run rather than once per batch (see :func:`run_ensemble`)."""
 
 
 class _Batches:
@@ -645,11 +649,18 @@ def run_ensemble(
     max_chord = float(np.radians(settings.max_chord_deg))
 
     ground = Ground(section.x, section.y, section.segment_material, mats)
-    # The centre path of the first rock's radius, made once for the whole run
-    # (on a fixed size, for every rock): on a survey of many points it costs
-    # more than many rocks, and the batches stay short (see batch_size).
-    r0 = float(radius[0]) if n else 1.0
-    path0 = rock_path(ground, r0, max_chord) if n else None
+    # On a survey of many points, the centre path of the first rock's radius
+    # is made once for the whole run (on a fixed size, for every rock): it
+    # costs more than many rocks, and the batches stay short (see
+    # batch_size). On a few points each batch makes its own, which costs
+    # less than loading numba's compiler to call rock_path from here.
+    if n and section.x.size > SHARED_PATH_VERTICES:
+        r0 = float(radius[0])
+        path0 = rock_path(ground, r0, max_chord)
+    else:
+        r0 = -1.0  # no rock has it: every batch makes its paths
+        path0 = Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
+                     ground.mats, np.empty(0))
     stations_rec = Stations(grid_all, st_yg, st_user, st_srow)
     resume_rec = Resume(res_mask, states0, rngs0)
     out = BatchOut(status, x_end, y_end, n_imp, n_ev, max_x, dur, caught_s, grid_h, grid_e,
@@ -670,9 +681,18 @@ def run_ensemble(
 
     batches = _Batches(n, batch_size)
 
+    # The kernel's kept machine code if it fits these arguments (_native:
+    # no numba compiler to load), else numba's dispatcher, which keeps it.
+    native = _native.load(_run_batch, DIGEST) if n else None
+
     def run(a: int, b: int) -> int:
         t0 = time.perf_counter()
-        _run_batch(*batch_args(a, b))
+        args = batch_args(a, b)
+        if native is not None and native.accepts(args):
+            native(*args)
+        else:
+            _run_batch(*args)
+            _native.export(_run_batch, args, DIGEST)
         batches.done(b - a, time.perf_counter() - t0)
         return b - a
 
@@ -680,7 +700,9 @@ def run_ensemble(
     first = batches.take()
     if first is not None:
         # The first batch runs alone if it compiles the kernel (said on stderr).
-        compiled = compile_notice(_run_batch, batch_args(*first))
+        args0 = batch_args(*first)
+        compiled = (None if native is not None and native.accepts(args0)
+                    else compile_notice(_run_batch, args0))
         if compiled is not None:
             n_done += run(*first)
             compiled()
