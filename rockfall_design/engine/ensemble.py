@@ -15,6 +15,7 @@ from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from contextvars import ContextVar
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -100,8 +101,9 @@ size adapts to the measured cost per rock: 4096 rocks of the standard slope
 take about 0.01 s, one rock on a survey of 100,000 points several ms.
 """
 
-FIRST_BATCH = 16
-"""Rocks in the first batch, before the cost of a rock is known."""
+FIRST_BATCH = 1
+"""Rocks in the first batch, before the cost of a rock is known (a rock of a survey of
+100,000 points and a size of its own costs seconds; batches grow 8-fold from there)."""
 
 SHARED_PATH_VERTICES = 256
 """Sections of more vertices than this have the centre path of a run's first radius
@@ -656,7 +658,7 @@ def run_ensemble(
     # less than loading numba's compiler to call rock_path from here.
     if n and section.x.size > SHARED_PATH_VERTICES:
         r0 = float(radius[0])
-        path0 = rock_path(ground, r0, max_chord)
+        path0 = _off_the_main_thread(rock_path, ground, r0, max_chord)
     else:
         r0 = -1.0  # no rock has it: every batch makes its paths
         path0 = Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
@@ -769,6 +771,33 @@ def run_ensemble(
         restart_state=srec,
         restart_rng=srng,
     )
+
+
+def _off_the_main_thread(fn: Callable[..., Any], *args: Any) -> Any:
+    """``fn(*args)`` run on a thread of its own, waited for here.
+
+    For a compiled call that takes seconds (the centre path of a survey of
+    100,000 points): an interrupt is raised here at once instead of after
+    the call (the call itself runs on, on a daemon thread that does not hold
+    the process at exit), and never while numba turns the call's result into
+    Python objects, which an exception at that moment can crash (measured: a
+    segmentation fault on Ctrl-C during the centre path of such a survey).
+    """
+    box: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            box["value"] = fn(*args)
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller below
+            box["error"] = exc
+
+    th = threading.Thread(target=target, name="rockfall-design centre path", daemon=True)
+    th.start()
+    while th.is_alive():
+        th.join(0.05)
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
 
 
 def _caught_in_given_order(caught: np.ndarray, order: np.ndarray) -> np.ndarray:
