@@ -1,8 +1,10 @@
-"""A flight over a dense survey finds its landing by blocks (issue 27, item 8).
+"""The engine on dense surveys (issue 27, item 8).
 
 ``flight.next_landing`` skips the blocks of the centre path that a flight
-clears (``flight.path_tree``); these tests hold it to a plain piece-by-piece
-walk over random noisy surveys: the same piece and the same time, to the bit.
+clears (``flight.path_tree``), and ``profile.centre_path`` leaves out of its
+sweep the pieces a vertex's circle hides (``profile._hidden``); these tests
+hold both to the plain versions over random noisy surveys: the same piece,
+time and path, to the bit.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from rockfall_design.engine.flight import (
     next_landing,
     path_tree,
 )
-from rockfall_design.engine.profile import centre_path
+from rockfall_design.engine.profile import _centre_path, _hidden, _raw_pieces, centre_path
 
 SETTINGS = settings(
     max_examples=int(os.environ.get("RF_EXAMPLES", "40")),
@@ -160,3 +162,33 @@ def test_runs_on_a_noisy_survey_are_the_same_on_one_and_two_threads():
     for name in ("status", "x_end", "y_end", "n_events", "max_x", "grid_height"):
         np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
     assert (one.x_end > 100.0).any()
+
+
+@SETTINGS
+@given(
+    n=st.sampled_from([8, 200, 3000]),
+    noise=st.sampled_from([0.0, 0.003, 0.01, 0.3]),
+    seed=st.integers(0, 2**16),
+    r=st.sampled_from([0.01, 0.05, 0.5, 2.0]),
+    chord=st.sampled_from([1.0, 5.0, 20.0]),
+)
+def test_leaving_hidden_pieces_out_keeps_the_centre_path_to_the_bit(n, noise, seed, r, chord):
+    # The sweep leaves out the pieces a vertex's circle hides (profile._hidden);
+    # the path must be the one the sweep over every piece gives.
+    x, y = noisy_survey(n, noise, seed)
+    seg = np.arange(n - 1)
+    fast = _centre_path(x, y, seg, r, np.radians(chord), True)
+    full = _centre_path(x, y, seg, r, np.radians(chord), False)
+    for a, b in zip(fast, full, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_most_pieces_of_a_dense_noisy_survey_are_hidden():
+    x, y = noisy_survey(30_000, 0.01, 4)
+    r = 0.5
+    ext = 2 * r + 1
+    ex = np.r_[x[0] - ext, x, x[-1] + ext]
+    ey = np.r_[y[0], y, y[-1]]
+    xa, ya, xb, yb, _ = _raw_pieces(ex, ey, np.arange(x.size + 1), r, np.radians(5.0))
+    hidden = _hidden(xa, ya, xb, yb, ex, ey, r, 1e-12 * 200.0)
+    assert hidden.mean() > 0.9
