@@ -1,7 +1,8 @@
 """Engine speed against the number of survey points (issue 27, item 8).
 
-    python benchmarks/survey.py [--rocks 2000] [--points 1000 10000 100000]
+    python benchmarks/survey.py [--rocks 20000] [--points 1000 10000 100000]
                                 [--noise 0.01] [--threads 1] [--varying-rocks 20]
+    PYTHONPATH=OTHER_TREE python benchmarks/survey.py   # the same for another engine
 
 The standard slope (the 6 vertices of projects/benchmark.yaml and its rn_rt
 talus) against noisy surveys of the same slope: n points evenly spaced in x,
@@ -24,8 +25,17 @@ import time
 import numpy as np
 
 from rockfall_design.engine import Material, Releases, Section, run_ensemble
-from rockfall_design.engine.ensemble import rock_path
-from rockfall_design.engine.records import Ground
+from rockfall_design.engine.records import Ground, Path
+
+try:
+    from rockfall_design.engine.ensemble import rock_path
+except ImportError:  # an engine from before issue 27 (PYTHONPATH=OTHER_TREE, to compare)
+    from rockfall_design.engine.profile import centre_path
+
+    def rock_path(ground, r, max_chord):  # noqa: D103 - the same work, older names
+        px, py, pseg = centre_path(ground.x, ground.y, np.arange(ground.x.size - 1), r,
+                                   max_chord)
+        return Path(px, py, pseg, ground.seg_mat, ground.mats)
 
 STANDARD = np.array([(0, 100), (30, 60), (60, 30), (80, 20), (120, 15), (200, 12)], float)
 TALUS = Material(impact_model="rn_rt", restitution=0.35, tangential_restitution=0.85,
@@ -61,7 +71,7 @@ def timed(sec: Section, rel: Releases, threads: int) -> tuple[float, int]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--rocks", type=int, default=2000)
+    ap.add_argument("--rocks", type=int, default=20_000)
     ap.add_argument("--points", type=int, nargs="+", default=[1000, 10_000, 100_000])
     ap.add_argument("--noise", type=float, default=0.01, help="sd of the survey heights (m)")
     ap.add_argument("--threads", type=int, default=1)
