@@ -142,7 +142,8 @@ def export(dispatcher: Any, args: Sequence[Any], digest: str) -> bool:
         except RuntimeError:
             # Loaded from numba's cache: the object code is in its data file.
             cf = cache._cache_file
-            data_name = cf._load_index()[cache._index_key(sig, dispatcher.targetctx.codegen())][1]
+            entry = cf._load_index()[cache._index_key(sig, dispatcher.targetctx.codegen())]
+            data_name = entry if isinstance(entry, str) else entry[-1]
             _, kind, data = cf._load_data(data_name)[0]
         if kind != "object":
             return False

@@ -694,7 +694,10 @@ def run_ensemble(
             native(*args)
         else:
             _run_batch(*args)
-            _native.export(_run_batch, args, DIGEST)
+            if native is None:
+                # Kept for the next process; not over a valid copy that only
+                # these arguments' types do not fit (read-only arrays, say).
+                _native.export(_run_batch, args, DIGEST)
         batches.done(b - a, time.perf_counter() - t0)
         return b - a
 
