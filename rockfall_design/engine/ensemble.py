@@ -98,7 +98,8 @@ A batch runs to its end once started (compiled code does not look at
 signals), so an interrupt takes effect within about this time after the
 running batches end, whatever the cost of a rock (issue 27, item 2). The
 size adapts to the measured cost per rock: 4096 rocks of the standard slope
-take about 0.01 s, one rock on a survey of 100,000 points several ms.
+take about 0.02 s, one rock of a size of its own on a survey of 100,000
+points about a second (its centre path).
 """
 
 FIRST_BATCH = 1
@@ -414,9 +415,6 @@ class EnsembleResult:
         return int(self.n_events.sum())
 
 
-# nogil: batches of rocks run on several Python threads at once; every rock
-# writes only its own rows, and draws from its own stream, so the results do
-# not depend on how the rocks are shared among threads.
 @njit(cache=CACHE, nogil=True)
 def rock_path(ground, r, max_chord):
     """The ground as a rock of radius ``r`` (m) meets it (``records.Path``).
@@ -429,6 +427,9 @@ def rock_path(ground, r, max_chord):
     return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
 
 
+# nogil: batches of rocks run on several Python threads at once; every rock
+# writes only its own rows, and draws from its own stream, so the results do
+# not depend on how the rocks are shared among threads.
 @njit(cache=CACHE, nogil=True)
 def _run_batch(ground, path0, r0, settings, max_chord, key, first_index, rel, resume,
                stations, bars, out):
