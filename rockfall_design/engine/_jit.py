@@ -246,6 +246,9 @@ def _configure() -> bool:
 CACHE: bool = _configure()
 """Whether the engine's compiled functions are cached on disk (``cache=`` of ``njit``)."""
 
+DIGEST: str = sources_digest(ENGINE_DIR)
+"""Digest of the engine's sources (what the kept machine code of ``_native`` is checked by)."""
+
 
 def hot(fn: Callable[..., Any]) -> Any:
     """Compile ``fn``, a function of the rock's event loop, without reference counting.
@@ -360,7 +363,10 @@ def drop_stale_cache(dispatcher: Any, sources_dir: Path) -> int:
         removed = 0
         if where.is_dir():
             for f in where.iterdir():
-                if f.suffix in (".nbi", ".nbc") and f.name.split(".", 1)[0] in stems:
+                # numba's index and data files, and the kernel's kept object
+                # code (engine._native).
+                if f.suffix in (".nbi", ".nbc", ".nbo", ".nbj") and \
+                        f.name.split(".", 1)[0] in stems:
                     with contextlib.suppress(FileNotFoundError):
                         f.unlink()
                         removed += 1

@@ -9,16 +9,20 @@ the same path whatever batch it runs in and whatever the other rocks do.
 from __future__ import annotations
 
 import os
+import threading
+import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from contextvars import ContextVar
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numba import njit
 
-from . import core
-from ._jit import CACHE, compile_notice
+from . import _native, core
+from ._jit import CACHE, DIGEST, compile_notice
+from .flight import path_tree
 from .profile import centre_path
 from .records import (
     N_REL_COLS,
@@ -86,6 +90,61 @@ def default_threads() -> int:
         return max(1, os.cpu_count() or 1)
 
 STATUS_NAMES = core.STATUS_NAMES
+
+BATCH_SECONDS = 0.1
+"""Work per batch that the batch sizes aim at (s of one thread).
+
+A batch runs to its end once started (compiled code does not look at
+signals), so an interrupt takes effect within about this time after the
+running batches end, whatever the cost of a rock (issue 27, item 2). The
+size adapts to the measured cost per rock: 4096 rocks of the standard slope
+take about 0.02 s, one rock of a size of its own on a survey of 100,000
+points about a second (its centre path).
+"""
+
+FIRST_BATCH = 1
+"""Rocks in the first batch, before the cost of a rock is known (a rock of a survey of
+100,000 points and a size of its own costs seconds; batches grow 8-fold from there)."""
+
+SHARED_PATH_VERTICES = 256
+"""Sections of more vertices than this have the centre path of a run's first radius
+made once per run rather than once per batch (see :func:`run_ensemble`)."""
+
+
+class _Batches:
+    """Cuts rocks 0..n-1 into consecutive batches sized to :data:`BATCH_SECONDS`.
+
+    Thread-safe. The results do not depend on where the cuts fall (each rock
+    draws from its own stream), so sizing them by measured time is harmless.
+    """
+
+    def __init__(self, n: int, most: int) -> None:
+        self.n = n
+        self.most = max(1, int(most))
+        self.next = 0
+        self.size = min(self.most, FIRST_BATCH)
+        self.rocks = 0
+        self.seconds = 0.0
+        self.lock = threading.Lock()
+
+    def take(self) -> tuple[int, int] | None:
+        """The next batch (first rock, end), or None when every rock is given out."""
+        with self.lock:
+            if self.next >= self.n:
+                return None
+            a = self.next
+            self.next = min(self.n, a + self.size)
+            return a, self.next
+
+    def done(self, rocks: int, seconds: float) -> None:
+        """Record that ``rocks`` rocks took ``seconds`` (one thread); size the next batches."""
+        with self.lock:
+            self.rocks += rocks
+            self.seconds += seconds
+            per_rock = self.seconds / max(self.rocks, 1)
+            fit = int(BATCH_SECONDS / per_rock) if per_rock > 0.0 else self.most
+            # Grow at most 8-fold per batch: the first batches may be cheap ones.
+            self.size = max(1, min(self.most, fit, 8 * self.size))
 
 
 @dataclass(frozen=True)
@@ -356,17 +415,36 @@ class EnsembleResult:
         return int(self.n_events.sum())
 
 
+@njit(cache=CACHE, nogil=True)
+def rock_path(ground, r, max_chord):
+    """The ground as a rock of radius ``r`` (m) meets it (``records.Path``).
+
+    Its centre path (``profile.centre_path``) and the tree of its highest
+    vertices (``flight.path_tree``); ``max_chord`` (rad) as in ``centre_path``.
+    """
+    px, py, pseg = centre_path(ground.x, ground.y, np.arange(ground.x.shape[0] - 1), r,
+                               max_chord)
+    return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
+
+
 # nogil: batches of rocks run on several Python threads at once; every rock
 # writes only its own rows, and draws from its own stream, so the results do
 # not depend on how the rocks are shared among threads.
 @njit(cache=CACHE, nogil=True)
-def _run_batch(ground, settings, max_chord, key, first_index, rel, resume, stations, bars, out):
+def _run_batch(ground, path0, r0, settings, max_chord, key, first_index, rel, resume,
+               stations, bars, out):
     """Run the rocks of one batch (rows of ``rel``) and write their rows of ``out``.
 
     Parameters
     ----------
     ground : Ground
         The section (``records.Ground``).
+    path0 : Path
+        The ground as rocks of radius ``r0`` meet it (:func:`rock_path`),
+        made once per run: the rocks of that radius use it, the others have
+        theirs made here.
+    r0 : float
+        The radius of ``path0`` (m).
     settings : ndarray of float, shape (N_SETTINGS,)
     max_chord : float
         Largest turn (rad) of a chord of the centre path at a convex vertex.
@@ -386,11 +464,8 @@ def _run_batch(ground, settings, max_chord, key, first_index, rel, resume, stati
         The batch's rows of every output (``records.BatchOut``).
     """
     n = rel.shape[0]
-    nseg = ground.x.shape[0] - 1
-    seg_ids = np.arange(nseg)
-    r_prev = -1.0
-    path = Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
-                ground.mats)
+    path = path0
+    r_prev = r0
     ns = stations.x.shape[0]
     gh = np.empty(ns)
     ge = np.empty(ns)
@@ -404,8 +479,7 @@ def _run_batch(ground, settings, max_chord, key, first_index, rel, resume, stati
         r = rel[i, REL_R]
         if r != r_prev:
             # Rocks of one size share their centre path.
-            px, py, pseg = centre_path(ground.x, ground.y, seg_ids, r, max_chord)
-            path = Path(px, py, pseg, ground.seg_mat, ground.mats)
+            path = path0 if r == r0 else rock_path(ground, r, max_chord)
             r_prev = r
         if resume.mask[i]:
             rng[0] = resume.rngs[i]
@@ -495,8 +569,9 @@ def run_ensemble(
     max_trajectory_points : int
         Rows kept per recorded trajectory.
     batch_size : int
-        Rocks per compiled call (memory and progress granularity only; the
-        results do not depend on it).
+        Most rocks per compiled call (memory and progress granularity only;
+        the results do not depend on it). Batches are smaller where rocks are
+        costly, so that each takes about :data:`BATCH_SECONDS`.
     progress : callable, optional
         Called with the number of rocks done after each batch.
     first_index : int
@@ -577,6 +652,18 @@ def run_ensemble(
     max_chord = float(np.radians(settings.max_chord_deg))
 
     ground = Ground(section.x, section.y, section.segment_material, mats)
+    # On a survey of many points, the centre path of the first rock's radius
+    # is made once for the whole run (on a fixed size, for every rock): it
+    # costs more than many rocks, and the batches stay short (see
+    # batch_size). On a few points each batch makes its own, which costs
+    # less than loading numba's compiler to call rock_path from here.
+    if n and section.x.size > SHARED_PATH_VERTICES:
+        r0 = float(radius[0])
+        path0 = _off_the_main_thread(rock_path, ground, r0, max_chord)
+    else:
+        r0 = -1.0  # no rock has it: every batch makes its paths
+        path0 = Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
+                     ground.mats, np.empty(0))
     stations_rec = Stations(grid_all, st_yg, st_user, st_srow)
     resume_rec = Resume(res_mask, states0, rngs0)
     out = BatchOut(status, x_end, y_end, n_imp, n_ev, max_x, dur, caught_s, grid_h, grid_e,
@@ -592,38 +679,69 @@ def run_ensemble(
             else getattr(out, f)[sl]
             for f in BatchOut._fields
         )
-        return (ground, sv, max_chord, k64, int(first_index) + a, rel[sl],
+        return (ground, path0, r0, sv, max_chord, k64, int(first_index) + a, rel[sl],
                 Resume._make(x[sl] for x in resume_rec), stations_rec, bars, rows)
 
+    batches = _Batches(n, batch_size)
+
+    # The kernel's kept machine code if it fits these arguments (_native:
+    # no numba compiler to load), else numba's dispatcher, which keeps it.
+    native = _native.load(_run_batch, DIGEST) if n else None
+
     def run(a: int, b: int) -> int:
-        _run_batch(*batch_args(a, b))
+        t0 = time.perf_counter()
+        args = batch_args(a, b)
+        if native is not None and native.accepts(args):
+            native(*args)
+        else:
+            _run_batch(*args)
+            if native is None:
+                # Kept for the next process; not over a valid copy that only
+                # these arguments' types do not fit (read-only arrays, say).
+                _native.export(_run_batch, args, DIGEST)
+        batches.done(b - a, time.perf_counter() - t0)
         return b - a
 
-    spans = [(a, min(a + batch_size, n)) for a in range(0, n, batch_size)]
     n_done = 0
-    if spans:
+    first = batches.take()
+    if first is not None:
         # The first batch runs alone if it compiles the kernel (said on stderr).
-        compiled = compile_notice(_run_batch, batch_args(*spans[0]))
+        args0 = batch_args(*first)
+        compiled = (None if native is not None and native.accepts(args0)
+                    else compile_notice(_run_batch, args0))
         if compiled is not None:
-            n_done += run(*spans[0])
+            n_done += run(*first)
             compiled()
             if progress is not None:
                 progress(n_done)
-            spans = spans[1:]
-    nthreads = min(len(spans), threads if threads is not None else default_threads())
+            first = batches.take()
+    left = n - (first[0] if first is not None else n)
+    nthreads = min(threads if threads is not None else default_threads(),
+                   -(-left // FIRST_BATCH))
     if nthreads <= 1:
-        for a, b in spans:
-            n_done += run(a, b)
+        span = first
+        while span is not None:
+            n_done += run(*span)
             if progress is not None:
                 progress(n_done)
+            span = batches.take()
     else:
         with ThreadPoolExecutor(max_workers=nthreads) as pool:
-            pending = {pool.submit(run, a, b) for a, b in spans}
+            # One batch per thread at a time, each cut when a thread is free,
+            # so that its size follows the measured cost of a rock.
+            pending = set()
+            span = first
+            while span is not None and len(pending) < nthreads:
+                pending.add(pool.submit(run, *span))
+                span = batches.take() if len(pending) < nthreads else None
             try:
                 while pending:
                     finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                     for f in finished:
                         n_done += f.result()
+                        nxt = batches.take()
+                        if nxt is not None:
+                            pending.add(pool.submit(run, *nxt))
                     if progress is not None:
                         progress(n_done)
             except BaseException:
@@ -657,6 +775,33 @@ def run_ensemble(
         restart_state=srec,
         restart_rng=srng,
     )
+
+
+def _off_the_main_thread(fn: Callable[..., Any], *args: Any) -> Any:
+    """``fn(*args)`` run on a thread of its own, waited for here.
+
+    For a compiled call that takes seconds (the centre path of a survey of
+    100,000 points): an interrupt is raised here at once instead of after
+    the call (the call itself runs on, on a daemon thread that does not hold
+    the process at exit), and never while numba turns the call's result into
+    Python objects, which an exception at that moment can crash (measured: a
+    segmentation fault on Ctrl-C during the centre path of such a survey).
+    """
+    box: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            box["value"] = fn(*args)
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller below
+            box["error"] = exc
+
+    th = threading.Thread(target=target, name="rockfall-design centre path", daemon=True)
+    th.start()
+    while th.is_alive():
+        th.join(0.05)
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
 
 
 def _caught_in_given_order(caught: np.ndarray, order: np.ndarray) -> np.ndarray:

@@ -71,6 +71,10 @@ class Path(NamedTuple):
         Material row of each ground segment.
     mats : ndarray of float, shape (n_materials, N_MAT_COLS)
         Material table (columns ``M_*``).
+    tree : ndarray of float
+        Highest vertex of the centre path over blocks of vertices
+        (``flight.path_tree``), so that a flight finds its landing in
+        O(log n) on a survey of n vertices.
     """
 
     px: np.ndarray
@@ -78,6 +82,7 @@ class Path(NamedTuple):
     pseg: np.ndarray
     seg_mat: np.ndarray
     mats: np.ndarray
+    tree: np.ndarray
 
 
 class Stations(NamedTuple):

@@ -121,6 +121,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
     px = path.px
     py = path.py
     pseg = path.pseg
+    tree = path.tree
     seg_mat = path.seg_mat
     mats = path.mats
     r = rock[REL_R]
@@ -227,7 +228,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
 
         if mode == FLIGHT:
             k = locate(px, x, vx)
-            leaves, tf, k = next_landing(px, py, x, y, vx, vy, k)
+            leaves, tf, k = next_landing(px, py, tree, x, y, vx, vy, k)
             x1 = x + vx * tf
             # Barriers crossed by this flight, in the order of travel; the
             # first that changes the path ends the flight there.

@@ -1,0 +1,114 @@
+"""Engine speed against the number of survey points (issue 27, item 8).
+
+    python benchmarks/survey.py [--rocks 20000] [--points 1000 10000 100000]
+                                [--noise 0.01] [--threads 1] [--varying-rocks 20]
+    PYTHONPATH=OTHER_TREE python benchmarks/survey.py   # the same for another engine
+
+The standard slope (the 6 vertices of projects/benchmark.yaml and its rn_rt
+talus) against noisy surveys of the same slope: n points evenly spaced in x,
+heights with N(0, noise) errors, all measured in the same run. For each:
+
+* the centre path of one radius (made once per run for rocks of one size);
+* rocks of one radius (0.5 m, as the project): the run's wall time (centre
+  path included), events per second, and the ratio to the 6-point section;
+  then the same without the one making of the centre path (what a run of
+  many more rocks tends to);
+* rocks of sizes uniform in [0.3, 0.7] m: each rock has a centre path of its
+  own, so its cost grows with the survey (``--varying-rocks``, 0 to skip).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from rockfall_design.engine import Material, Releases, Section, run_ensemble
+from rockfall_design.engine.records import Ground, Path
+
+try:
+    from rockfall_design.engine.ensemble import rock_path
+except ImportError:  # an engine from before issue 27 (PYTHONPATH=OTHER_TREE, to compare)
+    from rockfall_design.engine.profile import centre_path
+
+    def rock_path(ground, r, max_chord):  # noqa: D103 - the same work, older names
+        px, py, pseg = centre_path(ground.x, ground.y, np.arange(ground.x.size - 1), r,
+                                   max_chord)
+        return Path(px, py, pseg, ground.seg_mat, ground.mats)
+
+STANDARD = np.array([(0, 100), (30, 60), (60, 30), (80, 20), (120, 15), (200, 12)], float)
+TALUS = Material(impact_model="rn_rt", restitution=0.35, tangential_restitution=0.85,
+                 friction=0.58, rolling_resistance=0.3, roughness_deg=5.0,
+                 sd_restitution=0.05, sd_friction=0.05, sd_rolling_resistance=0.02)
+
+
+def section(points: int, noise: float, seed: int = 0) -> Section:
+    """The standard slope (``points`` 0 or 6) or a noisy survey of it with ``points`` points."""
+    if points <= len(STANDARD):
+        x, y = STANDARD[:, 0].copy(), STANDARD[:, 1].copy()
+    else:
+        rng = np.random.default_rng(seed)
+        x = np.linspace(0.0, 200.0, points)
+        y = np.interp(x, STANDARD[:, 0], STANDARD[:, 1]) + rng.normal(0.0, noise, points)
+    return Section(x, y, np.zeros(x.size - 1, dtype=np.int64), (TALUS,))
+
+
+def releases(n: int, radius: np.ndarray | float) -> Releases:
+    """n rocks released as in projects/benchmark.yaml."""
+    return Releases(radius=np.broadcast_to(np.asarray(radius, dtype=float), (n,)).copy(),
+                    density=2650.0, x=np.full(n, 1.0), height=np.zeros(n),
+                    vx=np.full(n, 0.6), vy=np.full(n, -0.8), spin=np.zeros(n),
+                    spin_rolling=np.zeros(n, dtype=bool))
+
+
+def timed(sec: Section, rel: Releases, threads: int) -> tuple[float, int]:
+    """Wall time (s) and events of one run."""
+    t0 = time.perf_counter()
+    res = run_ensemble(sec, rel, key=7, threads=threads)
+    return time.perf_counter() - t0, res.events_total
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rocks", type=int, default=20_000)
+    ap.add_argument("--points", type=int, nargs="+", default=[1000, 10_000, 100_000])
+    ap.add_argument("--noise", type=float, default=0.01, help="sd of the survey heights (m)")
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--varying-rocks", type=int, default=20)
+    args = ap.parse_args()
+    cases = [6, *args.points]
+    # Compiled and warm before anything is timed.
+    run_ensemble(section(6, 0.0), releases(2, [0.4, 0.5]), key=1, threads=1)
+    warm = section(300, 0.01)
+    rock_path(Ground(warm.x, warm.y, warm.segment_material, warm.material_table()), 0.5,
+              np.radians(5.0))
+    print(f"{args.rocks:,} rocks of 0.5 m and {args.varying_rocks:,} of U(0.3, 0.7) m on each "
+          f"section, {args.threads} thread(s), survey noise {args.noise} m")
+    print(f"{'points':>8} {'path pieces':>11} {'centre path':>12} {'run (one size)':>15} "
+          f"{'events/s':>12} {'vs 6 pts':>8} {'w/o path':>12} {'vs 6 pts':>8}   "
+          f"{'sizes varying':>14} {'events/s':>10}")
+    base = None
+    g = np.random.default_rng(0)
+    for pts in cases:
+        sec = section(pts, args.noise)
+        ground = Ground(sec.x, sec.y, sec.segment_material, sec.material_table())
+        t0 = time.perf_counter()
+        path = rock_path(ground, 0.5, np.radians(5.0))
+        t_path = time.perf_counter() - t0
+        t, ev = timed(sec, releases(args.rocks, 0.5), args.threads)
+        rate = ev / t
+        # The events alone: the run less one making of the centre path.
+        bare = ev / max(t - t_path, 1e-9) if pts > 256 else rate
+        base = base or rate
+        line = (f"{pts:>8,} {path.px.size - 1:>11,} {t_path * 1e3:>10.1f} ms {t:>13.3f} s "
+                f"{rate:>12,.0f} {base / rate:>7.1f}x {bare:>12,.0f} {base / bare:>7.1f}x")
+        if args.varying_rocks:
+            tv, evv = timed(sec, releases(args.varying_rocks,
+                                          g.uniform(0.3, 0.7, args.varying_rocks)), args.threads)
+            line += f"   {tv:>12.3f} s {evv / tv:>10,.0f}"
+        print(line, flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,194 @@
+"""The engine on dense surveys (issue 27, item 8).
+
+``flight.next_landing`` skips the blocks of the centre path that a flight
+clears (``flight.path_tree``), and ``profile.centre_path`` leaves out of its
+sweep the pieces a vertex's circle hides (``profile._hidden``); these tests
+hold both to the plain versions over random noisy surveys: the same piece,
+time and path, to the bit.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from rockfall_design.engine import G, Material, Releases, Section, run_ensemble
+from rockfall_design.engine.flight import (
+    LINEAR_PIECES,
+    _first_not_cleared,
+    locate,
+    next_landing,
+    path_tree,
+)
+from rockfall_design.engine.profile import _centre_path, _hidden, _raw_pieces, centre_path
+
+SETTINGS = settings(
+    max_examples=int(os.environ.get("RF_EXAMPLES", "40")),
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+
+STANDARD = np.array([(0, 100), (30, 60), (60, 30), (80, 20), (120, 15), (200, 12)], float)
+
+
+def noisy_survey(n: int, noise: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """``n`` points of the standard slope, heights with N(0, noise) errors (m)."""
+    rng = np.random.default_rng(seed)
+    x = np.linspace(0.0, 200.0, n)
+    return x, np.interp(x, STANDARD[:, 0], STANDARD[:, 1]) + rng.normal(0.0, noise, n)
+
+
+def walk(px, py, x0, y0, vx, vy, k):
+    """The landing by the plain walk, piece by piece (the engine before the tree)."""
+    with np.errstate(all="ignore"):  # a vx of 1e-300 overflows, as in the engine
+        return _walk(px, py, x0, y0, vx, vy, k)
+
+
+def _walk(px, py, x0, y0, vx, vy, k):
+    npc = px.shape[0] - 1
+    t_in = 0.0
+    while True:
+        c = (py[k + 1] - py[k]) / (px[k + 1] - px[k])
+        if vx > 0.0:
+            t_out = (px[k + 1] - x0) / vx
+        elif vx < 0.0:
+            t_out = (px[k] - x0) / vx
+        else:
+            t_out = np.inf
+        cc = y0 - (py[k] + c * (x0 - px[k]))
+        bb = vy - c * vx
+        if t_out < np.inf:
+            h_out = cc + t_out * (bb - 0.5 * G * t_out)
+            if h_out > 0.0:
+                k = k + 1 if vx > 0.0 else k - 1
+                if k < 0 or k >= npc:
+                    return True, t_out, k
+                t_in = t_out
+                continue
+        disc = bb * bb + 2.0 * G * cc
+        sq = np.sqrt(disc) if disc > 0.0 else 0.0
+        if bb >= 0.0:
+            t = (bb + sq) / G
+        elif sq - bb > 0.0:
+            t = 2.0 * cc / (sq - bb)
+        else:
+            t = 0.0
+        return False, min(max(t, t_in), t_out), k
+
+
+def _path(n: int, noise: float, seed: int, r: float):
+    x, y = noisy_survey(n, noise, seed)
+    px, py, _ = centre_path(x, y, np.arange(n - 1), r, np.radians(5.0))
+    return px, py, path_tree(px, py)
+
+
+@SETTINGS
+@given(
+    n=st.sampled_from([6, 40, 300, 3000]),
+    noise=st.sampled_from([0.0, 0.01, 0.3]),
+    seed=st.integers(0, 2**16),
+    r=st.sampled_from([0.05, 0.5, 2.0]),
+    flights=st.lists(
+        st.tuples(st.floats(0.0, 1.0), st.floats(0.0, 30.0), st.floats(-40.0, 40.0),
+                  st.floats(-30.0, 30.0)),
+        min_size=1, max_size=20),
+)
+def test_the_tree_finds_the_landing_of_the_plain_walk(n, noise, seed, r, flights):
+    px, py, tree = _path(n, noise, seed, r)
+    for u, h, vx, vy in flights:
+        x0 = px[0] + u * (px[-1] - px[0])
+        k = locate(px, x0, vx)
+        y0 = py[k] + (py[k + 1] - py[k]) * (x0 - px[k]) / (px[k + 1] - px[k]) + h
+        assert next_landing(px, py, tree, x0, y0, vx, vy, k) == walk(px, py, x0, y0, vx, vy, k)
+
+
+@SETTINGS
+@given(
+    seed=st.integers(0, 2**16),
+    v=st.integers(0, 2999),
+    dirn=st.sampled_from([1, -1]),
+    x0=st.floats(0.0, 200.0),
+    y0=st.floats(0.0, 140.0),
+    vx=st.floats(0.5, 40.0),
+    vy=st.floats(-20.0, 20.0),
+)
+def test_the_first_vertex_not_cleared_is_the_first_by_brute_force(seed, v, dirn, x0, y0, vx,
+                                                                  vy):
+    # Every vertex the tree skips is cleared, and the one it stops at is not
+    # cleared by the margin (or is the first not cleared at all).
+    px, py, tree = _path(3000, 0.01, seed, 0.5)
+    nv = px.size
+    v = min(v, nv - 1)
+    vx = vx * dirn
+    got = _first_not_cleared(px, tree, nv, v, dirn, x0, y0, vx, vy)
+    t = (px - x0) / vx
+    above = y0 + t * (vy - 0.5 * G * t) > py
+    skipped = range(v, got) if dirn > 0 else range(got + 1, v + 1)
+    assert all(above[j] for j in skipped)
+    if 0 <= got < nv:
+        # Not cleared by a margin: the exact test decides there.
+        assert (y0 + t[got] * (vy - 0.5 * G * t[got])) - py[got] < 1e-6 * (1 + abs(py[got]))
+
+
+def test_flights_over_a_dense_survey_walk_blocks_not_pieces():
+    # A long flight over 30,000 survey points passes thousands of pieces; it
+    # must still land where the plain walk lands.
+    px, py, tree = _path(30_000, 0.01, 1, 0.5)
+    assert px.size > 50 * LINEAR_PIECES
+    x0, vx, vy = 1.0, 25.0, 5.0
+    k = locate(px, x0, vx)
+    y0 = py[k] + 20.0
+    fast = next_landing(px, py, tree, x0, y0, vx, vy, k)
+    assert fast == walk(px, py, x0, y0, vx, vy, k)
+    assert fast[2] - k > 1000
+
+
+def test_runs_on_a_noisy_survey_are_the_same_on_one_and_two_threads():
+    x, y = noisy_survey(5000, 0.01, 3)
+    sec = Section(x, y, np.zeros(x.size - 1, dtype=int),
+                  (Material(impact_model="rn_rt", restitution=0.35,
+                            tangential_restitution=0.85, friction=0.58,
+                            rolling_resistance=0.3, roughness_deg=5),))
+    n = 64
+    g = np.random.default_rng(0)
+    rel = Releases(radius=g.choice([0.4, 0.5], n), density=2650.0, x=np.full(n, 1.0),
+                   height=np.zeros(n), vx=np.full(n, 0.6), vy=np.full(n, -0.8),
+                   spin=np.zeros(n), spin_rolling=np.zeros(n, dtype=bool))
+    one = run_ensemble(sec, rel, key=5, threads=1, batch_size=7)
+    two = run_ensemble(sec, rel, key=5, threads=2, batch_size=16)
+    for name in ("status", "x_end", "y_end", "n_events", "max_x", "grid_height"):
+        np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
+    assert (one.x_end > 100.0).any()
+
+
+@SETTINGS
+@given(
+    n=st.sampled_from([8, 200, 3000]),
+    noise=st.sampled_from([0.0, 0.003, 0.01, 0.3]),
+    seed=st.integers(0, 2**16),
+    r=st.sampled_from([0.01, 0.05, 0.5, 2.0]),
+    chord=st.sampled_from([1.0, 5.0, 20.0]),
+)
+def test_leaving_hidden_pieces_out_keeps_the_centre_path_to_the_bit(n, noise, seed, r, chord):
+    # The sweep leaves out the pieces a vertex's circle hides (profile._hidden);
+    # the path must be the one the sweep over every piece gives.
+    x, y = noisy_survey(n, noise, seed)
+    seg = np.arange(n - 1)
+    fast = _centre_path(x, y, seg, r, np.radians(chord), True)
+    full = _centre_path(x, y, seg, r, np.radians(chord), False)
+    for a, b in zip(fast, full, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_most_pieces_of_a_dense_noisy_survey_are_hidden():
+    x, y = noisy_survey(30_000, 0.01, 4)
+    r = 0.5
+    ext = 2 * r + 1
+    ex = np.r_[x[0] - ext, x, x[-1] + ext]
+    ey = np.r_[y[0], y, y[-1]]
+    xa, ya, xb, yb, _ = _raw_pieces(ex, ey, np.arange(x.size + 1), r, np.radians(5.0))
+    hidden = _hidden(xa, ya, xb, yb, ex, ey, r, 1e-12 * 200.0)
+    assert hidden.mean() > 0.9
