@@ -168,7 +168,7 @@ def warm(n: int, repeats: int) -> tuple[float, float, list[float]]:
     after it, every run of n).
     """
     from rockfall_design.project import load_project
-    from rockfall_design.simulation import run_study
+    from rockfall_design.run.simulation import run_study
 
     project = load_project(PROJECT)
     first = run_study(project, rocks=1).runtime_s
