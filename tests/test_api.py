@@ -191,6 +191,7 @@ def test_envelopes_only_where_enough_rocks_pass(tmp_path):
         rd.load_project(bad)
 
 
+@pytest.mark.slow  # an optimisation of design_ditch_or_fence: CI runs it with -m slow
 def test_report_of_optimise_is_self_contained(tmp_path, capsys):
     out = tmp_path / "report"
     code = main(["optimise", str(PROJECTS / "design_ditch_or_fence.yaml"), "--rocks", "400",
@@ -293,6 +294,7 @@ def test_no_pyplot_and_no_backend_switch_in_a_fresh_process():
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT)
 
 
+@pytest.mark.slow  # an optimisation of design_ditch_or_fence: CI runs it with -m slow
 def test_progress_callbacks():
     done: list[int] = []
     rd.simulate(STANDARD, rocks=50, progress=done.append)

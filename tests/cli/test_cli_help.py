@@ -182,7 +182,7 @@ def named_files(command: str, option: str, capsys, monkeypatch) -> set[str]:
 @pytest.mark.parametrize("command, project, rocks", [
     ("simulate", "standard_slope.yaml", "40"),
     ("check", "quarry_fence_ditch.yaml", "40"),
-    ("optimise", "design_ditch_or_fence.yaml", "200"),
+    pytest.param("optimise", "design_ditch_or_fence.yaml", "200", marks=pytest.mark.slow),
     ("study", "study_talus.yaml", "20"),
 ])
 def test_out_and_plot_write_the_files_their_help_names(command, project, rocks, tmp_path,
@@ -213,8 +213,8 @@ def test_out_and_plot_write_the_files_their_help_names(command, project, rocks, 
 @pytest.mark.parametrize("argv, keys", [
     (["check", str(PROJECTS / "quarry_fence_ditch.yaml"), "--rocks", "20"],
      {"measures", "protect", "ok", "failures"}),
-    (["optimise", str(PROJECTS / "design_ditch_or_fence.yaml"), "--rocks", "100"],
-     {"alternatives", "best"}),
+    pytest.param(["optimise", str(PROJECTS / "design_ditch_or_fence.yaml"), "--rocks", "100"],
+                 {"alternatives", "best"}, marks=pytest.mark.slow),
     (["plugins"], {"measures", "safety_concepts", "cost_models", "failures"}),
     (["study", str(PROJECTS / "study_talus.yaml"), "--rocks", "20", "--workers", "1"],
      {"vary", "scenarios", "sensitivity"}),

@@ -43,6 +43,7 @@ def files_of(directory: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in directory.iterdir() if p.name != MANIFEST}
 
 
+@pytest.mark.slow  # an optimisation of design_ditch_or_fence: CI runs it with -m slow
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_swallowed_interrupt_during_optimise_still_stops_it(tmp_path, monkeypatch, capsys,
                                                              signum):

@@ -148,6 +148,7 @@ def test_same_seed_same_result(registry):
     assert a == b
 
 
+@pytest.mark.slow  # an optimisation of design_ditch_or_fence: CI runs it with -m slow
 def test_chosen_design_holds_with_a_fresh_seed_and_twice_the_rocks(tmp_path, capsys):
     """Optimise, then check design.yaml with seeds 977 and 978 and twice the rocks that decided
     it. (The bundled project that runs in seconds; benchmarks/optimise.py does all of them.)"""

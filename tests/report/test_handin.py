@@ -27,7 +27,9 @@ RUNS = {
 }
 
 
-@pytest.fixture(scope="module", params=sorted(RUNS))
+# The optimise run (a design of design_ditch_or_fence) is in the slow set CI runs.
+@pytest.fixture(scope="module", params=[pytest.param("check"),
+                                        pytest.param("optimise", marks=pytest.mark.slow)])
 def run(request, tmp_path_factory):
     """(command, --json summary, terminal text, report.html, report.md) of one run."""
     # capsys is function-scoped: the module's one run captures its output by hand
