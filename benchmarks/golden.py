@@ -67,7 +67,7 @@ def _digest(obj: Any) -> str:
 def _engine(seed: int) -> dict[str, str]:
     """Every array of run_ensemble on the benchmark slope, with barriers, and a resumed run."""
     from rockfall_design.engine import barrier_table, run_ensemble
-    from rockfall_design.engine.ensemble import EnsembleResult
+    from rockfall_design.engine.problem import EnsembleResult
     from rockfall_design.project import load_project
     from rockfall_design.run.releases import (
         draw_releases,

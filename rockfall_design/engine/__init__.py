@@ -8,8 +8,9 @@ from pathlib import Path
 
 # _jit first: it decides where numba caches compiled code, before numba is imported.
 from . import _jit, ensemble  # noqa: I001
-from .core import STATUS_NAMES, G
-from .ensemble import (
+from .columns import STATUS_NAMES, G
+from .ensemble import run_ensemble
+from .problem import (
     EngineSettings,
     EnsembleResult,
     Material,
@@ -17,7 +18,6 @@ from .ensemble import (
     Section,
     barrier_table,
     rock_mass,
-    run_ensemble,
 )
 
 # Before anything loads from numba's cache: drop it if any engine source changed.

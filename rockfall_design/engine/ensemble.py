@@ -14,15 +14,23 @@ import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from contextvars import ContextVar
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numba import njit
 
-from . import _native, core
+from . import _native, columns
 from ._jit import CACHE, DIGEST, compile_notice
 from .flight import path_tree
+from .problem import (
+    EngineSettings,
+    EnsembleResult,
+    Material,
+    Releases,
+    Section,
+    barrier_table,
+    rock_mass,
+)
 from .profile import centre_path
 from .records import (
     N_REL_COLS,
@@ -43,6 +51,7 @@ from .records import (
     Stations,
 )
 from .rng import stream_start
+from .rock import simulate_rock
 
 __all__ = [
     "Material",
@@ -89,7 +98,7 @@ def default_threads() -> int:
     except AttributeError:  # pragma: no cover - not on Linux
         return max(1, os.cpu_count() or 1)
 
-STATUS_NAMES = core.STATUS_NAMES
+STATUS_NAMES = columns.STATUS_NAMES
 
 BATCH_SECONDS = 0.1
 """Work per batch that the batch sizes aim at (s of one thread).
@@ -145,274 +154,6 @@ class _Batches:
             fit = int(BATCH_SECONDS / per_rock) if per_rock > 0.0 else self.most
             # Grow at most 8-fold per batch: the first batches may be cheap ones.
             self.size = max(1, min(self.most, fit, 8 * self.size))
-
-
-@dataclass(frozen=True)
-class Material:
-    """Impact and contact parameters of one ground material.
-
-    Attributes
-    ----------
-    impact_model : str
-        ``"spang"`` (restitution e, friction mu, spin) or ``"rn_rt"``
-        (lumped-mass v_n' = -Rn v_n, v_t' = Rt v_t).
-    restitution : float
-        e (spang) or Rn (rn_rt), in [0, 1].
-    friction : float
-        Coulomb friction coefficient mu (-), >= 0.
-    rolling_resistance : float
-        Rolling-resistance coefficient mu_r (-), >= 0.
-    tangential_restitution : float
-        Rt (rn_rt only), in [0, 1].
-    velocity_scaling : bool
-        Pfeiffer & Bowen (1989) scaling of the normal restitution.
-    velocity_scaling_k : float
-        K of that scaling (m/s).
-    roughness_deg : float
-        Standard deviation of the tilt of the impact normal (degrees).
-    roughness_height_m : float
-        Roughness as a height h_r (m), PlatRock's convention: the normal tilts
-        against the motion by an angle uniform in [0, atan(h_r / r)].
-    sd_restitution, sd_friction, sd_rolling_resistance : float
-        Standard deviations of the per-impact draws.
-    """
-
-    impact_model: str = "spang"
-    restitution: float = 0.35
-    friction: float = 0.5
-    rolling_resistance: float = 0.0
-    tangential_restitution: float = 1.0
-    velocity_scaling: bool = False
-    velocity_scaling_k: float = 9.144
-    roughness_deg: float = 0.0
-    sd_restitution: float = 0.0
-    sd_friction: float = 0.0
-    sd_rolling_resistance: float = 0.0
-    roughness_height_m: float = 0.0
-
-    def row(self) -> np.ndarray:
-        """This material as a row of the engine's material table."""
-        out = np.zeros(core.N_MAT_COLS)
-        out[core.M_MODEL] = core.MODEL_SPANG if self.impact_model == "spang" else core.MODEL_RN_RT
-        out[core.M_E] = self.restitution
-        out[core.M_RT] = self.tangential_restitution
-        out[core.M_MU] = self.friction
-        out[core.M_MUR] = self.rolling_resistance
-        out[core.M_VSCALE] = 1.0 if self.velocity_scaling else 0.0
-        out[core.M_VSK] = self.velocity_scaling_k
-        out[core.M_ROUGH] = np.radians(self.roughness_deg)
-        out[core.M_SD_E] = self.sd_restitution
-        out[core.M_SD_MU] = self.sd_friction
-        out[core.M_SD_MUR] = self.sd_rolling_resistance
-        out[core.M_ROUGH_H] = self.roughness_height_m
-        return out
-
-
-@dataclass(frozen=True)
-class Section:
-    """A slope section: ground polyline and the material of each segment.
-
-    Attributes
-    ----------
-    x, y : ndarray of float
-        Ground vertices (m), x strictly increasing, at least two.
-    segment_material : ndarray of int
-        Index into ``materials`` for each of the ``len(x) - 1`` segments.
-    materials : tuple of Material
-    """
-
-    x: np.ndarray
-    y: np.ndarray
-    segment_material: np.ndarray
-    materials: tuple[Material, ...]
-
-    def __post_init__(self) -> None:
-        x = np.ascontiguousarray(self.x, dtype=float)
-        y = np.ascontiguousarray(self.y, dtype=float)
-        sm = np.ascontiguousarray(self.segment_material, dtype=np.int64)
-        if x.ndim != 1 or x.shape != y.shape or x.size < 2:
-            raise ValueError("a section needs at least two (x, y) vertices")
-        if not np.all(np.diff(x) > 0):
-            raise ValueError("section x must be strictly increasing")
-        if sm.shape != (x.size - 1,):
-            raise ValueError("one material index per segment is needed")
-        if sm.min() < 0 or sm.max() >= len(self.materials):
-            raise ValueError("material index out of range")
-        object.__setattr__(self, "x", x)
-        object.__setattr__(self, "y", y)
-        object.__setattr__(self, "segment_material", sm)
-
-    def material_table(self) -> np.ndarray:
-        return np.vstack([m.row() for m in self.materials])
-
-    def ground_height(self, x: np.ndarray | float) -> np.ndarray:
-        """Ground height (m) at ``x``, linear between vertices."""
-        return np.interp(x, self.x, self.y)
-
-    def centre_path(self, radius: float, max_chord_deg: float = 5.0):
-        """Centre path (px, py, pseg) of a sphere of ``radius`` (m)."""
-        return centre_path(
-            self.x, self.y, np.arange(self.x.size - 1), float(radius), np.radians(max_chord_deg)
-        )
-
-
-@dataclass(frozen=True)
-class Releases:
-    """Per-rock initial conditions (all arrays of one length N).
-
-    Attributes
-    ----------
-    radius : ndarray
-        Rock radius (m).
-    density : float or ndarray
-        Rock density (kg/m^3).
-    x : ndarray
-        Release x of the rock centre (m).
-    height : ndarray
-        Clearance above the ground at release (m), >= 0.
-    vx, vy : ndarray
-        Initial velocity (m/s).
-    spin : ndarray
-        Initial angular velocity (rad/s), counter-clockwise positive.
-    spin_rolling : ndarray of bool
-        Start with the spin of rolling along the ground instead of ``spin``.
-    zone : ndarray of int
-        Index of the release zone each rock came from (for reports).
-    """
-
-    radius: np.ndarray
-    density: float | np.ndarray
-    x: np.ndarray
-    height: np.ndarray
-    vx: np.ndarray
-    vy: np.ndarray
-    spin: np.ndarray
-    spin_rolling: np.ndarray
-    zone: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
-
-    def __len__(self) -> int:
-        return int(np.asarray(self.radius).size)
-
-    @property
-    def mass(self) -> np.ndarray:
-        return rock_mass(np.asarray(self.radius), self.density)
-
-
-def rock_mass(radius: np.ndarray | float, density: np.ndarray | float) -> np.ndarray:
-    """Mass (kg) of a solid sphere: m = 4/3 pi r^3 rho."""
-    return 4.0 / 3.0 * np.pi * np.asarray(radius) ** 3 * np.asarray(density)
-
-
-@dataclass(frozen=True)
-class EngineSettings:
-    """Numerical parameters of the engine (PHYSICS.md).
-
-    Attributes
-    ----------
-    v_contact : float
-        Outgoing normal speed (m/s) below which a rock stays in contact.
-    v_stop : float
-        Speed (m/s) below which a rock that the ground can hold is stopped.
-    max_events : int
-        Event limit per rock; a rock reaching it is reported as unresolved.
-    max_chord_deg : float
-        Largest turn (degrees) of an edge of the polygon replacing the arc of
-        the centre path at a convex vertex.
-    """
-
-    v_contact: float = 0.5
-    v_stop: float = 0.05
-    max_events: int = 10_000
-    max_chord_deg: float = 5.0
-
-    def vector(self) -> np.ndarray:
-        out = np.zeros(core.N_SETTINGS)
-        out[core.S_V_CONTACT] = self.v_contact
-        out[core.S_V_STOP] = self.v_stop
-        out[core.S_MAX_EVENTS] = self.max_events
-        return out
-
-
-@dataclass
-class EnsembleResult:
-    """Per-rock outcomes of an ensemble run.
-
-    Attributes
-    ----------
-    radius, mass : ndarray, shape (N,)
-        Rock radius (m) and mass (kg).
-    status : ndarray of int8, shape (N,)
-        How each path ended, index into ``STATUS_NAMES``.
-    x_end, y_end : ndarray, shape (N,)
-        Final position of the rock centre (m).
-    max_x : ndarray, shape (N,)
-        Largest x reached (m).
-    n_impacts, n_events : ndarray of int, shape (N,)
-    duration : ndarray, shape (N,)
-        Duration of each path (s).
-    stations : ndarray, shape (U,)
-        The user's analysis stations (m).
-    crossings : ndarray, shape (N, U, 5)
-        First downslope passage of each station: passing height (m),
-        vx, vy (m/s), w (rad/s), time (s); NaN where not crossed.
-    grid : ndarray, shape (S,)
-        Envelope stations (m), sorted, including the user stations.
-    grid_height : ndarray of float32, shape (N, S)
-        Passing height (m) at the first downslope passage, NaN if none.
-    grid_energy : ndarray of float32, shape (N, S)
-        Total kinetic energy (J) there.
-    trajectories : list of ndarray
-        Event states (columns x, y, vx, vy, w, t, mode) of the first rocks.
-    barrier_outcome : ndarray of int8, shape (N, B)
-        Outcome of each rock's first meeting with each barrier (``core.O_*``),
-        barriers in the order given.
-    barrier_meeting : ndarray, shape (N, B, 4)
-        Passing height (m), speed (m/s), total kinetic energy (J) and time (s)
-        of that meeting; NaN if not met.
-    caught_by : ndarray of int, shape (N,)
-        Barrier that caught each rock (order given), or -1.
-    grid_speed : ndarray of float32, shape (N, S), or (N, 0)
-        Speed (m/s) at the first downslope passage of each envelope station
-        (only with ``record_speed``).
-    restart_x : ndarray, shape (R,)
-        Restart stations (m), sorted.
-    restart_state : ndarray, shape (N, R, core.N_RESTART_COLS)
-        Each rock's state at the first downslope passage of each restart
-        station; NaN where it never passed.
-    restart_rng : ndarray of uint64, shape (N, R)
-        Each rock's random stream there.
-    """
-
-    radius: np.ndarray
-    mass: np.ndarray
-    status: np.ndarray
-    x_end: np.ndarray
-    y_end: np.ndarray
-    max_x: np.ndarray
-    n_impacts: np.ndarray
-    n_events: np.ndarray
-    duration: np.ndarray
-    stations: np.ndarray
-    crossings: np.ndarray
-    grid: np.ndarray
-    grid_height: np.ndarray
-    grid_energy: np.ndarray
-    trajectories: list[np.ndarray]
-    barrier_outcome: np.ndarray
-    barrier_meeting: np.ndarray
-    caught_by: np.ndarray
-    grid_speed: np.ndarray
-    restart_x: np.ndarray
-    restart_state: np.ndarray
-    restart_rng: np.ndarray
-
-    @property
-    def n(self) -> int:
-        return int(self.status.size)
-
-    @property
-    def events_total(self) -> int:
-        return int(self.n_events.sum())
 
 
 @njit(cache=CACHE, nogil=True)
@@ -471,7 +212,7 @@ def _run_batch(ground, path0, r0, settings, max_chord, key, first_index, rel, re
     ge = np.empty(ns)
     rng = np.empty(1, dtype=np.uint64)
     work = np.zeros(N_WORK)  # each rock's scratch (RockOut.work): no allocation per rock
-    empty_traj = np.empty((0, core.N_TRAJ_COLS))
+    empty_traj = np.empty((0, columns.N_TRAJ_COLS))
     ntr = out.traj.shape[0]
     # Serial on purpose: a prange version measured slower here (per-rock
     # allocations), and compiles for much longer.
@@ -495,12 +236,12 @@ def _run_batch(ground, path0, r0, settings, max_chord, key, first_index, rel, re
         cr = out.cross[i]
         cr[:, :] = np.nan
         bo = out.bar_out[i]
-        bo[:] = core.O_NOT_MET
+        bo[:] = columns.O_NOT_MET
         br = out.bar_rec[i]
         br[:, :] = np.nan
         rock_out = RockOut(gh, ge, gv, cr, out.traj[i] if i < ntr else empty_traj, bo, br, sr,
                            out.srng[i], work)
-        st, xe, ye, ni, ne, mx, tt, nt, cb = core.simulate_rock(
+        st, xe, ye, ni, ne, mx, tt, nt, cb = simulate_rock(
             path, settings, rel[i], rng, stations, bars, rock_out, resume.mask[i],
             resume.states[i],
         )
@@ -550,8 +291,8 @@ def run_ensemble(
     grid : array_like
         Further envelope stations (m) with passing height and energy only.
     settings : EngineSettings, optional
-    barriers : ndarray, shape (B, core.N_BARRIER_COLS), optional
-        Barrier table (columns ``core.BR_*``; the ground-height column is
+    barriers : ndarray, shape (B, columns.N_BARRIER_COLS), optional
+        Barrier table (columns ``columns.BR_*``; the ground-height column is
         filled in here), any order. See :func:`barrier_table`.
     record_speed : bool
         Keep the speed at every envelope station too (``grid_speed``; the
@@ -590,87 +331,98 @@ def run_ensemble(
     n = len(releases)
     user = np.asarray(stations, dtype=float).ravel()
     rs_x = np.unique(np.asarray(restart_stations, dtype=float).ravel())
-    grid_all = np.unique(
-        np.concatenate([user, np.asarray(grid, dtype=float).ravel(), rs_x])
-    )
-    st_srow = np.full(grid_all.size, -1, dtype=np.int64)
-    st_srow[np.searchsorted(grid_all, rs_x)] = np.arange(rs_x.size)
-    st_user = np.full(grid_all.size, -1, dtype=np.int64)
-    # Rows of `crossings` follow the user's order; duplicates share a grid slot.
-    for u, xs in enumerate(user):
-        st_user[np.searchsorted(grid_all, xs)] = u
-    st_yg = section.ground_height(grid_all).astype(float)
-    radius = np.ascontiguousarray(np.broadcast_to(releases.radius, (n,)), dtype=float)
-    mass = np.ascontiguousarray(rock_mass(radius, releases.density) * np.ones(n), dtype=float)
-    # The release table: one row per rock, built once (columns records.REL_*).
-    rel = np.empty((n, N_REL_COLS))
-    rel[:, REL_R] = radius
-    rel[:, REL_M] = mass
-    for col, values in ((REL_X, releases.x), (REL_H, releases.height), (REL_VX, releases.vx),
-                        (REL_VY, releases.vy), (REL_W, releases.spin),
-                        (REL_ROLLING, np.asarray(releases.spin_rolling, dtype=bool))):
-        rel[:, col] = np.broadcast_to(np.asarray(values, dtype=float), (n,))
+    stations_rec = _stations(section, user, np.asarray(grid, dtype=float).ravel(), rs_x)
+    grid_all = stations_rec.x
+    rel = _release_table(releases)
+    radius, mass = rel[:, REL_R].copy(), rel[:, REL_M].copy()
 
-    status = np.empty(n, dtype=np.int8)
-    x_end = np.empty(n)
-    y_end = np.empty(n)
-    n_imp = np.empty(n, dtype=np.int64)
-    n_ev = np.empty(n, dtype=np.int64)
-    max_x = np.empty(n)
-    dur = np.empty(n)
-    grid_h = np.empty((n, grid_all.size), dtype=np.float32)
-    grid_e = np.empty((n, grid_all.size), dtype=np.float32)
-    cross = np.empty((n, user.size, core.N_CROSS_COLS))
     ntr = min(n_trajectories, n)
-    traj = np.zeros((ntr, max_trajectory_points, core.N_TRAJ_COLS))
-    n_traj = np.zeros(ntr, dtype=np.int64)
-    if barriers is None:
-        barriers = np.zeros((0, core.N_BARRIER_COLS))
-    bars = np.array(barriers, dtype=float, ndmin=2).reshape(-1, core.N_BARRIER_COLS)
-    bar_order = np.argsort(bars[:, core.BR_X], kind="stable")
-    bars = np.ascontiguousarray(bars[bar_order])
-    bars[:, core.BR_YG] = section.ground_height(bars[:, core.BR_X])
-    nb = bars.shape[0]
-    bar_out_s = np.zeros((n, nb), dtype=np.int8)
-    bar_rec_s = np.empty((n, nb, core.N_BMEET_COLS))
-    caught_s = np.empty(n, dtype=np.int64)
-    grid_v = np.empty((n if record_speed else 1, grid_all.size), dtype=np.float32)
-    srec = np.empty((n, rs_x.size, core.N_RESTART_COLS))
-    srng = np.zeros((n, rs_x.size), dtype=np.uint64)
-    if resume is None:
-        res_mask = np.zeros(n, dtype=bool)
-        states0 = np.zeros((n, core.N_RESTART_COLS))
-        rngs0 = np.zeros(n, dtype=np.uint64)
-    else:
-        res_mask = np.ascontiguousarray(resume[0], dtype=bool)
-        states0 = np.ascontiguousarray(resume[1], dtype=float)
-        rngs0 = np.ascontiguousarray(resume[2], dtype=np.uint64)
-    mats = section.material_table()
-    sv = settings.vector()
+    bars, bar_order = _sorted_barriers(section, barriers)
+    out = _outputs(n, grid_all.size, user.size, ntr, max_trajectory_points, bars.shape[0],
+                   rs_x.size, record_speed)
     # numba wants a uint64 scalar; Python ints above 2**63 need the wrap.
     k64 = np.uint64(int(key) % (1 << 64))
     max_chord = float(np.radians(settings.max_chord_deg))
+    ground = Ground(section.x, section.y, section.segment_material, section.material_table())
+    path0, r0 = _shared_path(ground, radius, max_chord)
 
-    ground = Ground(section.x, section.y, section.segment_material, mats)
-    # On a survey of many points, the centre path of the first rock's radius
-    # is made once for the whole run (on a fixed size, for every rock): it
-    # costs more than many rocks, and the batches stay short (see
-    # batch_size). On a few points each batch makes its own, which costs
-    # less than loading numba's compiler to call rock_path from here.
-    if n and section.x.size > SHARED_PATH_VERTICES:
+    batch_args = _batch_slicer(
+        (ground, path0, r0, settings.vector(), max_chord, k64), int(first_index), rel,
+        _resume(resume, n), stations_rec, bars, out, ntr, record_speed)
+    _run_all(batch_args, _Batches(n, batch_size), n, threads, progress)
+
+    return EnsembleResult(
+        radius=radius,
+        mass=mass,
+        status=out.status,
+        x_end=out.x_end,
+        y_end=out.y_end,
+        max_x=out.max_x,
+        n_impacts=out.n_imp,
+        n_events=out.n_ev,
+        duration=out.dur,
+        stations=user,
+        crossings=out.cross,
+        grid=grid_all,
+        grid_height=out.grid_h,
+        grid_energy=out.grid_e,
+        trajectories=[out.traj[i, : out.n_traj[i]].copy() for i in range(ntr)],
+        # Back to the caller's barrier order.
+        barrier_outcome=_unsort(out.bar_out, bar_order),
+        barrier_meeting=_unsort(out.bar_rec, bar_order),
+        caught_by=_caught_in_given_order(out.caught_by, bar_order),
+        grid_speed=out.grid_v if record_speed else np.zeros((n, 0), dtype=np.float32),
+        restart_x=rs_x,
+        restart_state=out.srec,
+        restart_rng=out.srng,
+    )
+
+
+def _outputs(n: int, n_grid: int, n_user: int, n_traj: int, max_points: int, n_bars: int,
+             n_restart: int, record_speed: bool) -> BatchOut:
+    """The arrays the compiled batches write into, for ``n`` rocks (see :class:`BatchOut`)."""
+    return BatchOut(
+        status=np.empty(n, dtype=np.int8), x_end=np.empty(n), y_end=np.empty(n),
+        n_imp=np.empty(n, dtype=np.int64), n_ev=np.empty(n, dtype=np.int64),
+        max_x=np.empty(n), dur=np.empty(n), caught_by=np.empty(n, dtype=np.int64),
+        grid_h=np.empty((n, n_grid), dtype=np.float32),
+        grid_e=np.empty((n, n_grid), dtype=np.float32),
+        grid_v=np.empty((n if record_speed else 1, n_grid), dtype=np.float32),
+        cross=np.empty((n, n_user, columns.N_CROSS_COLS)),
+        traj=np.zeros((n_traj, max_points, columns.N_TRAJ_COLS)),
+        n_traj=np.zeros(n_traj, dtype=np.int64),
+        bar_out=np.zeros((n, n_bars), dtype=np.int8),
+        bar_rec=np.empty((n, n_bars, columns.N_BMEET_COLS)),
+        srec=np.empty((n, n_restart, columns.N_RESTART_COLS)),
+        srng=np.zeros((n, n_restart), dtype=np.uint64))
+
+
+def _shared_path(ground: Ground, radius: np.ndarray, max_chord: float) -> tuple[Path, float]:
+    """The centre path every batch uses, and its rock radius (m); an empty one and -1 if none.
+
+    On a survey of many points, the centre path of the first rock's radius is
+    made once for the whole run (on a fixed size, for every rock): it costs
+    more than many rocks, and the batches stay short (see ``batch_size``). On
+    a few points each batch makes its own, which costs less than loading
+    numba's compiler to call :func:`rock_path` from here.
+    """
+    if radius.size and ground.x.size > SHARED_PATH_VERTICES:
         r0 = float(radius[0])
-        path0 = _off_the_main_thread(rock_path, ground, r0, max_chord)
-    else:
-        r0 = -1.0  # no rock has it: every batch makes its paths
-        path0 = Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
-                     ground.mats, np.empty(0))
-    stations_rec = Stations(grid_all, st_yg, st_user, st_srow)
-    resume_rec = Resume(res_mask, states0, rngs0)
-    out = BatchOut(status, x_end, y_end, n_imp, n_ev, max_x, dur, caught_s, grid_h, grid_e,
-                   grid_v, cross, traj, n_traj, bar_out_s, bar_rec_s, srec, srng)
+        return _off_the_main_thread(rock_path, ground, r0, max_chord), r0
+    # no rock has radius -1: every batch makes its paths
+    return Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
+                ground.mats, np.empty(0)), -1.0
 
+
+def _batch_slicer(fixed: tuple, first_index: int, rel: np.ndarray, resume: Resume,
+                  stations: Stations, bars: np.ndarray, out: BatchOut, ntr: int,
+                  record_speed: bool) -> Callable[[int, int], tuple]:
+    """The arguments of the compiled call for rocks a..b-1 (views, no copies).
+
+    ``fixed`` holds the arguments every batch shares, in the kernel's order:
+    ground, shared path, its radius, settings, chord limit and run key.
+    """
     def batch_args(a: int, b: int) -> tuple:
-        """The arguments of the compiled call for rocks a..b-1 (views, no copies)."""
         sl = slice(a, b)
         tr = slice(min(a, ntr), min(b, ntr))
         rows = BatchOut._make(
@@ -679,13 +431,73 @@ def run_ensemble(
             else getattr(out, f)[sl]
             for f in BatchOut._fields
         )
-        return (ground, path0, r0, sv, max_chord, k64, int(first_index) + a, rel[sl],
-                Resume._make(x[sl] for x in resume_rec), stations_rec, bars, rows)
+        return (*fixed, first_index + a, rel[sl], Resume._make(x[sl] for x in resume),
+                stations, bars, rows)
 
-    batches = _Batches(n, batch_size)
+    return batch_args
 
-    # The kernel's kept machine code if it fits these arguments (_native:
-    # no numba compiler to load), else numba's dispatcher, which keeps it.
+
+def _stations(section: Section, user: np.ndarray, grid: np.ndarray,
+              restart_x: np.ndarray) -> Stations:
+    """Every envelope station (m), sorted, with its ground height and the user's rows.
+
+    Rows of ``crossings`` follow the user's order; duplicates share a grid
+    slot. Restart stations are envelope stations too.
+    """
+    grid_all = np.unique(np.concatenate([user, grid, restart_x]))
+    st_srow = np.full(grid_all.size, -1, dtype=np.int64)
+    st_srow[np.searchsorted(grid_all, restart_x)] = np.arange(restart_x.size)
+    st_user = np.full(grid_all.size, -1, dtype=np.int64)
+    for u, xs in enumerate(user):
+        st_user[np.searchsorted(grid_all, xs)] = u
+    return Stations(grid_all, section.ground_height(grid_all).astype(float), st_user, st_srow)
+
+
+def _release_table(releases: Releases) -> np.ndarray:
+    """The release table: one row per rock, built once (columns ``records.REL_*``)."""
+    n = len(releases)
+    radius = np.ascontiguousarray(np.broadcast_to(releases.radius, (n,)), dtype=float)
+    rel = np.empty((n, N_REL_COLS))
+    rel[:, REL_R] = radius
+    rel[:, REL_M] = rock_mass(radius, releases.density) * np.ones(n)
+    for col, values in ((REL_X, releases.x), (REL_H, releases.height), (REL_VX, releases.vx),
+                        (REL_VY, releases.vy), (REL_W, releases.spin),
+                        (REL_ROLLING, np.asarray(releases.spin_rolling, dtype=bool))):
+        rel[:, col] = np.broadcast_to(np.asarray(values, dtype=float), (n,))
+    return rel
+
+
+def _sorted_barriers(section: Section,
+                     barriers: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """The barrier table sorted by station, with its ground heights, and the order used."""
+    if barriers is None:
+        barriers = np.zeros((0, columns.N_BARRIER_COLS))
+    bars = np.array(barriers, dtype=float, ndmin=2).reshape(-1, columns.N_BARRIER_COLS)
+    bar_order = np.argsort(bars[:, columns.BR_X], kind="stable")
+    bars = np.ascontiguousarray(bars[bar_order])
+    bars[:, columns.BR_YG] = section.ground_height(bars[:, columns.BR_X])
+    return bars, bar_order
+
+
+def _resume(resume: tuple[np.ndarray, np.ndarray, np.ndarray] | None, n: int) -> Resume:
+    """Per rock: whether it resumes, from which state and random stream."""
+    if resume is None:
+        return Resume(np.zeros(n, dtype=bool), np.zeros((n, columns.N_RESTART_COLS)),
+                      np.zeros(n, dtype=np.uint64))
+    return Resume(np.ascontiguousarray(resume[0], dtype=bool),
+                  np.ascontiguousarray(resume[1], dtype=float),
+                  np.ascontiguousarray(resume[2], dtype=np.uint64))
+
+
+def _run_all(batch_args: Callable[[int, int], tuple], batches: _Batches, n: int,
+             threads: int | None, progress: Callable[[int], None] | None) -> int:
+    """Run every batch of the compiled kernel, on one thread or a pool; rocks done.
+
+    The kernel is its kept machine code where that fits the arguments
+    (:mod:`._native`: no numba compiler to load), else numba's dispatcher,
+    whose code is then kept for the next process. The first batch runs alone
+    if it compiles the kernel (said on stderr).
+    """
     native = _native.load(_run_batch, DIGEST) if n else None
 
     def run(a: int, b: int) -> int:
@@ -705,7 +517,6 @@ def run_ensemble(
     n_done = 0
     first = batches.take()
     if first is not None:
-        # The first batch runs alone if it compiles the kernel (said on stderr).
         args0 = batch_args(*first)
         compiled = (None if native is not None and native.accepts(args0)
                     else compile_notice(_run_batch, args0))
@@ -750,31 +561,7 @@ def run_ensemble(
                     f.cancel()
                 raise
 
-    return EnsembleResult(
-        radius=radius,
-        mass=mass,
-        status=status,
-        x_end=x_end,
-        y_end=y_end,
-        max_x=max_x,
-        n_impacts=n_imp,
-        n_events=n_ev,
-        duration=dur,
-        stations=user,
-        crossings=cross,
-        grid=grid_all,
-        grid_height=grid_h,
-        grid_energy=grid_e,
-        trajectories=[traj[i, : n_traj[i]].copy() for i in range(ntr)],
-        # Back to the caller's barrier order.
-        barrier_outcome=_unsort(bar_out_s, bar_order),
-        barrier_meeting=_unsort(bar_rec_s, bar_order),
-        caught_by=_caught_in_given_order(caught_s, bar_order),
-        grid_speed=grid_v if record_speed else np.zeros((n, 0), dtype=np.float32),
-        restart_x=rs_x,
-        restart_state=srec,
-        restart_rng=srng,
-    )
+    return n_done
 
 
 def _off_the_main_thread(fn: Callable[..., Any], *args: Any) -> Any:
@@ -817,38 +604,3 @@ def _unsort(a: np.ndarray, order: np.ndarray) -> np.ndarray:
     return out
 
 
-def barrier_table(
-    x: float,
-    height_m: float,
-    capacity_j: float,
-    behaviour: int,
-    restitution: float = 0.0,
-    gap_m: float = 0.0,
-    spacing_m: float = 1.0,
-) -> np.ndarray:
-    """One row of the engine's barrier table (see ``core.BR_*``).
-
-    Parameters
-    ----------
-    x : float
-        Station (m).
-    height_m : float
-        Height of the top above ground (m).
-    capacity_j : float
-        Energy capacity (J); ``np.inf`` for none.
-    behaviour : int
-        ``core.B_NET``, ``core.B_RIGID`` or ``core.B_BLOCKS``.
-    restitution : float
-        Rebound restitution of a rigid barrier (-).
-    gap_m, spacing_m : float
-        Clear gap and spacing of a boulder row (m).
-    """
-    row = np.zeros(core.N_BARRIER_COLS)
-    row[core.BR_X] = x
-    row[core.BR_H] = height_m
-    row[core.BR_CAP] = capacity_j
-    row[core.BR_BEH] = behaviour
-    row[core.BR_E] = restitution
-    row[core.BR_GAP] = gap_m
-    row[core.BR_SPACING] = spacing_m
-    return row

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..engine import Section, core
+from ..engine import Section, columns
 from ..plugins import guard
 from ..plugins.concept import DEFAULT_CONFIDENCE, Check, SafetyConcept
 from ..plugins.measure import Barrier, MeasureResult, Outcome
@@ -205,9 +205,9 @@ class Evaluation:
                         "measure": res.index,
                         "type": res.measure.kind,
                         "outcome": [names[int(o)] for o in out],
-                        "passing_height_m": rec[:, core.BM_H],
-                        "velocity_ms": rec[:, core.BM_V],
-                        "energy_kj": rec[:, core.BM_E] / 1e3,
+                        "passing_height_m": rec[:, columns.BM_H],
+                        "velocity_ms": rec[:, columns.BM_V],
+                        "energy_kj": rec[:, columns.BM_E] / 1e3,
                     }
                 )
             )
@@ -271,7 +271,7 @@ def _judge_run(placed: Sequence[PlacedMeasure], owners: list[int], study: Study,
         if isinstance(p.footprint, Barrier):
             b = owners.index(p.index)
             rec = r.barrier_meeting[:, b, :3].astype(float)
-            rec[:, core.BM_E] /= 1e3  # J -> kJ
+            rec[:, columns.BM_E] /= 1e3  # J -> kJ
             outcomes.append(r.barrier_outcome[:, b].copy())
             meetings.append(rec)
         else:

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..engine import Section, barrier_table, core
+from ..engine import Section, barrier_table, columns
 from ..plugins import blocked_provider, guard
 from ..plugins.concept import SafetyConcept
 from ..plugins.measure import Barrier, BarrierBehaviour, ProfileEdit
@@ -35,9 +35,9 @@ _EDGE_TOLERANCE_M = 1e-6
 
 
 _BEHAVIOUR_CODE = {
-    BarrierBehaviour.NET: core.B_NET,
-    BarrierBehaviour.RIGID: core.B_RIGID,
-    BarrierBehaviour.BLOCKS: core.B_BLOCKS,
+    BarrierBehaviour.NET: columns.B_NET,
+    BarrierBehaviour.RIGID: columns.B_RIGID,
+    BarrierBehaviour.BLOCKS: columns.B_BLOCKS,
 }
 
 
@@ -232,7 +232,7 @@ def _barrier_rows(placed: Sequence[PlacedMeasure]) -> tuple[np.ndarray, list[int
             )
             owners.append(p.index)
     if not rows:
-        return np.zeros((0, core.N_BARRIER_COLS)), owners
+        return np.zeros((0, columns.N_BARRIER_COLS)), owners
     return np.vstack(rows), owners
 
 

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..engine import Releases, Section, core, run_ensemble
+from ..engine import Releases, Section, columns, run_ensemble
 from ..errors import ProjectError
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
 from ..judge.outcomes import Judgement, RockFates, barrier_outcomes, judge_measures
@@ -291,7 +291,7 @@ class Screening:
             raise ValueError("no restart station upslope of the edit")
         xs = self.restart_x[q]
         state = self.restart_state[:, q]
-        go = np.isfinite(state[:, core.RS_X])
+        go = np.isfinite(state[:, columns.RS_X])
         idx = np.flatnonzero(go)
         t = _Table(h=self.bare.h, e_kj=self.bare.e_kj, v=self.bare.v,
                    max_x=self.bare.max_x.copy(), x_end=self.bare.x_end.copy(),
@@ -419,8 +419,8 @@ class Screening:
             upstream.append((fp.x, here))
             fates.max_x[stopped] = np.minimum(fates.max_x[stopped], fp.x)
             fates.x_end[stopped] = fp.x
-            fates.status[stopped] = np.where(out[stopped] == Outcome.CAUGHT, core.CAUGHT,
-                                             core.STOPPED)
+            fates.status[stopped] = np.where(out[stopped] == Outcome.CAUGHT, columns.CAUGHT,
+                                             columns.STOPPED)
             alive &= ~stopped
             outcomes[i] = out
             meetings[i] = np.column_stack([h, v, e_kj])
