@@ -178,29 +178,8 @@ def _resolve_candidate(
             raise project.unknown_name(at + (key,), key, list(fields), f"{kind} parameter")
     declared = _declared(registry, cls, kind)
 
-    # products
     product_field = declared.product
-    products: tuple[Product, ...] = ()
-    supplied: set[str] = set()
-    if product_field is not None:
-        products = _candidate_products(project, i, raw, kind, catalogue, product_field)
-        supplied = {product_field} | {
-            f for f in (declared.height, declared.capacity) if f is not None}
-        for product in products:
-            supplied |= set(_product_params(product, fields, declared))
-        for key in raw:
-            if key in supplied and key != product_field:
-                if key == declared.height:
-                    why = "the optimiser chooses it among the heights of the catalogue products"
-                elif key == declared.capacity:
-                    why = "it is the energy class of the catalogue product"
-                else:
-                    why = "the catalogue product sets it"
-                raise project.error_at(
-                    at + (key,),
-                    f"do not give {key} for a {kind} candidate: {why} (design.products); "
-                    f"restrict the products with {product_field}: [NAME, ...] instead",
-                )
+    products, supplied = _candidate_supply(project, i, raw, kind, catalogue, declared, fields)
 
     # fixed values, ranges, options
     x_low, x_high = (float(v) for v in raw["x"])
@@ -217,28 +196,7 @@ def _resolve_candidate(
         else:
             fixed[key] = value
 
-    # what the candidate does not give: the plugin's declarations; a required
-    # parameter without one takes design_variables bounds, or is an error
-    for name, info in fields.items():
-        if name in raw or name in supplied or name == "x":
-            continue
-        if name in declared.ranges:
-            ranges[name] = declared.ranges[name]
-            continue
-        if name in declared.options:
-            options[name] = declared.options[name]
-            continue
-        if not info.is_required():
-            continue
-        if name in declared.fallback_bounds:
-            ranges[name] = declared.fallback_bounds[name]
-            continue
-        about = f" ({info.description.rstrip('.')})" if info.description else ""
-        raise project.error_at(
-            at,
-            f"required {kind} parameter {name!r} is missing{about}: give a value, "
-            "a range [min, max] or {options: [...]}",
-        )
+    _declared_defaults(project, at, kind, raw, supplied, fields, declared, ranges, options)
 
     # check every value through the measure's Params: the fixed ones together,
     # each range end and option on its own, the others at the plugin's example
@@ -290,6 +248,74 @@ def _resolve_candidate(
         options=options,
         declared=declared,
     )
+
+
+def _candidate_supply(project: Project, i: int, raw: dict[str, Any], kind: str,
+                      catalogue: dict[str, dict[str, Product]], declared: DeclaredDesign,
+                      fields: dict[str, Any]) -> tuple[tuple[Product, ...], set[str]]:
+    """A candidate's catalogue products and the parameters they set.
+
+    A measure with a product field is built from catalogue products only: the
+    candidate may restrict the products but must not give what they set
+    (height, capacity, other product keys).
+    """
+    at = ("design", "candidates", i)
+    product_field = declared.product
+    products: tuple[Product, ...] = ()
+    supplied: set[str] = set()
+    if product_field is not None:
+        products = _candidate_products(project, i, raw, kind, catalogue, product_field)
+        supplied = {product_field} | {
+            f for f in (declared.height, declared.capacity) if f is not None}
+        for product in products:
+            supplied |= set(_product_params(product, fields, declared))
+        for key in raw:
+            if key in supplied and key != product_field:
+                if key == declared.height:
+                    why = "the optimiser chooses it among the heights of the catalogue products"
+                elif key == declared.capacity:
+                    why = "it is the energy class of the catalogue product"
+                else:
+                    why = "the catalogue product sets it"
+                raise project.error_at(
+                    at + (key,),
+                    f"do not give {key} for a {kind} candidate: {why} (design.products); "
+                    f"restrict the products with {product_field}: [NAME, ...] instead",
+                )
+
+    return products, supplied
+
+
+def _declared_defaults(project: Project, at: tuple, kind: str, raw: dict[str, Any],
+                       supplied: set[str], fields: dict[str, Any], declared: DeclaredDesign,
+                       ranges: dict[str, tuple[float, float]],
+                       options: dict[str, tuple[Any, ...]]) -> None:
+    """Fill ``ranges`` and ``options`` with what the candidate does not give.
+
+    The plugin's declarations first; a required parameter without one takes
+    the ``design_variables`` bounds, or is an error at the candidate.
+    """
+    for name, info in fields.items():
+        if name in raw or name in supplied or name == "x":
+            continue
+        if name in declared.ranges:
+            ranges[name] = declared.ranges[name]
+            continue
+        if name in declared.options:
+            options[name] = declared.options[name]
+            continue
+        if not info.is_required():
+            continue
+        if name in declared.fallback_bounds:
+            ranges[name] = declared.fallback_bounds[name]
+            continue
+        about = f" ({info.description.rstrip('.')})" if info.description else ""
+        raise project.error_at(
+            at,
+            f"required {kind} parameter {name!r} is missing{about}: give a value, "
+            "a range [min, max] or {options: [...]}",
+        )
+
 
 
 def _range_problem(model: Any, key: str) -> str:

@@ -284,18 +284,7 @@ def _barrier_designs(
         np.float32)
     edits = [guard(screen.registry).measure(m).footprint(screen.section) for m in fixed]
     stretches = [(e.x_start, e.x_end) for e in edits if isinstance(e, ProfileEdit)]
-    # Rocks through for sure (the table knows their fate; the exact run can
-    # only add to them) rule a placement out only when they exceed the target
-    # with confidence (their Clopper-Pearson lower bound): the largest count
-    # that does not.
-    lo, hi = 0, screen.n
-    while lo < hi:
-        mid = (lo + hi + 1) // 2
-        if screen.residual_rejects(mid):
-            hi = mid - 1
-        else:
-            lo = mid
-    limit = lo
+    limit = _most_through(screen)
     k_slots = len(opts)
     for level_cost, idx in _level_combos(levels):
         total = fixed_cost + level_cost
@@ -359,30 +348,61 @@ def _barrier_designs(
         if order.size > MAX_SCREENS_PER_LEVEL:
             tally.capped_levels += 1
             order = order[:MAX_SCREENS_PER_LEVEL]
-        found: list[_Screened] = []
-        passed = 0
-        for flat in order:
-            pos = np.unravel_index(flat, residual.shape)
-            chosen = [opts[s][ks[s][pos[s]]] for s in range(k_slots)]
-            ms = fixed + [o.measure for o in chosen]
-            if fixed:
-                sr = screen.screen(ms)
-            else:
-                # Built, placed and priced once per option; their spacing is checked above.
-                placed = [PlacedMeasure(i, o.measure, o.footprint, o.label)
-                          for i, o in enumerate(chosen)]
-                sr = screen.screen_placed(placed, table, sum(o.cost for o in chosen))
-            if sr.feasible or sr.near:
-                found.append(_Screened(sr.cost, ms, sr, (table_id,) + tuple(idx)))
-                passed += sr.feasible
-                if passed >= MAX_EXACT_PER_LEVEL:
-                    break  # more than the decisions this combination gets
-            else:
-                tally.fail(sr)
+        found = _screen_placements(screen, opts, ks, fixed, order, residual.shape, table,
+                                   table_id, idx, tally)
         # Within one level of cost, designs that pass come before those within the margin.
         found.sort(key=lambda d: (d.cost, not d.result.feasible, d.result.violation,
                                   d.result.residual))
         yield from found
+
+
+def _most_through(screen: Screening) -> int:
+    """The most rocks through for sure that do not yet fail the residual with confidence.
+
+    Rocks through for sure (the table knows their fate; the exact run can
+    only add to them) rule a placement out only when they exceed the target
+    with confidence (their Clopper-Pearson lower bound).
+    """
+    lo, hi = 0, screen.n
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        if screen.residual_rejects(mid):
+            hi = mid - 1
+        else:
+            lo = mid
+    return lo
+
+
+def _screen_placements(screen: Screening, opts: list, ks: list, fixed: list,
+                       order: np.ndarray, shape: tuple, table: _Table, table_id: int,
+                       idx: tuple, tally: _Tally) -> list[_Screened]:
+    """Screen a level's placements in ``order`` (flat indices into ``shape``) in full.
+
+    Stops once :data:`MAX_EXACT_PER_LEVEL` pass: more than the decisions this
+    combination of catalogue choices gets.
+    """
+    k_slots = len(opts)
+    found: list[_Screened] = []
+    passed = 0
+    for flat in order:
+        pos = np.unravel_index(flat, shape)
+        chosen = [opts[s][ks[s][pos[s]]] for s in range(k_slots)]
+        ms = fixed + [o.measure for o in chosen]
+        if fixed:
+            sr = screen.screen(ms)
+        else:
+            # Built, placed and priced once per option; their spacing is checked above.
+            placed = [PlacedMeasure(i, o.measure, o.footprint, o.label)
+                      for i, o in enumerate(chosen)]
+            sr = screen.screen_placed(placed, table, sum(o.cost for o in chosen))
+        if sr.feasible or sr.near:
+            found.append(_Screened(sr.cost, ms, sr, (table_id,) + tuple(idx)))
+            passed += sr.feasible
+            if passed >= MAX_EXACT_PER_LEVEL:
+                break  # more than the decisions this combination gets
+        else:
+            tally.fail(sr)
+    return found
 
 
 def _edit_designs(
