@@ -66,7 +66,7 @@ def run_child(cmd: list[str], env: dict[str, str] | None = None) -> tuple[float,
 def kernel(n: int, threads: int | None) -> tuple[float, int, int]:
     """Seconds, events and threads of ``run_ensemble`` on n rocks of the benchmark project."""
     from rockfall_design.engine import run_ensemble
-    from rockfall_design.engine.ensemble import default_threads
+    from rockfall_design.engine.batching import default_threads
     from rockfall_design.project import load_project
     from rockfall_design.run.releases import (
         ReleaseStream,

@@ -58,7 +58,7 @@ BESIDE = {"project", "plugins", "report", "errors", "arguments"}
 PACKAGES = {"cli": "cli", "engine": "engine", "judge": "judge", "run": "run",
             "optimise": "optimiser", "optimiser": "optimiser", "study": "studies",
             "studies": "studies", "calibration": "calibration", "project": "project",
-            "plugins": "plugins", "report": "report"}
+            "plugins": "plugins", "report": "report", "serve": "cli"}
 
 #: Files inside a sub-package whose room is another one (what they do, not where they are).
 MOVED: dict[str, str] = {}
@@ -67,6 +67,7 @@ MOVED: dict[str, str] = {}
 LOOSE = {
     "__init__.py": "api", "__main__.py": "cli", "api.py": "api", "testing.py": "testing",
     "errors.py": "errors", "version.py": "errors", "arguments.py": "arguments",
+    "results.py": "api",
 }
 
 MAX_MODULE_LINES = 600

@@ -40,7 +40,7 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import rockfall_design as rd
-from rockfall_design.engine.ensemble import ENGINE_THREADS
+from rockfall_design.engine.batching import ENGINE_THREADS
 from rockfall_design.project import load_project_text
 from rockfall_design.run.simulation import simulate
 from rockfall_design.studies.executors import usable_cores

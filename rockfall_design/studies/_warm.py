@@ -9,7 +9,7 @@ worker). One thread, so that the forkserver runs no thread when it forks.
 
 import os
 
-from ..engine.ensemble import THREADS_ENV
+from ..engine.batching import THREADS_ENV
 
 os.environ[THREADS_ENV] = "1"
 

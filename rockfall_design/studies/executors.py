@@ -9,7 +9,7 @@ numbers in-process, on any worker of a pool, or on any worker of a cluster.
   threads, every core).
 - ``workers=N`` with ``pool="threads"`` (what a study does by default): N
   threads of this process, each running one task at a time with the engine
-  on one thread (:data:`~rockfall_design.engine.ensemble.ENGINE_THREADS`).
+  on one thread (:data:`~rockfall_design.engine.batching.ENGINE_THREADS`).
   The compiled engine releases the GIL, so N threads keep N cores busy, with
   nothing to start: no process, no import, no loading of numba's cache.
   Only a task's pure-Python steps take turns on the GIL (numpy's sorts and
@@ -46,7 +46,7 @@ from concurrent.futures import (
 )
 from typing import Any
 
-from ..engine.ensemble import ENGINE_THREADS, THREADS_ENV
+from ..engine.batching import ENGINE_THREADS, THREADS_ENV
 from ..errors import InputError
 
 __all__ = ["run_tasks", "usable_cores", "EXTRA_HINT", "POOLS", "SCHEDULER_TIMEOUT_S"]

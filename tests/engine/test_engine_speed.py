@@ -15,7 +15,7 @@ from numpy.testing import assert_array_equal
 
 from rockfall_design.engine import Material, Releases, Section, barrier_table, columns, run_ensemble
 from rockfall_design.engine._jit import KEEP_SHARED, choose_cache_dir, shared_cache_dir
-from rockfall_design.engine.ensemble import THREADS_ENV, default_threads
+from rockfall_design.engine.batching import THREADS_ENV, default_threads
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -108,7 +108,7 @@ def test_the_proof_line_names_marginal_and_undecided_designs():
 def test_the_same_seed_gives_the_same_design_on_one_thread_and_on_two(monkeypatch):
     """Bit for bit: the chosen design, its cost, the looks and what is listed as marginal."""
     import rockfall_design as rd
-    from rockfall_design.engine.ensemble import THREADS_ENV
+    from rockfall_design.engine.batching import THREADS_ENV
 
     runs = []
     for threads in ("1", "2"):

@@ -109,13 +109,13 @@ def test_a_study_without_its_envelopes_gives_the_same_numbers(talus):
 
 
 def _engine_threads(_task):
-    from rockfall_design.engine.ensemble import default_threads
+    from rockfall_design.engine.batching import default_threads
 
     return default_threads()
 
 
 def test_a_task_on_the_thread_pool_runs_the_engine_on_one_thread():
-    from rockfall_design.engine.ensemble import default_threads
+    from rockfall_design.engine.batching import default_threads
     from rockfall_design.studies.executors import run_tasks
 
     before = default_threads()
@@ -222,7 +222,7 @@ def test_a_streamed_run_keeps_the_engine_threads_of_its_scenario(monkeypatch):
     # A streamed run computes its chunks on a helper thread: that thread must
     # run the engine on the scenario's one thread too, not on every core.
     import rockfall_design.run.simulation as simulation
-    from rockfall_design.engine.ensemble import ENGINE_THREADS, default_threads
+    from rockfall_design.engine.batching import ENGINE_THREADS, default_threads
 
     seen = []
     real = simulation.run_ensemble
