@@ -137,9 +137,10 @@ def compiled() -> None:
     under test then load it, and the signal lands in their computation
     rather than in the compiler.
     """
+    # optimise runs the same compiled kernel (run_ensemble's batch), so the
+    # two cheap runs compile everything it needs.
     for argv in (["simulate", str(PROJECTS / "standard_slope.yaml"), "--rocks", "20"],
-                 ["check", str(PROJECTS / "quarry_fence_ditch.yaml"), "--rocks", "20"],
-                 ["optimise", str(PROJECTS / "design_ditch_or_fence.yaml"), "--rocks", "100"]):
+                 ["check", str(PROJECTS / "quarry_fence_ditch.yaml"), "--rocks", "20"]):
         assert main([*argv, "--json"]) in (0, 1)
 
 

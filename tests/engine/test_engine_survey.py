@@ -166,7 +166,7 @@ def test_runs_on_a_noisy_survey_are_the_same_on_one_and_two_threads():
 
 @SETTINGS
 @given(
-    n=st.sampled_from([8, 200, 3000]),
+    n=st.sampled_from([8, 200, 1500]),
     noise=st.sampled_from([0.0, 0.003, 0.01, 0.3]),
     seed=st.integers(0, 2**16),
     r=st.sampled_from([0.01, 0.05, 0.5, 2.0]),
