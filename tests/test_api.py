@@ -220,6 +220,7 @@ def test_report_of_optimise_is_self_contained(tmp_path, capsys):
         assert "Chosen design" in html and "Measures and their checks" in html
 
 
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 def test_report_of_simulate_and_check(tmp_path):
     r = rd.simulate(STANDARD, rocks=60, seed=2)
     written = r.save_report(tmp_path / "s")

@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 import yaml
 
 from rockfall_design.cli import main
@@ -107,6 +108,7 @@ def test_the_section_stops_and_projects_from_the_dataset_files(tmp_path):
     assert abs(stops[:, 0].min() - 30 - 4) < 2.5
 
 
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 def test_the_worked_example_runs_on_what_the_script_writes(tmp_path, capsys):
     data = fake_dataset(tmp_path / "data")
     out = tmp_path / "authume"

@@ -45,6 +45,7 @@ def test_a_known_restitution_is_recovered_inside_its_interval(result):
     assert fit["observed"]["count"] == 40 and fit["simulated"]["count"] == 100
 
 
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 def test_intervals_cover_the_truth_at_other_seeds(tmp_path):
     # A small coverage check: each repetition its own observations and seed; the full
     # one (20 repetitions, 40 replicates each) is benchmarks/calibration.py.

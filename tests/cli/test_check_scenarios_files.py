@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from rockfall_design.cli.program import main
 from rockfall_design.project import load_project
 
@@ -24,6 +26,7 @@ def _weak(tmp_path: Path, seed: int, share: str = "all") -> Path:
     return path
 
 
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 def test_plot_and_report_show_the_binding_scenario_and_every_margin(tmp_path, capsys):
     # What is asserted holds whichever scenario binds and whatever the verdict.
     path = _weak(tmp_path, 3, "{share: 0.5}")

@@ -126,6 +126,7 @@ def test_small_problem_optimum_known_by_enumeration(registry, seed):
        allowed=st.sampled_from([0.02, 0.05]))
 @settings(max_examples=6, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 def test_chosen_design_never_dearer_than_any_that_holds(registry, seed, lo, products, allowed):
     text = (SMALL.replace("SEED", str(seed))
             .replace("PRODUCTS", str(PROJECTS / "catalogue_products.yaml"))

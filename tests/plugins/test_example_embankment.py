@@ -101,6 +101,7 @@ def test_priced_by_the_catalogue_else_by_its_default_price(installed, tmp_path):
     assert got == pytest.approx(expected)
 
 
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 def test_optimise_chooses_it_and_check_accepts_the_design(installed, tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["optimise", str(PROJECT), "--out", str(out), "--json"]) == 0

@@ -196,6 +196,7 @@ def dump(data: Any) -> str:
 
 @settings(max_examples=int(os.environ.get("RF_EXAMPLES", "300")), deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 @given(projects())
 def test_schema_trees_load_or_fail_with_one_line(data):
     text = dump(data)

@@ -394,6 +394,7 @@ def test_check_from_the_page_is_rockfall_design_check(client, project_copy, caps
     assert page["measures"] == cli["measures"]
 
 
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 def test_the_report_and_figures_of_a_check_download_as_the_command_line_writes_them(
         client, project_copy, tmp_path):
     fence = {**FENCE, "x": 150.0}

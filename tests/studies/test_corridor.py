@@ -200,6 +200,7 @@ def test_study_runs_every_section_as_its_own_study(tmp_path, capsys):
     assert json.loads((tmp_path / "out" / "summary.json").read_text())["totals"] == out["totals"]
 
 
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 def test_a_corridor_study_heeds_pool_and_draws_the_envelopes(tmp_path, capsys, monkeypatch):
     import importlib
 
