@@ -42,7 +42,7 @@ def with_safety(directory: Path, safety: str) -> Path:
     ("simulate", "standard_slope.yaml"),
     ("check", "quarry_fence_ditch.yaml"),
 ])
-@pytest.mark.parametrize("formats", ["svg", "svg,png"])
+@pytest.mark.parametrize("formats", ["svg", pytest.param("svg,png", marks=pytest.mark.slow)])
 def test_plot_and_report_into_one_folder_work_together(tmp_path, capsys, command, project,
                                                        formats):
     both = tmp_path / "both"

@@ -218,7 +218,8 @@ def test_a_project_path_at_an_unrelated_file_is_not_quoted(tmp_path, capsys):
 # --------------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("values", [300_000, 3_000_000], ids=["pure-python", "libyaml"])
+@pytest.mark.parametrize("values", [pytest.param(300_000, marks=pytest.mark.slow), 3_000_000],
+                         ids=["pure-python", "libyaml"])
 def test_a_file_of_many_values_is_refused_as_it_is_read(values):
     """Counted while parsed: before, a 48 MB list took minutes and gigabytes."""
     text = "name: x\nl: [" + "1, " * values + "1]\n"

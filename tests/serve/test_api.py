@@ -693,6 +693,7 @@ def test_a_study_from_the_page_is_rockfall_design_study(tmp_path, registry, proj
     assert sensitivity["rows"] and sensitivity["columns"][0] == "parameter"
 
 
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 def test_a_calibration_from_the_page_is_rockfall_design_calibrate(tmp_path, registry,
                                                                   projects_dir, capsys):
     app = _served(tmp_path, registry, projects_dir, "calibrate_quarry.yaml",

@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from rockfall_design.cli.program import main
 from rockfall_design.project import dump_yaml, load_corridor, section_seed
 from rockfall_design.report.staging import MANIFEST
@@ -30,6 +32,7 @@ def _drop_runtime(summary: dict) -> dict:
     return summary
 
 
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
 def test_every_section_is_checked_over_its_scenarios_as_alone(tmp_path, capsys):
     path = _write(tmp_path, CORRIDOR.replace("sections:", STUDY))
     out_dir, plot = tmp_path / "out", tmp_path / "plot"
