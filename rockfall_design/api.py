@@ -565,16 +565,9 @@ def validate_project(project: Project, registry: Registry) -> None:
     PluginError
         Exit code 3, if a plugin misbehaves.
     """
-    from .judge.plan import plan_for
-    from .studies.paths import check_study
+    from .studies.paths import check_study, validate_plugin_sections
 
-    plan_for(project, registry)
-    if project.design is not None:
-        # Imported only here: the optimiser (scipy's optimisers with it) is not
-        # loaded for a project without a design section.
-        from .optimiser.design_spec import resolve_design
-
-        resolve_design(project, registry)
+    validate_plugin_sections(project, registry)
     if project.study is not None:
         # the study's paths and values, against this project (after the sections above it)
         check_study(project, registry)

@@ -38,7 +38,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExitCode
-from ..studies.scenario_checks import check_across, values_text
+from ..report.sections import values_text
+from ..studies.scenario_checks import check_across
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..optimiser.across import AcrossResult

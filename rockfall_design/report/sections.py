@@ -402,6 +402,7 @@ def _bill_table(bill: Mapping[str, Any]) -> Table:
 
 
 def values_text(values: Mapping[str, Any]) -> str:
+    """A scenario's values as one line (``path = value, ...``), or "as written"."""
     return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
 
 

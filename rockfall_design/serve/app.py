@@ -439,7 +439,7 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
     ]
     inner = Starlette(routes=routes)
     inner.state.token = token
-    inner.state.entries = list(entries)
+    inner.state.entries = ep.entries
     app = TokenGuard(inner, token)
     app.state = inner.state  # type: ignore[attr-defined]
     return app

@@ -325,13 +325,15 @@ def check_study(project: Project, registry: Any = None) -> None:
 
 
 def validate_plugin_sections(project: Project, registry: Registry) -> None:
-    """The checks of the sections that plugins own, for one varied project.
+    """The checks of the sections that plugins own: measures, safety concept and design.
 
-    The same as :func:`rockfall_design.api.validate_project` without the
-    study (a scenario has none): measures, safety concept and design.
+    :func:`rockfall_design.api.validate_project` runs them and then the
+    study's; a varied project of a study (which has no study) runs them alone.
     """
     plan_for(project, registry)
     if project.design is not None:
+        # Imported only here: the optimiser (scipy's optimisers with it) is not
+        # loaded for a project without a design section.
         from ..optimiser.design_spec import resolve_design
 
         resolve_design(project, registry)

@@ -16,10 +16,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..project import Project
 
 
-def values_text(values: dict[str, Any]) -> str:
-    return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
-
-
 def _check_task(task: tuple[Any, int | None, tuple[str, ...]]) -> dict[str, Any]:
     """One scenario's check (a task for a pool or a cluster): its JSON block and margin.
 
@@ -70,6 +66,7 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
     from ..judge.evaluation import evaluate
     from ..judge.verdict import with_verdict
     from ..optimiser.across import margin, required_scenarios, scenario_runs
+    from ..report.sections import values_text
     from .executors import run_tasks
     from .paths import validate_plugin_sections
 
