@@ -8,6 +8,7 @@ turns errors into exit codes; the codes themselves live in :class:`ExitCode`.
 """
 
 import enum
+import re
 
 __all__ = [
     "ExitCode",
@@ -34,9 +35,36 @@ class ExitCode(enum.IntEnum):
     INTERRUPTED = 130
 
 
+#: Characters that steer a terminal or reorder text rather than show: the C0
+#: and C1 controls (ESC starts the sequences that set a window title or clear
+#: the screen), DEL, and the bidirectional overrides and isolates.
+_CONTROLS = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
+
+
+def strip_controls(text: str, *, lines: bool = False) -> str:
+    """``text`` without control characters, as it may be shown on a terminal.
+
+    Parameters
+    ----------
+    text : str
+        Text from a file (a project's name, description).
+    lines : bool
+        Keep line breaks and tabs (a description of several lines); else
+        they become spaces.
+    """
+    if not lines:
+        text = text.replace("\n", " ").replace("\t", " ").replace("\r", " ")
+    return _CONTROLS.sub("", text)
+
+
 def _one_line(text: object) -> str:
-    """``text`` as a single line: runs of whitespace, newlines included, become one space."""
-    return " ".join(str(text).split())
+    """``text`` as a single line: runs of whitespace, newlines included, become one space.
+
+    Control characters go too (a key of a project file may hold them): the
+    message is then the same on the terminal, which shows none, as in
+    ``str(error)``.
+    """
+    return strip_controls(" ".join(str(text).split()))
 
 
 class RockfallError(Exception):

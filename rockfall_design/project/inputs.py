@@ -23,10 +23,9 @@ forgets them (:func:`forget_inputs`) at the start of every command.
 from __future__ import annotations
 
 import os
-import re
 import stat
 
-from ..errors import InputError
+from ..errors import InputError, strip_controls
 
 __all__ = [
     "DEFAULT_MAX_FILE_MB",
@@ -88,28 +87,6 @@ def input_at(path: str | os.PathLike[str]) -> tuple[str, str] | None:
 def forget_inputs() -> None:
     """Forget every file noted as read (a new command starts)."""
     _inputs.clear()
-
-
-#: Characters that steer a terminal or reorder text rather than show: the C0
-#: and C1 controls (ESC starts the sequences that set a window title or clear
-#: the screen), DEL, and the bidirectional overrides and isolates.
-_CONTROLS = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
-
-
-def strip_controls(text: str, *, lines: bool = False) -> str:
-    """``text`` without control characters, as it may be shown on a terminal.
-
-    Parameters
-    ----------
-    text : str
-        Text from a file (a project's name, description).
-    lines : bool
-        Keep line breaks and tabs (a description of several lines); else
-        they become spaces.
-    """
-    if not lines:
-        text = text.replace("\n", " ").replace("\t", " ").replace("\r", " ")
-    return _CONTROLS.sub("", text)
 
 
 class UnreadableFile(OSError):

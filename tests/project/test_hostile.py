@@ -12,6 +12,7 @@ from hypothesis import HealthCheck, given, settings
 
 from rockfall_design.cli.program import main
 from rockfall_design.engine import EngineSettings, Material, columns
+from rockfall_design.errors import strip_controls
 
 from ..engine_helpers import one_rock, run_one, section
 from ..plugin_helpers import write_distribution
@@ -95,7 +96,8 @@ def test_mutated_project_files_run_or_fail_with_one_line(tmp_path_factory, capsy
         err = _project_error(path)
         assert err is not None and str(err) in out.err, out.err
         assert err.file == str(path) and err.line is not None, out.err
-        mutated = _mutated_keys(EXAMPLE_DATA, data)
+        # As the message shows them: one line, without control characters.
+        mutated = [" ".join(strip_controls(k).split()) for k in _mutated_keys(EXAMPLE_DATA, data)]
         assert any(_related(err.key, key) for key in mutated), (err.key, mutated)
     else:
         assert json.loads(out.out)["rocks"] == 3
