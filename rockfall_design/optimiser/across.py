@@ -46,7 +46,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from ..judge.evaluation import Evaluation, evaluate_design
+from ..judge.evaluation import Evaluation
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins.concept import DEFAULT_CONFIDENCE
 from .alternatives import (
@@ -57,11 +57,10 @@ from .alternatives import (
     MAX_UNJUDGED_FAILURES,
     Alternative,
     OptimisationResult,
-    fresh_failures,
     listed_entry,
     measure_dicts,
 )
-from .decide import decide, look_concept
+from .decide import decide, look_concept, verify_fresh
 from .driver import FamilyTask, search_families
 from .screening import Screening
 from .search import MAX_EXACT_PER_LEVEL, _barrier_designs, _BarrierSlots, _edit_designs, _Tally
@@ -312,8 +311,8 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
         sc = scs[j]
         dec = decide(sc.project, registry, measures, sc.concept,
                      rocks=sc.screen.n, seed=sc.run.seed, looks=sc.looks)
-        simulated += dec.rocks
-        exact += 1
+        simulated += dec.simulated
+        exact += dec.exact
         decisions[j] = dec
         rows[j]["decision_rocks"] = dec.rocks
         slack, rows[j]["binds_at"] = margin(dec.evaluation)
@@ -341,26 +340,43 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
         return _Verdict(False, rows, failed, why, decisions, simulated, exact, feasible,
                         unjudged, undecided)
     holding = 0
-    for j in admitted:
+    fresh_marginal: list[int] = []
+    for i, j in enumerate(admitted):
         sc = scs[j]
         fresh_n = max(2 * decisions[j].rocks, int(sc.spec.fresh_rocks or 0))
-        fresh = evaluate_design(sc.project, registry, measures, sc.concept, rocks=fresh_n,
-                                seed=sc.fresh_seed)
-        simulated += fresh_n
-        exact += 1
-        rows[j].update(holds_on_fresh_rocks=fresh.holds_with_confidence, fresh_seed=sc.fresh_seed,
-                       fresh_rocks=fresh_n)
-        if fresh.holds_with_confidence:
+        check = verify_fresh(sc.project, registry, measures, sc.concept, rocks=fresh_n,
+                             seed=sc.fresh_seed, max_rocks=sc.looks.sizes[-1])
+        simulated += check.simulated
+        exact += check.exact
+        held = check.verdict is Verdict.ADMITTED
+        rows[j].update(holds_on_fresh_rocks=held, fresh_seed=sc.fresh_seed,
+                       fresh_rocks=check.rocks)
+        if held:
             holding += 1
+            continue
+        if check.verdict is Verdict.MARGINAL:
+            fresh_marginal.append(j)
+            rows[j]["reason"] = "marginal on fresh rocks: " + check.reason
         else:
-            rows[j]["reason"] = ("does not hold with confidence on fresh rocks: "
-                                 + fresh_failures(fresh))
-            failed.append(j)
+            rows[j]["reason"] = "fails on fresh rocks: " + check.reason
+        failed.append(j)
+        if holding + len(admitted) - i - 1 < required:
+            break  # too few scenarios left to verify
     if holding < required:
         why = "; ".join(f"scenario {scs[j].run.index}: {rows[j]['reason']}" for j in failed
                         if rows[j]["reason"])
+        # As above: only what failed with confidence (in the search or on
+        # fresh rocks) rejects; a scenario marginal on fresh rocks may hold.
+        marginal = fresh_marginal + [
+            j for j in failed
+            if decisions[j] is not None and decisions[j].verdict is Verdict.MARGINAL]
+        rejected = len(failed) - len(marginal)
+        undecided = ""
+        if marginal and k - rejected >= required:
+            undecided = ("marginal in scenario(s) "
+                         + ", ".join(str(scs[j].run.index) for j in sorted(marginal)))
         return _Verdict(False, rows, failed, why, decisions, simulated, exact, feasible,
-                        unjudged)
+                        unjudged, undecided)
     return _Verdict(True, rows, failed, "", decisions, simulated, exact, feasible, unjudged)
 
 

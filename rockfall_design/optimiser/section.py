@@ -19,7 +19,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..judge.evaluation import evaluate_design
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins.concept import DEFAULT_CONFIDENCE
 from ..run.reach import reaches_protected_zone
@@ -42,7 +41,7 @@ from .alternatives import (
     fresh_failures,
     listed_entry,
 )
-from .decide import Decider, Decision, look_concept, look_values
+from .decide import Decider, Decision, look_concept, look_values, verify_fresh
 from .driver import FamilyTask, search_families
 from .screening import Screening, ScreenResult
 from .search import (
@@ -162,9 +161,10 @@ def _settle(
 
     Returns the rocks simulated. Each design the screening did not reject is
     decided sequentially (:meth:`Decider.decide`); the first admitted one
-    that holds on fresh rocks is the family's; one that fails on fresh rocks
-    is not chosen and the next is decided. A marginal design is kept for the
-    report. A design in which a measure holds no rock is dominated by the
+    that holds on fresh rocks is the family's (:func:`~.decide.verify_fresh`,
+    sequential too); one that fails there with confidence is not chosen and
+    the next is decided; one marginal there, like a marginal design of the
+    search, is kept for the report. A design in which a measure holds no rock is dominated by the
     same design without it: the family is reported as such (that design
     belongs to a smaller family).
 
@@ -312,17 +312,34 @@ class _SettleState:
             alt.reason = alt.dominated
             return True
         fresh_n = max(2 * dec.rocks, int(self.spec.fresh_rocks or 0))
-        fresh = evaluate_design(screen.project, screen.registry, d.measures, self.concept,
-                                rocks=fresh_n, seed=self.fresh_seed)
-        alt.exact_evaluations += 1
-        self.simulated += fresh_n
-        if not fresh.holds_with_confidence:
-            # Not chosen: it fits the noise of the search rocks. Decide the next one.
-            tally.reasons["fails on fresh rocks"] += 1
+        check = verify_fresh(screen.project, screen.registry, d.measures, self.concept,
+                             rocks=fresh_n, seed=self.fresh_seed,
+                             max_rocks=self.decider.looks.sizes[-1])
+        alt.exact_evaluations += check.exact
+        self.simulated += check.simulated
+        fresh = check.evaluation
+        if check.verdict is Verdict.REJECTED:
+            # Not chosen: it fitted the noise of the search rocks. Decide the next one.
+            tally.reasons["fails with confidence on fresh rocks"] += 1
+            alt.rejected += 1
             if not alt.holds_on_fresh_rocks:
-                alt.reason = ("the cheapest admitted design does not hold with confidence on "
-                              "fresh rocks: " + fresh_failures(fresh))
+                alt.reason = ("the cheapest admitted design fails on fresh rocks: "
+                              + check.reason)
             return False
+        if check.verdict is Verdict.MARGINAL:
+            # Neither held nor failed on fresh rocks up to the last look: it may
+            # hold, so it is listed (a rerun at another seed may choose it).
+            tally.reasons["marginal on fresh rocks"] += 1
+            _keep_cheapest(alt, listed_entry(
+                alt.name, d.measures, d.result.labels, d.cost, rocks=check.rocks,
+                values=check.values, decided=True,
+                reason=(f"admitted on {dec.rocks:,} search rocks; on fresh rocks (seed "
+                        f"{self.fresh_seed}) {check.reason}")))
+            if not alt.holds_on_fresh_rocks:
+                alt.reason = ("the cheapest admitted design is marginal on fresh rocks: "
+                              + fresh_failures(fresh))
+            return False
+        fresh_n = check.rocks
         alt.measures = sorted(d.measures, key=lambda m: m.x)
         alt.cost = d.cost
         alt.evaluation = ev
