@@ -7,7 +7,7 @@ runs them."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
@@ -162,6 +162,20 @@ class Releases:
     def __len__(self) -> int:
         return int(np.asarray(self.radius).size)
 
+    def joined(self, more: Releases) -> Releases:
+        """These rocks followed by ``more`` (see :meth:`EnsembleResult.joined`)."""
+        out = {}
+        for f in fields(self):
+            a, b = getattr(self, f.name), getattr(more, f.name)
+            if f.name == "density" and np.ndim(a) == 0 and np.ndim(b) == 0 and a == b:
+                out[f.name] = a
+                continue
+            if f.name == "density":
+                a = np.broadcast_to(a, (len(self),))
+                b = np.broadcast_to(b, (len(more),))
+            out[f.name] = np.concatenate([np.asarray(a), np.asarray(b)])
+        return Releases(**out)
+
     @property
     def mass(self) -> np.ndarray:
         return rock_mass(np.asarray(self.radius), self.density)
@@ -282,6 +296,28 @@ class EnsembleResult:
     @property
     def events_total(self) -> int:
         return int(self.n_events.sum())
+
+    #: Fields that are not one row per rock (the stations, the envelope grid,
+    #: the restart stations and the kept trajectories of the first rocks).
+    _SHARED = ("stations", "grid", "trajectories", "restart_x")
+
+    def joined(self, more: EnsembleResult) -> EnsembleResult:
+        """This run followed by ``more``: the rocks of both, in order.
+
+        ``more`` must be the next rocks of the same run (same section,
+        barriers, stations, settings and key, its ``first_index`` this run's
+        ``n``): every rock draws from its own stream, so the result is the
+        one a run of all the rocks at once gives, bit for bit. The kept
+        trajectories are this run's.
+        """
+        for f in ("stations", "grid", "restart_x"):
+            if not np.array_equal(getattr(self, f), getattr(more, f)):
+                raise ValueError(f"joined runs differ in {f}")
+        rows = {f.name: np.concatenate([getattr(self, f.name), getattr(more, f.name)])
+                for f in fields(self) if f.name not in self._SHARED}
+        return EnsembleResult(stations=self.stations, grid=self.grid,
+                              trajectories=self.trajectories, restart_x=self.restart_x,
+                              **rows)
 
 
 def barrier_table(

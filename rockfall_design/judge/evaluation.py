@@ -321,8 +321,20 @@ def evaluate_design(
     seed: int | None = None,
     n_trajectories: int = 0,
     progress: Callable[[int], None] | None = None,
+    after: Evaluation | None = None,
 ) -> Evaluation:
-    """Like :func:`evaluate`, for given measure and concept objects (the optimiser's designs)."""
+    """Like :func:`evaluate`, for given measure and concept objects (the optimiser's designs).
+
+    ``after``: an evaluation of the same design on the first rocks of this
+    run (same project and seed, fewer rocks); only the rocks after them are
+    simulated (``run_study``'s ``after``) and the whole is judged again with
+    ``concept``. A sequential look at more rocks goes on from the last look.
+    """
+    if after is not None:
+        study = after.study
+        return _evaluate_placed(project, registry, after.original_section, after.placed,
+                                study.section, concept, rocks=rocks, seed=seed,
+                                n_trajectories=0, progress=progress, after=study)
     bare = section_from_project(project)
     placed = place_measures(project, registry, measures, bare)
     section = edited_section(project, bare, placed)
@@ -342,11 +354,12 @@ def _evaluate_placed(
     seed: int | None,
     n_trajectories: int,
     progress: Callable[[int], None] | None,
+    after: Study | None = None,
 ) -> Evaluation:
     """Run the rocks against measures already placed on ``bare`` (``section``: edited)."""
     bars, owners = _barrier_rows(placed)
     study = run_study(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
-                      progress=progress, section=section, barriers=bars)
+                      progress=progress, section=section, barriers=bars, after=after)
     protect = project.protect
     judgement = _judge_run(placed, owners, study, None if protect is None else protect.x)
     checks = [guard(registry).concept(concept).checks(res) for res in judgement.results]

@@ -237,9 +237,12 @@ def decide(
     lc = look_concept(registry, concept, looks.look_confidence)
     allowed = project.protect.allowed_fraction if project.protect is not None else None
     simulated = 0
+    ev: Evaluation | None = None
     for j, n in enumerate(looks.sizes):
-        ev = evaluate_design(project, registry, measures, lc, rocks=n, seed=seed)
-        simulated += n
+        # Each look goes on from the last one's rocks (nested: the same seed).
+        done = 0 if ev is None else ev.study.n
+        ev = evaluate_design(project, registry, measures, lc, rocks=n, seed=seed, after=ev)
+        simulated += n - done
         verdict = _verdict_of(ev)
         if verdict is Verdict.UNDECIDED and j + 1 < len(looks):
             continue
@@ -331,10 +334,12 @@ class Decider:
         self._screens[j] = sc
         return sc
 
-    def _exact(self, measures: Sequence[ProtectiveMeasure], j: int) -> Evaluation:
+    def _exact(self, measures: Sequence[ProtectiveMeasure], j: int,
+               after: Evaluation | None) -> Evaluation:
+        """The exact run of look ``j``, going on from an earlier exact look's rocks."""
         s0 = self.screen
         return evaluate_design(s0.project, s0.registry, measures, s0.concept,
-                               rocks=self.looks.sizes[j], seed=s0.seed)
+                               rocks=self.looks.sizes[j], seed=s0.seed, after=after)
 
     def decide(self, measures: Sequence[ProtectiveMeasure], first: ScreenResult) -> Decision:
         """Decide a design that the first look (the search's screening) did not reject."""
@@ -345,15 +350,17 @@ class Decider:
         stations = [fp.x for fp in fps if isinstance(fp, Barrier)]
         sizes = self.looks.sizes
         j, sr, ev = 0, first, None
+        last: Evaluation | None = None  # the latest exact look, which the next goes on from
         verdict = _screen_verdict(sr)
         exact = simulated = 0
         by_exact = first.approximate  # the screening cannot decide what it approximates
         while True:
             if ev is None and (verdict is Verdict.ADMITTED or by_exact):
                 # Confirm an admission, or decide what the screening approximates.
-                ev = self._exact(measures, j)
+                ev = self._exact(measures, j, last)
                 exact += 1
-                simulated += sizes[j]
+                simulated += sizes[j] - (0 if last is None else last.study.n)
+                last = ev
                 verdict = _verdict_of(ev)
             if verdict is not Verdict.UNDECIDED or j + 1 == len(sizes):
                 break

@@ -270,6 +270,7 @@ def run_study(
     progress: Callable[[int], None] | None = None,
     section: Section | None = None,
     barriers: np.ndarray | None = None,
+    after: Study | None = None,
 ) -> Study:
     """Run the project's rockfall study.
 
@@ -289,12 +290,27 @@ def run_study(
         the slope with its ditches and berms).
     barriers : ndarray, optional
         The engine's barrier table (``check``'s fences, walls, boulder rows).
+    after : Study, optional
+        The first rocks of this very run (same project, seed, section and
+        barriers, fewer rocks, from rock 0): only the rocks after them are
+        simulated and joined on, and the result is that of a run of all the
+        rocks at once, bit for bit (each rock draws from its own stream, and
+        the releases are drawn in rock order). The optimiser's looks at a
+        design with more rocks go on from the last look this way.
     """
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
     if section is None:
         section = section_from_project(project)
-    releases = draw_releases(project, n, s)
+    first = 0
+    stream = ReleaseStream(project, s)
+    if after is not None:
+        if after.seed != s or after.first_rock != 0 or after.n > n:
+            raise ValueError("a run goes on only from the first rocks of the same run")
+        first = after.n
+        stream.draw(first)  # the releases of the rocks already run, in order
+        n_trajectories = 0
+    releases = stream.draw(n - first)
     x0, x1 = section.x[0], section.x[-1]
     grid = np.linspace(x0, x1, int(project.analysis.envelope_points))
     t0 = time.perf_counter()
@@ -308,8 +324,13 @@ def run_study(
         barriers=barriers,
         n_trajectories=n_trajectories,
         progress=progress,
+        first_index=first,
     )
     runtime = time.perf_counter() - t0
+    if after is not None:
+        result = after.result.joined(result)
+        releases = after.releases.joined(releases)
+        runtime += after.runtime_s
     return Study(
         project=project,
         result=result,

@@ -1,0 +1,75 @@
+"""A look at more rocks goes on from the last look's rocks and gives the run of all of them.
+
+The optimiser's sequential looks at a design (and its fresh-rock check) are
+nested: look j + 1 has the rocks of look j and more, at the same seed. They
+simulate only the new rocks (``run_study``'s and ``evaluate_design``'s
+``after``); the joined run must be bit for bit the run of all rocks at once,
+or a decision would depend on the schedule of looks.
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rockfall_design.engine import EnsembleResult, Releases
+from rockfall_design.judge.evaluation import evaluate_design
+from rockfall_design.judge.plan import plan_for
+from rockfall_design.plugins import load_registry
+from rockfall_design.project import load_project
+from rockfall_design.run.simulation import run_study
+
+PROJECTS = Path(__file__).resolve().parents[2] / "projects"
+
+
+def _same(a, b) -> None:
+    for f in fields(a):
+        x, y = getattr(a, f.name), getattr(b, f.name)
+        if isinstance(x, list):
+            assert len(x) == len(y), f.name
+            for u, v in zip(x, y, strict=True):
+                np.testing.assert_array_equal(u, v, err_msg=f.name)
+        else:
+            np.testing.assert_array_equal(np.asarray(x), np.asarray(y), err_msg=f.name)
+
+
+@pytest.mark.parametrize("name", ["design_two_zones.yaml", "quarry_fence_ditch.yaml"])
+@pytest.mark.parametrize("seed", [3, 41])
+def test_a_run_that_goes_on_is_the_run_of_all_its_rocks(name, seed):
+    project = load_project(PROJECTS / name)
+    registry = load_registry()
+    plan = plan_for(project, registry)
+    measures = [p.measure for p in plan.placed]
+    whole = evaluate_design(project, registry, measures, plan.concept, rocks=260, seed=seed)
+    first = evaluate_design(project, registry, measures, plan.concept, rocks=97, seed=seed)
+    more = evaluate_design(project, registry, measures, plan.concept, rocks=180, seed=seed,
+                           after=first)
+    last = evaluate_design(project, registry, measures, plan.concept, rocks=260, seed=seed,
+                           after=more)
+    assert last.study.n == 260 and more.study.n == 180
+    _same(whole.study.result, last.study.result)
+    _same(whole.study.releases, last.study.releases)
+    assert [c.as_dict() for cs in whole.checks for c in cs] == [
+        c.as_dict() for cs in last.checks for c in cs]
+    assert whole.protect == last.protect
+
+
+def test_a_run_goes_on_only_from_its_own_first_rocks():
+    project = load_project(PROJECTS / "design_two_zones.yaml")
+    part = run_study(project, rocks=50, seed=5)
+    with pytest.raises(ValueError, match="first rocks of the same run"):
+        run_study(project, rocks=100, seed=6, after=part)
+    with pytest.raises(ValueError, match="first rocks of the same run"):
+        run_study(project, rocks=40, seed=5, after=part)
+
+
+def test_joined_results_keep_their_types():
+    project = load_project(PROJECTS / "design_two_zones.yaml")
+    a = run_study(project, rocks=30, seed=2)
+    b = run_study(project, rocks=70, seed=2, after=a)
+    assert isinstance(b.result, EnsembleResult) and isinstance(b.releases, Releases)
+    assert b.result.grid_height.dtype == a.result.grid_height.dtype
+    assert b.releases.zone.size == 70
