@@ -188,3 +188,73 @@ def test_a_marginal_designs_values_are_json_whatever_its_bounds():
     json.dumps(v, allow_nan=False)
     assert v["checks"][0]["optimistic"] is None and v["checks"][0]["bound"] == 0.5
     rocks_to_decide(v)
+
+
+def _settling(monkeypatch, verdict):
+    """A family's state that has just admitted a design on 4,603 search rocks, and the fresh
+    check's verdict forced to ``verdict``."""
+    from rockfall_design.judge.sequential import Verdict
+    from rockfall_design.optimiser import section
+    from rockfall_design.optimiser.decide import Decision
+    from rockfall_design.optimiser.search import _Tally
+
+    values = {"rocks": 9206, "confidence": 0.9875, "checks": [],
+              "residual": {"reaching": 12, "fraction": 12 / 9206, "lower": 6e-4,
+                           "upper": 2.2e-3, "allowed": 1e-3}}
+    fresh = SimpleNamespace(results=[], checks=[], protect={"reaching": 12},
+                            failures=lambda: [])
+    calls = []
+
+    def verify_fresh(project, registry, measures, concept, *, rocks, seed, max_rocks):
+        calls.append((rocks, seed, max_rocks))
+        return Decision(verdict, rocks * 2, fresh, "" if verdict is Verdict.ADMITTED else
+                        "marginal: neither holds nor fails", looks=2, exact=2,
+                        simulated=rocks * 2, values=values)
+
+    monkeypatch.setattr(section, "verify_fresh", verify_fresh)
+    alt = Alternative(name="fence", family=(0,))
+    decider = SimpleNamespace(screen=SimpleNamespace(project=None, registry=None),
+                              looks=SimpleNamespace(sizes=(4603, 9206, 50_000)))
+    state = section._SettleState(alt, _Tally(), decider, SimpleNamespace(fresh_rocks=None),
+                                 concept=None, fresh_seed=1_000_010)
+    design = _design(90_000.0, 0, 0.0)
+    admitted = Decision(Verdict.ADMITTED, 4603, fresh, looks=1, exact=1, simulated=4603)
+    return state, design, admitted, calls
+
+
+def test_a_design_neither_held_nor_failed_on_fresh_rocks_is_listed_not_dropped(monkeypatch):
+    """design_quarry at its own seed chose a fence at 118,500 while the 90,000 one of seeds 11
+    to 15 held on the point values of its fresh rocks but not with its bound: it was dropped as
+    failing, and the report did not name it. The fresh check is sequential now (up to
+    design.max_rocks); a design still undecided there is listed as marginal."""
+    from rockfall_design.judge.sequential import Verdict
+
+    state, design, admitted, calls = _settling(monkeypatch, Verdict.MARGINAL)
+    assert state._admitted(design, admitted) is False
+    assert calls == [(9206, 1_000_010, 50_000)]  # twice the deciding rocks, up to the cap
+    (entry,) = state.alt.marginal
+    assert entry["cost"] == 90_000.0 and entry["decided"] is True
+    assert "admitted on 4,603 search rocks; on fresh rocks" in entry["reason"]
+    assert state.tally.reasons["marginal on fresh rocks"] == 1
+    assert not state.alt.holds_on_fresh_rocks and state.alt.rejected == 0
+    assert state.simulated == 18_412
+
+
+def test_a_design_that_fails_on_fresh_rocks_with_confidence_is_rejected(monkeypatch):
+    from rockfall_design.judge.sequential import Verdict
+
+    state, design, admitted, _ = _settling(monkeypatch, Verdict.REJECTED)
+    assert state._admitted(design, admitted) is False
+    assert state.alt.marginal == [] and state.alt.rejected == 1
+    assert state.tally.reasons["fails with confidence on fresh rocks"] == 1
+
+
+def test_a_design_that_holds_on_fresh_rocks_records_the_fresh_look_that_decided(monkeypatch):
+    from rockfall_design.judge.sequential import Verdict
+
+    state, design, admitted, _ = _settling(monkeypatch, Verdict.ADMITTED)
+    assert state._admitted(design, admitted) is True
+    alt = state.alt
+    assert alt.holds_on_fresh_rocks and alt.cost == 90_000.0
+    assert alt.fresh_rocks == 18_412 and alt.fresh_seed == 1_000_010
+    assert alt.decision_rocks == 4603
