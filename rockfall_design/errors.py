@@ -17,6 +17,7 @@ __all__ = [
     "PluginError",
     "ProjectError",
     "RockfallError",
+    "strip_controls",
 ]
 
 
