@@ -37,8 +37,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+# The engine's outcome codes (columns.O_*, the values of plugins.measure.Outcome)
+# as plain ints: numpy compares an array with an IntEnum member several times
+# slower (it looks the member up for array protocols on every call), and the
+# screening compares millions of times.
+from ..engine import columns
 from ..engine.columns import EXIT_DOWNSLOPE, STOPPED
-from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
+from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, ProfileEdit
 from ..run.reach import protected_zone_counts
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -151,12 +156,12 @@ def barrier_outcomes(
     hit = met & ~over & ~gap
     broken = hit & (energy_kj > fp.capacity_kj)
     stopped = hit & ~broken
-    out = np.full(height_m.shape, Outcome.NOT_MET, dtype=np.int8)
-    out[over] = Outcome.PASSED_OVER
-    out[gap] = Outcome.PASSED_THROUGH_GAP
-    out[broken] = Outcome.BROKEN_THROUGH
-    out[stopped] = (Outcome.REBOUNDED if fp.behaviour == BarrierBehaviour.RIGID
-                    else Outcome.CAUGHT)
+    out = np.full(height_m.shape, columns.O_NOT_MET, dtype=np.int8)
+    out[over] = columns.O_PASSED_OVER
+    out[gap] = columns.O_PASSED_THROUGH_GAP
+    out[broken] = columns.O_BROKEN_THROUGH
+    out[stopped] = (columns.O_REBOUNDED if fp.behaviour == BarrierBehaviour.RIGID
+                    else columns.O_CAUGHT)
     return out
 
 
@@ -164,20 +169,20 @@ def held_by(fp: Barrier | ProfileEdit, outcome: np.ndarray, fates: RockFates) ->
     """The rocks a measure holds (see the module docs for the rule)."""
     if isinstance(fp, Barrier):
         if fp.behaviour == BarrierBehaviour.RIGID:
-            return ((outcome == Outcome.REBOUNDED) & (fates.max_x <= fp.x)
+            return ((outcome == columns.O_REBOUNDED) & (fates.max_x <= fp.x)
                     & (fates.status != EXIT_DOWNSLOPE))
-        return outcome == Outcome.CAUGHT
-    return (outcome != Outcome.NOT_MET) & (fates.status == STOPPED) & (
+        return outcome == columns.O_CAUGHT
+    return (outcome != columns.O_NOT_MET) & (fates.status == STOPPED) & (
         fates.x_end >= fp.catch_from) & (fates.x_end <= fp.catch_to)
 
 
 def edit_outcomes(fp: ProfileEdit, fates: RockFates) -> np.ndarray:
     """Outcome codes at a profile edit: met when the centre reached ``catch_from``."""
     met = fates.max_x >= fp.catch_from
-    out = np.where(met, Outcome.PASSED_OVER, Outcome.NOT_MET).astype(np.int8)
+    out = np.where(met, columns.O_PASSED_OVER, columns.O_NOT_MET).astype(np.int8)
     inside = (fates.status == STOPPED) & (fates.x_end >= fp.catch_from) & (
         fates.x_end <= fp.catch_to)
-    out[met & inside] = Outcome.CAUGHT
+    out[met & inside] = columns.O_CAUGHT
     return out
 
 
@@ -216,11 +221,11 @@ def judge_measures(
         res = MeasureResult(measure=p.measure, index=p.index, n_rocks=n)
         if isinstance(fp, Barrier):
             out = np.asarray(out)
-            met = out != Outcome.NOT_MET
-            res.passed_over = int((out == Outcome.PASSED_OVER).sum())
-            res.broken_through = int((out == Outcome.BROKEN_THROUGH).sum())
-            res.rebounded = int((out == Outcome.REBOUNDED).sum())
-            res.passed_through_gap = int((out == Outcome.PASSED_THROUGH_GAP).sum())
+            met = out != columns.O_NOT_MET
+            res.passed_over = int((out == columns.O_PASSED_OVER).sum())
+            res.broken_through = int((out == columns.O_BROKEN_THROUGH).sum())
+            res.rebounded = int((out == columns.O_REBOUNDED).sum())
+            res.passed_through_gap = int((out == columns.O_PASSED_THROUGH_GAP).sum())
             res.passing_height_m = rec[met, 0]
             res.velocity_ms = rec[met, 1]
             res.energy_kj = rec[met, 2]
@@ -228,7 +233,7 @@ def judge_measures(
                 res.clearance_m = float(protect_x - fp.x)
         else:
             out = edit_outcomes(fp, fates)
-            met = out != Outcome.NOT_MET
+            met = out != columns.O_NOT_MET
             res.reach_m = fates.max_x[met] - fp.catch_from
         held = held_by(fp, out, fates)
         res.met = int(met.sum())

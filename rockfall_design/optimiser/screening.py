@@ -27,7 +27,7 @@ from ..judge.outcomes import Judgement, RockFates, barrier_outcomes, judge_measu
 from ..judge.placing import PlacedMeasure, edited_section, place_measures
 from ..plugins import guard
 from ..plugins.concept import DEFAULT_CONFIDENCE, Check
-from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, Outcome, ProfileEdit
+from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, ProfileEdit
 from ..run.reach import reaches_protected_zone
 from ..run.releases import draw_releases, engine_key, engine_settings, section_from_project
 
@@ -411,15 +411,15 @@ class Screening:
             j = self.station(fp.x)
             h, e_kj, v = table.column(j)
             out = barrier_outcomes(fp, h, e_kj, self.radius, self.u_gap, alive)
-            stopped = (out == Outcome.CAUGHT) | (out == Outcome.REBOUNDED)
-            here = (out == Outcome.BROKEN_THROUGH) | (out == Outcome.REBOUNDED)
+            stopped = (out == columns.O_CAUGHT) | (out == columns.O_REBOUNDED)
+            here = (out == columns.O_BROKEN_THROUGH) | (out == columns.O_REBOUNDED)
             if fp.behaviour == BarrierBehaviour.BLOCKS:
-                here = out != Outcome.NOT_MET
+                here = out != columns.O_NOT_MET
             approx |= here
             upstream.append((fp.x, here))
             fates.max_x[stopped] = np.minimum(fates.max_x[stopped], fp.x)
             fates.x_end[stopped] = fp.x
-            fates.status[stopped] = np.where(out[stopped] == Outcome.CAUGHT, columns.CAUGHT,
+            fates.status[stopped] = np.where(out[stopped] == columns.O_CAUGHT, columns.CAUGHT,
                                              columns.STOPPED)
             alive &= ~stopped
             outcomes[i] = out
@@ -434,7 +434,7 @@ class Screening:
             for x, m in upstream:
                 if x < start:
                     before |= m
-            touched.append(bool((before & (out != Outcome.NOT_MET)).any()))
+            touched.append(bool((before & (out != columns.O_NOT_MET)).any()))
         uncertain = int((approx & reaches_protected_zone(fates.max_x, fates.status,
                                                          self.protect_x)).sum())
         return judgement, _Approx(uncertain, bool(approx.any()), touched)

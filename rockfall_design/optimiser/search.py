@@ -20,11 +20,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy.optimize import differential_evolution
 
+from ..engine import columns
 from ..errors import ProjectError
 from ..judge.outcomes import RockFates, barrier_outcomes, judge_measures
 from ..judge.placing import MIN_BARRIER_SPACING_M, PlacedMeasure, edited_section, place_measures
 from ..plugins import guard
-from ..plugins.measure import Barrier, BarrierBehaviour, Outcome, ProfileEdit
+from ..plugins.measure import Barrier, BarrierBehaviour, ProfileEdit
 from ..run.reach import reaches_protected_zone
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -122,10 +123,10 @@ class _BarrierSlots:
             if row is None:
                 o = opts[k]
                 oc = self._outcome(o, table)[0]
-                row = (oc == Outcome.NOT_MET) | (oc == Outcome.PASSED_OVER) | (
-                    oc == Outcome.PASSED_THROUGH_GAP)
+                row = (oc == columns.O_NOT_MET) | (oc == columns.O_PASSED_OVER) | (
+                    oc == columns.O_PASSED_THROUGH_GAP)
                 if o.footprint.behaviour == BarrierBehaviour.BLOCKS:
-                    row = oc == Outcome.NOT_MET
+                    row = oc == columns.O_NOT_MET
                 if len(self._rows) > 100_000:
                     self._rows.clear()
                 self._rows[key] = row

@@ -243,3 +243,13 @@ def test_third_party_measure_through_a_real_entry_point_works_in_check(
     assert s["measures"][0]["type"] == "catch_net" and s["measures"][0]["caught"] == 1
     assert "broken" in out.err and "boom" in out.err  # named, and the rest still works
     assert code in (0, 1)
+
+
+def test_the_engines_outcome_codes_are_the_plugins():
+    """The judge and the screening compare with the engine's plain codes (faster than the
+    enum); they must be the values plugins see as ``Outcome``."""
+    from rockfall_design.engine import columns
+    from rockfall_design.plugins.measure import Outcome
+
+    for o in Outcome:
+        assert getattr(columns, f"O_{o.name}") == int(o)

@@ -73,3 +73,4 @@ def test_joined_results_keep_their_types():
     assert isinstance(b.result, EnsembleResult) and isinstance(b.releases, Releases)
     assert b.result.grid_height.dtype == a.result.grid_height.dtype
     assert b.releases.zone.size == 70
+
