@@ -92,6 +92,8 @@ class Alternative:
     decision_rocks: int | None = None
     fresh_rocks: int | None = None
     fresh_seed: int | None = None
+    #: The fresh-rock looks (``{"rocks": [...], "look_confidence": c}``) of the verification.
+    fresh_looks: dict[str, Any] | None = None
     proof: str = ""
     dominated: str = ""
     marginal: list[dict[str, Any]] = field(default_factory=list)
@@ -116,6 +118,7 @@ class Alternative:
             "fresh_residual": self.fresh_residual,
             "fresh_rocks": self.fresh_rocks,
             "fresh_seed": self.fresh_seed,
+            "fresh_looks": self.fresh_looks,
             "reason": self.reason,
             "proof": self.proof,
             "dominated": self.dominated or None,

@@ -64,6 +64,8 @@ class Decision:
         Rocks simulated for this decision (exact runs and look screenings).
     values : dict
         Point values and bounds of the deciding look (see :func:`look_values`).
+    schedule : LookSchedule or None
+        The looks planned (:func:`decide` sets it).
     """
 
     verdict: Verdict
@@ -74,6 +76,7 @@ class Decision:
     exact: int = 0
     simulated: int = 0
     values: dict[str, Any] = field(default_factory=dict)
+    schedule: LookSchedule | None = None
 
     @property
     def admitted(self) -> bool:
@@ -250,7 +253,7 @@ def decide(
         if verdict is Verdict.UNDECIDED:
             verdict = Verdict.MARGINAL
         reason = "" if verdict is Verdict.ADMITTED else _reason(verdict, values, fails)
-        return Decision(verdict, n, ev, reason, j + 1, j + 1, simulated, values)
+        return Decision(verdict, n, ev, reason, j + 1, j + 1, simulated, values, looks)
     raise AssertionError("a schedule has at least one look")  # pragma: no cover
 
 

@@ -348,6 +348,9 @@ class _SettleState:
         alt.residual = ev.protect["reaching"] if ev.protect else None
         alt.holds_on_fresh_rocks = True
         alt.fresh_rocks, alt.fresh_seed = fresh_n, self.fresh_seed
+        if check.schedule is not None:
+            alt.fresh_looks = {"rocks": list(check.schedule.sizes),
+                               "look_confidence": check.schedule.look_confidence}
         alt.fresh_residual = fresh.protect["reaching"] if fresh.protect else None
         alt.fresh_failures = fresh.failures()
         alt.feasible = True  # admitted with confidence on the deciding rocks

@@ -439,7 +439,12 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
            f"{100 * looks.look_confidence:.4g} % (together {100 * looks.confidence:g} %)\n"
            if looks is not None else "")
         + f"# verification: seed {best.fresh_seed}, {best.fresh_rocks} rocks: "
-        f"{'holds' if best.holds_on_fresh_rocks else 'FAILS'}; reproduce with\n"
+        f"{'holds' if best.holds_on_fresh_rocks else 'FAILS'}"
+        + (f" (the look of {best.fresh_rocks} fresh rocks of the looks "
+           f"{', '.join(str(k) for k in best.fresh_looks['rocks'])}, each at "
+           f"{100 * best.fresh_looks['look_confidence']:.4g} %)"
+           if getattr(best, "fresh_looks", None) else "")
+        + "; reproduce with\n"
         f"#   rockfall-design check design.yaml --seed {best.fresh_seed} "
         f"--rocks {best.fresh_rocks}\n"
         "# The design: section is left out (its catalogue paths are relative to the\n"
