@@ -33,6 +33,7 @@ numbers in-process, on any worker of a pool, or on any worker of a cluster.
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import threading
@@ -266,7 +267,8 @@ def _connect(client_class: Any, address: str) -> Any:
             box["error"] = exc
         else:
             if done.is_set():  # answered after we gave up: not ours any more
-                client.close()
+                with contextlib.suppress(Exception):  # nobody is left to tell
+                    client.close()
             box["client"] = client
         finally:
             done.set()

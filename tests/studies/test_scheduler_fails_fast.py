@@ -29,6 +29,9 @@ class _Silent:
     def __init__(self, address: str, timeout: str) -> None:
         time.sleep(30)
 
+    def close(self) -> None:
+        """Closed by the connecting thread when it answers after the wait gave up."""
+
 
 class _Garbled:
     """A client class that reads a banner as a Dask frame length."""
