@@ -14,7 +14,10 @@ heights with N(0, noise) errors, all measured in the same run. For each:
   then the same without the one making of the centre path (what a run of
   many more rocks tends to);
 * rocks of sizes uniform in [0.3, 0.7] m: each rock has a centre path of its
-  own, so its cost grows with the survey (``--varying-rocks``, 0 to skip).
+  own (``--varying-rocks``, 0 to skip), made from the ground segments that the
+  path of some radius in [0.3, 0.7] m can lie on (found once per run): how many
+  of the survey's segments those are, the time to find them, and the time of
+  one rock's path from them against that from every segment.
 """
 
 from __future__ import annotations
@@ -28,14 +31,29 @@ from rockfall_design.engine import Material, Releases, Section, run_ensemble
 from rockfall_design.engine.records import Ground, Path
 
 try:
-    from rockfall_design.engine.ensemble import rock_path
+    from rockfall_design.engine.ensemble import rock_path as _rock_path
 except ImportError:  # an engine from before issue 27 (PYTHONPATH=OTHER_TREE, to compare)
     from rockfall_design.engine.profile import centre_path
 
-    def rock_path(ground, r, max_chord):  # noqa: D103 - the same work, older names
+    def _rock_path(ground, r, max_chord):  # noqa: D103 - the same work, older names
         px, py, pseg = centre_path(ground.x, ground.y, np.arange(ground.x.size - 1), r,
                                    max_chord)
         return Path(px, py, pseg, ground.seg_mat, ground.mats)
+
+try:
+    from rockfall_design.engine.profile import path_segments
+except ImportError:  # before the paths of rocks of several sizes were made from fewer segments
+    path_segments = None
+
+EVERY = np.empty(0, dtype=np.int64)
+
+
+def rock_path(ground, r, max_chord, segs=EVERY):
+    """The engine's centre path of radius r (from the segments ``segs``, where it takes them)."""
+    try:
+        return _rock_path(ground, r, max_chord, segs)
+    except TypeError:  # an engine whose rock_path takes every segment
+        return _rock_path(ground, r, max_chord)
 
 STANDARD = np.array([(0, 100), (30, 60), (60, 30), (80, 20), (120, 15), (200, 12)], float)
 TALUS = Material(impact_model="rn_rt", restitution=0.35, tangential_restitution=0.85,
@@ -81,20 +99,25 @@ def main() -> None:
     # Compiled and warm before anything is timed.
     run_ensemble(section(6, 0.0), releases(2, [0.4, 0.5]), key=1, threads=1)
     warm = section(300, 0.01)
+    run_ensemble(warm, releases(2, [0.4, 0.5]), key=1, threads=1)
     rock_path(Ground(warm.x, warm.y, warm.segment_material, warm.material_table()), 0.5,
-              np.radians(5.0))
+              np.radians(5.0), np.arange(warm.x.size - 1))
     print(f"{args.rocks:,} rocks of 0.5 m and {args.varying_rocks:,} of U(0.3, 0.7) m on each "
           f"section, {args.threads} thread(s), survey noise {args.noise} m")
     print(f"{'points':>8} {'path pieces':>11} {'centre path':>12} {'run (one size)':>15} "
           f"{'events/s':>12} {'vs 6 pts':>8} {'w/o path':>12} {'vs 6 pts':>8}   "
-          f"{'sizes varying':>14} {'events/s':>10}")
+          f"{'sizes varying':>14} {'events/s':>10} {'vs 6 pts':>8}")
     base = None
+    base_v = None
+    details = []
     g = np.random.default_rng(0)
     for pts in cases:
         sec = section(pts, args.noise)
         ground = Ground(sec.x, sec.y, sec.segment_material, sec.material_table())
         t0 = time.perf_counter()
-        path = rock_path(ground, 0.5, np.radians(5.0))
+        # The engine's path of one size: on a survey, from every segment by survey_path.
+        path = rock_path(ground, 0.5, np.radians(5.0),
+                         np.arange(pts - 1) if pts > 256 else EVERY)
         t_path = time.perf_counter() - t0
         t, ev = timed(sec, releases(args.rocks, 0.5), args.threads)
         rate = ev / t
@@ -106,8 +129,38 @@ def main() -> None:
         if args.varying_rocks:
             tv, evv = timed(sec, releases(args.varying_rocks,
                                           g.uniform(0.3, 0.7, args.varying_rocks)), args.threads)
-            line += f"   {tv:>12.3f} s {evv / tv:>10,.0f}"
+            base_v = base_v or evv / tv
+            line += f"   {tv:>12.3f} s {evv / tv:>10,.0f} {base_v / (evv / tv):>7.1f}x"
+            if path_segments is not None and pts > 256:
+                details.append((pts, *_pruned(ground)))
         print(line, flush=True)
+    if details:
+        print("\nrocks of U(0.3, 0.7) m: the segments their paths can lie on (found once per run)")
+        print(f"{'points':>8} {'segments kept':>14} {'found in':>10} {'path of 0.45 m':>15} "
+              f"{'from every segment':>19}")
+        for pts, kept, t_find, t_kept, t_all in details:
+            print(f"{pts:>8,} {kept:>7,} ({kept / (pts - 1):>4.0%}) {t_find * 1e3:>7.1f} ms "
+                  f"{t_kept * 1e3:>12.2f} ms {t_all * 1e3:>16.2f} ms")
+
+
+def _pruned(ground: Ground) -> tuple[int, float, float, float]:
+    """Segments kept for radii in [0.3, 0.7] m, time to find them, and one path (0.45 m) from
+    them and from every segment (s, best of 3)."""
+    chord = np.radians(5.0)
+    t0 = time.perf_counter()
+    segs = path_segments(ground.x, ground.y, 0.3, 0.7, chord)[0]
+    t_find = time.perf_counter() - t0
+    every = np.arange(ground.x.size - 1, dtype=np.int64)
+
+    def best(s: np.ndarray) -> float:
+        times = []
+        for _ in range(3):
+            t = time.perf_counter()
+            rock_path(ground, 0.45, chord, s)
+            times.append(time.perf_counter() - t)
+        return min(times)
+
+    return segs.size, t_find, best(segs), best(every)
 
 
 if __name__ == "__main__":
