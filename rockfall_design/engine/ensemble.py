@@ -30,7 +30,7 @@ from .problem import (
     barrier_table,
     rock_mass,
 )
-from .profile import centre_path, path_segments, survey_path
+from .profile import centre_path, element_codes, path_elements, survey_path
 from .records import (
     N_REL_COLS,
     N_WORK,
@@ -72,24 +72,25 @@ STATUS_NAMES = columns.STATUS_NAMES
 SHARED_PATH_VERTICES = 256
 """Sections of more vertices than this have the centre path of a run's first radius
 made once per run rather than once per batch, and, with rocks of several sizes, the
-ground segments the paths of the others can lie on (see :func:`run_ensemble`)."""
+ground elements the paths of the others can lie on (see :func:`run_ensemble`)."""
 
 
 @njit(cache=CACHE, nogil=True)
-def rock_path(ground, r, max_chord, segs):
+def rock_path(ground, r, max_chord, elems):
     """The ground as a rock of radius ``r`` (m) meets it (``records.Path``).
 
     Its centre path (``profile.centre_path``) and the tree of its highest
     vertices (``flight.path_tree``); ``max_chord`` (rad) as in ``centre_path``.
-    ``segs``: empty, or the ground segments that the path can lie on
-    (``profile.path_segments``), of which ``profile.survey_path`` makes it.
+    ``elems``: empty, or the ground elements (segment offsets and vertex
+    arcs) that the path can lie on (``profile.path_elements``), of which
+    ``profile.survey_path`` makes it.
     """
-    if segs.shape[0] == 0:
+    if elems.shape[0] == 0:
         px, py, pseg = centre_path(ground.x, ground.y, np.arange(ground.x.shape[0] - 1), r,
                                    max_chord)
     else:
         px, py, pseg = survey_path(ground.x, ground.y, np.arange(ground.x.shape[0] - 1), r,
-                                   max_chord, segs)
+                                   max_chord, elems)
     return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
 
 
@@ -97,7 +98,7 @@ def rock_path(ground, r, max_chord, segs):
 # writes only its own rows, and draws from its own stream, so the results do
 # not depend on how the rocks are shared among threads.
 @njit(cache=CACHE, nogil=True)
-def _run_batch(ground, path0, r0, segs, settings, max_chord, key, first_index, rel, resume,
+def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, rel, resume,
                stations, bars, out):
     """Run the rocks of one batch (rows of ``rel``) and write their rows of ``out``.
 
@@ -111,8 +112,8 @@ def _run_batch(ground, path0, r0, segs, settings, max_chord, key, first_index, r
         theirs made here.
     r0 : float
         The radius of ``path0`` (m).
-    segs : ndarray of int
-        Empty, or the ground segments that the paths of every radius of the
+    elems : ndarray of int
+        Empty, or the ground elements that the paths of every radius of the
         run can lie on (:func:`rock_path`).
     settings : ndarray of float, shape (N_SETTINGS,)
     max_chord : float
@@ -148,7 +149,7 @@ def _run_batch(ground, path0, r0, segs, settings, max_chord, key, first_index, r
         r = rel[i, REL_R]
         if r != r_prev:
             # Rocks of one size share their centre path.
-            path = path0 if r == r0 else rock_path(ground, r, max_chord, segs)
+            path = path0 if r == r0 else rock_path(ground, r, max_chord, elems)
             r_prev = r
         if resume.mask[i]:
             rng[0] = resume.rngs[i]
@@ -272,10 +273,10 @@ def run_ensemble(
     k64 = np.uint64(int(key) % (1 << 64))
     max_chord = float(np.radians(settings.max_chord_deg))
     ground = Ground(section.x, section.y, section.segment_material, section.material_table())
-    path0, r0, segs, path_seconds = _shared_path(ground, radius, max_chord)
+    path0, r0, elems, path_seconds = _shared_path(ground, radius, max_chord)
 
     batch_args = _batch_slicer(
-        (ground, path0, r0, segs, settings.vector(), max_chord, k64), int(first_index), rel,
+        (ground, path0, r0, elems, settings.vector(), max_chord, k64), int(first_index), rel,
         _resume(resume, n), stations_rec, bars, out, ntr, record_speed)
     _run_all(batch_args, _Batches(n, batch_size, radius, r0, path_seconds), n, threads,
              progress)
@@ -336,13 +337,13 @@ def _shared_path(ground: Ground, radius: np.ndarray,
         The centre path of the first rock's radius (an empty one if none).
     r0 : float
         Its radius (m), -1 if none.
-    segs : ndarray of int64
-        On a survey of many points, the ground segments the paths of the
-        run's radii can lie on (``profile.path_segments``; all of them if the
-        rocks have one size), of which ``profile.survey_path`` makes each
-        path, the same whichever radii a run (or a chunk of one) has. Empty
-        on a few points: each rock's path from every segment
-        (``profile.centre_path``, as before).
+    elems : ndarray of int64
+        On a survey of many points, the ground elements (segment offsets,
+        vertex arcs) the paths of the run's radii can lie on
+        (``profile.path_elements``; all of them if the rocks have one size),
+        of which ``profile.survey_path`` makes each path, the same whichever
+        radii a run (or a chunk of one) has. Empty on a few points: each
+        rock's path from every element (``profile.centre_path``, as before).
     path_seconds : float
         Measured cost (s) of one path (0 on a few points).
 
@@ -351,7 +352,7 @@ def _shared_path(ground: Ground, radius: np.ndarray,
     On a survey of many points, the centre path of the first rock's radius
     is made once for the whole run (on a fixed size, for every rock): it
     costs more than many rocks, and the batches stay short (see
-    ``batch_size``). With rocks of several sizes, the ground segments their
+    ``batch_size``). With rocks of several sizes, the ground elements their
     paths can lie on are found once too (from the path of the smallest
     radius), and each path is made from those: on a dense noisy survey, the
     tops of the noise (issue 27, item 8). On a few points each batch makes
@@ -365,13 +366,13 @@ def _shared_path(ground: Ground, radius: np.ndarray,
         r0 = float(radius[0])
         r_min, r_max = float(radius.min()), float(radius.max())
         if r_min == r_max:
-            segs = np.arange(ground.x.size - 1, dtype=np.int64)
+            elems = element_codes(ground.x.size)
         else:
-            segs = _off_the_main_thread(path_segments, ground.x, ground.y, r_min, r_max,
-                                        max_chord)[0]
+            elems = _off_the_main_thread(path_elements, ground.x, ground.y, r_min, r_max,
+                                         max_chord)
         t0 = time.perf_counter()
-        path0 = _off_the_main_thread(rock_path, ground, r0, max_chord, segs)
-        return path0, r0, segs, time.perf_counter() - t0
+        path0 = _off_the_main_thread(rock_path, ground, r0, max_chord, elems)
+        return path0, r0, elems, time.perf_counter() - t0
     # no rock has radius -1: every batch makes its paths
     return (Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
                  ground.mats, np.empty(0)), -1.0, every, 0.0)
@@ -383,7 +384,7 @@ def _batch_slicer(fixed: tuple, first_index: int, rel: np.ndarray, resume: Resum
     """The arguments of the compiled call for rocks a..b-1 (views, no copies).
 
     ``fixed`` holds the arguments every batch shares, in the kernel's order:
-    ground, shared path, its radius, the segments paths are made of, settings,
+    ground, shared path, its radius, the elements paths are made of, settings,
     chord limit and run key.
     """
     def batch_args(a: int, b: int) -> tuple:

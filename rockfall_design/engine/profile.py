@@ -56,29 +56,34 @@ def _arc_edges(t1x, t1y, t2x, t2y, max_chord):
 
 
 @njit(cache=CACHE)
-def _raw_pieces(gx, gy, seg_id, r, max_chord, segs):
+def _raw_pieces(gx, gy, seg_id, r, max_chord, elems):
     """Offset segments and circumscribed vertex arcs of an extended profile.
 
     Returns arrays (xa, ya, xb, yb, sid) of straight pieces, each with
-    ``xa < xb``, in the order of the raw offset curve. Only the offsets of
-    the segments ``segs`` (sorted indices; ``np.arange(len(gx) - 1)`` for
-    all) are made, and the arcs of the vertices between two of them.
+    ``xa < xb``, in the order of the raw offset curve. Only the elements
+    ``elems`` are made (sorted codes: ``2 i`` the arc at vertex ``i``,
+    ``2 i + 1`` the offset of segment ``i``; ``np.arange(2 * len(gx) - 1)``
+    for all, see :func:`element_codes`).
     """
     nseg = gx.shape[0] - 1
     tx = np.empty(nseg)
     ty = np.empty(nseg)
-    for i in segs:
-        dx = gx[i + 1] - gx[i]
-        dy = gy[i + 1] - gy[i]
-        ln = np.hypot(dx, dy)
-        tx[i] = dx / ln
-        ty[i] = dy / ln
+    for c in elems:
+        # An arc needs the segments on both sides, an offset its own.
+        for i in range(c // 2 - 1 + c % 2, c // 2 + 1):
+            if 0 <= i < nseg:
+                dx = gx[i + 1] - gx[i]
+                dy = gy[i + 1] - gy[i]
+                ln = np.hypot(dx, dy)
+                tx[i] = dx / ln
+                ty[i] = dy / ln
     # A convex vertex (the ground turns clockwise) carries an arc of m + 1 edges.
-    ns = segs.shape[0]
-    cap = ns
-    for q in range(1, ns):
-        j = segs[q]
-        if segs[q - 1] == j - 1 and tx[j - 1] * ty[j] - ty[j - 1] * tx[j] < -1e-12:
+    cap = 0
+    for c in elems:
+        j = c // 2
+        if c % 2:
+            cap += 1
+        elif 0 < j < nseg and tx[j - 1] * ty[j] - ty[j - 1] * tx[j] < -1e-12:
             cap += _arc_edges(tx[j - 1], ty[j - 1], tx[j], ty[j], max_chord)[2] + 1
     xa = np.empty(cap)
     ya = np.empty(cap)
@@ -86,10 +91,12 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord, segs):
     yb = np.empty(cap)
     sid = np.empty(cap, dtype=np.int64)
     p = 0
-    for qs in range(ns):
-        i = segs[qs]
-        # Collinear neighbours (|cross| ~ round-off) need no arc.
-        if qs > 0 and segs[qs - 1] == i - 1 and tx[i - 1] * ty[i] - ty[i - 1] * tx[i] < -1e-12:
+    for c in elems:
+        i = c // 2
+        if c % 2 == 0:
+            # Collinear neighbours (|cross| ~ round-off) need no arc.
+            if not (0 < i < nseg and tx[i - 1] * ty[i] - ty[i - 1] * tx[i] < -1e-12):
+                continue
             # Circumscribed polygon about the arc at vertex i: from the tangent
             # point of the upslope normal (angle phi1) through m corners at the
             # mid angles (radius r / cos(delta/2)) to the tangent point of the
@@ -117,6 +124,7 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord, segs):
                 p += 1
                 x_prev = x_next
                 y_prev = y_next
+            continue
         nx = -ty[i]
         ny = tx[i]
         xa[p] = gx[i] + r * nx
@@ -126,6 +134,16 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord, segs):
         sid[p] = seg_id[i]
         p += 1
     return xa, ya, xb, yb, sid
+
+
+def element_codes(n: int) -> np.ndarray:
+    """Codes of every element of a ground of ``n`` vertices (see :func:`_raw_pieces`).
+
+    ``2 i``: the arc at vertex ``i`` (none at the two ends of the ground
+    itself, but :func:`_centre_path` extends it); ``2 i + 1``: the offset of
+    segment ``i``. In the order of the raw offset curve.
+    """
+    return np.arange(2 * n - 1, dtype=np.int64)
 
 
 @njit(cache=CACHE)
@@ -205,29 +223,30 @@ def _hidden(xa, ya, xb, yb, ex, ey, r, tol):
 @njit(cache=CACHE)
 def centre_path(gx, gy, seg_mat, r, max_chord):
     """Centre path of a sphere of radius ``r`` on the ground polyline (see :func:`_centre_path`)."""
-    return _centre_path(gx, gy, seg_mat, r, max_chord, True, np.arange(gx.shape[0] - 1), False)
+    return _centre_path(gx, gy, seg_mat, r, max_chord, True, np.arange(2 * gx.shape[0] - 1),
+                        False)
 
 
 @njit(cache=CACHE, nogil=True)
-def survey_path(gx, gy, seg_mat, r, max_chord, segs):
-    """Centre path of radius ``r`` (m) made of the ground segments ``segs`` only.
+def survey_path(gx, gy, seg_mat, r, max_chord, elems):
+    """Centre path of radius ``r`` (m) made of the ground elements ``elems`` only.
 
-    The path of :func:`centre_path`, from the offsets of the segments
-    ``segs`` (sorted indices) and the arcs of the vertices between two of
-    them, with crossings found from the pieces alone (``canon`` of
-    :func:`_centre_path`). When ``segs`` holds every segment whose offset or
-    vertex arcs can be on the path (:func:`path_segments`), it is the same,
-    to the bit, as this function over every segment
+    The path of :func:`centre_path`, from the offsets of the segments and
+    the arcs of the vertices in ``elems`` (sorted codes, see
+    :func:`element_codes`), with crossings found from the pieces alone
+    (``canon`` of :func:`_centre_path`). When ``elems`` holds every element
+    that can be on the path (:func:`path_elements`), it is the same, to the
+    bit, as this function over every element
     (tests/engine/test_engine_survey.py): on a dense noisy survey a rock of a
     size of its own then costs the sweep over the tops of the noise instead
     of over every point (issue 27, item 8).
     """
-    return _centre_path(gx, gy, seg_mat, r, max_chord, True, segs, True)
+    return _centre_path(gx, gy, seg_mat, r, max_chord, True, elems, True)
 
 
-def path_segments(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
-                  max_chord: float) -> tuple[np.ndarray, int]:
-    """The ground segments the centre path of any radius in [r_min, r_max] can lie on.
+def path_elements(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
+                  max_chord: float) -> np.ndarray:
+    """The ground elements the centre path of any radius in [r_min, r_max] can lie on.
 
     Parameters
     ----------
@@ -240,10 +259,9 @@ def path_segments(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
 
     Returns
     -------
-    segs : ndarray of int64
-        Sorted indices of the segments to give :func:`survey_path`.
-    pieces : int
-        Pieces of the centre path made to find them (that of ``r_min / s``).
+    ndarray of int64
+        Sorted codes (:func:`element_codes`) of the segment offsets and vertex
+        arcs to give :func:`survey_path`.
 
     Notes
     -----
@@ -254,20 +272,21 @@ def path_segments(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
     to ``U_r`` is at most its distance to ``U_R`` (the inclusion of openings
     by growing discs, Serra 1982). A segment's offset is on the path of
     radius ``R`` only where a free disc touches the segment (distance 0 to
-    ``U_R``), and the edge of a vertex's arc only if a free disc comes
+    ``U_R``), and an edge of a vertex's arc only if a free disc comes
     within ``R (s - 1)`` of the vertex (the edges are circumscribed, their
-    corners at ``R s`` from it, ``s = 1 / cos(max_chord / 2)``); so both
-    happen only for ground within ``0`` resp. ``r_max (s - 1)`` of
+    corners at ``R s`` from it, ``s = 1 / cos(max_chord / 2)``); so either
+    happens only for ground within ``0`` resp. ``r_max (s - 1)`` of
     ``U_{r_min}``, that is, within ``r_min`` resp. ``r_min + r_max (s - 1)``
     of the free centres of radius ``r_min``. Those lie above the path of
     radius ``r_min / s`` (whose arcs are at most ``r_min`` from their
-    vertices), so the segments kept are those within ``r_min`` of that path,
-    and the two on either side of each vertex within ``r_min + r_max (s - 1)``
-    of it (with both, its arc), with a margin for round-off, and all segments
+    vertices), so the offsets kept are those of the segments within
+    ``r_min`` of that path, and the arcs those of the vertices within
+    ``r_min + r_max (s - 1)`` of it, with a margin for round-off, and all
     near the section's ends (where the nearest free centre may lie beyond
-    them). This keeps every segment that can be on the path of any radius
-    in the range, though not only those: it holds for the circumscribed arcs
-    as for true circles.
+    them). This keeps every element that can be on the path of any radius
+    in the range, though not only those, for the circumscribed arcs as for
+    true circles: choosing by the path of ``r_min`` alone misses some where
+    an arc's corners stand out (tests/engine/test_engine_survey.py).
 
     References
     ----------
@@ -276,39 +295,41 @@ def path_segments(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
     """
     n = gx.shape[0]
     s = 1.0 / np.cos(0.5 * max_chord)
-    px, py, _ = survey_path(gx, gy, np.arange(n - 1), r_min / s, max_chord, np.arange(n - 1))
+    every = element_codes(n)
+    px, py, _ = survey_path(gx, gy, np.arange(n - 1), r_min / s, max_chord, every)
     scale = max(abs(gx[0]), abs(gx[-1]), abs(gy).max(), 1.0)
     margin = 1e-9 * (scale + r_max)
-    reach_seg = r_min + margin
     reach_vtx = r_min + r_max * (s - 1.0) + margin
-    keep = _near_path(gx, gy, px, py, reach_seg, reach_vtx)
-    ends = (gx[1:] <= gx[0] + reach_vtx) | (gx[:-1] >= gx[-1] - reach_vtx)
-    keep |= ends
-    keep[[0, -1]] = True
-    return np.flatnonzero(keep).astype(np.int64), px.shape[0] - 1
+    keep = _near_path(gx, gy, px, py, r_min + margin, reach_vtx)
+    # Every element near the ends: the vertices within reach_vtx of them,
+    # and the segments that start (end) there.
+    first = np.flatnonzero(gx <= gx[0] + reach_vtx)[-1]
+    last = np.flatnonzero(gx >= gx[-1] - reach_vtx)[0]
+    keep[: 2 * first + 2] = True
+    keep[max(2 * last - 1, 0):] = True
+    return every[keep]
 
 
 @njit(cache=CACHE, nogil=True)
 def _near_path(gx, gy, px, py, reach_seg, reach_vtx):
-    """Which ground segments come within ``reach_seg`` of the polyline (px, py), or
-    have a vertex within ``reach_vtx`` of it (m); see :func:`path_segments`."""
+    """Which elements (:func:`element_codes`) are near the polyline (px, py).
+
+    A vertex within ``reach_vtx`` of it (m), its arc; a segment within
+    ``reach_seg``, its offset. See :func:`path_elements`.
+    """
     n = gx.shape[0]
     npc = px.shape[0] - 1
-    keep = np.zeros(n - 1, dtype=np.bool_)
+    keep = np.zeros(2 * n - 1, dtype=np.bool_)
+    rv2 = reach_vtx * reach_vtx
     for v in range(n):
         lo = max(np.searchsorted(px, gx[v] - reach_vtx) - 1, 0)
         hi = min(np.searchsorted(px, gx[v] + reach_vtx), npc)
         for k in range(lo, hi):
-            if _dist2(gx[v], gy[v], px[k], py[k], px[k + 1], py[k + 1]) <= reach_vtx * reach_vtx:
-                if v > 0:
-                    keep[v - 1] = True
-                if v < n - 1:
-                    keep[v] = True
+            if _dist2(gx[v], gy[v], px[k], py[k], px[k + 1], py[k + 1]) <= rv2:
+                keep[2 * v] = True
                 break
     r2 = reach_seg * reach_seg
     for i in range(n - 1):
-        if keep[i]:
-            continue
         lo = max(np.searchsorted(px, gx[i] - reach_seg) - 1, 0)
         hi = min(np.searchsorted(px, gx[i + 1] + reach_seg), npc)
         for k in range(lo, hi):
@@ -318,7 +339,7 @@ def _near_path(gx, gy, px, py, reach_seg, reach_vtx):
                     or _dist2(px[k + 1], py[k + 1], gx[i], gy[i], gx[i + 1], gy[i + 1]) <= r2
                     or _dist2(gx[i], gy[i], px[k], py[k], px[k + 1], py[k + 1]) <= r2
                     or _dist2(gx[i + 1], gy[i + 1], px[k], py[k], px[k + 1], py[k + 1]) <= r2):
-                keep[i] = True
+                keep[2 * i + 1] = True
                 break
     return keep
 
@@ -336,7 +357,7 @@ def _dist2(x, y, ax, ay, bx, by):
 
 
 @njit(cache=CACHE)
-def _centre_path(gx, gy, seg_mat, r, max_chord, prune, segs, canon):
+def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
     """Centre path of a sphere of radius ``r`` on the ground polyline.
 
     Parameters
@@ -353,10 +374,10 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune, segs, canon):
         Leave out of the sweep the pieces that a vertex's circle hides
         (:func:`_hidden`); the result is the same, found faster on dense
         surveys. False only to test that.
-    segs : ndarray of int
-        Sorted indices of the ground segments whose offsets (and the arcs of
-        the vertices between two of them) make the path; every one
-        (``np.arange(n - 1)``) but in :func:`survey_path`.
+    elems : ndarray of int
+        Sorted codes of the ground elements (segment offsets, vertex arcs;
+        :func:`element_codes`) that make the path: every one
+        (``np.arange(2 n - 1)``) but in :func:`survey_path`.
     canon : bool
         Find where two pieces' lines cross from the two pieces alone, not
         from where the sweep stands: the path then does not depend on
@@ -402,12 +423,13 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune, segs, canon):
         eseg[i + 1] = i
     eseg[n] = n - 2
 
-    # The extended profile's segments: the two level extensions and ``segs``.
-    esegs = np.empty(segs.shape[0] + 2, dtype=np.int64)
-    esegs[0] = 0
-    esegs[1:-1] = segs + 1
-    esegs[-1] = n
-    xa, ya, xb, yb, sid = _raw_pieces(ex, ey, eseg, r, max_chord, esegs)
+    # The extended profile's elements: the offsets of the two level
+    # extensions and ``elems`` (a vertex and a segment further on: code + 2).
+    ecodes = np.empty(elems.shape[0] + 2, dtype=np.int64)
+    ecodes[0] = 1
+    ecodes[1:-1] = elems + 2
+    ecodes[-1] = 2 * n + 1
+    xa, ya, xb, yb, sid = _raw_pieces(ex, ey, eseg, r, max_chord, ecodes)
     npc = xa.shape[0]
 
     scale = max(abs(gx[0]), abs(gx[n - 1]), 1.0)

@@ -3,8 +3,8 @@
 ``flight.next_landing`` skips the blocks of the centre path that a flight
 clears (``flight.path_tree``), ``profile.centre_path`` leaves out of its
 sweep the pieces a vertex's circle hides (``profile._hidden``), and the
-path of a rock of a size of its own is made from the ground segments that
-the paths of the run's radii can lie on (``profile.path_segments``,
+path of a rock of a size of its own is made from the ground elements that
+the paths of the run's radii can lie on (``profile.path_elements``,
 ``profile.survey_path``); these tests hold them to the plain versions over
 random noisy surveys: the same piece, time and path, to the bit.
 """
@@ -31,7 +31,8 @@ from rockfall_design.engine.profile import (
     _hidden,
     _raw_pieces,
     centre_path,
-    path_segments,
+    element_codes,
+    path_elements,
     survey_path,
 )
 
@@ -190,8 +191,9 @@ def test_leaving_hidden_pieces_out_keeps_the_centre_path_to_the_bit(n, noise, se
     # sweep over every piece gives.
     x, y = noisy_survey(n, noise, seed)
     seg = np.arange(n - 1)
-    fast = _centre_path(x, y, seg, r, np.radians(chord), True, seg, canon)
-    full = _centre_path(x, y, seg, r, np.radians(chord), False, seg, canon)
+    every = element_codes(n)
+    fast = _centre_path(x, y, seg, r, np.radians(chord), True, every, canon)
+    full = _centre_path(x, y, seg, r, np.radians(chord), False, every, canon)
     for a, b in zip(fast, full, strict=True):
         np.testing.assert_array_equal(a, b)
 
@@ -203,7 +205,7 @@ def test_most_pieces_of_a_dense_noisy_survey_are_hidden():
     ex = np.r_[x[0] - ext, x, x[-1] + ext]
     ey = np.r_[y[0], y, y[-1]]
     xa, ya, xb, yb, _ = _raw_pieces(ex, ey, np.arange(x.size + 1), r, np.radians(5.0),
-                                    np.arange(x.size + 1))
+                                    element_codes(ex.size))
     hidden = _hidden(xa, ya, xb, yb, ex, ey, r, 1e-12 * 200.0)
     assert hidden.mean() > 0.9
 
@@ -218,21 +220,22 @@ def test_most_pieces_of_a_dense_noisy_survey_are_hidden():
     chord=st.sampled_from([1.0, 5.0, 20.0, 45.0]),
     u=st.lists(st.floats(0.0, 1.0), min_size=1, max_size=3),
 )
-def test_the_path_from_the_segments_kept_is_the_path_from_every_segment(n, noise, seed, r_min,
+def test_the_path_from_the_elements_kept_is_the_path_from_every_element(n, noise, seed, r_min,
                                                                         spread, chord, u):
-    # For every radius in [r_min, r_max] the path made of the segments that
-    # path_segments keeps is the one made of every segment, to the bit; the
+    # For every radius in [r_min, r_max] the path made of the elements that
+    # path_elements keeps is the one made of every element, to the bit; the
     # coarse chords (whose circumscribed arcs stand out of the circle by up to
     # 8 % of r) are where a choice by the path of r_min alone fails.
     x, y = noisy_survey(n, noise, seed)
     r_max = r_min * spread
     mc = np.radians(chord)
-    segs, _ = path_segments(x, y, r_min, r_max, mc)
-    assert np.all(np.diff(segs) > 0) and segs[0] == 0 and segs[-1] == n - 2
-    every = np.arange(n - 1)
+    kept = path_elements(x, y, r_min, r_max, mc)
+    every = element_codes(n)
+    assert np.all(np.diff(kept) > 0) and kept[0] == 0 and kept[-1] == every[-1]
+    seg = np.arange(n - 1)
     for r in (r_min, r_max, *(r_min + f * (r_max - r_min) for f in u)):
-        part = survey_path(x, y, every, r, mc, segs)
-        full = survey_path(x, y, every, r, mc, every)
+        part = survey_path(x, y, seg, r, mc, kept)
+        full = survey_path(x, y, seg, r, mc, every)
         for a, b in zip(part, full, strict=True):
             np.testing.assert_array_equal(a, b)
 
@@ -251,9 +254,9 @@ def test_survey_path_is_the_centre_path(n, noise, seed, r, chord):
     # round-off (centre_path may cut a piece in two where a stretch of it is
     # short, so the number of pieces may differ).
     x, y = noisy_survey(n, noise, seed)
-    every = np.arange(n - 1)
-    px, py, pseg = survey_path(x, y, every, r, np.radians(chord), every)
-    cx, cy, _ = centre_path(x, y, every, r, np.radians(chord))
+    seg = np.arange(n - 1)
+    px, py, pseg = survey_path(x, y, seg, r, np.radians(chord), element_codes(n))
+    cx, cy, _ = centre_path(x, y, seg, r, np.radians(chord))
     assert px[0] == x[0] and px[-1] == x[-1] and np.all(np.diff(px) > 0)
     assert pseg.size == px.size - 1 and pseg.min() >= 0 and pseg.max() <= n - 2
     xs = np.concatenate([px, cx, np.linspace(x[0], x[-1], 2000)])
@@ -261,11 +264,11 @@ def test_survey_path_is_the_centre_path(n, noise, seed, r, chord):
                                atol=1e-9 * (1.0 + np.abs(y).max()))
 
 
-def test_a_dense_noisy_survey_keeps_few_segments_for_rocks_of_several_sizes():
+def test_a_dense_noisy_survey_keeps_few_elements_for_rocks_of_several_sizes():
     # The paths of rocks of 0.3 to 0.7 m touch the tops of the noise only.
     x, y = noisy_survey(100_000, 0.01, 2)
-    segs, _ = path_segments(x, y, 0.3, 0.7, np.radians(5.0))
-    assert segs.size < 0.2 * (x.size - 1)
+    kept = path_elements(x, y, 0.3, 0.7, np.radians(5.0))
+    assert kept.size < 0.1 * element_codes(x.size).size
 
 
 def test_batches_hold_as_many_paths_as_fit_in_their_time():
@@ -288,7 +291,7 @@ def test_batches_hold_as_many_paths_as_fit_in_their_time():
 
 def test_runs_of_several_sizes_on_a_noisy_survey_do_not_depend_on_chunks():
     # A run cut into chunks (first_index) has other smallest and largest radii
-    # per chunk, so other segments kept, and must give the same rocks.
+    # per chunk, so other elements kept, and must give the same rocks.
     x, y = noisy_survey(3000, 0.01, 5)
     sec = Section(x, y, np.zeros(x.size - 1, dtype=int),
                   (Material(impact_model="rn_rt", restitution=0.35,
