@@ -30,7 +30,7 @@ from .problem import (
     barrier_table,
     rock_mass,
 )
-from .profile import centre_path, element_codes, path_elements, survey_path
+from .profile import _centre_path, element_codes, path_elements
 from .records import (
     N_REL_COLS,
     N_WORK,
@@ -85,12 +85,12 @@ def rock_path(ground, r, max_chord, elems):
     arcs) that the path can lie on (``profile.path_elements``), of which
     ``profile.survey_path`` makes it.
     """
-    if elems.shape[0] == 0:
-        px, py, pseg = centre_path(ground.x, ground.y, np.arange(ground.x.shape[0] - 1), r,
-                                   max_chord)
-    else:
-        px, py, pseg = survey_path(ground.x, ground.y, np.arange(ground.x.shape[0] - 1), r,
-                                   max_chord, elems)
+    n = ground.x.shape[0]
+    # centre_path (every element) or survey_path (``elems``), by one call of
+    # their common code, which is then compiled into the kernel once.
+    every = elems.shape[0] == 0
+    px, py, pseg = _centre_path(ground.x, ground.y, np.arange(n - 1), r, max_chord, True,
+                                np.arange(2 * n - 1) if every else elems, not every)
     return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
 
 

@@ -434,7 +434,24 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
 
     scale = max(abs(gx[0]), abs(gx[n - 1]), 1.0)
     tol = _EPS_X * scale
-    hidden = _hidden(xa, ya, xb, yb, ex, ey, r, tol) if prune else np.zeros(npc, np.bool_)
+    if prune and canon:
+        # Hidden by the circles of the vertices whose arcs are given (any
+        # ground vertex's circle is below the path, and the path does not
+        # depend on which pieces are hidden when canon). Of the elements
+        # path_elements keeps, those are the tops the path touches, which
+        # hide a piece within a vertex or two, where among every vertex the
+        # nearest would be those in the hollows between.
+        hv = np.empty(ecodes.shape[0], dtype=np.int64)
+        nh = 0
+        for c in ecodes:
+            if c % 2 == 0:
+                hv[nh] = c // 2
+                nh += 1
+        hidden = _hidden(xa, ya, xb, yb, ex[hv[:nh]], ey[hv[:nh]], r, tol)
+    elif prune:
+        hidden = _hidden(xa, ya, xb, yb, ex, ey, r, tol)
+    else:
+        hidden = np.zeros(npc, np.bool_)
 
     # Breakpoints: all piece ends inside the section (canon: of the pieces not
     # hidden, since the path does not depend on the others'), and the section ends.
