@@ -30,7 +30,7 @@ from .problem import (
     barrier_table,
     rock_mass,
 )
-from .profile import centre_path
+from .profile import _centre_path, element_codes, path_elements
 from .records import (
     N_REL_COLS,
     N_WORK,
@@ -71,18 +71,26 @@ STATUS_NAMES = columns.STATUS_NAMES
 
 SHARED_PATH_VERTICES = 256
 """Sections of more vertices than this have the centre path of a run's first radius
-made once per run rather than once per batch (see :func:`run_ensemble`)."""
+made once per run rather than once per batch, and, with rocks of several sizes, the
+ground elements the paths of the others can lie on (see :func:`run_ensemble`)."""
 
 
 @njit(cache=CACHE, nogil=True)
-def rock_path(ground, r, max_chord):
+def rock_path(ground, r, max_chord, elems):
     """The ground as a rock of radius ``r`` (m) meets it (``records.Path``).
 
     Its centre path (``profile.centre_path``) and the tree of its highest
     vertices (``flight.path_tree``); ``max_chord`` (rad) as in ``centre_path``.
+    ``elems``: empty, or the ground elements (segment offsets and vertex
+    arcs) that the path can lie on (``profile.path_elements``), of which
+    ``profile.survey_path`` makes it.
     """
-    px, py, pseg = centre_path(ground.x, ground.y, np.arange(ground.x.shape[0] - 1), r,
-                               max_chord)
+    n = ground.x.shape[0]
+    # centre_path (every element) or survey_path (``elems``), by one call of
+    # their common code, which is then compiled into the kernel once.
+    every = elems.shape[0] == 0
+    px, py, pseg = _centre_path(ground.x, ground.y, np.arange(n - 1), r, max_chord, True,
+                                np.arange(2 * n - 1) if every else elems, not every)
     return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
 
 
@@ -90,7 +98,7 @@ def rock_path(ground, r, max_chord):
 # writes only its own rows, and draws from its own stream, so the results do
 # not depend on how the rocks are shared among threads.
 @njit(cache=CACHE, nogil=True)
-def _run_batch(ground, path0, r0, settings, max_chord, key, first_index, rel, resume,
+def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, rel, resume,
                stations, bars, out):
     """Run the rocks of one batch (rows of ``rel``) and write their rows of ``out``.
 
@@ -104,6 +112,9 @@ def _run_batch(ground, path0, r0, settings, max_chord, key, first_index, rel, re
         theirs made here.
     r0 : float
         The radius of ``path0`` (m).
+    elems : ndarray of int
+        Empty, or the ground elements that the paths of every radius of the
+        run can lie on (:func:`rock_path`).
     settings : ndarray of float, shape (N_SETTINGS,)
     max_chord : float
         Largest turn (rad) of a chord of the centre path at a convex vertex.
@@ -138,7 +149,7 @@ def _run_batch(ground, path0, r0, settings, max_chord, key, first_index, rel, re
         r = rel[i, REL_R]
         if r != r_prev:
             # Rocks of one size share their centre path.
-            path = path0 if r == r0 else rock_path(ground, r, max_chord)
+            path = path0 if r == r0 else rock_path(ground, r, max_chord, elems)
             r_prev = r
         if resume.mask[i]:
             rng[0] = resume.rngs[i]
@@ -262,12 +273,13 @@ def run_ensemble(
     k64 = np.uint64(int(key) % (1 << 64))
     max_chord = float(np.radians(settings.max_chord_deg))
     ground = Ground(section.x, section.y, section.segment_material, section.material_table())
-    path0, r0 = _shared_path(ground, radius, max_chord)
+    path0, r0, elems, path_seconds = _shared_path(ground, radius, max_chord)
 
     batch_args = _batch_slicer(
-        (ground, path0, r0, settings.vector(), max_chord, k64), int(first_index), rel,
+        (ground, path0, r0, elems, settings.vector(), max_chord, k64), int(first_index), rel,
         _resume(resume, n), stations_rec, bars, out, ntr, record_speed)
-    _run_all(batch_args, _Batches(n, batch_size), n, threads, progress)
+    _run_all(batch_args, _Batches(n, batch_size, radius, r0, path_seconds), n, threads,
+             progress)
 
     return EnsembleResult(
         radius=radius,
@@ -315,21 +327,55 @@ def _outputs(n: int, n_grid: int, n_user: int, n_traj: int, max_points: int, n_b
         srng=np.zeros((n, n_restart), dtype=np.uint64))
 
 
-def _shared_path(ground: Ground, radius: np.ndarray, max_chord: float) -> tuple[Path, float]:
-    """The centre path every batch uses, and its rock radius (m); an empty one and -1 if none.
+def _shared_path(ground: Ground, radius: np.ndarray,
+                 max_chord: float) -> tuple[Path, float, np.ndarray, float]:
+    """What every batch is given to make the rocks' centre paths.
 
-    On a survey of many points, the centre path of the first rock's radius is
-    made once for the whole run (on a fixed size, for every rock): it costs
-    more than many rocks, and the batches stay short (see ``batch_size``). On
-    a few points each batch makes its own, which costs less than loading
-    numba's compiler to call :func:`rock_path` from here.
+    Returns
+    -------
+    path0 : Path
+        The centre path of the first rock's radius (an empty one if none).
+    r0 : float
+        Its radius (m), -1 if none.
+    elems : ndarray of int64
+        On a survey of many points, the ground elements (segment offsets,
+        vertex arcs) the paths of the run's radii can lie on
+        (``profile.path_elements``; all of them if the rocks have one size),
+        of which ``profile.survey_path`` makes each path, the same whichever
+        radii a run (or a chunk of one) has. Empty on a few points: each
+        rock's path from every element (``profile.centre_path``, as before).
+    path_seconds : float
+        Measured cost (s) of one path (0 on a few points).
+
+    Notes
+    -----
+    On a survey of many points, the centre path of the first rock's radius
+    is made once for the whole run (on a fixed size, for every rock): it
+    costs more than many rocks, and the batches stay short (see
+    ``batch_size``). With rocks of several sizes, the ground elements their
+    paths can lie on are found once too (from the path of the smallest
+    radius), and each path is made from those: on a dense noisy survey, the
+    tops of the noise (issue 27, item 8). On a few points each batch makes
+    its own paths from every segment, which costs less than loading numba's
+    compiler to call :func:`rock_path` from here. The calls here run on a
+    thread of their own (:func:`_off_the_main_thread`): an interrupt is
+    taken at once.
     """
+    every = np.empty(0, dtype=np.int64)
     if radius.size and ground.x.size > SHARED_PATH_VERTICES:
         r0 = float(radius[0])
-        return _off_the_main_thread(rock_path, ground, r0, max_chord), r0
+        r_min, r_max = float(radius.min()), float(radius.max())
+        if r_min == r_max:
+            elems = element_codes(ground.x.size)
+        else:
+            elems = _off_the_main_thread(path_elements, ground.x, ground.y, r_min, r_max,
+                                         max_chord)
+        t0 = time.perf_counter()
+        path0 = _off_the_main_thread(rock_path, ground, r0, max_chord, elems)
+        return path0, r0, elems, time.perf_counter() - t0
     # no rock has radius -1: every batch makes its paths
-    return Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
-                ground.mats, np.empty(0)), -1.0
+    return (Path(np.empty(0), np.empty(0), np.empty(0, dtype=np.int64), ground.seg_mat,
+                 ground.mats, np.empty(0)), -1.0, every, 0.0)
 
 
 def _batch_slicer(fixed: tuple, first_index: int, rel: np.ndarray, resume: Resume,
@@ -338,7 +384,8 @@ def _batch_slicer(fixed: tuple, first_index: int, rel: np.ndarray, resume: Resum
     """The arguments of the compiled call for rocks a..b-1 (views, no copies).
 
     ``fixed`` holds the arguments every batch shares, in the kernel's order:
-    ground, shared path, its radius, settings, chord limit and run key.
+    ground, shared path, its radius, the elements paths are made of, settings,
+    chord limit and run key.
     """
     def batch_args(a: int, b: int) -> tuple:
         sl = slice(a, b)
@@ -429,7 +476,7 @@ def _run_all(batch_args: Callable[[int, int], tuple], batches: _Batches, n: int,
                 # Kept for the next process; not over a valid copy that only
                 # these arguments' types do not fit (read-only arrays, say).
                 _native.export(_run_batch, args, DIGEST)
-        batches.done(b - a, time.perf_counter() - t0)
+        batches.done(a, b, time.perf_counter() - t0)
         return b - a
 
     n_done = 0

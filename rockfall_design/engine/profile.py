@@ -56,26 +56,34 @@ def _arc_edges(t1x, t1y, t2x, t2y, max_chord):
 
 
 @njit(cache=CACHE)
-def _raw_pieces(gx, gy, seg_id, r, max_chord):
+def _raw_pieces(gx, gy, seg_id, r, max_chord, elems):
     """Offset segments and circumscribed vertex arcs of an extended profile.
 
     Returns arrays (xa, ya, xb, yb, sid) of straight pieces, each with
-    ``xa < xb``, in the order of the raw offset curve.
+    ``xa < xb``, in the order of the raw offset curve. Only the elements
+    ``elems`` are made (sorted codes: ``2 i`` the arc at vertex ``i``,
+    ``2 i + 1`` the offset of segment ``i``; ``np.arange(2 * len(gx) - 1)``
+    for all, see :func:`element_codes`).
     """
-    n = gx.shape[0]
-    nseg = n - 1
+    nseg = gx.shape[0] - 1
     tx = np.empty(nseg)
     ty = np.empty(nseg)
-    for i in range(nseg):
-        dx = gx[i + 1] - gx[i]
-        dy = gy[i + 1] - gy[i]
-        ln = np.hypot(dx, dy)
-        tx[i] = dx / ln
-        ty[i] = dy / ln
+    for c in elems:
+        # An arc needs the segments on both sides, an offset its own.
+        for i in range(c // 2 - 1 + c % 2, c // 2 + 1):
+            if 0 <= i < nseg:
+                dx = gx[i + 1] - gx[i]
+                dy = gy[i + 1] - gy[i]
+                ln = np.hypot(dx, dy)
+                tx[i] = dx / ln
+                ty[i] = dy / ln
     # A convex vertex (the ground turns clockwise) carries an arc of m + 1 edges.
-    cap = nseg
-    for j in range(1, nseg):
-        if tx[j - 1] * ty[j] - ty[j - 1] * tx[j] < -1e-12:
+    cap = 0
+    for c in elems:
+        j = c // 2
+        if c % 2:
+            cap += 1
+        elif 0 < j < nseg and tx[j - 1] * ty[j] - ty[j - 1] * tx[j] < -1e-12:
             cap += _arc_edges(tx[j - 1], ty[j - 1], tx[j], ty[j], max_chord)[2] + 1
     xa = np.empty(cap)
     ya = np.empty(cap)
@@ -83,9 +91,12 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord):
     yb = np.empty(cap)
     sid = np.empty(cap, dtype=np.int64)
     p = 0
-    for i in range(nseg):
-        # Collinear neighbours (|cross| ~ round-off) need no arc.
-        if i > 0 and tx[i - 1] * ty[i] - ty[i - 1] * tx[i] < -1e-12:
+    for c in elems:
+        i = c // 2
+        if c % 2 == 0:
+            # Collinear neighbours (|cross| ~ round-off) need no arc.
+            if not (0 < i < nseg and tx[i - 1] * ty[i] - ty[i - 1] * tx[i] < -1e-12):
+                continue
             # Circumscribed polygon about the arc at vertex i: from the tangent
             # point of the upslope normal (angle phi1) through m corners at the
             # mid angles (radius r / cos(delta/2)) to the tangent point of the
@@ -113,6 +124,7 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord):
                 p += 1
                 x_prev = x_next
                 y_prev = y_next
+            continue
         nx = -ty[i]
         ny = tx[i]
         xa[p] = gx[i] + r * nx
@@ -122,6 +134,16 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord):
         sid[p] = seg_id[i]
         p += 1
     return xa, ya, xb, yb, sid
+
+
+def element_codes(n: int) -> np.ndarray:
+    """Codes of every element of a ground of ``n`` vertices (see :func:`_raw_pieces`).
+
+    ``2 i``: the arc at vertex ``i`` (none at the two ends of the ground
+    itself, but :func:`_centre_path` extends it); ``2 i + 1``: the offset of
+    segment ``i``. In the order of the raw offset curve.
+    """
+    return np.arange(2 * n - 1, dtype=np.int64)
 
 
 @njit(cache=CACHE)
@@ -201,11 +223,141 @@ def _hidden(xa, ya, xb, yb, ex, ey, r, tol):
 @njit(cache=CACHE)
 def centre_path(gx, gy, seg_mat, r, max_chord):
     """Centre path of a sphere of radius ``r`` on the ground polyline (see :func:`_centre_path`)."""
-    return _centre_path(gx, gy, seg_mat, r, max_chord, True)
+    return _centre_path(gx, gy, seg_mat, r, max_chord, True, np.arange(2 * gx.shape[0] - 1),
+                        False)
+
+
+@njit(cache=CACHE, nogil=True)
+def survey_path(gx, gy, seg_mat, r, max_chord, elems):
+    """Centre path of radius ``r`` (m) made of the ground elements ``elems`` only.
+
+    The path of :func:`centre_path`, from the offsets of the segments and
+    the arcs of the vertices in ``elems`` (sorted codes, see
+    :func:`element_codes`), with crossings found from the pieces alone
+    (``canon`` of :func:`_centre_path`). When ``elems`` holds every element
+    that can be on the path (:func:`path_elements`), it is the same, to the
+    bit, as this function over every element
+    (tests/engine/test_engine_survey.py): on a dense noisy survey a rock of a
+    size of its own then costs the sweep over the tops of the noise instead
+    of over every point (issue 27, item 8).
+    """
+    return _centre_path(gx, gy, seg_mat, r, max_chord, True, elems, True)
+
+
+def path_elements(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
+                  max_chord: float) -> np.ndarray:
+    """The ground elements the centre path of any radius in [r_min, r_max] can lie on.
+
+    Parameters
+    ----------
+    gx, gy : ndarray of float, shape (n,)
+        Ground vertices (m).
+    r_min, r_max : float
+        Smallest and largest rock radius (m), ``0 < r_min <= r_max``.
+    max_chord : float
+        Largest turn (rad) of an edge of a vertex arc, as in :func:`centre_path`.
+
+    Returns
+    -------
+    ndarray of int64
+        Sorted codes (:func:`element_codes`) of the segment offsets and vertex
+        arcs to give :func:`survey_path`.
+
+    Notes
+    -----
+    Let ``U_r`` be the union of the discs of radius ``r`` above the ground
+    whose inside is free of it (where rocks of radius ``r`` reach). A disc of
+    radius ``R > r`` free of ground is the union of discs of radius ``r``
+    free of ground, so ``U_R`` lies in ``U_r``, and a ground point's distance
+    to ``U_r`` is at most its distance to ``U_R`` (the inclusion of openings
+    by growing discs, Serra 1982). A segment's offset is on the path of
+    radius ``R`` only where a free disc touches the segment (distance 0 to
+    ``U_R``), and an edge of a vertex's arc only if a free disc comes
+    within ``R (s - 1)`` of the vertex (the edges are circumscribed, their
+    corners at ``R s`` from it, ``s = 1 / cos(max_chord / 2)``); so either
+    happens only for ground within ``0`` resp. ``r_max (s - 1)`` of
+    ``U_{r_min}``, that is, within ``r_min`` resp. ``r_min + r_max (s - 1)``
+    of the free centres of radius ``r_min``. Those lie above the path of
+    radius ``r_min / s`` (whose arcs are at most ``r_min`` from their
+    vertices), so the offsets kept are those of the segments within
+    ``r_min`` of that path, and the arcs those of the vertices within
+    ``r_min + r_max (s - 1)`` of it, with a margin for round-off, and all
+    near the section's ends (where the nearest free centre may lie beyond
+    them). This keeps every element that can be on the path of any radius
+    in the range, though not only those, for the circumscribed arcs as for
+    true circles: choosing by the path of ``r_min`` alone misses some where
+    an arc's corners stand out (tests/engine/test_engine_survey.py).
+
+    References
+    ----------
+    Serra, J. (1982). Image Analysis and Mathematical Morphology. Academic
+    Press (openings by discs; granulometries).
+    """
+    n = gx.shape[0]
+    s = 1.0 / np.cos(0.5 * max_chord)
+    every = element_codes(n)
+    px, py, _ = survey_path(gx, gy, np.arange(n - 1), r_min / s, max_chord, every)
+    scale = max(abs(gx[0]), abs(gx[-1]), abs(gy).max(), 1.0)
+    margin = 1e-9 * (scale + r_max)
+    reach_vtx = r_min + r_max * (s - 1.0) + margin
+    keep = _near_path(gx, gy, px, py, r_min + margin, reach_vtx)
+    # Every element near the ends: the vertices within reach_vtx of them,
+    # and the segments that start (end) there.
+    first = np.flatnonzero(gx <= gx[0] + reach_vtx)[-1]
+    last = np.flatnonzero(gx >= gx[-1] - reach_vtx)[0]
+    keep[: 2 * first + 2] = True
+    keep[max(2 * last - 1, 0):] = True
+    return every[keep]
+
+
+@njit(cache=CACHE, nogil=True)
+def _near_path(gx, gy, px, py, reach_seg, reach_vtx):
+    """Which elements (:func:`element_codes`) are near the polyline (px, py).
+
+    A vertex within ``reach_vtx`` of it (m), its arc; a segment within
+    ``reach_seg``, its offset. See :func:`path_elements`.
+    """
+    n = gx.shape[0]
+    npc = px.shape[0] - 1
+    keep = np.zeros(2 * n - 1, dtype=np.bool_)
+    rv2 = reach_vtx * reach_vtx
+    for v in range(n):
+        lo = max(np.searchsorted(px, gx[v] - reach_vtx) - 1, 0)
+        hi = min(np.searchsorted(px, gx[v] + reach_vtx), npc)
+        for k in range(lo, hi):
+            if _dist2(gx[v], gy[v], px[k], py[k], px[k + 1], py[k + 1]) <= rv2:
+                keep[2 * v] = True
+                break
+    r2 = reach_seg * reach_seg
+    for i in range(n - 1):
+        lo = max(np.searchsorted(px, gx[i] - reach_seg) - 1, 0)
+        hi = min(np.searchsorted(px, gx[i + 1] + reach_seg), npc)
+        for k in range(lo, hi):
+            # Two segments that do not cross (the path is above the ground):
+            # their distance is that of an end of one to the other.
+            if (_dist2(px[k], py[k], gx[i], gy[i], gx[i + 1], gy[i + 1]) <= r2
+                    or _dist2(px[k + 1], py[k + 1], gx[i], gy[i], gx[i + 1], gy[i + 1]) <= r2
+                    or _dist2(gx[i], gy[i], px[k], py[k], px[k + 1], py[k + 1]) <= r2
+                    or _dist2(gx[i + 1], gy[i + 1], px[k], py[k], px[k + 1], py[k + 1]) <= r2):
+                keep[2 * i + 1] = True
+                break
+    return keep
 
 
 @njit(cache=CACHE)
-def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
+def _dist2(x, y, ax, ay, bx, by):
+    """Squared distance (m^2) of the point (x, y) to the segment from (ax, ay) to (bx, by)."""
+    dx = bx - ax
+    dy = by - ay
+    ln2 = dx * dx + dy * dy
+    t = 0.0 if ln2 <= 0.0 else min(max(((x - ax) * dx + (y - ay) * dy) / ln2, 0.0), 1.0)
+    ex = ax + t * dx - x
+    ey = ay + t * dy - y
+    return ex * ex + ey * ey
+
+
+@njit(cache=CACHE)
+def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
     """Centre path of a sphere of radius ``r`` on the ground polyline.
 
     Parameters
@@ -222,6 +374,17 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
         Leave out of the sweep the pieces that a vertex's circle hides
         (:func:`_hidden`); the result is the same, found faster on dense
         surveys. False only to test that.
+    elems : ndarray of int
+        Sorted codes of the ground elements (segment offsets, vertex arcs;
+        :func:`element_codes`) that make the path: every one
+        (``np.arange(2 n - 1)``) but in :func:`survey_path`.
+    canon : bool
+        Find where two pieces' lines cross from the two pieces alone, not
+        from where the sweep stands: the path then does not depend on
+        pieces that are not on it (their ends are breakpoints of the sweep),
+        so that :func:`survey_path` over fewer segments gives it to the bit.
+        False keeps the crossings of earlier versions (the results of
+        sections of few points stay as they were).
 
     Returns
     -------
@@ -260,13 +423,43 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
         eseg[i + 1] = i
     eseg[n] = n - 2
 
-    xa, ya, xb, yb, sid = _raw_pieces(ex, ey, eseg, r, max_chord)
+    # The extended profile's elements: the offsets of the two level
+    # extensions and ``elems`` (a vertex and a segment further on: code + 2).
+    ecodes = np.empty(elems.shape[0] + 2, dtype=np.int64)
+    ecodes[0] = 1
+    ecodes[1:-1] = elems + 2
+    ecodes[-1] = 2 * n + 1
+    xa, ya, xb, yb, sid = _raw_pieces(ex, ey, eseg, r, max_chord, ecodes)
     npc = xa.shape[0]
 
-    # Breakpoints: all piece ends inside the section, and the section ends.
+    scale = max(abs(gx[0]), abs(gx[n - 1]), 1.0)
+    tol = _EPS_X * scale
+    if prune and canon:
+        # Hidden by the circles of the vertices whose arcs are given (any
+        # ground vertex's circle is below the path, and the path does not
+        # depend on which pieces are hidden when canon). Of the elements
+        # path_elements keeps, those are the tops the path touches, which
+        # hide a piece within a vertex or two, where among every vertex the
+        # nearest would be those in the hollows between.
+        hv = np.empty(ecodes.shape[0], dtype=np.int64)
+        nh = 0
+        for c in ecodes:
+            if c % 2 == 0:
+                hv[nh] = c // 2
+                nh += 1
+        hidden = _hidden(xa, ya, xb, yb, ex[hv[:nh]], ey[hv[:nh]], r, tol)
+    elif prune:
+        hidden = _hidden(xa, ya, xb, yb, ex, ey, r, tol)
+    else:
+        hidden = np.zeros(npc, np.bool_)
+
+    # Breakpoints: all piece ends inside the section (canon: of the pieces not
+    # hidden, since the path does not depend on the others'), and the section ends.
     bp = np.empty(2 * npc + 2)
     nb = 0
     for i in range(npc):
+        if canon and hidden[i]:
+            continue
         if gx[0] < xa[i] < gx[n - 1]:
             bp[nb] = xa[i]
             nb += 1
@@ -276,10 +469,11 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
     bp[nb] = gx[0]
     bp[nb + 1] = gx[n - 1]
     nb += 2
-    bp = np.sort(bp[:nb])
+    # numba's np.sort (quicksort) takes ~1 us per element on these nearly
+    # sorted breakpoints with many repeats; a merge sort gives the same values.
+    bp = bp[:nb]
+    bp = bp[np.argsort(bp, kind="mergesort")]
     # Remove breakpoints closer than round-off.
-    scale = max(abs(gx[0]), abs(gx[n - 1]), 1.0)
-    tol = _EPS_X * scale
     ub = np.empty(nb)
     nu = 0
     for i in range(nb):
@@ -288,8 +482,15 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
             nu += 1
     ub[nu - 1] = gx[n - 1]
 
-    hidden = _hidden(xa, ya, xb, yb, ex, ey, r, tol) if prune else np.zeros(npc, np.bool_)
-    order = np.argsort(xa)
+    if canon:
+        # The pieces not hidden, in order of xa; stable, so that pieces that
+        # start at the same x keep the order of the raw offset curve whatever
+        # other pieces are there.
+        vis = np.flatnonzero(~hidden)
+        order = vis[np.argsort(xa[vis], kind="mergesort")]
+    else:
+        order = np.argsort(xa)
+    nord = order.shape[0]
     active = np.empty(npc, dtype=np.int64)
     nact = 0
     nxt = 0  # next piece (in order of xa) not yet activated
@@ -298,6 +499,7 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
     ox = np.empty(cap)
     oy = np.empty(cap)
     oseg = np.empty(cap, dtype=np.int64)
+    otop = np.empty(cap, dtype=np.int64)  # the piece each stretch lies on
     no = 0
 
     for b in range(nu - 1):
@@ -305,7 +507,7 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
         x1 = ub[b + 1]
         xm = 0.5 * (x0 + x1)
         # Activate pieces starting at or before the midpoint; drop those ended.
-        while nxt < npc and xa[order[nxt]] <= xm:
+        while nxt < nord and xa[order[nxt]] <= xm:
             # A piece of no width (round-off on a collinear arc) has no slope.
             if xb[order[nxt]] > xa[order[nxt]] and not hidden[order[nxt]]:
                 active[nact] = order[nxt]
@@ -339,9 +541,11 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
             ox = _grow(ox, cap)
             oy = _grow(oy, cap)
             oseg = _grow(oseg, cap)
+            otop = _grow(otop, cap)
         ox[no] = x0
         oy[no] = vtop
         oseg[no] = sid[top]
+        otop[no] = top
         no += 1
         xc = x0
         # Walk the upper envelope of the active lines across [x0, x1].
@@ -354,9 +558,11 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
                 ki = _slope(xa, ya, xb, yb, i)
                 if ki <= kt:
                     continue
-                # Crossing of line i with the top line.
-                d = _line_at(xa, ya, xb, yb, top, xc) - _line_at(xa, ya, xb, yb, i, xc)
-                xi = xc + d / (ki - kt)
+                # Crossing of line i with the top line, from where the sweep
+                # stands, or (canon) from where both pieces begin.
+                xr = max(xa[top], xa[i]) if canon else xc
+                d = _line_at(xa, ya, xb, yb, top, xr) - _line_at(xa, ya, xb, yb, i, xr)
+                xi = xr + d / (ki - kt)
                 # The first crossing wins; on a tie the steeper line is above after it.
                 if (
                     best < 0
@@ -371,9 +577,11 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
                 ox[no] = bx
                 oy[no] = _line_at(xa, ya, xb, yb, top, bx)
                 oseg[no] = sid[best]
+                otop[no] = best
                 no += 1
             else:
                 oseg[no - 1] = sid[best]
+                otop[no - 1] = best
             top = best
             xc = max(bx, xc)
     # Last point: the value at the right end of the section.
@@ -383,9 +591,28 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune):
         v = _line_at(xa, ya, xb, yb, active[q], xe)
         if v > ve:
             ve = v
+    if canon and nact > 0:
+        # The last top line's value (another line may be up to round-off higher).
+        ve = _line_at(xa, ya, xb, yb, top, xe)
     ox[no] = xe
     oy[no] = ve
     no += 1
+
+    if canon:
+        # Stretches of one piece, cut by the ends of other pieces, made one
+        # first: the test of slopes below then sees whole pieces, and does
+        # not depend on where pieces that are not on the path end (a short
+        # stretch just past a corner would pass it).
+        k = 1
+        for i in range(1, no):
+            if i < no - 1 and otop[i] == otop[i - 1]:
+                continue
+            ox[k] = ox[i]
+            oy[k] = oy[i]
+            oseg[k] = oseg[i]
+            otop[k] = otop[i]
+            k += 1
+        no = k
 
     # Merge consecutive collinear pieces of the same ground segment.
     px = np.empty(no)

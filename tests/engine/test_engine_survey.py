@@ -1,10 +1,12 @@
 """The engine on dense surveys (issue 27, item 8).
 
 ``flight.next_landing`` skips the blocks of the centre path that a flight
-clears (``flight.path_tree``), and ``profile.centre_path`` leaves out of its
-sweep the pieces a vertex's circle hides (``profile._hidden``); these tests
-hold both to the plain versions over random noisy surveys: the same piece,
-time and path, to the bit.
+clears (``flight.path_tree``), ``profile.centre_path`` leaves out of its
+sweep the pieces a vertex's circle hides (``profile._hidden``), and the
+path of a rock of a size of its own is made from the ground elements that
+the paths of the run's radii can lie on (``profile.path_elements``,
+``profile.survey_path``); these tests hold them to the plain versions over
+random noisy surveys: the same piece, time and path, to the bit.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rockfall_design.engine import G, Material, Releases, Section, run_ensemble
+from rockfall_design.engine.batching import BATCH_SECONDS, _Batches
 from rockfall_design.engine.flight import (
     LINEAR_PIECES,
     _first_not_cleared,
@@ -23,7 +26,15 @@ from rockfall_design.engine.flight import (
     next_landing,
     path_tree,
 )
-from rockfall_design.engine.profile import _centre_path, _hidden, _raw_pieces, centre_path
+from rockfall_design.engine.profile import (
+    _centre_path,
+    _hidden,
+    _raw_pieces,
+    centre_path,
+    element_codes,
+    path_elements,
+    survey_path,
+)
 
 SETTINGS = settings(
     max_examples=int(os.environ.get("RF_EXAMPLES", "40")),
@@ -171,14 +182,18 @@ def test_runs_on_a_noisy_survey_are_the_same_on_one_and_two_threads():
     seed=st.integers(0, 2**16),
     r=st.sampled_from([0.01, 0.05, 0.5, 2.0]),
     chord=st.sampled_from([1.0, 5.0, 20.0]),
+    canon=st.booleans(),
 )
-def test_leaving_hidden_pieces_out_keeps_the_centre_path_to_the_bit(n, noise, seed, r, chord):
-    # The sweep leaves out the pieces a vertex's circle hides (profile._hidden);
-    # the path must be the one the sweep over every piece gives.
+def test_leaving_hidden_pieces_out_keeps_the_centre_path_to_the_bit(n, noise, seed, r, chord,
+                                                                   canon):
+    # The sweep leaves out the pieces a vertex's circle hides (profile._hidden),
+    # and (canon) their ends as breakpoints; the path must be the one the
+    # sweep over every piece gives.
     x, y = noisy_survey(n, noise, seed)
     seg = np.arange(n - 1)
-    fast = _centre_path(x, y, seg, r, np.radians(chord), True)
-    full = _centre_path(x, y, seg, r, np.radians(chord), False)
+    every = element_codes(n)
+    fast = _centre_path(x, y, seg, r, np.radians(chord), True, every, canon)
+    full = _centre_path(x, y, seg, r, np.radians(chord), False, every, canon)
     for a, b in zip(fast, full, strict=True):
         np.testing.assert_array_equal(a, b)
 
@@ -189,6 +204,113 @@ def test_most_pieces_of_a_dense_noisy_survey_are_hidden():
     ext = 2 * r + 1
     ex = np.r_[x[0] - ext, x, x[-1] + ext]
     ey = np.r_[y[0], y, y[-1]]
-    xa, ya, xb, yb, _ = _raw_pieces(ex, ey, np.arange(x.size + 1), r, np.radians(5.0))
+    xa, ya, xb, yb, _ = _raw_pieces(ex, ey, np.arange(x.size + 1), r, np.radians(5.0),
+                                    element_codes(ex.size))
     hidden = _hidden(xa, ya, xb, yb, ex, ey, r, 1e-12 * 200.0)
     assert hidden.mean() > 0.9
+
+
+@SETTINGS
+@given(
+    n=st.sampled_from([8, 60, 400, 3000]),
+    noise=st.sampled_from([0.0, 0.003, 0.01, 0.05, 0.3]),
+    seed=st.integers(0, 2**16),
+    r_min=st.floats(0.01, 1.0),
+    spread=st.floats(1.0, 3.0),
+    chord=st.sampled_from([1.0, 5.0, 20.0, 45.0]),
+    u=st.lists(st.floats(0.0, 1.0), min_size=1, max_size=3),
+)
+def test_the_path_from_the_elements_kept_is_the_path_from_every_element(n, noise, seed, r_min,
+                                                                        spread, chord, u):
+    # For every radius in [r_min, r_max] the path made of the elements that
+    # path_elements keeps is the one made of every element, to the bit; the
+    # coarse chords (whose circumscribed arcs stand out of the circle by up to
+    # 8 % of r) are where a choice by the path of r_min alone fails.
+    x, y = noisy_survey(n, noise, seed)
+    r_max = r_min * spread
+    mc = np.radians(chord)
+    kept = path_elements(x, y, r_min, r_max, mc)
+    every = element_codes(n)
+    assert np.all(np.diff(kept) > 0) and kept[0] == 0 and kept[-1] == every[-1]
+    seg = np.arange(n - 1)
+    for r in (r_min, r_max, *(r_min + f * (r_max - r_min) for f in u)):
+        part = survey_path(x, y, seg, r, mc, kept)
+        full = survey_path(x, y, seg, r, mc, every)
+        for a, b in zip(part, full, strict=True):
+            np.testing.assert_array_equal(a, b)
+
+
+@SETTINGS
+@given(
+    n=st.sampled_from([8, 60, 400, 3000]),
+    noise=st.sampled_from([0.0, 0.003, 0.01, 0.3]),
+    seed=st.integers(0, 2**16),
+    r=st.sampled_from([0.01, 0.05, 0.5, 2.0]),
+    chord=st.sampled_from([1.0, 5.0, 20.0]),
+)
+def test_survey_path_is_the_centre_path(n, noise, seed, r, chord):
+    # survey_path finds crossings from the pieces and merges a piece's
+    # stretches before testing slopes; the curve is the centre_path's to
+    # round-off (centre_path may cut a piece in two where a stretch of it is
+    # short, so the number of pieces may differ).
+    x, y = noisy_survey(n, noise, seed)
+    seg = np.arange(n - 1)
+    px, py, pseg = survey_path(x, y, seg, r, np.radians(chord), element_codes(n))
+    cx, cy, _ = centre_path(x, y, seg, r, np.radians(chord))
+    assert px[0] == x[0] and px[-1] == x[-1] and np.all(np.diff(px) > 0)
+    assert pseg.size == px.size - 1 and pseg.min() >= 0 and pseg.max() <= n - 2
+    xs = np.concatenate([px, cx, np.linspace(x[0], x[-1], 2000)])
+    np.testing.assert_allclose(np.interp(xs, px, py), np.interp(xs, cx, cy), rtol=0,
+                               atol=1e-9 * (1.0 + np.abs(y).max()))
+
+
+def test_a_dense_noisy_survey_keeps_few_elements_for_rocks_of_several_sizes():
+    # The paths of rocks of 0.3 to 0.7 m touch the tops of the noise only.
+    x, y = noisy_survey(100_000, 0.01, 2)
+    kept = path_elements(x, y, 0.3, 0.7, np.radians(5.0))
+    assert kept.size < 0.1 * element_codes(x.size).size
+
+
+def test_batches_hold_as_many_paths_as_fit_in_their_time():
+    # Rock 0 has the shared radius; the others each a path of their own, of
+    # 0.04 s: 2 per batch (BATCH_SECONDS 0.1), however cheap the rocks were.
+    radius = np.r_[0.5, 0.5, np.linspace(0.3, 0.7, 20)]
+    b = _Batches(radius.size, 4096, radius, 0.5, 0.4 * BATCH_SECONDS)
+    a0, b0 = b.take()
+    b.done(a0, b0, 1e-4)
+    spans = []
+    while (span := b.take()) is not None:
+        spans.append(span)
+        b.done(*span, 0.4 * BATCH_SECONDS * b._paths(*span) + 1e-5)
+    assert spans[0][0] == 1 and spans[-1][1] == radius.size
+    assert all(b._paths(*sp) <= 2 for sp in spans)
+    assert max(b._paths(*sp) for sp in spans) == 2
+    # The rocks' own cost leaves the paths out.
+    assert b.seconds / b.rocks < 1e-3
+
+
+def test_runs_of_several_sizes_on_a_noisy_survey_do_not_depend_on_chunks():
+    # A run cut into chunks (first_index) has other smallest and largest radii
+    # per chunk, so other elements kept, and must give the same rocks.
+    x, y = noisy_survey(3000, 0.01, 5)
+    sec = Section(x, y, np.zeros(x.size - 1, dtype=int),
+                  (Material(impact_model="rn_rt", restitution=0.35,
+                            tangential_restitution=0.85, friction=0.58,
+                            rolling_resistance=0.3, roughness_deg=5),))
+    n = 24
+    g = np.random.default_rng(1)
+
+    def rel(radius):
+        m = radius.size
+        return Releases(radius=radius, density=2650.0, x=np.full(m, 1.0), height=np.zeros(m),
+                        vx=np.full(m, 0.6), vy=np.full(m, -0.8), spin=np.zeros(m),
+                        spin_rolling=np.zeros(m, dtype=bool))
+
+    radius = g.uniform(0.3, 0.7, n)
+    radius[12:16] = radius[12]  # a chunk of one size
+    whole = run_ensemble(sec, rel(radius), key=9, threads=1)
+    parts = [run_ensemble(sec, rel(radius[a:b]), key=9, threads=1, first_index=a)
+             for a, b in ((0, 12), (12, 16), (16, n))]
+    for name in ("status", "x_end", "y_end", "n_events", "max_x", "grid_height"):
+        np.testing.assert_array_equal(getattr(whole, name),
+                                      np.concatenate([getattr(p, name) for p in parts]))
