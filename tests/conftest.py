@@ -8,6 +8,10 @@ README, the notebook). Helpers that tests import live beside this file
 (``engine_helpers``, ``plugin_helpers``); the plugin author's fixtures
 (``tiny_slope``, ``rockfall_registry``) come from ``rockfall_design.testing``
 through its pytest11 entry point, as they do for a plugin's own tests.
+``tests/data/design_small.yaml`` (with its coarse catalogues) is a design
+project that optimises in seconds, for the tests of what an optimisation
+hands over (files, reports, interrupts, threads, the app) rather than of
+what it designs.
 
 Tests marked ``slow`` (end-to-end runs of the documentation's examples) are
 left out of a plain run (``addopts`` in pyproject.toml); ``python -m pytest
