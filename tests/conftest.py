@@ -8,6 +8,10 @@ README, the notebook). Helpers that tests import live beside this file
 (``engine_helpers``, ``plugin_helpers``); the plugin author's fixtures
 (``tiny_slope``, ``rockfall_registry``) come from ``rockfall_design.testing``
 through its pytest11 entry point, as they do for a plugin's own tests.
+``tests/data/design_small.yaml`` (with its coarse catalogues) is a design
+project that optimises in seconds, for the tests of what an optimisation
+hands over (files, reports, interrupts, threads, the app) rather than of
+what it designs.
 
 Tests marked ``slow`` (end-to-end runs of the documentation's examples) are
 left out of a plain run (``addopts`` in pyproject.toml); ``python -m pytest
@@ -16,8 +20,14 @@ left out of a plain run (``addopts`` in pyproject.toml); ``python -m pytest
 
 from __future__ import annotations
 
+import contextlib
+import io
+import os
+import re
 import sys
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -41,6 +51,76 @@ def registry():
     assert {"fence", "wall", "ditch", "berm", "boulder_row"} <= set(reg.measures), reg.failures
     assert {"spang", "uni11211"} <= set(reg.safety_concepts), reg.failures
     return reg
+
+
+@dataclass(frozen=True)
+class OptimiseRun:
+    """One ``rockfall-design optimise PROJECT --out OUT --report REPORT`` and what it left."""
+
+    code: int
+    terminal: str
+    out: Path
+    report: Path
+
+
+@pytest.fixture(scope="session")
+def optimised(tmp_path_factory: pytest.TempPathFactory) -> Callable[[Path], OptimiseRun]:
+    """``optimise`` of a project with its own rocks and seed, run once per session.
+
+    A bundled design takes half a minute to a minute and a half, and several
+    slow tests read the same run (the one verdict of every face of
+    tests/report/test_handin.py, the fresh-rocks guarantee of
+    tests/optimiser/test_optimise.py): they share it. The tests only read its
+    files; they must not change them.
+    """
+    from rockfall_design.cli.program import main
+
+    runs: dict[Path, OptimiseRun] = {}
+
+    def run(project: Path) -> OptimiseRun:
+        if project not in runs:
+            d = tmp_path_factory.mktemp(f"optimise-{project.stem}")
+            term = io.StringIO()
+            with contextlib.redirect_stdout(term):
+                code = main(["optimise", str(project), "--out", str(d / "out"),
+                             "--report", str(d / "report")])
+            runs[project] = OptimiseRun(code, term.getvalue(), d / "out", d / "report")
+        return runs[project]
+
+    return run
+
+
+@dataclass(frozen=True)
+class PythonPageRun:
+    """The block of docs/python.md, run as written, and the folder it ran in."""
+
+    namespace: dict
+    folder: Path
+
+
+@pytest.fixture(scope="session")
+def python_page_run(tmp_path_factory: pytest.TempPathFactory) -> PythonPageRun:
+    """The Python page's block (docs/python.md, "From Python"), run once per session.
+
+    It runs in a folder of its own in which ``projects`` leads to the bundled
+    projects, as a reader runs it from the repository. Its optimisation of
+    design_two_zones (seed 1) takes a minute: tests/test_docs.py checks what the
+    page promises, and tests/test_api.py reads the same result as the issue's example
+    rather than running it again.
+    """
+    text = (ROOT / "docs" / "python.md").read_text(encoding="utf-8")
+    block = re.search(r"```python\n(.*?)```", text[text.index("# From Python"):], re.S)
+    assert block, "no python block after '# From Python' in python.md"
+    folder = tmp_path_factory.mktemp("python_page")
+    (folder / "projects").symlink_to(ROOT / "projects")
+    here = Path.cwd()
+    os.chdir(folder)
+    try:
+        namespace: dict = {}
+        exec(compile(block.group(1), "docs/python.md", "exec"), namespace)  # noqa: S102
+    finally:
+        os.chdir(here)
+    return PythonPageRun(namespace, folder)
 
 
 def _engine_is_cached() -> bool:

@@ -252,13 +252,9 @@ def test_the_guide_marks_current_and_older_routes_as_the_manual_does():
 
 
 @pytest.mark.slow
-def test_the_python_page_block_runs(tmp_path, monkeypatch):
+def test_the_python_page_block_runs(python_page_run):
+    """The block runs as written (conftest's ``python_page_run``, shared with test_api.py)."""
     from matplotlib.figure import Figure
 
-    source = _block_after(DOCS / "python.md", "# From Python", "python")
-    (tmp_path / "projects").symlink_to(ROOT / "projects")
-    monkeypatch.chdir(tmp_path)
-    namespace: dict = {}
-    exec(compile(source, "docs/python.md", "exec"), namespace)  # noqa: S102
-    assert isinstance(namespace["r"].plot(), Figure)
-    assert (tmp_path / "report" / "report.html").is_file()
+    assert isinstance(python_page_run.namespace["r"].plot(), Figure)
+    assert (python_page_run.folder / "report" / "report.html").is_file()

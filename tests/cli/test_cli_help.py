@@ -18,6 +18,9 @@ from rockfall_design.report.staging import MANIFEST
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"
+#: A design project that optimises in seconds: the tests here are about the files and keys
+#: an optimisation writes, not about its design.
+SMALL_DESIGN = ROOT / "tests" / "data" / "design_small.yaml"
 
 #: command -> option -> what its help must mention (fragments, in any order)
 EXPECTED: dict[str, dict[str, list[str]]] = {
@@ -182,7 +185,8 @@ def named_files(command: str, option: str, capsys, monkeypatch) -> set[str]:
 @pytest.mark.parametrize("command, project, rocks", [
     ("simulate", "standard_slope.yaml", "40"),
     ("check", "quarry_fence_ditch.yaml", "40"),
-    pytest.param("optimise", "design_ditch_or_fence.yaml", "200", marks=pytest.mark.slow),
+    pytest.param("optimise", SMALL_DESIGN, "200", marks=pytest.mark.slow,
+                 id="optimise-design_small.yaml-200"),  # PROJECTS / SMALL_DESIGN: itself
     ("study", "study_talus.yaml", "20"),
 ])
 def test_out_and_plot_write_the_files_their_help_names(command, project, rocks, tmp_path,
@@ -213,7 +217,7 @@ def test_out_and_plot_write_the_files_their_help_names(command, project, rocks, 
 @pytest.mark.parametrize("argv, keys", [
     (["check", str(PROJECTS / "quarry_fence_ditch.yaml"), "--rocks", "20"],
      {"measures", "protect", "ok", "failures"}),
-    pytest.param(["optimise", str(PROJECTS / "design_ditch_or_fence.yaml"), "--rocks", "100"],
+    pytest.param(["optimise", str(SMALL_DESIGN), "--rocks", "100"],
                  {"alternatives", "best"}, marks=pytest.mark.slow),
     (["plugins"], {"measures", "safety_concepts", "cost_models", "failures"}),
     (["study", str(PROJECTS / "study_talus.yaml"), "--rocks", "20", "--workers", "1"],

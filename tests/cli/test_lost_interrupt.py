@@ -22,6 +22,9 @@ from rockfall_design.report.staging import MANIFEST
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"
+#: A design project that optimises in seconds (tests/data/design_small.yaml): the test is
+#: about the interrupt, which the first screening of any design receives.
+SMALL_DESIGN = ROOT / "tests" / "data" / "design_small.yaml"
 
 
 @pytest.fixture(autouse=True)
@@ -43,11 +46,11 @@ def files_of(directory: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in directory.iterdir() if p.name != MANIFEST}
 
 
-@pytest.mark.slow  # an optimisation of design_ditch_or_fence: CI runs it with -m slow
+@pytest.mark.slow  # two optimisations of a small design: CI runs it with -m slow
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_a_swallowed_interrupt_during_optimise_still_stops_it(tmp_path, monkeypatch, capsys,
                                                              signum):
-    project = PROJECTS / "design_ditch_or_fence.yaml"
+    project = SMALL_DESIGN
     out = tmp_path / "out"
     assert main(["optimise", str(project), "--rocks", "300", "--out", str(out), "--json"]) == 0
     before = files_of(out)

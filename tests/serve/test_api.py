@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import shutil
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,6 +26,9 @@ TOKEN = "test-token-0123456789"
 ROCKS = 1500
 SEED = 5
 FENCE = {"type": "fence", "height": 5.0, "capacity_kj": 2000.0}
+#: A design project that optimises in seconds, and the catalogues it reads beside it.
+SMALL_DESIGN_DIR = Path(__file__).resolve().parents[1] / "data"
+SMALL_DESIGN_FILES = ("design_small.yaml", "catalogue_products.yaml", "catalogue_costs.yaml")
 
 
 def _wait(client: TestClient, job_id: str) -> dict:
@@ -463,14 +467,13 @@ def test_optimise_without_a_design_section(tmp_path, registry, projects_dir):
         assert r.status_code == 400 and "no design: section" in r.json()["error"]
 
 
-@pytest.mark.slow
-def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registry,
-                                                               projects_dir, capsys):
-    for name in ("design_quarry.yaml", "catalogue_products.yaml", "catalogue_costs.yaml"):
-        shutil.copy(projects_dir / name, tmp_path / name)
-    app = create_app(load_entries([tmp_path / "design_quarry.yaml"], registry), TOKEN)
+@pytest.mark.slow  # two optimisations of a small design: CI runs it with -m slow
+def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registry, capsys):
+    for name in SMALL_DESIGN_FILES:
+        shutil.copy(SMALL_DESIGN_DIR / name, tmp_path / name)
+    app = create_app(load_entries([tmp_path / "design_small.yaml"], registry), TOKEN)
     with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
-        job = c.post("/api/projects/design_quarry/optimise",
+        job = c.post("/api/projects/design_small/optimise",
                      json={"rocks": 500, "seed": 3}).json()
         job = _wait(c, job["id"])
         assert job["state"] == "done", job
@@ -481,7 +484,7 @@ def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registr
         assert report.status_code == 200 and page["best"]["name"] in report.text
         assert c.get(f"/api/jobs/{job['id']}/files/alternatives.png").content[:4] == b"\x89PNG"
     out = tmp_path / "out"
-    main(["optimise", str(tmp_path / "design_quarry.yaml"), "--rocks", "500", "--seed", "3",
+    main(["optimise", str(tmp_path / "design_small.yaml"), "--rocks", "500", "--seed", "3",
           "--json", "--out", str(out)])
     cli = json.loads(capsys.readouterr().out)
     assert page["best"] == cli["best"] and page["best"] is not None
@@ -489,7 +492,7 @@ def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registr
     assert design.status_code == 200
     # The same design.yaml but for the first line's "chosen from" (the file name as given).
     ours, theirs = design.text.splitlines(), (out / "design.yaml").read_text().splitlines()
-    assert ours[0].startswith("# Chosen by rockfall-design optimise from design_quarry.yaml")
+    assert ours[0].startswith("# Chosen by rockfall-design optimise from design_small.yaml")
     assert ours[1:] == theirs[1:]
 
 
