@@ -164,9 +164,9 @@ def _settle(
     that holds on fresh rocks is the family's (:func:`~.decide.verify_fresh`,
     sequential too); one that fails there with confidence is not chosen and
     the next is decided; one marginal there, like a marginal design of the
-    search, is kept for the report. A design in which a measure holds no rock is dominated by the
-    same design without it: the family is reported as such (that design
-    belongs to a smaller family).
+    search, is kept for the report. A design in which a measure holds no
+    rock is dominated by the same design without it: the family is reported
+    as such (that design belongs to a smaller family).
 
     Contenders first: a design that meets its targets on the point values of
     the search rocks is decided as the stream reaches it; one that misses
