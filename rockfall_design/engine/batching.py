@@ -62,6 +62,12 @@ FIRST_BATCH = 1
 """Rocks in the first batch, before the cost of a rock is known (a rock of a survey of
 100,000 points and a size of its own costs seconds; batches grow 8-fold from there)."""
 
+FIRST_BATCH_FEW_POINTS = 512
+"""Rocks in the first batch on a section of few points (``ensemble.SHARED_PATH_VERTICES``
+or fewer), where a rock costs microseconds to a few milliseconds. The optimiser makes
+hundreds of runs of a few thousand rocks there (its ground edits), for which batches
+of 1, 8 and 64 rocks cost more than they are worth."""
+
 
 class _Batches:
     """Cuts rocks 0..n-1 into consecutive batches sized to :data:`BATCH_SECONDS`.
@@ -88,14 +94,17 @@ class _Batches:
         Radius (m) whose centre path every batch is given.
     path_seconds : float
         Cost of making one centre path (s); 0 to leave them out.
+    first : int
+        Rocks in the first batch (:data:`FIRST_BATCH`, or
+        :data:`FIRST_BATCH_FEW_POINTS` on a section of few points).
     """
 
     def __init__(self, n: int, most: int, radius: np.ndarray | None = None,
-                 r0: float = -1.0, path_seconds: float = 0.0) -> None:
+                 r0: float = -1.0, path_seconds: float = 0.0, first: int = FIRST_BATCH) -> None:
         self.n = n
         self.most = max(1, int(most))
         self.next = 0
-        self.size = min(self.most, FIRST_BATCH)
+        self.size = min(self.most, max(1, int(first)))
         self.rocks = 0
         self.seconds = 0.0
         self.lock = threading.Lock()

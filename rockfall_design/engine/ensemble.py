@@ -19,7 +19,7 @@ from numba import njit
 
 from . import _native, columns
 from ._jit import CACHE, DIGEST, compile_notice
-from .batching import FIRST_BATCH, _Batches, default_threads
+from .batching import FIRST_BATCH, FIRST_BATCH_FEW_POINTS, _Batches, default_threads
 from .flight import path_tree
 from .problem import (
     EngineSettings,
@@ -284,7 +284,8 @@ def run_ensemble(
     batch_args = _batch_slicer(
         (ground, path0, r0, elems, settings.vector(), max_chord, k64), int(first_index), rel,
         _resume(resume, n), stations_rec, bars, out, ntr, record_speed)
-    _run_all(batch_args, _Batches(n, batch_size, radius, r0, path_seconds), n, threads,
+    first = FIRST_BATCH if ground.x.size > SHARED_PATH_VERTICES else FIRST_BATCH_FEW_POINTS
+    _run_all(batch_args, _Batches(n, batch_size, radius, r0, path_seconds, first), n, threads,
              progress)
 
     return EnsembleResult(
@@ -499,7 +500,7 @@ def _run_all(batch_args: Callable[[int, int], tuple], batches: _Batches, n: int,
             first = batches.take()
     left = n - (first[0] if first is not None else n)
     nthreads = min(threads if threads is not None else default_threads(),
-                   -(-left // FIRST_BATCH))
+                   -(-left // batches.size))
     if nthreads <= 1:
         span = first
         while span is not None:
