@@ -67,6 +67,7 @@ O_PASSED_OVER = 2
 O_BROKEN_THROUGH = 3
 O_REBOUNDED = 4
 O_PASSED_THROUGH_GAP = 5
+N_OUTCOMES = 6
 
 # Columns of a rock's state at the first downslope passage of a restart station,
 # enough to resume the path there exactly as it would have gone on (with the

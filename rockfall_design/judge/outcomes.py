@@ -46,10 +46,6 @@ from ..engine.columns import EXIT_DOWNSLOPE, STOPPED
 from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, ProfileEdit
 from ..run.reach import protected_zone_counts
 
-#: Number of outcome codes (``columns.O_*``: 0 to 5).
-_N_OUTCOMES = 1 + max(columns.O_NOT_MET, columns.O_CAUGHT, columns.O_PASSED_OVER,
-                      columns.O_BROKEN_THROUGH, columns.O_REBOUNDED, columns.O_PASSED_THROUGH_GAP)
-
 if TYPE_CHECKING:  # pragma: no cover
     from .placing import PlacedMeasure
 
@@ -227,7 +223,7 @@ def judge_measures(
             out = np.asarray(out)
             met = out != columns.O_NOT_MET
             # One pass over the rocks counts every outcome (the codes are 0..5).
-            counts = np.bincount(out.astype(np.intp, copy=False), minlength=_N_OUTCOMES)
+            counts = np.bincount(out.astype(np.intp, copy=False), minlength=columns.N_OUTCOMES)
             res.passed_over = int(counts[columns.O_PASSED_OVER])
             res.broken_through = int(counts[columns.O_BROKEN_THROUGH])
             res.rebounded = int(counts[columns.O_REBOUNDED])

@@ -253,3 +253,4 @@ def test_the_engines_outcome_codes_are_the_plugins():
 
     for o in Outcome:
         assert getattr(columns, f"O_{o.name}") == int(o)
+    assert columns.N_OUTCOMES == len(Outcome)
