@@ -389,14 +389,31 @@ def _marginal_values(m: dict[str, Any]) -> str:
     for c in v["checks"]:
         if c["value"] is None:
             continue
-        ends = [x for x in (c["bound"], c["optimistic"]) if x is not None]
-        rng = f" ({min(ends):.2f} to {max(ends):.2f})" if ends else ""
+        rng = _check_range(c["bound"], c["optimistic"])
         parts.append(f"{c['name']} {c['value']:.2f}{rng}, target {c['target']:.2f}")
     r = v.get("residual")
     if r is not None:
         parts.append(f"residual {100 * r['fraction']:.3f} % ({100 * r['lower']:.3f} to "
                      f"{100 * r['upper']:.3f} %), allowed {100 * r['allowed']:.3f} %")
     return f"on {v['rocks']:,} rocks at {100 * v['confidence']:.4g} %: " + ", ".join(parts)
+
+
+def _check_range(bound: float | None, optimistic: float | None) -> str:
+    """A check's two confidence ends as " (a to b)", or the one it has, said as what it is.
+
+    ``bound`` is the value that holds with confidence, ``optimistic`` the one
+    a check would have at the other end (``plugins.concept.Check``). With too
+    few rocks at a measure a percentile has a lower order-statistic bound but
+    no upper one: only ``optimistic`` is known, and a range of that one value
+    ("1.12 to 1.12" beside a point value of 0.66) would read as a bound.
+    """
+    if bound is not None and optimistic is not None:
+        return f" ({min(bound, optimistic):.2f} to {max(bound, optimistic):.2f})"
+    if optimistic is not None:
+        return f" (at best {optimistic:.2f}; too few rocks to bound it the other way)"
+    if bound is not None:
+        return f" (with confidence {bound:.2f})"
+    return ""
 
 
 def alternatives_table(result: Any) -> Any:
