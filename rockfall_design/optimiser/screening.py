@@ -102,6 +102,11 @@ class _Table:
     oh: np.ndarray | None = None  # (len(rows), S - first_col)
     oe: np.ndarray | None = None
     ov: np.ndarray | None = None
+    #: Which table this is, for the search's caches (0: the bare slope). Never
+    #: ``id()``: a table dropped from the cache of edited tables frees its id
+    #: for the next one, whose rocks would then be looked up under the old
+    #: table's outcomes.
+    serial: int = 0
 
     def column(self, j: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Passing height (m), energy (kJ) and speed (m/s) of every rock at station j."""
@@ -295,7 +300,7 @@ class Screening:
         idx = np.flatnonzero(go)
         t = _Table(h=self.bare.h, e_kj=self.bare.e_kj, v=self.bare.v,
                    max_x=self.bare.max_x.copy(), x_end=self.bare.x_end.copy(),
-                   status=self.bare.status.copy())
+                   status=self.bare.status.copy(), serial=self.edit_runs + 1)
         if idx.size:
             sub = Releases(
                 radius=self.releases.radius[idx], density=self.releases.density,
@@ -417,10 +422,12 @@ class Screening:
                 here = out != columns.O_NOT_MET
             approx |= here
             upstream.append((fp.x, here))
-            fates.max_x[stopped] = np.minimum(fates.max_x[stopped], fp.x)
-            fates.x_end[stopped] = fp.x
-            fates.status[stopped] = np.where(out[stopped] == columns.O_CAUGHT, columns.CAUGHT,
-                                             columns.STOPPED)
+            # In place under the mask (no gather and scatter of the stopped rocks:
+            # thousands of placements are judged on thousands of rocks).
+            np.minimum(fates.max_x, fp.x, out=fates.max_x, where=stopped)
+            np.copyto(fates.x_end, fp.x, where=stopped)
+            np.copyto(fates.status, np.where(out == columns.O_CAUGHT, columns.CAUGHT,
+                                             columns.STOPPED), where=stopped, casting="unsafe")
             alive &= ~stopped
             outcomes[i] = out
             meetings[i] = np.column_stack([h, v, e_kj])

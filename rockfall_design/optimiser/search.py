@@ -59,6 +59,9 @@ class _BarrierSlots:
         self.skipped: dict[int, Counter] = {}
         self._rows: dict[tuple[int, int, int], np.ndarray] = {}
         self._alone: dict[tuple[int, int], np.ndarray] = {}
+        # Outcome codes first_ok computed, for passes() of the same level (both
+        # ask for the options of the level at hand): (ci, k, table key) -> codes.
+        self._recent: dict[tuple[int, int, int], np.ndarray] = {}
 
     def of(self, ci: int) -> list[_Option]:
         """Options of candidate ``ci`` (every catalogue choice at every grid station)."""
@@ -122,7 +125,9 @@ class _BarrierSlots:
             row = self._rows.get(key)
             if row is None:
                 o = opts[k]
-                oc = self._outcome(o, table)[0]
+                oc = self._recent.get(key)
+                if oc is None:
+                    oc = self._outcome(o, table)[0]
                 row = (oc == columns.O_NOT_MET) | (oc == columns.O_PASSED_OVER) | (
                     oc == columns.O_PASSED_THROUGH_GAP)
                 if o.footprint.behaviour == BarrierBehaviour.BLOCKS:
@@ -153,6 +158,9 @@ class _BarrierSlots:
                 arr = self._alone[(ci, tk)] = np.full(len(opts), -1, dtype=np.int8)
             if arr[k] < 0:
                 oc, h, e_kj, v = self._outcome(o, table)
+                if len(self._recent) >= 4096:
+                    self._recent.clear()
+                self._recent[(ci, int(k), tk)] = oc
                 placed = PlacedMeasure(0, o.measure, o.footprint, o.label)
                 fates = RockFates(max_x=table.max_x, x_end=table.x_end, status=table.status,
                                   mass=sc.mass, radius=sc.radius)
@@ -457,7 +465,7 @@ def _edit_designs(
             seen[key] = 4.0 * big
             return seen[key]
         first = next(iter(_barrier_designs(screen, slots, barrier_cis, edits, fixed_cost, table,
-                                           id(table), tally, cost_limit)), None)
+                                           table.serial, tally, cost_limit)), None)
         if first is None:
             value = big + fixed_cost
         else:

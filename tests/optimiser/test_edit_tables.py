@@ -1,0 +1,42 @@
+"""The screening's tables of edited ground are told apart by a serial number, not by id()."""
+
+from __future__ import annotations
+
+import gc
+from pathlib import Path
+
+from rockfall_design.judge.placing import build_concept, edited_section, place_measures
+from rockfall_design.optimiser import Screening
+from rockfall_design.optimiser.design_spec import resolve_design
+from rockfall_design.optimiser.space import _decode, _variables
+from rockfall_design.project import load_project
+
+PROJECTS = Path(__file__).resolve().parents[2] / "projects"
+
+
+def test_a_table_dropped_from_the_cache_does_not_lend_its_key_to_the_next(registry):
+    # The search caches each option's outcomes per table. Keyed by id(table),
+    # a table dropped from the cache of edited tables (it holds 256) freed its
+    # id for the next one, whose rocks were then looked up under the old
+    # table's outcomes.
+    project = load_project(PROJECTS / "design_ditch_or_fence.yaml")
+    spec = resolve_design(project, registry)
+    concept = build_concept(project, registry)
+    screen = Screening(project, registry, spec, concept, rocks=300, seed=3)
+    (ci,) = sorted(screen.edit_candidates)
+    variables = _variables(spec.candidates, (ci,))
+    serials = []
+    for end in ("low", "high", "low"):
+        vec = [getattr(v, end) for v in variables]
+        measures = screen.measures(_decode(spec.candidates, (ci,), variables, vec))
+        placed = place_measures(project, registry, measures, screen.section)
+        edited = edited_section(project, screen.section, placed)
+        table = screen._table_for([p.footprint for p in placed], edited)
+        serials.append(table.serial)
+        assert screen._table_for([p.footprint for p in placed], edited) is table  # cached
+        del table
+        screen._edit_cache.clear()
+        gc.collect()
+    assert screen.bare.serial == 0
+    # Three runs, the third of the first geometry again after the cache lost it.
+    assert len(set(serials)) == 3 and 0 not in serials
