@@ -2,14 +2,19 @@
 
     python benchmarks/optimise.py [--projects projects/design_quarry.yaml ...] [--no-reference]
     python benchmarks/optimise.py --seeds 11,12,13,14,15 [--projects ...]
+    python benchmarks/optimise.py --no-reference --check-seeds 977,978,...,996
 
 For each project it prints
 
 * the optimiser's wall time (warm: numba compiled first), designs screened,
   exact evaluations, rocks simulated and the chosen design's cost;
 * the chosen design checked as an engineer would: ``rockfall-design check
-  design.yaml --seed 977`` and ``--seed 978`` with twice the rocks that
-  decided it (the verdict on the point values, and with confidence);
+  design.yaml --seed 977`` and ``--seed 978`` (or the ``--check-seeds``)
+  with twice the rocks that decided it (the verdict on the point values,
+  and with confidence, and each factor with its bound); with more than two
+  check seeds, at how many the check confirms the design with confidence (a
+  design chosen at its limit is confirmed by a checker's own seed only as
+  often as the check's power at that many rocks allows);
 * a reference the optimiser must come within 1 % of: the cheapest single
   fence or wall on a 2 m grid of stations, with every catalogue product and
   height, that ``check`` admits with confidence (``holds_with_confidence``)
@@ -56,6 +61,26 @@ def _check(design: Path, rocks: int, seed: int) -> dict:
          str(rocks), "--seed", str(seed), "--json"],
         capture_output=True, text=True, check=False)
     return json.loads(out.stdout)
+
+
+def _factors(chk: dict) -> str:
+    """``; reach_factor 1.04 (bound 0.98)`` for each factor check of a check's --json."""
+    out = []
+    for m in chk.get("measures", []):
+        for c in m.get("checks", []):
+            if c.get("name", "").endswith("_factor") and c.get("value") is not None:
+                bound = "-" if c.get("bound") is None else f"{c['bound']:.3f}"
+                out.append(f"{c['name']} {c['value']:.3f} (bound {bound})")
+    return "; " + ", ".join(out) if out else ""
+
+
+def _rate_interval(k: int, n: int) -> tuple[float, float]:
+    """Two-sided 95 % Clopper-Pearson interval of a rate of k in n."""
+    from scipy.stats import beta
+
+    lo = 0.0 if k == 0 else float(beta.ppf(0.025, k, n - k + 1))
+    hi = 1.0 if k == n else float(beta.ppf(0.975, k + 1, n - k))
+    return lo, hi
 
 
 def reference(project, registry, rocks: int) -> tuple[float, str, int]:
@@ -154,6 +179,11 @@ def main() -> None:
                     help="comma-separated seeds: run each project at each seed and print "
                     "each seed's choice, the spread of the chosen cost (max/min) and the "
                     "marginal designs cheaper than a dearer choice (e.g. 11,12,13,14,15)")
+    ap.add_argument("--check-seeds", type=lambda t: [int(x) for x in t.split(",")],
+                    default=[977, 978],
+                    help="comma-separated seeds at which the chosen design (at the project's "
+                    "own seed) is checked with twice its deciding rocks; with more than two, "
+                    "how many confirm it with confidence (e.g. 977,978,...,996)")
     args = ap.parse_args()
     if args.seeds:
         return _seeds(args)
@@ -193,12 +223,22 @@ def main() -> None:
             if code != 0 or not design.exists():
                 print(f"  optimise --out gave no design.yaml (exit {code})")
                 continue
-            for seed in (977, 978):
+            confirmed = 0
+            for seed in args.check_seeds:
                 chk = _check(design, 2 * best.decision_rocks, seed)
+                confirmed += bool(chk["holds_with_confidence"])
                 print(f"  check design.yaml --seed {seed} --rocks {2 * best.decision_rocks:,}: "
                       f"ok={chk['ok']} holds_with_confidence={chk['holds_with_confidence']} "
                       f"residual {chk['protect']['reaching']} "
-                      f"(upper {100 * chk['protect']['upper_fraction']:.3f} %)")
+                      f"(upper {100 * chk['protect']['upper_fraction']:.3f} %)"
+                      + _factors(chk))
+            if len(args.check_seeds) > 2:
+                # How often a checker who reruns the check at a seed of their own
+                # confirms the design with confidence (its power at that many
+                # rocks), with the Clopper-Pearson interval of that rate.
+                lo, hi = _rate_interval(confirmed, len(args.check_seeds))
+                print(f"  confirmed with confidence at {confirmed} of {len(args.check_seeds)} "
+                      f"checker seeds ({100 * lo:.0f} to {100 * hi:.0f} % at 95 %)")
         if args.no_reference:
             continue
         t0 = time.perf_counter()

@@ -17,6 +17,7 @@ from ..judge.placing import unknown_measure_type
 from ..plugins import guard
 from ..plugins.declared import DeclaredDesign, declared_design
 from ..project import params_problem
+from ..project.locator import validated_params
 
 if TYPE_CHECKING:  # pragma: no cover
 
@@ -498,9 +499,9 @@ def build_candidate_measure(
                 f"{label}: {key} = {_fmt(values[key])} is not one of its options "
                 f"({', '.join(_fmt(o) for o in opts)})"
             )
-    problem = params_problem(cls.Params, values)
+    params, problem = validated_params(cls.Params, values)
     if problem is not None:
         loc, message = problem
         where = ".".join(str(p) for p in loc)
         raise ValueError(f"{label}: {where + ': ' if where else ''}{message}")
-    return guard(registry).instantiate(cls, cls.Params.model_validate(values))
+    return guard(registry).instantiate(cls, params)

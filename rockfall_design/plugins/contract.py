@@ -106,10 +106,22 @@ _NOUN = {"measure": "measure", "safety": "safety concept", "cost": "cost model"}
 def _identify(plugin: Any) -> tuple[str, str]:
     """``(provider key, name)`` of a measure, safety concept or cost model (class or object)."""
     cls = plugin if inspect.isclass(plugin) else type(plugin)
+    known = _IDENTIFIED.get(cls)
+    if known is not None:
+        return known
     for _section, _what, _hook, base, name_attr, key in SECTIONS:
         if issubclass(cls, base):
-            return key, str(getattr(cls, name_attr, "?"))
+            found = key, str(getattr(cls, name_attr, "?"))
+            # Once per class: every call into a plugin names it, about 100,000
+            # in one optimise. (A class's name attribute is read once; the
+            # registry keeps the name it was registered under anyway.)
+            _IDENTIFIED[cls] = found
+            return found
     raise TypeError(f"{cls.__qualname__} is not a measure, safety concept or cost model")
+
+
+#: ``_identify``'s answers by class.
+_IDENTIFIED: dict[type, tuple[str, str]] = {}
 
 
 def _number(value: Any, name: str, low: float, high: float = math.inf, *,

@@ -44,12 +44,29 @@ def _handed_arrays(args: tuple[Any, ...]) -> list[tuple[str, np.ndarray]]:
         if isinstance(arg, np.ndarray):
             found.append((f"argument {i + 1}", arg))
         elif dataclasses.is_dataclass(arg) and not isinstance(arg, type):
-            owner = "section" if type(arg).__name__ == "Section" else type(arg).__name__
-            for f in dataclasses.fields(arg):
-                value = getattr(arg, f.name, None)
+            owner, names = _fields_of(type(arg))
+            for name in names:
+                value = getattr(arg, name, None)
                 if isinstance(value, np.ndarray):
-                    found.append((f"{owner}.{f.name}", value))
+                    found.append((f"{owner}.{name}", value))
     return found
+
+
+#: Per dataclass handed to plugins: its name in messages and its field names.
+_FIELDS: dict[type, tuple[str, tuple[str, ...]]] = {}
+
+
+def _fields_of(cls: type) -> tuple[str, tuple[str, ...]]:
+    """A dataclass's name for messages and its field names, looked up once per class.
+
+    ``dataclasses.fields`` builds its list on every call; the optimiser hands
+    a section or a measure's result to plugins about 100,000 times.
+    """
+    known = _FIELDS.get(cls)
+    if known is None:
+        owner = "section" if cls.__name__ == "Section" else cls.__name__
+        known = _FIELDS[cls] = (owner, tuple(f.name for f in dataclasses.fields(cls)))
+    return known
 
 
 def _freeze(arrays: list[tuple[str, np.ndarray]]) -> None:
