@@ -253,6 +253,7 @@ class _SettleState:
     simulated: int = 0
     unjudged_failures: int = 0
     per_level: Counter = field(default_factory=Counter)
+    marginal_levels: set = field(default_factory=set)  # levels with a design marginal at max
     skipped: list[tuple[Any, str]] = field(default_factory=list)  # (design, why not decided)
 
     def decide(self, d: Any) -> bool:
@@ -260,6 +261,16 @@ class _SettleState:
         alt, tally = self.alt, self.tally
         if self.per_level[d.level] >= MAX_EXACT_PER_LEVEL:
             why = "the catalogue combination's decisions were used up"
+            tally.reasons[f"not decided: {why}"] += 1
+            self.skipped.append((d, why))
+            return False
+        if d.level in self.marginal_levels:
+            # Its placements come closest to holding first: once one of them ran
+            # to max_rocks undecided, the next (a station or two away, missing
+            # by more on the search rocks) would most likely run there too, for
+            # the same listing (design_two_zones: three fences at 136.5 to
+            # 137.5 m, 50,000 rocks each, all marginal).
+            why = "a placement of the same catalogue combination is marginal at max_rocks"
             tally.reasons[f"not decided: {why}"] += 1
             self.skipped.append((d, why))
             return False
@@ -281,6 +292,7 @@ class _SettleState:
         self.simulated += dec.simulated
         if dec.verdict is Verdict.MARGINAL:
             tally.reasons["marginal"] += 1
+            self.marginal_levels.add(d.level)
             # The cheapest ones are kept: deferred designs are decided after
             # dearer contenders, and a cheaper marginal design is the one the
             # report must name.
