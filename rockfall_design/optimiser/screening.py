@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections import OrderedDict
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -41,6 +42,9 @@ from .space import STATION_STEP_M, _decode, _variables
 
 #: Spacing (m) of the restart stations upslope of ground-edit candidates.
 RESTART_STEP_M = 2.0
+#: First barriers of the search's placements whose judgement is kept (see
+#: :meth:`Screening.screen_placed`), least recently used dropped first.
+FIRST_BARRIERS_KEPT = 512
 
 
 # ---- screening --------------------------------------------------------------------
@@ -214,6 +218,10 @@ class Screening:
         self.u_gap = np.random.default_rng(np.random.SeedSequence([self.seed, 7919])).random(
             self.n)
         self._edit_cache: dict[tuple, _Table] = {}
+        # The first barrier of the search's placements, judged once per option and
+        # table (see screen_placed): key -> (outcomes, result, held, checks).
+        self._first: OrderedDict[tuple, tuple[np.ndarray, MeasureResult, np.ndarray,
+                                              list[Check]]] = OrderedDict()
         # A cost above any design's: infeasible designs cost at least this much.
         self.penalty_floor = 1e3 + 1e5 * spec.max_measures * max(1.0, spec.length_m)
         self.evaluations = 0
@@ -358,21 +366,43 @@ class Screening:
         return self._verdict(placed, table, cost)
 
     def screen_placed(self, placed: Sequence[PlacedMeasure], table: _Table,
-                      cost: float) -> ScreenResult:
+                      cost: float, keys: Sequence[Hashable] | None = None) -> ScreenResult:
         """Judge measures already placed and priced on ``table`` (the search's fast path).
 
         The search builds, places and prices every barrier option once, and
         keeps only placements that fit (spacing, not inside a ground edit); a
         design of them needs only the judgement and the safety checks.
+
+        ``keys``, when given, name each placed barrier's option for the whole
+        run (the search's ``(candidate, option)``): the barrier the rocks meet
+        first meets every rock of the table, so its outcomes, result and
+        checks are those of every placement that begins with it, and are
+        judged once (:meth:`_first_judged`).
         """
         self.evaluations += 1
-        return self._verdict(placed, table, cost)
+        return self._verdict(placed, table, cost, keys)
 
     def _verdict(self, placed: Sequence[PlacedMeasure], table: _Table,
-                 cost: float) -> ScreenResult:
-        judgement, approx = self.judge(placed, table)
-        checks = [guard(self.registry).concept(self.concept).checks(res)
-                  for res in judgement.results]
+                 cost: float, keys: Sequence[Hashable] | None = None) -> ScreenResult:
+        judgement, approx, first = self._judge(placed, table, keys)
+        concept = guard(self.registry).concept(self.concept)
+        checks = []
+        for i, res in enumerate(judgement.results):
+            if first is not None and i == first[0] and first[1] in self._first:
+                checks.append(self._first[first[1]][3])
+                continue
+            checks.append(concept.checks(res))
+        if first is not None and first[1] not in self._first:
+            i, key = first
+            # Least recently used out first: an entry holds the first barrier's
+            # met rocks (about 0.4 MB on 9,206 search rocks), and the placements
+            # come level by level, each level's few first barriers many times.
+            if len(self._first) >= FIRST_BARRIERS_KEPT:
+                self._first.popitem(last=False)
+            self._first[key] = (judgement.outcomes[i], judgement.results[i],
+                                judgement.held[i], checks[i])
+        elif first is not None:
+            self._first.move_to_end(first[1])
         labels = [p.label for p in placed]
         approximate = approx.any
         violation = self.violation(checks, judgement.reaching)
@@ -389,6 +419,16 @@ class Screening:
                             and judgement.reaching <= self.allowed_residual)
 
     def judge(self, placed: Sequence[PlacedMeasure], table: _Table) -> tuple[Judgement, _Approx]:
+        """The design's outcomes on the search rocks, by the one judgement.
+
+        See :meth:`_judge`.
+        """
+        judgement, approx, _ = self._judge(placed, table, None)
+        return judgement, approx
+
+    def _judge(self, placed: Sequence[PlacedMeasure], table: _Table,
+               keys: Sequence[Hashable] | None) -> tuple[Judgement, _Approx,
+                                                        tuple[int, tuple] | None]:
         """The design's outcomes on the search rocks, by the one judgement.
 
         Barriers are met in the order of their stations; a rock a barrier
@@ -409,13 +449,23 @@ class Screening:
         upstream: list[tuple[float, np.ndarray]] = []  # (station, rocks approximated there)
         outcomes: list[np.ndarray | None] = [None] * len(placed)
         meetings: list[np.ndarray | None] = [None] * len(placed)
+        first: tuple[int, tuple] | None = None  # (index in placed, key in self._first)
+        known = None  # what self._first holds for it
         for i in sorted(range(len(placed)), key=lambda k: _start(placed[k].footprint)):
             fp = placed[i].footprint
             if not isinstance(fp, Barrier):
                 continue
             j = self.station(fp.x)
             h, e_kj, v = table.column(j)
-            out = barrier_outcomes(fp, h, e_kj, self.radius, self.u_gap, alive)
+            if keys is not None and first is None:
+                # The first barrier: every rock is still moving when it gets there.
+                first = (i, (keys[i], placed[i].index, table.serial, j))
+                known = self._first.get(first[1])
+            if known is not None and i == first[0]:
+                out = known[0]
+            else:
+                out = barrier_outcomes(fp, h, e_kj, self.radius, self.u_gap, alive)
+                meetings[i] = np.column_stack([h, v, e_kj])
             stopped = (out == columns.O_CAUGHT) | (out == columns.O_REBOUNDED)
             here = (out == columns.O_BROKEN_THROUGH) | (out == columns.O_REBOUNDED)
             if fp.behaviour == BarrierBehaviour.BLOCKS:
@@ -430,8 +480,21 @@ class Screening:
                                              columns.STOPPED), where=stopped, casting="unsafe")
             alive &= ~stopped
             outcomes[i] = out
-            meetings[i] = np.column_stack([h, v, e_kj])
-        judgement = judge_measures(placed, outcomes, meetings, fates, self.protect_x)
+        if known is None:
+            judgement = judge_measures(placed, outcomes, meetings, fates, self.protect_x)
+        else:
+            # The first barrier's result as judged before; the others now. Each
+            # measure's result depends on its own outcomes and the rocks' fates
+            # only (a rock the first barrier stops has its fate set there).
+            i0 = first[0]
+            rest = [k for k in range(len(placed)) if k != i0]
+            part = judge_measures([placed[k] for k in rest], [outcomes[k] for k in rest],
+                                  [meetings[k] for k in rest], fates, self.protect_x)
+            results, helds, outs = part.results, part.held, part.outcomes
+            results.insert(i0, known[1])
+            helds.insert(i0, known[2])
+            outs.insert(i0, known[0])
+            judgement = Judgement(results, helds, outs, part.reaching, part.unresolved)
         # A measure's checks rest on approximated rocks when such rocks, from a
         # barrier upslope of it, met it.
         touched = []
@@ -444,7 +507,7 @@ class Screening:
             touched.append(bool((before & (out != columns.O_NOT_MET)).any()))
         uncertain = int((approx & reaches_protected_zone(fates.max_x, fates.status,
                                                          self.protect_x)).sum())
-        return judgement, _Approx(uncertain, bool(approx.any()), touched)
+        return judgement, _Approx(uncertain, bool(approx.any()), touched), first
 
     def station(self, x: float) -> int:
         """Index of the table station nearest ``x`` (m)."""

@@ -403,7 +403,8 @@ def _screen_placements(screen: Screening, opts: list, ks: list, fixed: list,
             # Built, placed and priced once per option; their spacing is checked above.
             placed = [PlacedMeasure(i, o.measure, o.footprint, o.label)
                       for i, o in enumerate(chosen)]
-            sr = screen.screen_placed(placed, table, sum(o.cost for o in chosen))
+            keys = [(o.ci, int(ks[s][pos[s]])) for s, o in enumerate(chosen)]
+            sr = screen.screen_placed(placed, table, sum(o.cost for o in chosen), keys=keys)
         if sr.feasible or sr.near:
             found.append(_Screened(sr.cost, ms, sr, (table_id,) + tuple(idx)))
             passed += sr.feasible
