@@ -73,6 +73,25 @@ def _on_signal(signum: int, frame: Any) -> None:
     raise _Interrupted(signum)
 
 
+def _quiet_swallowed_interrupt(unraisable: Any) -> None:
+    """``sys.unraisablehook`` while a command runs: a swallowed interrupt says nothing.
+
+    The handler's exception can land where Python cannot raise it (a weakref
+    callback of the import machinery, a ``__del__``): Python then prints
+    "Exception ignored in ..." with a traceback. The interrupt was noted
+    before it was raised, so the next safe point stops the run all the same
+    and the command ends with its one line; anything else goes to the hook
+    that was in place before the command.
+    """
+    if isinstance(unraisable.exc_value, _Interrupted):
+        return
+    _unraisable_before[0](unraisable)
+
+
+#: ``sys.unraisablehook`` as it was when the command began.
+_unraisable_before: list[Any] = [sys.__unraisablehook__]
+
+
 class _StdoutFailed(InputError):
     """Standard output could not be written (a full disk, a closed pipe): exit code 2."""
 
@@ -139,6 +158,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         # An ignored SIGINT (a background job of a non-interactive shell) stays so.
         handled.append(signal.SIGINT)
     previous = {s: signal.signal(s, _on_signal) for s in handled}
+    hook = _unraisable_before[0] = sys.unraisablehook
+    sys.unraisablehook = _quiet_swallowed_interrupt
     stdout = sys.stdout
     sys.stdout = _GuardedStdout(stdout)
     try:
@@ -176,6 +197,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         _exiting[0] = True
         forget_interrupts()  # this command's: they must not stop what the process does next
         sys.stdout = stdout
+        sys.unraisablehook = hook
         for s, handler in previous.items():
             # Run as the program (no argv), the process exits next: a Ctrl-C
             # now would only print a traceback from the interpreter's exit.
