@@ -370,10 +370,11 @@ def _surely_margin(ya, yb, s, tol):
 
 @hot
 def _candidate(d, jlo, jhi, n):
-    """The ``d``-th (0 to 3) vertex :func:`_surely_hidden` tries, or -1.
+    """The ``d``-th nearest vertex to the feet's range ``[jlo, jhi]``, or -1.
 
-    The nearest two on each side of the feet's range ``[jlo, jhi]``, if in
-    the window of :func:`_hides` for every ``j`` in it (and not ``j`` itself).
+    Even ``d`` on the left, odd on the right (:func:`_surely_hidden` tries
+    ``d`` 0 to 3), if in the window of :func:`_hides` for every ``j`` in the
+    range (and not ``j`` itself).
     """
     w = jlo - 1 - d // 2 if d % 2 == 0 else jhi + 1 + d // 2
     if w < 0 or w >= n or w < jhi - _HIDE_WINDOW or w > jlo + _HIDE_WINDOW:
@@ -395,6 +396,39 @@ def _surely_under(xa, ya, xb, yb, s, vx, vy, r, r2, mp):
     dbh = abs(xb - vx) + 2.0 * s
     return dah < r and dbh < r and vy + np.sqrt(r2 - dah * dah) > (ya + 2.0 * s) + mp and \
         vy + np.sqrt(r2 - dbh * dbh) > (yb + 2.0 * s) + mp
+
+
+#: Most vertices an arc's middle edges are tried against (:func:`_visible_pieces`).
+_ARC_CANDIDATES = 6
+
+
+@hot
+def _surely_by(xa, ya, xb, yb, s, hx, hy, r, r2, mp, cand, nc):
+    """Whether one of the vertices ``cand[:nc]`` surely hides the piece (:func:`_surely_under`)."""
+    for k in range(nc):
+        w = cand[k]
+        if _surely_under(xa, ya, xb, yb, s, hx[w], hy[w], r, r2, mp):
+            return True
+    return False
+
+
+@hot
+def _highest_within(hx, hy, cx, r, jlo, jhi, side):
+    """The highest of the nearest 16 vertices on a side of ``[jlo, jhi]`` within ``r`` of ``cx``.
+
+    ``side`` 0 left, 1 right; only vertices in the window of :func:`_hides`
+    for every foot in the range (:func:`_candidate`); -1 if none. Where an
+    arc is in a hollow of the noise, the top beside it whose circle hides it.
+    """
+    n = hx.shape[0]
+    w = -1
+    for k in range(16):
+        v = _candidate(2 * k + side, jlo, jhi, n)
+        if v < 0 or abs(hx[v] - cx) >= r:
+            break
+        if w < 0 or hy[v] > hy[w]:
+            w = v
+    return w
 
 
 @njit(cache=CACHE)
@@ -466,6 +500,7 @@ def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
     hid = False
     r2 = r * r
     kv = -1  # the arc's index among hx
+    cand = np.empty(_ARC_CANDIDATES, dtype=np.int64)
     for c in elems:
         i = c // 2
         if c % 2 == 1:
@@ -500,17 +535,21 @@ def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
         cy = gy[i]
         s = 1e-9 * (1.0 + abs(cx) + abs(cy) + rc)
         rough = prune and m <= _MAX_TURNS and abs(delta) < 1.0
-        w0 = w1 = w2 = w3 = -1
+        nc = 0
+        tops = False  # the highest vertices on each side are among the candidates
         if rough and m >= 2:
             # The feet of the middle edges are within h of the vertex (the
-            # rounding of their ends, over their length of at least r |delta|).
+            # rounding of their ends, over their length of at least r |delta|):
+            # the vertices in the window of every one of them are tried, the
+            # nearest two on each side first.
             h = 2.0 * s + 16.0 * s / abs(delta)
             jlo = _search_from(hx, cx - h, kv)
             jhi = _search_from(hx, cx + h, jlo)
-            w0 = _candidate(0, jlo, jhi, nh)
-            w1 = _candidate(1, jlo, jhi, nh)
-            w2 = _candidate(2, jlo, jhi, nh)
-            w3 = _candidate(3, jlo, jhi, nh)
+            for d in range(4):
+                w = _candidate(d, jlo, jhi, nh)
+                if w >= 0:
+                    cand[nc] = w
+                    nc += 1
         cd = np.cos(delta)
         sd = np.sin(delta)
         # The corner ahead, roughly (exact for the first): its unit vector.
@@ -535,11 +574,25 @@ def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
                 if 0 < q < m:
                     if _surely_gentle(x_prev, y_prev, x_next, y_next, s):
                         mp = _surely_margin(y_prev, y_next, s, tol)
-                        for w in (w0, w1, w2, w3):
-                            if w >= 0 and _surely_under(x_prev, y_prev, x_next, y_next, s,
-                                                        hx[w], hy[w], r, r2, mp):
-                                hid = True
-                                break
+                        hid = _surely_by(x_prev, y_prev, x_next, y_next, s, hx, hy, r, r2, mp,
+                                         cand, nc)
+                        if not hid and not tops:
+                            # Then the highest within reach on each side,
+                            # tried first from now on: they hide the arc's
+                            # edges beyond the neighbours' reach.
+                            tops = True
+                            n0 = nc
+                            for side in range(2):
+                                w = _highest_within(hx, hy, cx, r, jlo, jhi, side)
+                                for k in range(nc):
+                                    if cand[k] == w:
+                                        w = -1
+                                if w >= 0:
+                                    cand[nc] = cand[nc - n0]
+                                    cand[nc - n0] = w
+                                    nc += 1
+                            hid = _surely_by(x_prev, y_prev, x_next, y_next, s, hx, hy, r, r2,
+                                             mp, cand, nc - n0)
                 else:
                     hid, j = _surely_hidden(x_prev, y_prev, x_next, y_next, s, hx, hy, r,
                                             tol, j)
