@@ -30,6 +30,7 @@ from rockfall_design.engine.profile import (
     _HIDE_WINDOW,
     _centre_path,
     _hidden,
+    _near_path,
     _raw_pieces,
     _stable_order,
     _visible_pieces,
@@ -286,6 +287,40 @@ def test_the_stable_order_is_the_merge_sorts(n, shuffle, ties, seed):
             i, j = g.integers(0, n, 2)
             a[i], a[j] = a[j], a[i]
     np.testing.assert_array_equal(_stable_order(a), np.argsort(a, kind="stable"))
+
+
+def _dist2_to_pieces(x, y, px, py):
+    """Squared distances (m^2) of the points (x, y) to each piece of the polyline (px, py)."""
+    ax, ay, dx, dy = px[:-1], py[:-1], np.diff(px), np.diff(py)
+    x = np.asarray(x, dtype=float)[:, None]
+    y = np.asarray(y, dtype=float)[:, None]
+    t = np.clip(((x - ax) * dx + (y - ay) * dy) / (dx * dx + dy * dy), 0.0, 1.0)
+    return (ax + t * dx - x) ** 2 + (ay + t * dy - y) ** 2
+
+
+@SETTINGS
+@given(
+    n=st.sampled_from([8, 60, 400, 1500]),
+    noise=st.sampled_from([0.0, 0.003, 0.01, 0.3]),
+    seed=st.integers(0, 2**16),
+    r=st.sampled_from([0.01, 0.05, 0.5, 2.0]),
+    spread=st.floats(1.0, 3.0),
+)
+def test_the_elements_near_the_path_are_those_within_reach_of_some_piece(n, noise, seed, r,
+                                                                           spread):
+    # _near_path skips the pieces higher than a ground point by more than the
+    # reach: it must keep what the distances to every piece keep.
+    x, y = noisy_survey(n, noise, seed)
+    px, py, _ = survey_path(x, y, np.arange(n - 1), r, np.radians(5.0), element_codes(n))
+    reach_seg, reach_vtx = r * spread, r * spread * 1.001
+    keep = _near_path(x, y, px, py, reach_seg, reach_vtx)
+    to_pieces = _dist2_to_pieces(x, y, px, py)  # ground point i, path piece k
+    to_segments = _dist2_to_pieces(px, py, x, y)  # path point k, ground segment i
+    # A segment and a piece: the nearer of the four end-to-other distances.
+    seg = np.minimum.reduce([to_pieces[:-1], to_pieces[1:], to_segments[:-1].T,
+                             to_segments[1:].T])
+    np.testing.assert_array_equal(keep[::2], (to_pieces <= reach_vtx**2).any(axis=1))
+    np.testing.assert_array_equal(keep[1::2], (seg <= reach_seg**2).any(axis=1))
 
 
 def test_most_pieces_of_a_dense_noisy_survey_are_hidden():
