@@ -257,8 +257,8 @@ def _hides(xa, ya, xb, yb, ex, ey, r, tol, j0):
     ``_HIDE_WINDOW`` on each side of ``j``, the index where the foot of the
     piece's normal falls among them, nearest first: ``j - 1`` down to
     ``j - _HIDE_WINDOW`` and ``j + 1`` up to ``j + _HIDE_WINDOW`` (``j``
-    itself is not tried, as it never was: on an arc's edges it is the arc's
-    own vertex, whose circle never hides them). A side is left at the first
+    itself is not tried, as it never was: the hidden pieces, and so the
+    paths, stay what they were to the bit). A side is left at the first
     vertex that is ``r`` or more away from the piece's near end, in x: every
     vertex beyond is further (the differences are rounded monotonically), so
     none of them could hide it, and the answer is the one the whole window
