@@ -377,7 +377,7 @@ class Screening:
         run (the search's ``(candidate, option)``): the barrier the rocks meet
         first meets every rock of the table, so its outcomes, result and
         checks are those of every placement that begins with it, and are
-        judged once (:meth:`_first_judged`).
+        judged once (:meth:`_judge`, an LRU of :data:`FIRST_BARRIERS_KEPT`).
         """
         self.evaluations += 1
         return self._verdict(placed, table, cost, keys)
