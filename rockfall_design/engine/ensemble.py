@@ -30,7 +30,14 @@ from .problem import (
     barrier_table,
     rock_mass,
 )
-from .profile import _centre_path, element_codes, path_elements
+from .profile import (
+    _centre_path,
+    _centre_path_of,
+    element_codes,
+    every_piece_units,
+    no_units,
+    path_elements,
+)
 from .records import (
     N_REL_COLS,
     N_WORK,
@@ -100,6 +107,20 @@ def rock_path(ground, r, max_chord, elems):
     return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
 
 
+@njit(cache=CACHE, nogil=True)
+def _rock_path_of(ground, r, max_chord, units):
+    """:func:`rock_path` of every element, from ``units`` (``profile.every_piece_units``).
+
+    The same path, to the bit; what does not depend on the radius (the arcs'
+    trigonometry, most of a small section's path) made once per batch.
+    """
+    n = ground.x.shape[0]
+    px, py, pseg = _centre_path_of(ground.x, ground.y, np.arange(n - 1), r, max_chord,
+                                   n > SHARED_PATH_VERTICES, np.arange(2 * n - 1), False,
+                                   units)
+    return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
+
+
 # nogil: batches of rocks run on several Python threads at once; every rock
 # writes only its own rows, and draws from its own stream, so the results do
 # not depend on how the rocks are shared among threads.
@@ -149,13 +170,24 @@ def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, 
     work = np.zeros(N_WORK)  # each rock's scratch (RockOut.work): no allocation per rock
     empty_traj = np.empty((0, columns.N_TRAJ_COLS))
     ntr = out.traj.shape[0]
+    # Paths from every element (a section of few points): the radius-free part
+    # of their pieces once for the batch, when a rock first needs it (rocks of
+    # one size on a survey never do: they share path0).
+    units = no_units()
     # Serial on purpose: a prange version measured slower here (per-rock
     # allocations), and compiles for much longer.
     for i in range(n):
         r = rel[i, REL_R]
         if r != r_prev:
             # Rocks of one size share their centre path.
-            path = path0 if r == r0 else rock_path(ground, r, max_chord, elems)
+            if r == r0:
+                path = path0
+            elif elems.shape[0] == 0:
+                if units[0].shape[0] == 0:
+                    units = every_piece_units(ground.x, ground.y, max_chord)
+                path = _rock_path_of(ground, r, max_chord, units)
+            else:
+                path = rock_path(ground, r, max_chord, elems)
             r_prev = r
         if resume.mask[i]:
             rng[0] = resume.rngs[i]

@@ -63,7 +63,32 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord, elems):
     ``xa < xb``, in the order of the raw offset curve. Only the elements
     ``elems`` are made (sorted codes: ``2 i`` the arc at vertex ``i``,
     ``2 i + 1`` the offset of segment ``i``; ``np.arange(2 * len(gx) - 1)``
-    for all, see :func:`element_codes`).
+    for all, see :func:`element_codes`). :func:`_piece_units` and
+    :func:`_scaled_pieces`: what does not depend on ``r`` made once.
+    """
+    return _scaled_pieces(gx, gy, _piece_units(gx, gy, seg_id, max_chord, elems), r)
+
+
+@njit(cache=CACHE)
+def _piece_units(gx, gy, seg_id, max_chord, elems):
+    """What the pieces of :func:`_raw_pieces` are made of, whatever the radius.
+
+    Each end of a piece is a ground vertex plus a radius times a unit
+    vector: the segment's normal for an offset (radius ``r``), the normal at
+    an angle of the arc's polygon for a tangent point (``r``) or a corner
+    (``r / ch``, ``ch`` the cosine of half the polygon's turn). Those units,
+    angles and cosines cost the trigonometry of a path; a rock of a size of
+    its own then needs only :func:`_scaled_pieces` (its path is the same to
+    the bit: the same expressions of the same numbers). A level extension's
+    length does not change them (its direction is (1, 0) exactly).
+
+    Returns
+    -------
+    tuple
+        ``(va, uax, uay, ka, vb, ubx, uby, kb, ch, sid)`` per piece: the
+        vertex of each end, its unit vector, whether it is a corner (1) or not
+        (0), the cosine ``ch`` of the piece's arc (1 for an offset) and the
+        ground segment of its material.
     """
     nseg = gx.shape[0] - 1
     tx = np.empty(nseg)
@@ -85,10 +110,15 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord, elems):
             cap += 1
         elif 0 < j < nseg and tx[j - 1] * ty[j] - ty[j - 1] * tx[j] < -1e-12:
             cap += _arc_edges(tx[j - 1], ty[j - 1], tx[j], ty[j], max_chord)[2] + 1
-    xa = np.empty(cap)
-    ya = np.empty(cap)
-    xb = np.empty(cap)
-    yb = np.empty(cap)
+    va = np.empty(cap, dtype=np.int64)
+    vb = np.empty(cap, dtype=np.int64)
+    uax = np.empty(cap)
+    uay = np.empty(cap)
+    ubx = np.empty(cap)
+    uby = np.empty(cap)
+    ka = np.zeros(cap, dtype=np.int8)
+    kb = np.zeros(cap, dtype=np.int8)
+    ch = np.ones(cap)
     sid = np.empty(cap, dtype=np.int64)
     p = 0
     for c in elems:
@@ -103,36 +133,65 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord, elems):
             # downslope normal (phi2). The angle decreases, so x increases.
             phi1, phi2, m = _arc_edges(tx[i - 1], ty[i - 1], tx[i], ty[i], max_chord)
             delta = (phi2 - phi1) / m
-            rc = r / np.cos(0.5 * delta)
-            x_prev = gx[i] + r * np.cos(phi1)
-            y_prev = gy[i] + r * np.sin(phi1)
+            half = np.cos(0.5 * delta)
+            cx = np.cos(phi1)
+            cy = np.sin(phi1)
+            corner = 0
             for q in range(m + 1):
                 if q < m:
                     ang = phi1 + (q + 0.5) * delta
-                    x_next = gx[i] + rc * np.cos(ang)
-                    y_next = gy[i] + rc * np.sin(ang)
+                    nxq = np.cos(ang)
+                    nyq = np.sin(ang)
+                    nk = 1
                 else:
-                    x_next = gx[i] + r * np.cos(phi2)
-                    y_next = gy[i] + r * np.sin(phi2)
-                xa[p] = x_prev
-                ya[p] = y_prev
-                xb[p] = x_next
-                yb[p] = y_next
+                    nxq = np.cos(phi2)
+                    nyq = np.sin(phi2)
+                    nk = 0
+                va[p] = i
+                vb[p] = i
+                uax[p] = cx
+                uay[p] = cy
+                ka[p] = corner
+                ubx[p] = nxq
+                uby[p] = nyq
+                kb[p] = nk
+                ch[p] = half
                 # Edge q is tangent at phi1 + q*delta: the first half of the arc
                 # takes the material of the upslope segment.
                 sid[p] = seg_id[i - 1] if 2 * q < m else seg_id[i]
                 p += 1
-                x_prev = x_next
-                y_prev = y_next
+                cx = nxq
+                cy = nyq
+                corner = nk
             continue
-        nx = -ty[i]
-        ny = tx[i]
-        xa[p] = gx[i] + r * nx
-        ya[p] = gy[i] + r * ny
-        xb[p] = gx[i + 1] + r * nx
-        yb[p] = gy[i + 1] + r * ny
+        va[p] = i
+        vb[p] = i + 1
+        uax[p] = -ty[i]
+        uay[p] = tx[i]
+        ubx[p] = -ty[i]
+        uby[p] = tx[i]
         sid[p] = seg_id[i]
         p += 1
+    return va, uax, uay, ka, vb, ubx, uby, kb, ch, sid
+
+
+@njit(cache=CACHE)
+def _scaled_pieces(gx, gy, units, r):
+    """The pieces of :func:`_raw_pieces` for radius ``r`` (m) from :func:`_piece_units`."""
+    va, uax, uay, ka, vb, ubx, uby, kb, ch, sid = units
+    npc = va.shape[0]
+    xa = np.empty(npc)
+    ya = np.empty(npc)
+    xb = np.empty(npc)
+    yb = np.empty(npc)
+    for p in range(npc):
+        # A corner of an arc's polygon is at r / cos(delta / 2) from its vertex.
+        sa = r / ch[p] if ka[p] else r
+        sb = r / ch[p] if kb[p] else r
+        xa[p] = gx[va[p]] + sa * uax[p]
+        ya[p] = gy[va[p]] + sa * uay[p]
+        xb[p] = gx[vb[p]] + sb * ubx[p]
+        yb[p] = gy[vb[p]] + sb * uby[p]
     return xa, ya, xb, yb, sid
 
 
@@ -854,6 +913,17 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
     convex). Pieces hidden below a vertex's circle (:func:`_hidden`) are
     left out of the walk; every piece's ends stay breakpoints.
     """
+    return _centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, no_units())
+
+
+@njit(cache=CACHE)
+def _extended(gx, gy, r, elems):
+    """The profile extended level beyond both ends by ``2 r + 1`` (m), and its elements.
+
+    Returns ``ex, ey`` (n + 2 vertices), ``eseg`` (the ground segment of
+    each of its n + 1 segments) and ``ecodes``: the offsets of the two level
+    extensions and ``elems`` (a vertex and a segment further on: code + 2).
+    """
     n = gx.shape[0]
     ext = 2.0 * r + 1.0
     ex = np.empty(n + 2)
@@ -871,13 +941,43 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
     for i in range(n - 1):
         eseg[i + 1] = i
     eseg[n] = n - 2
-
-    # The extended profile's elements: the offsets of the two level
-    # extensions and ``elems`` (a vertex and a segment further on: code + 2).
     ecodes = np.empty(elems.shape[0] + 2, dtype=np.int64)
     ecodes[0] = 1
     ecodes[1:-1] = elems + 2
     ecodes[-1] = 2 * n + 1
+    return ex, ey, eseg, ecodes
+
+
+@njit(cache=CACHE)
+def no_units():
+    """Empty :func:`_piece_units`: :func:`_centre_path_of` makes them itself."""
+    e = np.empty(0, dtype=np.int64)
+    f = np.empty(0)
+    k = np.empty(0, dtype=np.int8)
+    return e, f, f, k, e, f, f, k, f, e
+
+
+@njit(cache=CACHE, nogil=True)
+def every_piece_units(gx, gy, max_chord):
+    """:func:`_piece_units` of the whole extended profile, for every radius at once.
+
+    A run's rocks of sizes of their own on a section of few points each make
+    their path from these (:func:`_centre_path_of`), made once per batch: the
+    trigonometry of the arcs is most of a small section's path.
+    """
+    ex, ey, eseg, ecodes = _extended(gx, gy, 1.0, np.arange(2 * gx.shape[0] - 1))
+    return _piece_units(ex, ey, eseg, max_chord, ecodes)
+
+
+@njit(cache=CACHE)
+def _centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, units):
+    """:func:`_centre_path`, from the pieces' ``units`` when given (not ``canon``).
+
+    ``units``: :func:`every_piece_units` of this ground and ``max_chord``
+    (``elems`` then every element), or :func:`no_units`.
+    """
+    n = gx.shape[0]
+    ex, ey, eseg, ecodes = _extended(gx, gy, r, elems)
     scale = max(abs(gx[0]), abs(gx[n - 1]), 1.0)
     tol = _EPS_X * scale
     if canon:
@@ -891,7 +991,9 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
         npc = xa.shape[0]
         hidden = np.zeros(npc, np.bool_)
     else:
-        xa, ya, xb, yb, sid = _raw_pieces(ex, ey, eseg, r, max_chord, ecodes)
+        if units[0].shape[0] == 0:
+            units = _piece_units(ex, ey, eseg, max_chord, ecodes)
+        xa, ya, xb, yb, sid = _scaled_pieces(ex, ey, units, r)
         npc = xa.shape[0]
         hidden = _hidden(xa, ya, xb, yb, ex, ey, r, tol) if prune else np.zeros(npc, np.bool_)
 
