@@ -272,7 +272,7 @@ def hot(fn: Callable[..., Any]) -> Any:
     return njit(cache=CACHE, _nrt=False)(fn)
 
 _notice_lock = threading.Lock()
-_checked: set[int] = set()
+_checked: set[tuple[int, tuple]] = set()
 
 
 def will_compile(dispatcher: Any, args: Sequence[Any]) -> bool:
@@ -296,15 +296,25 @@ def will_compile(dispatcher: Any, args: Sequence[Any]) -> bool:
 
 
 def compile_notice(dispatcher: Any, args: Sequence[Any]) -> Callable[[], None] | None:
-    """Say on stderr, once per function and process, that it is being compiled.
+    """Say on stderr, once per function, argument types and process, that it is being compiled.
+
+    Once per argument types, not per function: the optimiser runs the batch
+    kernel with other arguments than ``simulate`` (resumed rocks, speeds
+    recorded), and the first process after the engine changed compiled
+    that variant too, some 30 s, without a word.
 
     Returns a callable to call once the first call has returned (it reports
     how long compiling took), or None if nothing is compiled.
     """
+    try:
+        sig = tuple(dispatcher.typeof_pyval(a) for a in args)
+    except Exception:  # noqa: BLE001 - the notice must never break a run
+        sig = ()
     with _notice_lock:
-        if id(dispatcher) in _checked:
+        if (id(dispatcher), sig) in _checked:
             return None
-        _checked.add(id(dispatcher))
+        first = not any(k[0] == id(dispatcher) for k in _checked)
+        _checked.add((id(dispatcher), sig))
     if not will_compile(dispatcher, args):
         return None
     where = (
@@ -312,8 +322,9 @@ def compile_notice(dispatcher: Any, args: Sequence[Any]) -> Callable[[], None] |
         if CACHE
         else "no writable directory for numba's cache, so every run compiles it"
     )
+    what = "the trajectory engine" if first else "another variant of the trajectory engine"
     sys.stderr.write(
-        f"{PROG}: compiling the trajectory engine for this machine "
+        f"{PROG}: compiling {what} for this machine "
         f"({COMPILE_ESTIMATE}; {where})...\n"
     )
     sys.stderr.flush()

@@ -268,3 +268,30 @@ def test_simulate_of_a_bare_slope_loads_neither_pandas_nor_scipy(tmp_path):
                          cwd=tmp_path, timeout=300)
     assert run.returncode == 0, run.stderr
     assert run.stderr.rsplit("LOADED=", 1)[1] == ""
+
+
+def test_each_variant_compiled_is_announced_once(capsys):
+    # The optimiser runs the batch kernel with other argument types than
+    # simulate; the first process after the engine changed compiled that
+    # variant too (some 30 s) without a word: the notice was once per function.
+    from numba import njit
+
+    from rockfall_design.engine._jit import compile_notice
+
+    @njit(cache=False)
+    def twice(a):
+        return 2 * a
+
+    done = compile_notice(twice, (3,))
+    assert done is not None
+    twice(3)
+    done()
+    assert compile_notice(twice, (4,)) is None  # the same types: compiled, and said
+    other = compile_notice(twice, (3.5,))
+    assert other is not None
+    twice(3.5)
+    other()
+    err = capsys.readouterr().err
+    assert err.count("compiling the trajectory engine for this machine") == 1
+    assert err.count("compiling another variant of the trajectory engine") == 1
+    assert err.count("engine compiled in") == 2
