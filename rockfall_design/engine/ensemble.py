@@ -92,29 +92,30 @@ def rock_path(ground, r, max_chord, elems):
     arcs) that the path can lie on (``profile.path_elements``), of which
     ``profile.survey_path`` makes it.
     """
+    if elems.shape[0] == 0:
+        return _rock_path_of(ground, r, max_chord, no_units())
+    # survey_path (``elems``), by the code centre_path shares, which is then
+    # compiled into the kernel once.
     n = ground.x.shape[0]
-    # centre_path (every element) or survey_path (``elems``), by one call of
-    # their common code, which is then compiled into the kernel once.
-    every = elems.shape[0] == 0
-    # Leaving hidden pieces out of the sweep (profile._hidden) pays on a survey
-    # of many points; on a section of few it costs more than it saves, and
-    # there every rock of a size of its own makes its path (the optimiser's
-    # ground edits: about 8 us a rock, twice their engine time). The path is
-    # the same either way, to the bit.
-    prune = (not every) or n > SHARED_PATH_VERTICES
-    px, py, pseg = _centre_path(ground.x, ground.y, np.arange(n - 1), r, max_chord, prune,
-                                np.arange(2 * n - 1) if every else elems, not every)
+    px, py, pseg = _centre_path(ground.x, ground.y, np.arange(n - 1), r, max_chord, True,
+                                elems, True)
     return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
 
 
 @njit(cache=CACHE, nogil=True)
 def _rock_path_of(ground, r, max_chord, units):
-    """:func:`rock_path` of every element, from ``units`` (``profile.every_piece_units``).
+    """:func:`rock_path` from every element, from ``units`` (``profile.every_piece_units``).
 
     The same path, to the bit; what does not depend on the radius (the arcs'
-    trigonometry, most of a small section's path) made once per batch.
+    trigonometry, most of a small section's path) made once per batch, or
+    here if ``units`` is ``profile.no_units()``.
     """
     n = ground.x.shape[0]
+    # Leaving hidden pieces out of the sweep (profile._hidden) pays on a survey
+    # of many points; on a section of few it costs more than it saves, and
+    # there every rock of a size of its own makes its path (the optimiser's
+    # ground edits: about 8 us a rock, twice their engine time). The path is
+    # the same either way, to the bit.
     px, py, pseg = _centre_path_of(ground.x, ground.y, np.arange(n - 1), r, max_chord,
                                    n > SHARED_PATH_VERTICES, np.arange(2 * n - 1), False,
                                    units)

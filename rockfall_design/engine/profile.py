@@ -70,6 +70,39 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord, elems):
 
 
 @njit(cache=CACHE)
+def _unit_tangents(gx, gy, elems):
+    """Unit tangents (tx, ty) of the ground segments the elements ``elems`` need.
+
+    An arc needs the segments on both sides of its vertex, an offset its own
+    (sorted codes, :func:`element_codes`); each is computed once. The other
+    entries are left unset.
+    """
+    nseg = gx.shape[0] - 1
+    tx = np.empty(nseg)
+    ty = np.empty(nseg)
+    last = -1  # segments up to this one have their tangents (elems are sorted)
+    for c in elems:
+        for i in range(max(c // 2 - 1 + c % 2, last + 1), c // 2 + 1):
+            if 0 <= i < nseg:
+                dx = gx[i + 1] - gx[i]
+                dy = gy[i + 1] - gy[i]
+                ln = np.hypot(dx, dy)
+                tx[i] = dx / ln
+                ty[i] = dy / ln
+                last = i
+    return tx, ty
+
+
+@njit(cache=CACHE)
+def _convex(tx, ty, i):
+    """Whether the ground turns clockwise at inner vertex ``i``: it carries an arc.
+
+    Collinear neighbours (a cross product of round-off size) need none.
+    """
+    return 0 < i < tx.shape[0] and tx[i - 1] * ty[i] - ty[i - 1] * tx[i] < -1e-12
+
+
+@njit(cache=CACHE)
 def _piece_units(gx, gy, seg_id, max_chord, elems):
     """What the pieces of :func:`_raw_pieces` are made of, whatever the radius.
 
@@ -90,25 +123,14 @@ def _piece_units(gx, gy, seg_id, max_chord, elems):
         (0), the cosine ``ch`` of the piece's arc (1 for an offset) and the
         ground segment of its material.
     """
-    nseg = gx.shape[0] - 1
-    tx = np.empty(nseg)
-    ty = np.empty(nseg)
-    for c in elems:
-        # An arc needs the segments on both sides, an offset its own.
-        for i in range(c // 2 - 1 + c % 2, c // 2 + 1):
-            if 0 <= i < nseg:
-                dx = gx[i + 1] - gx[i]
-                dy = gy[i + 1] - gy[i]
-                ln = np.hypot(dx, dy)
-                tx[i] = dx / ln
-                ty[i] = dy / ln
-    # A convex vertex (the ground turns clockwise) carries an arc of m + 1 edges.
+    tx, ty = _unit_tangents(gx, gy, elems)
+    # A convex vertex carries an arc of m + 1 edges.
     cap = 0
     for c in elems:
         j = c // 2
         if c % 2:
             cap += 1
-        elif 0 < j < nseg and tx[j - 1] * ty[j] - ty[j - 1] * tx[j] < -1e-12:
+        elif _convex(tx, ty, j):
             cap += _arc_edges(tx[j - 1], ty[j - 1], tx[j], ty[j], max_chord)[2] + 1
     va = np.empty(cap, dtype=np.int64)
     vb = np.empty(cap, dtype=np.int64)
@@ -124,8 +146,7 @@ def _piece_units(gx, gy, seg_id, max_chord, elems):
     for c in elems:
         i = c // 2
         if c % 2 == 0:
-            # Collinear neighbours (|cross| ~ round-off) need no arc.
-            if not (0 < i < nseg and tx[i - 1] * ty[i] - ty[i - 1] * tx[i] < -1e-12):
+            if not _convex(tx, ty, i):
                 continue
             # Circumscribed polygon about the arc at vertex i: from the tangent
             # point of the upslope normal (angle phi1) through m corners at the
@@ -513,21 +534,10 @@ def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
     vertex itself (to round-off): the vertices tried for them are found once
     an arc.
     """
-    nseg = gx.shape[0] - 1
-    tx = np.empty(nseg)
-    ty = np.empty(nseg)
+    tx, ty = _unit_tangents(gx, gy, elems)
     nh = 0
-    last = -1  # segments up to this one have their tangents (elems are sorted)
     for c in elems:
         nh += 1 - c % 2
-        for i in range(max(c // 2 - 1 + c % 2, last + 1), c // 2 + 1):
-            if 0 <= i < nseg:
-                dx = gx[i + 1] - gx[i]
-                dy = gy[i + 1] - gy[i]
-                ln = np.hypot(dx, dy)
-                tx[i] = dx / ln
-                ty[i] = dy / ln
-                last = i
     # The vertices whose circles hide pieces: those whose arcs are given.
     hx = np.empty(nh)
     hy = np.empty(nh)
@@ -544,7 +554,7 @@ def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
             continue
         hx[nh] = gx[i]
         hy[nh] = gy[i]
-        if 0 < i < nseg and tx[i - 1] * ty[i] - ty[i - 1] * tx[i] < -1e-12:
+        if _convex(tx, ty, i):
             aphi1[nh], aphi2[nh], am[nh] = _arc_edges(tx[i - 1], ty[i - 1], tx[i], ty[i],
                                                       max_chord)
             cap += am[nh] + 1
