@@ -142,6 +142,10 @@ MAX_ENVELOPE_POINTS = 10_000
 MIN_CHORD_DEG = 0.5
 #: Most measures in one design of the optimiser.
 MAX_DESIGN_MEASURES = 10
+
+#: ``design.checker_power`` by default: the chance with which a checker's check of
+#: twice the deciding rocks confirms the chosen design (rockfall_design.judge.margin).
+DEFAULT_CHECKER_POWER = 0.9
 #: Most families (multisets of candidates) the optimiser searches: at about
 #: four seconds a family on 10,000 rocks, an hour's work.
 MAX_FAMILIES = 1_000
