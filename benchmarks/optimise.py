@@ -15,6 +15,10 @@ For each project it prints
   check seeds, at how many the check confirms the design with confidence (a
   design chosen at its limit is confirmed by a checker's own seed only as
   often as the check's power at that many rocks allows);
+* with ``--seeds``: each project at each seed, its choice, the spread of the
+  chosen cost and whether the dearer runs name the cheapest as marginal, and
+  every seed's choice checked at the check seeds with twice its deciding
+  rocks (in process, as ``check design.yaml`` evaluates it);
 * a reference the optimiser must come within 1 % of: the cheapest single
   fence or wall on a 2 m grid of stations, with every catalogue product and
   height, that ``check`` admits with confidence (``holds_with_confidence``)
@@ -119,6 +123,25 @@ def reference(project, registry, rocks: int) -> tuple[float, str, int]:
     return math.inf, "none", screened
 
 
+def _check_in_process(project, registry, best, seeds: list[int]) -> list[bool]:
+    """The chosen design checked as ``check design.yaml --rocks 2n --seed s`` does, in process.
+
+    design.yaml is the project with the chosen measures and the design's residual
+    target as the protected zone's allowance; ``check`` evaluates it exactly at
+    the project's confidence: the same evaluation here, without a process per check.
+    """
+    spec = resolve_design(project, registry)
+    allowed = spec.residual_fraction
+    if allowed is None:
+        allowed = (spec.residual_count or 0) / max(project.rocks.count, 1)
+    proj = project.model_copy(update={"protect": project.protect.model_copy(
+        update={"allowed_fraction": allowed})})
+    concept = build_concept(proj, registry)
+    return [bool(evaluate_design(proj, registry, best.measures, concept,
+                                 rocks=2 * best.decision_rocks, seed=s).holds_with_confidence)
+            for s in seeds]
+
+
 def _seeds(args: argparse.Namespace) -> None:
     """Each project at each seed: the choice, the spread, and the marginal cheaper designs."""
     registry = load_registry()
@@ -132,31 +155,48 @@ def _seeds(args: argparse.Namespace) -> None:
             continue
         print(f"\n{path.name}")
         costs, named = [], []
+        checked = confirmed = 0
         for seed in args.seeds:
             t0 = time.perf_counter()
             res = optimise(project, registry, seed=seed)
             wall = time.perf_counter() - t0
             b = res.best
+            if b is not None:
+                held = _check_in_process(project, registry, b, args.check_seeds)
+                checked += len(held)
+                confirmed += sum(held)
             cost = b.cost if b is not None else math.inf
             costs.append(cost)
-            marginal = sum(1 for m in res.marginal if m.get("decided", True))
-            undecided = len(res.marginal) - marginal
+            short = sum(1 for m in res.marginal if m.get("short_of_margin"))
+            marginal = sum(1 for m in res.marginal if m.get("decided", True)) - short
+            undecided = len(res.marginal) - marginal - short
             named.append({round(m["cost"], 2) for m in res.marginal})
             per = res.rocks_simulated / b.decision_rocks if b is not None else float("nan")
             print(f"  seed {seed}: {cost:>12,.0f} {b.name if b else 'none':30s} {wall:5.1f} s, "
                   f"{res.evaluations:,} screened, {res.exact_evaluations} exact, {marginal} "
-                  f"marginal, {undecided} undecided listed, {res.rocks_simulated:,} rocks "
+                  f"marginal, {short} short of the margin, {undecided} undecided listed, "
+                  f"{res.rocks_simulated:,} rocks "
                   f"simulated = {per:.1f} per "
                   f"deciding rock ({b.decision_rocks if b else 0:,})")
+            if b is not None:
+                print(f"      checked with {2 * b.decision_rocks:,} rocks at seeds "
+                      + ", ".join(f"{cs}: {'holds' if h else 'NOT with confidence'}"
+                                  for cs, h in zip(args.check_seeds, held, strict=True)))
             if res.bare_slope and res.bare_slope["holds"]:
                 print(f"      the bare slope already meets the residual target "
                       f"({res.bare_slope['reaching']} of {res.bare_slope['rocks']:,} reach)")
             for m in res.marginal[:8]:
-                kind = "marginal" if m.get("decided", True) else "not decided"
+                kind = ("short of the margin" if m.get("short_of_margin") else
+                        "marginal" if m.get("decided", True) else "not decided")
                 print(f"      {kind}, cheaper: {m['cost']:,.0f} {'; '.join(m['labels'])} "
                       f"(about {m['rocks_to_decide'] or '?'} rocks would decide it)")
             if len(res.marginal) > 8:
                 print(f"      ... {len(res.marginal) - 8} more listed")
+        if checked:
+            lo, hi = _rate_interval(confirmed, checked)
+            print(f"  every seed's choice checked at seeds {args.check_seeds}: holds with "
+                  f"confidence in {confirmed} of {checked} checks ({100 * lo:.0f} to "
+                  f"{100 * hi:.0f} % at 95 %)")
         finite = [c for c in costs if math.isfinite(c)]
         if finite:
             low = min(finite)

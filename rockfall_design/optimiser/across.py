@@ -60,7 +60,7 @@ from .alternatives import (
     listed_entry,
     measure_dicts,
 )
-from .decide import decide, look_concept, verify_fresh
+from .decide import checker_margin, decide, look_concept, verify_fresh
 from .driver import FamilyTask, search_families
 from .screening import Screening
 from .search import MAX_EXACT_PER_LEVEL, _barrier_designs, _BarrierSlots, _edit_designs, _Tally
@@ -310,7 +310,8 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
     for j in passing:
         sc = scs[j]
         dec = decide(sc.project, registry, measures, sc.concept,
-                     rocks=sc.screen.n, seed=sc.run.seed, looks=sc.looks)
+                     rocks=sc.screen.n, seed=sc.run.seed, looks=sc.looks,
+                     margin=checker_margin(sc.spec, sc.looks.confidence))
         simulated += dec.simulated
         exact += dec.exact
         decisions[j] = dec
@@ -345,7 +346,8 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
         sc = scs[j]
         fresh_n = max(2 * decisions[j].rocks, int(sc.spec.fresh_rocks or 0))
         check = verify_fresh(sc.project, registry, measures, sc.concept, rocks=fresh_n,
-                             seed=sc.fresh_seed, max_rocks=sc.looks.sizes[-1])
+                             seed=sc.fresh_seed, max_rocks=sc.looks.sizes[-1],
+                             margin=checker_margin(sc.spec, sc.looks.confidence))
         simulated += check.simulated
         exact += check.exact
         held = check.verdict is Verdict.ADMITTED

@@ -194,13 +194,20 @@ def measure_dicts(measures: Sequence[ProtectiveMeasure]) -> list[dict[str, Any]]
 
 def listed_entry(family: str, measures: Sequence[ProtectiveMeasure], labels: Sequence[str],
                  cost: float, *, rocks: int | None, values: dict[str, Any] | None,
-                 reason: str, decided: bool) -> dict[str, Any]:
+                 reason: str, decided: bool, margin_undecided: bool = False,
+                 short_of_margin: bool = False) -> dict[str, Any]:
     """A cheaper design listed as marginal or undecided (``marginal`` in --json).
 
     ``values`` are the look's point values and bounds (:func:`look_values`), None
-    for a design across scenarios; ``rocks_to_decide`` follows from them.
+    for a design across scenarios; ``rocks_to_decide`` follows from them (None
+    when they hold: ``margin_undecided``, the checker's margin is what is open).
+    ``short_of_margin``: it holds with its bounds, but falls short of the
+    checker's margin with confidence (listed so that the engineer knows of it).
     """
     return {"name": family, "family": family, "measures": measure_dicts(measures),
             "labels": list(labels), "cost": round(float(cost), 2), "rocks": rocks,
-            "rocks_to_decide": None if values is None else rocks_to_decide(values),
-            "values": values, "reason": reason, "decided": decided}
+            "rocks_to_decide": None if values is None or margin_undecided or short_of_margin
+            else rocks_to_decide(values),
+            "values": values, "reason": reason, "decided": decided,
+            "margin_undecided": bool(margin_undecided),
+            "short_of_margin": bool(short_of_margin)}

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
 from ..judge.evaluation import Evaluation, evaluate_design
+from ..judge.margin import CheckerMargin
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins import guard
 from ..plugins.measure import Barrier
@@ -36,10 +37,21 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.concept import Check, SafetyConcept
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
+    from .design_spec import DesignSpec
 
 from .screening import Screening, ScreenResult
 
-__all__ = ["Decider", "Decision", "decide", "look_concept", "rocks_to_decide", "verify_fresh"]
+__all__ = [
+    "SHORT",
+    "Decider",
+    "Decision",
+    "checker_margin",
+    "decide",
+    "judge_look",
+    "look_concept",
+    "rocks_to_decide",
+    "verify_fresh",
+]
 
 
 @dataclass
@@ -66,6 +78,12 @@ class Decision:
         Point values and bounds of the deciding look (see :func:`look_values`).
     schedule : LookSchedule or None
         The looks planned (:func:`decide` sets it).
+    short_of_margin : bool
+        REJECTED because a checker's check would confirm it too seldom
+        (:mod:`rockfall_design.judge.margin`), not because it fails.
+    margin_undecided : bool
+        MARGINAL although it holds with the last look's bounds: the checker's
+        margin is what that many rocks could not decide.
     """
 
     verdict: Verdict
@@ -77,10 +95,22 @@ class Decision:
     simulated: int = 0
     values: dict[str, Any] = field(default_factory=dict)
     schedule: LookSchedule | None = None
+    short_of_margin: bool = False
+    margin_undecided: bool = False
 
     @property
     def admitted(self) -> bool:
         return self.verdict is Verdict.ADMITTED
+
+
+#: The tally's words for a design rejected for the checker's margin (not for failing).
+SHORT = "short of the checker's margin with confidence"
+
+
+def checker_margin(spec: DesignSpec, confidence: float) -> CheckerMargin | None:
+    """The project's checker's margin (``design.checker_power``; None: turned off)."""
+    power = spec.checker_power
+    return None if power is None else CheckerMargin(float(confidence), float(power))
 
 
 def look_concept(registry: Registry, concept: SafetyConcept, confidence: float) -> SafetyConcept:
@@ -95,6 +125,78 @@ def _verdict_of(ev: Evaluation) -> Verdict:
     if ev.fails_with_confidence:
         return Verdict.REJECTED
     return Verdict.UNDECIDED
+
+
+def _checks_at(ev: Evaluation, registry: Registry, confidence: float) -> list[list[Check]]:
+    """The look's checks again, with their bounds at ``confidence`` (no rock runs)."""
+    concept = look_concept(registry, ev.concept, confidence)
+    return [guard(registry).concept(concept).checks(res) for res in ev.judgement.results]
+
+
+def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
+               checker_rocks: int) -> tuple[Verdict, list[str]]:
+    """A look's verdict, with the checker's margin (:mod:`rockfall_design.judge.margin`).
+
+    Parameters
+    ----------
+    ev : Evaluation
+        The look's exact run, judged at the look's confidence.
+    registry : Registry
+    margin : CheckerMargin or None
+        None: admitted when it holds with the look's bounds, as such.
+    checker_rocks : int
+        Rocks of the checker's check the margin is for.
+
+    Returns
+    -------
+    verdict, notes : Verdict, list of str
+        REJECTED with ``notes`` empty: fails with confidence; with ``notes``
+        (one line): short of the margin with confidence, what and why.
+        UNDECIDED with ``notes`` (one line): it holds with the look's bounds,
+        but the margin is neither shown nor missed.
+    """
+    verdict = _verdict_of(ev)
+    if margin is None or verdict is Verdict.REJECTED:
+        return verdict, []
+    n = ev.study.result.n
+    prot = ev.protect
+    m = margin.at_look(ev.confidence, n, checker_rocks,
+                       None if prot is None else float(prot["allowed_fraction"]))
+    labels = [p.label for p in ev.placed]
+    admit = _checks_at(ev, registry, m.admit)
+    holds = all(c.holds_with_confidence for cs in admit for c in cs)
+    if prot is not None and m.residual_rate is not None:
+        holds = holds and fraction_upper_bound(
+            int(prot["reaching"]), n, ev.confidence) <= m.residual_rate
+    if holds:
+        return Verdict.ADMITTED, []
+    power = f"{100 * margin.power:g} %"
+    why = (f"a check of {checker_rocks:,} rocks at another seed would confirm it with "
+           f"{100 * margin.confidence:g} % confidence less than {power} of the time")
+    short = []
+    for lab, cs in zip(labels, _checks_at(ev, registry, m.short), strict=True):
+        for c in cs:
+            if c.ok_with_confidence is None:
+                missed = not c.ok
+            elif m.short_pessimistic:
+                # its pessimistic bound at `short` misses: not merely too few rocks
+                missed = c.bound is not None and not c.ok_with_confidence
+            else:
+                missed = c.rejects
+            if missed:
+                value = "-" if c.value is None else f"{c.value:.2f}"
+                short.append(f"{lab}: {c.name} {value}, target {c.target:.2f}")
+    if (prot is not None and m.residual_rate is not None
+            and fraction_lower_bound(int(prot["reaching"]), n, ev.confidence)
+            > m.residual_rate):
+        short.append(f"{int(prot['reaching']):,} of {n:,} rocks reach the protected zone")
+    if short:
+        return Verdict.REJECTED, [f"{'; '.join(short)} ({why})"]
+    if verdict is Verdict.ADMITTED:
+        return Verdict.UNDECIDED, [
+            f"it holds with {100 * ev.confidence:.4g} % confidence on {n:,} rocks, but neither "
+            f"shows nor misses the checker's margin ({why.replace('less than', 'at least')})"]
+    return Verdict.UNDECIDED, []
 
 
 def _screen_verdict(sr: ScreenResult) -> Verdict:
@@ -168,8 +270,14 @@ def rocks_to_decide(values: dict[str, Any]) -> int | None:
     return int(math.ceil(need)) if need > n else None
 
 
-def _reason(verdict: Verdict, values: dict[str, Any], failures: Sequence[str]) -> str:
+def _reason(verdict: Verdict, values: dict[str, Any], failures: Sequence[str],
+            short: Sequence[str] = ()) -> str:
     conf = f"{100 * values['confidence']:.4g} %"
+    if verdict is Verdict.REJECTED and short:
+        return (f"short of the checker's margin with {conf} confidence on "
+                f"{values['rocks']:,} rocks: " + "; ".join(short))
+    if short:  # marginal: holds, the margin undecided
+        return "marginal: " + "; ".join(short) + "; more rocks would decide it (--max-rocks)"
     if verdict is Verdict.REJECTED:
         return f"fails with {conf} confidence on {values['rocks']:,} rocks: " + "; ".join(
             failures)
@@ -217,6 +325,8 @@ def decide(
     seed: int,
     max_rocks: int | None = None,
     looks: LookSchedule | None = None,
+    margin: CheckerMargin | None = None,
+    checker_rocks: int | None = None,
 ) -> Decision:
     """Decide a design sequentially by exact runs (see the module docs).
 
@@ -233,6 +343,11 @@ def decide(
     looks : LookSchedule, optional
         The schedule (default :func:`~rockfall_design.judge.sequential.plan_looks`
         from ``rocks`` to ``max_rocks`` at the concept's confidence).
+    margin : CheckerMargin, optional
+        Admit only with the checker's margin (:func:`judge_look`).
+    checker_rocks : int, optional
+        Rocks of the checker's check the margin is for (default: twice
+        each look's rocks, the check design.yaml asks for if that look decides).
     """
     confidence = float(concept.params.confidence)
     if looks is None:
@@ -246,14 +361,16 @@ def decide(
         done = 0 if ev is None else ev.study.n
         ev = evaluate_design(project, registry, measures, lc, rocks=n, seed=seed, after=ev)
         simulated += n - done
-        verdict = _verdict_of(ev)
+        verdict, short = judge_look(ev, registry, margin, checker_rocks or 2 * n)
         if verdict is Verdict.UNDECIDED and j + 1 < len(looks):
             continue
         values, fails = _ev_values(ev, allowed)
         if verdict is Verdict.UNDECIDED:
             verdict = Verdict.MARGINAL
-        reason = "" if verdict is Verdict.ADMITTED else _reason(verdict, values, fails)
-        return Decision(verdict, n, ev, reason, j + 1, j + 1, simulated, values, looks)
+        reason = "" if verdict is Verdict.ADMITTED else _reason(verdict, values, fails, short)
+        return Decision(verdict, n, ev, reason, j + 1, j + 1, simulated, values, looks,
+                        verdict is Verdict.REJECTED and bool(short),
+                        verdict is Verdict.MARGINAL and bool(short))
     raise AssertionError("a schedule has at least one look")  # pragma: no cover
 
 
@@ -266,6 +383,7 @@ def verify_fresh(
     rocks: int,
     seed: int,
     max_rocks: int,
+    margin: CheckerMargin | None = None,
 ) -> Decision:
     """Check an admitted design on fresh rocks: held, failed or marginal there too.
 
@@ -291,6 +409,8 @@ def verify_fresh(
         The fresh seed.
     max_rocks : int
         The last look (``design.max_rocks``; at least ``rocks``).
+    margin : CheckerMargin, optional
+        The checker's margin, for a check of ``rocks`` (the first look's).
 
     Returns
     -------
@@ -299,7 +419,8 @@ def verify_fresh(
         confidence on them) or MARGINAL (neither, up to the last look).
     """
     return decide(project, registry, measures, concept, rocks=rocks, seed=seed,
-                  max_rocks=max(int(max_rocks), int(rocks)))
+                  max_rocks=max(int(max_rocks), int(rocks)), margin=margin,
+                  checker_rocks=int(rocks))
 
 
 class Decider:
@@ -312,11 +433,16 @@ class Decider:
         concept (:func:`look_concept`).
     looks : LookSchedule
         ``looks.sizes[0]`` is ``screen.n``.
+    margin : CheckerMargin, optional
+        Admit only with the checker's margin for a check of twice the
+        deciding look's rocks (:func:`judge_look`).
     """
 
-    def __init__(self, screen: Screening, looks: LookSchedule) -> None:
+    def __init__(self, screen: Screening, looks: LookSchedule,
+                 margin: CheckerMargin | None = None) -> None:
         self.screen = screen
         self.looks = looks
+        self.margin = margin
         self._screens: dict[int, Screening] = {0: screen}
         self.simulated = 0  # rocks of the look screenings (each counted when run)
         self.screen_runs = 0
@@ -356,6 +482,7 @@ class Decider:
         last: Evaluation | None = None  # the latest exact look, which the next goes on from
         verdict = _screen_verdict(sr)
         exact = simulated = 0
+        short: list[str] = []
         by_exact = first.approximate  # the screening cannot decide what it approximates
         while True:
             if ev is None and (verdict is Verdict.ADMITTED or by_exact):
@@ -364,11 +491,11 @@ class Decider:
                 exact += 1
                 simulated += sizes[j] - (0 if last is None else last.study.n)
                 last = ev
-                verdict = _verdict_of(ev)
+                verdict, short = judge_look(ev, s0.registry, self.margin, 2 * sizes[j])
             if verdict is not Verdict.UNDECIDED or j + 1 == len(sizes):
                 break
             j += 1
-            ev = None
+            ev, short = None, []
             if barriers_only and not by_exact:
                 sc = self._screening(j, stations)
                 sr = sc.screen(measures)
@@ -384,5 +511,7 @@ class Decider:
             values, fails = look_values(*args), _rejections(*args)
         if verdict is Verdict.UNDECIDED:
             verdict = Verdict.MARGINAL
-        reason = "" if verdict is Verdict.ADMITTED else _reason(verdict, values, fails)
-        return Decision(verdict, sizes[j], ev, reason, j + 1, exact, simulated, values)
+        reason = "" if verdict is Verdict.ADMITTED else _reason(verdict, values, fails, short)
+        return Decision(verdict, sizes[j], ev, reason, j + 1, exact, simulated, values,
+                        short_of_margin=verdict is Verdict.REJECTED and bool(short),
+                        margin_undecided=verdict is Verdict.MARGINAL and bool(short))

@@ -53,6 +53,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from ..judge.margin import DEFAULT_CHECKER_POWER
 from ..judge.placing import unknown_measure_type
 from ..plugins.cost_model import CostModel
 from ..plugins.declared import DeclaredDesign, declared_design
@@ -100,6 +101,10 @@ class DesignSpec:
         1000003). The re-check never has fewer than twice the deciding rocks.
     max_rocks : int
         Most rocks a design near a limit is decided with.
+    checker_power : float or None
+        The chance with which a checker's check of twice the deciding rocks,
+        at a seed of their own, confirms the chosen design with confidence
+        (:mod:`rockfall_design.judge.margin`); None: no such margin.
     length_m : float
         Length of slope to protect (m).
     candidates : tuple of CandidateSpec
@@ -120,6 +125,7 @@ class DesignSpec:
     cost_model: CostModel
     products: dict[str, dict[str, Product]]
     max_rocks: int = 50_000
+    checker_power: float | None = DEFAULT_CHECKER_POWER
 
 
 def resolve_design(project: Project, registry: Registry) -> DesignSpec:
@@ -185,6 +191,7 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
         cost_model=cost_model,
         products=catalogue,
         max_rocks=design.max_rocks,
+        checker_power=design.checker_power,
     )
 
 

@@ -41,7 +41,15 @@ from .alternatives import (
     fresh_failures,
     listed_entry,
 )
-from .decide import Decider, Decision, look_concept, look_values, verify_fresh
+from .decide import (
+    SHORT,
+    Decider,
+    Decision,
+    checker_margin,
+    look_concept,
+    look_values,
+    verify_fresh,
+)
 from .driver import FamilyTask, search_families
 from .screening import Screening, ScreenResult
 from .search import (
@@ -104,22 +112,26 @@ def _proof(alt: Alternative, tally: _Tally, looks: LookSchedule, currency: str) 
     space = ("designs the search over its ground edits evaluated"
              if tally.searched else "designs in the space")
     conf = f"{100 * looks.confidence:g} %"
-    k = sum(1 for m in alt.marginal if m.get("decided", True))
+    k = sum(1 for m in alt.marginal if m.get("decided", True) and not m.get("short_of_margin"))
     marginal = ""
     if k or alt.undecided:
         parts = [f"is marginal ({k})"] if k else []
         if alt.undecided:
             parts.append(f"was not decided ({alt.undecided:,})")
         marginal = ", or " + " or ".join(parts) + " (the cheapest that may hold listed)"
+    short = (", or falls short of the checker's margin,"
+             if any(k.startswith(SHORT) and v for k, v in tally.reasons.items()) else "")
     return (f"cheapest admitted of {tally.designs:,} {space} ({alt.exact_evaluations} "
-            f"evaluated exactly); every cheaper design fails with {conf} confidence "
+            f"evaluated exactly); every cheaper design fails{short} with {conf} confidence "
             f"(looks of {looks.sizes[0]:,} to {looks.sizes[-1]:,} rocks){marginal}: "
             f"{top or 'none cheaper'}{capped}")
 
 
 def _marginal_entry(alt_name: str, d: Any, dec: Decision) -> dict[str, Any]:
     return listed_entry(alt_name, d.measures, d.result.labels, d.cost, rocks=dec.rocks,
-                        values=dec.values, reason=dec.reason, decided=True)
+                        values=dec.values, reason=dec.reason, decided=True,
+                        margin_undecided=dec.margin_undecided,
+                        short_of_margin=dec.short_of_margin)
 
 
 def _undecided_entry(alt_name: str, d: Any, why: str, screen: Screening) -> dict[str, Any]:
@@ -138,6 +150,11 @@ def _undecided_entry(alt_name: str, d: Any, why: str, screen: Screening) -> dict
                         values=values, decided=False,
                         reason=(f"not decided ({why}); on the {screen.n:,} search rocks it "
                                 f"neither holds nor fails with {conf} confidence"))
+
+
+def _listed_at(alt: Alternative, cost: float) -> bool:
+    """Is a design of this cost already listed beside the family's design?"""
+    return any(round(m["cost"], 2) == round(float(cost), 2) for m in alt.marginal)
 
 
 def _keep_cheapest(alt: Alternative, entry: dict[str, Any]) -> None:
@@ -302,8 +319,14 @@ class _SettleState:
             self.unjudged_failures += unjudged
             return False
         if not dec.admitted:
-            tally.reasons["fails with confidence"] += 1
+            tally.reasons[SHORT if dec.short_of_margin else "fails with confidence"] += 1
             alt.rejected += 1
+            if dec.short_of_margin and not _listed_at(alt, d.cost):
+                # It holds, but a checker's check would confirm it too seldom: a
+                # design the engineer may still want to know of (and another seed
+                # may admit), so it is listed, marked as such; once per cost (the
+                # other placements of a catalogue combination say no more).
+                _keep_cheapest(alt, _marginal_entry(alt.name, d, dec))
             if not alt.holds_on_fresh_rocks:
                 alt.reason = dec.reason
             self.unjudged_failures += unjudged
@@ -326,14 +349,21 @@ class _SettleState:
         fresh_n = max(2 * dec.rocks, int(self.spec.fresh_rocks or 0))
         check = verify_fresh(screen.project, screen.registry, d.measures, self.concept,
                              rocks=fresh_n, seed=self.fresh_seed,
-                             max_rocks=self.decider.looks.sizes[-1])
+                             max_rocks=self.decider.looks.sizes[-1], margin=self.decider.margin)
         alt.exact_evaluations += check.exact
         self.simulated += check.simulated
         fresh = check.evaluation
         if check.verdict is Verdict.REJECTED:
             # Not chosen: it fitted the noise of the search rocks. Decide the next one.
-            tally.reasons["fails with confidence on fresh rocks"] += 1
+            tally.reasons[(SHORT if check.short_of_margin else "fails with confidence")
+                          + " on fresh rocks"] += 1
             alt.rejected += 1
+            if check.short_of_margin and not _listed_at(alt, d.cost):
+                _keep_cheapest(alt, listed_entry(
+                    alt.name, d.measures, d.result.labels, d.cost, rocks=check.rocks,
+                    values=check.values, decided=True, short_of_margin=True,
+                    reason=(f"admitted on {dec.rocks:,} search rocks; on fresh rocks (seed "
+                            f"{self.fresh_seed}) {check.reason}")))
             if not alt.holds_on_fresh_rocks:
                 alt.reason = ("the cheapest admitted design fails on fresh rocks: "
                               + check.reason)
@@ -344,7 +374,7 @@ class _SettleState:
             tally.reasons["marginal on fresh rocks"] += 1
             _keep_cheapest(alt, listed_entry(
                 alt.name, d.measures, d.result.labels, d.cost, rocks=check.rocks,
-                values=check.values, decided=True,
+                values=check.values, decided=True, margin_undecided=check.margin_undecided,
                 reason=(f"admitted on {dec.rocks:,} search rocks; on fresh rocks (seed "
                         f"{self.fresh_seed}) {check.reason}")))
             if not alt.holds_on_fresh_rocks:
@@ -361,8 +391,10 @@ class _SettleState:
         alt.holds_on_fresh_rocks = True
         alt.fresh_rocks, alt.fresh_seed = fresh_n, self.fresh_seed
         if check.schedule is not None:
+            margin = self.decider.margin
             alt.fresh_looks = {"rocks": list(check.schedule.sizes),
-                               "look_confidence": check.schedule.look_confidence}
+                               "look_confidence": check.schedule.look_confidence,
+                               "checker_power": None if margin is None else margin.power}
         alt.fresh_residual = fresh.protect["reaching"] if fresh.protect else None
         alt.fresh_failures = fresh.failures()
         alt.feasible = True  # admitted with confidence on the deciding rocks
@@ -431,7 +463,7 @@ def optimise(
     n = looks.sizes[0]
     lc = look_concept(registry, concept, looks.look_confidence)
     screen = Screening(project, registry, spec, lc, rocks=n, seed=s)
-    decider = Decider(screen, looks)
+    decider = Decider(screen, looks, checker_margin(spec, confidence))
     slots = _BarrierSlots(screen)
     fams = families(spec.candidates, spec.max_measures)
     currency = getattr(spec.cost_model.params, "currency", "")

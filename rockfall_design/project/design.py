@@ -13,7 +13,13 @@ from pydantic import BeforeValidator, Field, PrivateAttr, WithJsonSchema, model_
 from .fields import Fraction, Integer, Positive, String, _as_number, _check_typed_item, _Model, _raw
 from .locator import Locator
 from .messages import _fail, describe, did_you_mean, fmt
-from .schema import MAX_COORDINATE_M, MAX_DESIGN_MEASURES, MAX_FAMILIES, MAX_ROCKS
+from .schema import (
+    DEFAULT_CHECKER_POWER,
+    MAX_COORDINATE_M,
+    MAX_DESIGN_MEASURES,
+    MAX_FAMILIES,
+    MAX_ROCKS,
+)
 
 # --------------------------------------------------------------------------------------
 # The design section (least-cost optimiser): shapes checked here, plugins resolve it later
@@ -415,6 +421,13 @@ class Design(_Model):
     )
     fresh_seed: Annotated[Integer, Field(ge=0)] | None = Field(
         None, description="Seed of the re-check; default: the run's seed + 1000003."
+    )
+    checker_power: Annotated[float, Field(ge=0.5, le=0.999)] | None = Field(
+        DEFAULT_CHECKER_POWER,
+        description="Chance with which a checker's check of twice the deciding rocks, at a "
+        "seed of their own, confirms the chosen design with confidence (-): a design is "
+        "admitted only with that margin. null: admitted when it holds with its bounds.",
+        json_schema_extra={"unit": "-"},
     )
     site: Site = Field(description="The site: length of slope to protect.")
     products: Annotated[Any, BeforeValidator(_parse_products)] = Field(

@@ -362,10 +362,18 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
         parts.append(Text(f"No admissible design: {result.reason}", style="bold red"))
     marginal = getattr(result, "marginal", None) or []
     for m in marginal[:_MARGINAL_SHOWN]:
-        head = "Marginal, cheaper" if m.get("decided", True) else "Not decided, cheaper"
+        head = ("Short of the checker's margin, cheaper" if m.get("short_of_margin") else
+                "Marginal, cheaper" if m.get("decided", True) else "Not decided, cheaper")
         parts.append(Text(f"{head}: {m['name']} {m['cost']:,.0f} {cur}: "
                           f"{'; '.join(m['labels'])}: {_marginal_values(m)}; "
-                          + (f"about {m['rocks_to_decide']:,} rocks would decide it "
+                          + ("it holds with these bounds, but a checker's check would "
+                             "confirm it less often than design.checker_power asks, with "
+                             "confidence" if m.get("short_of_margin") else
+                             "it holds with these bounds, but whether a checker's check "
+                             "would confirm it often enough (design.checker_power) is open; "
+                             "more rocks (--max-rocks) may decide it"
+                             if m.get("margin_undecided") else
+                             f"about {m['rocks_to_decide']:,} rocks would decide it "
                              "(--max-rocks)" if m["rocks_to_decide"] else
                              "its point value sits on the target" if m["values"] else
                              "more rocks (--max-rocks) may decide it"), style="yellow"))
@@ -426,6 +434,17 @@ def alternatives_table(result: Any) -> Any:
     return alternatives_frame(result.summary())
 
 
+def _margin_line(best: Any, ev: Any) -> str:
+    """design.yaml's line on the checker's margin the design was admitted with, if any."""
+    power = (getattr(best, "fresh_looks", None) or {}).get("checker_power")
+    if power is None:
+        return ""
+    return (f"# margin: admitted only as a design that a check of {2 * ev.study.result.n} rocks "
+            f"at a seed of your own confirms with {100 * ev.confidence:g} % confidence at "
+            f"least {100 * power:g} % of the time\n#   (design.checker_power; "
+            "docs/sequential-decisions.md)\n")
+
+
 def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
                 looks: Any = None) -> str:
     """The project with the chosen measures, as YAML that ``check`` accepts.
@@ -464,7 +483,8 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
         + "; reproduce with\n"
         f"#   rockfall-design check design.yaml --seed {best.fresh_seed} "
         f"--rocks {best.fresh_rocks}\n"
-        "# The design: section is left out (its catalogue paths are relative to the\n"
+        + _margin_line(best, ev)
+        + "# The design: section is left out (its catalogue paths are relative to the\n"
         "# original project); check this file with: rockfall-design check design.yaml\n"
     )
     # dump_yaml quotes a name the project loader would read as a number (1e3).

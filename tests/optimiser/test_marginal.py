@@ -207,7 +207,8 @@ def _settling(monkeypatch, verdict):
                             failures=lambda: [])
     calls = []
 
-    def verify_fresh(project, registry, measures, concept, *, rocks, seed, max_rocks):
+    def verify_fresh(project, registry, measures, concept, *, rocks, seed, max_rocks,
+                     margin=None):
         calls.append((rocks, seed, max_rocks))
         return Decision(verdict, rocks * 2, fresh, "" if verdict is Verdict.ADMITTED else
                         "marginal: neither holds nor fails", looks=2, exact=2,
@@ -216,7 +217,7 @@ def _settling(monkeypatch, verdict):
     monkeypatch.setattr(section, "verify_fresh", verify_fresh)
     alt = Alternative(name="fence", family=(0,))
     decider = SimpleNamespace(screen=SimpleNamespace(project=None, registry=None),
-                              looks=SimpleNamespace(sizes=(4603, 9206, 50_000)))
+                              looks=SimpleNamespace(sizes=(4603, 9206, 50_000)), margin=None)
     state = section._SettleState(alt, _Tally(), decider, SimpleNamespace(fresh_rocks=None),
                                  concept=None, fresh_seed=1_000_010)
     design = _design(90_000.0, 0, 0.0)

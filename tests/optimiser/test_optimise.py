@@ -12,10 +12,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rockfall_design.cli.program import main
-from rockfall_design.judge.evaluation import evaluate_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import STATION_STEP_M, Screening, decide
 from rockfall_design.optimiser.candidates import build_candidate_measure
+from rockfall_design.optimiser.decide import checker_margin, verify_fresh
 from rockfall_design.optimiser.design_spec import resolve_design
 from rockfall_design.optimiser.section import optimise
 from rockfall_design.project import load_project_text
@@ -74,7 +74,7 @@ def _holding_costs(project, registry, res) -> tuple[list[float], int]:
 
     Every design is decided exactly with the search rocks and seed (one look,
     ``design.max_rocks`` equal to them) and, if admitted, checked on the fresh
-    rocks as the optimiser does.
+    rocks as the optimiser does, both with the checker's margin.
     """
     spec = resolve_design(project, registry)
     concept = build_concept(project, registry)
@@ -82,6 +82,8 @@ def _holding_costs(project, registry, res) -> tuple[list[float], int]:
     proj = project.model_copy(update={"protect": project.protect.model_copy(
         update={"allowed_fraction": spec.residual_fraction})})
     screen = Screening(proj, registry, spec, concept, rocks=res.search_rocks, seed=res.seed)
+    # Admitted, as by the optimiser, only with the checker's margin (design.checker_power).
+    margin = checker_margin(spec, 0.95)
     (cand,) = spec.candidates
     holding, admitted = [], 0
     for x in _lattice(*cand.x_range, STATION_STEP_M):
@@ -90,13 +92,14 @@ def _holding_costs(project, registry, res) -> tuple[list[float], int]:
                 m = build_candidate_measure(cand, registry,
                                             {"x": float(x), "product": prod.name, "height": h})
                 dec = decide(proj, registry, [m], concept, rocks=res.search_rocks,
-                             seed=res.seed)
+                             seed=res.seed, margin=margin)
                 if not dec.admitted:
                     continue
                 admitted += 1
-                fresh = evaluate_design(proj, registry, [m], concept, rocks=2 * dec.rocks,
-                                        seed=res.fresh_seed)
-                if fresh.ok:
+                fresh = verify_fresh(proj, registry, [m], concept, rocks=2 * dec.rocks,
+                                     seed=res.fresh_seed, max_rocks=2 * dec.rocks,
+                                     margin=margin)
+                if fresh.admitted:
                     holding.append(screen.cost([m]))
     return holding, admitted
 
