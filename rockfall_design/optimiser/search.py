@@ -32,7 +32,15 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
 
 from .screening import Screening, ScreenResult, _Table
-from .space import STATION_STEP_M, _decode, _discrete_choices, _lattice, _Option, _variables
+from .space import (
+    RANGE_STEPS,
+    STATION_STEP_M,
+    _decode,
+    _discrete_choices,
+    _lattice,
+    _Option,
+    _variables,
+)
 
 #: Placements of one combination of catalogue choices screened in full, fewest through first.
 MAX_SCREENS_PER_LEVEL = 80
@@ -415,6 +423,162 @@ def _screen_placements(screen: Screening, opts: list, ks: list, fixed: list,
     return found
 
 
+#: Station shifts (lattice steps either way) tried with each cheaper step of a geometry.
+POLISH_SHIFTS = 4
+
+
+class _EditSearch:
+    """The search of one family with ground edits: its objective and the designs it kept.
+
+    Every ground edit costs a run of the rocks below its restart station, so
+    the edits' stations, options and continuous parameters (on a lattice, so
+    that the search comes back to geometries it has run) are searched with
+    ``scipy.optimize.differential_evolution`` (:meth:`run`); for each edit
+    geometry the family's barriers are enumerated exactly on its table
+    (:func:`_barrier_designs`). Every design that passed the screening on the
+    way is kept, cheapest first, for the exact decision. :meth:`around` then
+    runs the lattice next to the design the decisions chose.
+    """
+
+    def __init__(self, screen: Screening, slots: _BarrierSlots, fam: tuple[int, ...],
+                 tally: _Tally, cost_limit: float = math.inf) -> None:
+        self.screen, self.slots, self.tally, self.cost_limit = screen, slots, tally, cost_limit
+        self.cands = screen.spec.candidates
+        tally.searched = True
+        self.edit_slots = tuple(ci for ci in fam if ci in screen.edit_candidates)
+        self.barrier_cis = [ci for ci in fam if ci not in screen.edit_candidates]
+        self.variables = _variables(self.cands, self.edit_slots, screen.edit_candidates)
+        self.big = screen.penalty_floor
+        self.seen: dict[tuple, float] = {}
+        self.kept: dict[tuple, _Screened] = {}
+
+    def objective(self, vec: np.ndarray) -> float:
+        """The search's value of a vector: the cost of its cheapest design the screening
+        admits, with a handicap if only undecided, a penalty above every cost if none."""
+        screen, tally, big = self.screen, self.tally, self.big
+        decoded = _decode(self.cands, self.edit_slots, self.variables, vec)
+        key = tuple((ci, tuple(sorted(p.items()))) for ci, p in decoded)
+        if key in self.seen:
+            return self.seen[key]
+        try:
+            edits = screen.measures(decoded)
+            # Placing first: a geometry that does not fit is out of the space
+            # before the cost model is asked to price it.
+            placed = place_measures(screen.project, screen.registry, edits, screen.section)
+            fixed_cost = screen.cost(edits)
+            if fixed_cost > self.cost_limit:
+                # Dearer than a design that already holds: not worth a run.
+                tally.over_limit = min(tally.over_limit or math.inf, fixed_cost)
+                self.seen[key] = big + fixed_cost
+                return self.seen[key]
+            edited = edited_section(screen.project, screen.section, placed)
+            table = screen._table_for([p.footprint for p in placed], edited)
+        except (KeyError, ValueError, ProjectError) as exc:
+            tally.reasons["does not fit"] += 1
+            tally.why = tally.why or getattr(exc, "message", None) or str(exc)
+            self.seen[key] = 4.0 * big
+            return self.seen[key]
+        first = next(iter(_barrier_designs(screen, self.slots, self.barrier_cis, edits,
+                                           fixed_cost, table, table.serial, tally,
+                                           self.cost_limit)), None)
+        if first is None:
+            value = big + fixed_cost
+        else:
+            self.kept[key + tuple((m.kind, m.x) for m in first.measures)] = first
+            # Admitted on the search rocks: its cost. Undecided (only more rocks
+            # can tell): its cost with a handicap, so that the search still
+            # explores cheap geometries that may hold, but prefers those shown.
+            value = first.cost if first.result.feasible else UNDECIDED_HANDICAP * first.cost
+        self.seen[key] = value
+        return value
+
+    def _designs(self, keys: Any, limit: float) -> list[_Screened]:
+        return sorted((self.kept[k] for k in keys if self.kept[k].cost <= limit),
+                      key=lambda d: (d.cost, not d.result.feasible))
+
+    def run(self, seed: int) -> list[_Screened]:
+        """Differential evolution over the lattice; the designs kept, cheapest first."""
+        bounds = [(v.low, v.high) for v in self.variables]
+        integrality = np.array([v.integer for v in self.variables])
+        differential_evolution(
+            self.objective, bounds, integrality=integrality, seed=seed, popsize=6,
+            maxiter=12, tol=1e-3, mutation=(0.5, 1.0), recombination=0.7, polish=False,
+            init="sobol" if len(self.variables) > 1 else "latinhypercube",
+        )
+        return self._designs(list(self.kept), self.cost_limit)
+
+    def _vector(self, measures: Sequence[Any]) -> np.ndarray | None:
+        """The search vector of a design's ground edits (None: not one this search makes)."""
+        mine: dict[str, list[Any]] = {}
+        for m in sorted(measures, key=lambda m: m.x):
+            mine.setdefault(m.kind, []).append(m)
+        by_slot = []
+        for ci in self.edit_slots:
+            same = mine.get(self.cands[ci].kind) or []
+            if not same:
+                return None
+            by_slot.append(same.pop(0))
+        vec = np.empty(len(self.variables))
+        for i, v in enumerate(self.variables):
+            m = by_slot[v.slot]
+            if v.role == "x":
+                vec[i] = float(m.x)
+            elif v.role == "range":
+                vec[i] = float(getattr(m.params, v.name))
+            elif v.role == "option":
+                value = getattr(m.params, v.name)
+                if value not in v.options:
+                    return None
+                vec[i] = float(v.options.index(value))
+            else:  # a catalogue choice of a ground edit: not walked
+                return None
+        return vec
+
+    def around(self, measures: Sequence[Any], limit: float) -> list[_Screened]:
+        """Designs next to ``measures`` on the lattice and cheaper than ``limit``, newly run.
+
+        The search samples the lattice through its own seed, but what it
+        finds depends on the rocks: a geometry one step cheaper than the
+        chosen design, a metre or two from it, is run at some seeds and not
+        at others, and the chosen cost moves with the seed
+        (design_ditch_or_fence: a ditch 5.25 m wide at x = 109 m, chosen at
+        four of seeds 11 to 15, was never run at the fifth, which chose one
+        5.5 m wide at 107 m, 4 % dearer, and did not name the cheaper one).
+        Every step of one geometry coordinate that makes the design cheaper
+        is run here with the station shifted by up to :data:`POLISH_SHIFTS`
+        lattice steps either way; the new designs are decided like the rest.
+        """
+        start = self._vector(measures)
+        if start is None:
+            return []
+        before = set(self.kept)
+        x_vars = [i for i, v in enumerate(self.variables) if v.role == "x"]
+        for i, v in enumerate(self.variables):
+            if v.role == "x":
+                continue
+            step = 1.0 if v.integer else (v.step or (v.high - v.low) / RANGE_STEPS)
+            for sign in (-1.0, 1.0):
+                moved = start.copy()
+                moved[i] = min(max(moved[i] + sign * step, v.low), v.high)
+                if moved[i] == start[i] or not self._cost(moved) < limit:
+                    continue
+                for shift in range(-POLISH_SHIFTS, POLISH_SHIFTS + 1):
+                    vec = moved.copy()
+                    for j in x_vars:
+                        xv = self.variables[j]
+                        vec[j] = min(max(vec[j] + shift * STATION_STEP_M, xv.low), xv.high)
+                    self.objective(vec)
+        return self._designs([k for k in self.kept if k not in before], limit - 1e-9)
+
+    def _cost(self, vec: np.ndarray) -> float:
+        """The fixed cost of a vector's ground edits, without a run (inf: no price)."""
+        try:
+            return float(self.screen.cost(self.screen.measures(
+                _decode(self.cands, self.edit_slots, self.variables, vec))))
+        except (KeyError, ValueError, ProjectError):
+            return math.inf
+
+
 def _edit_designs(
     screen: Screening,
     slots: _BarrierSlots,
@@ -423,67 +587,5 @@ def _edit_designs(
     seed: int,
     cost_limit: float = math.inf,
 ) -> list[_Screened]:
-    """Designs of a family with ground edits: scipy over the edits, barriers enumerated.
-
-    Every ground edit costs a run of the rocks below its restart station, so
-    the edits' stations, options and continuous parameters (on a lattice, so
-    that the search comes back to geometries it has run) are searched with
-    ``scipy.optimize.differential_evolution``; for each edit geometry the
-    family's barriers are enumerated exactly on its table
-    (:func:`_barrier_designs`). Every design that passed the screening on
-    the way is kept, cheapest first, for the exact decision.
-    """
-    cands = screen.spec.candidates
-    tally.searched = True
-    edit_slots = tuple(ci for ci in fam if ci in screen.edit_candidates)
-    barrier_cis = [ci for ci in fam if ci not in screen.edit_candidates]
-    variables = _variables(cands, edit_slots, screen.edit_candidates)
-    big = screen.penalty_floor
-    seen: dict[tuple, float] = {}
-    kept: dict[tuple, _Screened] = {}
-
-    def objective(vec: np.ndarray) -> float:
-        decoded = _decode(cands, edit_slots, variables, vec)
-        key = tuple((ci, tuple(sorted(p.items()))) for ci, p in decoded)
-        if key in seen:
-            return seen[key]
-        try:
-            edits = screen.measures(decoded)
-            # Placing first: a geometry that does not fit is out of the space
-            # before the cost model is asked to price it.
-            placed = place_measures(screen.project, screen.registry, edits, screen.section)
-            fixed_cost = screen.cost(edits)
-            if fixed_cost > cost_limit:
-                # Dearer than a design that already holds: not worth a run.
-                tally.over_limit = min(tally.over_limit or math.inf, fixed_cost)
-                seen[key] = big + fixed_cost
-                return seen[key]
-            edited = edited_section(screen.project, screen.section, placed)
-            table = screen._table_for([p.footprint for p in placed], edited)
-        except (KeyError, ValueError, ProjectError) as exc:
-            tally.reasons["does not fit"] += 1
-            tally.why = tally.why or getattr(exc, "message", None) or str(exc)
-            seen[key] = 4.0 * big
-            return seen[key]
-        first = next(iter(_barrier_designs(screen, slots, barrier_cis, edits, fixed_cost, table,
-                                           table.serial, tally, cost_limit)), None)
-        if first is None:
-            value = big + fixed_cost
-        else:
-            kept[key + tuple((m.kind, m.x) for m in first.measures)] = first
-            # Admitted on the search rocks: its cost. Undecided (only more rocks
-            # can tell): its cost with a handicap, so that the search still
-            # explores cheap geometries that may hold, but prefers those shown.
-            value = first.cost if first.result.feasible else UNDECIDED_HANDICAP * first.cost
-        seen[key] = value
-        return value
-
-    bounds = [(v.low, v.high) for v in variables]
-    integrality = np.array([v.integer for v in variables])
-    differential_evolution(
-        objective, bounds, integrality=integrality, seed=seed, popsize=6, maxiter=12,
-        tol=1e-3, mutation=(0.5, 1.0), recombination=0.7, polish=False,
-        init="sobol" if len(variables) > 1 else "latinhypercube",
-    )
-    return sorted((d for d in kept.values() if d.cost <= cost_limit),
-                  key=lambda d: (d.cost, not d.result.feasible))
+    """Designs of a family with ground edits, cheapest first (:meth:`_EditSearch.run`)."""
+    return _EditSearch(screen, slots, fam, tally, cost_limit).run(seed)

@@ -57,7 +57,7 @@ from .search import (
     MAX_SCREENS_PER_LEVEL,
     _barrier_designs,
     _BarrierSlots,
-    _edit_designs,
+    _EditSearch,
     _Tally,
 )
 from .space import families, family_name
@@ -173,6 +173,7 @@ def _settle(
     concept: Any,
     *,
     fresh_seed: int,
+    skipped: list[tuple[Any, str]] | None = None,
 ) -> int:
     """Decide a family's screened designs in order of cost until one holds; fill ``alt``.
 
@@ -192,8 +193,14 @@ def _settle(
     cheaper than the family's design once that is found (at most
     :data:`MAX_DEFERRED_PER_FAMILY` of them, cheapest first; the rest are
     counted as not decided).
+
+    ``skipped``: the designs an earlier call left undecided (and this call's
+    are added to it), so that the count and list of cheaper undecided designs
+    are of all of them when ``alt`` already holds a design and more come.
     """
     state = _SettleState(alt, tally, decider, spec, concept, fresh_seed)
+    if skipped is not None:
+        state.skipped = skipped
     deferred: list[Any] = []
     for d in designs:
         if state.decisions >= MAX_EXACT_PER_FAMILY:
@@ -484,13 +491,30 @@ def optimise(
 
     def search_family(alt: Alternative, task: FamilyTask) -> int:
         tally = _Tally()
+        edits = None
         if any(ci in screen.edit_candidates for ci in task.family):
-            designs: Any = iter(_edit_designs(screen, slots, task.family, tally, task.seed,
-                                              task.limit))
+            edits = _EditSearch(screen, slots, task.family, tally, task.limit)
+            designs: Any = iter(edits.run(task.seed))
         else:
             designs = _barrier_designs(screen, slots, list(task.family), [], 0.0, screen.bare,
                                        0, tally, cost_limit=task.limit)
-        rocks = _settle(alt, designs, tally, decider, spec, concept, fresh_seed=fresh_seed)
+        skipped: list[tuple[Any, str]] = []
+        rocks = _settle(alt, designs, tally, decider, spec, concept, fresh_seed=fresh_seed,
+                        skipped=skipped)
+        while edits is not None and alt.holds:
+            # The lattice next to the chosen ground edit, which the search's
+            # samples may have missed at this seed (_EditSearch.around).
+            chosen = alt.cost
+            near = edits.around(alt.measures, chosen)
+            if not near:
+                break
+            rocks += _settle(alt, iter(near), tally, decider, spec, concept,
+                             fresh_seed=fresh_seed, skipped=skipped)
+            if not alt.cost < chosen:
+                break
+            # What was listed as cheaper than the earlier choice and is not
+            # cheaper than this one is no longer an alternative to it.
+            alt.marginal = [m for m in alt.marginal if m["cost"] < alt.cost]
         if not alt.holds_on_fresh_rocks and not alt.dominated:
             alt.reason = alt.reason or _cause(screen, slots, task.family, tally)
         elif alt.holds:

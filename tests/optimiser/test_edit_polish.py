@@ -1,0 +1,55 @@
+"""The ground-edit search runs the lattice next to the design the decisions chose
+(search._EditSearch.around): what differential evolution's samples missed at one seed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from rockfall_design.judge.placing import build_concept
+from rockfall_design.optimiser import Screening
+from rockfall_design.optimiser.design_spec import resolve_design
+from rockfall_design.optimiser.search import POLISH_SHIFTS, _BarrierSlots, _EditSearch, _Tally
+from rockfall_design.optimiser.space import STATION_STEP_M, _decode
+from rockfall_design.project import load_project
+
+PROJECTS = Path(__file__).resolve().parents[2] / "projects"
+
+
+def _search(registry) -> _EditSearch:
+    project = load_project(PROJECTS / "design_ditch_or_fence.yaml")
+    spec = resolve_design(project, registry)
+    project = project.model_copy(update={"protect": project.protect.model_copy(
+        update={"allowed_fraction": spec.residual_fraction})})
+    screen = Screening(project, registry, spec, build_concept(project, registry), rocks=600,
+                       seed=3)
+    (ci,) = sorted(screen.edit_candidates)
+    return _EditSearch(screen, _BarrierSlots(screen), (ci,), _Tally())
+
+
+def test_around_runs_the_cheaper_steps_of_the_chosen_geometry_near_its_station(registry):
+    search = _search(registry)
+    cands, slots, variables = search.cands, search.edit_slots, search.variables
+    names = [v.name for v in variables]
+    start = np.array([109.0 if n == "x" else 5.25 if n == "width" else 1.0
+                      for n in names])  # depth: index 1 of its options, 1.5 m
+    (ditch,) = search.screen.measures(_decode(cands, slots, variables, start))
+    assert (ditch.x, ditch.params.width, ditch.params.depth) == (109.0, 5.25, 1.5)
+    assert np.array_equal(search._vector([ditch]), start)  # the vector of a design, back
+    cost = search.screen.cost([ditch])
+    near = search.around([ditch], cost)
+    ran = {key for key in search.seen}
+    # Every design returned is new, cheaper than the chosen one, and next to it.
+    assert near and all(d.cost < cost for d in near)
+    costs = [d.cost for d in near]
+    assert costs == sorted(costs)
+    for d in near:
+        (m,) = d.measures
+        assert abs(m.x - 109.0) <= POLISH_SHIFTS * STATION_STEP_M + 1e-9
+        assert (m.params.width, m.params.depth) in {(5.0, 1.5), (5.25, 1.0)}
+    # 2 cheaper steps (narrower, shallower) x 9 stations; nothing dearer was run.
+    assert len(ran) == 2 * (2 * POLISH_SHIFTS + 1)
+    # Run again: nothing new to return, nothing run again.
+    assert search.around([ditch], cost) == []
+    assert set(search.seen) == ran
