@@ -19,7 +19,7 @@ agree where nothing is approximated; the exact run is what the report shows).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -155,26 +155,33 @@ def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
         UNDECIDED with ``notes`` (one line): it holds with the look's bounds,
         but the margin is neither shown nor missed.
     """
-    verdict = _verdict_of(ev)
+    prot = ev.protect
+    return _with_margin(
+        _verdict_of(ev), lambda c: _checks_at(ev, registry, c), [p.label for p in ev.placed],
+        None if prot is None else int(prot["reaching"]),
+        None if prot is None else float(prot["allowed_fraction"]),
+        ev.study.result.n, ev.confidence, margin, checker_rocks)
+
+
+def _with_margin(verdict: Verdict, checks_at: Callable[[float], list[list[Check]]],
+                 labels: Sequence[str], reaching: int | None, allowed: float | None, n: int,
+                 confidence: float, margin: CheckerMargin | None,
+                 checker_rocks: int) -> tuple[Verdict, list[str]]:
+    """:func:`judge_look` of any look: its verdict without the margin, its checks at any
+    confidence (``checks_at``), the rocks reaching the protected zone of its ``n``."""
     if margin is None or verdict is Verdict.REJECTED:
         return verdict, []
-    n = ev.study.result.n
-    prot = ev.protect
-    m = margin.at_look(ev.confidence, n, checker_rocks,
-                       None if prot is None else float(prot["allowed_fraction"]))
-    labels = [p.label for p in ev.placed]
-    admit = _checks_at(ev, registry, m.admit)
-    holds = all(c.holds_with_confidence for cs in admit for c in cs)
-    if prot is not None and m.residual_rate is not None:
-        holds = holds and fraction_upper_bound(
-            int(prot["reaching"]), n, ev.confidence) <= m.residual_rate
+    m = margin.at_look(confidence, n, checker_rocks, None if reaching is None else allowed)
+    holds = all(c.holds_with_confidence for cs in checks_at(m.admit) for c in cs)
+    if reaching is not None and m.residual_rate is not None:
+        holds = holds and fraction_upper_bound(reaching, n, confidence) <= m.residual_rate
     if holds:
         return Verdict.ADMITTED, []
     power = f"{100 * margin.power:g} %"
     why = (f"a check of {checker_rocks:,} rocks at another seed would confirm it with "
            f"{100 * margin.confidence:g} % confidence less than {power} of the time")
     short = []
-    for lab, cs in zip(labels, _checks_at(ev, registry, m.short), strict=True):
+    for lab, cs in zip(labels, checks_at(m.short), strict=True):
         for c in cs:
             if c.ok_with_confidence is None:
                 missed = not c.ok
@@ -186,15 +193,14 @@ def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
             if missed:
                 value = "-" if c.value is None else f"{c.value:.2f}"
                 short.append(f"{lab}: {c.name} {value}, target {c.target:.2f}")
-    if (prot is not None and m.residual_rate is not None
-            and fraction_lower_bound(int(prot["reaching"]), n, ev.confidence)
-            > m.residual_rate):
-        short.append(f"{int(prot['reaching']):,} of {n:,} rocks reach the protected zone")
+    if (reaching is not None and m.residual_rate is not None
+            and fraction_lower_bound(reaching, n, confidence) > m.residual_rate):
+        short.append(f"{reaching:,} of {n:,} rocks reach the protected zone")
     if short:
         return Verdict.REJECTED, [f"{'; '.join(short)} ({why})"]
     if verdict is Verdict.ADMITTED:
         return Verdict.UNDECIDED, [
-            f"it holds with {100 * ev.confidence:.4g} % confidence on {n:,} rocks, but neither "
+            f"it holds with {100 * confidence:.4g} % confidence on {n:,} rocks, but neither "
             f"shows nor misses the checker's margin ({why.replace('less than', 'at least')})"]
     return Verdict.UNDECIDED, []
 
@@ -470,6 +476,24 @@ class Decider:
         return evaluate_design(s0.project, s0.registry, measures, s0.concept,
                                rocks=self.looks.sizes[j], seed=s0.seed, after=after)
 
+    def _screen_verdict(self, sr: ScreenResult, n: int) -> tuple[Verdict, list[str]]:
+        """A screening look's verdict, with the margin where the screening judged every rock
+        exactly (then it is the exact run's, without the run: a run is made only to
+        confirm an admission)."""
+        verdict = _screen_verdict(sr)
+        if self.margin is None or sr.approximate or verdict is Verdict.REJECTED:
+            return verdict, []
+        s0 = self.screen
+        guarded = guard(s0.registry)
+
+        def checks_at(c: float) -> list[list[Check]]:
+            concept = guarded.concept(look_concept(s0.registry, s0.concept, c))
+            return [concept.checks(res) for res in sr.results]
+
+        reaching = None if s0.project.protect is None else int(sr.residual)
+        return _with_margin(verdict, checks_at, sr.labels, reaching, s0.allowed_fraction, n,
+                            s0.confidence, self.margin, 2 * n)
+
     def decide(self, measures: Sequence[ProtectiveMeasure], first: ScreenResult) -> Decision:
         """Decide a design that the first look (the search's screening) did not reject."""
         s0 = self.screen
@@ -480,9 +504,8 @@ class Decider:
         sizes = self.looks.sizes
         j, sr, ev = 0, first, None
         last: Evaluation | None = None  # the latest exact look, which the next goes on from
-        verdict = _screen_verdict(sr)
+        verdict, short = self._screen_verdict(sr, sizes[0])
         exact = simulated = 0
-        short: list[str] = []
         by_exact = first.approximate  # the screening cannot decide what it approximates
         while True:
             if ev is None and (verdict is Verdict.ADMITTED or by_exact):
@@ -499,7 +522,7 @@ class Decider:
             if barriers_only and not by_exact:
                 sc = self._screening(j, stations)
                 sr = sc.screen(measures)
-                verdict = _screen_verdict(sr)
+                verdict, short = self._screen_verdict(sr, sizes[j])
                 by_exact = sr.approximate
             else:
                 by_exact = True
