@@ -235,6 +235,8 @@ def across_design_yaml(result: AcrossResult, project_file: Path | str,
     data["measures"] = [{"type": m.kind, **m.params.model_dump(mode="json")}
                         for m in best.measures]
     data["safety"] = {"concept": ev.concept.name, **ev.concept.params.model_dump(mode="json")}
+    # The project's confidence, not the look's (as design_yaml: a check is one look).
+    data["safety"]["confidence"] = float(result.confidence)
     block = result.scenarios_block()
     b = block["binding"]
     head = (

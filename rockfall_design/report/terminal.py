@@ -434,13 +434,13 @@ def alternatives_table(result: Any) -> Any:
     return alternatives_frame(result.summary())
 
 
-def _margin_line(best: Any, ev: Any) -> str:
+def _margin_line(best: Any, rocks: int, confidence: float) -> str:
     """design.yaml's line on the checker's margin the design was admitted with, if any."""
     power = (getattr(best, "fresh_looks", None) or {}).get("checker_power")
     if power is None:
         return ""
-    return (f"# margin: admitted only as a design that a check of {2 * ev.study.result.n} rocks "
-            f"at a seed of your own confirms with {100 * ev.confidence:g} % confidence at "
+    return (f"# margin: admitted only as a design that a check of {2 * rocks} rocks "
+            f"at a seed of your own confirms with {100 * confidence:g} % confidence at "
             f"least {100 * power:g} % of the time\n#   (design.checker_power; "
             "docs/sequential-decisions.md)\n")
 
@@ -465,6 +465,12 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
         {"type": m.kind, **m.params.model_dump(mode="json")} for m in best.measures
     ]
     data["safety"] = {"concept": ev.concept.name, **ev.concept.params.model_dump(mode="json")}
+    if looks is not None:
+        # The project's confidence, not the look's (each look bounds at a higher
+        # one, its share of the error): a checker's check of this one design is
+        # one look, and the checker's margin the design was admitted with is
+        # for a check at the project's confidence.
+        data["safety"]["confidence"] = float(looks.confidence)
     head = (
         f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
         f"cost {best.cost:,.0f}.\n"
@@ -483,7 +489,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
         + "; reproduce with\n"
         f"#   rockfall-design check design.yaml --seed {best.fresh_seed} "
         f"--rocks {best.fresh_rocks}\n"
-        + _margin_line(best, ev)
+        + _margin_line(best, ev.study.result.n, data["safety"]["confidence"])
         + "# The design: section is left out (its catalogue paths are relative to the\n"
         "# original project); check this file with: rockfall-design check design.yaml\n"
     )

@@ -47,3 +47,19 @@ def test_the_margin_only_ever_costs_more(registry, seed):
         power_recorded = res.best.fresh_looks.get("checker_power")
         assert power_recorded == (None if power == "null" else float(power))
     assert costs == sorted(costs)
+
+
+def test_design_yaml_carries_the_projects_confidence_and_the_margin(tmp_path, capsys):
+    """design.yaml's safety.confidence is the project's (95 %), not the deciding look's
+    higher one: a checker's `check design.yaml` is one look, and the margin the design was
+    admitted with is for a check at the project's confidence, which the file states."""
+    import yaml
+
+    from rockfall_design.cli.program import main
+
+    assert main(["optimise", str(SMALL_DESIGN), "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    text = (tmp_path / "design.yaml").read_text(encoding="utf-8")
+    assert yaml.safe_load(text)["safety"]["confidence"] == 0.95
+    assert "# margin: admitted only as a design that a check of" in text
+    assert "confirms with 95 % confidence at least 90 % of the time" in text
