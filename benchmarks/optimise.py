@@ -48,7 +48,7 @@ from rockfall_design.errors import ProjectError
 from rockfall_design.judge.evaluation import evaluate_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.design_spec import resolve_design
+from rockfall_design.optimiser.design_spec import resolve_design, with_residual_target
 from rockfall_design.optimiser.section import optimise
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
@@ -91,11 +91,7 @@ def reference(project, registry, rocks: int) -> tuple[float, str, int]:
     """Cheapest single fence or wall on the 2 m grid that holds with confidence at ``rocks``."""
     spec = resolve_design(project, registry)
     concept = build_concept(project, registry)
-    allowed = spec.residual_fraction
-    if allowed is None:
-        allowed = (spec.residual_count or 0) / project.rocks.count
-    proj = project.model_copy(update={"protect": project.protect.model_copy(
-        update={"allowed_fraction": allowed})})
+    proj, _ = with_residual_target(project, spec, project.rocks.count)
     screen = Screening(proj, registry, spec, concept, rocks=rocks, seed=project.rocks.seed)
     passing = []
     screened = 0
@@ -131,11 +127,7 @@ def _check_in_process(project, registry, best, seeds: list[int]) -> list[bool]:
     the project's confidence: the same evaluation here, without a process per check.
     """
     spec = resolve_design(project, registry)
-    allowed = spec.residual_fraction
-    if allowed is None:
-        allowed = (spec.residual_count or 0) / max(project.rocks.count, 1)
-    proj = project.model_copy(update={"protect": project.protect.model_copy(
-        update={"allowed_fraction": allowed})})
+    proj, _ = with_residual_target(project, spec, project.rocks.count)
     concept = build_concept(proj, registry)
     return [bool(evaluate_design(proj, registry, best.measures, concept,
                                  rocks=2 * best.decision_rocks, seed=s).holds_with_confidence)

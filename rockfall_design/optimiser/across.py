@@ -223,18 +223,14 @@ class AcrossResult(OptimisationResult):
 def _build(run: ScenarioRun, registry: Registry, rocks: int | None) -> tuple[_Scenario, int]:
     """A scenario's screening with the rocks that can show its residual target."""
     from ..judge.placing import build_concept
-    from .design_spec import resolve_design
+    from .design_spec import resolve_design, with_residual_target
 
     project = run.project
     spec = resolve_design(project, registry)
     concept = build_concept(project, registry)
     confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
     n = int(project.rocks.count if rocks is None else rocks)
-    allowed = spec.residual_fraction
-    if allowed is None:
-        allowed = (spec.residual_count or 0) / max(n, 1)
-    project = project.model_copy(
-        update={"protect": project.protect.model_copy(update={"allowed_fraction": allowed})})
+    project, allowed = with_residual_target(project, spec, n)
     # The single optimiser's looks: the screening is the first, at the look's
     # confidence, and the exact decisions go on from there (decide).
     looks = plan_looks(n, max(n, int(spec.max_rocks)), confidence,

@@ -127,10 +127,12 @@ def _verdict_of(ev: Evaluation) -> Verdict:
     return Verdict.UNDECIDED
 
 
-def _checks_at(ev: Evaluation, registry: Registry, confidence: float) -> list[list[Check]]:
-    """The look's checks again, with their bounds at ``confidence`` (no rock runs)."""
-    concept = look_concept(registry, ev.concept, confidence)
-    return [guard(registry).concept(concept).checks(res) for res in ev.judgement.results]
+def _checks_at(registry: Registry, concept: SafetyConcept, results: Sequence[Any],
+               confidence: float) -> list[list[Check]]:
+    """A look's checks again, its measures' ``results`` judged by ``concept`` with its
+    bounds at ``confidence`` (no rock runs)."""
+    judge = guard(registry).concept(look_concept(registry, concept, confidence))
+    return [judge.checks(res) for res in results]
 
 
 def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
@@ -157,7 +159,8 @@ def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
     """
     prot = ev.protect
     return _with_margin(
-        _verdict_of(ev), lambda c: _checks_at(ev, registry, c), [p.label for p in ev.placed],
+        _verdict_of(ev), lambda c: _checks_at(registry, ev.concept, ev.judgement.results, c),
+        [p.label for p in ev.placed],
         None if prot is None else int(prot["reaching"]),
         None if prot is None else float(prot["allowed_fraction"]),
         ev.study.result.n, ev.confidence, margin, checker_rocks)
@@ -172,9 +175,12 @@ def _with_margin(verdict: Verdict, checks_at: Callable[[float], list[list[Check]
     if margin is None or verdict is Verdict.REJECTED:
         return verdict, []
     m = margin.at_look(confidence, n, checker_rocks, None if reaching is None else allowed)
-    holds = all(c.holds_with_confidence for cs in checks_at(m.admit) for c in cs)
-    if reaching is not None and m.residual_rate is not None:
-        holds = holds and fraction_upper_bound(reaching, n, confidence) <= m.residual_rate
+    # The margin's bounds are stricter than the look's: only what holds with the
+    # look's can hold with them (no checks again for the rest).
+    holds = verdict is Verdict.ADMITTED and all(
+        c.holds_with_confidence for cs in checks_at(m.admit) for c in cs)
+    if holds and reaching is not None and m.residual_rate is not None:
+        holds = fraction_upper_bound(reaching, n, confidence) <= m.residual_rate
     if holds:
         return Verdict.ADMITTED, []
     power = f"{100 * margin.power:g} %"
@@ -484,15 +490,10 @@ class Decider:
         if self.margin is None or sr.approximate or verdict is Verdict.REJECTED:
             return verdict, []
         s0 = self.screen
-        guarded = guard(s0.registry)
-
-        def checks_at(c: float) -> list[list[Check]]:
-            concept = guarded.concept(look_concept(s0.registry, s0.concept, c))
-            return [concept.checks(res) for res in sr.results]
-
         reaching = None if s0.project.protect is None else int(sr.residual)
-        return _with_margin(verdict, checks_at, sr.labels, reaching, s0.allowed_fraction, n,
-                            s0.confidence, self.margin, 2 * n)
+        return _with_margin(verdict, lambda c: _checks_at(s0.registry, s0.concept, sr.results, c),
+                            sr.labels, reaching, s0.allowed_fraction, n, s0.confidence,
+                            self.margin, 2 * n)
 
     def decide(self, measures: Sequence[ProtectiveMeasure], first: ScreenResult) -> Decision:
         """Decide a design that the first look (the search's screening) did not reject."""

@@ -80,6 +80,7 @@ __all__ = [
     "design_bill",
     "design_cost",
     "resolve_design",
+    "with_residual_target",
     "unknown_measure_type",
 ]
 
@@ -195,3 +196,31 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
     )
 
 
+
+
+def with_residual_target(project: Project, spec: DesignSpec,
+                         rocks: int) -> tuple[Project, float]:
+    """The project with the design's residual target as the protected zone's allowance.
+
+    So that the optimiser's exact checks, its fresh rocks and ``check`` of
+    design.yaml all judge the residual against the same fraction.
+
+    Parameters
+    ----------
+    project : Project
+        With a ``protect:`` section.
+    spec : DesignSpec
+        Its resolved design section.
+    rocks : int
+        The search rocks: a target given as a count is that share of them.
+
+    Returns
+    -------
+    project, allowed : Project, float
+        The project with ``protect.allowed_fraction`` set, and that fraction (-).
+    """
+    allowed = spec.residual_fraction
+    if allowed is None:
+        allowed = (spec.residual_count or 0) / max(int(rocks), 1)
+    return project.model_copy(update={"protect": project.protect.model_copy(
+        update={"allowed_fraction": allowed})}), float(allowed)

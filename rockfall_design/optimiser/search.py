@@ -33,7 +33,6 @@ if TYPE_CHECKING:  # pragma: no cover
 
 from .screening import Screening, ScreenResult, _Table
 from .space import (
-    RANGE_STEPS,
     STATION_STEP_M,
     _decode,
     _discrete_choices,
@@ -556,7 +555,7 @@ class _EditSearch:
         for i, v in enumerate(self.variables):
             if v.role == "x":
                 continue
-            step = 1.0 if v.integer else (v.step or (v.high - v.low) / RANGE_STEPS)
+            step = v.lattice_step
             for sign in (-1.0, 1.0):
                 moved = start.copy()
                 moved[i] = min(max(moved[i] + sign * step, v.low), v.high)

@@ -443,7 +443,7 @@ def optimise(
     design that holds.
     """
     from ..judge.plan import plan_for
-    from .design_spec import resolve_design
+    from .design_spec import resolve_design, with_residual_target
 
     t0 = time.perf_counter()
     plan = plan_for(project, registry)
@@ -455,12 +455,7 @@ def optimise(
     s = int(project.rocks.seed if seed is None else seed)
     # The design's residual target becomes the protected zone's allowance, so
     # that the exact checks, the fresh rocks and `check` of design.yaml agree.
-    allowed = spec.residual_fraction
-    if allowed is None:
-        allowed = (spec.residual_count or 0) / max(n, 1)
-    project = project.model_copy(
-        update={"protect": project.protect.model_copy(update={"allowed_fraction": allowed})}
-    )
+    project, allowed = with_residual_target(project, spec, n)
     fresh_seed = int(spec.fresh_seed) if spec.fresh_seed is not None else s + FRESH_OFFSET
     # The looks of every decision, fixed before any rock runs: the search rocks
     # are the first look, with at least the rocks with which none reaching

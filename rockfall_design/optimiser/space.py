@@ -53,6 +53,13 @@ class _Var:
     # never the parameter's name, says how a coordinate is decoded.
     role: str = "range"
 
+    @property
+    def lattice_step(self) -> float:
+        """The step between two of its values: 1 for an index, else its lattice's."""
+        if self.integer:
+            return 1.0
+        return self.step or (self.high - self.low) / RANGE_STEPS
+
 
 def families(candidates: Sequence[CandidateSpec], max_measures: int) -> list[tuple[int, ...]]:
     """Every multiset of candidates with 1..max_measures members, in a stable order."""
@@ -130,7 +137,7 @@ def _decode(cands, fam, variables, vec) -> list[tuple[int, dict[str, Any]]]:
         else:
             # A lattice of 1/RANGE_STEPS of the range: designs an engineer can
             # build, and repeated ground edits come from the cache.
-            step = v.step or (v.high - v.low) / RANGE_STEPS
+            step = v.lattice_step
             if step > 0:
                 k = min(round((float(val) - v.low) / step),
                         math.floor((v.high - v.low) / step + 1e-9))
