@@ -117,13 +117,6 @@ def _percentile(values: np.ndarray, q: float) -> float:
     return float(part[lo] + (h - lo) * (part[hi] - part[lo]))
 
 
-def _statistic(values: np.ndarray, statistic: str) -> float:
-    """``max`` or the ``pNN`` percentile (linear interpolation) of a non-empty array."""
-    if statistic == "max":
-        return float(np.max(values))
-    return _percentile(values, float(statistic[1:]))
-
-
 def _statistic_bound(values: np.ndarray, statistic: str, confidence: float) -> float | None:
     """Upper confidence bound of ``statistic`` (the maximum bounds itself); None: too few."""
     if statistic == "max" or float(statistic[1:]) >= 100.0:

@@ -142,21 +142,6 @@ class Evaluation:
                 if not holds(c):
                     yield p.label, c, "" if c.unit == "-" else f" {c.unit}"
 
-    def failures_with_confidence(self) -> list[str]:
-        """One line per check (and residual) that fails with the bounds in place."""
-        out = []
-        for label, c, unit in self._failed_checks(lambda c: c.holds_with_confidence):
-            value = "no bound" if c.bound is None else f"{c.bound:.2f}{unit}"
-            out.append(f"{label}: {c.name} with {100 * self.confidence:g} % "
-                       f"confidence {value}, target {c.target:.2f}{unit} ({c.detail})")
-        prot = self.protect
-        if prot is not None and not prot["ok_with_confidence"]:
-            out.append(
-                f"{prot['reaching']} of {self.study.result.n:,} rocks reach the protected zone "
-                f"at x >= {prot['x']:g} m: upper bound {100 * prot['upper_fraction']:.3f} % at "
-                f"{100 * self.confidence:g} %, allowed {100 * prot['allowed_fraction']:.3f} %")
-        return out
-
     def failures(self) -> list[str]:
         """One line per failed check, for reports."""
         out = []

@@ -34,10 +34,6 @@ MAX_DEFERRED_PER_FAMILY = 8
 MAX_DEFERRED_KEPT = 400
 
 
-#: The search runs at least this many times the rocks that show the residual target.
-SEARCH_FACTOR = 1
-
-
 #: Designs the screening could not judge (too few rocks at a measure) that may fail
 #: exactly before the family's other such designs are no longer decided.
 MAX_UNJUDGED_FAILURES = 3

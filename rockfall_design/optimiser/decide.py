@@ -457,7 +457,6 @@ class Decider:
         self.margin = margin
         self._screens: dict[int, Screening] = {0: screen}
         self.simulated = 0  # rocks of the look screenings (each counted when run)
-        self.screen_runs = 0
 
     def _screening(self, j: int, stations: Sequence[float]) -> Screening:
         """The screening of look ``j``, with at least ``stations`` (m) in its table."""
@@ -471,7 +470,6 @@ class Decider:
         sc = Screening(s0.project, s0.registry, s0.spec, s0.concept, rocks=self.looks.sizes[j],
                        seed=s0.seed, stations=np.array(sorted(want)))
         self.simulated += sc.n
-        self.screen_runs += 1
         self._screens[j] = sc
         return sc
 

@@ -13,7 +13,6 @@ just upslope of the edit, resumed from their saved state.
 from __future__ import annotations
 
 import math
-import time
 from collections import OrderedDict
 from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
@@ -196,13 +195,11 @@ class Screening:
                 restarts = [np.asarray(restart_stations, dtype=float)]
         self.grid = np.unique(np.clip(np.concatenate(sts + [np.array([self.protect_x])]), x0, x1))
         self.restart_x = np.unique(np.clip(np.concatenate(restarts), x0, x1))
-        t0 = time.perf_counter()
         bare = run_ensemble(
             self.section, self.releases, key=self.key, grid=self.grid,
             restart_stations=self.restart_x, settings=self.settings, record_speed=True,
             progress=rock_progress,
         )
-        self.bare_runtime_s = time.perf_counter() - t0
         cols = np.searchsorted(bare.grid, self.grid)
         self.bare = _Table(
             h=bare.grid_height[:, cols].astype(float),

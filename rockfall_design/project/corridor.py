@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 from ..errors import ProjectError
@@ -308,8 +307,3 @@ def _fill(section_lines: _SectionLines, data: Any) -> None:
                 visit(item, path + (i,))
 
     visit(data, ())
-
-
-def base_dir_of(source: str, base_dir: Any) -> Path:
-    """The directory a corridor's referenced files are relative to."""
-    return Path(source).parent if base_dir is None else Path(base_dir)

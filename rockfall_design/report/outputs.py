@@ -108,8 +108,6 @@ class OutputSet:
     def __init__(self) -> None:
         self._entries: dict[Path, _Entry] = {}
         self._created: list[Path] = []
-        #: True once every file of the set is in place.
-        self.committed = False
         # A backstop for an interrupt that lands where neither commit() nor
         # discard() can react (say, on the first instruction of __exit__):
         # the temporary files are still removed when the set is dropped or
@@ -209,8 +207,8 @@ class OutputSet:
 
         Every file is synced to disk first; then the renames run with SIGINT
         and SIGTERM held, and a signal that arrived meanwhile is delivered
-        (as ``KeyboardInterrupt``, say) only after the last one, with
-        :attr:`committed` already True. Any exception before the renames
+        (as ``KeyboardInterrupt``, say) only after the last one, once every
+        file is in place. Any exception before the renames
         discards the set.
 
         Raises
@@ -241,7 +239,6 @@ class OutputSet:
                 # Nothing is left to clean up: the entries are in place and
                 # the directories made for them are theirs.
                 self._finalizer.detach()
-                self.committed = True
                 # The old files, no longer needed; still with the signals
                 # held, or an interrupt noted meanwhile would leave them.
                 for backup in backups:
