@@ -76,7 +76,8 @@ def _crossing(p: np.ndarray, q: np.ndarray, line: np.ndarray) -> np.ndarray | No
 def trace_fall_line(dem: Dem, start: tuple[float, float], *, ascend: bool = False,
                     stop_line: np.ndarray | None = None, flat_deg: float = DEFAULT_FLAT_DEG,
                     max_length_m: float = 5_000.0, smooth_px: float = 1.0,
-                    step_m: float | None = None, what: str = "the fall line") -> FallLine:
+                    step_m: float | None = None, what: str = "the fall line",
+                    edge_ok: bool = False) -> FallLine:
     """Follow the steepest descent (or ascent) from ``start``.
 
     Parameters
@@ -99,6 +100,8 @@ def trace_fall_line(dem: Dem, start: tuple[float, float], *, ascend: bool = Fals
         Step length (m); default half the DEM's resolution.
     what
         The path's name in messages.
+    edge_ok
+        A descent may end at the raster's edge (the runout below a road).
 
     Returns
     -------
@@ -156,7 +159,7 @@ def trace_fall_line(dem: Dem, start: tuple[float, float], *, ascend: bool = Fals
         walked += h
         if walked >= max_length_m:
             break
-    if stop == "edge" and not ascend:
+    if stop == "edge" and not (ascend or edge_ok):
         p = path[-1]
         raise TerrainError(
             dem.shown, f"{what} from ({start[0]:.2f}, {start[1]:.2f}) leaves the raster or "
