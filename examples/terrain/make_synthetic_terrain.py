@@ -3,7 +3,7 @@
     python examples/terrain/make_synthetic_terrain.py
 
 A made-up hillside in ETRS89 / UTM 32N (EPSG:25832), 2 m pixels, 600 m x
-500 m: an 8 deg valley floor with a road on it, a 32 deg talus slope, a rock
+500 m: a flat valley bottom, an 8 deg floor with a road on it, a 32 deg talus slope, a rock
 cliff of 60-70 deg whose height varies along the valley, gullies, and an
 upper slope of 28 deg; roughness from a seeded, smoothed random field. It is
 NOT a survey of any real place (see README.txt). Also written: the road
@@ -29,14 +29,25 @@ RES = 2.0
 COLS, ROWS = 300, 250  # 600 m east, 500 m north (uphill)
 
 
-def angle_deg(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Slope angle (deg) at (u east, v north of the south edge), m."""
+def profile(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Height (m) above the valley bottom at (u east, v north of the south edge), m.
+
+    The slope angle changes at breaks (valley bottom 1 deg, floor 8 deg, talus
+    32 deg, the cliff 60-70 deg, the upper slope 28 deg) whose places vary
+    along the valley; the height is the exact integral of tan(angle) up to v.
+    """
     cliff_foot = 170.0 + 15.0 * np.sin(2 * np.pi * u / 500.0)
     cliff_height = 25.0 + 15.0 * np.sin(2 * np.pi * u / 300.0 + 1.0)  # 10 to 40 m
     cliff_deg = 65.0 + 5.0 * np.cos(2 * np.pi * u / 250.0)
     cliff_top = cliff_foot + cliff_height / np.tan(np.radians(cliff_deg))
-    return np.select([v < 80.0, v < cliff_foot, v < cliff_top],
-                     [8.0, 32.0, cliff_deg], 28.0)
+    breaks = [np.zeros_like(u), np.full_like(u, 25.0), np.full_like(u, 80.0), cliff_foot,
+              cliff_top, np.full_like(u, np.inf)]
+    angles = [np.full_like(u, 1.0), np.full_like(u, 8.0), np.full_like(u, 32.0), cliff_deg,
+              np.full_like(u, 28.0)]
+    z = np.zeros_like(v)
+    for k, angle in enumerate(angles):
+        z += np.tan(np.radians(angle)) * np.clip(v - breaks[k], 0.0, breaks[k + 1] - breaks[k])
+    return z
 
 
 def heights() -> np.ndarray:
@@ -44,8 +55,7 @@ def heights() -> np.ndarray:
     u = (np.arange(COLS) + 0.5) * RES
     v = (np.arange(ROWS) + 0.5) * RES
     uu, vv = np.meshgrid(u, v)  # rows from the south here
-    rise = np.tan(np.radians(angle_deg(uu, vv))) * RES
-    z = 600.0 + np.cumsum(rise, axis=0)
+    z = 600.0 + profile(uu, vv)
     for centre, depth in ((140.0, 6.0), (420.0, 9.0)):  # two gullies down the slope
         z -= depth * np.exp(-((uu - centre) / 18.0) ** 2) * np.clip((vv - 60.0) / 150.0, 0, 1)
     rng = np.random.default_rng(20261127)

@@ -29,6 +29,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The command line: every command's parser, each added by the module that runs it."""
     from .calibrate_command import add_calibrate_parser
     from .study_command import add_study_parser
+    from .terrain_command import add_section_parser
 
     parser = CommandParser(prog=PROG, description="Rockfall trajectories and protection design.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
@@ -40,6 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_calibrate_parser(sub)
     add_plugins_parser(sub)
     add_serve_parser(sub)
+    add_section_parser(sub)
     return parser
 
 

@@ -93,3 +93,50 @@ def write_layer(path: str | os.PathLike[str], geometries: Sequence[Any],
     except Exception as exc:  # noqa: BLE001 - GDAL's errors writing a file
         reason = " ".join(str(exc).split())[:160] or type(exc).__name__
         raise TerrainError(os.fspath(path), f"cannot write the layer: {reason}") from None
+
+
+def chosen_measures(where: Any, blocks: Sequence[Mapping[str, Any]]) -> list[MapMeasure]:
+    """The measures of each section's chosen design, on the map.
+
+    Parameters
+    ----------
+    where
+        The corridor's :class:`~.road.CorridorMap`.
+    blocks
+        The sections' JSON objects of ``optimise`` (``best``: the chosen
+        design with its ``measures`` and ``cost``; None without a design), in order.
+
+    Returns
+    -------
+    list of MapMeasure
+        One per measure of every chosen design. ``cost`` is the whole design's
+        cost of that section (a design of several measures repeats it).
+    """
+    out = []
+    for road_section, block in zip(where.sections, blocks, strict=True):
+        best = block.get("best")
+        if not best:
+            continue
+        for measure in best.get("measures", []):
+            x = float(measure["x"])
+            out.append(MapMeasure(measure_line(road_section, x), {
+                "type": str(measure.get("type", "")),
+                "product": measure.get("product"),
+                "height_m": measure.get("height"),
+                "capacity_kj": measure.get("capacity_kj"),
+                "cost": best.get("cost"),
+                "section": str(block.get("name", "")),
+                "station_m": round(road_section.station, 3),
+                "x_m": x,
+            }))
+    return out
+
+
+def write_measures(path: str | os.PathLike[str], measures: Sequence[MapMeasure],
+                   crs_wkt: str) -> None:
+    """Write the measures as a line layer ``measures`` (GeoPackage or GeoJSON)."""
+    shapely = require("shapely", f"writing {os.fspath(path)}")
+    keys = ("type", "product", "height_m", "capacity_kj", "cost", "section", "station_m", "x_m")
+    attributes = {k: [m.attributes.get(k) for m in measures] for k in keys}
+    write_layer(path, [shapely.LineString(m.line) for m in measures], attributes,
+                "LineString", crs_wkt, layer="measures")
