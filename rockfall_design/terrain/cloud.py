@@ -79,10 +79,11 @@ def cloud_section(path: str | os.PathLike[str], line: np.ndarray, *, swath_m: fl
     which = np.clip(np.digitize(s, edges) - 1, 0, len(edges) - 2)
     centres, heights = [], []
     for b in range(len(edges) - 1):
-        mine = z[which == b]
-        if len(mine):
-            centres.append(0.5 * (edges[b] + edges[b + 1]))
-            heights.append(float(np.percentile(mine, percentile)))
+        mine = which == b
+        if mine.any():
+            x_b, z_b = _bin_ground(s[mine], z[mine], percentile)
+            centres.append(x_b)
+            heights.append(z_b)
     x, h = np.array(centres), np.array(heights)
     gaps = np.flatnonzero(np.diff(x) > (MAX_GAP_BINS + 1) * bin_m)
     if len(gaps):
@@ -105,15 +106,35 @@ def cloud_section(path: str | os.PathLike[str], line: np.ndarray, *, swath_m: fl
                           line_n=line_n, dense_x=x - x0, dense_z=h)
 
 
+def _bin_ground(s: np.ndarray, z: np.ndarray, percentile: float) -> tuple[float, float]:
+    """A bin's station (the mean of its points', m) and ground height there (m).
+
+    The heights are detrended first (a least-squares line along the bin):
+    on a slope, a percentile of the raw heights would take the bin's lower
+    end, not its middle (on 1 m bins at 27 deg, 0.2 m low). The ground is
+    the fitted line at the mean station plus the percentile of the residuals.
+    """
+    centre = float(s.mean())
+    if len(s) < 3 or np.ptp(s) < 1e-6:
+        return centre, float(np.percentile(z, percentile))
+    slope, intercept = np.polyfit(s - centre, z, 1)
+    residual = z - (intercept + slope * (s - centre))
+    return centre, float(intercept + np.percentile(residual, percentile))
+
+
 def _along_across(points: np.ndarray, line: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Distance along the polyline (m) of each point's nearest foot, and its offset (m)."""
     best_d = np.full(len(points), np.inf)
     best_s = np.zeros(len(points))
     start = 0.0
-    for a, b in zip(line[:-1], line[1:], strict=True):
+    last = len(line) - 2
+    for k, (a, b) in enumerate(zip(line[:-1], line[1:], strict=True)):
         ab = b - a
         length = float(np.hypot(*ab))
-        t = np.clip(((points - a) @ ab) / length**2, 0.0, 1.0)
+        # beyond the line's ends the station runs on (below 0, above the length),
+        # so that points past an end are not counted at the end itself
+        t = np.clip(((points - a) @ ab) / length**2, -np.inf if k == 0 else 0.0,
+                    np.inf if k == last else 1.0)
         foot = a + t[:, None] * ab
         rel = points - foot
         dist = np.hypot(rel[:, 0], rel[:, 1])
