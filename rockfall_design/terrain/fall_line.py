@@ -120,9 +120,30 @@ def trace_fall_line(dem: Dem, start: tuple[float, float], *, ascend: bool = Fals
     """
     dem.check_points(start[0], start[1], f"the start of {what}")
     h = 0.5 * dem.resolution if step_m is None else float(step_m)
-    sign = 1.0 if ascend else -1.0
-    flat = math.tan(math.radians(flat_deg))
     line = None if stop_line is None else np.asarray(stop_line, dtype=float)
+    path, stop = _walk(dem, np.asarray(start, dtype=float), h, 1.0 if ascend else -1.0,
+                       math.tan(math.radians(flat_deg)), line, max_length_m, smooth_px)
+    if stop == "edge" and not (ascend or edge_ok):
+        p = path[-1]
+        raise TerrainError(
+            dem.shown, f"{what} from ({start[0]:.2f}, {start[1]:.2f}) leaves the raster or "
+            f"meets no data at ({p[0]:.2f}, {p[1]:.2f}) before it stops: give a stop line, "
+            "or a DEM that covers the slope down to its foot")
+    if len(path) < 2:
+        raise TerrainError(
+            dem.shown, f"{what} from ({start[0]:.2f}, {start[1]:.2f}) does not start: the "
+            f"ground there is flat (below {flat_deg:g} deg) or at the raster's edge")
+    return FallLine(np.array(path), stop)
+
+
+def _walk(dem: Dem, start: np.ndarray, h: float, sign: float, flat: float,
+          line: np.ndarray | None, max_length_m: float,
+          smooth_px: float) -> tuple[list[np.ndarray], str]:
+    """The midpoint-rule walk of :func:`trace_fall_line`: its points and why it stopped.
+
+    ``sign`` is +1 up the gradient, -1 down; ``flat`` the gradient's norm (-)
+    below which the ground is flat.
+    """
 
     def direction(p: np.ndarray) -> np.ndarray | None:
         g = dem.gradient_at(float(p[0]), float(p[1]), smooth_px)
@@ -135,38 +156,26 @@ def trace_fall_line(dem: Dem, start: tuple[float, float], *, ascend: bool = Fals
             return np.array([np.nan, np.nan])
         return np.array([sign * g[0] / norm, sign * g[1] / norm])
 
-    path = [np.asarray(start, dtype=float)]
+    path = [start]
     walked, stop = 0.0, "length"
     for _ in range(MAX_STEPS):
         p = path[-1]
         d = direction(p)
         mid = d if d is None or np.isnan(d[0]) else direction(p + 0.5 * h * d)
         if mid is None:
-            stop = "edge"
-            break
+            return path, "edge"
         if np.isnan(mid[0]):
-            stop = "flat"
-            break
+            return path, "flat"
         q = p + h * mid
+        if not dem.inside(q[0], q[1]):
+            return path, "edge"
         if len(path) >= 3 and np.hypot(*(q - path[-2])) < 0.5 * h:
-            stop = "flat"  # turned back on itself: a pit (or a ridge, walking up)
-            break
+            return path, "flat"  # turned back on itself: a pit (or a ridge, walking up)
         if line is not None and (hit := _crossing(p, q, line)) is not None:
             path.append(hit)
-            stop = "line"
-            break
+            return path, "line"
         path.append(q)
         walked += h
         if walked >= max_length_m:
             break
-    if stop == "edge" and not (ascend or edge_ok):
-        p = path[-1]
-        raise TerrainError(
-            dem.shown, f"{what} from ({start[0]:.2f}, {start[1]:.2f}) leaves the raster or "
-            f"meets no data at ({p[0]:.2f}, {p[1]:.2f}) before it stops: give a stop line, "
-            "or a DEM that covers the slope down to its foot")
-    if len(path) < 2:
-        raise TerrainError(
-            dem.shown, f"{what} from ({start[0]:.2f}, {start[1]:.2f}) does not start: the "
-            f"ground there is flat (below {flat_deg:g} deg) or at the raster's edge")
-    return FallLine(np.array(path), stop)
+    return path, stop

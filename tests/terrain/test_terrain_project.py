@@ -152,9 +152,14 @@ def test_the_section_command_writes_a_survey_csv(tmp_path, capsys):
     dem = slope_dem(tmp_path / "dem.tif")
     code, err = run(["section", str(dem), "--fall-line", f"{WEST + 30},{NORTH - 5}", "--out",
                      str(tmp_path / "s.csv"), "--plot", str(tmp_path / "s.png")], capsys)
+    assert code == 2 and "leaves the raster" in err  # the slope runs on to the raster's edge
+    code, err = run(["section", str(dem), "--fall-line", f"{WEST + 30},{NORTH - 5}", "--stop",
+                     f"{WEST},{NORTH - 100}", f"{WEST + 60},{NORTH - 100}", "--out",
+                     str(tmp_path / "s.csv"), "--plot", str(tmp_path / "s.png")], capsys)
     assert code == 0, err
     rows = (tmp_path / "s.csv").read_text().splitlines()
     assert rows[2] == "x,y"
+    assert rows[-1].startswith("95.0000,")  # from 5 m to 100 m south
     assert (tmp_path / "s.png").stat().st_size > 1000
 
 
