@@ -169,8 +169,11 @@ def cut_section(dem: Dem, line: np.ndarray, *, spacing: float | None = None,
     if np.any(seg <= 0):
         k = int(np.argmin(seg > 0)) + 1
         raise TerrainError(dem.shown, f"{what}: point {k + 1} repeats point {k}")
-    for k, (e, n) in enumerate(line):
-        dem.check_points(e, n, f"point {k + 1} of {what}")
+    bad = ~dem.inside(line[:, 0], line[:, 1])
+    bad |= ~np.isfinite(dem.height(line[:, 0], line[:, 1]))
+    if bad.any():  # checked at once (a traced line has hundreds); the first one named
+        k = int(np.argmax(bad))
+        dem.check_points(line[k, 0], line[k, 1], f"point {k + 1} of {what}")
     step = dem.resolution if spacing is None else float(spacing)
     if orient and dem.height(*line[-1]) > dem.height(*line[0]):
         line = line[::-1]
