@@ -60,14 +60,19 @@ def classes_from_raster(path: str | os.PathLike[str], east: np.ndarray, north: n
     try:
         with rasterio.open(path) as src:
             same_crs(shown, src.crs.to_wkt() if src.crs else "", dem_wkt, "land-cover raster")
-            rows, cols = src.index(east, north)
+            inverse = ~src.transform
             band = src.read(1, masked=True)
+        # the pixel that holds each point (the inverse affine transform, floored)
+        x, y = np.asarray(east, dtype=float), np.asarray(north, dtype=float)
+        cols = inverse.a * x + inverse.b * y + inverse.c
+        rows = inverse.d * x + inverse.e * y + inverse.f
     except TerrainError:
         raise
     except Exception as exc:  # noqa: BLE001 - GDAL's errors on a foreign or damaged file
         reason = " ".join(str(exc).split())[:160] or type(exc).__name__
         raise TerrainError(shown, f"not a raster that can be read: {reason}") from None
-    rows, cols = np.asarray(rows), np.asarray(cols)
+    rows = np.floor(rows).astype(np.intp)
+    cols = np.floor(cols).astype(np.intp)
     out: list[Any] = []
     for k, (i, j) in enumerate(zip(rows, cols, strict=True)):
         if not (0 <= i < band.shape[0] and 0 <= j < band.shape[1]):

@@ -183,3 +183,45 @@ def test_bad_terrain_input_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch,
     assert expected in err
     assert "dem.tif" in err or case == "no extra"
     assert not (tmp_path / "s.csv").exists()
+
+
+def test_materials_from_a_land_cover_raster_and_release_from_polygons(tmp_path):
+    slope_dem(tmp_path / "dem.tif")
+    e, n = grid(120, 60)
+    classes = np.where(NORTH - n > 70, 2.0, 1.0)  # class 2 from 70 m south of the edge
+    write_dem(tmp_path / "cover.tif", classes, nodata=None)
+    source = shapely.box(WEST, NORTH - 30, WEST + 60, NORTH - 20)
+    write_layer(tmp_path / "release.gpkg", [source], {"name": ["scarp"]}, "Polygon", CRS)
+    (tmp_path / "p.yaml").write_text(f"""
+name: t
+slope:
+  dem: dem.tif
+  line: [[{WEST + 30}, {NORTH - 5}], [{WEST + 30}, {NORTH - 110}]]
+  materials: {{raster: cover.tif, classes: {{1: talus, 2: forest}}}}
+protect: {{x: 100}}
+{MATERIALS.replace("steeper_than_deg: 45", "polygons: release.gpkg")}""")
+    project = load_project(tmp_path / "p.yaml")
+    points = np.array(project.slope.points)
+    change = project.slope.materials.index("forest")
+    assert_allclose(points[change, 0], 65.0, atol=1.0)  # 70 m south, the line from 5 m
+    assert set(project.slope.materials[:change]) == {"talus"}
+    assert set(project.slope.materials[change:]) == {"forest"}
+    (zone,) = project.rocks.release
+    assert_allclose(zone.x, (15.0, 25.0), atol=1.0)
+
+
+def test_a_class_without_material_names_the_class_and_the_station(tmp_path):
+    slope_dem(tmp_path / "dem.tif")
+    e, n = grid(120, 60)
+    write_dem(tmp_path / "cover.tif", np.where(NORTH - n > 70, 7.0, 1.0), nodata=None)
+    (tmp_path / "p.yaml").write_text(f"""
+name: t
+slope:
+  dem: dem.tif
+  line: [[{WEST + 30}, {NORTH - 5}], [{WEST + 30}, {NORTH - 110}]]
+  materials: {{raster: cover.tif, classes: {{1: talus}}}}
+protect: {{x: 100}}
+{MATERIALS}""")
+    with pytest.raises(Exception, match=r"cover.tif: class 7 at 6\d\.\d m along the section "
+                       r"\(.*\) has no material"):
+        load_project(tmp_path / "p.yaml")
