@@ -47,6 +47,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExitCode, InputError
+from .corridor_map import map_files, write_map
 from .corridor_report import _print_totals, _section_rule, corridor_summary, section_block
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -206,6 +207,7 @@ def each_section(
     guard: Callable[[CorridorSection], None] | None = None,
     elsewhere: Callable[[Sequence[argparse.Namespace]], Sequence[Any] | None] | None = None,
     scenarios: bool = False,
+    extra: tuple[Sequence[Path], Callable[[OutputSet, dict[str, Any]], None]] | None = None,
 ) -> dict[str, Any]:
     """Run a command over every section of a corridor: the pattern every command shares.
 
@@ -238,6 +240,9 @@ def each_section(
         returns one result per section (``SectionRun.ran``), or None.
     scenarios
         ``check --scenarios`` (see :func:`corridor_summary`).
+    extra
+        More files of the corridor (reserved first) and their writer, called
+        with the set and the corridor's JSON (the map of a corridor on a DEM).
 
     Returns
     -------
@@ -261,6 +266,8 @@ def each_section(
                 reserve(files, sub.report, REPORT_FILES)
             reserve(files, sub.plot, figure_files(figures, sub))
         reserve(files, args.out, ("summary.json",))
+        if extra is not None:
+            files.reserve(*extra[0])
         ran = elsewhere(subs) if elsewhere is not None else None
 
         def one(i: int) -> SectionDone:
@@ -282,6 +289,8 @@ def each_section(
             [d.cost for d in done] if command == "optimise" else (), scenarios)
         if args.out:
             files.write_json(args.out / "summary.json", summary)
+        if extra is not None:
+            extra[1](files, summary)
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
@@ -413,9 +422,13 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
         return SectionDone(report.summary,
                            lambda: print_optimised(result, project, report.summary), cost)
 
+    extra = None
+    if corridor.map is not None:  # a corridor along a road on a DEM: the design on the map
+        extra = (map_files(args),
+                 lambda files, summary: write_map(args, corridor, files, summary["sections"]))
     summary = each_section(args, corridor, "optimise", body, guard=guard,
                            out_files=("design.yaml", "alternatives.csv", "summary.json"),
-                           figures=FIGURES)
+                           figures=FIGURES, extra=extra)
     return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
 
 

@@ -30,6 +30,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .calibrate_command import add_calibrate_parser
     from .study_command import add_study_parser
 
+    # section's module imports matplotlib (its figure): only when the parser is built
+    from .terrain_command import add_section_parser
+
     parser = CommandParser(prog=PROG, description="Rockfall trajectories and protection design.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=CommandParser)
@@ -40,6 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_calibrate_parser(sub)
     add_plugins_parser(sub)
     add_serve_parser(sub)
+    add_section_parser(sub)
     return parser
 
 

@@ -129,6 +129,10 @@ class Corridor:
         The run seed (``rocks.seed`` at the top level) the sections' seeds derive from.
     sections
         One :class:`CorridorSection` per item of ``sections:``, in order.
+    map
+        For a corridor along a road on a DEM (``corridor:``), where its
+        sections lie on the map (:class:`rockfall_design.terrain.road.CorridorMap`);
+        None for one of listed sections.
     """
 
     name: str
@@ -136,6 +140,7 @@ class Corridor:
     source: str
     seed: int
     sections: tuple[CorridorSection, ...]
+    map: Any = None
 
     def section_seeds(self, seed: int | None = None) -> list[int]:
         """Each section's seed for a run with ``seed`` (default: :attr:`seed`)."""

@@ -28,6 +28,7 @@ from .messages import (
     unquoted,
 )
 from .model import Project
+from .terrain_corridor import terrain_corridor
 from .yaml_file import parse_yaml
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -71,9 +72,11 @@ def load_project_text(
         ``source:line: key.path: message``.
     """
     data, lines = _parse_top(text, source)
-    if "sections" in data:
+    for key in ("sections", "corridor"):
+        if key not in data:
+            continue
         raise ProjectError(
-            source, _line_of(("sections",), lines), "sections",
+            source, _line_of((key,), lines), key,
             "this file lists sections (a corridor): load it with load_corridor; simulate, "
             "check, optimise and study run every section",
         )
@@ -204,6 +207,14 @@ def load_corridor_text(
 
     data, lines = _parse_top(text, source)
     base = Path(source).parent if base_dir is None else Path(base_dir)
+    where = None
+    if "corridor" in data:
+        # Sections along a road, cut from a DEM (the terrain extra).
+        def error(path: Any, message: str) -> ProjectError:
+            full = _yaml_path(tuple(path), lines)
+            return ProjectError(source, _line_of(full, lines), _key_text(full, lines), message)
+
+        data, where = terrain_corridor(data, error, base)
     if "sections" not in data:
         return _validated(data, lines, source, base)
     sections = []
@@ -223,7 +234,7 @@ def load_corridor_text(
     return Corridor(name=strip_controls(str(data.get("name", ""))),
                     description=(strip_controls(description, lines=True)
                                  if isinstance(description, str) else ""),
-                    source=source, seed=run_seed, sections=tuple(sections))
+                    source=source, seed=run_seed, sections=tuple(sections), map=where)
 
 
 def load_corridor(path: str | os.PathLike[str]) -> "Corridor | Project":

@@ -54,6 +54,7 @@ from .messages import (
     unquoted,
 )
 from .schema import Material, Slope
+from .terrain_slope import is_terrain_slope, terrain_slope, terrain_zones
 from .yaml_file import parse_yaml
 
 __all__ = ["MAX_SURVEY_POINTS", "resolve_inputs"]
@@ -116,7 +117,14 @@ def resolve_inputs(data: dict[str, Any], lines: _Lines, source: str, base_dir: P
     if isinstance(materials, dict) and "library" in materials:
         out["materials"] = _merge_library(materials, where, base_dir)
     slope = data.get("slope")
-    if isinstance(slope, dict) and ("csv" in slope or "dxf" in slope):
+    if is_terrain_slope(slope):
+        # A DEM or a point cloud (the terrain extra): cut here, as a survey is read.
+        out["slope"], section, crs = terrain_slope(slope, where.error, base_dir)
+        rocks = data.get("rocks")
+        if isinstance(rocks, dict) and "release" in rocks:
+            out["rocks"] = {**rocks, "release": terrain_zones(
+                rocks["release"], section, crs, where.error, base_dir)}
+    elif isinstance(slope, dict) and ("csv" in slope or "dxf" in slope):
         out["slope"] = _survey_slope(slope, out.get("materials"), where, base_dir)
     return out
 

@@ -24,6 +24,17 @@ SMALL_DESIGN = ROOT / "tests" / "data" / "design_small.yaml"
 
 #: command -> option -> what its help must mention (fragments, in any order)
 EXPECTED: dict[str, dict[str, list[str]]] = {
+    "section": {
+        "dem": ["DEM"],
+        "--fall-line": ["steepest descent", "map point"],
+        "--line": ["map line", "two or more points"],
+        "--stop": ["map line", "fall line ends"],
+        "--flat-deg": ["fall line ends", "flatter", "deg"],
+        "--spacing": ["sampling step", "DEM's resolution"],
+        "--tolerance": ["vertical tolerance"],
+        "--out": ["CSV", "x, y"],
+        "--plot": ["figure", ".png"],
+    },
     "simulate": {
         "project": ["project file"],
         "--repeat": ["summary.json", "instead of reading a project file"],
