@@ -22,7 +22,13 @@ import numpy as np
 from ..project import Project
 from .calibrated import CalibrationResult, ComparisonResult
 from .distances import fit_statistics, level_shares
-from .observations import Observations, observed_file, read_observations, size_distribution
+from .observations import (
+    Observations,
+    observed_file,
+    read_observations,
+    size_distribution,
+    size_limits,
+)
 
 __all__ = ["run_calibration", "run_comparison"]
 
@@ -30,7 +36,7 @@ __all__ = ["run_calibration", "run_comparison"]
 def _observations(project: Project, path: str | os.PathLike[str] | None) -> Observations:
     if path is None:
         path = observed_file(project)
-    return read_observations(path, project.slope.x_range)
+    return read_observations(path, project.slope.x_range, size_limits(project.rocks.density))
 
 
 def run_calibration(
