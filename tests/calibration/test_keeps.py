@@ -19,6 +19,8 @@ from pathlib import Path
 
 import pytest
 import yaml
+from hypothesis import given
+from hypothesis import strategies as st
 
 import rockfall_design as rd
 import rockfall_design.api
@@ -237,3 +239,19 @@ def test_ctrl_c_ends_a_real_calibration(tmp_path):
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "interrupted; no files were changed" in err
     assert not out.exists() or list(out.iterdir()) == []
+
+
+@given(lo=st.floats(-1e3, 1e3), width=st.floats(1e-3, 1e3), u=st.floats(0, 1),
+       a=st.floats(0, 1), b=st.floats(0, 1))
+def test_rounding_keeps_the_value_in_range_and_within_half_a_digit(lo, width, u, a, b):
+    hi = lo + width
+    value = lo + u * width
+    low, high = sorted((lo + a * width, lo + b * width))
+    low, high = min(low, value), max(high, value)
+    p = {"value": value, "low": low, "high": high, "sd": width / 10, "range": [lo, hi]}
+    r, places = rounded(p), decimals(p)
+    assert lo <= r["value"] <= hi
+    assert abs(r["value"] - value) <= 0.5 * 10.0 ** -places + 1e-9 * max(1.0, abs(value))
+    # Two significant digits of the half-width at least: the rounding is finer than it.
+    if high > low:
+        assert 10.0 ** -places <= (high - low) / 2 + 1e-12

@@ -14,11 +14,15 @@ from pathlib import Path
 
 import matplotlib
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from pydantic_core import PydanticCustomError
 
 import rockfall_design as rd
 from rockfall_design.cli.program import main
 from rockfall_design.errors import ProjectError
 from rockfall_design.project import load_project_text
+from rockfall_design.project.fields import one_line
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"
@@ -117,3 +121,17 @@ def test_markup_in_names_is_printed_as_written(tmp_path, capsys):
                  "--rocks", "60"]) == 0
     out = capsys.readouterr().out
     assert "[/oops] a [red]b" in out and "[bold]bench[/]" in out
+
+
+@given(before=st.text(max_size=8), after=st.text(max_size=8),
+       control=st.sampled_from(["\n", "\r", "\t", "\x1b", "\x00", "\x7f", "\x9b", "\u2028",
+                                "\u202e", "\u2066"]))
+def test_one_line_refuses_every_line_break_and_control(before, after, control):
+    with pytest.raises(PydanticCustomError):
+        one_line(before + control + after)
+
+
+@given(st.text(alphabet=st.characters(blacklist_categories=("Cc", "Cf", "Zl", "Zp", "Cs")),
+               max_size=30))
+def test_one_line_keeps_printable_text(text):
+    assert one_line(text) == text
