@@ -10,6 +10,7 @@ Light on purpose: the command line imports it to parse its options.
 
 from __future__ import annotations
 
+import numbers
 import operator
 from typing import Any
 
@@ -19,6 +20,7 @@ __all__ = [
     "MAX_BOOTSTRAP",
     "MAX_ROCKS",
     "ArgumentError",
+    "ArgumentTypeError",
     "bounds_problem",
     "whole_number",
 ]
@@ -30,10 +32,14 @@ MAX_ROCKS = 1_000_000_000
 MAX_BOOTSTRAP = 2000
 
 
-class ArgumentError(InputError):
+class ArgumentError(InputError, ValueError):
     """A number given to an API function that the command line would refuse too.
 
-    Exit code 2 (an :class:`~rockfall_design.errors.InputError`).
+    Exit code 2 (an :class:`~rockfall_design.errors.InputError`). Also a
+    :class:`ValueError`, as Python's convention has it for an argument of
+    the right type with a wrong value (numpy's ``AxisError`` is a
+    ``ValueError`` and an ``IndexError`` alike): a user's ``except
+    ValueError`` catches ``simulate(p, rocks=2.5)`` and ``seed=-1``.
 
     Attributes
     ----------
@@ -47,6 +53,15 @@ class ArgumentError(InputError):
         super().__init__(f"{key}: {problem}")
         self.key = key
         self.problem = problem
+
+
+class ArgumentTypeError(ArgumentError, TypeError):
+    """An argument that is not a number at all (``rocks="10"``, ``seed=True``, ``None``).
+
+    A :class:`TypeError` too, as Python raises for a wrong type; still an
+    :class:`ArgumentError` (so a ``ValueError`` and an ``InputError``, exit
+    code 2), so that one ``except`` catches every refused argument.
+    """
 
 
 def bounds_problem(value: int, low: int, high: int | None, what: str) -> str | None:
@@ -83,14 +98,21 @@ def whole_number(value: Any, key: str, low: int, high: int | None = None,
     Raises
     ------
     ArgumentError
-        ``KEY: expected a whole number, got VALUE`` or a bound's message.
+        ``KEY: expected a whole number, got VALUE`` for a real number that is
+        not whole, or a bound's message (a ``ValueError`` too).
+    ArgumentTypeError
+        The same words for a value that is not a number (text, None, a
+        boolean): a ``TypeError`` too.
     """
     if isinstance(value, bool):
-        raise ArgumentError(key, f"expected a whole number, got {value!r} (a boolean)")
+        raise ArgumentTypeError(key, f"expected a whole number, got {value!r} (a boolean)")
     try:
         number = operator.index(value)  # int and numpy integers; not 2.5, "10" or 10.0
     except TypeError:
-        raise ArgumentError(key, f"expected a whole number, got {value!r}") from None
+        # A real number that is not whole (2.5, 10.0) is a wrong value; anything
+        # else ("10", None, a list) a wrong type.
+        kind = ArgumentError if isinstance(value, numbers.Real) else ArgumentTypeError
+        raise kind(key, f"expected a whole number, got {value!r}") from None
     problem = bounds_problem(number, low, high, what)
     if problem is not None:
         raise ArgumentError(key, problem)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import rockfall_design as rd
-from rockfall_design.arguments import ArgumentError
+from rockfall_design.arguments import ArgumentError, ArgumentTypeError
 from rockfall_design.cli.program import main
 from rockfall_design.errors import ExitCode, InputError
 
@@ -87,3 +87,24 @@ def test_calibrate_bootstrap_is_checked_as_the_option():
 def test_numpy_integers_are_whole_numbers(standard):
     result = rd.simulate(standard, rocks=np.int64(5), seed=np.uint8(3))
     assert result.summary["rocks"] == 5 and result.summary["seed"] == 3
+
+
+@pytest.mark.parametrize("kw", [{"rocks": 2.5}, {"seed": 1.5}, {"rocks": 0}, {"seed": -1},
+                                {"rocks": 10.0}])
+def test_a_wrong_value_is_a_value_error(standard, kw):
+    """Issue 34 item 8: ``except ValueError`` in a user's script catches a refused value."""
+    with pytest.raises(ValueError) as caught:
+        rd.simulate(standard, **kw)
+    assert isinstance(caught.value, ArgumentError)
+    assert not isinstance(caught.value, TypeError)
+
+
+@pytest.mark.parametrize("kw", [{"rocks": "10"}, {"seed": "7"}, {"rocks": True},
+                                {"seed": [3]}])
+def test_a_wrong_type_is_a_type_error(standard, kw):
+    """Not a number at all: a TypeError, and still the project's own error (exit code 2)."""
+    with pytest.raises(TypeError) as caught:
+        rd.simulate(standard, **kw)
+    assert isinstance(caught.value, ArgumentTypeError)
+    assert isinstance(caught.value, ArgumentError) and isinstance(caught.value, InputError)
+    assert caught.value.exit_code == ExitCode.BAD_INPUT

@@ -17,9 +17,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..project import Project
-from .distances import LevelShare
+from .distances import LevelShare, verdict
 from .fit import FitProblem
 from .observations import Observations, observed_file
+from .uncertainty import intervals_flag, rounded
 
 if TYPE_CHECKING:  # pragma: no cover
     import os
@@ -47,9 +48,9 @@ def _material_key(path: str) -> tuple[str, str] | None:
 
 
 def _warnings(parameters: list[dict[str, Any]], fit: dict[str, Any],
-              levels: list[LevelShare]) -> list[str]:
+              levels: list[LevelShare], rough: str | None = None) -> list[str]:
     """What a reader of the calibration must not miss, one sentence each."""
-    out = []
+    out = [rough] if rough else []
     for p in parameters:
         if p["identified"] is False:
             out.append(f"{p['path']}: not identified by the observations (its refits spread "
@@ -93,8 +94,15 @@ class ComparisonResult:
             "levels": [s.as_dict() for s in self.levels],
             "seed": self.seed,
             "rocks": self.rocks,
+            "verdict": self.verdict_line,
+            "consistent": verdict(self.fit, self.levels)[0],
             "warnings": _warnings([], self.fit, self.levels),
         }
+
+    @property
+    def verdict_line(self) -> str:
+        """Whether the prediction is consistent with the observations, naming the test."""
+        return verdict(self.fit, self.levels)[1]
 
     def figures(self) -> dict[str, Figure]:
         """The stop positions' figure (:data:`FIGURES` [0])."""
@@ -118,9 +126,16 @@ class ComparisonResult:
 
     def print(self, console: Console | None = None) -> None:
         """The fit statistics and the levels as rich tables."""
-        _print_fit(self.project.name, self.fit, self.levels, console,
+        from rich.markup import escape
+
+        console = _print_fit(self.project.name, self.fit, self.levels, console,
                    f"{self.observations.n} observed blocks, {self.rocks:,} simulated rocks, "
                    f"seed {self.seed}")
+        consistent, line = verdict(self.fit, self.levels)
+        colour = "green" if consistent else "red"
+        console.print(f"[{colour}]verdict:[/{colour}] {escape(line)}")
+        for w in self.summary["warnings"]:
+            console.print(f"[yellow]warning:[/yellow] {escape(w)}")
 
 
 @dataclass
@@ -189,10 +204,15 @@ class CalibrationResult:
                        "bootstrap": len(self.replicates) - 1, "confidence": self.confidence,
                        "interval": "expanded percentile bootstrap (Hesterberg 2015), each "
                        "replicate refitted with its own "
-                       "simulation seed", "seed": self.seed,
+                       "simulation seed", "rough_intervals": self.rough, "seed": self.seed,
                        "evaluations": int(sum(r["evaluations"] for r in self.replicates))},
-            "warnings": _warnings(self.parameters, self.fit, self.levels),
+            "warnings": _warnings(self.parameters, self.fit, self.levels, self.rough),
         }
+
+    @property
+    def rough(self) -> str | None:
+        """Why the intervals are not of the stated confidence (too few replicates), or None."""
+        return intervals_flag(len(self.replicates) - 1, self.confidence)
 
     def parameters_table(self) -> pd.DataFrame:
         """One row per fitted input (``parameters.csv``)."""
@@ -220,8 +240,10 @@ class CalibrationResult:
         bootstrap's standard deviation of the fitted value (added in
         quadrature), so that a later run carries the uncertainty of the
         ground as well as its variability. The ``calibrate:`` section is
-        kept, its ``observed`` file relative to ``relative_to`` (the
-        directory the file is written to), so ``compare`` finds its levels.
+        kept, its ``observed`` the file this calibration fitted (``--observed``
+        if given, else the project's), relative to ``relative_to`` (the
+        directory the file is written to), so that a rerun fits the same
+        observations and ``compare`` finds its levels.
         ``spread=False`` keeps the project's scatter as it was.
 
         Notes
@@ -240,15 +262,17 @@ class CalibrationResult:
 
         data = copy.deepcopy(self.problem.base)
         for p in self.parameters:
-            set_input(data, p["path"], p["value"])
+            # To its interval's precision: the digits beyond are noise.
+            set_input(data, p["path"], rounded(p)["value"])
             key = _material_key(p["path"])
             if spread and key is not None and p["sd"] is not None:
                 scatter = data["materials"][key[0]].setdefault("scatter", {})
                 old = float(scatter.get(key[1]) or 0.0)
-                scatter[key[1]] = float(math.hypot(old, p["sd"]))
+                scatter[key[1]] = float(f"{math.hypot(old, p['sd']):.2g}")
         spec = self.project.resolved_dict().get("calibrate")
         if spec is not None:
-            path = os.fspath(observed_file(self.project).resolve())
+            fitted = self.observations.path or observed_file(self.project)
+            path = os.fspath(fitted.resolve())
             if relative_to is not None:
                 path = os.path.relpath(path, relative_to)
             data["calibrate"] = {**spec, "observed": path}
@@ -292,17 +316,17 @@ class CalibrationResult:
             if len(key) != 3 or key[0] != "materials":
                 continue  # not a material's parameter (e.g. the release height)
             key = key[1:]
-            interval = ("" if p["low"] is None else
-                        f" [{p['low']:.3g}, {p['high']:.3g}]")
+            r = rounded(p)
+            interval = "" if r["low"] is None else f" [{r['low']:g}, {r['high']:g}]"
             flag = " NOT IDENTIFIED" if p["identified"] is False else ""
-            fitted.setdefault(key[0], []).append(f"{key[1]} {p['value']:.3g}{interval}{flag}")
+            fitted.setdefault(key[0], []).append(f"{key[1]} {r['value']:g}{interval}{flag}")
         observed = f"{self.observations.source} ({self.observations.n} blocks)"
         parts = []
         for name, entry in self.materials_library(spread=spread).items():
             if name in fitted:
+                what = self.rough or f"{100 * self.confidence:g} % intervals"
                 source = (f"calibrated on {observed}, {day}, seed {self.seed} (rockfall-design "
-                          f"calibrate; fitted: {'; '.join(fitted[name])}, "
-                          f"{100 * self.confidence:g} % intervals)")
+                          f"calibrate; fitted: {'; '.join(fitted[name])}, {what})")
             else:
                 source = f"the project {self.project.source}, not fitted by this calibration"
             law = entry.get("impact_model", "spang")
@@ -335,19 +359,22 @@ class CalibrationResult:
 
     def print(self, console: Console | None = None) -> None:
         """The parameters, the fit and the levels as rich tables."""
+        from rich.markup import escape
         from rich.table import Table
 
         from ..report.terminal import fitted_console
 
-        t = Table(title=f"fitted inputs ({100 * self.confidence:.0f} % intervals, "
-                  f"{len(self.replicates) - 1} bootstrap replicates)")
+        replicates = len(self.replicates) - 1
+        kind = ("ROUGH intervals, not " if self.rough else "") + f"{100 * self.confidence:g} %"
+        t = Table(title=f"fitted inputs ({kind}, {replicates} bootstrap replicates)")
         for col in ("input", "value", "low", "high", "range", "identified"):
             t.add_column(col, justify="left" if col in ("input", "identified") else "right")
         for p in self.parameters:
             def num(v: Any) -> str:
-                return "-" if v is None else f"{v:.3g}"
+                return "-" if v is None else f"{v:g}"
+            r = rounded(p)
             ident = {True: "yes", False: "[red]NO[/red]", None: "-"}[p["identified"]]
-            t.add_row(p["path"], num(p["value"]), num(p["low"]), num(p["high"]),
+            t.add_row(escape(p["path"]), num(r["value"]), num(r["low"]), num(r["high"]),
                       f"{p['range'][0]:g}..{p['range'][1]:g}", ident)
         console = console or fitted_console(t)
         console.print(t)
@@ -357,23 +384,25 @@ class CalibrationResult:
             for j in range(len(self.problem.paths)):
                 c.add_column(str(j + 1), justify="right")
             for i, path in enumerate(self.problem.paths):
-                c.add_row(f"{i + 1} {path}", *(f"{v:+.2f}" for v in self.correlation[i]))
+                c.add_row(f"{i + 1} {escape(path)}",
+                          *(f"{v:+.2f}" for v in self.correlation[i]))
             console.print(c)
         _print_fit(self.project.name, self.fit, self.levels, console,
                    f"{self.observations.n} observed blocks, {self.problem.rocks:,} rocks per "
                    f"evaluation, seed {self.seed}, {self.runtime_s:.1f} s")
         for w in self.summary["warnings"]:
-            console.print(f"[yellow]warning:[/yellow] {w}")
+            console.print(f"[yellow]warning:[/yellow] {escape(w)}")
 
 
 def _print_fit(name: str, fit: dict[str, Any], levels: list[LevelShare],
-               console: Console | None, head: str) -> None:
-    """The fit statistics and the level shares (shared by calibrate and compare)."""
+               console: Console | None, head: str) -> Console:
+    """The fit statistics and the level shares (shared by calibrate and compare); the console."""
+    from rich.markup import escape
     from rich.table import Table
 
     from ..report.terminal import fitted_console
 
-    t = Table(title=f"{name}: observed and simulated stops ({head})")
+    t = Table(title=f"{escape(name)}: observed and simulated stops ({head})")
     for col in ("", "count", "mean", "p5", "p25", "p50", "p75", "p95"):
         t.add_column(col, justify="left" if not col else "right")
     for label in ("observed", "simulated"):
@@ -390,8 +419,9 @@ def _print_fit(name: str, fit: dict[str, Any], levels: list[LevelShare],
         for col in ("level", "x (m)", "observed", "interval", "simulated", ""):
             lt.add_column(col, justify="left" if col in ("level", "") else "right")
         for s in levels:
-            lt.add_row(s.name, f"{s.x[0]:g}..{s.x[1]:g}",
+            lt.add_row(escape(s.name), f"{s.x[0]:g}..{s.x[1]:g}",
                        f"{s.observed_share:.2f} ({s.observed_count})",
                        f"{s.low:.2f}..{s.high:.2f}", f"{s.simulated_share:.2f}",
                        "" if s.consistent else "[red]outside[/red]")
         console.print(lt)
+    return console

@@ -21,14 +21,17 @@ the section, are then far from it.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-__all__ = ["LevelShare", "distance", "fit_statistics", "level_shares", "objective",
-           "spread", "stop_positions", "wilson_interval"]
+__all__ = ["LevelShare", "TEST_LEVEL", "distance", "fit_statistics", "level_shares",
+           "objective", "spread", "stop_positions", "verdict", "wilson_interval"]
+
+#: Significance level of compare's verdict (the two-sample KS test).
+TEST_LEVEL = 0.05
 
 
 def stop_positions(x_end: np.ndarray, status: np.ndarray, x_range: tuple[float, float]
@@ -215,3 +218,54 @@ def fit_statistics(observed: np.ndarray, simulated: np.ndarray, kind: str = "ene
     if x_range is not None:
         out["beyond_section"] = float(np.mean(simulated >= x_range[1]))
     return out
+
+
+def verdict(fit: Mapping[str, Any], levels: Sequence[LevelShare], confidence: float = 0.95,
+            level: float = TEST_LEVEL) -> tuple[bool, str]:
+    """Whether a prediction is consistent with the observed stops, and the line that says so.
+
+    The test is the two-sample Kolmogorov-Smirnov test of the observed and
+    simulated stop positions at ``level``: consistent when its p-value is at
+    least ``level``. A level whose simulated share lies outside the observed
+    share's Wilson interval (at ``confidence``) makes the prediction
+    inconsistent too, and is named.
+
+    Parameters
+    ----------
+    fit
+        :func:`fit_statistics`' result (``ks_pvalue``).
+    levels
+        :func:`level_shares`' result.
+    confidence, level
+        Of the levels' intervals, and of the KS test.
+
+    Returns
+    -------
+    (consistent, line)
+
+    Notes
+    -----
+    Consistent means only that the observations cannot tell the prediction
+    apart at this level: with few observed blocks the test has little
+    power, so the distance and the percentiles say how close the two are.
+    After a fit to the same observations the p-value is optimistic.
+
+    References
+    ----------
+    Hollander, M., Wolfe, D. A., Chicken, E. (2014). Nonparametric
+    Statistical Methods, 3rd ed., Wiley, sec. 5.4 (the two-sample
+    Kolmogorov-Smirnov test).
+    """
+    p = float(fit["ks_pvalue"])
+    ks_ok = p >= level
+    outside = [s.name for s in levels if not s.consistent]
+    test = (f"two-sample Kolmogorov-Smirnov test at {100 * level:g} %: p = {p:.2g} "
+            f"{'>=' if ks_ok else '<'} {level:g}")
+    if ks_ok and not outside:
+        return True, f"consistent with the observations ({test})"
+    why = [test] if not ks_ok else [f"the {test} passes"]
+    if outside:
+        why.append(f"the simulated share of level{'s' if len(outside) > 1 else ''} "
+                   f"{', '.join(outside)} lies outside the observed share's "
+                   f"{100 * confidence:g} % interval")
+    return False, f"NOT consistent with the observations ({'; '.join(why)})"

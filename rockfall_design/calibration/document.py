@@ -24,6 +24,8 @@ import numpy as np
 from ..report.documents import MODEL_LIMITS
 from ..report.sections import Table, inputs_table
 from ..version import __version__
+from .distances import verdict
+from .uncertainty import rounded
 
 __all__ = ["CALIBRATION_LIMITS", "report_context"]
 
@@ -116,6 +118,8 @@ def _settings_table(result: Any) -> Table:
              ["bootstrap replicates", f"{int(m['bootstrap']):,}"],
              ["confidence of the intervals", f"{100 * float(m['confidence']):g} %"],
              ["interval", str(m["interval"])]]
+    if m.get("rough_intervals"):
+        rows.append(["intervals flagged", str(m["rough_intervals"])])
     return Table("Calibration settings", ["setting", "value"], rows,
                  note="Ranges searched (the fitted inputs' values in the tables above are "
                  "where the search started); levels: stretches [from, to) of x whose shares "
@@ -124,17 +128,21 @@ def _settings_table(result: Any) -> Table:
 
 def _parameters_table(result: Any) -> Table:
     conf = f"{100 * result.confidence:g} %"
+    if result.rough:
+        conf = f"ROUGH, not {conf}"
     rows = []
     for p in result.parameters:
         ident = {True: "yes", False: "NO: not pinned down", None: "-"}[p["identified"]]
         share = "-" if p["width_share"] is None else f"{100 * p['width_share']:.0f} %"
-        rows.append([p["path"], _g(p["value"]), _g(p["low"]), _g(p["high"]),
+        r = rounded(p)  # to the interval's precision
+        rows.append([p["path"], _g(r["value"], 12), _g(r["low"], 12), _g(r["high"], 12),
                      f"{p['range'][0]:g} .. {p['range'][1]:g}", share, _g(p["sd"], 2), ident,
                      p["at_bound"] or "-"])
     return Table("Fitted inputs", ["input", "best value", f"low ({conf})", f"high ({conf})",
                                    "range searched", "interval / range", "sd of refits",
                                    "identified", "at bound"], rows,
-                 note="best value: the fit to the observed stops; low, high: the bootstrap "
+                 note="best value: the fit to the observed stops, to the precision of its "
+                 "interval (two digits of its half-width); low, high: the bootstrap "
                  "interval; interval / range: how much of the searched range the interval "
                  "fills; identified NO: the refits spread over the range (their standard "
                  "deviation above half that of values spread evenly over it), so the "
@@ -237,13 +245,11 @@ def _verdict(result: Any, command: str, warnings: Sequence[str]) -> tuple[str, s
             head += " (no bootstrap: no intervals)"
         return head + ".", ("fit with warnings" if warnings else "fit without warnings")
     fit = result.fit
-    apart = float(fit["ks_pvalue"]) < 0.05
+    consistent, line = verdict(fit, result.levels)
     head = (f"Prediction of {n:,} observed blocks: {fit['distance_kind']} distance "
-            f"{float(fit['distance']):.2f} m, KS D = {float(fit['ks_statistic']):.2f}, p = "
-            f"{float(fit['ks_pvalue']):.2g}: "
-            + ("the observations tell the prediction apart at 5 %." if apart else
-               "the observations do not tell the prediction apart at 5 %."))
-    return head, ("fit with warnings" if apart or warnings else "fit without warnings")
+            f"{float(fit['distance']):.2f} m, KS D = {float(fit['ks_statistic']):.2f}: "
+            f"{line}.")
+    return head, ("fit with warnings" if not consistent or warnings else "fit without warnings")
 
 
 def report_context(result: Any,

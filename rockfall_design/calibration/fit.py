@@ -32,6 +32,7 @@ import numpy as np
 
 from ..errors import ProjectError
 from ..project import Project
+from ..studies.executors import stop_if_cancelled
 from ..studies.paths import with_values
 from .distances import objective, spread, stop_positions
 
@@ -172,8 +173,12 @@ def simulated_stops(problem: FitProblem, values: Mapping[str, float], seed: int
     """Stop stations (m) of ``problem.rocks`` rocks with the inputs set to ``values``."""
     from ..run.simulation import run_study
 
+    # A replicate on a pool's thread stops here, or between batches, once its
+    # calibration is given up (Ctrl-C): a thread cannot be stopped from outside.
+    stop_if_cancelled()
     project = with_values(problem.project, values, base=problem.base)
-    run = run_study(project, rocks=problem.rocks, seed=seed).result
+    run = run_study(project, rocks=problem.rocks, seed=seed,
+                    progress=lambda _done: stop_if_cancelled()).result
     return stop_positions(run.x_end, run.status, problem.x_range)
 
 

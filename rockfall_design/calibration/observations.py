@@ -20,6 +20,7 @@ Every problem is one line naming the file, the line and the column,
 from __future__ import annotations
 
 import csv
+import dataclasses
 import difflib
 import io
 import math
@@ -31,13 +32,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import ProjectError
+from ..project import MAX_RADIUS_M, MIN_RADIUS_M
 from ..project.inputs import read_named_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..project import Project
 
 __all__ = ["MIN_OBSERVATIONS", "Observations", "observed_file", "read_observations",
-           "size_distribution"]
+           "size_distribution", "size_limits"]
 
 #: Fewest observed blocks a calibration accepts: below it no distance between
 #: distributions means anything (20 or more give useful intervals).
@@ -60,12 +62,15 @@ class Observations:
         ``"volume"`` or ``"mass"`` (the project's ``rocks`` key), or None.
     source : str
         The file, as shown in messages.
+    path : Path or None
+        The file read, absolute (None for text that came from no file).
     """
 
     x: np.ndarray
     size: np.ndarray | None = None
     size_key: str | None = None
     source: str = "<observations>"
+    path: Path | None = None
 
     @property
     def n(self) -> int:
@@ -109,7 +114,39 @@ def _columns(header: list[str], source: str) -> tuple[int, int | None, str | Non
     return names.index("x"), names.index(sizes[0]), sizes[0]
 
 
-def parse_observations(text: str, source: str, x_range: tuple[float, float]) -> Observations:
+def size_limits(density: float) -> dict[str, tuple[float, float]]:
+    """The sizes a rock of the project may have, per size column's key (``volume``, ``mass``).
+
+    Spheres of :data:`~rockfall_design.project.MIN_RADIUS_M` to
+    :data:`~rockfall_design.project.MAX_RADIUS_M` (the project file's own
+    limits of a rock), in m3 and, at ``density`` (kg/m3), in kg.
+    """
+    small = 4.0 / 3.0 * math.pi * MIN_RADIUS_M**3
+    large = 4.0 / 3.0 * math.pi * MAX_RADIUS_M**3
+    return {"volume": (small, large), "mass": (small * density, large * density)}
+
+
+def _check_size(size: float, limits: tuple[float, float] | None, source: str, line: int,
+                column: str) -> None:
+    """The one-line error at ``line`` for a size <= 0 or outside ``limits``."""
+    if size <= 0:
+        raise ProjectError(source, line, column, f"expected a size > 0, got {_num(size)}")
+    if limits is None:
+        return
+    unit = column.rsplit("_", 1)[-1]
+    low, high = limits
+    if size < low:
+        raise ProjectError(source, line, column, f"{_num(size)} {unit} is smaller than the "
+                           f"smallest rock ({low:.3g} {unit}, a sphere of {MIN_RADIUS_M:g} m "
+                           "radius at the project's density): is the column in other units?")
+    if size > high:
+        raise ProjectError(source, line, column, f"{_num(size)} {unit} is larger than the "
+                           f"largest rock ({high:.3g} {unit}, a sphere of {MAX_RADIUS_M:g} m "
+                           "radius at the project's density): is the column in other units?")
+
+
+def parse_observations(text: str, source: str, x_range: tuple[float, float],
+                       limits: dict[str, tuple[float, float]] | None = None) -> Observations:
     """Observed blocks from the CSV ``text`` of the file ``source``, checked.
 
     Parameters
@@ -120,15 +157,20 @@ def parse_observations(text: str, source: str, x_range: tuple[float, float]) -> 
         The file's name, as shown in messages.
     x_range
         (first, last) station of the slope section (m): every stop lies on it.
+    limits
+        The smallest and largest size of a rock per size key
+        (:func:`size_limits`); None: any size > 0.
 
     Raises
     ------
     ProjectError
         Empty file, no ``x`` column, a cell that is not a finite number, a
-        stop outside the section, a size <= 0, fewer than
+        stop outside the section, a size <= 0 or outside ``limits``, fewer than
         :data:`MIN_OBSERVATIONS` blocks: ``file:line: column: message``.
     """
-    rows = [r for r in csv.reader(io.StringIO(text))]
+    # A UTF-8 byte order mark (Excel's "CSV UTF-8") is no part of the first name,
+    # as the survey files read it (project.sources).
+    rows = [r for r in csv.reader(io.StringIO(text.removeprefix("\ufeff")))]
     numbered = [(i + 1, r) for i, r in enumerate(rows) if any(c.strip() for c in r)]
     if not numbered:
         raise ProjectError(source, 1, "", "the file of observed stops is empty: expected a "
@@ -150,9 +192,8 @@ def parse_observations(text: str, source: str, x_range: tuple[float, float]) -> 
         if isize is not None:
             assert size_name is not None
             size = _number(row[isize], source, line, size_name)
-            if size <= 0:
-                raise ProjectError(source, line, size_name, f"expected a size > 0, got "
-                                   f"{_num(size)}")
+            _check_size(size, None if limits is None else limits[SIZE_COLUMNS[size_name]],
+                        source, line, size_name)
             sizes.append(size)
     if len(xs) < MIN_OBSERVATIONS:
         line = body[-1][0] if body else numbered[0][0]
@@ -176,8 +217,8 @@ def observed_file(project: Project) -> Path:
     return path
 
 
-def read_observations(path: str | os.PathLike[str], x_range: tuple[float, float]
-                      ) -> Observations:
+def read_observations(path: str | os.PathLike[str], x_range: tuple[float, float],
+                      limits: dict[str, tuple[float, float]] | None = None) -> Observations:
     """Read and check an observation file (see :func:`parse_observations`).
 
     Raises
@@ -191,7 +232,8 @@ def read_observations(path: str | os.PathLike[str], x_range: tuple[float, float]
         text = read_named_text(path, "file of observed stops")
     except ValueError as exc:
         raise ProjectError(shown, None, "", str(exc)) from None
-    return parse_observations(text, shown, x_range)
+    parsed = parse_observations(text, shown, x_range, limits)
+    return dataclasses.replace(parsed, path=Path(os.path.abspath(path)))
 
 
 def size_distribution(obs: Observations) -> dict[str, Any] | None:

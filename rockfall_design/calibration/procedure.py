@@ -22,7 +22,13 @@ import numpy as np
 from ..project import Project
 from .calibrated import CalibrationResult, ComparisonResult
 from .distances import fit_statistics, level_shares
-from .observations import Observations, observed_file, read_observations, size_distribution
+from .observations import (
+    Observations,
+    observed_file,
+    read_observations,
+    size_distribution,
+    size_limits,
+)
 
 __all__ = ["run_calibration", "run_comparison"]
 
@@ -30,7 +36,26 @@ __all__ = ["run_calibration", "run_comparison"]
 def _observations(project: Project, path: str | os.PathLike[str] | None) -> Observations:
     if path is None:
         path = observed_file(project)
-    return read_observations(path, project.slope.x_range)
+    return read_observations(path, project.slope.x_range, size_limits(project.rocks.density))
+
+
+def _load_on_this_thread(problem: Any) -> None:
+    """Import the search's scipy modules and load the engine here, before the pool starts.
+
+    On a pool's threads the first replicates would do it (scipy.optimize and
+    scipy.stats take 2 to 12 s to import on a loaded machine, numba's cached
+    engine about 1 s to load), and a thread cannot be stopped in the middle:
+    Ctrl-C then waited for them. On the caller's thread the interrupt stops
+    it at once, and the replicates start evaluating, where they check it.
+    """
+    from dataclasses import replace
+
+    import scipy.optimize  # noqa: F401 - loaded for the replicates
+    import scipy.stats.qmc  # noqa: F401
+
+    from .fit import simulated_stops
+
+    simulated_stops(replace(problem, rocks=2), {}, 0)
 
 
 def run_calibration(
@@ -83,6 +108,7 @@ def run_calibration(
     sizes = size_distribution(obs)
     problem = problem_for(project, spec.fit, levels=spec.levels, rocks=n_rocks,
                           kind=spec.distance, sizes=sizes)
+    _load_on_this_thread(problem)
     tasks = [ReplicateTask(problem, obs.x, b, run_seed) for b in range(n_boot + 1)]
     done = [0]
 

@@ -30,6 +30,7 @@ Application. Cambridge University Press, sec. 5.3.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,8 +39,9 @@ import numpy as np
 from ..studies.scenarios import scenario_seed
 from .fit import FitProblem, fit
 
-__all__ = ["IDENTIFIED_SD_SHARE", "ReplicateTask", "expanded_tail", "replicate_seed",
-           "run_replicate", "summarise"]
+__all__ = ["IDENTIFIED_SD_SHARE", "MIN_INTERVAL_REPLICATES", "ReplicateTask", "decimals",
+           "expanded_tail", "intervals_flag", "replicate_seed", "rounded", "run_replicate",
+           "summarise"]
 
 #: A parameter whose refitted values spread with a standard deviation above
 #: this share of its range is reported as not identified by the observations:
@@ -48,6 +50,21 @@ __all__ = ["IDENTIFIED_SD_SHARE", "ReplicateTask", "expanded_tail", "replicate_s
 IDENTIFIED_SD_SHARE = 0.5 / 12**0.5
 #: A best value within this share of its range from an end is "at the bound".
 AT_BOUND_SHARE = 0.02
+#: Fewest bootstrap replicates whose intervals are given as intervals of the
+#: stated confidence. With fewer, the 2.5 % and 97.5 % quantiles of B refits
+#: are interpolated between the two most extreme ones (each holds 1/B > 5 %
+#: of them), so the interval is about the range of the refits, whose coverage
+#: depends on B, not on the confidence; and the standard deviation of the
+#: refits, on which ``identified`` rests, is itself uncertain by more than
+#: 1/sqrt(2 (B - 1)) = 16 %. Such intervals are flagged as rough
+#: (:func:`intervals_flag`), not refused: a quick look with a few replicates
+#: stays possible. Efron & Tibshirani (1993, sec. 19.3) ask for B of 1,000 or
+#: more for percentile intervals; 20 is the floor below which they are not
+#: even rough intervals of the stated confidence.
+MIN_INTERVAL_REPLICATES = 20
+#: Share of a fitted input's range to which the search pins its best value
+#: (as :data:`~.fit.X_TOLERANCE`): the precision of a value without an interval.
+SEARCH_PRECISION_SHARE = 2e-3
 
 
 @dataclass(frozen=True)
@@ -182,3 +199,60 @@ def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence:
             correlation = np.corrcoef(boot, rowvar=False)
         correlation = np.where(np.isfinite(correlation), correlation, 0.0)
     return params, correlation
+
+
+def intervals_flag(replicates: int, confidence: float) -> str | None:
+    """Why ``replicates`` bootstrap replicates give no ``confidence`` intervals, or None.
+
+    None for no replicates (no intervals) and for
+    :data:`MIN_INTERVAL_REPLICATES` or more.
+    """
+    if replicates == 0 or replicates >= MIN_INTERVAL_REPLICATES:
+        return None
+    return (f"rough intervals from only {replicates} bootstrap replicate"
+            f"{'s' if replicates != 1 else ''} (fewer than {MIN_INTERVAL_REPLICATES}): about "
+            f"the range of the refits, not {100 * confidence:g} % intervals; rerun with "
+            f"--bootstrap {MIN_INTERVAL_REPLICATES * 2} or more before using them")
+
+
+def decimals(parameter: dict[str, Any]) -> int:
+    """The decimal places a fitted value is shown and written with: its interval's precision.
+
+    Two significant digits of the interval's half-width (the last digit
+    that the bootstrap still supports); without an interval, the search's
+    own resolution (:data:`SEARCH_PRECISION_SHARE` of the range). Never
+    fewer than 0.
+
+    Parameters
+    ----------
+    parameter
+        One of :func:`summarise`'s dicts (``low``, ``high``, ``range``).
+
+    Notes
+    -----
+    The usual rule of reporting a measured value to the precision of its
+    uncertainty, given with two significant digits (JCGM 100:2008, GUM,
+    sec. 7.2.6): more digits are noise, and a 17-digit value read from a
+    calibrated project suggests a knowledge of the ground no one has.
+    """
+    lo, hi = parameter["range"]
+    step = SEARCH_PRECISION_SHARE * (hi - lo)
+    if parameter.get("low") is not None and parameter["high"] > parameter["low"]:
+        step = (parameter["high"] - parameter["low"]) / 2
+    if not math.isfinite(step) or step <= 0:
+        return 6
+    return max(0, 1 - math.floor(math.log10(step)))
+
+
+def rounded(parameter: dict[str, Any]) -> dict[str, float | None]:
+    """value, low, high to :func:`decimals` (the value kept in range); sd to 2 digits."""
+    places = decimals(parameter)
+    lo, hi = parameter["range"]
+
+    def r(v: float | None) -> float | None:
+        return None if v is None else round(float(v), places)
+
+    value = min(max(round(float(parameter["value"]), places), lo), hi)
+    sd = parameter.get("sd")
+    return {"value": value, "low": r(parameter.get("low")), "high": r(parameter.get("high")),
+            "sd": None if sd is None else float(f"{sd:.2g}")}

@@ -156,6 +156,30 @@ def _show(args: argparse.Namespace, summary: dict[str, Any], result: Any) -> int
     return int(ExitCode.OK)
 
 
+def _library_file(args: argparse.Namespace, files: Any) -> Path | None:
+    """--save-materials' file, reserved; None if none, or if it is --out's materials.yaml.
+
+    --out's own materials.yaml has the same content, so naming it again is
+    one file written once; any other file of the command named twice is
+    refused in one line.
+    """
+    import os
+
+    from ..errors import InputError
+
+    path = args.save_materials
+    if path is None:
+        return None
+    if args.out is not None and (os.path.abspath(path)
+                                 == os.path.abspath(args.out / "materials.yaml")):
+        return None
+    if files.holds(path):
+        raise InputError(f"--save-materials {path}: another option of this command writes "
+                         "that file already; name another file")
+    files.reserve(path)
+    return path
+
+
 def cmd_calibrate(args: argparse.Namespace) -> int:
     """Calibrate; exit 0 (a calibration has no pass or fail: its warnings say what to doubt)."""
     from ..api import calibrate
@@ -165,12 +189,13 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     from .common import REPORT_FILES, figure_files, reserve
 
     project, registry = _one_section(args)
-    with OutputSet() as files:
+    # Every file of the command is one output set, which replaces only files
+    # this program wrote (a shared materials library stays), checked now.
+    with OutputSet(keep_others=True) as files:
         reserve(files, args.out, OUT_FILES)
         reserve(files, args.plot, figure_files(FIGURES, args))
         reserve(files, args.report, REPORT_FILES)
-        if args.save_materials is not None:
-            files.reserve(args.save_materials)
+        library = _library_file(args, files)
         result = calibrate(project, observed=args.observed, rocks=args.rocks,
                            bootstrap=args.bootstrap, seed=args.seed, workers=args.workers,
                            scheduler=args.scheduler, pool=args.pool,
@@ -187,8 +212,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             files.write_csv(out / "replicates.csv", result.replicates_table())
             record = run_record(args, project, result.seed, result.problem.rocks)
             files.write_json(out / "summary.json", {**summary, "run": record})
-        if args.save_materials is not None:
-            files.write_text(args.save_materials, _header(result, spread)
+        if library is not None:
+            files.write_text(library, _header(result, spread)
                              + result.materials_library_text(spread=spread))
         _save_plots(args, result, files)
     return _show(args, summary, result)
@@ -202,7 +227,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from .common import REPORT_FILES, figure_files, reserve
 
     project, registry = _one_section(args)
-    with OutputSet() as files:
+    with OutputSet(keep_others=True) as files:
         reserve(files, args.out, ("summary.json",))
         reserve(files, args.plot, figure_files(FIGURES[:1], args))
         reserve(files, args.report, REPORT_FILES)

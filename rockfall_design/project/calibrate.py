@@ -24,7 +24,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BeforeValidator, Field, model_validator
 
-from .fields import Integer, String, _as_number, _choice, _Model
+from .fields import Integer, Label, String, _as_number, _choice, _Model
 from .messages import _fail, describe, fmt
 
 #: Most inputs fitted at once: every one costs evaluations, and a few dozen
@@ -61,7 +61,7 @@ class CalibrateSpec(_Model):
     fit: Annotated[dict[String, Interval], Field(min_length=1, max_length=MAX_FITTED)] = Field(
         description="Input path (as in study.vary) -> [lo, hi], the range searched."
     )
-    levels: dict[String, Interval] = Field(
+    levels: dict[Label, Interval] = Field(
         default_factory=dict,
         description="Named stretches of x [from, to) (m) whose shares of the stops are "
         "compared (and fitted) besides the stop positions.",

@@ -10,7 +10,18 @@ from typing import Annotated, Any
 
 from pydantic import BeforeValidator, Field, PrivateAttr, WithJsonSchema, model_validator
 
-from .fields import Fraction, Integer, Positive, String, _as_number, _check_typed_item, _Model, _raw
+from .fields import (
+    Fraction,
+    Integer,
+    Positive,
+    String,
+    _as_number,
+    _check_typed_item,
+    _Model,
+    _raw,
+    lines_of_text,
+    one_line,
+)
 from .locator import Locator
 from .messages import _fail, describe, did_you_mean, fmt
 from .schema import (
@@ -120,6 +131,7 @@ def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
     for kind, table in value.items():
         if not isinstance(kind, str) or not kind.strip():
             raise _fail(f"expected the name of a measure type, got {describe(kind)}", (kind,))
+        one_line(kind, (kind,))
         if not isinstance(table, dict):
             raise _fail(
                 f"expected a mapping of product name -> {{capacity_kj: E, heights: [h, ...]}}, "
@@ -134,6 +146,7 @@ def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
                     f"expected a product name, got {describe(name)} (quote names such as '100')",
                     where,
                 )
+            one_line(name, where)
             if not isinstance(entry, dict):
                 raise _fail(
                     f"expected a mapping {{capacity_kj: E, heights: [h, ...]}}, "
@@ -195,6 +208,7 @@ def _parse_cost_params(value: Any) -> Any:
         return None
     if not isinstance(value, dict):
         raise _fail(f"expected a mapping of the cost model's parameters, got {describe(value)}")
+    lines_of_text(value)
     return _raw(value, number_keys=True)
 
 

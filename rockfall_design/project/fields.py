@@ -8,6 +8,7 @@ loaded.
 """
 
 import math
+import re
 from collections.abc import Callable
 from typing import Annotated, Any
 
@@ -109,6 +110,45 @@ Boolean = Annotated[bool, BeforeValidator(_as_bool)]
 Title = Annotated[String, AfterValidator(strip_controls)]
 #: Free text of several lines (a description): control characters removed.
 Prose = Annotated[String, AfterValidator(lambda s: strip_controls(s, lines=True))]
+#: Newlines, tabs and the characters :func:`strip_controls` removes: none of
+#: them belongs in a name, a label or a currency.
+_NOT_ONE_LINE = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
+
+
+def one_line(value: Any, subpath: tuple = ()) -> Any:
+    """``value`` if it is not text, or text of one line without control characters.
+
+    A name, a label or a currency from a file is shown in tables, headings
+    and figures: a newline there would start a heading of its own in
+    report.md, and a control character steer the terminal. Refused at the
+    key, not silently changed: the file says something else than intended.
+    """
+    if isinstance(value, str) and _NOT_ONE_LINE.search(value):
+        raise _fail("expected one line of text without control characters (a newline, a "
+                    "tab, an escape), got " + describe(value), subpath)
+    return value
+
+
+def lines_of_text(value: Any, where: tuple = ()) -> None:
+    """Every key and text in ``value`` one line without control characters (:func:`one_line`).
+
+    A cost catalogue's currency and product names are shown in headings,
+    tables and figures: a newline there wrote a heading of its own into
+    report.md.
+    """
+    if isinstance(value, dict):
+        for key, item in value.items():
+            one_line(key, (*where, key))
+            lines_of_text(item, (*where, key))
+    elif isinstance(value, list):
+        for j, item in enumerate(value):
+            lines_of_text(item, (*where, j))
+    else:
+        one_line(value, where)
+
+
+#: Text of one line without control characters (a name, a label, a currency).
+Label = Annotated[String, AfterValidator(one_line)]
 Fraction = Annotated[Number, Field(ge=0.0, le=1.0)]
 NonNegative = Annotated[Number, Field(ge=0.0)]
 Positive = Annotated[Number, Field(gt=0.0)]

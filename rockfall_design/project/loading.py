@@ -14,7 +14,7 @@ from pydantic_core import PydanticCustomError
 
 from ..errors import ProjectError
 from .design import _check_products
-from .fields import _raw
+from .fields import _raw, lines_of_text
 from .inputs import read_named_text, read_text, strip_controls
 from .locator import Locator
 from .messages import (
@@ -172,6 +172,7 @@ def attach_catalogues(project: Project, base_dir: Path) -> None:
                     raise _fail(
                         f"expected a mapping of the cost model's parameters, got {describe(data)}"
                     )
+                lines_of_text(data)  # a currency or product name of one line, no control characters
                 design._cost_params = _raw(data, number_keys=True)
         except PydanticCustomError as exc:
             raise _custom_error(exc, shown, lines) from None

@@ -36,6 +36,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 __all__ = [
     "RockfallFigure",
+    "literal_texts",
     "FIGURE_FORMATS",
     "CAPTIONS",
     "DEFAULT_MIN_ROCKS_ENVELOPE",
@@ -86,10 +87,40 @@ class RockfallFigure(Figure):
     formatter for Figures takes precedence, so a figure is never shown twice.
     """
 
+    def draw(self, renderer: Any) -> None:
+        """Draw the figure, its words drawn as written (see :func:`literal_texts`)."""
+        literal_texts(self)
+        super().draw(renderer)
+
     def _repr_png_(self) -> bytes:
         buf = io.BytesIO()
         self.savefig(buf, format="png", dpi=100, bbox_inches="tight")
         return buf.getvalue()
+
+
+def literal_texts(fig: Figure) -> None:
+    """Draw every title, label, annotation and legend entry of ``fig`` as written.
+
+    Matplotlib reads text between two ``$`` as mathematics: a project named
+    "Budget: $5 to $10 per m" came out as "Budget: 5*to*10", and
+    ``$\\undefinedmacro{x}$`` stopped the drawing with a parse error. The
+    words of these figures come from the user's files (project, level,
+    product and measure names), and none of the program's own uses
+    mathematics, so every text is drawn literally, except the tick labels
+    and the axes' offset texts, which matplotlib's formatters write as
+    mathematics themselves (10 to a power on a log axis).
+    """
+    from matplotlib.text import Text
+
+    numbers: set[int] = set()
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            numbers.add(id(axis.offsetText))
+            for tick in (*axis.majorTicks, *axis.minorTicks):
+                numbers.update((id(tick.label1), id(tick.label2)))
+    for text in fig.findobj(Text):
+        if id(text) not in numbers:
+            text.set_parse_math(False)
 
 
 _GROUND_FILL = "#d9cfc1"

@@ -27,6 +27,17 @@ file); :meth:`OutputSet.remove` deletes a stale result only if that manifest
 lists it, unchanged since it was written, so that a file the user made
 under the same name (a figure of their own) stays.
 
+A set made with ``keep_others=True`` (``calibrate``'s) goes further: it
+refuses, before the command's work, any target that is there and that the
+manifest does not list as this program's, unchanged: a materials library
+kept beside the projects is never replaced by a calibration's
+``materials.yaml``.
+
+Temporary files are named after the process that writes them
+(:mod:`.temporaries`): the first file a set reserves in a directory removes
+the temporary files that runs killed outright (``kill -9``) left there, and
+only those, with one line on standard error.
+
 The single-file helpers (:func:`write_text`, :func:`write_json`,
 :func:`write_csv`, :func:`write_with`, :func:`atomic_writer`) are output sets
 of one file.
@@ -37,7 +48,6 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import tempfile
 import weakref
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -54,11 +64,13 @@ from .staging import (
     _key,
     _manifests,
     _open_target,
+    _refuse_foreign,
     _refuse_input,
     _signals_held,
     _swap_in,
     _umask,
 )
+from .temporaries import make, remove_stale
 
 __all__ = [
     "MANIFEST",
@@ -105,9 +117,14 @@ class OutputSet:
     ['.rockfall-design-outputs.json', 'rows.csv', 'summary.json']
     """
 
-    def __init__(self) -> None:
+    def __init__(self, *, keep_others: bool = False) -> None:
+        #: Refuse a target that is a file this program did not write (see
+        #: :func:`~.staging._refuse_foreign`), when it is reserved and again at the commit.
+        self.keep_others = keep_others
         self._entries: dict[Path, _Entry] = {}
         self._created: list[Path] = []
+        # The directories whose stale temporary files this set has looked for.
+        self._swept: set[Path] = set()
         # A backstop for an interrupt that lands where neither commit() nor
         # discard() can react (say, on the first instruction of __exit__):
         # the temporary files are still removed when the set is dropped or
@@ -134,6 +151,10 @@ class OutputSet:
             return False
         entry = self._entries.get(_key(path))
         return entry is not None and entry.state in ("open", "ready")
+
+    def holds(self, path: str | os.PathLike[str]) -> bool:
+        """True if ``path`` is in this set in any state: reserved, written or to be removed."""
+        return _key(path) in self._entries
 
     # ---- adding files ----------------------------------------------------
     def reserve(self, *paths: str | os.PathLike[str]) -> None:
@@ -228,6 +249,8 @@ class OutputSet:
                 raise RuntimeError(f"reserved but never written: {', '.join(unwritten)}")
             for entry in self._entries.values():
                 _finish(entry)
+                if self.keep_others and entry.tmp is not None:
+                    _refuse_foreign(entry.target)  # one the user put there during the run
             # Recorded in the set, so that a failure from here on discards them too.
             for manifest in _manifests(list(self._entries.values())):
                 self._entries[manifest.target] = manifest
@@ -267,13 +290,19 @@ class OutputSet:
         if key.is_dir():
             raise OutputError(key, "it is a directory", "nothing was written")
         _refuse_input(key)
+        if self.keep_others:
+            _refuse_foreign(key)
         with _signals_held():
             try:
                 missing = [d for d in (key.parent, *key.parent.parents) if not d.exists()]
                 # Recorded first: mkdir may fail half-way, having made some.
                 self._created.extend(reversed(missing))
                 key.parent.mkdir(parents=True, exist_ok=True)
-                fd, name = tempfile.mkstemp(prefix=f".{key.name}.", suffix=".tmp", dir=key.parent)
+                if key.parent not in self._swept:
+                    # What runs killed outright left behind (see .temporaries).
+                    self._swept.add(key.parent)
+                    remove_stale(key.parent)
+                fd, name = make(key.parent, key.name)
                 entry = self._entries[key] = _Entry(key, Path(name), "reserved")
                 os.close(fd)
                 # mkstemp makes the file 0600; give it the mode open() would.

@@ -15,7 +15,6 @@ import io
 import json
 import os
 import signal
-import tempfile
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -24,6 +23,7 @@ from typing import IO, Any, Literal
 
 from ..errors import InputError
 from .interrupts import HELD_SIGNALS
+from .temporaries import make
 
 #: The manifest in every directory an output set writes to: which of its
 #: files this program wrote (and so may remove), as JSON.
@@ -165,6 +165,24 @@ def _refuse_input(target: Path) -> None:
             "into another directory", "nothing was written")
 
 
+def _refuse_foreign(target: Path) -> None:
+    """Raise :class:`OutputError` if ``target`` is a file this program did not write.
+
+    A file is this program's if the manifest of its directory lists it,
+    unchanged since it was written (:data:`MANIFEST`); any other file there
+    (a materials library the user keeps beside their projects, a file they
+    edited since) is the user's.
+    """
+    stamp = _stamp(target)
+    if not os.path.lexists(target) or (
+            stamp is not None and _read_manifest(target.parent).get(target.name) == stamp):
+        return
+    raise OutputError(
+        target, f"a file this program did not write is there (the folder's {MANIFEST} does "
+        "not list it, or it changed since); it is kept: write into another folder or file, "
+        "or move it away first", "nothing was written")
+
+
 #: The largest manifest read (bytes); a larger one is not ours and counts as empty.
 _MANIFEST_LIMIT = 1 << 20
 
@@ -227,7 +245,7 @@ def _manifests(entries: list[_Entry]) -> list[_Entry]:
         if target.is_dir():
             continue
         try:
-            fd, name = tempfile.mkstemp(prefix=f".{MANIFEST}.", suffix=".tmp", dir=directory)
+            fd, name = make(directory, MANIFEST)
         except OSError as exc:
             raise OutputError(target, exc) from None
         entry = _Entry(target, Path(name), "reserved")
@@ -278,8 +296,7 @@ def _swap_in(entries: list[_Entry]) -> list[Path]:
                 if entry.target.is_dir() and not entry.target.is_symlink():
                     raise IsADirectoryError(21, "it is a directory")
                 # A unique name beside the target, then the old file onto it.
-                fd, name = tempfile.mkstemp(prefix=f".{entry.target.name}.", suffix=".old",
-                                            dir=entry.target.parent)
+                fd, name = make(entry.target.parent, entry.target.name, ".old")
                 os.close(fd)
                 backup = Path(name)
                 try:

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from rich.console import Console, Group
+from rich.markup import escape
 from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
@@ -187,8 +188,9 @@ def _verdict_parts(verdict: dict[str, Any] | None) -> list[Any]:
 
 def _bill_table(bill: dict[str, Any]) -> Table:
     """The bill of the chosen design: a line per quantity and fixed cost, the total."""
-    cur = bill.get("currency") or ""
-    tab = Table(title=f"Bill ({bill['model']}; site length {bill['length_m']:g} m)",
+    # Words from the catalogue and the plugins are shown as written, never as markup.
+    cur = escape(bill.get("currency") or "")
+    tab = Table(title=f"Bill ({escape(bill['model'])}; site length {bill['length_m']:g} m)",
                 title_justify="left", show_edge=False, caption="count: over the whole site "
                 "length; unit prices as the catalogue gives them", caption_justify="left")
     for col, just in (("measure", "left"), ("quantity", "left"), ("count", "right"),
@@ -197,8 +199,8 @@ def _bill_table(bill: dict[str, Any]) -> Table:
         tab.add_column(col, justify=just)
     last = None
     for it in bill["items"]:
-        tab.add_row("" if it["measure"] == last else it["measure"], it["quantity"],
-                    f"{it['count']:,.2f}", it["unit"], f"{it['unit_price']:,.2f}",
+        tab.add_row("" if it["measure"] == last else Text(it["measure"]), Text(it["quantity"]),
+                    f"{it['count']:,.2f}", Text(it["unit"]), f"{it['unit_price']:,.2f}",
                     f"{it['amount']:,.2f}")
         last = it["measure"]
     tab.add_row("total", "", "", "", "", f"{bill['total']:,.2f}", style="bold")
@@ -233,7 +235,7 @@ def check_renderable(summary: dict[str, Any]) -> Group:
         for k, c in enumerate(checks):
             head = (
                 [
-                    f"{m['type']} x={m['x']:g}",
+                    Text(f"{m['type']} x={m['x']:g}"),
                     f"{m['met']:,}",
                     f"{m['caught']:,}",
                     f"{m['passed_over']:,}",
@@ -306,7 +308,7 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
     With the command's ``summary`` (``OptimiseResult.summary``) the report
     opens with its verdict and shows the chosen design's bill.
     """
-    cur = result.currency or ""
+    cur = escape(result.currency or "")
     tab = Table(show_edge=False, title="Alternatives (cheapest design of each family)",
                 title_justify="left", caption="factors: h height, e energy, r reach "
                 "(! = misses its target); res.: rocks reaching the protected zone; fresh: "
@@ -322,8 +324,9 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
         fresh = "-" if a.holds_on_fresh_rocks is None else (
             "yes" if a.holds_on_fresh_rocks else "NO")
         cost = "-" if not np.isfinite(a.cost) else f"{a.cost:,.0f}"
-        tab.add_row(star, a.name, cost if a.holds else f"({cost})",
-                    "\n".join(_measure_short(m) for m in a.measures) or "-", _factors(a) or "-",
+        tab.add_row(star, Text(a.name), cost if a.holds else f"({cost})",
+                    Text("\n".join(_measure_short(m) for m in a.measures) or "-"),
+                    _factors(a) or "-",
                     "-" if a.residual is None else f"{a.residual}", fresh, style=style)
     verdict = _verdict_parts((summary or {}).get("verdict"))
     parts: list[Any] = [*verdict, Text("")] if verdict else []

@@ -14,9 +14,11 @@ numbers in-process, on any worker of a pool, or on any worker of a cluster.
   nothing to start: no process, no import, no loading of numba's cache.
   Only a task's pure-Python steps take turns on the GIL (numpy's sorts and
   partitions of a scenario's statistics release it too); measured in
-  benchmarks/study.py. A task interrupted by an error or
-  Ctrl-C is not stopped: the tasks under way finish (their results unused),
-  no further one starts.
+  benchmarks/study.py. On an error or Ctrl-C no further task starts, and
+  the tasks under way stop at their next call of :func:`stop_if_cancelled`
+  (a calibration's replicates call it before every engine run and between
+  its batches of rocks); a task that never calls it finishes (its result
+  unused).
 - ``workers=N`` with ``pool="processes"`` (the default of :func:`run_tasks`,
   for tasks that run plugins' Python code: sections, designs): a local
   :class:`~concurrent.futures.ProcessPoolExecutor` of N processes, started
@@ -45,12 +47,14 @@ from concurrent.futures import (
     ThreadPoolExecutor,
     wait,
 )
+from contextvars import ContextVar
 from typing import Any
 
 from ..engine.batching import ENGINE_THREADS, THREADS_ENV
 from ..errors import InputError
 
-__all__ = ["run_tasks", "usable_cores", "EXTRA_HINT", "POOLS", "SCHEDULER_TIMEOUT_S"]
+__all__ = ["run_tasks", "stop_if_cancelled", "usable_cores", "Cancelled", "EXTRA_HINT",
+           "POOLS", "SCHEDULER_TIMEOUT_S"]
 
 #: How to install what a Dask cluster or SALib's indices need.
 EXTRA_HINT = "pip install 'rockfall-design[study]'"
@@ -61,8 +65,35 @@ EXTRA_HINT = "pip install 'rockfall-design[study]'"
 #: at once instead of waiting for ever.
 SCHEDULER_TIMEOUT_S = 15.0
 
+#: Longest wait (s) for a task to finish before the caller looks at its signals again.
+WAKE_S = 0.25
+
 #: The kinds of local pool :func:`run_tasks` runs tasks on.
 POOLS = ("threads", "processes")
+
+
+class Cancelled(Exception):
+    """Raised in a task on a pool's thread when the run it belongs to was given up."""
+
+
+#: The event that says the run of the task on this thread was given up (an
+#: error or Ctrl-C in the caller): set by :func:`run_tasks`' pool of threads.
+_CANCEL: ContextVar[threading.Event | None] = ContextVar("rockfall_design_cancel",
+                                                         default=None)
+
+
+def stop_if_cancelled() -> None:
+    """Raise :class:`Cancelled` if the run of the task on this thread was given up.
+
+    A task on :func:`run_tasks`' pool of threads cannot be stopped from
+    outside (Python has no way to stop a thread), so a long task calls this
+    at safe points (before each engine run, between batches of rocks): on
+    Ctrl-C it then stops within one batch instead of running to its end.
+    Elsewhere (in this process, on a process pool or on Dask) it does nothing.
+    """
+    event = _CANCEL.get()
+    if event is not None and event.is_set():
+        raise Cancelled("the run was given up")
 
 
 def usable_cores() -> int:
@@ -173,12 +204,16 @@ def run_tasks(
     return _on_pool(fn, tasks, n, on_done)
 
 
-def _one_engine_thread(fn: Callable[[Any], Any], task: Any) -> Any:
-    """A task on a thread of the pool: the engine on this one thread."""
+def _one_engine_thread(fn: Callable[[Any], Any], task: Any, cancel: threading.Event) -> Any:
+    """A task on a thread of the pool: the engine on this one thread, ``cancel`` its stop."""
+    if cancel.is_set():  # given up before it started
+        raise Cancelled("the run was given up")
     token = ENGINE_THREADS.set(1)
+    stop = _CANCEL.set(cancel)
     try:
         return fn(task)
     finally:
+        _CANCEL.reset(stop)
         ENGINE_THREADS.reset(token)
 
 
@@ -186,7 +221,10 @@ def _collect(pending: dict[Future, int], results: list[Any],
              on_done: Callable[[int, Any], None] | None) -> None:
     """Put each finished task's result at its place, as they finish; ``on_done`` for each."""
     while pending:
-        done, _ = wait(pending, return_when=FIRST_COMPLETED)
+        # A short timeout, so that a signal handled on another thread (the
+        # kernel may hand SIGINT to any thread; Python then only notes it)
+        # raises here within it, not when the next task happens to finish.
+        done, _ = wait(pending, timeout=WAKE_S, return_when=FIRST_COMPLETED)
         for future in done:
             i = pending.pop(future)
             results[i] = future.result()  # a task's error is raised here, as it was
@@ -198,17 +236,20 @@ def _on_threads(fn: Callable[[Any], Any], tasks: Iterable[Any], count: int, n: i
                 on_done: Callable[[int, Any], None] | None) -> list[Any]:
     results: list[Any] = [None] * count
     pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix="rockfall-task")
+    cancel = threading.Event()
     try:
         pending: dict[Future, int] = {}
         # Each task starts as it is made: its run overlaps the making of the next.
         for i, t in enumerate(tasks):
-            pending[pool.submit(_one_engine_thread, fn, t)] = i
+            pending[pool.submit(_one_engine_thread, fn, t, cancel)] = i
         if len(pending) != count:
             raise ValueError(f"{len(pending)} tasks given, {count} announced")
         _collect(pending, results, on_done)
     except BaseException:
-        # An error or Ctrl-C: nothing more starts; a thread cannot be stopped,
-        # so the tasks under way finish on their own (results unused).
+        # An error or Ctrl-C: nothing more starts, and a thread cannot be
+        # stopped from outside: the tasks under way stop at their next
+        # stop_if_cancelled() (results unused), or finish on their own.
+        cancel.set()
         pool.shutdown(wait=False, cancel_futures=True)
         raise
     pool.shutdown(wait=True)

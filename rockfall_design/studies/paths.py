@@ -269,6 +269,8 @@ def with_values(project: Project, values: Mapping[str, Any], *,
         return _validate(project, data)
     except ValidationError as exc:
         combined = _problem(exc)
+    if not values:  # the base itself is refused (say, sizes set in it): the whole project
+        raise project.error_at((), combined)
     # Which value is to blame: each on its own, in the order given.
     for path, value in values.items():
         alone = copy.deepcopy(base)

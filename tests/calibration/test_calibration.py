@@ -13,6 +13,7 @@ import pytest
 import yaml
 
 import rockfall_design as rd
+from rockfall_design.calibration.uncertainty import rounded
 from rockfall_design.cli.program import main
 from rockfall_design.project import load_project
 from rockfall_design.report.staging import MANIFEST
@@ -100,16 +101,22 @@ def test_json_out_plot_and_calibrated_project(site, tmp_path, capsys):
     assert names == ["calibration_cloud.png", "calibration_stops.png"]
     calibrated = load_project(out / "calibrated.yaml")
     soil = calibrated.materials["soil"]
-    assert soil.restitution == pytest.approx(summary["parameters"][0]["value"])
-    assert soil.scatter.restitution == pytest.approx(summary["parameters"][0]["sd"])
+    # Written to the interval's precision, not with 17 digits (issue 36 item 7).
+    best = rounded(summary["parameters"][0])
+    assert soil.restitution == best["value"]
+    assert soil.restitution == pytest.approx(summary["parameters"][0]["value"], abs=5e-3)
+    assert soil.scatter.restitution == float(f"{summary['parameters'][0]['sd']:.2g}")
     assert yaml.safe_load(lib.read_text())["soil"]["restitution"] == soil.restitution
     # The library says where each entry comes from, as projects/materials.yaml does.
     text = (out / "materials.yaml").read_text()
     assert text == lib.read_text()
-    p = summary["parameters"][0]
     assert (f"# law: spang\n# source: calibrated on {site.parent / 'stops.csv'} (40 blocks), "
             in text and f"seed {summary['method']['seed']} " in text)
-    assert f"fitted: restitution {p['value']:.3g} [{p['low']:.3g}, {p['high']:.3g}]" in text
+    assert (f"fitted: restitution {best['value']:g} [{best['low']:g}, {best['high']:g}]"
+            in text)
+    # Three replicates: the intervals are flagged as rough, not 95 % ones.
+    assert "rough intervals from only 3 bootstrap replicates" in text
+    assert summary["method"]["rough_intervals"].startswith("rough intervals from only 3")
     assert "# law: spang\n# source: the project " in text  # rock and unused: not fitted
     assert set(yaml.safe_load(text)) == {"soil", "rock", "unused"}
     kept = rd.calibrate(site, workers=1, bootstrap=3).calibrated_project(spread=False)
