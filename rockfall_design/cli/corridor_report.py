@@ -117,7 +117,9 @@ def _corridor_verdict(blocks: Sequence[dict[str, Any]], command: str) -> dict[st
 
 def _print_totals(summary: dict[str, Any]) -> None:
     """The corridor's table: one row per section, and the total."""
+    from rich.markup import escape
     from rich.table import Table
+    from rich.text import Text
 
     from ..report.tables import chosen_name
     from ..report.terminal import fitted_console
@@ -126,7 +128,7 @@ def _print_totals(summary: dict[str, Any]) -> None:
     if summary.get("scenarios"):
         _print_scenario_totals(summary)
         return
-    cur = totals.get("currency") or ""
+    cur = escape(totals.get("currency") or "")  # words from files: never markup
     table = Table(show_edge=False)
     columns = ["section", "seed", "rocks"]
     if command == "study":
@@ -141,7 +143,7 @@ def _print_totals(summary: dict[str, Any]) -> None:
         table.add_column(col, justify="left" if col in ("section", "design", "holds") else
                          "right")
     for block in summary["sections"]:
-        row = [block["name"], str(block["seed"]), f"{block['rocks']:,}"]
+        row: list[Any] = [Text(block["name"]), str(block["seed"]), f"{block['rocks']:,}"]
         if command == "study":  # rocks of all its scenarios
             k = len(block["scenarios"])
             row[2] = f"{block['rocks'] * k:,}"
@@ -154,7 +156,7 @@ def _print_totals(summary: dict[str, Any]) -> None:
         if command == "optimise":
             best = chosen_name(block)
             cost = next((a["cost"] for a in block["alternatives"] if a["name"] == best), None)
-            row += [best or "none", "-" if cost is None else f"{cost:,.0f}"]
+            row += [Text(best or "none"), "-" if cost is None else f"{cost:,.0f}"]
         table.add_row(*row)
     last = ["total", "", f"{totals['rocks']:,}"]
     if command == "study":
@@ -192,6 +194,7 @@ def _margin(b: dict[str, Any]) -> str:
 def _print_scenario_totals(summary: dict[str, Any]) -> None:
     """The corridor's table of ``check --scenarios``: a row per section, and the total."""
     from rich.table import Table
+    from rich.text import Text
 
     from ..report.terminal import fitted_console
 
@@ -202,7 +205,7 @@ def _print_scenario_totals(summary: dict[str, Any]) -> None:
         table.add_column(col, justify="right" if col in ("seed", "rocks", "scenarios",
                                                          "holds in", "required") else "left")
     for b in summary["sections"]:
-        table.add_row(b["name"], str(b["seed"]), f"{b['rocks'] * b['of']:,}", f"{b['of']:,}",
+        table.add_row(Text(b["name"]), str(b["seed"]), f"{b['rocks'] * b['of']:,}", f"{b['of']:,}",
                       f"{b['holds_in']:,}", f"{b['required']:,}", _margin(b["binding"]),
                       b["binding"]["binds_at"] or "-", "yes" if b["ok"] else "NO",
                       style="" if b["ok"] else "red")
