@@ -21,11 +21,17 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from rockfall_design.engine import run_ensemble
 from rockfall_design.engine.ensemble import SHARED_PATH_VERTICES
 from rockfall_design.judge.bounds import quantile_with_bounds
 from rockfall_design.project import load_project_text
 from rockfall_design.project.schema import DEFAULT_SIZE_STEP, MAX_SIZE_STEP, SURVEY_POINTS
-from rockfall_design.run.releases import draw_releases, size_classes
+from rockfall_design.run.releases import (
+    draw_releases,
+    engine_key,
+    section_from_project,
+    size_classes,
+)
 from rockfall_design.run.simulation import run_study
 
 #: The standard slope (projects/benchmark.yaml's vertices), resampled as a noisy survey.
@@ -142,6 +148,18 @@ def test_rocks_of_one_class_run_as_they_would_alone():
         for name in ("x_end", "y_end", "max_x", "n_events", "status"):
             assert getattr(alone, name)[i] == getattr(whole, name)[i], name
         assert np.array_equal(alone.grid_energy[i], whole.grid_energy[i], equal_nan=True)
+
+
+def test_threads_and_batches_change_nothing_on_a_survey_of_size_classes():
+    survey = load_project_text(survey_yaml(400, LOGNORMAL))
+    section, rel = section_from_project(survey), draw_releases(survey, 400, 6)
+    common = dict(key=engine_key(6), stations=[45.0, 75.0], n_trajectories=3)
+    one = run_ensemble(section, rel, threads=1, **common)
+    two = run_ensemble(section, rel, threads=2, batch_size=7, **common)
+    for name in ("status", "x_end", "y_end", "n_events", "crossings", "grid_energy"):
+        assert np.array_equal(getattr(one, name), getattr(two, name), equal_nan=True), name
+    for a, b in zip(one.trajectories, two.trajectories, strict=True):
+        assert np.array_equal(a, b)
 
 
 # ---- the statistics of size classes against exact sizes --------------------------
