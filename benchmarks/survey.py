@@ -2,6 +2,7 @@
 
     python benchmarks/survey.py [--rocks 20000] [--points 1000 10000 100000]
                                 [--noise 0.01] [--threads 1] [--varying-rocks 20]
+                                [--sigma 0.2] [--size-step 0.005]
     PYTHONPATH=OTHER_TREE python benchmarks/survey.py   # the same for another engine
 
 The standard slope (the 6 vertices of projects/benchmark.yaml and its rn_rt
@@ -21,6 +22,15 @@ heights with N(0, noise) errors, all measured in the same run. For each:
   every element. The 6-point row of this column runs 2,000 rocks (20 take a
   millisecond, too short to time); its rate is the one the others are set
   against;
+* rocks of lognormal size (issue 34, item 9): ``--rocks`` rocks of radius
+  0.5 m times exp(N(0, ``--sigma``)) (0.2: a volume's sigma of 0.6, as
+  projects/quarry_road.yaml), rounded to size classes of relative step
+  ``--size-step`` as a project's run rounds them on a survey
+  (``run.releases.size_classes``): the run's wall time (every class's centre
+  path included), events per second and their ratio to those of the rocks of
+  one size on the same section (the issue's aim: within 3 times), and the
+  same ratio of events per CPU second (the two runs again, one after the
+  other: on a shared machine the wall times move with its load);
 * for those rocks, how much of its own path a rock comes near: of the 1 m
   windows of the slope it travels over, the share in which it touches the
   ground or flies within its radius + 0.1 m of the window's highest point
@@ -51,6 +61,12 @@ try:
     from rockfall_design.engine.profile import element_codes, path_elements
 except ImportError:  # before the paths of rocks of several sizes were made from fewer elements
     element_codes = path_elements = None
+
+try:
+    from rockfall_design.run.releases import size_classes
+except ImportError:  # an engine from before size classes: every size exact
+    def size_classes(radius, step):  # noqa: D103 - the radii as they are
+        return np.asarray(radius, dtype=float).copy()
 
 EVERY = np.empty(0, dtype=np.int64)
 
@@ -101,6 +117,10 @@ def main() -> None:
     ap.add_argument("--noise", type=float, default=0.01, help="sd of the survey heights (m)")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--varying-rocks", type=int, default=20)
+    ap.add_argument("--sigma", type=float, default=0.2,
+                    help="sd of ln(radius) of the lognormal rocks (0 to skip them)")
+    ap.add_argument("--size-step", type=float, default=0.005,
+                    help="relative step of their size classes")
     args = ap.parse_args()
     cases = [6, *args.points]
     # Compiled and warm before anything is timed.
@@ -117,6 +137,7 @@ def main() -> None:
     base = None
     base_v = None
     details = []
+    lognormal = []
     g = np.random.default_rng(0)
     for pts in cases:
         sec = section(pts, args.noise)
@@ -140,6 +161,16 @@ def main() -> None:
             if path_elements is not None and pts > 256:
                 details.append((pts, *_pruned(ground)))
         print(line, flush=True)
+        if args.sigma > 0:
+            lognormal.append((pts, rate, *_lognormal(sec, args)))
+    if lognormal:
+        print(f"\n{args.rocks:,} rocks of lognormal radius (median 0.5 m, sigma {args.sigma}) "
+              f"in size classes of step {args.size_step}, against as many of 0.5 m")
+        print(f"{'points':>8} {'classes':>8} {'run':>10} {'events/s':>12} "
+              f"{'one size':>12} {'ratio':>6} {'per CPU s':>10}")
+        for pts, rate, classes, tl, evl, cpu_ratio in lognormal:
+            print(f"{pts:>8,} {classes:>8,} {tl:>8.3f} s {evl / tl:>12,.0f} {rate:>12,.0f} "
+                  f"{rate / (evl / tl):>5.1f}x {cpu_ratio:>9.1f}x")
     if args.varying_rocks:
         print("\nrocks of U(0.3, 0.7) m: the share of the 1 m windows each travels over "
               "that it comes near (touches, or flies within r + 0.1 m of the highest point)")
@@ -155,6 +186,21 @@ def main() -> None:
         for pts, kept, t_find, t_kept, t_all in details:
             print(f"{pts:>8,} {kept:>8,} ({kept / (2 * pts - 1):>4.0%}) {t_find * 1e3:>7.1f} ms "
                   f"{t_kept * 1e3:>12.2f} ms {t_all * 1e3:>16.2f} ms")
+
+
+def _lognormal(sec: Section, args: argparse.Namespace) -> tuple[int, float, int, float]:
+    """Size classes of ``args.rocks`` lognormal radii and the run's wall time (s), events
+    and events per CPU second against those of as many rocks of 0.5 m (CPU time: what the
+    work costs, whatever else the machine runs)."""
+    g = np.random.default_rng(2)
+    radius = size_classes(0.5 * np.exp(args.sigma * g.standard_normal(args.rocks)),
+                          args.size_step if sec.x.size > 256 else 0.0)
+    rates = []
+    for rel in (releases(args.rocks, 0.5), releases(args.rocks, radius)):
+        c0 = time.process_time()
+        t, ev = timed(sec, rel, args.threads)
+        rates.append(ev / max(time.process_time() - c0, 1e-9))
+    return int(np.unique(radius).size), t, ev, rates[0] / rates[1]
 
 
 def _every(points: int) -> np.ndarray:

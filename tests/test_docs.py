@@ -31,6 +31,8 @@ OTHER_PROGRAMS_OPTIONS = {
     "--write": "benchmarks/golden.py",
     "--kernel-only": "benchmarks/engine.py",
     "--seeds": "benchmarks/optimise.py",
+    "--points": "benchmarks/survey.py",
+    "--varying-rocks": "benchmarks/survey.py",
     "--nthreads": "dask worker",
     "--nworkers": "dask worker",
     "--host": "dask scheduler and dask worker",

@@ -126,9 +126,9 @@ def _rock_path_of(ground, r, max_chord, units):
 # writes only its own rows, and draws from its own stream, so the results do
 # not depend on how the rocks are shared among threads.
 @njit(cache=CACHE, nogil=True)
-def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, rel, resume,
-               stations, bars, out):
-    """Run the rocks of one batch (rows of ``rel``) and write their rows of ``out``.
+def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, rows, rel,
+               resume, stations, bars, out):
+    """Run the rocks of one batch (``rows`` of ``rel``) and write their rows of ``out``.
 
     Parameters
     ----------
@@ -149,9 +149,15 @@ def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, 
     key : uint64
         Key of the run's random streams.
     first_index : int
-        Index in the whole run of the batch's first rock (its stream).
+        Index in the whole run of the call's first rock: rock ``i`` (row ``i``
+        of ``rel``) draws from stream ``first_index + i``.
+    rows : ndarray of int64, shape (M,)
+        The rocks of the batch, in the order they run (rows of ``rel``,
+        ``resume`` and ``out``): rocks of one radius one after another share
+        their centre path (:func:`run_ensemble` groups them by size on a
+        survey). Which rows and in what order does not change any result.
     rel : ndarray of float, shape (N, N_REL_COLS)
-        Release table (columns ``records.REL_*``).
+        Release table of the call (columns ``records.REL_*``).
     resume : Resume
         Which rocks resume, from which state and stream (``records.Resume``).
     stations : Stations
@@ -159,7 +165,8 @@ def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, 
     bars : ndarray of float, shape (B, N_BARRIER_COLS)
         Barrier table, sorted by x.
     out : BatchOut
-        The batch's rows of every output (``records.BatchOut``).
+        Every output of the call (``records.BatchOut``), of which the batch
+        writes its ``rows``.
     """
     n = rel.shape[0]
     path = path0
@@ -177,7 +184,8 @@ def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, 
     units = no_units()
     # Serial on purpose: a prange version measured slower here (per-rock
     # allocations), and compiles for much longer.
-    for i in range(n):
+    for j in range(rows.shape[0]):
+        i = rows[j]
         r = rel[i, REL_R]
         if r != r_prev:
             # Rocks of one size share their centre path.
@@ -314,12 +322,14 @@ def run_ensemble(
     ground = Ground(section.x, section.y, section.segment_material, section.material_table())
     path0, r0, elems, path_seconds = _shared_path(ground, radius, max_chord)
 
+    survey = ground.x.size > SHARED_PATH_VERTICES
+    order = _run_order(radius, survey)
     batch_args = _batch_slicer(
-        (ground, path0, r0, elems, settings.vector(), max_chord, k64), int(first_index), rel,
-        _resume(resume, n), stations_rec, bars, out, ntr, record_speed)
-    first = FIRST_BATCH if ground.x.size > SHARED_PATH_VERTICES else FIRST_BATCH_FEW_POINTS
-    _run_all(batch_args, _Batches(n, batch_size, radius, r0, path_seconds, first), n, threads,
-             progress)
+        (ground, path0, r0, elems, settings.vector(), max_chord, k64), int(first_index), order,
+        rel, _resume(resume, n), stations_rec, bars, out)
+    first = FIRST_BATCH if survey else FIRST_BATCH_FEW_POINTS
+    _run_all(batch_args, _Batches(n, batch_size, radius[order], r0, path_seconds, first), n,
+             threads, progress)
 
     return EnsembleResult(
         radius=radius,
@@ -418,28 +428,36 @@ def _shared_path(ground: Ground, radius: np.ndarray,
                  ground.mats, np.empty(0)), -1.0, every, 0.0)
 
 
-def _batch_slicer(fixed: tuple, first_index: int, rel: np.ndarray, resume: Resume,
-                  stations: Stations, bars: np.ndarray, out: BatchOut, ntr: int,
-                  record_speed: bool) -> Callable[[int, int], tuple]:
-    """The arguments of the compiled call for rocks a..b-1 (views, no copies).
+def _batch_slicer(fixed: tuple, first_index: int, order: np.ndarray, rel: np.ndarray,
+                  resume: Resume, stations: Stations, bars: np.ndarray,
+                  out: BatchOut) -> Callable[[int, int], tuple]:
+    """The arguments of the compiled call for the rocks ``order[a:b]`` (no copies).
 
     ``fixed`` holds the arguments every batch shares, in the kernel's order:
     ground, shared path, its radius, the elements paths are made of, settings,
-    chord limit and run key.
+    chord limit and run key. Every batch is given the whole release table
+    and outputs, and writes the rows of its rocks.
     """
     def batch_args(a: int, b: int) -> tuple:
-        sl = slice(a, b)
-        tr = slice(min(a, ntr), min(b, ntr))
-        rows = BatchOut._make(
-            getattr(out, f)[tr] if f in ("traj", "n_traj")
-            else getattr(out, f) if (f == "grid_v" and not record_speed)
-            else getattr(out, f)[sl]
-            for f in BatchOut._fields
-        )
-        return (*fixed, first_index + a, rel[sl], Resume._make(x[sl] for x in resume),
-                stations, bars, rows)
+        return (*fixed, first_index, order[a:b], rel, resume, stations, bars, out)
 
     return batch_args
+
+
+def _run_order(radius: np.ndarray, survey: bool) -> np.ndarray:
+    """The order the rocks run in: by radius on a survey, else as given.
+
+    On a survey (more than :data:`SHARED_PATH_VERTICES` points) a rock's
+    centre path costs milliseconds; rocks of one radius one after another
+    share it (:func:`_run_batch`), so a run of size classes
+    (``run.releases.size_classes``) makes about one path per class rather
+    than one per rock (issue 34, item 9). A stable sort: rocks of one radius
+    keep their order. The results do not depend on the order.
+    """
+    n = radius.size
+    if not survey or n < 2 or np.all(radius == radius[0]):
+        return np.arange(n, dtype=np.int64)
+    return np.argsort(radius, kind="stable").astype(np.int64)
 
 
 def _stations(section: Section, user: np.ndarray, grid: np.ndarray,

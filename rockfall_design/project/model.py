@@ -30,7 +30,16 @@ from .fields import (
 )
 from .locator import Locator
 from .messages import _fail, did_you_mean, fmt
-from .schema import Analysis, EngineConfig, Material, Protect, Rocks, Slope
+from .schema import (
+    DEFAULT_SIZE_STEP,
+    SURVEY_POINTS,
+    Analysis,
+    EngineConfig,
+    Material,
+    Protect,
+    Rocks,
+    Slope,
+)
 from .study import StudySpec
 
 
@@ -89,6 +98,20 @@ class Project(_Model):
     _resolved_plugins: tuple | None = PrivateAttr(default=None)
     #: the plan resolved against the plugins (rockfall_design.judge.plan.plan_for)
     _plan: Any = PrivateAttr(default=None)
+
+    @property
+    def size_step(self) -> float:
+        """The relative step of the size classes the rocks are rounded to (0: none).
+
+        On a survey (a slope of more than :data:`~.schema.SURVEY_POINTS`
+        points) with rocks of varying size, ``rocks.size_step`` or its
+        default :data:`~.schema.DEFAULT_SIZE_STEP`; else 0 (every size as
+        drawn). See ``run.releases.size_classes``.
+        """
+        if len(self.slope.points) <= SURVEY_POINTS or not self.rocks.sizes_vary:
+            return 0.0
+        step = self.rocks.size_step
+        return DEFAULT_SIZE_STEP if step is None else float(step)
 
     @property
     def source(self) -> str:
@@ -182,6 +205,13 @@ class Project(_Model):
         if data.get("calibrate") is None:
             # likewise: files without a calibration keep their record and hash
             data.pop("calibrate", None)
+        if data["rocks"].get("size_step") is None:
+            # the step in effect where sizes are rounded (a survey, sizes that vary);
+            # elsewhere absent, so that those records and hashes are as before
+            if self.size_step > 0.0:
+                data["rocks"]["size_step"] = self.size_step
+            else:
+                data["rocks"].pop("size_step", None)
         if self.design is not None and data.get("design") is not None:
             # the catalogues inline, so the record (and its hash) holds the figures used
             design = data["design"]

@@ -72,6 +72,9 @@ def run_summary(
         "version": __version__,
         "rocks": int(study.n),
         "seed": int(study.seed),
+        # The relative step of the size classes the radii were rounded to, where
+        # they were (a survey, sizes that vary: run.releases.size_classes).
+        **({"size_step": study.project.size_step} if study.project.size_step > 0 else {}),
         "project_hash": project_hash or study.project.resolved_hash(),
         "runtime_s": round(float(study.runtime_s), 6),
         "events": int(events),
