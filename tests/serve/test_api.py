@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import shutil
-import time
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +22,7 @@ from rockfall_design.serve.guards import MAX_BODY_BYTES
 from rockfall_design.serve.workbench import load_entries
 
 from .conftest import TWO_ZONES_FILES
+from .conftest import wait_job as _wait
 
 TOKEN = "test-token-0123456789"
 ROCKS = 1500
@@ -40,16 +40,6 @@ HEADERS = {TOKEN_HEADER: TOKEN, "Origin": "http://127.0.0.1"}
 def _client(app) -> TestClient:
     """A client that is the app's own page: the token in the header, the app's origin."""
     return TestClient(app, base_url="http://127.0.0.1", headers=HEADERS)
-
-
-def _wait(client: TestClient, job_id: str) -> dict:
-    """Poll a job until it is no longer running (the run takes seconds)."""
-    for _ in range(2400):
-        job = client.get(f"/api/jobs/{job_id}").json()
-        if job["state"] != "running":
-            return job
-        time.sleep(0.05)
-    raise AssertionError(f"job {job_id} still running: {job}")
 
 
 @pytest.fixture(scope="module")

@@ -9,6 +9,7 @@ skipped and says why; CI (``.ci/run``) installs Chromium and sets
 
 from __future__ import annotations
 
+import contextlib
 import html
 import http.server
 import io
@@ -42,6 +43,18 @@ def _browser_or_skip():
             pytest.fail(f"ROCKFALL_DESIGN_BROWSER_TESTS=1 but {why}")
         pytest.skip(why)
     return sync_playwright
+
+
+@contextlib.contextmanager
+def _chromium(sync_playwright: Any) -> Any:
+    """Headless Chromium (the local one, never Playwright's download), closed after use."""
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=str(CHROMIUM),
+                                     args=["--no-sandbox", "--disable-gpu"])
+        try:
+            yield browser
+        finally:
+            browser.close()
 
 
 def _distinct_colours(png: bytes) -> int:
@@ -212,23 +225,18 @@ def test_a_form_of_another_page_on_127_0_0_1_changes_nothing(tmp_path, projects_
                                + "</body></html>")
     statuses = []
     try:
-        with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=str(CHROMIUM),
-                                         args=["--no-sandbox", "--disable-gpu"])
-            try:
-                context = browser.new_context()
-                page = context.new_page()
-                page.goto(url)  # the user has the app open in the same browser
-                page.wait_for_selector("body[data-ready='1']", timeout=60_000)
-                for address in (attack_url, bare_url):
-                    evil = context.new_page()
-                    evil.goto(address)
-                    with evil.expect_response(lambda r: "/upload" in r.url) as info:
-                        evil.click("#go")
-                    statuses.append((info.value.status, info.value.text()))
-                    evil.close()
-            finally:
-                browser.close()
+        with _chromium(sync_playwright) as browser:
+            context = browser.new_context()
+            page = context.new_page()
+            page.goto(url)  # the user has the app open in the same browser
+            page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+            for address in (attack_url, bare_url):
+                evil = context.new_page()
+                evil.goto(address)
+                with evil.expect_response(lambda r: "/upload" in r.url) as info:
+                    evil.click("#go")
+                statuses.append((info.value.status, info.value.text()))
+                evil.close()
     finally:
         attacker.shutdown()
         bare.shutdown()
@@ -247,30 +255,25 @@ def test_two_servers_in_one_browser_both_keep_working():
     second, url_b = start_server("projects/quarry_fence_ditch.yaml", cwd=ROOT)
     errors: list[str] = []
     try:
-        with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=str(CHROMIUM),
-                                         args=["--no-sandbox", "--disable-gpu"])
-            try:
-                context = browser.new_context()
-                pages = []
-                for url in (url_a, url_b):
-                    page = context.new_page()
-                    page.on("pageerror", lambda e: errors.append(str(e)))
-                    page.goto(url)
-                    page.wait_for_selector("body[data-ready='1']", timeout=60_000)
-                    pages.append(page)
-                for page in pages:
-                    page.locator("summary", has_text="Project file").click()
-                for page in pages + pages[::-1]:  # the first after the second, and back
-                    page.evaluate("() => { document.getElementById('yaml-status')"
-                                  ".textContent = ''; }")
-                    page.click("#validate")
-                    page.wait_for_function(
-                        "() => document.getElementById('yaml-status').textContent !== ''",
-                        timeout=30_000)
-                    assert page.inner_text("#yaml-status") == "valid"
-            finally:
-                browser.close()
+        with _chromium(sync_playwright) as browser:
+            context = browser.new_context()
+            pages = []
+            for url in (url_a, url_b):
+                page = context.new_page()
+                page.on("pageerror", lambda e: errors.append(str(e)))
+                page.goto(url)
+                page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+                pages.append(page)
+            for page in pages:
+                page.locator("summary", has_text="Project file").click()
+            for page in pages + pages[::-1]:  # the first after the second, and back
+                page.evaluate("() => { document.getElementById('yaml-status')"
+                              ".textContent = ''; }")
+                page.click("#validate")
+                page.wait_for_function(
+                    "() => document.getElementById('yaml-status').textContent !== ''",
+                    timeout=30_000)
+                assert page.inner_text("#yaml-status") == "valid"
     finally:
         for proc in (first, second):
             stop_server(proc)
@@ -284,58 +287,53 @@ def test_the_page_shows_the_verdict_untested_measures_and_keyed_charts():
     proc, url = start_server("projects/quarry_fence_ditch.yaml", cwd=ROOT)
     errors: list[str] = []
     try:
-        with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=str(CHROMIUM),
-                                         args=["--no-sandbox", "--disable-gpu"])
-            try:
-                page = browser.new_page(viewport={"width": 1400, "height": 1000})
-                page.on("pageerror", lambda e: errors.append(str(e)))
-                page.goto(url)
-                page.wait_for_selector("body[data-ready='1']", timeout=60_000)
-                assert page.is_checked("#with-own")
-                page.fill("#rocks", "400")
-                page.click("#simulate")
-                page.wait_for_selector("#status[data-state='done']", timeout=300_000)
-                for chart, series in (("#env-height", 4), ("#env-energy", 4), ("#stops", 1)):
-                    assert page.locator(f"{chart} .x-tick").count() >= 4, chart
-                    assert page.locator(f"{chart} .y-tick").count() >= 3, chart
-                    assert page.locator(f"{chart} .axis-title").count() == 2, chart
-                    assert page.locator(f"{chart} .legend-swatch").count() == series, chart
-                names = page.locator("#env-height .legend-item").evaluate_all(
-                    "(items) => items.map((i) => i.dataset.series)")
-                assert names == ["p50", "p95", "p99", "max"]
-                page.click("#place")
-                page.wait_for_function(
-                    "() => document.getElementById('residual').dataset.verdict !== undefined",
-                    timeout=30_000)
-                assert page.inner_text("#error") == ""
-                # The project's fence and ditch and the placed fence: three measures.
-                assert page.locator("#checks b").count() == 3
-                # Drag the placed fence to the crest, above every release: no rock meets it.
-                box = page.locator("#placed-handle").bounding_box()
-                left = page.locator("#section").bounding_box()["x"]
-                x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
-                page.mouse.move(x, y)
-                page.mouse.down()
-                for i in range(1, 11):
-                    page.mouse.move(x + (left - 5 - x) * i / 10, y)
-                page.mouse.up()
-                page.wait_for_function(
-                    "() => [...document.querySelectorAll('#checks tr[data-untested] b')]"
-                    ".some((b) => b.textContent.startsWith('fence')"
-                    " && b.textContent.endsWith('at x = 0.5 m'))",
-                    timeout=30_000)
-                assert page.inner_text("#error") == ""
-                # Its checks say "untested", not "holds" (as the verdict says).
-                words = page.locator("#checks td.untested").all_inner_texts()
-                assert words and set(words) == {"untested"}
-                page.fill("#rocks", "200")
-                page.click("#check")
-                page.wait_for_selector("#check-verdict[data-verdict]", timeout=300_000)
-                assert page.locator("#check-table td", has_text="untested").count() >= 1
-                assert page.inner_text("#error") == ""
-            finally:
-                browser.close()
+        with _chromium(sync_playwright) as browser:
+            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url)
+            page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+            assert page.is_checked("#with-own")
+            page.fill("#rocks", "400")
+            page.click("#simulate")
+            page.wait_for_selector("#status[data-state='done']", timeout=300_000)
+            for chart, series in (("#env-height", 4), ("#env-energy", 4), ("#stops", 1)):
+                assert page.locator(f"{chart} .x-tick").count() >= 4, chart
+                assert page.locator(f"{chart} .y-tick").count() >= 3, chart
+                assert page.locator(f"{chart} .axis-title").count() == 2, chart
+                assert page.locator(f"{chart} .legend-swatch").count() == series, chart
+            names = page.locator("#env-height .legend-item").evaluate_all(
+                "(items) => items.map((i) => i.dataset.series)")
+            assert names == ["p50", "p95", "p99", "max"]
+            page.click("#place")
+            page.wait_for_function(
+                "() => document.getElementById('residual').dataset.verdict !== undefined",
+                timeout=30_000)
+            assert page.inner_text("#error") == ""
+            # The project's fence and ditch and the placed fence: three measures.
+            assert page.locator("#checks b").count() == 3
+            # Drag the placed fence to the crest, above every release: no rock meets it.
+            box = page.locator("#placed-handle").bounding_box()
+            left = page.locator("#section").bounding_box()["x"]
+            x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+            page.mouse.move(x, y)
+            page.mouse.down()
+            for i in range(1, 11):
+                page.mouse.move(x + (left - 5 - x) * i / 10, y)
+            page.mouse.up()
+            page.wait_for_function(
+                "() => [...document.querySelectorAll('#checks tr[data-untested] b')]"
+                ".some((b) => b.textContent.startsWith('fence')"
+                " && b.textContent.endsWith('at x = 0.5 m'))",
+                timeout=30_000)
+            assert page.inner_text("#error") == ""
+            # Its checks say "untested", not "holds" (as the verdict says).
+            words = page.locator("#checks td.untested").all_inner_texts()
+            assert words and set(words) == {"untested"}
+            page.fill("#rocks", "200")
+            page.click("#check")
+            page.wait_for_selector("#check-verdict[data-verdict]", timeout=300_000)
+            assert page.locator("#check-table td", has_text="untested").count() >= 1
+            assert page.inner_text("#error") == ""
     finally:
         code, err = stop_server(proc)
     assert not errors, errors

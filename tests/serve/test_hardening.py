@@ -13,7 +13,6 @@ import errno
 import gc
 import os
 import shutil
-import time
 import weakref
 from pathlib import Path
 
@@ -32,6 +31,7 @@ from rockfall_design.serve.workbench import load_entries  # noqa: E402
 
 from ..plugin_helpers import install_embankment_example  # noqa: E402
 from .conftest import start_server, stop_server  # noqa: E402
+from .conftest import wait_job as _wait  # noqa: E402
 
 TOKEN = "test-token-hardening-0123"
 OWN = "http://127.0.0.1"
@@ -44,15 +44,6 @@ def _snapshot(directory: Path) -> dict[Path, tuple[bytes, int]]:
     """Every file under ``directory`` with its bytes and mode: to show nothing changed."""
     return {p: (p.read_bytes(), p.stat().st_mode) for p in sorted(directory.rglob("*"))
             if p.is_file()}
-
-
-def _wait(c: TestClient, job_id: str) -> dict:
-    for _ in range(4000):
-        job = c.get(f"/api/jobs/{job_id}").json()
-        if job["state"] != "running":
-            return job
-        time.sleep(0.05)
-    raise AssertionError(f"job {job_id} still running")
 
 
 def _serve(registry, directory: Path, name: str, **kw) -> tuple[TestClient, object]:
