@@ -175,9 +175,7 @@ class ProjectEntry:
             409 when a job of this project is under way.
         """
         with self.lock:
-            if self.job is not None and self.job.state == "running":
-                raise ServeError(409, f"a {self.job.kind} of {self.id} is under way "
-                                 f"(job {self.job.id})")
+            self._refuse_while_running()
             job = Job(kind, total)
             self.job = job
         threading.Thread(target=self._work, args=(job, work), daemon=True,
@@ -486,9 +484,7 @@ class ProjectEntry:
         if name in p.materials and p.materials[name] != new:
             name = f"{material} ({Path(lib['path']).stem})"
         with self.lock:
-            if self.job is not None and self.job.state == "running":
-                raise ServeError(409, f"a {self.job.kind} of {self.id} is under way "
-                                 f"(job {self.job.id})")
+            self._refuse_while_running()
             names = list(p.slope.materials)
             names[segment] = name
             slope = p.slope.model_copy(update={"materials": names})
