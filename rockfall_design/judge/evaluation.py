@@ -48,7 +48,57 @@ __all__ = [
     "edited_section",
     "evaluate",
     "evaluate_design",
+    "protect_summary",
 ]
+
+
+def protect_summary(x: float, reaching: int, n: int, allowed: float, confidence: float,
+                    unresolved: int = 0) -> dict[str, Any]:
+    """The rocks reaching a protected zone against what is allowed, as ``check`` reports it.
+
+    Parameters
+    ----------
+    x : float
+        Where the protected zone begins (m).
+    reaching, n : int
+        Rocks reaching it, of ``n`` rocks.
+    allowed : float
+        The allowed fraction (-).
+    confidence : float
+        One-sided confidence of the Clopper-Pearson bounds (-).
+    unresolved : int
+        Of ``reaching``, rocks whose paths did not finish (counted as reaching).
+
+    Returns
+    -------
+    dict
+        ``x``, ``reaching``, ``fraction``, ``upper_fraction`` and
+        ``lower_fraction`` (Clopper-Pearson), ``unresolved``,
+        ``allowed_fraction``, ``ok`` (the fraction is allowed),
+        ``ok_with_confidence`` (its upper bound is) and
+        ``fails_with_confidence`` (its lower bound exceeds the allowance).
+        :func:`~rockfall_design.judge.verdict.verdict_of` reads it.
+
+    References
+    ----------
+    Clopper, C. J. and Pearson, E. S. (1934). The use of confidence or fiducial
+    limits illustrated in the case of the binomial. Biometrika 26(4), 404-413.
+    """
+    fraction = reaching / n if n else 0.0
+    upper = fraction_upper_bound(reaching, n, confidence)
+    lower = fraction_lower_bound(reaching, n, confidence)
+    return {
+        "x": float(x),
+        "reaching": int(reaching),
+        "fraction": fraction,
+        "upper_fraction": upper,
+        "unresolved": int(unresolved),
+        "allowed_fraction": float(allowed),
+        "ok": fraction <= allowed,
+        "ok_with_confidence": upper <= allowed,
+        "lower_fraction": lower,
+        "fails_with_confidence": lower > allowed,
+    }
 
 
 @dataclass
@@ -95,24 +145,9 @@ class Evaluation:
         p = self.study.project.protect
         if p is None:
             return None
-        n = self.study.result.n
-        reaching, unresolved = self.judgement.reaching, self.judgement.unresolved
-        fraction = reaching / n if n else 0.0
-        allowed = float(getattr(p, "allowed_fraction", 0.0))
-        upper = fraction_upper_bound(reaching, n, self.confidence)
-        lower = fraction_lower_bound(reaching, n, self.confidence)
-        return {
-            "x": float(p.x),
-            "reaching": reaching,
-            "fraction": fraction,
-            "upper_fraction": upper,
-            "unresolved": unresolved,
-            "allowed_fraction": allowed,
-            "ok": fraction <= allowed,
-            "ok_with_confidence": upper <= allowed,
-            "lower_fraction": lower,
-            "fails_with_confidence": lower > allowed,
-        }
+        return protect_summary(float(p.x), self.judgement.reaching, self.study.result.n,
+                               float(getattr(p, "allowed_fraction", 0.0)), self.confidence,
+                               self.judgement.unresolved)
 
     @property
     def ok(self) -> bool:

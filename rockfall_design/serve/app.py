@@ -1,12 +1,16 @@
 """The ASGI application of ``rockfall-design serve``: the page, its assets and the API.
 
 Every request must carry the run's token: in the address the command
-prints (``?token=...``), after which the page keeps it in a cookie
-(HttpOnly, SameSite=Strict), as Jupyter does. A request without it gets
-403, so other local users and other sites' pages cannot use the app.
+prints (``?token=...``); the page holds it and sends it in the
+``X-Rockfall-Token`` header (no cookie: a cookie of 127.0.0.1 goes to every
+port, to other servers of this app and to other local services). A
+request that changes something must also come from the app's own page (its
+``Origin``, or lacking one a same-origin ``Referer``) as
+``application/json``. Anything else gets 403, so other local users and
+other pages (another port of 127.0.0.1 too) cannot use the app.
 
-API (JSON; an error is ``{"error": "one line"}`` with a 4xx status and
-changes nothing):
+API (JSON; an error is ``{"error": "one line"}`` with a 4xx or 5xx status
+and changes nothing):
 
 ==========================================  ==========================================
 ``GET  /api/projects``                      the projects served
@@ -34,13 +38,13 @@ changes nothing):
                                             bounds and residual from the run's table
 ``GET  /api/plugins``                       ``plugins --json``: measures and their
                                             parameters, for the forms
-``GET  /api/projects/{id}/file``            the project file's text
+``GET  /api/projects/{id}/file``            the project file's text and ``version``
 ``POST /api/projects/{id}/validate``        ``{"text"}``: the command line's one-line
                                             error, or ok
-``POST /api/projects/{id}/save``            ``{"text", "path"}``: write it, only inside
-                                            the project's directory
+``POST /api/projects/{id}/save``            ``{"text", "version"}``: write the project
+                                            file, only if unchanged since read
 ``POST /api/projects/{id}/upload``          ``{"path", "text", "replace"}``: import a
-                                            CSV or DXF section or a library there
+                                            section, stops or a library there
 ``GET  /api/projects/{id}/materials``       the entries of its materials library
                                             (``?path=FILE``: another one), law, values
 ``POST /api/projects/{id}/materials``       ``{"segment", "material", "library"}``: give
@@ -50,27 +54,35 @@ changes nothing):
 
 from __future__ import annotations
 
+import html
 import json
 import math
 import secrets
 from collections.abc import Sequence
-from http.cookies import SimpleCookie
 from importlib import resources
 from typing import Any
-from urllib.parse import parse_qs
+from urllib.parse import parse_qs, quote
 
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
+from starlette.exceptions import HTTPException
 from starlette.requests import Request
-from starlette.responses import FileResponse, JSONResponse, PlainTextResponse, Response
+from starlette.responses import FileResponse, HTMLResponse, JSONResponse, Response
 from starlette.routing import Route
 
-from .guards import MAX_BODY_BYTES, ServeError
+from .guards import (
+    MAX_BODY_BYTES,
+    ServeError,
+    non_finite_key,
+    request_problem,
+    version_of,
+)
+from .jobs import JobStore
 from .reports import media_type
 from .workbench import ProjectEntry
 
-#: Name of the cookie that carries the token after the first request.
-COOKIE = "rockfall_design_token"
+#: Header that carries the token on every request of the page (and of a script).
+TOKEN_HEADER = "X-Rockfall-Token"
 
 _STATIC_FILES = {"app.js": "text/javascript", "style.css": "text/css",
                  "index.html": "text/html"}
@@ -87,55 +99,66 @@ _PAGE_HEADERS = {
 }
 
 
-class TokenGuard:
-    """ASGI middleware: 403 for any request without the run's token.
+def _refusal(status: int, message: str) -> JSONResponse:
+    return JSONResponse({"error": message}, status_code=status,
+                        headers={"Cache-Control": "no-store"})
 
-    The token is accepted from the ``token`` query parameter (the printed
-    address) or the cookie; a request that brought it in the address gets
-    the cookie set, so that the page's own requests need not repeat it.
+
+class TokenGuard:
+    """ASGI middleware: the token on every request, and only the app's page changes anything.
+
+    The token comes in the :data:`TOKEN_HEADER` header (the page holds it
+    and sends it with every request) or the ``token`` query parameter (the
+    printed address, the page's assets and downloads). No cookie: a cookie
+    of 127.0.0.1 goes to every port of it, to another server of this app and
+    to any other local service. A request that is not a GET or HEAD must
+    also come from the app's own origin as JSON
+    (:func:`~rockfall_design.serve.guards.request_problem`). Everything
+    refused is 403 with a JSON error; an exception that escapes an endpoint
+    is answered 500 with one line, never a traceback on the terminal.
     """
 
     def __init__(self, app: Any, token: str) -> None:
         self.app = app
         self.token = token
 
+    def _problem(self, scope: dict) -> str | None:
+        headers = {k.decode("latin-1").lower(): v.decode("latin-1")
+                   for k, v in scope.get("headers", [])}
+        query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+        given = headers.get(TOKEN_HEADER.lower()) or query.get("token", [""])[0]
+        if not (given and secrets.compare_digest(given.encode(), self.token.encode())):
+            return ("this address needs the token that rockfall-design serve printed "
+                    "(open the address it printed)")
+        return request_problem(scope.get("method", "GET"), scope.get("scheme", "http"),
+                               headers)
+
     async def __call__(self, scope: dict, receive: Any, send: Any) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
-        query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
-        from_query = query.get("token", [""])[0]
-        cookie = ""
-        for name, value in scope.get("headers", []):
-            if name == b"cookie":
-                jar: SimpleCookie = SimpleCookie()
-                try:
-                    jar.load(value.decode("latin-1"))
-                except Exception:  # noqa: BLE001 -- a malformed cookie is no token
-                    continue
-                if COOKIE in jar:
-                    cookie = jar[COOKIE].value
-        ok_query = bool(from_query) and secrets.compare_digest(from_query, self.token)
-        ok_cookie = bool(cookie) and secrets.compare_digest(cookie, self.token)
-        if not (ok_query or ok_cookie):
-            resp = PlainTextResponse(
-                "403: this address needs the token that rockfall-design serve printed "
-                "(open the address it printed)\n", status_code=403)
-            await resp(scope, receive, send)
+        problem = self._problem(scope)
+        if problem is not None:
+            await _refusal(403, problem)(scope, receive, send)
             return
-        if ok_query and not ok_cookie:
-            header = (f"{COOKIE}={self.token}; Path=/; HttpOnly; SameSite=Strict").encode()
+        started = False
 
-            async def send_with_cookie(message: dict) -> None:
-                if message["type"] == "http.response.start":
-                    message = dict(message)
-                    message["headers"] = list(message.get("headers", [])) + [
-                        (b"set-cookie", header)]
-                await send(message)
+        async def tracked(message: dict) -> None:
+            nonlocal started
+            started = started or message["type"] == "http.response.start"
+            await send(message)
 
-            await self.app(scope, receive, send_with_cookie)
-            return
-        await self.app(scope, receive, send)
+        try:
+            await self.app(scope, receive, tracked)
+        except Exception as exc:  # noqa: BLE001 -- one line to the page, no traceback
+            if not started:
+                await _refusal(500, _one_line(exc))(scope, receive, send)
+
+
+def _one_line(exc: BaseException) -> str:
+    """An unexpected error as one line: its type and message, no traceback."""
+    text = " ".join(str(exc).split())
+    return f"internal error: {type(exc).__name__}{': ' + text if text else ''}"
 
 
 def _error(exc: ServeError) -> JSONResponse:
@@ -189,6 +212,10 @@ async def _body(request: Request) -> dict[str, Any]:
         raise ServeError(400, f"malformed JSON body: {exc}") from None
     if not isinstance(data, dict):
         raise ServeError(400, "expected a JSON object as the request body")
+    bad = non_finite_key(data)
+    if bad is not None:
+        raise ServeError(400, f"{bad}: expected a finite number (NaN, Infinity and numbers "
+                         "beyond 1.8e308 are not numbers the app can use)")
     return data
 
 
@@ -196,9 +223,24 @@ def _optional_int(data: dict[str, Any], key: str) -> int | None:
     v = data.get(key)
     if v is None:
         return None
-    if isinstance(v, bool) or not isinstance(v, int | float) or v != int(v):
-        raise ServeError(400, f"{key}: expected a whole number, got {v!r}")
+    if (isinstance(v, bool) or not isinstance(v, int | float)
+            or (isinstance(v, float) and not (math.isfinite(v) and v.is_integer()))):
+        raise ServeError(400, f"{key}: expected a whole number, got {_short(v)}")
+    if abs(v) > _LARGEST_WHOLE:
+        raise ServeError(400, f"{key}: {_short(v)} is beyond any number of rocks or seed "
+                         f"the app takes (at most {_LARGEST_WHOLE:.3g})")
     return int(v)
+
+
+#: Largest whole number a request may give (rocks, seed, bootstrap): 2**63 - 1,
+#: the engine's integers; the endpoints' own bounds are far below for rocks.
+_LARGEST_WHOLE = 2**63 - 1
+
+
+def _short(v: Any) -> str:
+    """A value for a message, cut to 40 characters."""
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _handle(fn: Any) -> Any:
@@ -208,16 +250,19 @@ def _handle(fn: Any) -> Any:
             return await fn(request)
         except ServeError as exc:
             return _error(exc)
+        except Exception as exc:  # noqa: BLE001 -- one line to the page, no traceback
+            return _refusal(500, _one_line(exc))
     return endpoint
 
 
 class _Endpoints:
     """The app's endpoints over the served projects and their jobs (one per app)."""
 
-    def __init__(self, entries: Sequence[ProjectEntry]) -> None:
+    def __init__(self, entries: Sequence[ProjectEntry], token: str) -> None:
         self.entries = list(entries)
         self.by_id = {e.id: e for e in self.entries}
-        self.jobs: dict[str, Any] = {}
+        self.jobs = JobStore()
+        self.token = token
 
     def entry(self, pid: str) -> ProjectEntry:
         e = self.by_id.get(pid)
@@ -227,7 +272,7 @@ class _Endpoints:
         return e
 
     async def page(self, request: Request) -> Response:
-        return _static("index.html")
+        return _page(self.token)
 
     async def static(self, request: Request) -> Response:
         name = request.path_params["name"]
@@ -252,7 +297,7 @@ class _Endpoints:
         e = self.entry(request.path_params["pid"])
         data = await _body(request)
         job = e.start_run(_optional_int(data, "rocks"), _optional_int(data, "seed"))
-        self.jobs[job.id] = job
+        self.jobs.add(job)
         return _json(job.as_dict(), 202)
 
     async def check(self, request: Request) -> Response:
@@ -262,21 +307,21 @@ class _Endpoints:
         if raws is not None and not isinstance(raws, list):
             raise ServeError(400, "measures: expected a list of measures")
         job = e.start_check(raws, _optional_int(data, "rocks"), _optional_int(data, "seed"))
-        self.jobs[job.id] = job
+        self.jobs.add(job)
         return _json(job.as_dict(), 202)
 
     async def optimise(self, request: Request) -> Response:
         e = self.entry(request.path_params["pid"])
         data = await _body(request)
         job = e.start_optimise(_optional_int(data, "rocks"), _optional_int(data, "seed"))
-        self.jobs[job.id] = job
+        self.jobs.add(job)
         return _json(job.as_dict(), 202)
 
     async def study(self, request: Request) -> Response:
         e = self.entry(request.path_params["pid"])
         data = await _body(request)
         job = e.start_study(_optional_int(data, "rocks"), _optional_int(data, "seed"))
-        self.jobs[job.id] = job
+        self.jobs.add(job)
         return _json(job.as_dict(), 202)
 
     async def calibrate(self, request: Request) -> Response:
@@ -284,14 +329,19 @@ class _Endpoints:
         data = await _body(request)
         job = e.start_calibrate(_optional_int(data, "rocks"), _optional_int(data, "seed"),
                                 _optional_int(data, "bootstrap"))
-        self.jobs[job.id] = job
+        self.jobs.add(job)
         return _json(job.as_dict(), 202)
 
     async def job_file(self, request: Request) -> Response:
         j = self.job_of(request)
         name = request.path_params["name"]
         if name not in j.files:
+            if name in j.released:
+                raise ServeError(410, f"job {j.id}: {name} is no longer kept (the app keeps "
+                                 f"the full results of the last {self.jobs.keep_full} jobs); "
+                                 "run it again")
             raise ServeError(404, f"job {j.id} has no {name}")
+        self.jobs.touch(j)
         content = j.files[name]
         if callable(content):
             # The report and figures are drawn on the first request (seconds):
@@ -305,7 +355,7 @@ class _Endpoints:
 
     def job_of(self, request: Request) -> Any:
         job = self.jobs.get(request.path_params["jid"])
-        if job is None:
+        if job is None:  # never started, or forgotten (the app keeps the latest jobs)
             raise ServeError(404, f"unknown job {request.path_params['jid']!r}")
         return job
 
@@ -364,7 +414,10 @@ class _Endpoints:
             text = target.read_text(encoding="utf-8")
         except UnicodeDecodeError:
             raise ServeError(400, f"{name}: not a UTF-8 text file") from None
-        return _json({"path": name, "text": text})
+        # Save sends the version back: it writes only over the file the page read.
+        version = version_of(target)
+        return JSONResponse(_clean({"path": name, "text": text, "version": version}),
+                            headers={"ETag": f'"{version}"'})
 
     async def validate(self, request: Request) -> Response:
         e = self.entry(request.path_params["pid"])
@@ -376,10 +429,13 @@ class _Endpoints:
         e = self.entry(request.path_params["pid"])
         data = await _body(request)
         name = data.get("path")
-        if name is not None and not isinstance(name, str):
-            raise ServeError(400, "path: expected a file name inside the project's directory")
-        target = e.save(data.get("text"), name)
-        return _json({"ok": True, "path": str(target.relative_to(e.directory))})
+        if name is not None and name != e.path.name:
+            # The path is the project's: Save never writes another file.
+            raise ServeError(400, f"path: Save writes the project file it opened "
+                             f"({e.path.name}) and nothing else; leave path out")
+        target = await run_in_threadpool(e.save, data.get("text"), data.get("version"))
+        return _json({"ok": True, "path": str(target.relative_to(e.directory)),
+                      "version": version_of(target)})
 
     async def materials(self, request: Request) -> Response:
         e = self.entry(request.path_params["pid"])
@@ -401,7 +457,8 @@ class _Endpoints:
         name = data.get("path")
         if not isinstance(name, str):
             raise ServeError(400, "path: expected a file name inside the project's directory")
-        target = e.upload(name, data.get("text"), bool(data.get("replace", False)))
+        target = await run_in_threadpool(e.upload, name, data.get("text"),
+                                         data.get("replace", False) is True)
         return _json({"ok": True, "path": str(target.relative_to(e.directory))})
 
 
@@ -412,7 +469,7 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
     inner Starlette app, also as the attribute ``token`` of the returned object.
     """
     token = token or secrets.token_urlsafe(24)
-    ep = _Endpoints(entries)
+    ep = _Endpoints(entries, token)
 
     routes = [
         Route("/", _handle(ep.page)),
@@ -437,12 +494,28 @@ def create_app(entries: Sequence[ProjectEntry], token: str | None = None) -> Any
         Route("/api/place", _handle(ep.place), methods=["POST"]),
         Route("/api/plugins", _handle(ep.plugins)),
     ]
-    inner = Starlette(routes=routes)
+    inner = Starlette(routes=routes, exception_handlers={HTTPException: _http_error})
     inner.state.token = token
     inner.state.entries = ep.entries
     app = TokenGuard(inner, token)
     app.state = inner.state  # type: ignore[attr-defined]
     return app
+
+
+async def _http_error(request: Request, exc: Exception) -> Response:
+    """Starlette's own refusals (no such route, method not allowed) as JSON errors too."""
+    status = getattr(exc, "status_code", 500)
+    detail = getattr(exc, "detail", "") or "error"
+    return _refusal(status, f"{request.method} {request.url.path}: {detail}")
+
+
+def _page(token: str) -> Response:
+    """The page with the token it sends with every request (in a meta tag and asset links)."""
+    path = resources.files("rockfall_design.serve").joinpath("static", "index.html")
+    text = path.read_text(encoding="utf-8")
+    text = text.replace("__TOKEN_QUERY__", quote(token, safe=""))
+    text = text.replace("__TOKEN__", html.escape(token, quote=True))
+    return HTMLResponse(text, headers=_PAGE_HEADERS)
 
 
 def _inside(e: ProjectEntry, name: str) -> Any:

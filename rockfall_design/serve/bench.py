@@ -19,9 +19,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .guards import (
-    ServeError,
-)
+from ..judge.evaluation import protect_summary
+from ..judge.verdict import verdict_of
+from .guards import ServeError
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..optimiser.screening import Screening
@@ -113,7 +113,9 @@ class Bench:
         dict
             ``measures`` (label, station used, counts, checks with their
             bounds), ``residual`` (rocks reaching the protected zone with
-            the Clopper-Pearson bounds and the target), ``admitted`` and
+            the Clopper-Pearson bounds and the target), ``verdict`` (what
+            :func:`~rockfall_design.judge.verdict.verdict_of` says of these
+            numbers, as ``check --json`` gives it), ``admitted`` and
             ``rejected`` as the optimiser's screening decides them, and
             ``elapsed_ms``.
 
@@ -132,9 +134,8 @@ class Bench:
         every move (``reshapes_ground`` in the answer says so).
         """
         from ..errors import ProjectError
-        from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
         from ..judge.placing import edited_section, place_measures
-        from ..plugins.measure import Barrier, ProfileEdit
+        from ..plugins.measure import ProfileEdit
 
         t0 = time.perf_counter()
         sc = self.screening
@@ -152,41 +153,23 @@ class Bench:
                 table = sc._table_for(edits, edited_section(entry.project, sc.section, placed))
             except ValueError as exc:
                 raise ServeError(400, f"{' + '.join(p.label for p in placed)}: {exc}") from None
-        cost = math.nan
-        if sc.spec.cost_model is not None:
-            try:
-                cost = sc.cost([p.measure for p in placed])
-            except (KeyError, ValueError):
-                cost = math.nan  # the cost model has no price for it: shown as unknown
+        cost = _cost(sc, placed)
         res = sc.screen_placed(placed, table, cost)
-        n = sc.n
-        out_measures = []
-        for p, r, checks in zip(placed, res.results, res.checks, strict=True):
-            fp = p.footprint
-            x = float(fp.x) if isinstance(fp, Barrier) else float(fp.x_start)
-            out_measures.append({
-                "index": p.index, "label": p.label, "type": raws[p.index]["type"],
-                "x": x, "x_table": float(sc.grid[sc.station(x)]),
-                "reshapes_ground": not isinstance(fp, Barrier),
-                "met": int(r.met), "caught": int(r.caught), "passed_over": int(r.passed_over),
-                "broken_through": int(r.broken_through), "rebounded": int(r.rebounded),
-                "checks": [_check_dict(c) for c in checks],
-                "ok": all(c.ok for c in checks),
-            })
-        reaching = int(res.residual)
-        residual = {
-            "reaching": reaching, "rocks": n, "fraction": reaching / n if n else 0.0,
-            "upper_bound": fraction_upper_bound(reaching, n, sc.confidence),
-            "lower_bound": fraction_lower_bound(reaching, n, sc.confidence),
-            "allowed_fraction": sc.allowed_fraction, "allowed": sc.allowed_residual,
-            "confidence": sc.confidence, "x": sc.protect_x,
-            # Without protect: in the project, the foot of the section stands in.
-            "protected_zone": entry.project.protect is not None,
-        }
-        residual["ok"] = reaching <= sc.allowed_residual
-        residual["ok_with_confidence"] = residual["upper_bound"] <= sc.allowed_fraction
+        out_measures = _measure_dicts(sc, placed, res, raws)
+        # The residual as check reports it (judge.evaluation), against the
+        # screening's allowance; the foot of the section stands in without protect:.
+        prot = protect_summary(sc.protect_x, int(res.residual), sc.n, sc.allowed_fraction,
+                               sc.confidence)
+        verdict = verdict_of({
+            "rocks": sc.n, "confidence": sc.confidence,
+            "protect": prot if entry.project.protect is not None else None,
+            "measures": [{k: m[k] for k in ("label", "type", "met", "checks")}
+                         for m in out_measures]})
         return {
-            "measures": out_measures, "residual": residual,
+            "measures": out_measures, "residual": _residual_dict(entry, sc, prot),
+            # The verdict of check (judge.verdict) on these numbers: "untested"
+            # for a measure no rock meets, never "holds".
+            "verdict": verdict.as_dict(),
             "admitted": bool(res.feasible), "near": bool(res.near),
             "rejected": not res.feasible and not res.near,
             "approximate": bool(res.approximate), "cost": _num(cost),
@@ -194,6 +177,53 @@ class Bench:
             "rerun_rocks": int(table.rows.size) if table.rows is not None else 0,
             "elapsed_ms": round((time.perf_counter() - t0) * 1e3, 3),
         }
+
+
+def _cost(sc: Screening, placed: Sequence[Any]) -> float:
+    """The design's cost by the project's cost model; NaN without one or without a price."""
+    if sc.spec.cost_model is None:
+        return math.nan
+    try:
+        return float(sc.cost([p.measure for p in placed]))
+    except (KeyError, ValueError):
+        return math.nan  # the cost model has no price for it: shown as unknown
+
+
+def _measure_dicts(sc: Screening, placed: Sequence[Any], res: Any,
+                   raws: Sequence[Any]) -> list[dict[str, Any]]:
+    """Per placed measure: its label, station, counts and checks, for the page."""
+    from ..plugins.measure import Barrier
+
+    out = []
+    for p, r, checks in zip(placed, res.results, res.checks, strict=True):
+        fp = p.footprint
+        x = float(fp.x) if isinstance(fp, Barrier) else float(fp.x_start)
+        out.append({
+            "index": p.index, "label": p.label, "type": raws[p.index]["type"],
+            "x": x, "x_table": float(sc.grid[sc.station(x)]),
+            "reshapes_ground": not isinstance(fp, Barrier),
+            "met": int(r.met), "caught": int(r.caught), "passed_over": int(r.passed_over),
+            "broken_through": int(r.broken_through), "rebounded": int(r.rebounded),
+            "checks": [_check_dict(c) for c in checks],
+            "ok": all(c.ok for c in checks),
+        })
+    return out
+
+
+def _residual_dict(entry: ProjectEntry, sc: Screening, prot: dict[str, Any]) -> dict[str, Any]:
+    """The rocks reaching the protected zone, with their Clopper-Pearson bounds and target.
+
+    ``prot`` is :func:`~rockfall_design.judge.evaluation.protect_summary` of them.
+    """
+    return {
+        "reaching": prot["reaching"], "rocks": sc.n, "fraction": prot["fraction"],
+        "upper_bound": prot["upper_fraction"], "lower_bound": prot["lower_fraction"],
+        "allowed_fraction": sc.allowed_fraction, "allowed": sc.allowed_residual,
+        "confidence": sc.confidence, "x": sc.protect_x,
+        # Without protect: in the project, the foot of the section stands in.
+        "protected_zone": entry.project.protect is not None,
+        "ok": prot["ok"], "ok_with_confidence": prot["ok_with_confidence"],
+    }
 
 
 def _placed_message(message: str) -> str:
@@ -212,14 +242,16 @@ def _check_dict(c: Any) -> dict[str, Any]:
 def default_spec(project: Project, registry: Registry) -> Any:
     """The project's design section, or targets alone for a project without one.
 
-    Without ``design:`` no rock may reach the protected zone (a count of 0)
-    and nothing is priced.
+    Without ``design:`` the residual is judged as ``check`` judges it: against
+    ``protect.allowed_fraction`` (0 without a protected zone), and nothing is
+    priced.
     """
     from ..optimiser.design_spec import DesignSpec, resolve_design
 
     if project.design is not None:
         return resolve_design(project, registry)
-    return DesignSpec(max_measures=4, residual_count=0, residual_fraction=None,
+    allowed = float(project.protect.allowed_fraction) if project.protect is not None else 0.0
+    return DesignSpec(max_measures=4, residual_count=None, residual_fraction=allowed,
                       fresh_rocks=None, fresh_seed=None, length_m=1.0, candidates=(),
                       cost_model=None, products={})
 

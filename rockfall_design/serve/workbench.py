@@ -28,12 +28,16 @@ import numpy as np
 from .bench import Bench, _placed_message, build_bench
 from .guards import (
     MAX_BODY_BYTES,
+    UPLOAD_KINDS,
     UPLOAD_SUFFIXES,
     ServeError,
     _library_comments,
-    _write_atomically,
+    file_kind,
+    hidden_part,
     inside,
     referenced_outside,
+    same_version,
+    write_atomically,
 )
 from .job_tables import _plain, calibration_tables, study_tables
 from .jobs import Cancelled, Job
@@ -142,7 +146,9 @@ class ProjectEntry:
             known = ", ".join(sorted(self.registry.measures))
             raise ServeError(400, f"measures[{i}].type: unknown measure {kind!r} "
                              f"(installed: {known})")
-        values = {k: v for k, v in raw.items() if k != "type"}
+        # "label" is what describe() adds for the page, not a parameter: a measure
+        # sent back as the app described it is the same measure.
+        values = {k: v for k, v in raw.items() if k not in ("type", "label")}
         problem = params_problem(cls.Params, values)
         if problem is not None:
             loc, message = problem
@@ -169,9 +175,7 @@ class ProjectEntry:
             409 when a job of this project is under way.
         """
         with self.lock:
-            if self.job is not None and self.job.state == "running":
-                raise ServeError(409, f"a {self.job.kind} of {self.id} is under way "
-                                 f"(job {self.job.id})")
+            self._refuse_while_running()
             job = Job(kind, total)
             self.job = job
         threading.Thread(target=self._work, args=(job, work), daemon=True,
@@ -233,7 +237,8 @@ class ProjectEntry:
                 place_measures(project, self.registry, measures, section_from_project(project))
             except ProjectError as exc:
                 raise ServeError(400, _placed_message(exc.message)) from None
-            project = project.model_copy(update={"measures": [dict(r) for r in raws]})
+            project = project.model_copy(update={"measures": [
+                {k: v for k, v in r.items() if k != "label"} for r in raws]})
 
         def work(job: Job) -> None:
             from ..results import DEFAULT_TRAJECTORIES, CheckResult
@@ -479,9 +484,7 @@ class ProjectEntry:
         if name in p.materials and p.materials[name] != new:
             name = f"{material} ({Path(lib['path']).stem})"
         with self.lock:
-            if self.job is not None and self.job.state == "running":
-                raise ServeError(409, f"a {self.job.kind} of {self.id} is under way "
-                                 f"(job {self.job.id})")
+            self._refuse_while_running()
             names = list(p.slope.materials)
             names[segment] = name
             slope = p.slope.model_copy(update={"materials": names})
@@ -499,53 +502,115 @@ class ProjectEntry:
         return {**self.describe(), "yaml": dump_yaml(project.resolved_dict())}
 
     # -- the project file -----------------------------------------------------------
-    def save(self, text: str, name: str | None) -> Path:
-        """Validate ``text`` as a project and write it to ``name`` in the project's directory.
+    def _refuse_while_running(self) -> None:
+        """409 while a job of this project runs (call with :attr:`lock` held)."""
+        if self.job is not None and self.job.state == "running":
+            raise ServeError(409, f"a {self.job.kind} of {self.id} is under way "
+                             f"(job {self.job.id}); wait for it or cancel it first")
+
+    def save(self, text: str, version: str) -> Path:
+        """Validate ``text`` as the project and write it to the project file, and nowhere else.
+
+        Parameters
+        ----------
+        text
+            The project's YAML.
+        version
+            The version of the project file the page read
+            (:func:`~rockfall_design.serve.guards.version_of`, as
+            ``GET .../file`` gives it).
 
         Nothing is written unless the text is a valid project that names no
-        file outside the directory; the file is replaced in one step.
+        file outside the directory, the file is still the one the page read
+        and no job of the project runs; the file is replaced in one step,
+        keeping its mode.
 
         Raises
         ------
         ServeError
-            403 for a target or a referenced file outside the directory, 400
-            for a project that does not validate (its one-line message).
+            400 without a version or for a project that does not validate
+            (its one-line message); 403 for a referenced file outside the
+            directory; 409 when the file changed since the page read it, or
+            while a job of this project runs; 507 when the disk is full.
         """
-        target = inside(self.directory, self.path.name if name is None else name)
-        if not target.parent.is_dir():
-            raise ServeError(400, f"path {name!r}: no such directory in the project's directory")
-        if target.is_dir():
-            raise ServeError(400, f"path {name!r} is a directory")
+        target = self.path.resolve()
         project = self.validate(text, target)
-        _write_atomically(target, text)
-        if target == self.path.resolve():
+        if not isinstance(version, str) or not version:
+            raise ServeError(400, "version: expected the version of the project file the page "
+                             "read (GET .../file gives it), so that Save overwrites no edit "
+                             "made since")
+        with self.lock:
+            self._refuse_while_running()
+            try:
+                unchanged = same_version(target, version)
+            except FileNotFoundError:
+                unchanged = False
+            if not unchanged:
+                raise ServeError(409, f"{target.name} changed since the page read it (or was "
+                                 "removed): reload it and make your edits again; nothing was "
+                                 "written")
+            write_atomically(target, text)
             self.project, self.bench, self.edits = project, None, []
         return target
 
     def upload(self, name: str, text: str, replace: bool = False) -> Path:
-        """Write an imported file (a CSV or DXF section, a materials library) beside the project.
+        """Write an imported file (a section, observed stops, a library) beside the project.
+
+        The text must be a surveyed section (CSV or DXF), observed stops
+        (CSV) or a materials library (YAML); an existing file is replaced
+        only when asked and only by a file of its own kind (observed stops
+        by observed stops, never a project, a catalogue or another file by a
+        library). Dotfiles and anything under a dot-folder are never written.
 
         Raises
         ------
         ServeError
-            403 outside the project's directory; 400 for another kind of
-            file or text that is not a string; 409 when the file exists and
-            ``replace`` is not set.
+            403 outside the project's directory or for a dotfile or
+            dot-folder; 400 for another kind of file or text that is not a
+            string; 409 when the file exists and ``replace`` is not set, or is
+            of another kind; 507 when the disk is full.
         """
+        if isinstance(name, str) and hidden_part(name) is not None:
+            raise ServeError(403, f"path {name!r}: {hidden_part(name)!r} is hidden (a dotfile "
+                             "or dot-folder): the app never writes there")
         target = inside(self.directory, name)
+        if hidden_part(str(target.relative_to(self.directory))) is not None:
+            raise ServeError(403, f"path {name!r} leads to a dotfile or dot-folder: the app "
+                             "never writes there")
         if target.suffix.lower() not in UPLOAD_SUFFIXES:
             raise ServeError(400, f"path {name!r}: expected a file ending in "
                              f"{', '.join(UPLOAD_SUFFIXES)}")
         if not isinstance(text, str):
             raise ServeError(400, "text: expected the file's text as a string")
+        kind = file_kind(target.name, text)
+        if kind not in UPLOAD_KINDS:
+            raise ServeError(400, f"{name}: the text is {kind}, not one of "
+                             f"{'; '.join(UPLOAD_KINDS)}")
         if not target.parent.is_dir():
             raise ServeError(400, f"path {name!r}: no such directory in the project's directory")
-        if target.exists() and not replace:
-            raise ServeError(409, f"{name} exists already (send \"replace\": true to replace it)")
         if target.resolve() == self.path.resolve():
             raise ServeError(400, f"{name} is the project file: save it from the editor")
-        _write_atomically(target, text)
+        if target.exists():
+            if not replace:
+                raise ServeError(409, f"{name} exists already (send \"replace\": true to "
+                                 "replace it)")
+            old = self._existing_kind(target)
+            if old != kind:
+                raise ServeError(409, f"{name} holds {old}: an upload replaces only a file of "
+                                 f"its own kind ({kind}); nothing was written")
+        write_atomically(target, text)
         return target
+
+    @staticmethod
+    def _existing_kind(target: Path) -> str:
+        if not target.is_file():
+            return "directory or special file"
+        if target.stat().st_size > MAX_BODY_BYTES:
+            return "file larger than an upload may be"
+        try:
+            return file_kind(target.name, target.read_text(encoding="utf-8"))
+        except UnicodeDecodeError:
+            return "binary file"
 
     def validate(self, text: str, target: Path | None = None) -> Project:
         """The project in ``text``, validated as if it were the file ``target``.

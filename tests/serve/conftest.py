@@ -7,6 +7,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -65,3 +66,14 @@ def stop_server(proc: subprocess.Popen) -> tuple[int, str]:
         proc.kill()
         _, err = proc.communicate()
     return proc.returncode, err
+
+
+def wait_job(client, job_id: str, polls: int = 4000) -> dict:
+    """Poll a job of the app until it is no longer running (a run takes seconds)."""
+    job: dict = {}
+    for _ in range(polls):
+        job = client.get(f"/api/jobs/{job_id}").json()
+        if job["state"] != "running":
+            return job
+        time.sleep(0.05)
+    raise AssertionError(f"job {job_id} still running: {job}")

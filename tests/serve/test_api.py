@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import shutil
-import time
 from pathlib import Path
 
 import numpy as np
@@ -17,10 +16,13 @@ from starlette.testclient import TestClient  # noqa: E402
 import rockfall_design as rd  # noqa: E402
 from rockfall_design.cli.program import main  # noqa: E402
 from rockfall_design.judge.placing import place_measures
-from rockfall_design.serve.app import COOKIE, create_app  # noqa: E402
+from rockfall_design.serve.app import TOKEN_HEADER, create_app  # noqa: E402
 from rockfall_design.serve.bench import TABLE_STEP_M, default_spec
 from rockfall_design.serve.guards import MAX_BODY_BYTES
 from rockfall_design.serve.workbench import load_entries
+
+from .conftest import TWO_ZONES_FILES
+from .conftest import wait_job as _wait
 
 TOKEN = "test-token-0123456789"
 ROCKS = 1500
@@ -31,14 +33,13 @@ SMALL_DESIGN_DIR = Path(__file__).resolve().parents[1] / "data"
 SMALL_DESIGN_FILES = ("design_small.yaml", "catalogue_products.yaml", "catalogue_costs.yaml")
 
 
-def _wait(client: TestClient, job_id: str) -> dict:
-    """Poll a job until it is no longer running (the run takes seconds)."""
-    for _ in range(2400):
-        job = client.get(f"/api/jobs/{job_id}").json()
-        if job["state"] != "running":
-            return job
-        time.sleep(0.05)
-    raise AssertionError(f"job {job_id} still running: {job}")
+#: What the page sends with every request: its token, and its own origin.
+HEADERS = {TOKEN_HEADER: TOKEN, "Origin": "http://127.0.0.1"}
+
+
+def _client(app) -> TestClient:
+    """A client that is the app's own page: the token in the header, the app's origin."""
+    return TestClient(app, base_url="http://127.0.0.1", headers=HEADERS)
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +51,7 @@ def entries(project_copy, registry):
 def client(entries):
     """A client holding the token's cookie, with one finished run of the project."""
     app = create_app(entries, TOKEN)
-    with TestClient(app, base_url="http://127.0.0.1") as c:
+    with _client(app) as c:
         assert c.get(f"/?token={TOKEN}").status_code == 200
         r = c.post("/api/projects/design_two_zones/simulate", json={"rocks": ROCKS, "seed": SEED})
         assert r.status_code == 202, r.text
@@ -74,22 +75,27 @@ def test_every_request_without_the_token_is_refused(entries, path):
     with TestClient(app, base_url="http://127.0.0.1") as c:
         assert c.get(path).status_code == 403
         assert c.get(path, params={"token": "wrong"}).status_code == 403
-        c.cookies.set(COOKIE, "wrong")
-        assert c.get(path).status_code == 403
-        assert c.post("/api/place", json={"project": "design_two_zones", "measure": FENCE,
-                                          "x": 50}).status_code == 403
+        assert c.get(path, headers={TOKEN_HEADER: "wrong"}).status_code == 403
+        r = c.post("/api/place", json={"project": "design_two_zones", "measure": FENCE, "x": 50},
+                   headers={"Origin": "http://127.0.0.1"})
+        assert r.status_code == 403 and "token" in r.json()["error"]
 
 
-def test_the_token_in_the_address_sets_the_cookie_that_later_requests_use(entries):
+def test_the_token_in_the_address_gives_the_page_that_holds_it(entries):
+    """The page carries its token (for its header and its asset links); no cookie is set:
+    a cookie of 127.0.0.1 would go to every port of it."""
     app = create_app(entries, TOKEN)
     with TestClient(app, base_url="http://127.0.0.1") as c:
         r = c.get("/", params={"token": TOKEN})
         assert r.status_code == 200 and "<svg" in r.text
-        cookie = r.headers["set-cookie"]
-        assert f"{COOKIE}={TOKEN}" in cookie
-        assert "HttpOnly" in cookie and "SameSite=Strict" in cookie
-        # The client keeps the cookie: no token in the address any more.
-        assert c.get("/api/projects").json()["projects"][0]["id"] == "design_two_zones"
+        assert "set-cookie" not in r.headers
+        assert f'<meta name="rockfall-token" content="{TOKEN}">' in r.text
+        assert f"/static/app.js?token={TOKEN}" in r.text
+        assert c.get(f"/static/app.js?token={TOKEN}").status_code == 200
+        # The header alone is enough from then on.
+        r = c.get("/api/projects", headers={TOKEN_HEADER: TOKEN})
+        assert r.json()["projects"][0]["id"] == "design_two_zones"
+        assert c.get("/api/projects").status_code == 403
 
 
 def test_the_page_loads_only_its_own_files_and_leaks_no_token(client):
@@ -137,7 +143,7 @@ def test_the_run_gives_envelopes_stops_and_paths(client):
 def test_a_run_reports_progress_and_can_be_cancelled(entries, registry, project_copy):
     (entry,) = load_entries([project_copy], registry)
     app = create_app([entry], TOKEN)
-    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+    with _client(app) as c:
         job = c.post("/api/projects/design_two_zones/simulate", json={"rocks": 30000}).json()
         assert job["total"] == 30000 and job["state"] == "running"
         # A second run of the same project while one is under way is refused.
@@ -259,7 +265,7 @@ def test_a_malformed_body_is_refused(client, raw):
 
 def test_place_before_any_run_says_to_simulate_first(entries, registry, project_copy):
     app = create_app(load_entries([project_copy], registry), TOKEN)
-    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+    with _client(app) as c:
         r = c.post("/api/place", json={"project": "design_two_zones", "measure": FENCE, "x": 50})
         assert r.status_code == 409 and "simulated" in r.json()["error"]
 
@@ -300,7 +306,7 @@ def test_a_link_out_of_the_directory_is_refused(client, project_copy):
         before = _snapshot(project_copy.parent.parent)
         r = client.post("/api/projects/design_two_zones/save",
                         json={"text": project_copy.read_text(), "path": "link.txt"})
-        assert r.status_code == 403
+        assert r.status_code in (400, 403)
         assert _snapshot(project_copy.parent.parent) == before
     finally:
         link.unlink()
@@ -347,15 +353,32 @@ def test_an_oversized_upload_is_refused_and_changes_nothing(client, project_copy
     assert _snapshot(root) == before
 
 
-def test_save_writes_a_valid_project_inside_the_directory(client, project_copy):
-    text = project_copy.read_text().replace("count: 3000", "count: 2000")
-    r = client.post("/api/projects/design_two_zones/validate", json={"text": text})
-    assert r.json() == {"ok": True}
-    r = client.post("/api/projects/design_two_zones/save",
-                    json={"text": text, "path": "edited.yaml"})
-    assert r.status_code == 200 and r.json()["path"] == "edited.yaml"
-    assert (project_copy.parent / "edited.yaml").read_text() == text
-    assert "count: 3000" in project_copy.read_text()  # the project's own file is untouched
+@pytest.fixture()
+def fresh(tmp_path, registry, projects_dir):
+    """design_two_zones.yaml and its catalogues in a directory of their own, served, no run."""
+    for name in TWO_ZONES_FILES:
+        shutil.copy(projects_dir / name, tmp_path / name)
+    (entry,) = load_entries([tmp_path / "design_two_zones.yaml"], registry)
+    with _client(create_app([entry], TOKEN)) as c:
+        yield c, entry, tmp_path
+
+
+def test_save_writes_the_project_file_it_opened(fresh):
+    c, entry, d = fresh
+    path = d / "design_two_zones.yaml"
+    path.chmod(0o664)
+    read = c.get("/api/projects/design_two_zones/file").json()
+    text = path.read_text().replace("count: 3000", "count: 2000")
+    assert c.post("/api/projects/design_two_zones/validate", json={"text": text}).json() == {
+        "ok": True}
+    r = c.post("/api/projects/design_two_zones/save",
+               json={"text": text, "version": read["version"]})
+    assert r.status_code == 200 and r.json()["path"] == "design_two_zones.yaml", r.text
+    assert path.read_text() == text and entry.project.rocks.count == 2000
+    assert r.json()["version"] != read["version"]
+    # Its mode is kept (a temporary file's 0600 would lock the group out).
+    assert path.stat().st_mode & 0o777 == 0o664
+    assert sorted(p.name for p in d.iterdir()) == sorted(TWO_ZONES_FILES)  # no temporary left
 
 
 def test_plugins_lists_the_measures_parameters(client):
@@ -450,7 +473,7 @@ def test_check_with_a_measure_that_does_not_fit_starts_nothing(client):
 def test_optimise_can_be_cancelled(entries, registry, project_copy):
     (entry,) = load_entries([project_copy], registry)
     app = create_app([entry], TOKEN)
-    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+    with _client(app) as c:
         job = c.post("/api/projects/design_two_zones/optimise", json={"rocks": 3000}).json()
         assert job["kind"] == "optimise"
         c.post(f"/api/jobs/{job['id']}/cancel", json={})
@@ -462,7 +485,7 @@ def test_optimise_can_be_cancelled(entries, registry, project_copy):
 def test_optimise_without_a_design_section(tmp_path, registry, projects_dir):
     shutil.copy(projects_dir / "standard_slope.yaml", tmp_path / "standard_slope.yaml")
     app = create_app(load_entries([tmp_path / "standard_slope.yaml"], registry), TOKEN)
-    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+    with _client(app) as c:
         r = c.post("/api/projects/standard_slope/optimise", json={})
         assert r.status_code == 400 and "no design: section" in r.json()["error"]
 
@@ -472,7 +495,7 @@ def test_optimise_from_the_page_gives_the_command_lines_design(tmp_path, registr
     for name in SMALL_DESIGN_FILES:
         shutil.copy(SMALL_DESIGN_DIR / name, tmp_path / name)
     app = create_app(load_entries([tmp_path / "design_small.yaml"], registry), TOKEN)
-    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+    with _client(app) as c:
         job = c.post("/api/projects/design_small/optimise",
                      json={"rocks": 500, "seed": 3}).json()
         job = _wait(c, job["id"])
@@ -582,7 +605,7 @@ def test_a_project_without_a_protected_zone_runs_and_says_so(registry, projects_
     (entry,) = load_entries([projects_dir / "calibrate_quarry.yaml"], registry)
     assert entry.project.protect is None
     app = create_app([entry], TOKEN)
-    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+    with _client(app) as c:
         job = c.post("/api/projects/calibrate_quarry/simulate", json={"rocks": 300}).json()
         assert _wait(c, job["id"])["state"] == "done"
         out = c.post("/api/place", json={"project": "calibrate_quarry", "measure": FENCE,
@@ -601,7 +624,7 @@ def survey(tmp_path, registry, projects_dir):
         shutil.copy(projects_dir / name, tmp_path / name)
     (entry,) = load_entries([tmp_path / "survey_slope.yaml"], registry)
     app = create_app([entry], TOKEN)
-    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+    with _client(app) as c:
         yield c, entry, tmp_path
 
 
@@ -678,7 +701,7 @@ def _served(tmp_path, registry, projects_dir, *names):
 def test_a_study_from_the_page_is_rockfall_design_study(tmp_path, registry, projects_dir,
                                                         capsys):
     app = _served(tmp_path, registry, projects_dir, "study_talus.yaml")
-    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+    with _client(app) as c:
         r = c.post("/api/projects/study_talus/study", json={"rocks": 60, "seed": 4})
         assert r.status_code == 202, r.text
         job = _wait(c, r.json()["id"])
@@ -701,7 +724,7 @@ def test_a_calibration_from_the_page_is_rockfall_design_calibrate(tmp_path, regi
                                                                   projects_dir, capsys):
     app = _served(tmp_path, registry, projects_dir, "calibrate_quarry.yaml",
                   "quarry_stops_a.csv", "quarry_stops_b.csv")
-    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+    with _client(app) as c:
         r = c.post("/api/projects/calibrate_quarry/calibrate",
                    json={"rocks": 80, "seed": 2, "bootstrap": 2})
         assert r.status_code == 202, r.text
@@ -720,7 +743,7 @@ def test_a_calibration_from_the_page_is_rockfall_design_calibrate(tmp_path, regi
 
 def test_study_and_calibration_can_be_cancelled(tmp_path, registry, projects_dir):
     app = _served(tmp_path, registry, projects_dir, "study_talus.yaml")
-    with TestClient(app, base_url="http://127.0.0.1", cookies={COOKIE: TOKEN}) as c:
+    with _client(app) as c:
         job = c.post("/api/projects/study_talus/study", json={"rocks": 3000}).json()
         c.post(f"/api/jobs/{job['id']}/cancel", json={})
         job = _wait(c, job["id"])

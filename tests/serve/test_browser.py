@@ -9,9 +9,14 @@ skipped and says why; CI (``.ci/run``) installs Chromium and sets
 
 from __future__ import annotations
 
+import contextlib
+import html
+import http.server
 import io
 import os
+import threading
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -38,6 +43,18 @@ def _browser_or_skip():
             pytest.fail(f"ROCKFALL_DESIGN_BROWSER_TESTS=1 but {why}")
         pytest.skip(why)
     return sync_playwright
+
+
+@contextlib.contextmanager
+def _chromium(sync_playwright: Any) -> Any:
+    """Headless Chromium (the local one, never Playwright's download), closed after use."""
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path=str(CHROMIUM),
+                                     args=["--no-sandbox", "--disable-gpu"])
+        try:
+            yield browser
+        finally:
+            browser.close()
 
 
 def _distinct_colours(png: bytes) -> int:
@@ -95,8 +112,9 @@ def test_drag_a_fence_and_the_residual_follows(tmp_path):
                 page.click("#check")
                 link = page.locator("#results .downloads a", has_text="report.html")
                 link.wait_for(timeout=300_000)
+                # Drawn on this first request: seconds, more on a busy machine.
                 report = page.request.get(url.split("/?", 1)[0]
-                                          + link.get_attribute("href"))
+                                          + link.get_attribute("href"), timeout=300_000)
                 assert report.status == 200 and "<svg" in report.text()
                 shot = page.screenshot(path=str(tmp_path / "serve.png"), full_page=True)
                 # Everything came from the app itself: it works with no network.
@@ -148,6 +166,174 @@ def test_study_and_library_materials_from_the_page():
                 assert "asphalt" in page.input_value("#yaml")
             finally:
                 browser.close()
+    finally:
+        code, err = stop_server(proc)
+    assert not errors, errors
+    assert "Traceback" not in err, err
+
+
+# ---- round four: only the app's own page, two servers, the verdict and keyed charts -----------
+
+
+def _attacker(html: str) -> tuple[Any, str]:
+    """A page on another port of 127.0.0.1 (another origin, the same site): its server
+    and its address."""
+    body = html.encode()
+
+    class Page(http.server.BaseHTTPRequestHandler):
+        def do_GET(self) -> None:  # noqa: N802 -- the handler's own name
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html")
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+        def log_message(self, *args: Any) -> None:
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Page)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server, f"http://127.0.0.1:{server.server_address[1]}/attack.html"
+
+
+def _form(action: str, target: str) -> str:
+    """A text/plain form whose body is JSON: the classic cross-site request of a JSON API."""
+    body = '{"path": "' + target + '", "replace": true, "text": "{\\"ok\\":true}", "pad": "'
+    name = html.escape(body, quote=True)
+    return (f'<form method="POST" enctype="text/plain" action="{html.escape(action)}">'
+            f'<input type="hidden" name="{name}" value="&quot;}}">'
+            '<button id="go">go</button></form>')
+
+
+def test_a_form_of_another_page_on_127_0_0_1_changes_nothing(tmp_path, projects_dir):
+    """A page on another port posts a text/plain form to the app (with the token too, as
+    if it had leaked): 403, and the observed stops are unchanged."""
+    import shutil
+
+    sync_playwright = _browser_or_skip()
+    for name in ("calibrate_quarry.yaml", "quarry_stops_a.csv", "quarry_stops_b.csv"):
+        shutil.copy(projects_dir / name, tmp_path / name)
+    target = tmp_path / "quarry_stops_a.csv"
+    before = target.read_bytes()
+    proc, url = start_server(str(tmp_path / "calibrate_quarry.yaml"))
+    origin, token = url.split("/?token=")
+    upload = f"{origin}/api/projects/calibrate_quarry/upload"
+    attacker, attack_url = _attacker(
+        "<!DOCTYPE html><html><body>" + _form(f"{upload}?token={token}", target.name)
+        + "</body></html>")
+    bare, bare_url = _attacker("<!DOCTYPE html><html><body>" + _form(upload, target.name)
+                               + "</body></html>")
+    statuses = []
+    try:
+        with _chromium(sync_playwright) as browser:
+            context = browser.new_context()
+            page = context.new_page()
+            page.goto(url)  # the user has the app open in the same browser
+            page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+            for address in (attack_url, bare_url):
+                evil = context.new_page()
+                evil.goto(address)
+                with evil.expect_response(lambda r: "/upload" in r.url) as info:
+                    evil.click("#go")
+                statuses.append((info.value.status, info.value.text()))
+                evil.close()
+    finally:
+        attacker.shutdown()
+        bare.shutdown()
+        code, err = stop_server(proc)
+    assert [s for s, _ in statuses] == [403, 403], statuses
+    assert "Origin" in statuses[0][1] and "token" in statuses[1][1], statuses
+    assert target.read_bytes() == before
+    assert "Traceback" not in err, err
+
+
+def test_two_servers_in_one_browser_both_keep_working():
+    """Two servers (two ports of 127.0.0.1) open in one browser: neither locks the other out
+    (a token cookie of 127.0.0.1 was one for every port)."""
+    sync_playwright = _browser_or_skip()
+    first, url_a = start_server("projects/design_two_zones.yaml", cwd=ROOT)
+    second, url_b = start_server("projects/quarry_fence_ditch.yaml", cwd=ROOT)
+    errors: list[str] = []
+    try:
+        with _chromium(sync_playwright) as browser:
+            context = browser.new_context()
+            pages = []
+            for url in (url_a, url_b):
+                page = context.new_page()
+                page.on("pageerror", lambda e: errors.append(str(e)))
+                page.goto(url)
+                page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+                pages.append(page)
+            for page in pages:
+                page.locator("summary", has_text="Project file").click()
+            for page in pages + pages[::-1]:  # the first after the second, and back
+                page.evaluate("() => { document.getElementById('yaml-status')"
+                              ".textContent = ''; }")
+                page.click("#validate")
+                page.wait_for_function(
+                    "() => document.getElementById('yaml-status').textContent !== ''",
+                    timeout=30_000)
+                assert page.inner_text("#yaml-status") == "valid"
+    finally:
+        for proc in (first, second):
+            stop_server(proc)
+    assert not errors, errors
+
+
+def test_the_page_shows_the_verdict_untested_measures_and_keyed_charts():
+    """quarry_fence_ditch.yaml with its own measures: Place and Check work; a fence where no
+    rock goes is "untested"; the charts have both axes with ticks and a keyed legend."""
+    sync_playwright = _browser_or_skip()
+    proc, url = start_server("projects/quarry_fence_ditch.yaml", cwd=ROOT)
+    errors: list[str] = []
+    try:
+        with _chromium(sync_playwright) as browser:
+            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url)
+            page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+            assert page.is_checked("#with-own")
+            page.fill("#rocks", "400")
+            page.click("#simulate")
+            page.wait_for_selector("#status[data-state='done']", timeout=300_000)
+            for chart, series in (("#env-height", 4), ("#env-energy", 4), ("#stops", 1)):
+                assert page.locator(f"{chart} .x-tick").count() >= 4, chart
+                assert page.locator(f"{chart} .y-tick").count() >= 3, chart
+                assert page.locator(f"{chart} .axis-title").count() == 2, chart
+                assert page.locator(f"{chart} .legend-swatch").count() == series, chart
+            names = page.locator("#env-height .legend-item").evaluate_all(
+                "(items) => items.map((i) => i.dataset.series)")
+            assert names == ["p50", "p95", "p99", "max"]
+            page.click("#place")
+            page.wait_for_function(
+                "() => document.getElementById('residual').dataset.verdict !== undefined",
+                timeout=30_000)
+            assert page.inner_text("#error") == ""
+            # The project's fence and ditch and the placed fence: three measures.
+            assert page.locator("#checks b").count() == 3
+            # Drag the placed fence to the crest, above every release: no rock meets it.
+            box = page.locator("#placed-handle").bounding_box()
+            left = page.locator("#section").bounding_box()["x"]
+            x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+            page.mouse.move(x, y)
+            page.mouse.down()
+            for i in range(1, 11):
+                page.mouse.move(x + (left - 5 - x) * i / 10, y)
+            page.mouse.up()
+            page.wait_for_function(
+                "() => [...document.querySelectorAll('#checks tr[data-untested] b')]"
+                ".some((b) => b.textContent.startsWith('fence')"
+                " && b.textContent.endsWith('at x = 0.5 m'))",
+                timeout=30_000)
+            assert page.inner_text("#error") == ""
+            # Its checks say "untested", not "holds" (as the verdict says).
+            words = page.locator("#checks td.untested").all_inner_texts()
+            assert words and set(words) == {"untested"}
+            page.fill("#rocks", "200")
+            page.click("#check")
+            page.wait_for_selector("#check-verdict[data-verdict]", timeout=300_000)
+            assert page.locator("#check-table td", has_text="untested").count() >= 1
+            assert page.inner_text("#error") == ""
     finally:
         code, err = stop_server(proc)
     assert not errors, errors

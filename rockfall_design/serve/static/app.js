@@ -1,5 +1,6 @@
 // rockfall-design serve: the page. Plain JavaScript and SVG, no library, no network
-// beyond this app's own API (the token travels in a cookie the first request set).
+// beyond this app's own API. The token the server wrote into the page goes with every
+// request in a header (no cookie: a cookie of 127.0.0.1 would go to every port of it).
 "use strict";
 
 const SVG = "http://www.w3.org/2000/svg";
@@ -9,6 +10,7 @@ const MATERIAL_COLOURS = ["#8d6e63", "#c2a36b", "#7cb342", "#90a4ae", "#b0876b",
 const W = 900;                      // drawing width (SVG units = px at 100 %)
 const PAD = { l: 48, r: 12, t: 12, b: 26 };
 
+const TOKEN = document.querySelector("meta[name='rockfall-token']").content;
 const state = {
   projects: [], project: null, plugins: null, run: null, job: null,
   placed: null,                     // {type, params, x}
@@ -19,8 +21,10 @@ const state = {
 
 // ---- helpers --------------------------------------------------------------------
 async function api(path, body) {
-  const opts = body === undefined ? {} : {
-    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body),
+  const headers = { "X-Rockfall-Token": TOKEN };
+  const opts = body === undefined ? { headers } : {
+    method: "POST", headers: { ...headers, "Content-Type": "application/json" },
+    body: JSON.stringify(body),
   };
   const resp = await fetch(path, opts);
   let data = null;
@@ -167,23 +171,54 @@ function drawLegend(names) {
 }
 
 // ---- envelopes and stops ------------------------------------------------------------
-function drawChart(svg, xs, series, ylabel, marker) {
+// A round step (1, 2 or 5 times a power of ten) giving about n intervals over range.
+function niceStep(range, n) {
+  if (!(range > 0)) return 1;
+  const raw = range / n, p = 10 ** Math.floor(Math.log10(raw)), f = raw / p;
+  return (f <= 1 ? 1 : f <= 2 ? 2 : f <= 5 ? 5 : 10) * p;
+}
+function tickText(v, step) {
+  const d = step >= 1 ? 0 : Math.min(6, Math.ceil(-Math.log10(step)));
+  return Number(v).toFixed(d);
+}
+
+// A chart along the section: x in m on the section's own scale, both axes with ticks and
+// titles, and a legend that keys every series by its colour.
+function drawChart(svg, xs, series, ytitle, marker) {
   clear(svg);
-  const { X } = state.sx, H = 150;
+  const { X, x0, x1 } = state.sx, H = 190, B = 40;       // B: room for x ticks and title
   svg.setAttribute("viewBox", `0 0 ${W} ${H}`);
   let ymax = 0;
   for (const s of series) for (const v of s.values) if (v !== null && v > ymax) ymax = v;
   ymax = ymax > 0 ? ymax * 1.05 : 1;
-  const Y = (v) => H - PAD.b - (v / ymax) * (H - PAD.t - PAD.b);
-  el("line", { x1: PAD.l, y1: H - PAD.b, x2: W - PAD.r, y2: H - PAD.b, stroke: "#999" }, svg);
-  el("text", { x: 4, y: PAD.t + 4 }, svg).textContent = fmt(ymax, ymax < 10 ? 1 : 0);
-  el("text", { x: 4, y: H - PAD.b }, svg).textContent = "0";
+  const top = PAD.t + 16;                                // room for the legend
+  const Y = (v) => H - B - (v / ymax) * (H - top - B);
+  const axes = el("g", { class: "axes" }, svg);
+  el("line", { x1: PAD.l, y1: H - B, x2: W - PAD.r, y2: H - B, stroke: "#999", class: "x-axis" }, axes);
+  el("line", { x1: PAD.l, y1: top, x2: PAD.l, y2: H - B, stroke: "#999", class: "y-axis" }, axes);
+  const ys = niceStep(ymax, 4);
+  for (let v = 0; v <= ymax + 1e-9; v += ys) {
+    const g = el("g", { class: "y-tick" }, axes);
+    el("line", { x1: PAD.l - 4, y1: Y(v), x2: PAD.l, y2: Y(v), stroke: "#555" }, g);
+    el("line", { x1: PAD.l, y1: Y(v), x2: W - PAD.r, y2: Y(v), stroke: "#eee" }, g);
+    el("text", { x: PAD.l - 6, y: Y(v) + 4, "text-anchor": "end" }, g).textContent = tickText(v, ys);
+  }
+  const xstep = niceStep(x1 - x0, 8);
+  for (let x = Math.ceil(x0 / xstep) * xstep; x <= x1 + 1e-9; x += xstep) {
+    const g = el("g", { class: "x-tick" }, axes);
+    el("line", { x1: X(x), y1: H - B, x2: X(x), y2: H - B + 4, stroke: "#555" }, g);
+    el("text", { x: X(x), y: H - B + 16, "text-anchor": "middle" }, g).textContent = tickText(x, xstep);
+  }
+  el("text", { x: (PAD.l + W - PAD.r) / 2, y: H - 4, "text-anchor": "middle", class: "axis-title x-title" },
+    axes).textContent = "x along the section (m)";
+  el("text", { x: 0, y: 0, "text-anchor": "middle", class: "axis-title y-title",
+    transform: `translate(11,${(top + H - B) / 2}) rotate(-90)` }, axes).textContent = ytitle;
   for (const s of series) {
     if (s.bars) {
       for (let i = 0; i < s.values.length; i++) {
         if (!s.values[i]) continue;
         el("rect", { x: X(xs[i]), y: Y(s.values[i]), width: Math.max(1, X(xs[i + 1]) - X(xs[i]) - 0.5),
-          height: H - PAD.b - Y(s.values[i]), fill: s.colour }, svg);
+          height: H - B - Y(s.values[i]), fill: s.colour }, svg);
       }
       continue;
     }
@@ -196,14 +231,19 @@ function drawChart(svg, xs, series, ylabel, marker) {
     }
     el("path", { d, fill: "none", stroke: s.colour, "stroke-width": s.width || 1.5 }, svg);
   }
-  let lx = W - PAD.r - 8;
-  for (const s of series.slice().reverse()) {
-    const t = el("text", { x: lx, y: PAD.t + 4, "text-anchor": "end", fill: s.colour }, svg);
-    t.textContent = s.name;
-    lx -= 12 + 7 * s.name.length;
+  // The legend: a colour swatch (a line, or a block for bars) before each series' name.
+  const legend = el("g", { class: "chart-legend" }, svg);
+  let lx = PAD.l + 8;
+  for (const s of series) {
+    const item = el("g", { class: "legend-item", "data-series": s.name }, legend);
+    el("rect", s.bars ? { x: lx, y: PAD.t - 2, width: 12, height: 10, fill: s.colour, class: "legend-swatch" }
+      : { x: lx, y: PAD.t + 2, width: 16, height: Math.max(2, s.width || 1.5) + 1, fill: s.colour,
+        class: "legend-swatch" }, item);
+    el("text", { x: lx + 20, y: PAD.t + 7 }, item).textContent = s.name;
+    lx += 34 + 7 * s.name.length;
   }
   if (marker !== null && marker !== undefined) {
-    el("line", { x1: X(marker), y1: PAD.t, x2: X(marker), y2: H - PAD.b, stroke: "#c62828",
+    el("line", { x1: X(marker), y1: top, x2: X(marker), y2: H - B, stroke: "#c62828",
       "stroke-dasharray": "4,3" }, svg);
   }
   svg.onmousemove = (ev) => hover(ev);
@@ -212,13 +252,13 @@ function drawChart(svg, xs, series, ylabel, marker) {
 function drawRun() {
   const r = state.run, mark = state.placed ? state.placed.x : null;
   if (!r) { for (const id of ["env-height", "env-energy", "stops"]) clear($(id)); return; }
-  const e = r.envelopes, colours = ["#90caf9", "#1565c0", "#0d47a1", "#000"];
-  const series = (q) => e.percentiles.map((p, i) => ({ name: p, values: q[p], colour: colours[i % 3] }))
+  const e = r.envelopes, colours = ["#90caf9", "#1565c0", "#0d47a1", "#7e57c2", "#26a69a", "#ef6c00"];
+  const series = (q) => e.percentiles.map((p, i) => ({ name: p, values: q[p], colour: colours[i % colours.length] }))
     .concat([{ name: "max", values: q.max, colour: "#888", width: 1 }]);
-  drawChart($("env-height"), e.x, series(e.height), "m", mark);
-  drawChart($("env-energy"), e.x, series(e.energy), "kJ", mark);
+  drawChart($("env-height"), e.x, series(e.height), "height (m)", mark);
+  drawChart($("env-energy"), e.x, series(e.energy), "energy (kJ)", mark);
   drawChart($("stops"), r.stops.edges, [{ name: "stopped rocks", values: r.stops.counts, colour: "#00897b",
-    bars: true }], "rocks", mark);
+    bars: true }], "rocks per bin", mark);
 }
 
 function hover(ev) {
@@ -301,7 +341,8 @@ function startDrag(ev) {
   const move = (e) => {
     const pt = svg.createSVGPoint(); pt.x = e.clientX; pt.y = e.clientY;
     const p = pt.matrixTransform(svg.getScreenCTM().inverse());
-    const x = Math.max(state.sx.x0, Math.min(state.sx.x1, state.sx.inv(p.x)));
+    // Half a metre inside either end: a measure on the end point is off the section.
+    const x = Math.max(state.sx.x0 + 0.5, Math.min(state.sx.x1 - 0.5, state.sx.inv(p.x)));
     state.placed.x = Math.round(x * 2) / 2;
     moveMarker();
     requestPlace(state.placed.x);
@@ -330,6 +371,13 @@ function moveMarker() {
   grip.setAttribute("height", Y(g) - Y(g + h) + 20);
 }
 
+// The project's own measures (when ticked) as the project file gives them: without the
+// label the app added for the drawing (not a parameter of the measure).
+function ownMeasures() {
+  if (!$("with-own").checked) return [];
+  return state.project.measures.map(({ label, ...params }) => params);
+}
+
 // Latest wins: while a request is out, only the newest position waits for its turn.
 function requestPlace(x) {
   if (state.inflight) { state.pendingX = x; return; }
@@ -337,7 +385,7 @@ function requestPlace(x) {
   const t0 = performance.now();
   const m = state.placed;
   // The design on the section: the project's own measures (when asked) and the placed one.
-  const own = $("with-own").checked ? state.project.measures.map((q) => ({ ...q })) : [];
+  const own = ownMeasures();
   api("/api/place", { project: state.project.id, measures: [...own, { type: m.type, ...m.params, x }] })
     .then((r) => { state.lastMs = performance.now() - t0; showPlace(r); showError(""); })
     .catch((e) => { showError(e.message); $("residual").textContent = "—"; $("residual").className = "residual"; })
@@ -347,33 +395,50 @@ function requestPlace(x) {
     });
 }
 
+// The verdict's state as a class of the page: green, red, or neither.
+function verdictClass(state) {
+  return state === "holds with confidence" ? "ok" : state === "fails" ? "fail" : "";
+}
+
+// A check's cell says what the verdict says: "untested" for a measure no rock met.
+function checkWord(c, untested) {
+  if (untested) return ["untested", "untested"];
+  if (c.ok_with_confidence === null || c.ok_with_confidence === undefined)
+    return c.ok ? ["holds", "ok"] : ["fails", "fail"];
+  return c.ok_with_confidence ? ["holds", "ok"] : c.ok ? ["bound fails", ""] : ["fails", "fail"];
+}
+
 function showPlace(r) {
   state.lastResult = r;
-  const res = r.residual, div = $("residual");
+  const res = r.residual, div = $("residual"), v = r.verdict;
+  const untested = new Set(v.untested_measures);
+  // The words are the verdict of check (judge.verdict) on these numbers.
   div.textContent = (res.protected_zone ? `At the protected zone (x ≥ ${res.x} m): `
     : `No protected zone (protect:); past the foot of the section (x = ${res.x} m): `) +
     `${res.reaching} of ${res.rocks} rocks ` +
     `(${pct(res.fraction)}, upper bound ${pct(res.upper_bound)} at ${Math.round(res.confidence * 100)} %); ` +
-    `allowed ${pct(res.allowed_fraction)}. ` +
-    (r.admitted ? "The design holds with confidence."
-      : r.rejected ? "The design fails with confidence (a check or the residual)."
-        : "Undecided: more rocks would decide it.");
-  div.className = "residual " + (r.admitted ? "ok" : r.rejected ? "fail" : "");
+    `allowed ${pct(res.allowed_fraction)}. ` + v.headline +
+    (r.approximate ? " (Rocks that break through keep their bare-slope paths here: Check this design decides.)" : "");
+  div.className = "residual " + verdictClass(v.state);
   div.dataset.reaching = res.reaching;
+  div.dataset.verdict = v.state;
   const body = $("checks").querySelector("tbody");
   body.innerHTML = "";
   for (const m of r.measures) {
     const head = document.createElement("tr"), td = document.createElement("td"), b = document.createElement("b");
     td.colSpan = 5;
     b.textContent = m.label;
-    td.append(b, m.reshapes_ground ? ` (${r.rerun_rocks} rocks run again from above it)` : ` (table at ${m.x_table} m)`);
+    if (untested.has(m.label)) head.dataset.untested = "1";
+    td.append(b, m.reshapes_ground ? ` (${r.rerun_rocks} rocks run again from above it)` : ` (table at ${m.x_table} m)`,
+      untested.has(m.label) ? ": no rock reaches it, its checks say nothing" : "");
     head.appendChild(td);
     body.appendChild(head);
     for (const c of m.checks) {
       const tr = document.createElement("tr");
       tr.title = c.detail;
-      const verdict = cell(c.holds_with_confidence ? "holds" : c.ok ? "bound fails" : "fails");
-      verdict.className = c.holds_with_confidence ? "ok" : c.ok ? "" : "fail";
+      const [word, cls] = checkWord(c, untested.has(m.label));
+      const verdict = cell(word);
+      verdict.className = cls;
       tr.append(cell(c.name), cell(fmt(c.value)), cell(fmt(c.bound)), cell(fmt(c.target)), verdict);
       body.appendChild(tr);
     }
@@ -408,7 +473,7 @@ async function startJob(kind, body) {
 function simulate() { startJob("simulate", runOptions()); }
 
 function checkDesign() {
-  const measures = $("with-own").checked ? state.project.measures.map((m) => ({ ...m })) : [];
+  const measures = ownMeasures();
   if (state.placed) measures.push({ type: state.placed.type, ...state.placed.params, x: state.placed.x });
   startJob("check", { ...runOptions(), measures });
 }
@@ -495,20 +560,29 @@ function cell(v) { const td = document.createElement("td"); td.textContent = v; 
 
 function showCheck(s) {
   const div = $("results");
-  const p = s.protect;
+  const p = s.protect, v = s.verdict;
+  const untested = new Set(v ? v.untested_measures : []);
   div.innerHTML = "";
+  // The verdict heads the result, as it heads check's report.
   const head = document.createElement("p");
-  head.className = s.ok ? "ok" : "fail";
-  head.textContent = `check (${s.rocks} rocks, seed ${s.seed}): ${s.ok ? "every check holds" : "fails"}` +
+  head.id = "check-verdict";
+  head.className = v ? verdictClass(v.state) : s.ok ? "ok" : "fail";
+  head.textContent = `check (${s.rocks} rocks, seed ${s.seed}): ` +
+    (v ? v.headline : s.ok ? "every check holds" : "fails") +
     (p ? `; ${p.reaching} rocks reach x ≥ ${p.x} m (upper bound ${pct(p.upper_fraction)})` : "");
+  if (v) head.dataset.verdict = v.state;
   div.appendChild(head);
-  for (const f of s.failures) { const q = document.createElement("p"); q.className = "fail"; q.textContent = f; div.appendChild(q); }
+  for (const f of (v ? v.details : s.failures)) {
+    const q = document.createElement("p"); q.className = v ? "detail" : "fail"; q.textContent = f; div.appendChild(q);
+  }
   const table = document.createElement("table");
   table.id = "check-table";
   for (const m of s.measures) {
     for (const c of m.checks) {
       const tr = document.createElement("tr");
-      tr.append(cell(m.label), cell(c.name), cell(fmt(c.value)), cell(fmt(c.bound)), cell(fmt(c.target)), cell(c.ok ? "ok" : "fails"));
+      const [word, cls] = checkWord(c, untested.has(m.label));
+      const w = cell(word); w.className = cls;
+      tr.append(cell(m.label), cell(c.name), cell(fmt(c.value)), cell(fmt(c.bound)), cell(fmt(c.target)), w);
       table.appendChild(tr);
     }
   }
@@ -523,7 +597,9 @@ function showDownloads(job, div) {
   p.className = "downloads"; p.textContent = "download: ";
   for (const name of job.files) {
     const a = document.createElement("a");
-    a.href = `/api/jobs/${job.id}/files/${name}`; a.textContent = name; a.download = name;
+    // A link cannot send a header: the token goes in its address (same origin only).
+    a.href = `/api/jobs/${job.id}/files/${name}?token=${encodeURIComponent(TOKEN)}`;
+    a.textContent = name; a.download = name;
     p.append(a, " ");
   }
   div.appendChild(p);
@@ -565,16 +641,21 @@ async function cancel() { if (state.job) await api(`/api/jobs/${state.job.id}/ca
 async function loadYaml() {
   const f = await api(`/api/projects/${state.project.id}/file`);
   $("yaml").value = f.text;
+  // Save sends it back: the server writes only over the file this page read.
+  state.fileVersion = f.version;
+  $("save-file").textContent = `writes ${f.path}`;
 }
 async function validateYaml() {
   try { await api(`/api/projects/${state.project.id}/validate`, { text: $("yaml").value }); $("yaml-status").textContent = "valid"; }
   catch (e) { $("yaml-status").textContent = e.message; }
 }
 async function saveYaml() {
-  const body = { text: $("yaml").value };
-  if ($("save-path").value) body.path = $("save-path").value;
-  try { const r = await api(`/api/projects/${state.project.id}/save`, body); $("yaml-status").textContent = `saved ${r.path}`; }
-  catch (e) { $("yaml-status").textContent = e.message; }
+  const body = { text: $("yaml").value, version: state.fileVersion };
+  try {
+    const r = await api(`/api/projects/${state.project.id}/save`, body);
+    state.fileVersion = r.version;
+    $("yaml-status").textContent = `saved ${r.path}`;
+  } catch (e) { $("yaml-status").textContent = e.message; }
 }
 
 async function uploadFile() {
