@@ -95,10 +95,10 @@ def test_a_slope_from_a_point_cloud_takes_the_ground_and_a_low_percentile(tmp_pa
     header.scales = [0.001, 0.001, 0.001]
     las = laspy.LasData(header)
     las.x, las.y, las.z, las.classification = e, n, z, cls
-    las.write(tmp_path / "scan.las")
+    las.write(tmp_path / "scan.laz")  # compressed: lazrs
     (tmp_path / "p.yaml").write_text(f"""
 name: t
-slope: {{points: scan.las, line: [[{WEST + 20}, {NORTH - 2}], [{WEST + 20}, {NORTH - 78}]],
+slope: {{points: scan.laz, line: [[{WEST + 20}, {NORTH - 2}], [{WEST + 20}, {NORTH - 78}]],
          swath_m: 2.0, materials: talus}}
 protect: {{x: 60}}
 {MATERIALS.replace("steeper_than_deg: 45", "x: [0, 5]")}""")
@@ -163,7 +163,7 @@ def test_the_section_command_writes_a_survey_csv(tmp_path, capsys):
     assert (tmp_path / "s.png").stat().st_size > 1000
 
 
-@pytest.mark.parametrize("case", ["geographic", "off", "not a raster", "no extra"])
+@pytest.mark.parametrize("case", ["geographic", "off", "not a raster", "no extra", "plot"])
 def test_bad_terrain_input_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch, case):
     e, n = grid(20, 20)
     dem = write_dem(tmp_path / "dem.tif", 100 + 0.5 * (n - NORTH),
@@ -173,15 +173,17 @@ def test_bad_terrain_input_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch,
     if case == "no extra":
         monkeypatch.setitem(sys.modules, "rasterio", None)  # import fails: not installed
     point = f"{WEST + 500},{NORTH - 5}" if case == "off" else f"{WEST + 5},{NORTH - 5}"
+    plot = ["--plot", str(tmp_path / "s.xyz")] if case == "plot" else []
     code, err = run(["section", str(dem), "--fall-line", point, "--out",
-                     str(tmp_path / "s.csv")], capsys)
+                     str(tmp_path / "s.csv")] + plot, capsys)
     assert code == 2
     assert len(err.strip().splitlines()) == 1
     expected = {"geographic": "is geographic", "off": "is off the raster",
                 "not a raster": "not a raster that can be read",
-                "no extra": "optional extra [terrain]"}[case]
+                "no extra": "optional extra [terrain]",
+                "plot": "expected a file ending in .png, .svg, .pdf"}[case]
     assert expected in err
-    assert "dem.tif" in err or case == "no extra"
+    assert "dem.tif" in err or case in ("no extra", "plot")
     assert not (tmp_path / "s.csv").exists()
 
 
