@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -114,7 +115,7 @@ protect: {{x: 60}}
 
 
 
-def test_a_corridor_along_a_road_gives_sections_with_their_share(tmp_path):
+def test_a_corridor_along_a_road_gives_sections_with_their_share(tmp_path, capsys):
     slope_dem(tmp_path / "dem.tif")
     road = shapely.LineString([(WEST + 2, NORTH - 100), (WEST + 58, NORTH - 100)])
     write_layer(tmp_path / "road.gpkg", [road], {"name": ["road"]}, "LineString", CRS)
@@ -141,6 +142,13 @@ design: {{residual: {{fraction: 0.05}}, products: {ROOT / "projects/catalogue_pr
         assert_allclose(p.protect.x, where.road_x, atol=1e-3)
         assert p.slope.x_range[1] == pytest.approx(where.road_x + 10.0, abs=0.6)
         assert_allclose(p.rocks.release[0].x, (where.road_x - 60, where.road_x - 40), atol=1.5)
+    # every section's block says where along the road it is and the road it stands for
+    code = main(["simulate", str(tmp_path / "c.yaml"), "--workers", "1", "--json"])
+    blocks = json.loads(capsys.readouterr().out)["sections"]
+    assert code == 0
+    stations = [b["road"]["station_m"] for b in blocks]
+    assert stations == pytest.approx([28 / 3, 28, 140 / 3], abs=1e-3)
+    assert all(b["road"]["length_m"] == pytest.approx(56 / 3, abs=1e-3) for b in blocks)
 
 
 def run(argv: list[str], capsys: pytest.CaptureFixture) -> tuple[int, str]:
