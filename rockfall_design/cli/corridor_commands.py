@@ -47,7 +47,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExitCode, InputError
-from .corridor_map import map_files, write_map
+from .corridor_map import map_files, road_share, write_map
 from .corridor_report import _print_totals, _section_rule, corridor_summary, section_block
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -284,8 +284,9 @@ def each_section(
         # _on_executors), the numbers are the same wherever a section ran.
         done = [one(i) for i in range(len(subs))]
         summary = corridor_summary(
-            corridor, command, run_seed, [section_block(s, d.summary) for s, d in
-                                          zip(corridor.sections, done, strict=True)],
+            corridor, command, run_seed, [{**section_block(s, d.summary), **road_share(corridor, i)}
+                                          for i, (s, d) in enumerate(
+                                              zip(corridor.sections, done, strict=True))],
             [d.cost for d in done] if command == "optimise" else (), scenarios)
         if args.out:
             files.write_json(args.out / "summary.json", summary)

@@ -28,6 +28,9 @@ from ..terrain.fall_line import DEFAULT_FLAT_DEG, trace_fall_line
 
 __all__ = ["add_section_parser", "cmd_section"]
 
+#: The figure formats of --plot (those of every other command's --plot-format).
+PLOT_SUFFIXES = (".png", ".svg", ".pdf")
+
 
 def _point(text: str) -> tuple[float, float]:
     parts = text.split(",")
@@ -87,6 +90,9 @@ def cmd_section(args: argparse.Namespace) -> int:
         raise InputError("--stop needs two or more points E,N")
     if args.spacing is not None and args.spacing <= 0:
         raise InputError("--spacing must be > 0")
+    if args.plot is not None and args.plot.suffix.lower() not in PLOT_SUFFIXES:
+        raise InputError(f"--plot {args.plot}: expected a file ending in "
+                         f"{', '.join(PLOT_SUFFIXES)}")
     dem = read_dem(args.dem)
     how = "along the line"
     if args.fall_line is not None:

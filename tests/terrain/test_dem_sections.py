@@ -76,6 +76,24 @@ def test_a_fall_line_stops_at_a_road_line():
     assert_allclose(fl.points[-1], [WEST + 50.0, NORTH - 72.5], atol=1e-6)
 
 
+@given(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5),
+       st.lists(st.tuples(st.floats(2, 98), st.floats(2, 78)), min_size=2, max_size=5,
+                unique=True),
+       st.floats(0.3, 3.0))
+@settings(max_examples=40, deadline=None)
+def test_any_line_across_a_plane_gives_the_plane(a, b, corners, spacing):
+    e, n = grid(80, 100)
+    dem = memory_dem(100.0 + a * (e - WEST) + b * (n - NORTH))
+    line = np.array([[WEST + x, NORTH - y] for x, y in corners])
+    if np.any(np.hypot(*np.diff(line, axis=0).T) < 1e-3):
+        return
+    section = cut_section(dem, line, spacing=spacing, tolerance=0.0)
+    where = section.map_point(section.dense_x)
+    expect = 100.0 + a * (where[:, 0] - WEST) + b * (where[:, 1] - NORTH)
+    assert np.abs(section.dense_z - expect).max() < 1e-6
+    assert np.all(np.diff(section.x) > 0) and section.x[0] == 0.0
+
+
 @given(st.lists(st.floats(-50, 50), min_size=3, max_size=60),
        st.floats(0.0, 2.0))
 @settings(max_examples=60, deadline=None)

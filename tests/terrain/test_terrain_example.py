@@ -27,6 +27,8 @@ def test_the_bundled_terrain_corridor_is_designed_and_mapped(tmp_path, capsys):
     names = list(meta["fields"])
     for key in ("type", "product", "height_m", "capacity_kj", "cost", "section", "station_m"):
         assert key in names
+    assert sum(b["road"]["length_m"] for b in summary["sections"]) == pytest.approx(562.05,
+                                                                                  abs=0.1)
     sections = {b["name"] for b in summary["sections"]}
     assert set(fields[names.index("section")]) == sections  # a measure in every section
     assert len(geometry) == sum(len(b["best"]["measures"]) for b in summary["sections"])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -95,10 +96,10 @@ def test_a_slope_from_a_point_cloud_takes_the_ground_and_a_low_percentile(tmp_pa
     header.scales = [0.001, 0.001, 0.001]
     las = laspy.LasData(header)
     las.x, las.y, las.z, las.classification = e, n, z, cls
-    las.write(tmp_path / "scan.las")
+    las.write(tmp_path / "scan.laz")  # compressed: lazrs
     (tmp_path / "p.yaml").write_text(f"""
 name: t
-slope: {{points: scan.las, line: [[{WEST + 20}, {NORTH - 2}], [{WEST + 20}, {NORTH - 78}]],
+slope: {{points: scan.laz, line: [[{WEST + 20}, {NORTH - 2}], [{WEST + 20}, {NORTH - 78}]],
          swath_m: 2.0, materials: talus}}
 protect: {{x: 60}}
 {MATERIALS.replace("steeper_than_deg: 45", "x: [0, 5]")}""")
@@ -114,7 +115,7 @@ protect: {{x: 60}}
 
 
 
-def test_a_corridor_along_a_road_gives_sections_with_their_share(tmp_path):
+def test_a_corridor_along_a_road_gives_sections_with_their_share(tmp_path, capsys):
     slope_dem(tmp_path / "dem.tif")
     road = shapely.LineString([(WEST + 2, NORTH - 100), (WEST + 58, NORTH - 100)])
     write_layer(tmp_path / "road.gpkg", [road], {"name": ["road"]}, "LineString", CRS)
@@ -141,6 +142,13 @@ design: {{residual: {{fraction: 0.05}}, products: {ROOT / "projects/catalogue_pr
         assert_allclose(p.protect.x, where.road_x, atol=1e-3)
         assert p.slope.x_range[1] == pytest.approx(where.road_x + 10.0, abs=0.6)
         assert_allclose(p.rocks.release[0].x, (where.road_x - 60, where.road_x - 40), atol=1.5)
+    # every section's block says where along the road it is and the road it stands for
+    code = main(["simulate", str(tmp_path / "c.yaml"), "--workers", "1", "--json"])
+    blocks = json.loads(capsys.readouterr().out)["sections"]
+    assert code == 0
+    stations = [b["road"]["station_m"] for b in blocks]
+    assert stations == pytest.approx([28 / 3, 28, 140 / 3], abs=1e-3)
+    assert all(b["road"]["length_m"] == pytest.approx(56 / 3, abs=1e-3) for b in blocks)
 
 
 def run(argv: list[str], capsys: pytest.CaptureFixture) -> tuple[int, str]:
@@ -163,7 +171,7 @@ def test_the_section_command_writes_a_survey_csv(tmp_path, capsys):
     assert (tmp_path / "s.png").stat().st_size > 1000
 
 
-@pytest.mark.parametrize("case", ["geographic", "off", "not a raster", "no extra"])
+@pytest.mark.parametrize("case", ["geographic", "off", "not a raster", "no extra", "plot"])
 def test_bad_terrain_input_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch, case):
     e, n = grid(20, 20)
     dem = write_dem(tmp_path / "dem.tif", 100 + 0.5 * (n - NORTH),
@@ -173,15 +181,17 @@ def test_bad_terrain_input_is_one_line_and_exit_2(tmp_path, capsys, monkeypatch,
     if case == "no extra":
         monkeypatch.setitem(sys.modules, "rasterio", None)  # import fails: not installed
     point = f"{WEST + 500},{NORTH - 5}" if case == "off" else f"{WEST + 5},{NORTH - 5}"
+    plot = ["--plot", str(tmp_path / "s.xyz")] if case == "plot" else []
     code, err = run(["section", str(dem), "--fall-line", point, "--out",
-                     str(tmp_path / "s.csv")], capsys)
+                     str(tmp_path / "s.csv")] + plot, capsys)
     assert code == 2
     assert len(err.strip().splitlines()) == 1
     expected = {"geographic": "is geographic", "off": "is off the raster",
                 "not a raster": "not a raster that can be read",
-                "no extra": "optional extra [terrain]"}[case]
+                "no extra": "optional extra [terrain]",
+                "plot": "expected a file ending in .png, .svg, .pdf"}[case]
     assert expected in err
-    assert "dem.tif" in err or case == "no extra"
+    assert "dem.tif" in err or case in ("no extra", "plot")
     assert not (tmp_path / "s.csv").exists()
 
 
