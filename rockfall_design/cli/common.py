@@ -46,10 +46,10 @@ def memory_guard(need: int, what: str, advice: str) -> None:
 def in_memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
     """The guard for ``check`` and ``optimise``, which keep every rock's results.
 
-    Per rock and envelope point: float32 height and energy, and float64
-    copies of them while the percentiles are taken.
+    Per rock and envelope point: float32 height, energy and speed, and
+    float64 copies of them while the percentiles are taken.
     """
-    need = n_rocks * (32 * n_grid + 40 * n_stations + 200)
+    need = n_rocks * (44 * n_grid + 40 * n_stations + 200)
     memory_guard(need, f"{n_rocks:,} rocks with {n_grid} envelope points",
                   "Use fewer rocks or fewer analysis.envelope_points.")
 

@@ -74,6 +74,10 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
             # summary that says there is no design.
             files.remove(out / "design.yaml")
         files.write_csv(out / "alternatives.csv", report.alternatives)
+        if report.design is not None:  # the chosen design's stations and barriers
+            files.write_csv(out / "barriers.csv", report.design.barriers)
+        else:
+            files.remove(out / "barriers.csv")
         run = {"command": "optimise", "version": __version__, "seed": result.seed,
                "rocks": result.rocks, "project_file": str(args.project), **(record or {}),
                "project_hash": project.resolved_hash(), "project": project.resolved_dict()}
