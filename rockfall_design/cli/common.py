@@ -110,8 +110,8 @@ def run_with_progress(run: Any, project: Any, args: argparse.Namespace, **kw: An
         return run(project, progress=callback, **kw)
 
 
-#: The files of --report DIR.
-REPORT_FILES = ("report.html", "report.md")
+#: The files of --report DIR (report.pdf where the pdf extra and a Chromium are there).
+REPORT_FILES = ("report.html", "report.md", "report.pdf")
 
 
 def figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet) -> None:
@@ -122,7 +122,8 @@ def figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet) 
     if args.report:
         from ..report.documents import write_report
 
-        write_report(result, args.report, outputs=files, figures=figures)
+        write_report(result, args.report, outputs=files, figures=figures,
+                     note=lambda line: sys.stderr.write(f"{PROG}: {line}\n"))
     if args.plot:
         from ..report.figures import save_figures
 

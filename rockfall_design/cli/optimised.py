@@ -92,12 +92,14 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     return report
 
 
-def print_optimised(result: Any, project: Any, summary: dict[str, Any] | None = None) -> None:
-    """The terminal report of ``optimise``: the verdict, the alternatives, the chosen
-    design's bill (from ``summary``), and the scenarios if any."""
+def print_optimised(result: Any, project: Any, summary: dict[str, Any] | None = None,
+                    design: dict[str, Any] | None = None) -> None:
+    """The terminal report of ``optimise``: the verdict, the chosen design's design values
+    (from ``design``, its check summary) and bill (from ``summary``), the alternatives,
+    how sure, and the scenarios if any."""
     from ..report.terminal import print_optimise
 
-    print_optimise(result, project, summary=summary)
+    print_optimise(result, project, summary=summary, design=design)
     if project.design.scenarios is not None:
         from .scenario_commands import print_across
 

@@ -189,7 +189,8 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(report.summary, allow_nan=False) + "\n")
     else:
-        print_optimised(report.result, project, report.summary)
+        print_optimised(report.result, project, report.summary,
+                        None if report.design is None else report.design.summary)
     return int(ExitCode.OK if report.result.best is not None else ExitCode.CHECK_FAILED)
 
 
@@ -243,7 +244,9 @@ def add_simulate_parser(sub: Any) -> None:
         "station), barriers.csv (one row per station and quantity: its statistics) and "
         "summary.json (the summary and the run record that --repeat reads) into DIR",
         plot="draw profile.png (the section, rock paths and rest positions), envelopes.png "
-        "(passing height and energy along x) and stops.png (rest positions) into DIR",
+        "(passing height, energy and speed along x), stops.png (where the rocks ended) and "
+        "passing_station_N.png (histograms and cumulative distributions at analysis station "
+        "N) into DIR",
         json_="print the summary as one JSON object on stdout instead of the report",
         repeatable=True,
     )
@@ -273,8 +276,10 @@ def add_check_parser(sub: Any) -> None:
         "statistics and the barrier's figures) and summary.json (the summary and the run "
         "record) into DIR",
         plot="draw profile.png (the section with the measures, rock paths and rest "
-        "positions), envelopes.png and stops.png into DIR; with --scenarios, those of the "
-        "binding scenario and the margins figure (the margin in every scenario)",
+        "positions), envelopes.png, stops.png, passing_station_N.png and "
+        "passing_measure_N.png (the distributions at analysis station N and at barrier N of "
+        "measures:) into DIR; with --scenarios, those of the binding scenario and the "
+        "margins figure (the margin in every scenario)",
         json_="print the summary with measures, protect, ok and failures as one JSON object "
         "on stdout instead of the report",
     )
@@ -312,8 +317,8 @@ def add_optimise_parser(sub: Any) -> None:
         "barriers.csv (the chosen design's stations and barriers, one row per place and "
         "quantity) and summary.json (the summary and the run record) into DIR",
         plot="draw alternatives.png (every family's cost or reason) and profile.png, "
-        "envelopes.png and stops.png of the chosen design into DIR (only alternatives.png "
-        "when no design is admissible)",
+        "envelopes.png, stops.png, passing_station_N.png and passing_measure_N.png of the "
+        "chosen design into DIR (only alternatives.png when no design is admissible)",
         json_="print the alternatives and the best design as one JSON object on stdout "
         "instead of the report",
     )

@@ -271,7 +271,9 @@ def test_a_scenario_bounds_are_the_order_statistics_of_its_rocks():
     side = 1 - (1 - 0.95) / 8  # four scenarios: each side of each at 1 - (1 - c) / (2k)
     assert bounds["joint"]["upper"][ENERGY] == quantile_upper_bound(energy, 0.95, side)
     assert bounds["joint"]["lower"][ENERGY] == quantile_lower_bound(energy, 0.95, side)
-    reaching, rocks = block["protect"]["reaching"], block["rocks"]
+    # The residual of the project as it stands: with its measures, where it has any.
+    residual = block.get("protect_with_measures") or block["protect"]
+    reaching, rocks = residual["reaching"], block["rocks"]
     assert bounds["lower"]["x=200 residual"] == pytest.approx(
         fraction_lower_bound(reaching, rocks, 0.95))
 
