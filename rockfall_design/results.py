@@ -223,7 +223,8 @@ class SimulationResult:
         return save_figures(self.figures(), directory, formats)
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
-        """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
+        """Write ``report.html`` (self-contained), ``report.md`` (with SVG figures) and
+        ``report.pdf`` (with the pdf extra; else a warning says how to get it)."""
         from .report.documents import write_report
 
         return write_report(self, directory)
@@ -484,7 +485,8 @@ class OptimiseResult:
         return save_figures(self.figures(), directory, formats)
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
-        """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
+        """Write ``report.html`` (self-contained), ``report.md`` (with SVG figures) and
+        ``report.pdf`` (with the pdf extra; else a warning says how to get it)."""
         from .report.documents import write_report
 
         return write_report(self, directory)
