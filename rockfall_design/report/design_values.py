@@ -21,7 +21,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from .tables import round_value
+from .rounding import round_value
 
 __all__ = ["DesignTable", "design_tables", "design_columns", "how_sure", "state_of"]
 

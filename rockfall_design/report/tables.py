@@ -16,6 +16,8 @@ from typing import Any
 
 import pandas as pd
 
+from .rounding import round_value
+
 __all__ = [
     "chosen_name",
     "round_value",
@@ -27,10 +29,6 @@ __all__ = [
     "passages_frame",
 ]
 
-#: Decimals kept for a value of a unit (unknown units keep 3 significant decimals).
-_DECIMALS = {"-": 2, "m": 2, "kJ": 0, "kj": 0, "m/s": 1, "rad/s": 1, "%": 2, "kg": 0}
-
-
 def chosen_name(summary: Mapping[str, Any]) -> str | None:
     """Family name of an optimise summary's chosen design (None without one).
 
@@ -41,31 +39,6 @@ def chosen_name(summary: Mapping[str, Any]) -> str | None:
     if best is None or isinstance(best, str):
         return best
     return best.get("name")
-
-
-def round_value(value: Any, unit: str = "-") -> Any:
-    """A number rounded for its unit; None, NaN and non-numbers as they are.
-
-    Parameters
-    ----------
-    value : float or None
-    unit : str
-        ``"-"`` (a factor: 0.01), ``"m"`` (0.01 m), ``"kJ"`` (1 kJ),
-        ``"m/s"`` (0.1), ``"cost"`` (whole currency units), ``"count"`` (whole
-        numbers); other units 0.001.
-
-    Returns
-    -------
-    float, int or the value unchanged
-    """
-    if value is None or isinstance(value, bool) or not isinstance(value, int | float):
-        return value
-    if not math.isfinite(value):
-        return value
-    if unit in ("cost", "count"):
-        return int(round(value))
-    digits = _DECIMALS.get(unit, 3)
-    return int(round(value)) if digits == 0 else round(float(value), digits)
 
 
 def check_columns(checks: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
