@@ -22,6 +22,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .optimiser.alternatives import OptimisationResult
     from .plugins import Registry
     from .project import Project
+    from .run.passages import Passages
     from .run.simulation import Study
     from .run.streamed import StreamedStudy
 
@@ -153,19 +154,63 @@ class SimulationResult:
 
         return stops_figure(self.study, self._evaluation)
 
+    def passages(self) -> list[Passages]:
+        """The rocks passing each analysis station and meeting each barrier.
+
+        Per place every quantity of :data:`rockfall_design.run.passages.QUANTITIES`
+        per rock, with the barrier's figures (its heights and capacities) as
+        marks. Empty for a streamed run (more than ``EXACT_ROCKS`` rocks),
+        which keeps no rock's values; its summary still has each station's
+        statistics.
+        """
+        from .run.passages import station_passages
+
+        if self.streamed:
+            return []
+        out = station_passages(self.study)
+        if self._evaluation is not None:
+            out += self._evaluation.passages()
+        return out
+
+    @property
+    def barriers(self) -> pd.DataFrame:
+        """barriers.csv: one row per station or barrier and quantity, with its statistics.
+
+        See :func:`rockfall_design.report.tables.passages_frame`.
+        """
+        from .report.tables import passages_frame
+
+        return passages_frame(self.summary)
+
+    def plot_passages(self) -> dict[str, Figure]:
+        """Histograms and empirical CDFs at every station and barrier, by figure name.
+
+        Names ``passing_station_N`` and ``passing_measure_N`` (from 1); see
+        :func:`rockfall_design.report.passage_figures.passage_figure`.
+        """
+        from .report.passage_figures import passage_figure, passage_name
+
+        return {passage_name(p): passage_figure(p, self.project.name) for p in self.passages()}
+
     def figures(self) -> dict[str, Figure]:
         """Every figure of the result, by name (the file names of ``--plot``)."""
         return {"profile": self.plot_profile(), "envelopes": self.plot_envelopes(),
-                "stops": self.plot_stops()}
+                "stops": self.plot_stops(), **self.plot_passages()}
 
     def plot(self, which: str = "profile") -> Figure:
-        """One figure by name: ``profile``, ``envelopes`` or ``stops``.
+        """One figure by name: ``profile``, ``envelopes``, ``stops`` or ``passing_...``.
 
         Returns a :class:`matplotlib.figure.Figure` (shown by a notebook
         when it is a cell's value; ``fig.savefig(path)`` writes it).
         """
         methods = {"profile": self.plot_profile, "envelopes": self.plot_envelopes,
                    "stops": self.plot_stops}
+        if which.startswith("passing_"):
+            figs = self.plot_passages()
+            if which in figs:
+                return figs[which]
+            raise ValueError(f"unknown figure {which!r}; the places of this run: "
+                             f"{', '.join(figs) or 'none'}")
         if which not in methods:
             raise ValueError(f"unknown figure {which!r}; choose one of {', '.join(methods)}")
         return methods[which]()
@@ -178,7 +223,8 @@ class SimulationResult:
         return save_figures(self.figures(), directory, formats)
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
-        """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
+        """Write ``report.html`` (self-contained), ``report.md`` (with SVG figures) and
+        ``report.pdf`` (with the pdf extra; else a warning says how to get it)."""
         from .report.documents import write_report
 
         return write_report(self, directory)
@@ -439,7 +485,8 @@ class OptimiseResult:
         return save_figures(self.figures(), directory, formats)
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
-        """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
+        """Write ``report.html`` (self-contained), ``report.md`` (with SVG figures) and
+        ``report.pdf`` (with the pdf extra; else a warning says how to get it)."""
         from .report.documents import write_report
 
         return write_report(self, directory)

@@ -173,8 +173,13 @@ def test_stops_figure_says_why_no_rock_stops():
     text = QUARRY.read_text().replace("x: 117                # m", "x: 100                # m")
     c = rd.check(load_project_text(text, str(QUARRY)), rocks=100, seed=7)
     assert c.summary["stops"]["stopped"] == 0
-    title = c.plot_stops().axes[0].get_title()
-    assert "no rock came to rest" in title and "caught by the measures" in title
+    # Not an empty plot (issue 36): the caught rocks are drawn where the fence caught
+    # them, in its colour, and the title says how every rock ended.
+    ax = c.plot_stops().axes[0]
+    assert f"{c.summary['stops']['caught']} caught by a barrier" in ax.get_title()
+    assert any(label.startswith("held by fence") for label in ax.get_legend_handles_labels()[1])
+    assert sum(b.get_height() for bars in ax.containers for b in bars) == \
+        c.summary["stops"]["caught"]
 
 
 def test_barriers_are_annotated_with_product_height_and_capacity():
@@ -260,7 +265,9 @@ def test_plot_format_writes_each_format(tmp_path, capsys):
     assert main(["simulate", str(STANDARD), "--rocks", "40", "--plot", str(figs),
                  "--plot-format", "svg,pdf", "--json"]) == 0
     names = sorted(p.name for p in figs.iterdir() if p.name != ".rockfall-design-outputs.json")
-    assert names == sorted(f"{n}.{e}" for n in ("profile", "envelopes", "stops")
+    # and the distributions at the project's one analysis station
+    assert names == sorted(f"{n}.{e}" for n in ("profile", "envelopes", "stops",
+                                                "passing_station_1")
                            for e in ("svg", "pdf"))
     assert (figs / "profile.pdf").read_bytes().startswith(b"%PDF")
     with pytest.raises(SystemExit) as exc:

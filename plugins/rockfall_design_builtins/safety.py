@@ -54,6 +54,7 @@ from pydantic import ConfigDict, Field
 
 from rockfall_design import (
     Check,
+    DesignValue,
     MeasureResult,
     SafetyConcept,
     SafetyParams,
@@ -172,22 +173,35 @@ def _factor_check(
     quantity: str,
     target: float,
     confidence: float,
+    symbols: tuple[str, str, str, str] = ("F", "S", "P", "provided"),
 ) -> Check:
     """``provided / statistic(values)`` compared with ``target`` (ok if >= target).
+
+    ``symbols``: the factor's symbol, the demand's (its statistic is added as
+    a subscript), the provided figure's and what that figure is, for the
+    report's table of design values.
 
     The detail reads e.g. "4.00 m / p95 passing height 1.62 m (upper bound
     1.70 m at 95 %) over 812 rocks". ``bound`` is ``provided`` over the upper
     confidence bound of the statistic: the factor that holds with confidence.
     """
     values = np.asarray(values, dtype=float)
+    factor_symbol, demand_symbol, provided_symbol, provided_meaning = symbols
+    named = {"symbol": factor_symbol, "relation": ">=", "target_symbol": name}
+    figure = DesignValue(provided_symbol, provided_meaning, provided, unit, source="product")
     if values.size == 0:
-        return Check(name, None, target, True, "-", _NO_ROCK, None, True)
+        return Check(name, None, target, True, "-", _NO_ROCK, None, True, **named,
+                     design_values=(DesignValue(f"{demand_symbol}_{statistic}",
+                                                f"{statistic} {quantity}", None, unit), figure))
     if statistic == "max" or float(statistic[1:]) >= 100.0:
         demand = upper = lower = float(np.max(values))
     else:
         # One partial sort for the percentile and both its bounds.
         demand, lower, upper = quantile_with_bounds(values, float(statistic[1:]) / 100.0,
                                                     confidence)
+    named["design_values"] = (
+        DesignValue(f"{demand_symbol}_{statistic}", f"{statistic} {quantity} of the rocks",
+                    demand, unit, upper), figure)
     bound_text = ("" if statistic == "max" or upper is None else
                   f" (upper bound {_num(upper, unit)} at {100 * confidence:g} %)")
     detail = (
@@ -200,7 +214,8 @@ def _factor_check(
         # No demand at the point value; with confidence only if the bound has none too.
         no_demand = upper is not None and not upper > 0.0
         return Check(name, None, target, True, "-", f"{detail}: factor undefined, no demand",
-                     None, no_demand or (None if upper is None else provided / upper >= target))
+                     None, no_demand or (None if upper is None else provided / upper >= target),
+                     **named)
     factor = provided / demand
     # The most favourable factor at this confidence: over the lower bound of
     # the statistic. It fails with confidence only when even that misses.
@@ -208,10 +223,10 @@ def _factor_check(
     fails = f_best is not None and bool(f_best < target)
     if upper is None:
         return Check(name, factor, target, bool(factor >= target), "-", detail, None, False,
-                     _needed(statistic, confidence), f_best, fails)
+                     _needed(statistic, confidence), f_best, fails, **named)
     f_bound = provided / upper
     return Check(name, factor, target, bool(factor >= target), "-", detail, f_bound,
-                 bool(f_bound >= target), None, f_best, fails)
+                 bool(f_bound >= target), None, f_best, fails, **named)
 
 
 def _reach_check(
@@ -223,7 +238,7 @@ def _reach_check(
     number of rocks until every ditch fails).
     """
     return _factor_check("reach_factor", width_m, "m", result.reach_m, statistic, "reach",
-                         target, confidence)
+                         target, confidence, ("F_b", "r", "b", "width of the catch area"))
 
 
 def _product(result: MeasureResult) -> str:
@@ -257,7 +272,11 @@ def _braking_check(result: MeasureResult, elongation_m: float | None) -> list[Ch
     if not ok:
         detail = f"{detail}: the net would reach into the protected zone while braking a rock"
     return [Check("braking_distance", elongation_m, clearance, ok, "m", detail, elongation_m,
-                  ok, None, elongation_m, not ok)]
+                  ok, None, elongation_m, not ok, "d_max", "<=", "d_A",
+                  (DesignValue("d_max", f"maximum elongation of {_product(result)}",
+                               elongation_m, "m", source="product"),
+                   DesignValue("d_A", "clearance from the fence to the protected zone",
+                               clearance, "m", source="product")))]
 
 
 # ---------------------------------------------------------------------------
@@ -397,6 +416,7 @@ class SpangConcept(SafetyConcept):
                     "passing height",
                     params.height_factor,
                     params.confidence,
+                    ("F_h", "h", "h_N", "nominal height"),
                 )
             )
         capacity_kj = _finite_property(properties, "capacity_kj")
@@ -411,6 +431,7 @@ class SpangConcept(SafetyConcept):
                     "energy",
                     params.energy_factor,
                     params.confidence,
+                    ("F_E", "E", "E_cap", "energy capacity (capacity_kj)"),
                 )
             )
         width_m = _finite_property(properties, "width_m")
@@ -621,8 +642,15 @@ class Uni11211Concept(SafetyConcept):
         target = capacity_kj / params.gamma_e
         speeds = np.asarray(result.velocity_ms, dtype=float)
         masses = np.asarray(result.mass_kg, dtype=float)
+        figures = (DesignValue("E_cap", "energy capacity (capacity_kj, the MEL)", capacity_kj,
+                               "kJ", source="product"),
+                   DesignValue("E_cap / gamma_E", "the limit of the design energy", target, "kJ",
+                               source="product"))
+        named: dict[str, Any] = {"symbol": "E_d", "relation": "<=",
+                                 "target_symbol": "E_cap / gamma_E", "design_values": figures}
         if speeds.size == 0 or masses.size == 0:
-            return Check("design_energy", None, target, True, "kJ", _NO_ROCK, None, True)
+            return Check("design_energy", None, target, True, "kJ", _NO_ROCK, None, True,
+                         **named)
         p = _label(params.percentile)
         speed = _percentile(speeds, params.percentile)
         mass = _percentile(masses, params.percentile)
@@ -635,6 +663,15 @@ class Uni11211Concept(SafetyConcept):
         )
         speed_b = _statistic_bound(speeds, p, params.confidence)
         mass_b = _statistic_bound(masses, p, params.confidence)
+        e_b = (None if speed_b is None or mass_b is None
+               else self._design_energy(mass_b, speed_b))
+        m_f = params.gamma_volf * params.gamma_gamma
+        named["design_values"] = (
+            DesignValue("v_d", f"design speed: {p} speed x gamma_F", speed * self.gamma_f,
+                        "m/s", None if speed_b is None else speed_b * self.gamma_f),
+            DesignValue("m_d", f"design mass: {p} mass x gamma_VolF gamma_gamma", mass * m_f,
+                        "kg", None if mass_b is None else mass_b * m_f),
+            DesignValue("E_d", "design energy 1/2 m_d v_d^2", e_d, "kJ", e_b), *figures)
         speed_l = _statistic_lower(speeds, p, params.confidence)
         mass_l = _statistic_lower(masses, p, params.confidence)
         e_l = None if speed_l is None or mass_l is None else self._design_energy(mass_l,
@@ -643,11 +680,11 @@ class Uni11211Concept(SafetyConcept):
         if speed_b is None or mass_b is None:
             detail = f"{detail}; {_too_few(p, speeds.size, params.confidence)}"
             return Check("design_energy", e_d, target, bool(e_d <= target), "kJ", detail,
-                         None, False, _needed(p, params.confidence), e_l, fails)
-        e_b = self._design_energy(mass_b, speed_b)
+                         None, False, _needed(p, params.confidence), e_l, fails, **named)
+        assert e_b is not None
         detail = f"{detail}; with the {100 * params.confidence:g} % bounds {_num(e_b, 'kJ')}"
         return Check("design_energy", e_d, target, bool(e_d <= target), "kJ", detail, e_b,
-                     bool(e_b <= target), None, e_l, fails)
+                     bool(e_b <= target), None, e_l, fails, **named)
 
     def _design_energy(self, mass_kg: float, speed_ms: float) -> float:
         """E_d (kJ) from a characteristic mass (kg) and speed (m/s)."""
@@ -674,8 +711,16 @@ class Uni11211Concept(SafetyConcept):
             against = (f"residual height after the MEL test {_num(residual_m, 'm')} of "
                        f"{_product(result)} (catalogue; nominal height "
                        f"{_num(nominal_m, 'm')}), used in place of the nominal height")
+        figure = (DesignValue("h_N", "nominal height", nominal_m, "m", source="product"),)
+        if residual_m is not None:
+            figure += (DesignValue("h_R", "residual height after the MEL test", residual_m, "m",
+                                   source="product"),)
+        named: dict[str, Any] = {"symbol": "h_d + f", "relation": "<=",
+                                 "target_symbol": "h_N" if residual_m is None else "h_R",
+                                 "design_values": figure}
         if heights.size == 0:
-            return Check("design_height", None, height_m, True, "m", _NO_ROCK, None, True)
+            return Check("design_height", None, height_m, True, "m", _NO_ROCK, None, True,
+                         **named)
         p = _label(params.percentile)
         height = _percentile(heights, params.percentile)
         h_d = height * self.gamma_f
@@ -690,6 +735,13 @@ class Uni11211Concept(SafetyConcept):
         )
         height_b = _statistic_bound(heights, p, params.confidence)
         radius_b = _statistic_bound(radii, p, params.confidence) if radii.size else 0.0
+        required_b = (None if height_b is None or radius_b is None
+                      else self._required_height(height_b, radius_b))
+        named["design_values"] = (
+            DesignValue("h_d", f"design height: {p} passing height x gamma_F", h_d, "m",
+                        None if height_b is None else height_b * self.gamma_f),
+            DesignValue("f", "freeboard: max(f_min, d_d / 2)", freeboard, "m"),
+            DesignValue("h_d + f", "required height", required, "m", required_b), *figure)
         height_l = _statistic_lower(heights, p, params.confidence)
         radius_l = _statistic_lower(radii, p, params.confidence) if radii.size else 0.0
         required_l = (None if height_l is None or radius_l is None
@@ -698,11 +750,13 @@ class Uni11211Concept(SafetyConcept):
         if height_b is None or radius_b is None:
             detail = f"{detail}; {_too_few(p, heights.size, params.confidence)}"
             return Check("design_height", required, height_m, bool(height_m >= required), "m",
-                         detail, None, False, _needed(p, params.confidence), required_l, fails)
-        required_b = self._required_height(height_b, radius_b)
+                         detail, None, False, _needed(p, params.confidence), required_l, fails,
+                         **named)
+        assert required_b is not None
         detail = f"{detail}; with the {100 * params.confidence:g} % bounds {_num(required_b, 'm')}"
         return Check("design_height", required, height_m, bool(height_m >= required), "m",
-                     detail, required_b, bool(height_m >= required_b), None, required_l, fails)
+                     detail, required_b, bool(height_m >= required_b), None, required_l, fails,
+                     **named)
 
 
 @hookimpl

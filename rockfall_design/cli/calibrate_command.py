@@ -38,8 +38,9 @@ def _common(p: argparse.ArgumentParser, what: str, report: str) -> None:
     p.add_argument("--plot-format", type=formats, default=("png",), metavar="FMT[,FMT]",
                    help="file formats of the --plot figures: png, svg, pdf (default: png)")
     p.add_argument("--report", type=Path, metavar="DIR",
-                   help="write DIR/report.html (self-contained: figures inline as SVG) and "
-                   f"DIR/report.md (its Markdown twin, figures beside it as SVG): {report}")
+                   help="write DIR/report.html (self-contained: figures inline as SVG), "
+                   "DIR/report.md (its Markdown twin, figures beside it as SVG) and "
+                   f"DIR/report.pdf (the HTML printed at A4, with the pdf extra): {report}")
 
 
 def add_calibrate_parser(sub: Any) -> None:

@@ -46,10 +46,10 @@ def memory_guard(need: int, what: str, advice: str) -> None:
 def in_memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
     """The guard for ``check`` and ``optimise``, which keep every rock's results.
 
-    Per rock and envelope point: float32 height and energy, and float64
-    copies of them while the percentiles are taken.
+    Per rock and envelope point: float32 height, energy and speed, and
+    float64 copies of them while the percentiles are taken.
     """
-    need = n_rocks * (32 * n_grid + 40 * n_stations + 200)
+    need = n_rocks * (44 * n_grid + 40 * n_stations + 200)
     memory_guard(need, f"{n_rocks:,} rocks with {n_grid} envelope points",
                   "Use fewer rocks or fewer analysis.envelope_points.")
 
@@ -110,8 +110,8 @@ def run_with_progress(run: Any, project: Any, args: argparse.Namespace, **kw: An
         return run(project, progress=callback, **kw)
 
 
-#: The files of --report DIR.
-REPORT_FILES = ("report.html", "report.md")
+#: The files of --report DIR (report.pdf where the pdf extra and a Chromium are there).
+REPORT_FILES = ("report.html", "report.md", "report.pdf")
 
 
 def figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet) -> None:
@@ -122,7 +122,8 @@ def figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet) 
     if args.report:
         from ..report.documents import write_report
 
-        write_report(result, args.report, outputs=files, figures=figures)
+        write_report(result, args.report, outputs=files, figures=figures,
+                     note=lambda line: sys.stderr.write(f"{PROG}: {line}\n"))
     if args.plot:
         from ..report.figures import save_figures
 

@@ -74,6 +74,10 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
             # summary that says there is no design.
             files.remove(out / "design.yaml")
         files.write_csv(out / "alternatives.csv", report.alternatives)
+        if report.design is not None:  # the chosen design's stations and barriers
+            files.write_csv(out / "barriers.csv", report.design.barriers)
+        else:
+            files.remove(out / "barriers.csv")
         run = {"command": "optimise", "version": __version__, "seed": result.seed,
                "rocks": result.rocks, "project_file": str(args.project), **(record or {}),
                "project_hash": project.resolved_hash(), "project": project.resolved_dict()}
@@ -88,12 +92,14 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     return report
 
 
-def print_optimised(result: Any, project: Any, summary: dict[str, Any] | None = None) -> None:
-    """The terminal report of ``optimise``: the verdict, the alternatives, the chosen
-    design's bill (from ``summary``), and the scenarios if any."""
+def print_optimised(result: Any, project: Any, summary: dict[str, Any] | None = None,
+                    design: dict[str, Any] | None = None) -> None:
+    """The terminal report of ``optimise``: the verdict, the chosen design's design values
+    (from ``design``, its check summary) and bill (from ``summary``), the alternatives,
+    how sure, and the scenarios if any."""
     from ..report.terminal import print_optimise
 
-    print_optimise(result, project, summary=summary)
+    print_optimise(result, project, summary=summary, design=design)
     if project.design.scenarios is not None:
         from .scenario_commands import print_across
 

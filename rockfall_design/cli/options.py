@@ -95,8 +95,10 @@ def add_run_options(
                    help="file formats of the --plot figures: png, svg, pdf, comma-separated "
                    "(default: png)")
     p.add_argument("--report", type=Path, metavar="DIR",
-                   help="write DIR/report.html (self-contained: figures inline as SVG) and "
-                   "DIR/report.md (its Markdown twin, figures beside it as SVG)")
+                   help="write DIR/report.html (self-contained: figures inline as SVG), "
+                   "DIR/report.md (its Markdown twin, figures beside it as SVG) and "
+                   "DIR/report.pdf (the HTML printed at A4; needs the pdf extra and a "
+                   "Chromium, else one line says how to get it)")
     p.add_argument("--json", action="store_true", help=json_)
 
 

@@ -68,7 +68,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                   f"{project.analysis.envelope_points} envelope points",
                   "Use fewer analysis.envelope_points or analysis.stations.")
     with OutputSet() as files:
-        reserve(files, args.out, ("rocks.csv", "crossings.csv", "summary.json"))
+        reserve(files, args.out, ("rocks.csv", "crossings.csv", "barriers.csv",
+                                  "summary.json"))
         reserve(files, args.report, REPORT_FILES)
         reserve(files, args.plot, figure_files(FIGURES, args))
         on_chunk = table_writers(files, args.out) if args.out else None
@@ -76,6 +77,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         result = SimulationResult(project, study)
         summary = result.summary
         if args.out:
+            files.write_csv(args.out / "barriers.csv", result.barriers)
             files.write_json(args.out / "summary.json",
                              {**summary, "run": run_record(study, args)})
         figures_and_report(result, args, files)
@@ -122,7 +124,8 @@ def cmd_check(args: argparse.Namespace) -> int:
     in_memory_guard(n, project.analysis.envelope_points + len(project.analysis.stations),
                      len(project.analysis.stations))
     with OutputSet() as files:
-        reserve(files, args.out, ("rocks.csv", "crossings.csv", "measures.csv", "summary.json"))
+        reserve(files, args.out, ("rocks.csv", "crossings.csv", "measures.csv", "barriers.csv",
+                                  "summary.json"))
         reserve(files, args.report, REPORT_FILES)
         reserve(files, args.plot, figure_files(FIGURES, args))
         result = run_with_progress(check, project, args, registry=registry)
@@ -134,6 +137,7 @@ def cmd_check(args: argparse.Namespace) -> int:
             files.write_csv(out / "rocks.csv", result.rocks)
             files.write_csv(out / "crossings.csv", study.crossings_table())
             files.write_csv(out / "measures.csv", evaluation.outcomes_table())
+            files.write_csv(out / "barriers.csv", result.barriers)
             record = run_record(study, args)
             record["project"] = evaluation.resolved_project().resolved_dict()
             record["project_hash"] = evaluation.resolved_project().resolved_hash()
@@ -176,7 +180,8 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     in_memory_guard(max(n, project.design.max_rocks), project.analysis.envelope_points + 400,
                      len(project.analysis.stations))
     with OutputSet() as files:
-        reserve(files, args.out, ("design.yaml", "alternatives.csv", "summary.json"))
+        reserve(files, args.out, ("design.yaml", "alternatives.csv", "barriers.csv",
+                                  "summary.json"))
         reserve(files, args.report, REPORT_FILES)
         reserve(files, args.plot, figure_files(FIGURES, args))
         report = optimise_with_files(project, args, registry, files, args.project)
@@ -184,7 +189,8 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     if args.json:
         sys.stdout.write(json.dumps(report.summary, allow_nan=False) + "\n")
     else:
-        print_optimised(report.result, project, report.summary)
+        print_optimised(report.result, project, report.summary,
+                        None if report.design is None else report.design.summary)
     return int(ExitCode.OK if report.result.best is not None else ExitCode.CHECK_FAILED)
 
 
@@ -235,10 +241,12 @@ def add_simulate_parser(sub: Any) -> None:
         seed="random seed (default: rocks.seed of the project, or the seed that --repeat "
         "reads)",
         out="write rocks.csv (one row per rock), crossings.csv (one row per rock and "
-        "station) and summary.json (the summary and the run record that --repeat reads) "
-        "into DIR",
+        "station), barriers.csv (one row per station and quantity: its statistics) and "
+        "summary.json (the summary and the run record that --repeat reads) into DIR",
         plot="draw profile.png (the section, rock paths and rest positions), envelopes.png "
-        "(passing height and energy along x) and stops.png (rest positions) into DIR",
+        "(passing height, energy and speed along x), stops.png (where the rocks ended) and "
+        "passing_station_N.png (histograms and cumulative distributions at analysis station "
+        "N) into DIR",
         json_="print the summary as one JSON object on stdout instead of the report",
         repeatable=True,
     )
@@ -264,10 +272,14 @@ def add_check_parser(sub: Any) -> None:
         seed="random seed (default: rocks.seed of the project)",
         out="write rocks.csv (one row per rock, with the measure that caught it), "
         "crossings.csv (one row per rock and station), measures.csv (one row per rock and "
-        "measure) and summary.json (the summary and the run record) into DIR",
+        "measure), barriers.csv (one row per station or barrier and quantity: its "
+        "statistics and the barrier's figures) and summary.json (the summary and the run "
+        "record) into DIR",
         plot="draw profile.png (the section with the measures, rock paths and rest "
-        "positions), envelopes.png and stops.png into DIR; with --scenarios, those of the "
-        "binding scenario and the margins figure (the margin in every scenario)",
+        "positions), envelopes.png, stops.png, passing_station_N.png and "
+        "passing_measure_N.png (the distributions at analysis station N and at barrier N of "
+        "measures:) into DIR; with --scenarios, those of the binding scenario and the "
+        "margins figure (the margin in every scenario)",
         json_="print the summary with measures, protect, ok and failures as one JSON object "
         "on stdout instead of the report",
     )
@@ -301,11 +313,12 @@ def add_optimise_parser(sub: Any) -> None:
         seed="random seed of the search and of the decision (default: rocks.seed of the "
         "project; the fresh rocks use another seed)",
         out="write design.yaml (the project with the chosen measures, for check; removed "
-        "when no design is admissible), alternatives.csv (one row per family of measures) "
-        "and summary.json (the summary and the run record) into DIR",
+        "when no design is admissible), alternatives.csv (one row per family of measures), "
+        "barriers.csv (the chosen design's stations and barriers, one row per place and "
+        "quantity) and summary.json (the summary and the run record) into DIR",
         plot="draw alternatives.png (every family's cost or reason) and profile.png, "
-        "envelopes.png and stops.png of the chosen design into DIR (only alternatives.png "
-        "when no design is admissible)",
+        "envelopes.png, stops.png, passing_station_N.png and passing_measure_N.png of the "
+        "chosen design into DIR (only alternatives.png when no design is admissible)",
         json_="print the alternatives and the best design as one JSON object on stdout "
         "instead of the report",
     )

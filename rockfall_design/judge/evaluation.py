@@ -20,6 +20,7 @@ from ..engine import Section, columns
 from ..plugins import guard
 from ..plugins.concept import DEFAULT_CONFIDENCE, Check, SafetyConcept
 from ..plugins.measure import Barrier, MeasureResult, Outcome
+from ..run.passages import Passages, barrier_values, property_marks, slope_deg_at
 from ..run.releases import section_from_project
 from ..run.simulation import Study, run_study
 from .bounds import fraction_lower_bound, fraction_upper_bound
@@ -233,6 +234,27 @@ class Evaluation:
             )
         return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
+    def passages(self) -> list[Passages]:
+        """The rocks that met each barrier, with the barrier's figures to draw on them.
+
+        One :class:`~rockfall_design.run.passages.Passages` per barrier (a
+        profile edit has no passage), in project order: every quantity of
+        :data:`~rockfall_design.run.passages.QUANTITIES` per rock that met
+        it, and the marks of its design properties (heights, capacities,
+        whatever the product gives, read by their units).
+        """
+        out = []
+        for p, res in zip(self.placed, self.results, strict=True):
+            fp = p.footprint
+            if not isinstance(fp, Barrier):
+                continue
+            slope = slope_deg_at(self.study.section, float(fp.x))
+            values = barrier_values(res.passing_height_m, res.velocity_ms, res.energy_kj,
+                                    res.mass_kg, res.radius_m, slope)
+            out.append(Passages("measure", res.index, p.label, float(fp.x), slope, values,
+                                property_marks(res.measure.design_properties())))
+        return out
+
     def resolved_project(self) -> Project:
         """The project with every measure's and the concept's parameters resolved."""
         measures = [
@@ -246,6 +268,7 @@ class Evaluation:
         """JSON-ready: the simulate summary plus ``measures``, ``protect`` and ``ok``."""
         out = self.study.summary()
         out["safety_concept"] = self.concept.name
+        passing = {q.index: q.block() for q in self.passages()}
         out["measures"] = [
             {
                 "type": res.measure.kind,
@@ -260,6 +283,8 @@ class Evaluation:
                 "passed_through_gap": res.passed_through_gap,
                 "checks": [c.as_dict() for c in cs],
                 "ok": all(c.ok for c in cs),
+                # The distributions at a barrier (run.passages): None for a ground edit.
+                "passing": passing.get(res.index),
             }
             for p, res, cs in zip(self.placed, self.results, self.checks, strict=True)
         ]
@@ -328,7 +353,8 @@ def evaluate(
     plan = plan_for(project, registry)
     return _evaluate_placed(project, registry, plan.bare, list(plan.placed), plan.section,
                             plan.concept, rocks=rocks, seed=seed,
-                            n_trajectories=n_trajectories, progress=progress)
+                            n_trajectories=n_trajectories, progress=progress,
+                            record_speed=True)
 
 
 def evaluate_design(
@@ -375,11 +401,17 @@ def _evaluate_placed(
     n_trajectories: int,
     progress: Callable[[int], None] | None,
     after: Study | None = None,
+    record_speed: bool = False,
 ) -> Evaluation:
-    """Run the rocks against measures already placed on ``bare`` (``section``: edited)."""
+    """Run the rocks against measures already placed on ``bare`` (``section``: edited).
+
+    ``record_speed``: keep the speeds along the section for the speed
+    envelope (``check`` and the chosen design's figures; not the optimiser).
+    """
     bars, owners = _barrier_rows(placed)
     study = run_study(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
-                      progress=progress, section=section, barriers=bars, after=after)
+                      progress=progress, section=section, barriers=bars, after=after,
+                      record_speed=record_speed)
     protect = project.protect
     judgement = _judge_run(placed, owners, study, None if protect is None else protect.x)
     checks = [guard(registry).concept(concept).checks(res) for res in judgement.results]

@@ -48,6 +48,7 @@ __all__ = [
     "DesignVerdict",
     "verdict_of",
     "with_verdict",
+    "check_state",
     "verdict_of_scenarios",
     "verdict_of_sections",
     "requirement_warnings",
@@ -310,15 +311,63 @@ def verdict_of(summary: Mapping[str, Any]) -> DesignVerdict:
                          untested_lines, untested, None, conf)
 
 
+def check_state(check: Mapping[str, Any], met: int) -> str:
+    """The state of one check of a measure, in the verdict's words (:data:`STATES`).
+
+    ``untested`` when no rock met the measure and the check has no value (a
+    statistic of no rock says nothing; a check of geometry, such as a braking
+    distance against the protected zone, has its value without rocks and is
+    judged on it); ``fails`` when it misses its target on its point value;
+    ``holds with confidence`` when it holds with its bound in place (or the
+    concept reports no bound); else ``holds on point values only``.
+
+    Parameters
+    ----------
+    check : mapping
+        A check as :meth:`rockfall_design.plugins.concept.Check.as_dict` gives it.
+    met : int
+        Rocks that met the measure.
+
+    Returns
+    -------
+    str
+    """
+    if met <= 0 and check.get("value") is None:
+        return UNTESTED
+    if not check.get("ok"):
+        return FAILS
+    return HOLDS_WITH_CONFIDENCE if _holds_with_bound(check) else HOLDS_ON_POINT_VALUES
+
+
+def _with_check_states(measures: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """The measures with each check's ``state`` (:func:`check_state`) and the measure's."""
+    out = []
+    for m in measures:
+        met = int(m.get("met") or 0)
+        checks = [{**c, "state": check_state(c, met)} for c in m.get("checks") or []]
+        states = {c["state"] for c in checks}
+        # The measure's own word: a failing check's, else untested without a rock,
+        # else its least sure check's. A measure with no check has none.
+        state = (FAILS if FAILS in states else UNTESTED if met <= 0 else
+                 HOLDS_ON_POINT_VALUES if HOLDS_ON_POINT_VALUES in states else
+                 HOLDS_WITH_CONFIDENCE if checks else None)
+        out.append({**m, "checks": checks, "state": state})
+    return out
+
+
 def with_verdict(summary: Mapping[str, Any]) -> dict[str, Any]:
     """A check summary headed by its ``verdict``; a check of nothing is not ``ok``.
 
     What ``check --json`` prints: the verdict first, then the summary's own
     keys, with ``ok`` and ``holds_with_confidence`` false when nothing was
-    tested (no vacuous "holds").
+    tested (no vacuous "holds"). Every measure and each of its checks carries
+    its ``state`` in the verdict's words (:func:`check_state`): a measure no
+    rock met is ``untested``, never "ok".
     """
     verdict = verdict_of(summary)
     out = {"verdict": verdict.as_dict(), **summary}
+    if "measures" in out:
+        out["measures"] = _with_check_states(out["measures"])
     if verdict.state == UNTESTED:
         out["ok"] = out["holds_with_confidence"] = False
     return out

@@ -21,7 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from .measure import MeasureResult
 
-__all__ = ["Check", "SafetyConcept", "SafetyParams", "DEFAULT_CONFIDENCE"]
+__all__ = ["Check", "DesignValue", "SafetyConcept", "SafetyParams", "DEFAULT_CONFIDENCE"]
 
 #: One-sided confidence of the bounds on design values (``safety.confidence``).
 DEFAULT_CONFIDENCE = 0.95
@@ -44,6 +44,45 @@ class SafetyParams(BaseModel):
         description="One-sided confidence of the upper bounds of the design values and of "
         "the residual (-), e.g. 0.95.", json_schema_extra={"unit": "-"},
     )
+
+
+@dataclass(frozen=True)
+class DesignValue:
+    """One design value or product figure behind a check, in the concept's symbols.
+
+    The report's table of design values shows these as they are, so that a
+    concept says what it computed (``v_d``, ``m_d``, ``E_d``, the product's
+    ``MEL``) without the report knowing the concept.
+
+    Attributes
+    ----------
+    symbol : str
+        The concept's symbol, e.g. ``v_d``, ``E_d``, ``h_N`` (plain text;
+        ``_`` starts a subscript).
+    meaning : str
+        What it is, in a few words, e.g. "design speed: p95 speed x gamma_F".
+    value : float or None
+        Its value in ``unit``; None when no rock gives it.
+    unit : str
+        ``m``, ``m/s``, ``kg``, ``kJ``, ``-`` ...
+    bound : float or None
+        Its one-sided confidence bound on the unsafe side (``safety.confidence``),
+        where the value is a statistic of the rocks; None for a product's figure.
+    source : str
+        ``"rocks"`` (a statistic of the rocks, with the concept's factors) or
+        ``"product"`` (a figure of the measure or its product).
+    """
+
+    symbol: str
+    meaning: str
+    value: float | None
+    unit: str = "-"
+    bound: float | None = None
+    source: str = "rocks"
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"symbol": self.symbol, "meaning": self.meaning, "value": self.value,
+                "unit": self.unit, "bound": self.bound, "source": self.source}
 
 
 @dataclass(frozen=True)
@@ -93,6 +132,17 @@ class Check:
         then treats a failed point value as failing with confidence only
         where the concept reports no bounds at all (``ok_with_confidence``
         None), and as undecided otherwise.
+    symbol : str
+        The check's value in the concept's symbols, e.g. ``E_d`` or ``F_h``
+        (empty: the report shows ``name``).
+    relation : str
+        ``"<="`` or ``">="``: how the value must stand to the target (empty:
+        not said).
+    target_symbol : str
+        The target in the concept's symbols, e.g. ``MEL / gamma_E``.
+    design_values : tuple of DesignValue
+        The design values and product figures the check was computed from, in
+        the order a reader follows them (the report's table of design values).
 
     See Also
     --------
@@ -110,6 +160,10 @@ class Check:
     rocks_needed: int | None = None
     optimistic: float | None = None
     fails_with_confidence: bool | None = None
+    symbol: str = ""
+    relation: str = ""
+    target_symbol: str = ""
+    design_values: tuple[DesignValue, ...] = ()
 
     @property
     def holds_with_confidence(self) -> bool:
@@ -142,6 +196,10 @@ class Check:
             "rocks_needed": self.rocks_needed,
             "optimistic": self.optimistic,
             "fails_with_confidence": self.fails_with_confidence,
+            "symbol": self.symbol,
+            "relation": self.relation,
+            "target_symbol": self.target_symbol,
+            "design_values": [d.as_dict() for d in self.design_values],
         }
 
 

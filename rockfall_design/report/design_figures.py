@@ -6,11 +6,12 @@ matplotlib Figures, no pyplot, as :mod:`.figures` draws them.
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from matplotlib.figure import Figure
-from matplotlib.ticker import FuncFormatter
+from matplotlib.ticker import FuncFormatter, MaxNLocator
 
 from .figures import RockfallFigure
 
@@ -61,51 +62,73 @@ def alternatives_figure(
     rows = sorted(alternatives, key=lambda a: (not a.get("feasible"),
                                                math.inf if a.get("cost") is None
                                                else a["cost"]))
-    n = max(len(rows), 1)
-    fig = RockfallFigure(figsize=(11, 1.2 + 0.55 * n), layout="constrained")
-    ax = fig.add_subplot()
-    costs = [a.get("cost") for a in rows]
-    finite = [c for c in costs if c is not None]
+    texts = [_wrapped(_bar_note(a, currency)) for a in rows]
+    # Each family takes as many lines as its note: every label in full, nothing cut.
+    heights = [max(1, t.count("\n") + 1) for t in texts]
+    ys, y = [], 0.0
+    for h in heights:
+        ys.append(y + 0.5 * (h - 1) * _LINE)
+        y += 1.0 + (h - 1) * _LINE
+    fig = RockfallFigure(figsize=(11, 1.4 + 0.5 * max(y, 1.0)), layout="constrained")
+    ax, notes = fig.subplots(1, 2, sharey=True, width_ratios=[1, 1.25])
+    notes.axis("off")
+    finite = [a["cost"] for a in rows if a.get("cost") is not None]
     top = max(finite) if finite else 1.0
-    for i, a in enumerate(rows):
+    for a, yi, text in zip(rows, ys, texts, strict=True):
         cost = a.get("cost")
         chosen = best is not None and a.get("name") == best
-        if a.get("feasible"):
-            color = "#1e8449" if chosen else "#7dcea0"
-            hatch = None
-        else:
-            color, hatch = "#d5d8dc", "//"
+        color, hatch = (("#1e8449" if chosen else "#7dcea0"), None) if a.get("feasible") \
+            else ("#d5d8dc", "//")
         width = cost if cost is not None else 0.0
-        ax.barh(i, width, color=color, hatch=hatch, edgecolor="#566573", height=0.6)
-        note = []
-        if a.get("residual") is not None:
-            k = int(a["residual"])
-            note.append(f"{k} {'rock' if k == 1 else 'rocks'} reach the protected zone")
-        if a.get("feasible"):
-            bind = _binding(a.get("checks") or [])
-            if bind:
-                note.append(f"binding: {bind}")
-            if a.get("holds_on_fresh_rocks") is False:
-                note.append("fails on fresh rocks")
-        else:
-            reason = str(a.get("reason") or "not admissible")
-            note.append(reason if len(reason) <= 70 else reason[:67] + "...")
-        head = "" if cost is None else f"{cost:,.0f} {currency}".strip()
-        text = "   ".join(([head] if head else []) + note)
-        ax.text(width + 0.01 * top, i, text, va="center", fontsize=8)
-    ax.set_yticks(range(len(rows)),
-                  [("* " if best is not None and a.get("name") == best else "") +
-                   str(a.get("name", "?")) for a in rows], fontsize=9)
-    ax.invert_yaxis()
-    ax.set_xlim(0, top * 2.3)
+        ax.barh(yi, width, color=color, hatch=hatch, edgecolor="#566573", height=0.6)
+        # The note in a panel of its own right of the bars: no bar runs under it, and
+        # the layout gives it its width.
+        notes.text(0.0, yi, text, va="center", ha="left", fontsize=8, linespacing=1.25,
+                   transform=notes.get_yaxis_transform())
+    ax.set_yticks(ys, [("* " if best is not None and a.get("name") == best else "") +
+                       str(a.get("name", "?")) for a in rows], fontsize=9)
+    ax.set_ylim(y - 0.4, -0.6)
+    ax.set_xlim(0, top * 1.05)
+    ax.spines[["right", "top"]].set_visible(False)
+    ax.xaxis.set_major_locator(MaxNLocator(4))
     ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}"))
     ax.set_xlabel(f"cost ({currency})" if currency else "cost")
     ax.grid(axis="x", alpha=0.3)
     head = "cheapest design of each family; * chosen, hatched: not admissible"
-    ax.set_title(f"{title}: {head}" if title else head)
+    ax.set_title(f"{title}: {head}" if title else head, loc="left")
     if not rows:
         ax.text(0.5, 0.5, "no alternatives", transform=ax.transAxes, ha="center")
     return fig
+
+
+#: Height of a note's further line, in rows (the bars are 1 apart).
+_LINE = 0.42
+
+#: Characters per line of a family's note on the alternatives figure.
+_NOTE_WIDTH = 95
+
+
+def _bar_note(a: Mapping[str, Any], currency: str) -> str:
+    """A family's note: its cost, the rocks reaching the zone, what binds, or why not."""
+    cost = a.get("cost")
+    note = [] if cost is None else [f"{cost:,.0f} {currency}".strip()]
+    if a.get("residual") is not None:
+        k = int(a["residual"])
+        note.append(f"{k} {'rock' if k == 1 else 'rocks'} reach the protected zone")
+    if a.get("feasible"):
+        bind = _binding(a.get("checks") or [])
+        if bind:
+            note.append(f"binding: {bind}")
+        if a.get("holds_on_fresh_rocks") is False:
+            note.append("fails on fresh rocks")
+    else:
+        note.append(str(a.get("reason") or "not admissible"))
+    return "; ".join(note)
+
+
+def _wrapped(text: str) -> str:
+    """The note over lines of :data:`_NOTE_WIDTH` characters (all of it: nothing cut)."""
+    return "\n".join(textwrap.wrap(text, _NOTE_WIDTH, break_long_words=False)) or text
 
 
 def _short_paths(paths: Sequence[str]) -> dict[str, str]:

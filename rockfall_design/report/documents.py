@@ -15,11 +15,14 @@ from __future__ import annotations
 import datetime as _dt
 import os
 import re
-from collections.abc import Mapping
+import warnings
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..version import __version__
+from .design_values import design_columns, design_tables, how_sure
+from .pdf import html_to_pdf, pdf_unavailable
 from .sections import (
     Table,
     _alternatives_table,
@@ -34,6 +37,7 @@ from .sections import (
     _scenarios_table,
     _stations_table,
     inputs_table,
+    passages_table,
     values_text,
 )
 
@@ -154,6 +158,8 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
         "limits": [],
         "chosen": "",
         "chosen_measures": [],
+        "design_values": [],
+        "how_sure": [],
     }
     design = result.design if command == "optimise" else None
     stats_summary = design.summary if design is not None else (
@@ -169,7 +175,15 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
         ct = _checks_table(stats_summary)
         if ct is not None:
             ctx["results"].append(ct)
+        pt = passages_table(stats_summary)
+        if pt is not None:
+            ctx["results"].append(pt)
         ctx["protect"] = _protect_text(stats_summary)
+        if stats_summary.get("measures") is not None:
+            ctx["design_values"] = _design_value_tables(stats_summary)
+            ctx["how_sure"] = how_sure(stats_summary)
+    if command == "optimise":
+        ctx["how_sure"] += _optimiser_sentences(summary)
     _set_verdict(ctx, summary.get("verdict"))
     if command == "check" and not summary.get("verdict"):  # a summary from before verdicts
         ctx["verdict"] = ("Design holds on the point values." if summary["ok"]
@@ -185,22 +199,50 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
             f"rocks and the verification {int(summary.get('fresh_rocks') or 0):,} fresh rocks "
             f"(seed {summary.get('fresh_seed')}); confidence "
             f"{100 * float(summary.get('confidence') or 0.95):g} %.")
-    if command in ("check", "optimise"):
-        ctx["limits"] = [{"heading": h, "items": list(items)} for h, items in MODEL_LIMITS]
+    # Every report says what the model is and is not; the concepts' part where one judged.
+    ctx["limits"] = [{"heading": h, "items": list(items)} for h, items in MODEL_LIMITS
+                     if command in ("check", "optimise") or not h.startswith("Safety")]
     figs = figures if figures is not None else result.figures()
     ctx["figures"] = [{"name": name, "caption": CAPTIONS.get(name, ""), "fig": fig}
                       for name, fig in figs.items()]
     return ctx
 
 
+def _design_value_tables(summary: Mapping[str, Any]) -> list[Table]:
+    """The design values at each measure, a table each (:mod:`.design_values`)."""
+    cols = design_columns(float(summary.get("confidence") or 0.95))
+    return [Table(t.title, cols, t.rows, highlight=[bool(x) for x in t.states])
+            for t in design_tables(summary)]
+
+
+def _optimiser_sentences(summary: Mapping[str, Any]) -> list[str]:
+    """How ``optimise`` searched and decided, and its record of the decision, as sentences."""
+    conf = 100 * float(summary.get("confidence") or 0.95)
+    out = [f"The optimiser searched with {int(summary.get('search_rocks') or 0):,} rocks "
+           f"(seed {summary.get('seed')}), screening "
+           f"{int(summary.get('designs_evaluated') or 0):,} designs, "
+           f"{int(summary.get('exact_evaluations') or 0):,} of them evaluated exactly; the "
+           f"chosen design was decided with {int(summary.get('rocks') or 0):,} rocks and "
+           f"checked again on {int(summary.get('fresh_rocks') or 0):,} fresh rocks (seed "
+           f"{summary.get('fresh_seed')}), every bound at {conf:g} % confidence."]
+    best = summary.get("best")
+    if isinstance(best, Mapping) and best.get("proof"):
+        out.append(f"The optimiser's record of the decision: {best['proof']}.")
+    return out
+
+
 def _set_verdict(ctx: dict[str, Any], verdict: Mapping[str, Any] | None) -> None:
-    """The verdict (``summary["verdict"]``) as the report's first lines."""
+    """The verdict (``summary["verdict"]``) as the report's first lines.
+
+    What fails is said at once; what is open with confidence belongs to the
+    statistics and is said under "How sure" (its ``details`` are there).
+    """
     if not verdict:
         return
     ctx["verdict"] = verdict["headline"]
     ctx["verdict_state"] = verdict["state"]
     ctx["verdict_ok"] = verdict["state"] == "holds with confidence"
-    ctx["failures"] = list(verdict.get("details") or [])
+    ctx["failures"] = list(verdict.get("details") or []) if verdict["state"] == "fails" else []
 
 
 def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[str, Any]:
@@ -273,6 +315,9 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
     if summary.get("verdict"):
         ctx["scenarios_note"] = ctx["verdict"]
         _set_verdict(ctx, summary["verdict"])
+        if summary["verdict"]["state"] != "fails":  # what is open: under "How sure"
+            ctx["how_sure"] = [*ctx["how_sure"], "Over the scenarios:",
+                               *(f"- {d}" for d in summary["verdict"].get("details") or [])]
         ctx["failures"] = [ctx["scenarios_note"], *ctx["failures"]]
     for f in ctx["figures"]:
         f["caption"] = f"{name[0].upper()}{name[1:]}: {f['caption']}"
@@ -305,7 +350,20 @@ def _environment(markdown: bool) -> Any:
     )
     env.filters["md"] = _md_cell
     env.filters["rendered"] = _Rendered
+    env.filters["wbr"] = _wbr
     return env
+
+
+def _wbr(text: Any) -> Any:
+    """A column header, escaped, that may break after each underscore (``<wbr>``).
+
+    A printed table of many columns (the ground materials) then wraps
+    ``rolling_resistance`` at its underscore rather than in the middle of a
+    word, or not at all and past the page's edge.
+    """
+    from markupsafe import Markup, escape
+
+    return Markup(str(escape(str(text))).replace("_", "_<wbr>"))
 
 
 #: What could start HTML in Markdown: a tag, a closing tag, a comment or
@@ -335,15 +393,23 @@ def _md_cell(text: Any) -> str:
     return " ".join(str(text).split()).replace("|", "\\|")
 
 
-def render_html(context: Mapping[str, Any]) -> str:
-    """report.html: self-contained, every figure inline as SVG."""
+def render_html(context: Mapping[str, Any], for_print: bool = False,
+                svgs: Mapping[str, str] | None = None) -> str:
+    """report.html: self-contained, every figure inline as SVG.
+
+    ``for_print``: the page report.pdf is printed from, whose column headers
+    may break after an underscore (``<wbr>``), so that a table of many
+    columns fits the page; report.html keeps its headers as plain text.
+    ``svgs``: each figure's SVG by name, if drawn already (for both pages).
+    """
     from markupsafe import Markup
 
     from .figures import figure_svg
 
-    figs = [{**f, "svg": Markup(figure_svg(f["fig"]))} for f in context["figures"]]
-    return _environment(False).get_template("report.html.j2").render(**{**context,
-                                                                        "figures": figs})
+    figs = [{**f, "svg": Markup(svgs[f["name"]] if svgs and f["name"] in svgs
+                                else figure_svg(f["fig"]))} for f in context["figures"]]
+    return _environment(False).get_template("report.html.j2").render(
+        **{**context, "figures": figs, "for_print": for_print})
 
 
 def render_markdown(context: Mapping[str, Any]) -> str:
@@ -355,8 +421,17 @@ def render_markdown(context: Mapping[str, Any]) -> str:
 
 def write_report(result: Any, directory: str | os.PathLike[str],
                  outputs: OutputSet | None = None,
-                 figures: Mapping[str, Any] | None = None) -> list[Path]:
-    """Write DIR/report.html, DIR/report.md and the Markdown's figures DIR/NAME.svg.
+                 figures: Mapping[str, Any] | None = None,
+                 pdf: bool = True, note: Callable[[str], None] | None = None) -> list[Path]:
+    """Write DIR/report.html, DIR/report.md, the Markdown's figures DIR/NAME.svg and
+    DIR/report.pdf.
+
+    report.pdf is report.html printed by Chromium (:mod:`.pdf`: A4, the
+    project and date on every page, page numbers, vector figures). Where it
+    cannot be made (no ``pdf`` extra, no Chromium) the rest is written and
+    ``note`` is called with one line that says how to get it (default: a
+    :class:`UserWarning`); a report.pdf of an earlier run is removed then, so
+    that it does not sit beside a newer report.
 
     Parameters
     ----------
@@ -368,17 +443,21 @@ def write_report(result: Any, directory: str | os.PathLike[str],
         none). Without one they land together on return.
     figures : mapping of str to Figure, optional
         Default: ``result.figures()``.
+    pdf : bool
+        Write report.pdf too (default).
+    note : callable, optional
+        Called with the one line that says why report.pdf was not written.
 
     Returns
     -------
     list of Path
     """
-    from .figures import save_figures
+    from .figures import figure_svg, save_figures
     from .outputs import OutputSet
 
     if outputs is None:
         with OutputSet() as own:
-            return write_report(result, directory, own, figures)
+            return write_report(result, directory, own, figures, pdf, note)
     out = Path(directory)
     # A result that builds its own context (calibrate, compare) is rendered by
     # the same templates; the others' context is built here.
@@ -386,6 +465,35 @@ def write_report(result: Any, directory: str | os.PathLike[str],
     ctx = own(figures) if callable(own) else report_context(result, figures)
     figs = {f["name"]: f["fig"] for f in ctx["figures"]}
     written = save_figures(figs, out, ("svg",), outputs)
-    outputs.write_text(out / "report.html", render_html(ctx))
+    svgs = {name: figure_svg(fig) for name, fig in figs.items()}  # once, for both pages
+    page = render_html(ctx, svgs=svgs)
+    outputs.write_text(out / "report.html", page)
     outputs.write_text(out / "report.md", render_markdown(ctx))
-    return [*written, out / "report.html", out / "report.md"]
+    written += [out / "report.html", out / "report.md"]
+    if pdf:
+        if _write_pdf(render_html(ctx, for_print=True, svgs=svgs), ctx, out / "report.pdf",
+                      outputs, note):
+            written.append(out / "report.pdf")
+    return written
+
+
+def _write_pdf(page: str, ctx: Mapping[str, Any], path: Path, outputs: OutputSet,
+               note: Callable[[str], None] | None) -> bool:
+    """report.pdf from report.html into the output set; False (and the note) where it
+    cannot be made, a stale report.pdf removed."""
+    why = pdf_unavailable()
+    if why is None:
+        try:
+            data = html_to_pdf(page, str(ctx.get("project") or ctx.get("title", "")),
+                               str(ctx.get("generated", "")))
+        except RuntimeError as exc:
+            why = str(exc)
+        else:
+            outputs.write_with(path, lambda fh: fh.write(data))
+            return True
+    outputs.remove(path)
+    if note is None:
+        warnings.warn(why, UserWarning, stacklevel=3)
+    else:
+        note(why)
+    return False

@@ -24,7 +24,9 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.figure import Figure
 
+from ..engine.columns import STOPPED
 from ..engine.trajectory import end_counts
+from ..run.passages import property_marks
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -61,10 +63,14 @@ CAPTIONS = {
     "centre paths, the rest positions, the analysis stations, the protected zone and the "
     "measures (barriers with product, height and capacity).",
     "envelopes": "Envelopes along the section of the passing height of the rock centre above "
-    "the ground (m) and of the total kinetic energy (kJ), over the rocks passing each point "
-    "downslope for the first time; drawn only where enough rocks pass (bottom: how many).",
-    "stops": "Where the rocks come to rest along the section (count per bin), with the ground "
-    "below; the title says how the other rocks ended.",
+    "the ground (m), of the total kinetic energy (kJ) and of the translational speed (m/s), "
+    "over the rocks passing each point downslope for the first time; drawn only where enough "
+    "rocks pass (bottom: how many). Each barrier's heights and energies (nominal height, "
+    "capacity and any other figure its product gives) are ticks at its station.",
+    "stops": "Where the rocks ended along the section (count per bin): at rest, or held by a "
+    "measure where it held them (a colour per measure); the rocks that left the section are "
+    "a hatched bar beyond its end, with their count; the title says how every rock ended. "
+    "The ground below.",
     "alternatives": "The optimiser's alternatives: cost of the cheapest design of each family "
     "(admissible ones coloured, the chosen one marked), with the rocks still reaching the "
     "protected zone and the check that binds or fails.",
@@ -257,18 +263,42 @@ def profile_figure(study: Study | StreamedStudy, evaluation: Evaluation | None =
     return fig
 
 
+def _figure_marks(axes: Mapping[str, Axes], evaluation: Evaluation | None) -> None:
+    """Each measure's figures at its station: heights on the height panel, energies on the
+    energy panel (read from its design properties by their units, see
+    :func:`rockfall_design.run.passages.property_marks`)."""
+    if evaluation is None:
+        return
+    from ..plugins.measure import Barrier
+
+    panel = {"passing_height_m": "height", "energy_kj": "energy"}
+    for p in evaluation.placed:
+        if not isinstance(p.footprint, Barrier):
+            continue
+        x = float(p.footprint.x)
+        for m in property_marks(p.measure.design_properties()):
+            ax = axes.get(panel.get(m.quantity, ""))
+            if ax is None:
+                continue
+            ax.plot([x], [m.value], marker="_", ms=16, mew=2.5, color=_MEASURE, zorder=6)
+            ax.annotate(m.label, (x, m.value), textcoords="offset points", xytext=(6, 2),
+                        fontsize=7, color=_MEASURE, zorder=7)
+
+
 def envelopes_figure(
     study: Study | StreamedStudy,
     evaluation: Evaluation | None = None,
     min_rocks: int | None = None,
 ) -> Figure:
-    """Envelopes of passing height (m) and energy (kJ) along x, and how many rocks pass.
+    """Envelopes of passing height (m), energy (kJ) and speed (m/s) along x, and rocks passing.
 
     Parameters
     ----------
     study : Study or StreamedStudy
     evaluation : Evaluation, optional
-        Measures are marked by a vertical line at their station.
+        Measures are marked by a vertical line at their station, and each
+        barrier's heights and energies (nominal height, capacity, and any
+        other the product gives) as a tick at its station on those panels.
     min_rocks : int, optional
         Points passed by fewer rocks are left out of the envelopes (default:
         the project's ``analysis.min_rocks_envelope``, else
@@ -277,6 +307,7 @@ def envelopes_figure(
     Returns
     -------
     matplotlib.figure.Figure
+        The speed panel only where the run recorded speeds along the section.
     """
     if min_rocks is None:
         min_rocks = int(getattr(study.project.analysis, "min_rocks_envelope",
@@ -289,38 +320,42 @@ def envelopes_figure(
     def masked(col: str) -> np.ndarray:
         return np.where(enough, env[col].to_numpy(dtype=float), np.nan)
 
-    fig = RockfallFigure(figsize=(11, 8), layout="constrained")
-    a1, a2, a3 = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [3, 3, 1.4]})
-    pcts = [c for c in env.columns if c.startswith("height_p")]
-    a1.plot(x, masked("height_max_m"), color="k", lw=1.4, label="max")
-    a2.plot(x, masked("energy_max_kj"), color="k", lw=1.4, label="max")
+    panels = [("height", "m", "passing height of the\nrock centre above ground (m)"),
+              ("energy", "kj", "total kinetic energy (kJ)")]
+    if "speed_max_ms" in env:
+        panels.append(("speed", "ms", "translational speed (m/s)"))
+    fig = RockfallFigure(figsize=(11, 3.0 * len(panels) + 2), layout="constrained")
+    axes = fig.subplots(len(panels) + 1, 1, sharex=True,
+                        gridspec_kw={"height_ratios": [3] * len(panels) + [1.4]})
+    *tops, a3 = axes
+    pcts = [c[len("height_p"):-len("_m")] for c in env.columns if c.startswith("height_p")]
     colors = colormaps["viridis"](np.linspace(0.15, 0.85, max(len(pcts), 1)))
-    for c, col in zip(colors, pcts, strict=False):
-        q = col[len("height_p"):-len("_m")].replace("_", ".")
-        a1.plot(x, masked(col), color=c, lw=1.0, label=f"p{q}")
-        a2.plot(x, masked(col.replace("height", "energy")[:-2] + "_kj"), color=c, lw=1.0,
-                label=f"p{q}")
+    for ax, (name, unit, ylabel) in zip(tops, panels, strict=True):
+        ax.plot(x, masked(f"{name}_max_{unit}"), color="k", lw=1.4, label="max")
+        for c, q in zip(colors, pcts, strict=False):
+            ax.plot(x, masked(f"{name}_p{q}_{unit}"), color=c, lw=1.0,
+                    label=f"p{q.replace('_', '.')}")
+        ax.set_ylabel(ylabel)
+        if enough.any():
+            ax.legend(loc="upper right", fontsize=8)
+    _figure_marks({name: ax for ax, (name, _, _) in zip(tops, panels, strict=True)}, evaluation)
     a3.fill_between(x, count, step="mid", color="#95a5a6", alpha=0.6, label="rocks passing")
     a3.axhline(min_rocks, color="#c0392b", lw=0.9, ls=":",
                label=f"minimum for an envelope ({min_rocks})")
-    for ax in (a1, a2, a3):
+    for ax in axes:
         _marks(ax, study, label=False)
         _measure_lines(ax, evaluation)
         ax.grid(alpha=0.3)
-    for ax in (a1, a2):
-        if np.isfinite(masked("height_max_m")).any():
-            ax.legend(loc="upper right", fontsize=8)
     if not enough.any():
-        a1.text(0.5, 0.5, f"no point of the section is passed by {min_rocks} rocks or more",
-                transform=a1.transAxes, ha="center", va="center", fontsize=10)
+        tops[0].text(0.5, 0.5, f"no point of the section is passed by {min_rocks} rocks or "
+                     "more", transform=tops[0].transAxes, ha="center", va="center",
+                     fontsize=10)
     a3.legend(loc="upper right", fontsize=8)
     a3.set_ylim(bottom=0)
-    a1.set_ylabel("passing height of the\nrock centre above ground (m)")
-    a2.set_ylabel("total kinetic energy (kJ)")
     a3.set_ylabel("rocks passing")
     a3.set_xlabel("x (m)")
-    a1.set_title(f"{study.project.name}: envelopes over {study.n:,} rocks (first passage "
-                 f"downslope), drawn where at least {min_rocks} rocks pass")
+    tops[0].set_title(f"{study.project.name}: envelopes over {study.n:,} rocks (first passage "
+                      f"downslope), drawn where at least {min_rocks} rocks pass")
     return fig
 
 
@@ -353,45 +388,86 @@ def no_stop_reason(counts: Mapping[str, int] | Sequence[int] | np.ndarray) -> st
     return f"of {n:,} rocks, " + ", ".join(text[:-1]) + " and " + text[-1]
 
 
-def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = None) -> Figure:
-    """Where the rocks come to rest (a histogram along x) over the ground.
+def _rest_layers(study: Study | StreamedStudy, evaluation: Evaluation | None,
+                 bins: np.ndarray) -> list[tuple[str, np.ndarray, str]]:
+    """Where the rocks ended, a layer per measure: (label, counts per bin, colour).
 
-    When no rock comes to rest the histogram says so and why (every rock left
-    the section, was caught by the measures, or a mix), instead of staying empty.
+    Without an evaluation, one layer: the rocks at rest. With one, the rocks
+    each measure holds where it holds them (a fence's at its station, a
+    ditch's in it; ``Evaluation.caught_by_measure``), a colour per measure,
+    and the rocks at rest that no measure holds in grey.
+    """
+    if evaluation is None:
+        counts = study.stop_counts(len(bins) - 1)
+        return [("rocks at rest", counts, "#7f8c8d")] if counts.sum() else []
+    r = evaluation.study.result
+    by = evaluation.caught_by_measure()
+    layers = []
+    free = (by < 0) & (r.status == STOPPED)
+    counts = np.histogram(r.x_end[free], bins=bins)[0]
+    if counts.sum():
+        layers.append(("at rest, held by no measure", counts, "#7f8c8d"))
+    colours = colormaps["tab10"](np.arange(10))
+    for k, p in enumerate(evaluation.placed):
+        held = by == p.index
+        if held.any():
+            # A caught rock's centre ends at the barrier (clipped into the plot).
+            x = np.clip(r.x_end[held], bins[0], bins[-1])
+            layers.append((f"held by {p.label}", np.histogram(x, bins=bins)[0],
+                           colours[k % 10]))
+    return layers
+
+
+def _leavers(ax: Axes, counts: Mapping[str, int], bins: np.ndarray, n: int) -> None:
+    """Bars beyond the section's ends for the rocks that left it, saying how many."""
+    width = float(bins[1] - bins[0])
+    for key, x, side in (("exit_downslope", bins[-1], "downslope"),
+                         ("exit_upslope", bins[0] - width, "upslope")):
+        k = int(counts.get(key, 0))
+        if not k:
+            continue
+        ax.bar(x, k, width=width, align="edge", color="white", edgecolor="#c0392b",
+               hatch="//", label=f"left the section {side}")
+        ax.annotate(f"{k:,} of {n:,} left\nthe section {side}",
+                    (x + width / 2, k), textcoords="offset points", xytext=(0, 4),
+                    ha="right" if side == "downslope" else "left", va="bottom", fontsize=8,
+                    color="#c0392b")
+
+
+def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = None) -> Figure:
+    """Where the rocks end: at rest, held by each measure (a colour each), or gone.
+
+    Rocks at rest are counted per bin along x; with measures, the rocks a
+    measure holds are drawn where it holds them in its own colour (a fence's
+    catch at its station); rocks that left the section are a hatched bar
+    beyond its end, with their count. The title says how every rock ended,
+    so that a run where every rock leaves (or is caught) is not an empty plot.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
     counts = study.ends()
-    n_stopped = counts["stopped"]
     fig = RockfallFigure(figsize=(11, 6), layout="constrained")
     a1, a2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1]})
     sec = study.section
     bins = np.linspace(sec.x[0], sec.x[-1], 81)
-    if n_stopped:
-        a1.bar(bins[:-1], study.stop_counts(80), width=np.diff(bins), align="edge",
-               color="#7f8c8d", edgecolor="white", label="rocks at rest")
-        others = []
-        if counts["exit_downslope"]:
-            others.append(f"{counts['exit_downslope']:,} left the section downslope")
-        if counts["caught"]:
-            others.append(f"{counts['caught']:,} were caught by the measures")
-        title = f"rest positions of {n_stopped:,} of {study.n:,} rocks"
-        if others:
-            title += "; " + ", ".join(others)
-    else:
-        reason = no_stop_reason(counts)
-        title = f"no rock came to rest on the section: {reason}"
-        a1.text(0.5, 0.5, f"No rock came to rest on the section:\n{reason}.",
+    bottom = np.zeros(len(bins) - 1)
+    for label, k, colour in _rest_layers(study, evaluation, bins):
+        a1.bar(bins[:-1], k, width=np.diff(bins), align="edge", bottom=bottom, color=colour,
+               edgecolor="white", label=label)
+        bottom = bottom + k
+    _leavers(a1, counts, bins, study.n)
+    if not counts["stopped"] and not counts["caught"]:
+        a1.text(0.5, 0.5, f"No rock came to rest on the section:\n{no_stop_reason(counts)}.",
                 transform=a1.transAxes, ha="center", va="center", fontsize=11, zorder=5,
                 bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "#999999"})
-        a1.set_ylim(0, 1)
-        a1.set_yticks([])
-    a1.set_ylabel("rocks at rest (per bin)")
-    a1.set_title(f"{study.project.name}: {title}")
+    a1.set_ylabel("rocks (per bin)")
+    a1.set_title(f"{study.project.name}: where the rocks ended: {_ends_text(counts)}",
+                 fontsize=10)
     _marks(a1, study)
     a1.grid(alpha=0.3)
+    a1.set_ylim(0, max(a1.get_ylim()[1], 1.0) * 1.15)  # room for the leavers' count
     handles, _ = a1.get_legend_handles_labels()
     if handles:
         a1.legend(loc="upper left", fontsize=8)
@@ -401,6 +477,16 @@ def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = N
     a2.set_xlabel("x (m)")
     a2.set_ylabel("elevation (m)")
     return fig
+
+
+def _ends_text(counts: Mapping[str, int]) -> str:
+    """'600 at rest, 380 caught by measures, 20 left downslope' (the non-zero ones)."""
+    parts = [(counts["stopped"], "at rest on the section"),
+             (counts["caught"], "caught by a barrier"),
+             (counts["exit_downslope"], "left downslope"),
+             (counts["exit_upslope"], "left upslope"),
+             (counts["unresolved"], "unresolved")]
+    return ", ".join(f"{k:,} {what}" for k, what in parts if k) or "no rock"
 
 
 def study_figures(

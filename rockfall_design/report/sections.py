@@ -12,8 +12,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from ..run.passages import QUANTITIES
 from ..version import __version__
-from .tables import chosen_name, measure_text, round_value
+from .design_values import state_of
+from .tables import chosen_name, measure_text, passages_frame, round_value
 
 if TYPE_CHECKING:  # pragma: no cover
     pass
@@ -297,13 +299,39 @@ def _checks_table(summary: Mapping[str, Any]) -> Table | None:
             row = first + [str(c["name"]), _num(c.get("value"), unit)]
             if bounds:
                 row.append(_num(c.get("bound"), unit))
-            row += [_num(c.get("target"), unit), unit, "ok" if c.get("ok") else "FAILS",
-                    str(c.get("detail", ""))]
+            row += [_num(c.get("target"), unit), unit, state_of(c), str(c.get("detail", ""))]
             rows.append(row)
     return Table("Measures and their checks", cols, rows,
                  note="met: rocks that reached the measure; over: passed over it; through: "
                  "broke through or passed a gap. Value against target as the safety concept "
-                 "defines it.")
+                 "defines it; verdict in the verdict's words (untested: no rock met the "
+                 "measure, so its checks say nothing).")
+
+
+def passages_table(summary: Mapping[str, Any]) -> Table | None:
+    """Results at every station and barrier: a row per place and quantity (barriers.csv)."""
+    frame = passages_frame(summary)
+    if frame.empty:
+        return None
+    cols = ["place", "quantity", "unit", "rocks", "mean", "p50", "p95", "p99", "max",
+            "measure's figures"]
+    what = {key: text for key, text, _ in QUANTITIES}
+    rows = []
+    last = None
+    for r in frame.itertuples(index=False):
+        where = f"{r.label}" if r.label != last else ""
+        last = r.label
+        rows.append([where, what.get(str(r.quantity), str(r.quantity)), str(r.unit),
+                     _num(r.rocks, "count"),
+                     *(_num(getattr(r, k), str(r.unit)) for k in
+                       ("mean", "p50", "p95", "p99", "max")), str(r.figures or "")])
+    return Table("Results at every station and barrier", cols, rows,
+                 note="Per analysis station the rocks passing it downslope for the first time, "
+                 "per barrier the rocks that met it: passing height of the centre vertical and "
+                 "normal to the slope, translational and angular speed, translational, "
+                 "rotational and total kinetic energy; the barrier's figures (its heights and "
+                 "capacities) beside the quantity they bound. As barriers.csv of --out; the "
+                 "figures passing_station_N and passing_measure_N show the distributions.")
 
 
 def _alternatives_table(summary: Mapping[str, Any]) -> Table:
@@ -373,6 +401,16 @@ def _resolved_inputs(result: Any) -> tuple[dict[str, Any], dict[str, str]]:
         if result.command == "check":
             d["measures"] = run.get("measures") or []
         d["safety"] = run.get("safety") or d.get("safety")
+    if result.command == "optimise" and d.get("protect") and result.project.design:
+        # optimise judges the residual against design.residual, not the file's
+        # protect.allowed_fraction: the table says what the checks used.
+        design = result.project.design
+        allowed = design.residual_fraction
+        if allowed is None:
+            allowed = (design.residual_count or 0) / max(int(result.n_rocks), 1)
+        d["protect"] = {**d["protect"], "allowed_fraction": (
+            f"{allowed:.6g} ({100 * allowed:.2f} %): design.residual, which every check of "
+            "optimise uses (the file's protect.allowed_fraction does not apply)")}
     registry = getattr(result, "registry", None) or getattr(result, "_registry", None)
     concepts = {} if registry is None else {
         name: str(getattr(cls, "summary", "") or "")

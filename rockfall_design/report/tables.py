@@ -16,6 +16,8 @@ from typing import Any
 
 import pandas as pd
 
+from .rounding import round_value
+
 __all__ = [
     "chosen_name",
     "round_value",
@@ -24,11 +26,8 @@ __all__ = [
     "alternatives_frame",
     "measures_frame",
     "checks_frame",
+    "passages_frame",
 ]
-
-#: Decimals kept for a value of a unit (unknown units keep 3 significant decimals).
-_DECIMALS = {"-": 2, "m": 2, "kJ": 0, "kj": 0, "m/s": 1, "%": 2}
-
 
 def chosen_name(summary: Mapping[str, Any]) -> str | None:
     """Family name of an optimise summary's chosen design (None without one).
@@ -40,31 +39,6 @@ def chosen_name(summary: Mapping[str, Any]) -> str | None:
     if best is None or isinstance(best, str):
         return best
     return best.get("name")
-
-
-def round_value(value: Any, unit: str = "-") -> Any:
-    """A number rounded for its unit; None, NaN and non-numbers as they are.
-
-    Parameters
-    ----------
-    value : float or None
-    unit : str
-        ``"-"`` (a factor: 0.01), ``"m"`` (0.01 m), ``"kJ"`` (1 kJ),
-        ``"m/s"`` (0.1), ``"cost"`` (whole currency units), ``"count"`` (whole
-        numbers); other units 0.001.
-
-    Returns
-    -------
-    float, int or the value unchanged
-    """
-    if value is None or isinstance(value, bool) or not isinstance(value, int | float):
-        return value
-    if not math.isfinite(value):
-        return value
-    if unit in ("cost", "count"):
-        return int(round(value))
-    digits = _DECIMALS.get(unit, 3)
-    return int(round(value)) if digits == 0 else round(float(value), digits)
 
 
 def check_columns(checks: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
@@ -225,3 +199,62 @@ def checks_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
             })
     cols = ["measure", "label", "check", "value", "bound", "target", "unit", "ok", "detail"]
     return pd.DataFrame(rows, columns=cols)
+
+
+#: The columns of barriers.csv (:func:`passages_frame`).
+PASSAGE_COLUMNS = ["place", "number", "label", "x_m", "quantity", "unit", "rocks", "mean",
+                   "p50", "p95", "p99", "max", "figures"]
+
+
+def _passage_rows(place: str, number: int, label: str, x: float,
+                  block: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """The rows of one place: one per quantity of ``run.passages.QUANTITIES`` it has."""
+    from ..run.passages import QUANTITIES
+
+    marks = block.get("marks") or []
+    rows = []
+    for key, _what, unit in QUANTITIES:
+        stats = block.get(key)
+        if not isinstance(stats, Mapping):
+            continue
+        figures = "; ".join(f"{m['label']}" for m in marks if m.get("quantity") == key)
+        rows.append({"place": place, "number": number, "label": label, "x_m": x,
+                     "quantity": key, "unit": unit, "rocks": block.get("rocks"),
+                     **{k: round_value(stats.get(k), unit) for k in
+                        ("mean", "p50", "p95", "p99", "max")},
+                     "figures": figures})
+    return rows
+
+
+def passages_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
+    """barriers.csv: one row per place (analysis station or barrier) and quantity.
+
+    Parameters
+    ----------
+    summary : dict
+        What ``simulate --json`` or ``check --json`` prints: its ``stations``
+        and, for a check, each barrier's ``passing`` block.
+
+    Returns
+    -------
+    DataFrame
+        ``place`` (``station`` or ``measure``), ``number`` (from 1, in the
+        order of ``analysis.stations`` or ``measures:``), ``label``, ``x_m``,
+        ``quantity`` (a key of ``run.passages.QUANTITIES``: passing height
+        vertical and normal to the slope, translational and angular speed,
+        translational, rotational and total energy), ``unit``, ``rocks``
+        (that passed the station or met the barrier), ``mean``, ``p50``,
+        ``p95``, ``p99``, ``max`` (rounded for the unit), and ``figures``: the
+        measure's figures drawn on that quantity (its heights, its
+        capacity), empty where there are none. A ground edit (ditch, berm)
+        has no rows: no rock passes it at a station.
+    """
+    rows: list[dict[str, Any]] = []
+    for j, st in enumerate(summary.get("stations") or []):
+        block = {**st, "rocks": st.get("crossings")}
+        rows += _passage_rows("station", j + 1, f"station at x = {st['x']:g} m", st["x"], block)
+    for i, m in enumerate(summary.get("measures") or []):
+        if m.get("passing"):
+            rows += _passage_rows("measure", i + 1, str(m.get("label")), m.get("x"),
+                                  m["passing"])
+    return pd.DataFrame(rows, columns=PASSAGE_COLUMNS)

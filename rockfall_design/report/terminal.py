@@ -16,6 +16,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
+from .design_values import design_columns, design_tables, how_sure
 from .outputs import OutputSet
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -207,64 +208,88 @@ def _bill_table(bill: dict[str, Any]) -> Table:
     return tab
 
 
-def check_renderable(summary: dict[str, Any]) -> Group:
-    """The rich renderable of a ``check`` summary (verdict first, measures, checks)."""
-    verdict = _verdict_parts(summary.get("verdict"))
-    parts: list[Any] = [*verdict, Text("")] if verdict else []
-    parts += list(simulation_renderable(summary).renderables)
-    tab = Table(
-        title=f"Measures (safety concept: {summary['safety_concept']})",
-        title_justify="left",
-        show_edge=False,
-    )
-    for col, just in (
-        ("measure", "left"),
-        ("met", "right"),
-        ("caught", "right"),
-        ("over", "right"),
-        ("past", "right"),
-        ("factor", "left"),
-        ("value", "right"),
-        ("target", "right"),
-        ("", "left"),
-    ):
-        tab.add_column(col, justify=just)
-    for m in summary["measures"]:
-        checks = m["checks"] or [None]
-        through = m["broken_through"] + m["passed_through_gap"]
-        for k, c in enumerate(checks):
-            head = (
-                [
-                    Text(f"{m['type']} x={m['x']:g}"),
-                    f"{m['met']:,}",
-                    f"{m['caught']:,}",
-                    f"{m['passed_over']:,}",
-                    f"{through:,}",
-                ]
-                if k == 0
-                else ["", "", "", "", ""]
-            )
-            if c is None:
-                tab.add_row(*head, "(none)", "", "", "")
-                continue
-            verdict = Text("ok", style="green") if c["ok"] else Text("FAILS", style="bold red")
-            tab.add_row(
-                *head,
-                c["name"].removesuffix("_factor"),
-                _value(c["value"], c["unit"]),
-                _value(c["target"], c["unit"]),
-                verdict,
-            )
-    parts += [Text(""), tab]
-    for m in summary["measures"]:
+def _state_text(state: str) -> Text:
+    """A check's or measure's state in its verdict's style ("ok"/"FAILS" from before states)."""
+    style = _VERDICT_STYLE.get(state, "bold red" if state == "FAILS" else "green")
+    return Text(state, style=style.replace("bold ", "") if state != "fails" else style)
+
+
+def _design_value_tables(summary: dict[str, Any]) -> list[Any]:
+    """The design values of every measure of a check summary, a rich table each.
+
+    See :func:`rockfall_design.report.design_values.design_tables`: the
+    concept's symbols against the product's figures, each check's
+    requirement and state.
+    """
+    conf = float(summary.get("confidence") or 0.95)
+    parts: list[Any] = []
+    for t in design_tables(summary):
+        tab = Table(title=Text(t.title), title_justify="left", show_edge=False)
+        for col in design_columns(conf):
+            tab.add_column(col, justify="right" if col in ("value", f"{100 * conf:g} % bound")
+                           or col.endswith("bound") else "left")
+        for row, state in zip(t.rows, t.states, strict=True):
+            # Names from the project and the catalogue are text, never markup.
+            cells: list[Any] = [Text(str(c)) for c in row[:-1]]
+            cells.append(_state_text(state) if state else "")
+            tab.add_row(*cells, style="bold" if state else "")
+        parts += [tab, Text("")]
+    return parts
+
+
+def _opening(summary: dict[str, Any]) -> list[Any]:
+    """The verdict and, when the design fails, what fails: the first lines of a report.
+
+    The verdict's other details (what is open with confidence, how many rocks
+    would settle it) are the statistics': they follow under "How sure".
+    """
+    verdict = summary.get("verdict")
+    if not verdict:
+        return []
+    parts: list[Any] = [Text(verdict["headline"],
+                             style=_VERDICT_STYLE.get(verdict["state"], "bold"))]
+    if verdict["state"] == "fails":
+        parts += [Text(f"  - {line}", style="red") for line in verdict.get("details") or []]
+    return parts
+
+
+def _how_sure_renderable(summary: dict[str, Any], extra: list[str] | None = None) -> Group:
+    """The section "How sure": the statistics behind the verdict, in plain sentences."""
+    parts: list[Any] = [Text("How sure", style="bold underline")]
+    for line in [*how_sure(summary), *(extra or [])]:
+        parts.append(Text(line, style="yellow" if line.startswith("- ") else ""))
+    return Group(*parts)
+
+
+def _details(summary: dict[str, Any]) -> list[Any]:
+    """How each check's value was computed, one dim line each."""
+    parts: list[Any] = []
+    for m in summary.get("measures") or []:
         for c in m["checks"]:
             if c["detail"]:
                 parts.append(Text(f"  {m['label']}: {c['name']}: {c['detail']}", style="dim"))
-    if not verdict:  # a summary from before verdicts: the point values' word
+    return [Text("How each value was computed", style="bold"), *parts] if parts else []
+
+
+def check_renderable(summary: dict[str, Any]) -> Group:
+    """The rich renderable of a ``check`` summary.
+
+    The verdict first, then the design values at each measure against the
+    product's figures, then the run (how the paths ended, the stations, the
+    protected zone), then "How sure" and how each value was computed.
+    """
+    opening = _opening(summary)
+    parts: list[Any] = [*opening, Text("")] if opening else []
+    parts += [Text(f"Design values (safety concept: {summary['safety_concept']})",
+                   style="bold underline"), Text("")]
+    parts += _design_value_tables(summary)
+    parts += list(simulation_renderable(summary).renderables)
+    if not summary.get("verdict"):  # a summary from before verdicts: the point values' word
         parts += [Text(""), Text("Design holds on the point values." if summary["ok"]
                                  else "Design fails:", style="bold")]
         for line in summary.get("failures", []):
             parts.append(Text(f"  - {line}", style="red"))
+    parts += [Text(""), _how_sure_renderable(summary), Text(""), *_details(summary)]
     return Group(*parts)
 
 
@@ -301,13 +326,8 @@ def _factors(alt: Any) -> str:
     return " ".join(out)
 
 
-def print_optimise(result: Any, project: Any, console: Console | None = None,
-                   summary: dict[str, Any] | None = None) -> None:
-    """The optimiser's comparison of alternatives, the chosen one marked.
-
-    With the command's ``summary`` (``OptimiseResult.summary``) the report
-    opens with its verdict and shows the chosen design's bill.
-    """
+def _alternatives_renderable(result: Any) -> tuple[Table, list[Any]]:
+    """The optimiser's comparison of the families (the chosen one marked), and its order."""
     cur = escape(result.currency or "")
     tab = Table(show_edge=False, title="Alternatives (cheapest design of each family)",
                 title_justify="left", caption="factors: h height, e energy, r reach "
@@ -328,62 +348,104 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
                     Text("\n".join(_measure_short(m) for m in a.measures) or "-"),
                     _factors(a) or "-",
                     "-" if a.residual is None else f"{a.residual}", fresh, style=style)
-    verdict = _verdict_parts((summary or {}).get("verdict"))
-    parts: list[Any] = [*verdict, Text("")] if verdict else []
-    parts += [
-        Text.assemble((project.name, "bold"),
-                      f"   search: {result.search_rocks or result.rocks:,} rocks, seed "
-                      f"{result.seed}; chosen design decided with {result.rocks:,} rocks, "
-                      f"checked on {result.fresh_rocks:,} fresh rocks (seed "
-                      f"{result.fresh_seed}); {100 * result.confidence:g} % confidence; "
-                      f"{result.evaluations:,} designs screened, "
-                      f"{result.exact_evaluations} evaluated exactly, {result.edit_runs} ground "
-                      f"edits simulated, {result.wall_s:.1f} s"),
-        Text(""), tab, Text(""),
-    ]
+    return tab, order
+
+
+def _search_sentence(result: Any) -> str:
+    """How the design was found and decided, in one sentence."""
+    return (f"The optimiser searched with {result.search_rocks or result.rocks:,} rocks (seed "
+            f"{result.seed}), screening {result.evaluations:,} designs, "
+            f"{result.exact_evaluations} of them evaluated exactly and {result.edit_runs} "
+            f"ground edits simulated; the chosen design was decided with {result.rocks:,} "
+            f"rocks and checked again on {result.fresh_rocks:,} fresh rocks (seed "
+            f"{result.fresh_seed}), every bound at {100 * result.confidence:g} % confidence "
+            f"({result.wall_s:.1f} s).")
+
+
+def _marginal_lines(result: Any) -> list[str]:
+    """The cheaper designs that are marginal or not decided, one sentence each."""
+    cur = escape(result.currency or "")
+    marginal = getattr(result, "marginal", None) or []
+    out = []
+    for m in marginal[:_MARGINAL_SHOWN]:
+        head = ("Short of the checker's margin, cheaper" if m.get("short_of_margin") else
+                "Marginal, cheaper" if m.get("decided", True) else "Not decided, cheaper")
+        out.append(f"- {head}: {m['name']} {m['cost']:,.0f} {cur}: "
+                   f"{'; '.join(m['labels'])}: {_marginal_values(m)}; "
+                   + ("it holds with these bounds, but a checker's check would "
+                      "confirm it less often than design.checker_power asks, with "
+                      "confidence" if m.get("short_of_margin") else
+                      "it holds with these bounds, but whether a checker's check "
+                      "would confirm it often enough (design.checker_power) is open; "
+                      "more rocks (--max-rocks) may decide it"
+                      if m.get("margin_undecided") else
+                      f"about {m['rocks_to_decide']:,} rocks would decide it "
+                      "(--max-rocks)" if m["rocks_to_decide"] else
+                      "its point value sits on the target" if m["values"] else
+                      "more rocks (--max-rocks) may decide it"))
+    if len(marginal) > _MARGINAL_SHOWN:
+        out.append(f"- ... and {len(marginal) - _MARGINAL_SHOWN} more cheaper designs "
+                   "marginal or not decided (listed under 'marginal' in --json and "
+                   "summary.json)")
+    return out
+
+
+def _bare_slope_line(result: Any) -> list[Any]:
     bare = getattr(result, "bare_slope", None)
-    if bare and bare["holds"]:
-        parts.append(Text(
-            f"The bare slope already meets the residual target: {bare['reaching']:,} of "
-            f"{bare['rocks']:,} search rocks reach x = {bare['x']:g} m, at most "
-            f"{100 * bare['upper']:.3f} % with {100 * result.confidence:g} % confidence "
-            f"(allowed {100 * bare['allowed']:.3f} %). No measure is needed for the "
-            "residual; a family's cheapest design may be one that meets few or no rocks.",
-            style="bold yellow"))
+    if not (bare and bare["holds"]):
+        return []
+    return [Text(
+        f"The bare slope already meets the residual target: {bare['reaching']:,} of "
+        f"{bare['rocks']:,} search rocks reach x = {bare['x']:g} m, at most "
+        f"{100 * bare['upper']:.3f} % with {100 * result.confidence:g} % confidence "
+        f"(allowed {100 * bare['allowed']:.3f} %). No measure is needed for the "
+        "residual; a family's cheapest design may be one that meets few or no rocks.",
+        style="bold yellow")]
+
+
+def print_optimise(result: Any, project: Any, console: Console | None = None,
+                   summary: dict[str, Any] | None = None,
+                   design: dict[str, Any] | None = None) -> None:
+    """The optimiser's report: the engineer's words first, the proof after.
+
+    The verdict; the chosen design, its design values at each measure
+    against the product's figures (from ``design``, the chosen design's
+    check summary, ``OptimiseResult.design.summary``) and its bill (from
+    ``summary``, ``OptimiseResult.summary``); the alternatives; then "How
+    sure": how the design was searched and decided, its statistics, the
+    optimiser's proof and the cheaper designs left marginal or undecided.
+    """
+    cur = escape(result.currency or "")
+    opening = _opening(summary or {})
+    parts: list[Any] = [*opening, Text("")] if opening else []
     if result.best is not None:
         b = result.best
         parts.append(Text(f"Chosen: {b.name}, {b.cost:,.0f} {cur}: "
                           + "; ".join(m.label() for m in b.measures), style="bold green"))
-        if b.proof:
-            parts.append(Text(f"Proven: {b.proof}"))
         if b.holds_on_fresh_rocks is False:
             parts.append(Text("Warning: the chosen design does not hold on the fresh rocks: "
                               + "; ".join(b.fresh_failures), style="bold yellow"))
+        parts.append(Text(""))
+        if design is not None:
+            parts += [Text(f"Design values (safety concept: {design['safety_concept']})",
+                           style="bold underline"), Text(""), *_design_value_tables(design)]
         if (summary or {}).get("bill"):
-            parts += [Text(""), _bill_table(summary["bill"]), Text("")]
+            parts += [_bill_table(summary["bill"]), Text("")]
     else:
-        parts.append(Text(f"No admissible design: {result.reason}", style="bold red"))
-    marginal = getattr(result, "marginal", None) or []
-    for m in marginal[:_MARGINAL_SHOWN]:
-        head = ("Short of the checker's margin, cheaper" if m.get("short_of_margin") else
-                "Marginal, cheaper" if m.get("decided", True) else "Not decided, cheaper")
-        parts.append(Text(f"{head}: {m['name']} {m['cost']:,.0f} {cur}: "
-                          f"{'; '.join(m['labels'])}: {_marginal_values(m)}; "
-                          + ("it holds with these bounds, but a checker's check would "
-                             "confirm it less often than design.checker_power asks, with "
-                             "confidence" if m.get("short_of_margin") else
-                             "it holds with these bounds, but whether a checker's check "
-                             "would confirm it often enough (design.checker_power) is open; "
-                             "more rocks (--max-rocks) may decide it"
-                             if m.get("margin_undecided") else
-                             f"about {m['rocks_to_decide']:,} rocks would decide it "
-                             "(--max-rocks)" if m["rocks_to_decide"] else
-                             "its point value sits on the target" if m["values"] else
-                             "more rocks (--max-rocks) may decide it"), style="yellow"))
-    if len(marginal) > _MARGINAL_SHOWN:
-        parts.append(Text(f"... and {len(marginal) - _MARGINAL_SHOWN} more cheaper designs "
-                          "marginal or not decided (listed under 'marginal' in --json and "
-                          "summary.json)", style="yellow"))
+        parts += [Text(f"No admissible design: {result.reason}", style="bold red"), Text("")]
+    parts += _bare_slope_line(result)
+    tab, order = _alternatives_renderable(result)
+    parts += [Text.assemble((project.name, "bold")), tab, Text("")]
+    extra = [_search_sentence(result)]
+    if result.best is not None and result.best.proof:
+        extra.append(f"The optimiser's record of the decision: {result.best.proof}.")
+    extra += _marginal_lines(result)
+    if design is not None:
+        parts.append(_how_sure_renderable(design, extra))
+    else:
+        parts += [Text("How sure", style="bold underline"),
+                  *(Text(line, style="yellow" if line.startswith("- ") else "")
+                    for line in extra)]
     for a in order:
         if (not a.holds or a.dominated) and a.reason:
             parts.append(Text(f"  {a.name}: {a.reason}", style="dim"))

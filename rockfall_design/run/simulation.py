@@ -26,6 +26,7 @@ from ..engine import EnsembleResult, Releases, Section, run_ensemble
 from ..engine.columns import C_H, C_T, C_VX, C_VY, C_W, STATUS_NAMES, STOPPED
 from ..engine.trajectory import centre_points, end_counts
 from .histograms import LogHistogram
+from .passages import slope_deg_at
 from .reach import protected_zone_counts, reaches_protected_zone
 from .releases import (
     ReleaseStream,
@@ -163,6 +164,9 @@ class Study:
         """Per rock and user station (shape (N, U)): passing height and energies.
 
         Energies in J; NaN where a rock did not pass the station downslope.
+        ``passing_height_normal_m`` is the height normal to the slope and
+        ``angular_speed_rads`` the magnitude of the spin (see
+        :mod:`rockfall_design.run.passages`).
         """
         if "cross" not in self._cache:
             r = self.result
@@ -171,8 +175,14 @@ class Study:
             speed = np.hypot(c[..., C_VX], c[..., C_VY])
             e_tr = 0.5 * m * speed**2
             e_rot = 0.2 * m * r.radius[:, None] ** 2 * c[..., C_W] ** 2
+            # Normal to the slope: h cos(beta) of the segment at each station
+            # (run.passages, where the convention is written down).
+            cos = np.cos(np.radians([slope_deg_at(self.section, float(xs))
+                                     for xs in r.stations]))
             self._cache["cross"] = {
                 "passing_height_m": c[..., C_H],
+                "passing_height_normal_m": c[..., C_H] * cos[None, :],
+                "angular_speed_rads": np.abs(c[..., C_W]),
                 "vx_ms": c[..., C_VX],
                 "vy_ms": c[..., C_VY],
                 "velocity_ms": speed,
@@ -214,8 +224,9 @@ class Study:
 
         Columns: ``x_m``, ``ground_m``, ``crossings``, then ``height_max_m`` and
         ``height_pXX_m`` for each configured percentile, and the same for
-        ``energy_*_kj``. Statistics are over the rocks that pass each station
-        downslope; NaN where none does.
+        ``energy_*_kj`` and, where the run recorded speeds, ``speed_*_ms`` (m/s).
+        Statistics are over the rocks that pass each station downslope; NaN
+        where none does.
         """
         import pandas as pd
 
@@ -224,6 +235,9 @@ class Study:
         r = self.result
         h = r.grid_height.astype(float)
         e = r.grid_energy.astype(float) / 1e3
+        quantities = [("height", h, "m"), ("energy", e, "kj")]
+        if r.grid_speed.shape == h.shape:  # recorded (record_speed): the speed envelope
+            quantities.append(("speed", r.grid_speed.astype(float), "ms"))
         count = np.isfinite(h).sum(axis=0)
         out: dict[str, np.ndarray] = {
             "x_m": r.grid,
@@ -232,7 +246,7 @@ class Study:
         }
         pcts = list(self.project.analysis.percentiles)
         has = count > 0
-        for name, arr, unit in (("height", h, "m"), ("energy", e, "kj")):
+        for name, arr, unit in quantities:
             mx = np.full(r.grid.size, np.nan)
             mx[has] = np.nanmax(arr[:, has], axis=0)
             out[f"{name}_max_{unit}"] = mx
@@ -271,6 +285,7 @@ def run_study(
     section: Section | None = None,
     barriers: np.ndarray | None = None,
     after: Study | None = None,
+    record_speed: bool = False,
 ) -> Study:
     """Run the project's rockfall study.
 
@@ -297,6 +312,10 @@ def run_study(
         rocks at once, bit for bit (each rock draws from its own stream, and
         the releases are drawn in rock order). The optimiser's looks at a
         design with more rocks go on from the last look this way.
+    record_speed : bool
+        Keep the speed at every envelope point too, for the speed envelope
+        of the figures (4 bytes per rock and point; the optimiser's runs
+        leave it out).
     """
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
@@ -325,6 +344,7 @@ def run_study(
         n_trajectories=n_trajectories,
         progress=progress,
         first_index=first,
+        record_speed=record_speed and after is None,
     )
     runtime = time.perf_counter() - t0
     if after is not None:
@@ -368,18 +388,19 @@ def study_memory(project: Project, rocks: int) -> int:
     """
     s = int(project.analysis.envelope_points) + len(project.analysis.stations)
     u = len(project.analysis.stations)
-    per_rock = 32 * s + 40 * u + 200
+    # height, energy and speed: float32 each, float64 copies while percentiles are taken
+    per_rock = 44 * s + 40 * u + 200
     if rocks <= EXACT_ROCKS:
         return rocks * per_rock
     probe = LogHistogram(1, STREAM_REL_ERROR)
     n_log = probe.n_buckets
     # The histograms, and while adding to one of them its temporaries and a
     # fresh count array of the same size (np.bincount).
-    histograms = 8 * n_log * (2 * s + len(STATION_QUANTITIES) * u) + 8 * _STOP_BUCKETS
+    histograms = 8 * n_log * (3 * s + len(STATION_QUANTITIES) * u) + 8 * _STOP_BUCKETS
     adding = probe.ADD_TEMPORARY_BYTES + 8 * n_log * s
     # The engine computes the next chunk while this one is being added: its
     # float32 envelope values and crossings are held too.
-    ahead = chunk_rocks(project) * (8 * s + 40 * u + 200)
+    ahead = chunk_rocks(project) * (12 * s + 40 * u + 200)
     return chunk_rocks(project) * per_rock + ahead + histograms + adding + 16 * REST_SAMPLE
 
 
@@ -419,7 +440,7 @@ def simulate(
     s = int(project.rocks.seed if seed is None else seed)
     if chunk is None and n <= EXACT_ROCKS:
         study = run_study(project, rocks=n, seed=s, n_trajectories=n_trajectories,
-                          progress=progress)
+                          progress=progress, record_speed=True)
         if on_chunk is not None:
             on_chunk(study)
         return study
@@ -438,7 +459,7 @@ def simulate(
         return run_ensemble(
             section, releases, key=key, stations=stations, grid=grid, settings=settings,
             n_trajectories=n_trajectories if first == 0 else 0, progress=chunk_progress,
-            first_index=first,
+            first_index=first, record_speed=True,
         )
 
     # The engine runs the next chunk (on its own threads, without the GIL)

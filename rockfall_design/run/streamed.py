@@ -63,6 +63,7 @@ class StreamedStudy:
     _station: dict[str, LogHistogram] = field(default_factory=dict)
     _env_h: LogHistogram | None = None
     _env_e: LogHistogram | None = None
+    _env_v: LogHistogram | None = None
     _stops: LinearHistogram | None = None
 
     def __post_init__(self) -> None:
@@ -70,6 +71,7 @@ class StreamedStudy:
         self._station = {k: LogHistogram(u, STREAM_REL_ERROR) for k in STATION_QUANTITIES}
         self._env_h = LogHistogram(s, STREAM_REL_ERROR)
         self._env_e = LogHistogram(s, STREAM_REL_ERROR)
+        self._env_v = LogHistogram(s, STREAM_REL_ERROR)
         self._stops = LinearHistogram(self.section.x[0], self.section.x[-1], _STOP_BUCKETS)
 
     @property
@@ -89,6 +91,8 @@ class StreamedStudy:
             self._station[key].add(a[arr], scale)
         self._env_h.add(r.grid_height)
         self._env_e.add(r.grid_energy, 1e3)
+        if r.grid_speed.shape == r.grid_height.shape:
+            self._env_v.add(r.grid_speed)
         stopped = r.status == STOPPED
         self._stops.add(r.x_end[stopped])
         room = REST_SAMPLE - sum(x.size for x in self._rest_x)
@@ -140,7 +144,10 @@ class StreamedStudy:
             "ground_m": self.section.ground_height(self.grid),
             "crossings": self._env_h.n.copy(),
         }
-        for name, hist, unit in (("height", self._env_h, "m"), ("energy", self._env_e, "kj")):
+        hists = [("height", self._env_h, "m"), ("energy", self._env_e, "kj")]
+        if self._env_v.n.any():
+            hists.append(("speed", self._env_v, "ms"))
+        for name, hist, unit in hists:
             out[f"{name}_max_{unit}"] = hist.maximum()
             for q in self.project.analysis.percentiles:
                 out[f"{name}_p{percentile_label(q)}_{unit}"] = hist.percentile(q)

@@ -232,17 +232,57 @@ def run_scenario(task: ScenarioTask) -> dict[str, Any]:
     }
     if "protect" in summary:
         out["protect"] = summary["protect"]
+        if project.measures:
+            out["protect_with_measures"] = _residual_with_measures(task)
     if task.barriers:
         out["measures"] = [
             {"index": i, "label": label, "x": x, "crossings": by_x[x]["crossings"],
              **{q: by_x[x][q] for q in QUANTITIES}}
             for i, label, x in task.barriers
         ]
-    out["bounds"] = _bounds(study, summary, task, _confidence(project))
+    out["bounds"] = _bounds(study, summary, task, _confidence(project),
+                            out.get("protect_with_measures"))
     if task.envelope:
         out["envelope"] = _envelope(study, envelope_percentile(project))
     out["runtime_s"] = runtime
     return out
+
+
+def _residual_with_measures(task: ScenarioTask) -> dict[str, Any]:
+    """The rocks reaching the protected zone with the project's measures in place.
+
+    The scenario's rocks (its seed and count) run as ``check`` runs them:
+    with the barriers in place and the ground edited, judged by the judge
+    (:mod:`rockfall_design.judge.outcomes`). What the study calls the
+    residual, as ``check`` does; the bare slope's stays in ``protect``.
+    The plugins are loaded in the worker (the task carries data alone); the
+    study checked the project with the command's plugins already.
+
+    Returns
+    -------
+    dict
+        ``x`` (m), ``reaching``, ``fraction``, ``unresolved`` as ``check``'s
+        ``protect``, and ``measures``: the labels of the measures in place.
+    """
+    from ..judge.evaluation import evaluate
+
+    ev = evaluate(task.project, _registry(), rocks=task.rocks, seed=task.seed)
+    p = ev.protect or {}
+    return {"x": p.get("x"), "reaching": int(p.get("reaching", 0)),
+            "fraction": float(p.get("fraction", 0.0)), "unresolved": int(p.get("unresolved", 0)),
+            "measures": [pl.label for pl in ev.placed]}
+
+
+_REGISTRY: list[Any] = []
+
+
+def _registry() -> Any:
+    """The installed plugins, loaded once per process (a worker's first scenario)."""
+    if not _REGISTRY:
+        from ..plugins import load_registry
+
+        _REGISTRY.append(load_registry())
+    return _REGISTRY[0]
 
 
 def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> dict[str, Any]:
@@ -294,7 +334,8 @@ def _confidence(project: Project) -> float:
 
 
 def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
-            confidence: float) -> dict[str, Any]:
+            confidence: float, with_measures: dict[str, Any] | None = None
+            ) -> dict[str, Any]:
     """Confidence bounds of the scenario's design values, by name.
 
     Each p95 and p99 of passing height and energy at the stations and
@@ -345,14 +386,15 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
     protect = summary.get("protect")
     if protect is not None:
         from ..judge.bounds import fraction_bounds, fraction_lower_bound, fraction_upper_bound
-        from ..project.messages import fmt
+        from .sensitivity import residual_names
 
-        name = f"x={fmt(protect['x'])} residual"
-        x, n = int(protect["reaching"]), int(summary["rocks"])
-        out["upper"][name] = fraction_upper_bound(x, n, confidence)
-        out["lower"][name] = fraction_lower_bound(x, n, confidence)
-        low, high = fraction_bounds(x, n, sides)
-        ladder["lower"][name], ladder["upper"][name] = low.tolist(), high.tolist()
+        n = int(summary["rocks"])
+        for name, block in residual_names(protect, with_measures):
+            x = int(block["reaching"])
+            out["upper"][name] = fraction_upper_bound(x, n, confidence)
+            out["lower"][name] = fraction_lower_bound(x, n, confidence)
+            low, high = fraction_bounds(x, n, sides)
+            ladder["lower"][name], ladder["upper"][name] = low.tolist(), high.tolist()
     out["ladder"] = ladder
     return out
 

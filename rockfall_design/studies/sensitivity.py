@@ -7,7 +7,9 @@ Targets, per scenario (from its run, see :func:`targets`):
   ``x=100 energy_kj p99``, ...;
 - at each barrier of the project (fence, wall, boulder row: its station on
   the bare slope) the same four, named ``measures[0] x=120 energy_kj p95``;
-- at the protected zone, the fraction of rocks reaching it, ``x=150 residual``.
+- at the protected zone, the fraction of rocks reaching it, ``x=150 residual``: with the
+  project's measures in place where it has any (as ``check`` counts it), and then the
+  bare slope's beside it, ``x=150 residual, bare slope``.
 
 The effect of an input on a target is a main-effect range: the target's
 mean over the scenarios at each level of the input (averaged over the other
@@ -80,6 +82,21 @@ def place_names(stations: Sequence[Mapping[str, Any]], barriers: Sequence[tuple[
     return out
 
 
+def residual_names(protect: Mapping[str, Any], with_measures: Mapping[str, Any] | None
+                   ) -> list[tuple[str, Mapping[str, Any]]]:
+    """The residual targets of a scenario: (name, its ``protect``-like block) each.
+
+    ``x=200 residual`` is the residual of the project as it stands: with its
+    measures in place where it has any (``protect_with_measures``, as
+    ``check`` counts it), else the bare slope's; with measures the bare
+    slope's is beside it as ``x=200 residual, bare slope``, labelled so.
+    """
+    name = f"x={fmt(protect['x'])} residual"
+    if with_measures is None:
+        return [(name, protect)]
+    return [(name, with_measures), (f"{name}, bare slope", protect)]
+
+
 def targets(results: Sequence[Mapping[str, Any]]) -> dict[str, tuple[str, np.ndarray]]:
     """Target name -> (unit, value per scenario; NaN where a scenario has none).
 
@@ -103,9 +120,9 @@ def targets(results: Sequence[Mapping[str, Any]]) -> dict[str, tuple[str, np.nda
                     units[name] = unit
         protect = result.get("protect")
         if protect is not None:
-            name = f"x={fmt(protect['x'])} residual"
-            row[name] = float(protect["fraction"])
-            units[name] = "fraction"
+            for name, block in residual_names(protect, result.get("protect_with_measures")):
+                row[name] = float(block["fraction"])
+                units[name] = "fraction"
         rows.append(row)
     names = list(dict.fromkeys(name for row in rows for name in row))
     return {

@@ -256,7 +256,7 @@ class StudyResult:
         chosen: list[str] = []
         for e in entries:  # the targets, most moved first (relative to their own size)
             if e["target"] not in chosen and (e["target"].endswith(" p95")
-                                              or e["target"].endswith("residual")):
+                                              or _is_residual(e["target"])):
                 chosen.append(e["target"])
         chosen.sort(key=lambda t: -max(_relative(e) for e in entries if e["target"] == t))
         chosen = chosen[:_TORNADO_TARGETS]
@@ -331,7 +331,7 @@ class StudyResult:
         )
         frame = self.scenarios
         paths = list(self.scenario_list[0].values) if self.scenario_list else []
-        shown = [c for c in frame.columns if c.endswith(" p95") or c.endswith("residual")][:6]
+        shown = [c for c in frame.columns if c.endswith(" p95") or _is_residual(c)][:6]
         table = Table(title="Scenarios", show_edge=False, title_justify="left")
         for col in ["#", *paths, *shown]:
             table.add_column(col, justify="right")
@@ -383,7 +383,12 @@ def _unit(target: str) -> str:
         return "m"
     if "energy_kj" in target:
         return "kJ"
-    return "fraction" if target.endswith("residual") else ""
+    return "fraction" if _is_residual(target) else ""
+
+
+def _is_residual(target: str) -> bool:
+    """A residual target: ``x=200 residual`` or ``x=200 residual, bare slope``."""
+    return target.endswith(" residual") or target.endswith(" residual, bare slope")
 
 
 def _number(v: Any, unit: str = "") -> str:

@@ -214,7 +214,10 @@ def test_out_and_plot_write_the_files_their_help_names(command, project, rocks, 
     else:
         assert summary["rocks"] == int(rocks) and summary["seed"] == 5
     written = {p.name for p in out.iterdir()} - {MANIFEST}
-    drawn = {p.name for p in plot.iterdir()} - {MANIFEST} if plot.exists() else set()
+    # The distributions at every station and barrier: one figure each, named
+    # passing_station_N / passing_measure_N as the help says.
+    drawn = {re.sub(r"_\d+\.", "_N.", p.name) for p in plot.iterdir()} - {MANIFEST} \
+        if plot.exists() else set()
     if command == "optimise" and summary["best"] is None:
         # as the help says: no design.yaml, and only alternatives.png, without an
         # admissible design

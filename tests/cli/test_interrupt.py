@@ -264,8 +264,9 @@ def test_an_interrupt_during_the_commit_is_reported_as_after_it(tmp_path, monkey
     assert "Traceback" not in captured.err and captured.err.count("\n") == 1
     assert "interrupted" in captured.err and "written completely" in captured.err
     assert captured.out == ""  # interrupted before the report
-    assert sorted(p.name for p in renamed) == ["crossings.csv", "rocks.csv", "summary.json"]
-    assert _names(out) == ["crossings.csv", "rocks.csv", "summary.json"]
+    files = ["barriers.csv", "crossings.csv", "rocks.csv", "summary.json"]
+    assert sorted(p.name for p in renamed) == files
+    assert _names(out) == files
     summary = json.loads((out / "summary.json").read_text())
     assert summary["run"]["rocks"] == 50
     assert len(pd.read_csv(out / "rocks.csv")) == 50

@@ -201,7 +201,10 @@ def test_an_input_that_moves_nothing_is_not_resolved(seed):
     result = _study(NULL_INPUT, 1000, seed)
     entries = [e for e in result.summary["sensitivity"]
                if e["parameter"] == "materials.unused.restitution"]
-    assert len(entries) == 9 and any(e["effect"] > 0 for e in entries)  # the noise
+    # 8 design values at stations and the fence, the residual with the fence in place and
+    # the bare slope's beside it
+    assert len(entries) == 10 and any(e["effect"] > 0 for e in entries)  # the noise
+    assert {"x=200 residual", "x=200 residual, bare slope"} <= {e["target"] for e in entries}
     # with 1,000 rocks every design value is bounded, and none is moved beyond the noise
     assert all(e["effect_low"] == 0 and not e["resolved"] for e in entries)
 
@@ -271,7 +274,9 @@ def test_a_scenario_bounds_are_the_order_statistics_of_its_rocks():
     side = 1 - (1 - 0.95) / 8  # four scenarios: each side of each at 1 - (1 - c) / (2k)
     assert bounds["joint"]["upper"][ENERGY] == quantile_upper_bound(energy, 0.95, side)
     assert bounds["joint"]["lower"][ENERGY] == quantile_lower_bound(energy, 0.95, side)
-    reaching, rocks = block["protect"]["reaching"], block["rocks"]
+    # The residual of the project as it stands: with its measures, where it has any.
+    residual = block.get("protect_with_measures") or block["protect"]
+    reaching, rocks = residual["reaching"], block["rocks"]
     assert bounds["lower"]["x=200 residual"] == pytest.approx(
         fraction_lower_bound(reaching, rocks, 0.95))
 
