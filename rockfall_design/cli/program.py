@@ -29,8 +29,6 @@ def build_parser() -> argparse.ArgumentParser:
     """The command line: every command's parser, each added by the module that runs it."""
     from .calibrate_command import add_calibrate_parser
     from .study_command import add_study_parser
-
-    # section's module imports matplotlib (its figure): only when the parser is built
     from .terrain_command import add_section_parser
 
     parser = CommandParser(prog=PROG, description="Rockfall trajectories and protection design.")

@@ -14,17 +14,18 @@ import argparse
 import math
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib.colors import LightSource
-from matplotlib.figure import Figure
 
 from ..errors import ExitCode, InputError
 from ..report.outputs import OutputSet
 from ..terrain.cut import DEFAULT_TOLERANCE_M, TerrainSection, cut_section
 from ..terrain.dem import Dem, read_dem
 from ..terrain.fall_line import DEFAULT_FLAT_DEG, trace_fall_line
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = ["add_section_parser", "cmd_section"]
 
@@ -124,6 +125,10 @@ def cmd_section(args: argparse.Namespace) -> int:
 
 def section_figure(dem: Dem, section: TerrainSection, title: str) -> Figure:
     """The section's profile (samples and simplified) beside its line on the map."""
+    # matplotlib is heavy (a fifth of a second): loaded only to draw, not for every command.
+    from matplotlib.colors import LightSource
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(11, 4.5))
     profile, plan = fig.subplots(1, 2, gridspec_kw={"width_ratios": [1.6, 1]})
     profile.plot(section.dense_x, section.dense_z, color="0.6", lw=2.5, label="DEM samples")

@@ -3,16 +3,16 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib import colormaps
-from matplotlib.colors import LightSource
-from matplotlib.figure import Figure
 
 from .dem import Dem
 from .mapping import MapMeasure
 from .road import CorridorMap
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
 
 __all__ = ["corridor_map"]
 
@@ -39,6 +39,11 @@ def corridor_map(dem: Dem, where: CorridorMap, designs: Sequence[str],
     title
         The figure's title.
     """
+    # matplotlib is heavy: loaded when a map is drawn, not by every command that
+    # can draw one (study's corridor commands import this module).
+    from matplotlib.colors import LightSource
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=(9, 7.5))
     ax = fig.add_subplot()
     e0, e1, n0, n1 = dem.extent
@@ -79,6 +84,8 @@ def _height(value: Any) -> str:
 
 
 def _colours(kinds: Sequence[str]) -> Mapping[str, Any]:
+    from matplotlib import colormaps  # heavy: see corridor_map
+
     cmap = colormaps["tab10"]
     out: dict[str, Any] = {}
     for i, kind in enumerate(k for k in kinds if k != "none"):
