@@ -280,7 +280,7 @@ def run_ensemble(
     batch_size : int
         Most rocks per compiled call (memory and progress granularity only;
         the results do not depend on it). Batches are smaller where rocks are
-        costly, so that each takes about :data:`BATCH_SECONDS`.
+        costly, so that each takes about :data:`~.batching.BATCH_SECONDS`.
     progress : callable, optional
         Called with the number of rocks done after each batch.
     first_index : int
