@@ -15,7 +15,7 @@ given with ``--beside``), the figures the house's targets are set on:
 * modules over 600 lines and functions over 120 lines, outside the compiled
   kernel (functions decorated with numba's ``njit``/``jit`` or the engine's
   ``hot``; a module is part of the kernel when most of its function lines are);
-* and, as the issue also names them: imports of another file's ``_private``
+* and imports of another file's ``_private``
   names, and file names that occur more than once (in the package and the
   built-in plugins' package);
 * the largest module of the built-in plugins (the built-ins are meant to be
@@ -69,7 +69,7 @@ PACKAGES = {"cli": "cli", "engine": "engine", "judge": "judge", "run": "run",
 #: Files inside a sub-package whose room is another one (what they do, not where they are).
 MOVED: dict[str, str] = {}
 
-#: Files loose at the top of the package -> the room they belong to (issue 24's reading).
+#: Files loose at the top of the package -> the room they belong to (what each does).
 LOOSE = {
     "__init__.py": "api", "__main__.py": "cli", "api.py": "api", "testing.py": "testing",
     "errors.py": "errors", "version.py": "errors", "arguments.py": "arguments",

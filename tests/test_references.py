@@ -188,3 +188,19 @@ def test_candidates_follow_sphinx_lookup() -> None:
     assert candidates("a.b", "", "P.f", {"P": "a.c.P"})[2] == "a.c.P.f"
     assert _import("rockfall_design.errors")
     assert not _import("rockfall_design.no_such_name")
+
+
+#: An issue or item number in prose ("issue 22", "issue #27", "(#27)", "item 8");
+#: a colour ("#566573") or a numbered label ("#2 talus.restitution") is not one.
+ISSUE_NUMBER = re.compile(r"\bissues? #?\d+\b|\(#\d+\)|\bitem \d+\b", re.I)
+
+
+def test_no_issue_numbers_in_the_package() -> None:
+    """Docstrings and comments say what they mean, not which issue asked for it."""
+    found = []
+    for folder, _ in SOURCES:
+        for path in sorted(folder.rglob("*.py")):
+            for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+                if ISSUE_NUMBER.search(line):
+                    found.append(f"{path.relative_to(ROOT)}:{i}: {line.strip()}")
+    assert not found, "issue numbers in the package:\n" + "\n".join(found)
