@@ -2,8 +2,9 @@
 
     python benchmarks/house.py [PACKAGE_DIR] [--list]
 
-Counts, from the code alone (its syntax trees; nothing is imported), the
-figures that issue 24 sets targets for:
+Counts, from the code alone (its syntax trees; nothing is imported), over
+the package and the built-in plugins' package (``plugins/``, or the folders
+given with ``--beside``), the figures the house's targets are set on:
 
 * import cycles between files (strongly connected components of the graph of
   every import, at module level or inside a function, ``if TYPE_CHECKING:``
@@ -14,9 +15,11 @@ figures that issue 24 sets targets for:
 * modules over 600 lines and functions over 120 lines, outside the compiled
   kernel (functions decorated with numba's ``njit``/``jit`` or the engine's
   ``hot``; a module is part of the kernel when most of its function lines are);
-* and, as the issue also names them: imports of another file's ``_private``
+* and imports of another file's ``_private``
   names, and file names that occur more than once (in the package and the
-  built-in plugins' package).
+  built-in plugins' package);
+* the largest module of the built-in plugins (the built-ins are meant to be
+  one small module per measure, safety concept or cost model).
 
 The rooms' order (docs of the architecture, DESIGN.md)::
 
@@ -31,7 +34,10 @@ the API; when the engine imports anything outside itself (it is numpy and
 numba only); or when errors.py imports anything of the package. A file's
 room is its package (``optimiser/`` is the optimiser, ``studies/`` the
 studies); the files still loose at the top of the package are given the room
-they belong to in :data:`LOOSE` (unknown ones are reported as such).
+they belong to in :data:`LOOSE` (unknown ones are reported as such). The
+built-ins are a room of their own, a client of the public API: an import of
+them from the package runs back up (the package finds them through their
+entry points only).
 
 Prints the figures; ``--list`` adds every offending item. Exit code 0
 always: it measures, it does not judge (a test may judge later).
@@ -63,7 +69,7 @@ PACKAGES = {"cli": "cli", "engine": "engine", "judge": "judge", "run": "run",
 #: Files inside a sub-package whose room is another one (what they do, not where they are).
 MOVED: dict[str, str] = {}
 
-#: Files loose at the top of the package -> the room they belong to (issue 24's reading).
+#: Files loose at the top of the package -> the room they belong to (what each does).
 LOOSE = {
     "__init__.py": "api", "__main__.py": "cli", "api.py": "api", "testing.py": "testing",
     "errors.py": "errors", "version.py": "errors", "arguments.py": "arguments",
@@ -80,6 +86,7 @@ class Package:
     """The package's files, parsed, and the import graph between them."""
 
     root: Path
+    beside: list[Path] = field(default_factory=list)          # the built-ins' folders
     files: dict[str, Path] = field(default_factory=dict)     # dotted module -> file
     trees: dict[str, ast.Module] = field(default_factory=dict)
     edges: dict[str, set[str]] = field(default_factory=dict)  # module -> modules it imports
@@ -105,9 +112,13 @@ def _type_checking_lines(tree: ast.Module) -> set[int]:
     return lines
 
 
-def load(root: Path) -> Package:
-    """Parse every file of the package at ``root`` and build its import graph."""
-    pkg = Package(root=root, files=_modules(root))
+def load(root: Path, beside: list[Path] | None = None) -> Package:
+    """Parse the package at ``root`` and the packages ``beside`` it; build the import graph."""
+    beside = beside or []
+    files = _modules(root)
+    for folder in beside:
+        files.update(_modules(folder))
+    pkg = Package(root=root, beside=beside, files=files)
 
     def resolve(name: str) -> str | None:
         while name:
@@ -151,6 +162,8 @@ def load(root: Path) -> Package:
 
 def room(pkg: Package, mod: str) -> str:
     """The room of a module (see the module's docstring)."""
+    if not pkg.files[mod].is_relative_to(pkg.root):
+        return "builtins"
     rel = pkg.files[mod].relative_to(pkg.root).as_posix()
     if rel in MOVED:
         return MOVED[rel]
@@ -164,6 +177,8 @@ def runs_up(src: str, dst: str) -> bool:
     """True if an import from room ``src`` into room ``dst`` runs back up the order."""
     if src == dst:
         return False
+    if dst == "builtins":
+        return True
     if src == "engine" or src == "errors":
         return True
     if src in CHAIN and dst in CHAIN:
@@ -252,10 +267,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("package", nargs="?", type=Path, default=ROOT / "rockfall_design")
     ap.add_argument("--beside", type=Path, action="append",
                     default=[ROOT / "plugins" / "rockfall_design_builtins"],
-                    help="other source folders whose file names count in the twice-named")
+                    help="other source folders read with the package (the built-ins)")
     ap.add_argument("--list", action="store_true", help="list every offending item")
     args = ap.parse_args(argv)
-    pkg = load(args.package.resolve())
+    beside = [d.resolve() for d in args.beside]
+    pkg = load(args.package.resolve(), beside)
 
     circles = cycles(pkg.edges)
     rooms = {m: room(pkg, m) for m in pkg.files}
@@ -263,14 +279,17 @@ def main(argv: list[str] | None = None) -> int:
                 if runs_up(rooms[a], rooms[b]))
     unknown = sorted(m for m, r in rooms.items() if r.startswith("?"))
     loose = sorted(p.name for p in pkg.root.glob("*.py"))
+    builtins = sorted(((m, len(p.read_text(encoding="utf-8").splitlines()))
+                       for m, p in pkg.files.items() if rooms[m] == "builtins"),
+                      key=lambda mn: -mn[1])
     modules, functions = sizes(pkg)
-    paths = list(pkg.files.values()) + [p for d in args.beside for p in d.rglob("*.py")]
+    paths = list(pkg.files.values())
     names = Counter(p.name for p in paths if p.name not in ("__init__.py", "__main__.py"))
     twice = sorted(n for n, c in names.items() if c > 1)
     n_edges = sum(len(e) for e in pkg.edges.values())
 
     rows = [
-        ("files", len(pkg.files), ""),
+        ("files", len(pkg.files), f"{len(builtins)} of them built-ins"),
         ("import edges between files", n_edges, ""),
         ("import cycles", len(circles),
          f"{sum(len(c) for c in circles)} files in them; target 0"),
@@ -281,6 +300,8 @@ def main(argv: list[str] | None = None) -> int:
          "outside the kernel; target 0"),
         ("imports of another file's _private names", len(pkg.private), ""),
         ("file names that occur twice or more", len(twice), ""),
+        ("lines of the largest built-in module", builtins[0][1] if builtins else 0,
+         builtins[0][0] if builtins else "no built-ins read"),
     ]
     width = max(len(r[0]) for r in rows)
     for label, value, note in rows:

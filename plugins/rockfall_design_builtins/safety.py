@@ -496,7 +496,7 @@ class Uni11211Concept(SafetyConcept):
     The freeboard :math:`f` is at least ``f_min_m`` (0.5 m) and at least
     half the design block, so that the centre of the design block passes at
     least half a block below the top of the fence and the block does not
-    graze over it. The text of the issue this follows says "at most half
+    graze over it. The requirement as first written says "at most half
     the block size"; we read the standard as requiring the centre to pass
     at least half a block below the top and use the maximum. **This reading
     is flagged for review.**

@@ -8,12 +8,14 @@
   Nelder-Mead);
 - :mod:`.uncertainty`: the bootstrap replicates (each a refit with its own
   seed), the intervals, the correlation, the identification flag;
-- :mod:`.run`: a calibration or a comparison, the replicates run as tasks
+- :mod:`.procedure`: a calibration or a comparison, the replicates run as tasks
   (locally or on Dask, with the same numbers);
-- :mod:`.result`: :class:`CalibrationResult` and :class:`ComparisonResult`
+- :mod:`.calibrated`: :class:`~.calibrated.CalibrationResult` and
+  :class:`~.calibrated.ComparisonResult`
   (JSON, tables, the calibrated project, figures, terminal);
-- :mod:`.figures`: the stops' ECDF and histogram, the bootstrap cloud;
-- :mod:`.command`: the ``rockfall-design calibrate`` and ``compare`` commands.
+- :mod:`.charts`: the stops' ECDF and histogram, the bootstrap cloud;
+- :mod:`~rockfall_design.cli.calibrate_command`: the ``rockfall-design
+  calibrate`` and ``compare`` commands.
 
 The engineer's entry points are :func:`rockfall_design.calibrate` and
 :func:`rockfall_design.compare`; the method is described in docs/calibration.md.

@@ -5,7 +5,7 @@ what they return, and maps errors to exit codes (:mod:`.main`, the only
 place that does). Files:
 
 * :mod:`.program`: ``main``, the parser's dispatch, signals and exit codes;
-* :mod:`.parser`: the argument parser and the options commands share;
+* :mod:`.options`: the argument parser and the options commands share;
 * :mod:`.common`: what every command does around its run (plugins,
   progress, memory guard, files reserved, figures and report);
 * :mod:`.section_commands`: ``simulate``, ``check``, ``optimise``,

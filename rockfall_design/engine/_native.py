@@ -1,4 +1,4 @@
-"""The batch kernel's machine code, loaded without numba's compiler (issue 27, item 11).
+"""The batch kernel's machine code, loaded without numba's compiler.
 
 numba's cache holds the compiled kernel, but loading it through numba's
 dispatcher first builds numba's whole target context: it imports numba's

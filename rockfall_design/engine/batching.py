@@ -51,7 +51,7 @@ BATCH_SECONDS = 0.1
 
 A batch runs to its end once started (compiled code does not look at
 signals), so an interrupt takes effect within about this time after the
-running batches end, whatever the cost of a rock (issue 27, item 2). The
+running batches end, whatever the cost of a rock. The
 size adapts to the measured cost per rock: 4096 rocks of the standard slope
 take about 0.02 s, one rock of a size of its own on a survey of 100,000
 points about a second (its centre path).

@@ -288,7 +288,7 @@ def run_ensemble(
     batch_size : int
         Most rocks per compiled call (memory and progress granularity only;
         the results do not depend on it). Batches are smaller where rocks are
-        costly, so that each takes about :data:`BATCH_SECONDS`.
+        costly, so that each takes about :data:`~.batching.BATCH_SECONDS`.
     progress : callable, optional
         Called with the number of rocks done after each batch.
     first_index : int
@@ -405,7 +405,7 @@ def _shared_path(ground: Ground, radius: np.ndarray,
     ``batch_size``). With rocks of several sizes, the ground elements their
     paths can lie on are found once too (from the path of the smallest
     radius), and each path is made from those: on a dense noisy survey, the
-    tops of the noise (issue 27, item 8). On a few points each batch makes
+    tops of the noise. On a few points each batch makes
     its own paths from every segment, which costs less than loading numba's
     compiler to call :func:`rock_path` from here. The calls here run on a
     thread of their own (:func:`_off_the_main_thread`): an interrupt is

@@ -742,7 +742,7 @@ def survey_path(gx, gy, seg_mat, r, max_chord, elems):
     bit, as this function over every element
     (tests/engine/test_engine_survey.py): on a dense noisy survey a rock of a
     size of its own then costs the sweep over the tops of the noise instead
-    of over every point (issue 27, item 8).
+    of over every point.
     """
     return _centre_path(gx, gy, seg_mat, r, max_chord, True, elems, True)
 

@@ -1,6 +1,6 @@
 """The records the compiled engine passes around instead of dozens of arrays.
 
-House style item 12: a kernel takes a few well-named records. Each record here
+House style: a kernel takes a few well-named records. Each record here
 is a named tuple of arrays (numba compiles attribute access on a named tuple
 to a field read, so it costs nothing in the loop) or a float64 table with
 named columns, built once per run by :func:`rockfall_design.engine.run_ensemble`:

@@ -236,7 +236,7 @@ def _first_reaching(n: np.ndarray, q: np.ndarray, target: np.ndarray,
 
 
 def _first_reaching_bisect(n: int, q: float, target: np.ndarray, strict: bool) -> np.ndarray:
-    """As :func:`_first_reaching_window`, by bisection over all j in [0, n] (always works)."""
+    """As :func:`_first_reaching`, by bisection over all j in [0, n] (always works)."""
     from scipy.special import bdtr
 
     lo = np.zeros(target.size, dtype=np.int64)

@@ -75,7 +75,7 @@ def plan_for(project: Project, registry: Registry) -> Plan:
     ------
     ProjectError
         Exit code 2, located at the offending key (see
-        :func:`rockfall_design.judge.evaluation.validate_project`).
+        :func:`rockfall_design.api.validate_project`).
     PluginError
         Exit code 3, if a plugin misbehaves.
     """

@@ -194,7 +194,7 @@ def listed_entry(family: str, measures: Sequence[ProtectiveMeasure], labels: Seq
                  short_of_margin: bool = False) -> dict[str, Any]:
     """A cheaper design listed as marginal or undecided (``marginal`` in --json).
 
-    ``values`` are the look's point values and bounds (:func:`look_values`), None
+    ``values`` are the look's point values and bounds (:func:`~.decide.look_values`), None
     for a design across scenarios; ``rocks_to_decide`` follows from them (None
     when they hold: ``margin_undecided``, the checker's margin is what is open).
     ``short_of_margin``: it holds with its bounds, but falls short of the

@@ -432,7 +432,7 @@ def build_candidate_measure(
     spec
         The candidate.
     registry
-        The plugins (the same as given to :func:`resolve_design`).
+        The plugins (the same as given to :func:`~.design_spec.resolve_design`).
     params
         The picked values, by parameter name: ``x`` (m), one value per range
         and option parameter, and for a candidate with products its product

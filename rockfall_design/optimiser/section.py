@@ -4,7 +4,7 @@
 the screening cannot reject (sequentially, :mod:`.decide`), verifies the
 first admitted one on fresh rocks and reports the marginal and undecided
 designs cheaper than it. The loop over the families is
-:func:`~rockfall_design.optimiser.alternatives.search_families`, shared with
+:func:`~rockfall_design.optimiser.driver.search_families`, shared with
 the scenarios' driver (:mod:`.across`).
 """
 
@@ -433,10 +433,10 @@ def optimise(
     Notes
     -----
     Each family's designs are screened cheapest first (see
-    :func:`_barrier_designs`, :func:`_edit_designs`); those that pass the
+    :func:`_barrier_designs`, :func:`~.search._edit_designs`); those that pass the
     screening, or miss it within its margin, are decided exactly in order of
-    cost (:func:`decide`: admitted only with the confidence bounds, with the
-    rocks :func:`plan_rocks` plans) and the first admitted one is verified
+    cost (:func:`~.decide.decide`: admitted only with the confidence bounds, with the
+    rocks :func:`~.decide.rocks_to_decide` plans) and the first admitted one is verified
     on fresh rocks: an independent seed and at least twice the rocks that
     decided it. A design that fails there is not chosen; the next one in
     order of cost is decided. The best design overall is the cheapest family

@@ -66,10 +66,12 @@ From rockfall-design, only the public API: the names exported by the
 ``rockfall_design`` package itself (``from rockfall_design import ...``),
 which are :data:`hookimpl`, the contracts :class:`ProtectiveMeasure`,
 :class:`SafetyConcept` and :class:`CostModel` with their parameter bases
-:class:`MeasureParams`, :class:`SafetyParams` and :class:`CostParams`, and
-the data they exchange (:class:`Barrier`, :class:`BarrierBehaviour`,
-:class:`ProfileEdit`, :class:`MeasureResult`, :class:`Outcome`,
-:class:`Check`, :class:`Quantity`). Everything else (``rockfall_design.engine``, ``project``,
+:class:`~.measure.MeasureParams`, :class:`~.concept.SafetyParams` and
+:class:`~.cost_model.CostParams`, and the data they exchange
+(:class:`~.measure.Barrier`, :class:`~.measure.BarrierBehaviour`,
+:class:`~.measure.ProfileEdit`, :class:`~.measure.MeasureResult`, :class:`~.measure.Outcome`,
+:class:`~.concept.Check`, :class:`~.measure.Quantity`). Everything else
+(``rockfall_design.engine``, ``project``,
 ``plugins``, ...) is internal and may change in any release. Other libraries
 (numpy, pydantic, ...) are fine as dependencies of the plugin's own
 distribution.
@@ -92,8 +94,8 @@ Rules for every registered class
   lower case, only ``a-z``, ``0-9``, ``_`` and ``-``; unique across all
   installed plugins.
 * ``summary``: one line shown by ``rockfall-design plugins``.
-* ``Params``: a pydantic model, subclass of :class:`MeasureParams`,
-  :class:`SafetyParams` or :class:`CostParams`; put units in field names
+* ``Params``: a pydantic model, subclass of :class:`~.measure.MeasureParams`,
+  :class:`~.concept.SafetyParams` or :class:`~.cost_model.CostParams`; put units in field names
   (``height_m``, ``capacity_kj``) and in each field's metadata,
   ``Field(2.0, gt=0, json_schema_extra={"unit": "m"})`` (``{"unit": None}``
   for a name or a flag). Without that metadata the unit is read from the
@@ -164,7 +166,7 @@ parameter's declaration under ``design``.
 Costs by quantities
 -------------------
 A measure reports what it takes per running metre of slope as a bill:
-``bill(section)`` returns a list of :class:`Quantity` (``name``, ``amount``
+``bill(section)`` returns a list of :class:`~.measure.Quantity` (``name``, ``amount``
 per running metre, ``unit``, optional ``product`` and ``size``), e.g.
 ``Quantity("embankment_fill_m3", 18.5, "m3")``. The built-ins bill
 ``fence``/``wall`` (one running metre of their product at their height),
@@ -213,18 +215,18 @@ naming the measure kind, safety concept or cost model, the distribution that
 provides it, the method and the exception (type, message, file:line). The
 same at load time leaves the plugin out, reported by
 ``rockfall-design plugins``. What must come back: ``footprint`` a
-:class:`Barrier` or :class:`ProfileEdit`; ``design_properties`` and
+:class:`~.measure.Barrier` or :class:`~.measure.ProfileEdit`; ``design_properties`` and
 ``quantities`` a dict of str to number, never NaN (``inf`` is allowed, e.g.
-"no capacity given"); ``bill`` a list of :class:`Quantity` with finite
-amounts >= 0; ``label`` a str; ``checks`` a list of :class:`Check`;
+"no capacity given"); ``bill`` a list of :class:`~.measure.Quantity` with finite
+amounts >= 0; ``label`` a str; ``checks`` a list of :class:`~.concept.Check`;
 ``cost`` and ``price`` a finite number >= 0; ``missing_price`` a str or None.
 
 Every field of a footprint is checked before the engine sees it
-(``rockfall_design.plugins.footprint_problem``): a :class:`Barrier` needs a
+(``rockfall_design.plugins.footprint_problem``): a :class:`~.measure.Barrier` needs a
 finite ``x`` on the section, ``height_m`` > 0, ``capacity_kj`` >= 0 (``inf``
-for none given), a :class:`BarrierBehaviour`, ``restitution`` in 0..1,
+for none given), a :class:`~.measure.BarrierBehaviour`, ``restitution`` in 0..1,
 ``gap_m`` >= 0 and ``spacing_m`` > 0 with the gap no wider than the
-spacing; a :class:`ProfileEdit` a finite stretch ``x_start`` < ``x_end``,
+spacing; a :class:`~.measure.ProfileEdit` a finite stretch ``x_start`` < ``x_end``,
 ``points`` of shape (k, 2), k >= 2, finite, x strictly increasing from
 ``x_start`` to ``x_end`` and meeting the ground at both, a finite catch range
 ``catch_from`` <= ``catch_to`` on the section and a ``material`` name or
@@ -293,13 +295,13 @@ def rockfall_design_measures() -> list[type[ProtectiveMeasure]]:
       all installed plugins: two plugins with the same ``kind`` stop the
       program with an error naming both.
     * Required class attributes: ``kind``, ``summary``, ``Params`` (a
-      :class:`MeasureParams` subclass; every measure has the station ``x``
+      :class:`~.measure.MeasureParams` subclass; every measure has the station ``x``
       in m) and ``example`` (a valid parameter set *without* ``type``).
       ``design_variables`` (name -> (low, high)) lists what the optimiser
       may vary; a field's ``json_schema_extra={"design": ...}`` declares its
       role more precisely (see "Design variables" above).
-    * Implement ``footprint(section)`` (a :class:`Barrier` at a station, or
-      a :class:`ProfileEdit` of the ground), ``design_properties()`` (the
+    * Implement ``footprint(section)`` (a :class:`~.measure.Barrier` at a station, or
+      a :class:`~.measure.ProfileEdit` of the ground), ``design_properties()`` (the
       ``height_m``, ``capacity_kj`` and/or ``width_m`` that safety concepts
       check) and, for costing, ``bill(section)`` (named quantities, see
       "Costs by quantities" above) or ``quantities(section)``.
@@ -372,15 +374,15 @@ def rockfall_design_safety_concepts() -> list[type[SafetyConcept]]:
     * ``name`` must be unique across all installed plugins; two plugins with
       the same name stop the program with an error naming both.
     * Required class attributes: ``name``, ``summary``, ``Params`` (a
-      :class:`SafetyParams` subclass: targets and partial factors with
+      :class:`~.concept.SafetyParams` subclass: targets and partial factors with
       documented defaults) and ``example`` (a valid parameter set *without*
       ``concept``).
-    * Implement ``checks(result)``: given the :class:`MeasureResult` of one
+    * Implement ``checks(result)``: given the :class:`~.measure.MeasureResult` of one
       measure (passing heights in m, energies in kJ, reaches in m, of the
-      rocks that met it), return a list of :class:`Check`; an empty list when
+      rocks that met it), return a list of :class:`~.concept.Check`; an empty list when
       the concept has nothing to check for that kind of measure. Read the
       measure's properties with ``result.measure.design_properties()``.
-      Anything but a list of :class:`Check`, or an exception, is a plugin
+      Anything but a list of :class:`~.concept.Check`, or an exception, is a plugin
       fault (exit code 3).
 
     Examples
@@ -443,7 +445,7 @@ def rockfall_design_cost_models() -> list[type[CostModel]]:
     * ``name`` must be unique across all installed plugins; two plugins with
       the same name stop the program with an error naming both.
     * Required class attributes: ``name``, ``summary``, ``Params`` (a
-      :class:`CostParams` subclass: the catalogue of unit prices, units in
+      :class:`~.cost_model.CostParams` subclass: the catalogue of unit prices, units in
       the field names) and ``example`` (a valid parameter set).
     * Implement ``cost(measure, quantities, length_m)``: the cost of
       ``measure`` over ``length_m`` metres of slope, from its

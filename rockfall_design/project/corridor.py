@@ -23,7 +23,7 @@ A section's ``rocks``, ``analysis`` and ``design`` are merged key by key into
 the shared ones (the section's value of a key wins; a section that gives one
 of ``radius``, ``volume``, ``mass`` replaces the shared size), its
 ``materials`` by name. Loading a corridor gives one ordinary, complete
-:class:`Project` per section, validated as a project file is, so the
+:class:`~.model.Project` per section, validated as a project file is, so the
 engine, the judge and the optimiser see nothing new; an error in a section
 names the line in the file and the key as written there
 (``corridor.yaml:31: sections[1].protect.x: ...``).

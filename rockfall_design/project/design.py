@@ -394,7 +394,7 @@ class Design(_Model):
     (a discrete one); ``product`` is a catalogue name or a list of names.
 
     The product catalogue and the cost model's parameters may come from files
-    (paths relative to the project file); :func:`load_project` reads them and
+    (paths relative to the project file); :func:`~.loading.load_project` reads them and
     keeps their line numbers: :attr:`catalogue` / :attr:`products_locator`
     and :attr:`cost_params` / :attr:`costs_locator`.
     """

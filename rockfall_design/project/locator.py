@@ -29,10 +29,10 @@ from .messages import (
 class Locator:
     """Where the nodes of some YAML data are: a file, its line map and a key prefix.
 
-    The project file has one (:attr:`Project.locator`); so has each part of
+    The project file has one (:attr:`.Project.locator`); so has each part of
     the design section that may come from another file: the product
-    catalogue (:attr:`Design.products_locator`) and the cost model's
-    parameters (:attr:`Design.costs_locator`). Key paths given to the methods
+    catalogue (:attr:`.Design.products_locator`) and the cost model's
+    parameters (:attr:`.Design.costs_locator`). Key paths given to the methods
     are relative to the data's root; the prefix locates that root in its
     file (``("design", "products")`` for an inline catalogue, ``()`` for a
     catalogue file). Errors read ``file:line: key.path: message``.
@@ -64,7 +64,7 @@ class Locator:
         return _line_of(_yaml_path(self.prefix + tuple(path), self._lines), self._lines)
 
     def error_at(self, path: Sequence[str | int], message: str) -> ProjectError:
-        """A :class:`ProjectError` at ``path`` (see :meth:`Project.error_at`)."""
+        """A :class:`ProjectError` at ``path`` (see :meth:`.Project.error_at`)."""
         full = _yaml_path(self.prefix + tuple(path), self._lines)
         return ProjectError(
             self.source, _line_of(full, self._lines), _key_text(full, self._lines), message
@@ -73,7 +73,7 @@ class Locator:
     def unknown_name(
         self, path: Sequence[str | int], name: Any, candidates: Iterable[str], what: str
     ) -> ProjectError:
-        """An unknown name with "did you mean" (see :meth:`Project.unknown_name`)."""
+        """An unknown name with "did you mean" (see :meth:`.Project.unknown_name`)."""
         names = [str(c) for c in candidates]
         hint = did_you_mean(name, names) if isinstance(name, str) else ""
         available = f" (available: {', '.join(names)})" if names else " (none available)"
@@ -87,7 +87,7 @@ class Locator:
         *,
         drop: Iterable[str] = (),
     ) -> BaseModel:
-        """Validate plugin parameters at ``path`` (see :meth:`Project.validate_params`)."""
+        """Validate plugin parameters at ``path`` (see :meth:`.Project.validate_params`)."""
         path = tuple(path)
         if not isinstance(data, Mapping):
             raise self.error_at(path, f"expected a mapping of key: value, got {describe(data)}")
@@ -143,7 +143,7 @@ def params_problem(model: type[BaseModel], data: Mapping[str, Any]) -> tuple[tup
     """The first problem of plugin parameters ``data`` for ``model``, or None if valid.
 
     The same strict checks and one-line messages as
-    :meth:`Project.validate_params`, for data that is not in a file (the
+    :meth:`.Project.validate_params`, for data that is not in a file (the
     optimiser's candidates): unknown keys first, then pydantic's order.
 
     Returns

@@ -46,7 +46,7 @@ from .study import StudySpec
 class Project(_Model):
     """A validated, normalised project file.
 
-    Load one with :func:`load_project` or :func:`load_project_text`; the file
+    Load one with :func:`.load_project` or :func:`.load_project_text`; the file
     it came from is :attr:`source`.
     """
 

@@ -243,7 +243,7 @@ class SizeSpec(_Model):
 
     In the project file this is written as a number (fixed) or as a one-key
     mapping ``{uniform: [a, b]}``, ``{normal: [mean, sd]}`` or
-    ``{lognormal: [median, sigma]}``; :meth:`Project.resolved_dict` writes it
+    ``{lognormal: [median, sigma]}``; :meth:`.Project.resolved_dict` writes it
     back the same way.
     """
 

@@ -126,7 +126,7 @@ _Dumper.add_implicit_resolver(*_YAML12_FLOAT)
 
 
 def dump_yaml(data: Any) -> str:
-    """``data`` as YAML that :func:`load_project_text` reads back to the same values.
+    """``data`` as YAML that :func:`.load_project_text` reads back to the same values.
 
     Keys keep their order; non-ASCII text is written as it is.
     """

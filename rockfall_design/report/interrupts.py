@@ -33,7 +33,7 @@ def note_interrupt(signum: int) -> None:
     ``KeyboardInterrupt``. The exception may be swallowed where it lands
     (numpy swallows one raised while it looks up ``__array_ufunc__``, say,
     and a library's ``except BaseException`` would too); the note is not:
-    :meth:`OutputSet.commit` and :func:`check_interrupt` raise it again, so
+    :meth:`~.outputs.OutputSet.commit` and :func:`check_interrupt` raise it again, so
     the command still ends as interrupted (exit code 130) and replaces
     nothing.
     """

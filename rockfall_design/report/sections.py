@@ -33,7 +33,7 @@ class Table:
 
 
 def _num(v: Any, unit: str = "-", none: str = "-") -> str:
-    """A number as text, rounded for its unit (see :func:`tables.round_value`)."""
+    """A number as text, rounded for its unit (see :func:`.tables.round_value`)."""
     if v is None:
         return none
     if isinstance(v, bool):

@@ -45,7 +45,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 # pandas and scipy are imported where a table or a size distribution needs
 # them: together they cost more than a second at start-up, and `simulate`
-# with a fixed rock size writes no table unless asked (issue 14).
+# with a fixed rock size writes no table unless asked.
 
 __all__ = [
     "Study",

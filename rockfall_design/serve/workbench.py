@@ -6,7 +6,7 @@ Nothing here knows about HTTP: :mod:`rockfall_design.serve.app` turns a
 A run (:meth:`ProjectEntry.start_run`) is the optimiser's screening run
 (:class:`~rockfall_design.optimiser.screening.Screening`) of the project's
 rocks on the bare slope, with its table stations every
-:data:`TABLE_STEP_M` along the whole section: per rock, its passing height,
+:data:`~.bench.TABLE_STEP_M` along the whole section: per rock, its passing height,
 energy and speed at its first passage of every station. A fence or wall
 placed anywhere is then judged from that table by the screening's own
 judgement and the project's safety concept (:meth:`Bench.place`), in

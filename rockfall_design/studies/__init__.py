@@ -5,12 +5,12 @@
   :func:`check_study`, every path and value of a ``study:`` section checked;
 - :mod:`.scenarios`: the scenarios of a ``study:`` section (grid or Latin
   hypercube), each with its values and its own rock seed;
-- :mod:`.run`: the scenarios as tasks, and the task (one ``simulate`` run);
+- :mod:`.runner`: the scenarios as tasks, and the task (one ``simulate`` run);
 - :mod:`.executors`: tasks in-process, on a local process pool or on Dask;
 - :mod:`.sensitivity`: which input moves each design value (main-effect
   ranges; RBD-FAST indices of SALib for a sampled study);
-- :mod:`.result`: :class:`StudyResult` (JSON, tables, figures, report);
-- :mod:`.command`: the ``rockfall-design study`` command.
+- :mod:`.study_result`: :class:`.StudyResult` (JSON, tables, figures, report);
+- :mod:`~rockfall_design.cli.study_command`: the ``rockfall-design study`` command.
 
 The engineer's entry point is :func:`rockfall_design.study` (the function of
 the public API, which shares its name with this package).

@@ -95,7 +95,7 @@ def _shown(keys: tuple) -> str:
     return text
 
 
-#: Short paths the issue and the README use: first key -> the keys it stands for.
+#: Short paths the README and users write: first key -> the keys it stands for.
 ALIASES: dict[str, tuple[str, ...]] = {"release": ("rocks", "release")}
 
 

@@ -516,7 +516,7 @@ def run_parametric(
     pool: str = "threads",
     envelopes: bool = True,
 ) -> Any:
-    """Prepare, run and analyse the project's study; a :class:`~.result.StudyResult`.
+    """Prepare, run and analyse the project's study; a :class:`~.study_result.StudyResult`.
 
     Parameters are those of :func:`prepare` and :func:`run_tasks_of`;
     ``indices`` those of :func:`~.sensitivity.sensitivity`; ``envelopes``

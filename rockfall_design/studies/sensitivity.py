@@ -103,7 +103,7 @@ def targets(results: Sequence[Mapping[str, Any]]) -> dict[str, tuple[str, np.nda
     Parameters
     ----------
     results
-        The scenarios' results (:func:`~.run.run_scenario`), in scenario order.
+        The scenarios' results (:func:`~.runner.run_scenario`), in scenario order.
     """
     rows: list[dict[str, float]] = []
     units: dict[str, str] = {}
@@ -143,7 +143,7 @@ def joint_bounds(results: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
     Parameters
     ----------
     results
-        The study's k scenario results (:func:`~.run.run_scenario`), each with
+        The study's k scenario results (:func:`~.runner.run_scenario`), each with
         its ``bounds`` (``confidence`` c and the ``ladder``).
 
     Returns
