@@ -55,7 +55,7 @@ def design_columns(confidence: float) -> list[str]:
 
 
 def _fmt(v: Any, unit: str) -> str:
-    """A value rounded for its unit (see :func:`tables.round_value`), '-' without one."""
+    """A value rounded for its unit (see :func:`~.rounding.round_value`), '-' without one."""
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return "-"
     r = round_value(v, unit)
