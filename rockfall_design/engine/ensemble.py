@@ -451,7 +451,7 @@ def _run_order(radius: np.ndarray, survey: bool) -> np.ndarray:
     centre path costs milliseconds; rocks of one radius one after another
     share it (:func:`_run_batch`), so a run of size classes
     (``run.releases.size_classes``) makes about one path per class rather
-    than one per rock (issue 34, item 9). A stable sort: rocks of one radius
+    than one per rock (a decision of the project). A stable sort: rocks of one radius
     keep their order. The results do not depend on the order.
     """
     n = radius.size

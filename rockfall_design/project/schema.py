@@ -132,7 +132,7 @@ SURVEY_POINTS = 256
 #: Relative step of the geometric grid of radii rocks of varying size are rounded
 #: to on a survey (``rocks.size_step``, default): 0.5 %, so that a radius moves by
 #: at most 0.25 % and a mass by 0.751 %, far inside what any survey of block sizes
-#: knows (issue 34, item 9; a decision of the project, not a published value).
+#: knows (a decision of the project, not a published value).
 DEFAULT_SIZE_STEP = 0.005
 #: Largest ``rocks.size_step``: 5 % (radii within 2.5 %, masses within 7.6 %).
 #: ILLUSTRATIVE: a bound against a step given as a per cent (0.5 for 0.5 %).

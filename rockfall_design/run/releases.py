@@ -154,7 +154,7 @@ def size_classes(radius: np.ndarray, step: float) -> np.ndarray:
     Every class radius is one number computed from its k alone, so all rocks
     of a class have the same radius to the bit and share one centre path on
     a survey (``engine.run_ensemble``), which is what the classes are for
-    (issue 34, item 9). The grid is anchored at 1 m, whatever the run's
+    (so dense surveys run fast). The grid is anchored at 1 m, whatever the run's
     sizes, so a chunk of a run and the whole run round alike.
     """
     r = np.asarray(radius, dtype=float)

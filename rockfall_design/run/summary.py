@@ -41,7 +41,7 @@ STATION_QUANTITIES: dict[str, tuple[str, float]] = {
     "energy_kj": ("energy_j", 1e3),
     "translational_energy_kj": ("translational_energy_j", 1e3),
     "rotational_energy_kj": ("rotational_energy_j", 1e3),
-    # Issue 36: the height as EAD 340059 measures a fence's (normal to the
+    # The height as EAD 340059 measures a fence's (normal to the
     # slope) and the angular speed, so every station has the quantities a
     # barrier's distributions show (run.passages.QUANTITIES).
     "passing_height_normal_m": ("passing_height_normal_m", 1.0),
