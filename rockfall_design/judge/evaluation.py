@@ -99,6 +99,9 @@ class Evaluation:
         reaching, unresolved = self.judgement.reaching, self.judgement.unresolved
         fraction = reaching / n if n else 0.0
         allowed = float(getattr(p, "allowed_fraction", 0.0))
+        by_concept = self.concept.allowed_residual_fraction()
+        if by_concept is not None:
+            allowed = min(allowed, by_concept) if allowed > 0.0 else by_concept
         upper = fraction_upper_bound(reaching, n, self.confidence)
         lower = fraction_lower_bound(reaching, n, self.confidence)
         return {
