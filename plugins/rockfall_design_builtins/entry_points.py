@@ -3,7 +3,8 @@
 Every built-in measure, safety concept and cost model is registered by its
 own entry point (pyproject.toml, group ``rockfall_design``), named as the
 project file names it: ``fence``, ``wall``, ``ditch``, ``berm``,
-``boulder_row``, ``spang``, ``uni11211``, ``unit_prices``. So
+``boulder_row``, ``spang``, ``uni11211``, ``onr24810``, ``reliability``,
+``unit_prices``. So
 ``--block fence`` leaves out the fence and nothing else, and a third party
 can replace one built-in by blocking it and registering its own class of
 that name.
@@ -22,13 +23,15 @@ from types import ModuleType
 
 from rockfall_design import hookimpl
 
-from . import costs, measures, safety
+from . import costs, measures, safety, safety_onr24810, safety_reliability
 
 __all__ = [
     "berm",
     "boulder_row",
     "ditch",
     "fence",
+    "onr24810",
+    "reliability",
     "spang",
     "uni11211",
     "unit_prices",
@@ -72,8 +75,8 @@ def _measure(kind: str) -> OneBuiltin:
     return OneBuiltin(measures, "rockfall_design_measures", "kind", kind)
 
 
-def _concept(name: str) -> OneBuiltin:
-    return OneBuiltin(safety, "rockfall_design_safety_concepts", "name", name)
+def _concept(name: str, module: ModuleType = safety) -> OneBuiltin:
+    return OneBuiltin(module, "rockfall_design_safety_concepts", "name", name)
 
 
 def _cost_model(name: str) -> OneBuiltin:
@@ -87,4 +90,7 @@ berm = _measure("berm")
 boulder_row = _measure("boulder_row")
 spang = _concept("spang")
 uni11211 = _concept("uni11211")
+# One module each (DESIGN.md: one module per built-in).
+onr24810 = _concept("onr24810", safety_onr24810)
+reliability = _concept("reliability", safety_reliability)
 unit_prices = _cost_model("unit_prices")

@@ -67,6 +67,8 @@ from rockfall_design import (
 
 __all__ = [
     "SpangConcept",
+    "braking_check",
+    "gamma_d_field",
     "Uni11211Concept",
     "rockfall_design_safety_concepts",
 ]
@@ -247,36 +249,61 @@ def _product(result: MeasureResult) -> str:
     return f"product {name}" if name else f"this {result.measure.kind}"
 
 
-def _braking_check(result: MeasureResult, elongation_m: float | None) -> list[Check]:
+def braking_check(result: MeasureResult, elongation_m: float | None,
+                  gamma_d: float = 1.3) -> list[Check]:
     """The braking distance against the protected zone: ``[]`` or one check.
 
     A fence stops a rock by stretching downslope by up to its maximum
-    elongation (ETAG 027 / EAD 340059, measured in the MEL test); what stands
-    within that distance is hit by the net even when the rock is caught. The
-    only thing a project declares downslope is its protected zone
-    (``protect.x``), so the check is that the zone starts no nearer than the
-    elongation: value the elongation, target the clearance ``protect.x - x``
-    (m), holds if value <= target. It is geometry, not a statistic of the
-    rocks: it holds or fails with confidence alike, rocks or none.
+    elongation (EAD 340059 / ETAG 027, measured in the MEL test); what stands
+    within that distance is hit by the net even when the rock is caught.
+    Peila & Ronco (2009) ask that the distance from the fence to what it
+    protects, :math:`d_A`, be at least the elongation times a partial factor,
+    :math:`d_A \\ge \\gamma_d \\, d_{MEL}`, :math:`\\gamma_d` = 1.3 for an
+    elongation from the MEL test (1.5 from the SEL test). The only thing a
+    project declares downslope is its protected zone (``protect.x``): value
+    :math:`\\gamma_d d_{MEL}`, target the clearance ``protect.x - x`` (m),
+    holds if value <= target. It is geometry, not a statistic of the rocks:
+    it holds or fails with confidence alike, rocks or none. (The run itself
+    carries each caught rock on by its own braking distance, without the
+    factor: ``engine.barriers.braking_distance``.)
 
     No check without an elongation or without a protected zone
     (``result.clearance_m`` None).
+
+    References
+    ----------
+    .. [1] Peila, D. and Ronco, C. (2009). Technical note: Design of rockfall
+       net fences and the new ETAG 027 European guideline. Natural Hazards
+       and Earth System Sciences 9, 1291-1298.
     """
     clearance = result.clearance_m
     if elongation_m is None or clearance is None:
         return []
-    ok = bool(elongation_m <= clearance)
-    detail = (f"maximum elongation {_num(elongation_m, 'm')} of {_product(result)} "
-              f"(catalogue, MEL test) against {_num(clearance, 'm')} from the fence to the "
-              f"protected zone (protect.x)")
+    required = gamma_d * elongation_m
+    ok = bool(required <= clearance)
+    detail = (f"gamma_d {gamma_d:g} x maximum elongation {_num(elongation_m, 'm')} of "
+              f"{_product(result)} (catalogue, MEL test) = {_num(required, 'm')} against "
+              f"{_num(clearance, 'm')} from the fence to the protected zone (protect.x)")
     if not ok:
         detail = f"{detail}: the net would reach into the protected zone while braking a rock"
-    return [Check("braking_distance", elongation_m, clearance, ok, "m", detail, elongation_m,
-                  ok, None, elongation_m, not ok, "d_max", "<=", "d_A",
+    return [Check("braking_distance", required, clearance, ok, "m", detail, required,
+                  ok, None, required, not ok, "gamma_d d_max", "<=", "d_A",
                   (DesignValue("d_max", f"maximum elongation of {_product(result)}",
                                elongation_m, "m", source="product"),
+                   DesignValue("gamma_d d_max", f"the elongation with its partial factor "
+                               f"{gamma_d:g}", required, "m", source="product"),
                    DesignValue("d_A", "clearance from the fence to the protected zone",
                                clearance, "m", source="product")))]
+
+
+def gamma_d_field() -> Any:
+    """The ``gamma_d`` parameter of a concept that checks a fence's braking distance."""
+    return Field(
+        1.3, ge=1.0, le=_MAX_PARTIAL,
+        description="Partial factor on the fence's maximum elongation in the braking-distance "
+        "check (-): 1.3 for an elongation from the MEL test (Peila & Ronco 2009).",
+        json_schema_extra={"unit": "-"},
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -374,12 +401,14 @@ class SpangConcept(SafetyConcept):
             "95th/99th percentile (default p95) or the maximum.",
             json_schema_extra={"unit": None},
         )
+        gamma_d: float = gamma_d_field()
 
     example: ClassVar[dict[str, Any]] = {
         "height_factor": 2.0,
         "energy_factor": 1.0,
         "reach_factor": 1.0,
         "statistic": "p95",
+        "gamma_d": 1.3,
         "confidence": 0.95,
     }
 
@@ -411,7 +440,7 @@ class SpangConcept(SafetyConcept):
                     "height_factor",
                     height_m,
                     "m",
-                    result.passing_height_m,
+                    result.rated_passing_height_m,
                     params.statistic,
                     "passing height",
                     params.height_factor,
@@ -438,7 +467,8 @@ class SpangConcept(SafetyConcept):
         if width_m is not None:
             checks.append(_reach_check(result, width_m, params.reach_factor, params.statistic,
                                        params.confidence))
-        checks += _braking_check(result, _finite_property(properties, "max_elongation_m"))
+        checks += braking_check(result, _finite_property(properties, "max_elongation_m"),
+                                self.params.gamma_d)
         return checks
 
 
@@ -520,6 +550,9 @@ class Uni11211Concept(SafetyConcept):
     """
 
     name: ClassVar[str] = "uni11211"
+    #: An EAD concept: a fence's test figures are required (at their catalogue line).
+    required_measure_params: ClassVar[tuple[str, ...]] = (
+        "max_elongation_m", "residual_height_fraction")
     summary: ClassVar[str] = (
         "UNI 11211-4 limit states: design energy and design height (with freeboard) "
         "from percentiles times partial factors"
@@ -584,6 +617,7 @@ class Uni11211Concept(SafetyConcept):
             description="Target of berm or ditch width / reach of the rocks (the statistic "
             "of the concept) (-).", json_schema_extra={"unit": "-"},
         )
+        gamma_d: float = gamma_d_field()
 
     example: ClassVar[dict[str, Any]] = {
         "gamma_tr": 1.02,
@@ -594,6 +628,7 @@ class Uni11211Concept(SafetyConcept):
         "f_min_m": 0.5,
         "percentile": 95.0,
         "reach_factor": 1.0,
+        "gamma_d": 1.3,
         "confidence": 0.95,
     }
 
@@ -629,7 +664,8 @@ class Uni11211Concept(SafetyConcept):
         if width_m is not None:
             checks.append(_reach_check(result, width_m, params.reach_factor,
                                        _label(params.percentile), params.confidence))
-        checks += _braking_check(result, _finite_property(properties, "max_elongation_m"))
+        checks += braking_check(result, _finite_property(properties, "max_elongation_m"),
+                                self.params.gamma_d)
         return checks
 
     @property
@@ -701,7 +737,7 @@ class Uni11211Concept(SafetyConcept):
                       residual_m: float | None = None) -> Check:
         """h_d + f against the residual height where given, else the nominal height (m)."""
         params = self.params
-        heights = np.asarray(result.passing_height_m, dtype=float)
+        heights = np.asarray(result.rated_passing_height_m, dtype=float)
         radii = np.asarray(result.radius_m, dtype=float)
         if residual_m is None:
             height_m = nominal_m

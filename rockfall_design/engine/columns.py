@@ -58,7 +58,10 @@ BR_BEH = 4  #: behaviour code
 BR_E = 5  #: restitution of a rigid barrier
 BR_GAP = 6  #: clear gap between blocks (m)
 BR_SPACING = 7  #: block spacing (m)
-N_BARRIER_COLS = 8
+BR_SEL = 8  #: a net's service energy level, SEL (J)
+BR_D_SEL = 9  #: a net's elongation in its SEL test (m); 0 for none given
+BR_D_MEL = 10  #: a net's maximum elongation in its MEL test (m); 0: no braking distance
+N_BARRIER_COLS = 11
 
 # Outcome of a rock's first meeting with a barrier (rockfall_design.plugins.measure.Outcome).
 O_NOT_MET = 0

@@ -328,6 +328,9 @@ def barrier_table(
     restitution: float = 0.0,
     gap_m: float = 0.0,
     spacing_m: float = 1.0,
+    sel_j: float = 0.0,
+    elongation_sel_m: float = 0.0,
+    elongation_mel_m: float = 0.0,
 ) -> np.ndarray:
     """One row of the engine's barrier table (see ``columns.BR_*``).
 
@@ -345,6 +348,11 @@ def barrier_table(
         Rebound restitution of a rigid barrier (-).
     gap_m, spacing_m : float
         Clear gap and spacing of a boulder row (m).
+    sel_j, elongation_sel_m, elongation_mel_m : float
+        A net's service energy level (J) and its elongations in the SEL and
+        MEL tests (m): a rock it catches comes to rest its braking distance
+        downslope (:func:`~rockfall_design.engine.barriers.braking_distance`);
+        0 for figures not given (no elongation at MEL: no braking distance).
     """
     row = np.zeros(columns.N_BARRIER_COLS)
     row[columns.BR_X] = x
@@ -354,4 +362,7 @@ def barrier_table(
     row[columns.BR_E] = restitution
     row[columns.BR_GAP] = gap_m
     row[columns.BR_SPACING] = spacing_m
+    row[columns.BR_SEL] = sel_j
+    row[columns.BR_D_SEL] = elongation_sel_m
+    row[columns.BR_D_MEL] = elongation_mel_m
     return row

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._jit import hot
-from .barriers import _barrier_hit, _meet
+from .barriers import _barrier_hit, _braked_stop, _meet
 from .columns import (
     BR_E,
     BR_X,
@@ -176,6 +176,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
     nvy = 0.0
     nw = 0.0
     vs = 0.0
+    e_hit = 0.0  # kinetic energy (J) at the barrier that ends a flight or phase
     ctx = out.work[WORK_CTX:N_WORK]
     ctx[:] = 0.0
     if resume:
@@ -251,6 +252,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                         j += jstep
                         continue
                     hit = j
+                    e_hit = 0.5 * m * (vx * vx + vyb * vyb) + 0.2 * m * r * r * w * w
                     break
             if hit >= 0:
                 xb = bars[hit, BR_X]
@@ -272,6 +274,9 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                 if code == O_CAUGHT:
                     status = CAUGHT
                     caught_by = hit
+                    # The net carries the rock on by its braking distance.
+                    x, y = _braked_stop(bars, hit, e_hit, vx, x, y, px, py)
+                    max_x = max(max_x, x)
                     vx = 0.0
                     vy = 0.0
                     w = 0.0
@@ -427,6 +432,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                     j += dirn
                     continue
                 hit = j
+                e_hit = 0.5 * m * vs * vs + 0.2 * m * r * r * ss * ss
                 # The phase ends at the barrier.
                 xn = bars[j, BR_X]
                 yn = y + dy * dd
@@ -456,6 +462,8 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             if code == O_CAUGHT:
                 status = CAUGHT
                 caught_by = hit
+                x, y = _braked_stop(bars, hit, e_hit, dx, x, y, px, py)
+                max_x = max(max_x, x)
                 vx = 0.0
                 vy = 0.0
                 w = 0.0

@@ -146,9 +146,13 @@ class Evaluation:
         p = self.study.project.protect
         if p is None:
             return None
+        allowed = float(getattr(p, "allowed_fraction", 0.0))
+        # A concept that sets the residual itself (reliability) tightens the allowance.
+        by_concept = self.concept.allowed_residual_fraction()
+        if by_concept is not None:
+            allowed = min(allowed, by_concept) if allowed > 0.0 else by_concept
         return protect_summary(float(p.x), self.judgement.reaching, self.study.result.n,
-                               float(getattr(p, "allowed_fraction", 0.0)), self.confidence,
-                               self.judgement.unresolved)
+                               allowed, self.confidence, self.judgement.unresolved)
 
     @property
     def ok(self) -> bool:

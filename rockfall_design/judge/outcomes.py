@@ -53,6 +53,7 @@ __all__ = [
     "Judgement",
     "RockFates",
     "barrier_outcomes",
+    "braking_distances",
     "edit_outcomes",
     "held_by",
     "judge_measures",
@@ -148,7 +149,7 @@ def barrier_outcomes(
         :class:`~rockfall_design.plugins.measure.Outcome` codes.
     """
     met = alive & np.isfinite(height_m)
-    over = met & (height_m > fp.height_m)
+    over = met & (height_m > fp.vertical_height_m)
     gap = np.zeros_like(met)
     if fp.behaviour == BarrierBehaviour.BLOCKS:
         p = (fp.gap_m - 2.0 * radius_m) / fp.spacing_m
@@ -163,6 +164,38 @@ def barrier_outcomes(
     out[stopped] = (columns.O_REBOUNDED if fp.behaviour == BarrierBehaviour.RIGID
                     else columns.O_CAUGHT)
     return out
+
+
+def braking_distances(fp: Barrier, energy_kj: np.ndarray) -> np.ndarray:
+    """Braking distance (m) of each rock a net catches, from its energy there (kJ).
+
+    The engine's rule (``engine.barriers.braking_distance``) over an array,
+    for the optimiser's screening: 0 without an MEL elongation (and for any
+    barrier but a net); the MEL elongation for every rock without an SEL
+    elongation; else the SEL elongation up to the SEL (a third of the MEL
+    where not given), the MEL elongation from the MEL on, linear in the
+    energy between the tests (``numpy.interp`` clamps at both ends, which is
+    that rule).
+
+    Parameters
+    ----------
+    fp : Barrier
+    energy_kj : ndarray
+        Kinetic energy of each rock at the net (kJ).
+
+    Returns
+    -------
+    ndarray
+        m, the shape of ``energy_kj``.
+    """
+    e = np.asarray(energy_kj, dtype=float)
+    d_mel, d_sel = fp.elongation_mel_m, fp.elongation_sel_m
+    if fp.behaviour != BarrierBehaviour.NET or not d_mel > 0.0:
+        return np.zeros_like(e)
+    sel = fp.capacity_kj / 3.0 if np.isnan(fp.sel_kj) else fp.sel_kj
+    if not d_sel > 0.0 or not fp.capacity_kj > sel:
+        return np.full_like(e, d_mel)
+    return np.interp(e, [sel, fp.capacity_kj], [d_sel, d_mel])
 
 
 def held_by(fp: Barrier | ProfileEdit, outcome: np.ndarray, fates: RockFates) -> np.ndarray:
@@ -234,6 +267,8 @@ def judge_measures(
             # thousands of placements.
             rows = np.flatnonzero(met)
             res.passing_height_m = rec[rows, 0]
+            res.passing_height_normal_m = res.passing_height_m * fp.slope_cos
+            res.height_normal = fp.height_normal
             res.velocity_ms = rec[rows, 1]
             res.energy_kj = rec[rows, 2]
             if protect_x is not None:

@@ -9,6 +9,7 @@ The plan (:mod:`rockfall_design.judge.plan`) does this once per command.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -84,6 +85,23 @@ def build_concept(project: Project, registry: Registry) -> SafetyConcept:
         raise unknown_plugin_name(project, registry, "safety", ("safety", "concept"), name)
     params = project.validate_params(("safety",), cls.Params, raw, drop=("concept",))
     return guard(registry).instantiate(cls, params)
+
+
+def required_figures_problem(concept: SafetyConcept, measure_cls: Any,
+                             values: dict[str, Any]) -> str | None:
+    """What a measure (or catalogue product) lacks that the concept requires, or None.
+
+    ``concept.required_measure_params`` names parameters the concept needs
+    wherever a measure's parameter model has them; ``values`` are the
+    parameters given (a measure's, or a catalogue product's entry).
+    """
+    fields = getattr(getattr(measure_cls, "Params", None), "model_fields", {})
+    missing = [k for k in concept.required_measure_params
+               if k in fields and values.get(k) is None]
+    if not missing:
+        return None
+    return (f"the safety concept {concept.name!r} needs {', '.join(missing)} (the product's "
+            "EAD 340059 test figures: take them from its European Technical Assessment)")
 
 
 def place_measures(
@@ -214,6 +232,22 @@ def edited_section(project: Project, section: Section, placed: Sequence[PlacedMe
     )
 
 
+def _mel_columns(fp: Barrier) -> dict[str, float]:
+    """A net's SEL (J) and its SEL and MEL elongations (m) for the engine, 0 where not given.
+
+    The SEL defaults to a third of the MEL, as EAD 340059 defines it, where
+    the kit gives an SEL elongation but no SEL energy.
+    """
+    def given(v: float) -> float:
+        return 0.0 if math.isnan(v) else float(v)
+
+    if fp.behaviour != BarrierBehaviour.NET:
+        return {}
+    sel_kj = fp.capacity_kj / 3.0 if math.isnan(fp.sel_kj) else fp.sel_kj
+    return {"sel_j": sel_kj * 1e3, "elongation_sel_m": given(fp.elongation_sel_m),
+            "elongation_mel_m": given(fp.elongation_mel_m)}
+
+
 def _barrier_rows(placed: Sequence[PlacedMeasure]) -> tuple[np.ndarray, list[int]]:
     rows, owners = [], []
     for p in placed:
@@ -222,12 +256,13 @@ def _barrier_rows(placed: Sequence[PlacedMeasure]) -> tuple[np.ndarray, list[int
             rows.append(
                 barrier_table(
                     fp.x,
-                    fp.height_m,
+                    fp.vertical_height_m,
                     fp.capacity_kj * 1e3,
                     _BEHAVIOUR_CODE[fp.behaviour],
                     restitution=fp.restitution,
                     gap_m=fp.gap_m,
                     spacing_m=fp.spacing_m,
+                    **_mel_columns(fp),
                 )
             )
             owners.append(p.index)

@@ -51,10 +51,10 @@ all is an error at ``design.costs`` naming the candidate and the quantity
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..judge.margin import DEFAULT_CHECKER_POWER
-from ..judge.placing import unknown_measure_type
+from ..judge.placing import build_concept, required_figures_problem, unknown_measure_type
 from ..plugins.cost_model import CostModel
 from ..plugins.declared import DeclaredDesign, declared_design
 from .candidates import (
@@ -181,10 +181,20 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
     )
     cost_model = _resolve_cost_model(project, registry)
     _check_prices(project, registry, candidates, cost_model)
+    concept = build_concept(project, registry)
+    _check_required_figures(project, registry, concept)
+    residual_count, residual_fraction = design.residual_count, design.residual_fraction
+    by_concept = concept.allowed_residual_fraction()
+    if by_concept is not None:
+        # The stricter of the concept's and the design's fraction; a count (or a
+        # fraction of 0, the default) gives way to the concept's.
+        residual_fraction = (min(residual_fraction, by_concept)
+                             if residual_fraction else by_concept)
+        residual_count = None
     return DesignSpec(
         max_measures=design.max_measures,
-        residual_count=design.residual_count,
-        residual_fraction=design.residual_fraction,
+        residual_count=residual_count,
+        residual_fraction=residual_fraction,
         fresh_rocks=design.fresh_rocks,
         fresh_seed=design.fresh_seed,
         length_m=design.site.length_m,
@@ -196,6 +206,28 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
     )
 
 
+
+
+def _check_required_figures(project: Project, registry: Registry, concept: Any) -> None:
+    """Every catalogue product gives what the safety concept requires of its measure.
+
+    Raises
+    ------
+    ProjectError
+        At the product's line in the catalogue: e.g. a fence without its EAD
+        340059 test figures under an EAD concept.
+    """
+    design = project.design
+    assert design is not None
+    for kind, table in design.catalogue.items():
+        cls = registry.measures.get(kind)
+        if cls is None:
+            continue
+        for name, entry in table.items():
+            why = required_figures_problem(concept, cls, entry)
+            if why:
+                raise design.products_locator.error_at((kind, name), f"{kind} product {name!r}: "
+                                                       f"{why}")
 
 
 def with_residual_target(project: Project, spec: DesignSpec,

@@ -23,7 +23,13 @@ import numpy as np
 from ..engine import Releases, Section, columns, run_ensemble
 from ..errors import ProjectError
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
-from ..judge.outcomes import Judgement, RockFates, barrier_outcomes, judge_measures
+from ..judge.outcomes import (
+    Judgement,
+    RockFates,
+    barrier_outcomes,
+    braking_distances,
+    judge_measures,
+)
 from ..judge.placing import PlacedMeasure, edited_section, place_measures
 from ..plugins import guard
 from ..plugins.concept import DEFAULT_CONFIDENCE, Check
@@ -473,6 +479,14 @@ class Screening:
             # thousands of placements are judged on thousands of rocks).
             np.minimum(fates.max_x, fp.x, out=fates.max_x, where=stopped)
             np.copyto(fates.x_end, fp.x, where=stopped)
+            if fp.behaviour == BarrierBehaviour.NET and fp.elongation_mel_m > 0.0:
+                # A net carries what it catches on by its braking distance (the engine's
+                # rule, clipped to the section as the engine does).
+                caught = np.flatnonzero(out == columns.O_CAUGHT)
+                x_stop = np.minimum(fp.x + braking_distances(fp, e_kj[caught]),
+                                    float(self.section.x[-1]))
+                fates.max_x[caught] = x_stop
+                fates.x_end[caught] = x_stop
             np.copyto(fates.status, np.where(out == columns.O_CAUGHT, columns.CAUGHT,
                                              columns.STOPPED), where=stopped, casting="unsafe")
             alive &= ~stopped

@@ -222,9 +222,26 @@ class SafetyConcept(ABC):
     summary: ClassVar[str] = ""
     Params: ClassVar[type[SafetyParams]]
     example: ClassVar[dict[str, Any]] = {}
+    #: Measure parameters the concept needs wherever a measure has them: a
+    #: measure (or catalogue product) whose parameter model has one of these
+    #: fields must give it (not None), else the project is an error at its
+    #: line. E.g. ``("max_elongation_m", "residual_height_fraction")``: the
+    #: EAD 340059 test figures of a fence, which the EAD concepts check.
+    required_measure_params: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self, params: SafetyParams) -> None:
         self.params = params
+
+    def allowed_residual_fraction(self) -> float | None:
+        """The largest fraction of rocks that may reach the protected zone, or None.
+
+        A concept that sets the residual target itself (a target reliability
+        over the working life, say) returns it (-); the judge and the
+        optimiser then hold the residual to the stricter of it and the
+        project's own (``protect.allowed_fraction``, ``design.residual``).
+        None (the default): the project's target alone.
+        """
+        return None
 
     @abstractmethod
     def checks(self, result: MeasureResult) -> list[Check]:

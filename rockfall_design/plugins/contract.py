@@ -155,6 +155,21 @@ def _x_problem(x: float, name: str, measure: Any, section: Any) -> str | None:
     return None
 
 
+def _mel_problem(fp: Barrier) -> str | None:
+    """What is wrong with a barrier's optional SEL/MEL figures (NaN: not given), or None."""
+    for name in ("sel_kj", "elongation_sel_m", "elongation_mel_m"):
+        value = getattr(fp, name)
+        if _is_number(value) and math.isnan(float(value)):
+            continue
+        why = _number(value, name, 0.0, low_open=True)
+        if why:
+            return why
+    if not math.isnan(float(fp.sel_kj)) and not fp.sel_kj < fp.capacity_kj:
+        return (f"sel_kj = {fp.sel_kj:g}: expected it below capacity_kj = {fp.capacity_kj:g} "
+                "(the SEL is a fraction of the MEL)")
+    return None
+
+
 def footprint_problem(fp: Barrier | ProfileEdit, measure: Any, section: Any) -> str | None:
     """What is wrong with a footprint's fields, or None: every value the engine will use.
 
@@ -162,7 +177,9 @@ def footprint_problem(fp: Barrier | ProfileEdit, measure: Any, section: Any) -> 
     (a NaN height would catch every rock), ``capacity_kj`` >= 0 (``inf``
     for none given), a :class:`BarrierBehaviour`, ``restitution`` in 0..1,
     ``gap_m`` >= 0 and ``spacing_m`` > 0 with the gap no wider than the
-    spacing. A profile edit needs a finite stretch ``x_start`` < ``x_end``,
+    spacing, ``slope_cos`` in (0, 1], and SEL/MEL figures that are NaN (not
+    given) or > 0, the SEL below the capacity. A profile edit needs a
+    finite stretch ``x_start`` < ``x_end``,
     points of shape (k, 2), k >= 2, finite, x strictly increasing from
     ``x_start`` to ``x_end`` and meeting the ground there, a finite catch
     range ``catch_from`` <= ``catch_to`` on the section, and a material
@@ -181,6 +198,10 @@ def footprint_problem(fp: Barrier | ProfileEdit, measure: Any, section: Any) -> 
         why = (_number(fp.restitution, "restitution", 0.0, 1.0)
                or _number(fp.gap_m, "gap_m", 0.0)
                or _number(fp.spacing_m, "spacing_m", 0.0, low_open=True))
+        if why:
+            return why
+        why = (_number(fp.slope_cos, "slope_cos", 0.0, 1.0, low_open=True)
+               or _mel_problem(fp))
         if why:
             return why
         if fp.gap_m > fp.spacing_m:

@@ -26,6 +26,7 @@ the rock's path crosses the barrier's station, in either direction.
 from __future__ import annotations
 
 import enum
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Literal
@@ -253,6 +254,26 @@ class Barrier:
         BLOCKS: clear width of a gap between blocks (m).
     spacing_m : float
         BLOCKS: centre-to-centre spacing of the blocks (m), > 0.
+    slope_cos : float
+        Cosine of the inclination of the ground the barrier stands on (-),
+        in (0, 1]: a passing height measured vertically times this is the
+        passing height perpendicular to the slope. 1 (level ground) unless
+        the measure says.
+    height_normal : bool
+        ``height_m`` is measured perpendicular to the slope (a fence's
+        nominal height, as EAD 340059 defines it), not vertically: the rock's
+        centre passes over where its vertical passing height exceeds
+        ``height_m / slope_cos`` (:attr:`vertical_height_m`).
+    sel_kj : float
+        NET: service energy level of the kit (kJ), below ``capacity_kj``
+        (its MEL); NaN for none given.
+    elongation_sel_m, elongation_mel_m : float
+        NET: elongation of the kit in its SEL test and maximum elongation in
+        its MEL test (m); NaN for none given. A rock the net catches comes
+        to rest its braking distance downslope of ``x``, interpolated by its
+        energy between the two tests
+        (:func:`rockfall_design.engine.barriers.braking_distance`); without
+        ``elongation_mel_m`` it stops at ``x``.
     """
 
     x: float
@@ -262,6 +283,21 @@ class Barrier:
     restitution: float = 0.0
     gap_m: float = 0.0
     spacing_m: float = 1.0
+    slope_cos: float = 1.0
+    height_normal: bool = False
+    sel_kj: float = math.nan
+    elongation_sel_m: float = math.nan
+    elongation_mel_m: float = math.nan
+
+    @property
+    def vertical_height_m(self) -> float:
+        """Height of the top above the ground at ``x``, measured vertically (m).
+
+        For a height measured perpendicular to the slope (``height_normal``),
+        ``height_m / slope_cos``: a rock's centre at that vertical height is
+        ``height_m`` from a planar slope of that inclination.
+        """
+        return self.height_m / self.slope_cos if self.height_normal else self.height_m
 
 
 @dataclass(frozen=True)
@@ -321,8 +357,15 @@ class MeasureResult:
     met, caught, passed_over, broken_through, rebounded, passed_through_gap : int
         Counts (each rock counted once, by its first meeting).
     passing_height_m : ndarray
-        Passing height of the rock centre above the ground at the station (m);
-        empty for profile edits.
+        Passing height of the rock centre above the ground at the station,
+        measured vertically (m); empty for profile edits.
+    passing_height_normal_m : ndarray
+        The same, measured perpendicular to the slope the barrier stands on
+        (m, ``passing_height_m`` times the barrier's ``slope_cos``).
+    height_normal : bool
+        The measure's height is rated perpendicular to the slope (a fence's
+        nominal height): its height checks use ``passing_height_normal_m``
+        (see :attr:`rated_passing_height_m`).
     velocity_ms : ndarray
         Speed there (m/s).
     energy_kj : ndarray
@@ -350,12 +393,23 @@ class MeasureResult:
     rebounded: int = 0
     passed_through_gap: int = 0
     passing_height_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    passing_height_normal_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    height_normal: bool = False
     velocity_ms: np.ndarray = field(default_factory=lambda: np.zeros(0))
     energy_kj: np.ndarray = field(default_factory=lambda: np.zeros(0))
     mass_kg: np.ndarray = field(default_factory=lambda: np.zeros(0))
     radius_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
     reach_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
     clearance_m: float | None = None
+
+    @property
+    def rated_passing_height_m(self) -> np.ndarray:
+        """The passing heights to compare with the measure's own height (m).
+
+        Perpendicular to the slope for a measure whose height is rated so (a
+        fence's nominal height, EAD 340059), else vertical.
+        """
+        return self.passing_height_normal_m if self.height_normal else self.passing_height_m
 
 
 class ProtectiveMeasure(ABC):

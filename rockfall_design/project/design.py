@@ -86,8 +86,10 @@ _CATALOGUE_FORM = "measure type -> product name -> {capacity_kj: E, heights: [h,
 #: what it is), the value in (low, high]; checked here so that a bad figure is an error
 #: at its line.
 _MEL_KEYS = {
+    "sel_kj": (0.0, math.inf, "service energy level (SEL), kJ, below capacity_kj (the MEL)"),
     "max_elongation_m": (0.0, MAX_COORDINATE_M,
                          "maximum elongation (braking distance) in the MEL test, m"),
+    "elongation_sel_m": (0.0, MAX_COORDINATE_M, "elongation in the SEL test, m"),
     "residual_height_fraction": (0.0, 1.0,
                                  "residual height after the MEL test as a fraction of the "
                                  "nominal height, e.g. 0.5 for category A"),
@@ -114,6 +116,10 @@ def _mel_figures(entry: dict[str, Any], where: tuple) -> dict[str, float]:
                 where + (key,),
             )
         out[key] = value
+    if "sel_kj" in out and "capacity_kj" in entry and not out["sel_kj"] < _as_number(
+            entry["capacity_kj"], where + ("capacity_kj",)):
+        raise _fail(f"expected the SEL below capacity_kj = {fmt(entry['capacity_kj'])} kJ "
+                    f"(the MEL), got {fmt(out['sel_kj'])}", where + ("sel_kj",))
     return out
 
 

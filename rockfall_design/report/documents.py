@@ -78,13 +78,23 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "ground parameters), no fragmentation of a rock on impact, no rock hitting another.",
         "No trees or forest, no air drag, no ground that deforms or is cratered beyond what "
         "restitution and friction represent.",
-        "A fence is a line at its station: in the simulation a rock is stopped where its "
-        "centre crosses the station, with no braking distance (maximum elongation) and no "
-        "loss of height (residual height) after an impact, no difference between hitting a "
-        "post, a cable or the middle of the net, no load on posts, anchors or foundations. "
-        "Where the product gives its maximum elongation and residual height, the checks use "
-        "them (below). The catalogue's capacity_kj is one number; SEL and MEL are not told "
-        "apart.",
+        "A fence is a line at its station with a braking distance. Its nominal height "
+        "is measured perpendicular to the slope, as EAD 340059 defines it: a rock "
+        "passes over where its centre is more than the nominal height from the ground "
+        "segment under the station (h_vertical x cos(slope) > h_nominal, so the "
+        "vertical top is h_nominal / cos(slope)); reports give the passing height both "
+        "ways, vertical and normal to the slope. A rock caught below it comes to rest "
+        "its braking distance downslope of the station, taken horizontally (on the safe "
+        "side: the elongation is measured along the slope): the SEL test's elongation "
+        "up to the SEL (MEL / 3 unless the product gives sel_kj), the MEL test's "
+        "maximum elongation from the MEL on, linear in the rock's energy in between; "
+        "with only the MEL elongation, that for every caught rock; without an MEL "
+        "elongation the rock stops at the station as before. So stop positions, the "
+        "protected zone and a barrier below see the deflection (a net carried into a "
+        "barrier below is not modelled: the braking check keeps the zone clear of it). "
+        "Above the MEL the rock breaks through with the surplus energy. No difference "
+        "between hitting a post, a cable or the middle of the net, no loss of height "
+        "after earlier impacts in the run, no load on posts, anchors or foundations.",
         "A wall is rigid: no structural check of the wall, the embankment or its foundation; "
         "a ditch or berm holds a rock that comes to rest in it, with no check of its slopes.",
     )),
@@ -107,16 +117,39 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "h_d + f instead (the conservative reading, flagged for review against the text of "
         "the standard).",
         "Fence classes follow ETAG 027, now EAD 340059: a kit is tested at its service "
-        "energy level SEL and its maximum energy level MEL (SEL = MEL / 3); the MEL test "
-        "gives the maximum elongation (braking distance) and the residual height (category "
-        "A at least 50 % of the nominal height, B 30 to 50 %, C at most 30 %). The energy "
-        "is checked against capacity_kj. Where the catalogue gives a fence product's "
-        "max_elongation_m and residual_height_fraction (or a checked fence has them), both "
-        "concepts check that the protected zone (protect.x) does not start within the "
-        "maximum elongation downslope of the fence (braking_distance, naming the product), "
-        "and uni11211 checks the design height against the residual height; without them "
-        "the braking distance is not checked and the height is checked against the nominal "
-        "height.",
+        "energy level SEL and its maximum energy level MEL (SEL = MEL / 3); the tests "
+        "give the elongation (braking distance) and the residual height (category A at "
+        "least 50 % of the nominal height, B 30 to 50 %, C at most 30 %). Where a fence "
+        "has max_elongation_m and a protected zone is given, every concept checks "
+        "braking_distance: gamma_d x the maximum elongation must not exceed the "
+        "distance from the fence to protect.x, gamma_d = 1.3 for an elongation from the "
+        "MEL test after Peila & Ronco (2009) (a concept parameter). uni11211 checks the "
+        "design height against the residual height; onr24810 against the nominal height "
+        "for rare events and the residual height for frequent ones. The EAD concepts "
+        "(uni11211, onr24810) require every catalogue fence to give max_elongation_m "
+        "and residual_height_fraction: a product without them is an error at its line "
+        "in the catalogue.",
+        "onr24810 follows ONR 24810 as Volkwein et al. (2011) and Mölk & Stelzer (2013) "
+        "describe it: the 99 % fractiles of the energies and of the passing heights "
+        "(normal to the slope) at the fence, times gamma_F by consequence class, "
+        "against the SEL (event: frequent) or MEL / gamma_R (event: rare), the height "
+        "with a freeboard max(f_min_m, the 99 % fractile radius). The defaults of "
+        "gamma_F (0.99 / 1.1 / 1.21 for CC1 / CC2 / CC3, EN 1990's K_FI on a base "
+        "factor of 1.1) and gamma_R (1.0) are ILLUSTRATIVE and flagged for review: the "
+        "text of the standard was not at hand; set them from the edition in force.",
+        "reliability follows Marchelli, De Biagi & Peila (2020): falls arrive as a "
+        "Poisson process of annual_falls per year, so the probability that at least one "
+        "block fails within working_life_years is 1 - exp(-lambda T p), p the simulated "
+        "per-block probability. Each measure's p (rocks passing over, breaking through "
+        "or slipping through a gap, of all rocks) and the protected zone's (the "
+        "residual) must keep that probability within target_failure_probability, judged "
+        "with their Clopper-Pearson bounds; the probability that at least one of these "
+        "happens to a block is at most their sum. A target of 1e-4 over 2.5 falls a "
+        "year for 50 years allows p = 8.0e-7 per block, which zero failures show only "
+        "with 3.7 million rocks at 95 %: the check says so (rocks_needed) and such a "
+        "design stays undecided (marginal) within design.max_rocks. The rocks must be a "
+        "fair sample of the falls that annual_falls counts (same release zones and "
+        "block sizes). ### The fence's MEL-test figures in the catalogue",
     )),
 )
 

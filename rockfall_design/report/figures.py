@@ -192,10 +192,13 @@ def _draw_measures(ax: Axes, evaluation: Evaluation, label: bool = True,
         fp = p.footprint
         if isinstance(fp, Barrier):
             yg = float(section.ground_height(fp.x))
-            ax.plot([fp.x, fp.x], [yg, yg + fp.height_m], color=_MEASURE, lw=3.0, zorder=6,
+            # Where a rock's centre passes over: a fence's nominal height is normal to
+            # the slope, so its top stands higher above the ground vertically.
+            top = yg + fp.vertical_height_m
+            ax.plot([fp.x, fp.x], [yg, top], color=_MEASURE, lw=3.0, zorder=6,
                     solid_capstyle="butt", label="barrier" if (label and first) else None)
             first = False
-            anchor = (fp.x, yg + fp.height_m)
+            anchor = (fp.x, top)
         else:
             ax.axvspan(fp.catch_from, fp.catch_to, color=_MEASURE, alpha=0.12, zorder=0)
             anchor = (fp.catch_from, float(section.ground_height(fp.catch_from)))

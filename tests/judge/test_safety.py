@@ -147,6 +147,7 @@ def test_default_parameters():
         "energy_factor": 1.0,
         "reach_factor": 1.0,
         "statistic": "p95",  # as the README advises (issue 25); the maximum has no bound
+        "gamma_d": 1.3,  # Peila & Ronco (2009), on a fence's maximum elongation
         "confidence": 0.95,
     }
     assert Uni11211Concept.Params().model_dump() == {
@@ -158,6 +159,7 @@ def test_default_parameters():
         "f_min_m": 0.5,
         "percentile": 95.0,
         "reach_factor": 1.0,
+        "gamma_d": 1.3,
         "confidence": 0.95,
     }
 

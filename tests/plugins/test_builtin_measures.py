@@ -161,9 +161,16 @@ def test_params_are_frozen():
 
 def test_fence_footprint_and_quantities(simple):
     fence = build(Fence, x=70.0, height=4.0, capacity_kj=1000.0, product="RX-100")
-    assert fence.footprint(simple) == Barrier(
-        x=70.0, height_m=4.0, capacity_kj=1000.0, behaviour=BarrierBehaviour.NET
+    # x = 70 m stands on the segment (60, 30)-(80, 20): cos = 20 / hypot(20, 10).
+    cos = 20.0 / math.hypot(20.0, 10.0)
+    fp = fence.footprint(simple)
+    assert fp == Barrier(
+        x=70.0, height_m=4.0, capacity_kj=1000.0, behaviour=BarrierBehaviour.NET,
+        slope_cos=cos, height_normal=True, sel_kj=math.nan, elongation_sel_m=math.nan,
+        elongation_mel_m=math.nan,
     )
+    # The nominal height is normal to the slope: the vertical top is higher.
+    assert_allclose(fp.vertical_height_m, 4.0 / cos)
     assert fence.design_properties() == {"height_m": 4.0, "capacity_kj": 1000.0}
     assert fence.quantities(simple) == {
         "height_m": 4.0,
@@ -171,6 +178,19 @@ def test_fence_footprint_and_quantities(simple):
         "area_m2_per_m": 4.0,
     }
     assert "RX-100" in fence.label()
+
+
+def test_fence_carries_its_ead_figures_to_the_engine_and_the_concepts(simple):
+    fence = build(Fence, x=70.0, height=4.0, capacity_kj=1000.0, max_elongation_m=5.5,
+                  elongation_sel_m=3.6, sel_kj=300.0, residual_height_fraction=0.6)
+    fp = fence.footprint(simple)
+    assert (fp.sel_kj, fp.elongation_sel_m, fp.elongation_mel_m) == (300.0, 3.6, 5.5)
+    props = fence.design_properties()
+    assert props["max_elongation_m"] == 5.5 and props["elongation_sel_m"] == 3.6
+    assert props["sel_kj"] == 300.0
+    assert_allclose(props["residual_height_m"], 2.4)
+    with pytest.raises(ValidationError, match="below capacity_kj"):
+        Fence.Params(x=70.0, height=4.0, capacity_kj=1000.0, sel_kj=1000.0)
 
 
 def test_wall_footprint_and_quantities(simple):

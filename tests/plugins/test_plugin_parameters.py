@@ -130,7 +130,8 @@ def test_every_builtin_parameter_documents_its_unit():
     fence = next(m for m in data["measures"] if m["kind"] == "fence")
     assert {p["name"]: p["unit"] for p in fence["parameters"]} == {
         "x": "m", "height": "m", "capacity_kj": "kJ", "product": None,
-        "max_elongation_m": "m", "residual_height_fraction": "-"}
+        "max_elongation_m": "m", "residual_height_fraction": "-", "sel_kj": "kJ",
+        "elongation_sel_m": "m"}
     assert {v["name"] for v in fence["design_variables"]} >= {"x", "height"}
 
 

@@ -1,0 +1,202 @@
+"""The built-in safety concept ``onr24810``: the Austrian rule for rockfall fences.
+
+An ordinary plugin (public ``rockfall_design`` API only, its own entry point).
+
+ONR 24810 (Austrian Standards) designs a net fence on the 99 % fractile of
+the simulated kinetic energies and passing heights at the fence, raised by
+partial factors that grow with the consequence class, and compares the
+design energy with the kit's tested energy: its service energy level (SEL)
+for frequent events, which the fence must take without repair, and its
+maximum energy level (MEL) for rare events (Volkwein et al. 2011, sect. 6;
+Mölk & Stelzer 2013). The kit's figures are those of its European Technical
+Assessment (EAD 340059): the concept requires a fence's maximum elongation
+and residual height.
+
+Checks, per measure (units m, kJ):
+
+``design_energy`` (``capacity_kj``)
+    :math:`E_d = \\gamma_F \\, E_{99}` against :math:`E_{SEL}` (``event:
+    frequent``) or :math:`E_{MEL} / \\gamma_R` (``event: rare``).
+``design_height`` (``height_m``)
+    :math:`h_d + f = \\gamma_F \\, h_{99} + \\max(f_{min}, r_{99})`, the
+    passing height perpendicular to the slope for a fence, against its
+    nominal height for rare events and its residual height for frequent
+    ones (a fence hit by frequent blocks stands at its residual height until
+    it is repaired).
+``braking_distance`` (a fence's ``max_elongation_m``)
+    :math:`\\gamma_d \\, d_{MEL}` within the clearance to the protected zone
+    (Peila & Ronco 2009), as in the other concepts.
+
+Each design value carries its order-statistic bounds at the project's
+confidence (the 99 % fractile needs at least 299 rocks at the measure to be
+bounded at 95 %).
+
+The partial factors' defaults are ILLUSTRATIVE and **flagged for review**:
+the text of ONR 24810 was not reached when this was written. The factor on
+the actions follows the consequence class as EN 1990 (Annex B) scales
+actions by class (:math:`K_{FI}` = 0.9, 1.0, 1.1 for CC1 to CC3) applied
+to a base factor of 1.1; set ``gamma_f`` to the value of the edition in
+force.
+
+References
+----------
+.. [1] ONR 24810:2021. Technischer Steinschlagschutz -- Begriffe,
+   Einwirkungen, Bemessung und konstruktive Durchbildung, Überwachung und
+   Instandhaltung. Austrian Standards International, Vienna.
+.. [2] Volkwein, A., Schellenberg, K., Labiouse, V., Agliardi, F., Berger,
+   F., Bourrier, F., Dorren, L. K. A., Gerber, W. and Jaboyedoff, M. (2011).
+   Rockfall characterisation and structural protection -- a review. Natural
+   Hazards and Earth System Sciences 11, 2617-2651.
+.. [3] Mölk, M. and Stelzer, G. (2013). Die neue ONR 24810: Stand der
+   Technik im Steinschlagschutz. Journal für Wildbach-, Lawinen-, Erosions-
+   und Steinschlagschutz 171.
+.. [4] EN 1990:2002, Basis of structural design, Annex B (consequence
+   classes and :math:`K_{FI}`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar, Literal
+
+import numpy as np
+from pydantic import ConfigDict, Field
+
+from rockfall_design import (
+    Check,
+    MeasureResult,
+    SafetyConcept,
+    SafetyParams,
+    hookimpl,
+    quantile_with_bounds,
+    rocks_to_bound_quantile,
+)
+
+from .safety import braking_check, gamma_d_field
+
+__all__ = ["Onr24810Concept", "rockfall_design_safety_concepts"]
+
+#: The EN 1990 K_FI of each consequence class times a base factor of 1.1 on
+#: the actions: ILLUSTRATIVE, flagged for review against ONR 24810 (see the module).
+_GAMMA_F = {"CC1": 0.9 * 1.1, "CC2": 1.0 * 1.1, "CC3": 1.1 * 1.1}
+_NO_ROCK = "no rock reached the measure"
+
+
+def _finite(properties: dict[str, float], key: str) -> float | None:
+    value = properties.get(key)
+    return None if value is None or not math.isfinite(float(value)) else float(value)
+
+
+class Onr24810Concept(SafetyConcept):
+    """ONR 24810: 99 % fractiles, consequence-class factors, SEL or MEL by event frequency.
+
+    See the module docstring for the checks, their formulas and what is
+    flagged for review.
+    """
+
+    name: ClassVar[str] = "onr24810"
+    summary: ClassVar[str] = (
+        "ONR 24810: 99 % fractile energy and passing height with consequence-class factors, "
+        "against the SEL (frequent events) or the MEL (rare events)"
+    )
+    required_measure_params: ClassVar[tuple[str, ...]] = (
+        "max_elongation_m", "residual_height_fraction")
+
+    class Params(SafetyParams):
+        """Consequence class, event frequency and partial factors."""
+
+        model_config = ConfigDict(allow_inf_nan=False)
+
+        consequence_class: Literal["CC1", "CC2", "CC3"] = Field(
+            "CC2", description="Consequence class of a failure (EN 1990): CC1 low, CC2 "
+            "medium, CC3 high.", json_schema_extra={"unit": None})
+        event: Literal["frequent", "rare"] = Field(
+            "rare", description="How often the design block comes: 'frequent' designs on the "
+            "kit's SEL and residual height, 'rare' on its MEL and nominal height.",
+            json_schema_extra={"unit": None})
+        gamma_f: float | None = Field(
+            None, ge=0.5, le=10.0,
+            description="Partial factor on the design energy and passing height (-); default "
+            "by consequence class 0.99 / 1.1 / 1.21 (ILLUSTRATIVE, see the docs).",
+            json_schema_extra={"unit": "-"})
+        gamma_r: float = Field(
+            1.0, ge=1.0, le=10.0,
+            description="Partial factor on the MEL for rare events (-); ILLUSTRATIVE 1.0.",
+            json_schema_extra={"unit": "-"})
+        f_min_m: float = Field(
+            0.5, ge=0.0, le=100.0,
+            description="Least freeboard above the design passing height (m); at least the "
+            "99 % fractile radius.", json_schema_extra={"unit": "m"})
+        gamma_d: float = gamma_d_field()
+
+    example: ClassVar[dict[str, Any]] = {
+        "consequence_class": "CC2", "event": "rare", "gamma_r": 1.0, "f_min_m": 0.5,
+        "gamma_d": 1.3, "confidence": 0.95,
+    }
+    params: Params
+
+    @property
+    def factor(self) -> float:
+        """:math:`\\gamma_F` (-): ``gamma_f`` or the consequence class's default."""
+        p = self.params
+        return _GAMMA_F[p.consequence_class] if p.gamma_f is None else p.gamma_f
+
+    def checks(self, result: MeasureResult) -> list[Check]:
+        """``design_energy``, ``design_height``, ``braking_distance``, as the measure has them."""
+        props = result.measure.design_properties()
+        checks = []
+        capacity = _finite(props, "capacity_kj")
+        if capacity is not None:
+            if self.params.event == "frequent":
+                sel = _finite(props, "sel_kj")
+                limit, what = (capacity / 3.0 if sel is None else sel), "SEL"
+            else:
+                limit = capacity / self.params.gamma_r
+                what = f"MEL / gamma_R {self.params.gamma_r:g}"
+            checks.append(self._design_check("design_energy", result.energy_kj, 0.0, limit,
+                                             f"{what} {limit:.1f} kJ", "kJ"))
+        height = _finite(props, "height_m")
+        if height is not None:
+            residual = _finite(props, "residual_height_m")
+            if self.params.event == "frequent" and residual is not None:
+                target, what = residual, f"residual height {residual:.2f} m"
+            else:
+                target, what = height, f"nominal height {height:.2f} m"
+            radius = np.asarray(result.radius_m, dtype=float)
+            r99 = float(np.percentile(radius, 99.0)) if radius.size else 0.0
+            checks.append(self._design_check("design_height", result.rated_passing_height_m,
+                                             max(self.params.f_min_m, r99), target, what, "m"))
+        checks += braking_check(result, _finite(props, "max_elongation_m"), self.params.gamma_d)
+        return checks
+
+    def _design_check(self, name: str, values: Any, add: float, target: float, against: str,
+                      unit: str) -> Check:
+        """``gamma_F x P99(values) + add`` against ``target`` (holds if <=), with its bounds."""
+        v = np.asarray(values, dtype=float)
+        c = self.params.confidence
+        if v.size == 0:
+            return Check(name, None, target, True, unit, _NO_ROCK, None, True)
+        point, lower, upper = quantile_with_bounds(v, 0.99, c)
+        g = self.factor
+        value = g * point + add
+        detail = (f"gamma_F {g:.3g} ({self.params.consequence_class}) x 99 % fractile "
+                  f"{point:.2f} {unit}" + (f" + freeboard {add:.2f} m" if add else "")
+                  + f" = {value:.2f} {unit} over {v.size} rocks, against {against} "
+                  f"({self.params.event} events)")
+        optimistic = None if lower is None else g * lower + add
+        fails = optimistic is not None and optimistic > target
+        if upper is None:
+            need = rocks_to_bound_quantile(0.99, c)
+            detail = f"{detail}; {v.size} rocks cannot bound the 99 % fractile: it needs {need}"
+            return Check(name, value, target, bool(value <= target), unit, detail, None, False,
+                         need, optimistic, fails)
+        bound = g * upper + add
+        detail = f"{detail}; with the {100 * c:g} % bound {bound:.2f} {unit}"
+        return Check(name, value, target, bool(value <= target), unit, detail, bound,
+                     bool(bound <= target), None, optimistic, fails)
+
+
+@hookimpl
+def rockfall_design_safety_concepts() -> list[type[SafetyConcept]]:
+    """The built-in ``onr24810`` concept."""
+    return [Onr24810Concept]
