@@ -1,7 +1,7 @@
 """Engine speed on the standard peer case: cold, warm and whole process, and the peer.
 
     python benchmarks/engine.py [--rocks 100000 1000000] [--peer-python PATH]
-        [--peer-case DIR] [--repeats 3]
+        [--peer-case DIR] [--repeats 3] [--no-first-compile]
     PYTHONPATH=OTHER_TREE python benchmarks/engine.py --kernel-only   # compare two engines
 
 The case is the standard peer case (../shared/peer-case/README.md):
@@ -17,6 +17,13 @@ interpreter from the peer-case folder), measured in the same run. Printed:
   ``runtime_s`` times), and the cost of that process's first run of 1 rock
   (loading the engine);
 * whole process: wall time and resident peak of a fresh process at each N;
+* first compile (left out with ``--no-first-compile``): ``simulate --rocks 10``
+  in a fresh process with an empty cache (``XDG_CACHE_HOME`` set to a new
+  temporary directory), its wall and CPU time; then, on the cache it left,
+  the engine run as the optimiser runs it (read-only section, recorded
+  speeds, resumed rocks), which must compile nothing more; and the load of
+  the compiled engine in a fresh process (its first run of one rock less its
+  second), through the kept machine code and through numba's cache;
 * the peer's rate and the ratios the aims are stated in (issue 27, item 11:
   cold ``runtime_s`` at least 20 times the peer's rate, whole process at
   1,000,000 rocks at least 10 times). Without a peer interpreter the peer's
@@ -43,6 +50,18 @@ CHUNK = 100_000
 
 def run_child(cmd: list[str], env: dict[str, str] | None = None) -> tuple[float, float, str]:
     """Run ``cmd``; its wall time (s), its own resident peak (MiB) and its stdout."""
+    wall, rss, out, _, _ = run_child_full(cmd, env)
+    return wall, rss, out
+
+
+def run_child_full(cmd: list[str],
+                   env: dict[str, str] | None = None) -> tuple[float, float, str, str, float]:
+    """Run ``cmd``; wall time (s), resident peak (MiB), stdout, stderr and CPU time (s).
+
+    The CPU time (user and system, of the child alone) is the figure a busy
+    machine moves least: a compile is single-threaded, so on a quiet machine
+    its wall time is about its CPU time.
+    """
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env=env, cwd=ROOT)
@@ -60,7 +79,8 @@ def run_child(cmd: list[str], env: dict[str, str] | None = None) -> tuple[float,
     proc.returncode = os.waitstatus_to_exitcode(status)
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed:\n{chunks.get('err', '')}")
-    return wall, usage.ru_maxrss / 1024, chunks.get("out", "")
+    return (wall, usage.ru_maxrss / 1024, chunks.get("out", ""), chunks.get("err", ""),
+            usage.ru_utime + usage.ru_stime)
 
 
 def kernel(n: int, threads: int | None) -> tuple[float, int, int]:
@@ -161,6 +181,96 @@ def simulate_cmd(n: int) -> list[str]:
             str(n), "--json"]
 
 
+OPTIMISER_ARGS = r"""
+# The engine run as the optimiser runs it: a read-only section (the plugin
+# proxy's guard), speeds recorded, rocks resumed from recorded states.
+import numpy as np
+from rockfall_design.engine import Section, run_ensemble
+from rockfall_design.project import load_project
+from rockfall_design.run.releases import draw_releases, engine_key, section_from_project
+import sys
+project = load_project(sys.argv[1])
+s = section_from_project(project)
+ro = Section(s.x.copy(), s.y.copy(), s.segment_material.copy(), s.materials)
+for a in (ro.x, ro.y, ro.segment_material):
+    a.flags.writeable = False
+rel = draw_releases(project, 20, 1)
+first = run_ensemble(ro, rel, key=engine_key(1), grid=[10.0, 150.0], restart_stations=[50.0],
+                     record_speed=True)
+mask = ~np.isnan(first.restart_state[:, 0, 0])  # the rocks that passed the station
+run_ensemble(ro, rel, key=engine_key(1), grid=[10.0, 150.0], record_speed=True,
+             resume=(mask, first.restart_state[:, 0], first.restart_rng[:, 0]))
+"""
+
+LOAD_ENGINE = r"""
+# A fresh process: import the engine, then its first run of one rock (loading
+# the compiled kernel) and a second (warm); the difference is the load.
+import json, sys, time
+t0 = time.perf_counter()
+from rockfall_design.engine import run_ensemble
+from rockfall_design.project import load_project
+from rockfall_design.run.releases import draw_releases, engine_key, section_from_project
+t1 = time.perf_counter()
+project = load_project(sys.argv[1])
+sec, rel = section_from_project(project), draw_releases(project, 1, 1)
+runs = []
+for _ in range(2):
+    t = time.perf_counter()
+    run_ensemble(sec, rel, key=engine_key(1), threads=1)
+    runs.append(time.perf_counter() - t)
+print(json.dumps({"import": t1 - t0, "first": runs[0], "second": runs[1],
+                  "numba_compiler": "numba.np.arraymath" in sys.modules}))
+"""
+
+
+def first_compile(cache_home: Path) -> dict[str, float | bool | str]:
+    """The first run after an install, in an empty cache: compile, and what follows.
+
+    ``simulate --rocks 10`` of the benchmark project in a fresh process with
+    ``XDG_CACHE_HOME`` set to ``cache_home`` (empty), its wall and CPU time
+    and the compile time it reports; then, on the cache it left, the engine
+    run as the optimiser runs it (:data:`OPTIMISER_ARGS`), which must not
+    compile again, and the load of the compiled engine in a fresh process
+    (:data:`LOAD_ENGINE`), through its kept machine code and through numba's
+    own cache (``ROCKFALL_DESIGN_NATIVE=0``).
+    """
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(cache_home)
+    wall, _, _, err, cpu = run_child_full(simulate_cmd(10), env)
+    said = [ln for ln in err.splitlines() if "engine compiled in" in ln]
+    out: dict[str, float | bool | str] = {"wall": wall, "cpu": cpu,
+                                          "said": said[0].split(": ", 1)[-1] if said else ""}
+    wall, _, _, err, cpu = run_child_full(
+        [sys.executable, "-c", OPTIMISER_ARGS, str(PROJECT)], env)
+    out.update(opt_wall=wall, opt_cpu=cpu, opt_compiled="compiling" in err)
+    for tag, native in (("native", "1"), ("numba", "0")):
+        runs = []
+        for _ in range(3):
+            _, _, text, _, _ = run_child_full(
+                [sys.executable, "-c", LOAD_ENGINE, str(PROJECT)],
+                {**env, "ROCKFALL_DESIGN_NATIVE": native})
+            runs.append(json.loads(text))
+        mid = sorted(runs, key=lambda r: r["first"] - r["second"])[1]
+        out[f"{tag}_import"] = mid["import"]
+        out[f"{tag}_load"] = mid["first"] - mid["second"]
+        out[f"{tag}_compiler"] = mid["numba_compiler"]
+    return out
+
+
+def print_first_compile(fc: dict[str, float | bool | str]) -> None:
+    """Print :func:`first_compile`'s figures."""
+    print(f"first compile, simulate --rocks 10 in an empty cache: wall {fc['wall']:.1f} s, "
+          f"CPU {fc['cpu']:.1f} s (said: {fc['said'] or 'nothing'})")
+    print(f"  then the optimiser's arguments (read-only section, resumed rocks): "
+          f"wall {fc['opt_wall']:.1f} s, "
+          f"{'COMPILED A SECOND VARIANT' if fc['opt_compiled'] else 'nothing compiled'}")
+    for tag, what in (("native", "kept machine code"),
+                      ("numba", "numba's cache, ROCKFALL_DESIGN_NATIVE=0")):
+        print(f"cache load, fresh process ({what}; median of 3): engine import "
+              f"{fc[f'{tag}_import']:.2f} s, load {fc[f'{tag}_load']:.3f} s"
+              f", numba's compiler {'built' if fc[f'{tag}_compiler'] else 'not built'}")
+
+
 def warm(n: int, repeats: int) -> tuple[float, float, list[float]]:
     """In this process: the first 1-rock run (s), then ``repeats`` runs of n rocks (s each).
 
@@ -184,6 +294,8 @@ def main() -> None:
     ap.add_argument("--peer-case", type=Path, default=None,
                     help="the shared peer-case folder (default: found above the checkout)")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--no-first-compile", action="store_true",
+                    help="leave out the first compile in an empty cache (a minute or more)")
     ap.add_argument("--kernel-only", action="store_true",
                     help="only the kernel figures (to compare two versions of the engine "
                          "in one session, e.g. with PYTHONPATH set to another tree)")
@@ -203,11 +315,16 @@ def main() -> None:
               f"{n / t:>10,.0f} rocks/s  {events / t:>12,.0f} events/s")
         return
 
+    print(f"cores usable: {len(os.sched_getaffinity(0))}; load average "
+          f"{os.getloadavg()[0]:.1f}; project: {PROJECT.name}")
+    if not args.no_first_compile:
+        import tempfile
+
+        with tempfile.TemporaryDirectory(prefix="rockfall-design-first-") as tmp:
+            print_first_compile(first_compile(Path(tmp)))
     # Compile (or load the cache) once, so that no figure below includes it.
     run_child(simulate_cmd(10))
     n0 = min(args.rocks)
-    print(f"cores usable: {len(os.sched_getaffinity(0))}; load average "
-          f"{os.getloadavg()[0]:.1f}; project: {PROJECT.name}")
     # Child processes first, while this one is small: a child's resident peak
     # starts from its parent's size at the fork.
     cold = []

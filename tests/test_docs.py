@@ -30,6 +30,7 @@ MAX_README_LINES = 300
 OTHER_PROGRAMS_OPTIONS = {
     "--write": "benchmarks/golden.py",
     "--kernel-only": "benchmarks/engine.py",
+    "--no-first-compile": "benchmarks/engine.py",
     "--seeds": "benchmarks/optimise.py",
     "--points": "benchmarks/survey.py",
     "--varying-rocks": "benchmarks/survey.py",

@@ -269,7 +269,65 @@ def hot(fn: Callable[..., Any]) -> Any:
     """
     from numba import njit
 
-    return njit(cache=CACHE, _nrt=False)(fn)
+    return one_variant(njit(cache=CACHE, _nrt=False)(fn))
+
+
+def compiled(fn: Callable[..., Any] | None = None, *, nogil: bool = False) -> Any:
+    """Compile ``fn`` with numba (cached), one variant for every call from compiled code.
+
+    ``@compiled`` or ``@compiled(nogil=True)``: numba's ``njit(cache=...)``,
+    with :func:`one_variant`. Use it, not ``njit``, for every function of the
+    engine.
+    """
+    def wrap(f: Callable[..., Any]) -> Any:
+        from numba import njit
+
+        return one_variant(njit(cache=CACHE, nogil=nogil)(f))
+
+    return wrap if fn is None else wrap(fn)
+
+
+def one_variant(dispatcher: Any) -> Any:
+    """Have ``dispatcher`` compile one variant per argument types, not one per constant.
+
+    numba types a constant argument of a call between compiled functions as
+    a literal (``Literal[int](0)``, ``Literal[bool](True)``) and compiles the
+    callee for it, apart from the variant a variable argument gets: the
+    engine compiled 14 of its functions twice so, among them the centre
+    path's sweep (``profile._centre_path_of``, ``_visible_pieces``), about a
+    fifth of the first compile (measured with numba's compile events). The
+    callee is linked into its caller's module either way, where LLVM
+    propagates the constant as it did; the machine code differs by branch
+    layout at most, and the results not at all (``benchmarks/golden.py``).
+
+    So the call is typed with plain types first (``numba.types.unliteral``);
+    where the callee needs the literal (a tuple indexed by the argument,
+    say), typing fails with plain types and the literal is used, as numba
+    would. Not public numba API: if numba changes the method, its own
+    behaviour applies and the only loss is the compile time.
+    """
+    try:
+        from numba.core import errors, types
+
+        base = type(dispatcher).get_call_template
+    except (ImportError, AttributeError):  # pragma: no cover - numba changed
+        return dispatcher
+
+    def get_call_template(args: Sequence[Any], kws: dict[str, Any]) -> Any:
+        plain = tuple(types.unliteral(a) for a in args)
+        plain_kws = {k: types.unliteral(v) for k, v in kws.items()}
+        if plain != tuple(args) or plain_kws != kws:
+            try:
+                return base(dispatcher, plain, plain_kws)
+            except errors.TypingError:
+                pass
+        return base(dispatcher, args, kws)
+
+    try:
+        dispatcher.get_call_template = get_call_template
+    except AttributeError:  # pragma: no cover - a dispatcher without __dict__
+        pass
+    return dispatcher
 
 _notice_lock = threading.Lock()
 _checked: set[tuple[int, tuple]] = set()

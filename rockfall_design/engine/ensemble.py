@@ -15,10 +15,9 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from . import _native, columns
-from ._jit import CACHE, DIGEST, compile_notice
+from ._jit import DIGEST, compile_notice, compiled
 from .batching import FIRST_BATCH, FIRST_BATCH_FEW_POINTS, _Batches, default_threads
 from .flight import path_tree
 from .problem import (
@@ -31,7 +30,6 @@ from .problem import (
     rock_mass,
 )
 from .profile import (
-    _centre_path,
     _centre_path_of,
     element_codes,
     every_piece_units,
@@ -82,7 +80,7 @@ made once per run rather than once per batch, and, with rocks of several sizes, 
 ground elements the paths of the others can lie on (see :func:`run_ensemble`)."""
 
 
-@njit(cache=CACHE, nogil=True)
+@compiled(nogil=True)
 def rock_path(ground, r, max_chord, elems):
     """The ground as a rock of radius ``r`` (m) meets it (``records.Path``).
 
@@ -92,17 +90,10 @@ def rock_path(ground, r, max_chord, elems):
     arcs) that the path can lie on (``profile.path_elements``), of which
     ``profile.survey_path`` makes it.
     """
-    if elems.shape[0] == 0:
-        return _rock_path_of(ground, r, max_chord, no_units())
-    # survey_path (``elems``), by the code centre_path shares, which is then
-    # compiled into the kernel once.
-    n = ground.x.shape[0]
-    px, py, pseg = _centre_path(ground.x, ground.y, np.arange(n - 1), r, max_chord, True,
-                                elems, True)
-    return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
+    return _path(ground, r, max_chord, elems, no_units())
 
 
-@njit(cache=CACHE, nogil=True)
+@compiled(nogil=True)
 def _rock_path_of(ground, r, max_chord, units):
     """:func:`rock_path` from every element, from ``units`` (``profile.every_piece_units``).
 
@@ -110,22 +101,46 @@ def _rock_path_of(ground, r, max_chord, units):
     trigonometry, most of a small section's path) made once per batch, or
     here if ``units`` is ``profile.no_units()``.
     """
+    return _path(ground, r, max_chord, np.empty(0, dtype=np.int64), units)
+
+
+@compiled(nogil=True)
+def _path(ground, r, max_chord, elems, units):
+    """:func:`rock_path` (``elems`` given) or :func:`_rock_path_of` (``elems`` empty).
+
+    The one function the kernel calls for a rock's path, and the one call of
+    the sweep (``profile._centre_path_of``) in it: numba compiles every
+    function between the kernel and the sweep with the sweep's code linked
+    in and optimised again, and a chain of three such wrappers cost about a
+    tenth of the first compile. ``units`` is used with every element only
+    (``elems`` empty), as ``profile._centre_path_of`` wants.
+    """
     n = ground.x.shape[0]
-    # Leaving hidden pieces out of the sweep (profile._hidden) pays on a survey
-    # of many points; on a section of few it costs more than it saves, and
-    # there every rock of a size of its own makes its path (the optimiser's
-    # ground edits: about 8 us a rock, twice their engine time). The path is
-    # the same either way, to the bit.
-    px, py, pseg = _centre_path_of(ground.x, ground.y, np.arange(n - 1), r, max_chord,
-                                   n > SHARED_PATH_VERTICES, np.arange(2 * n - 1), False,
-                                   units)
+    if elems.shape[0] == 0:
+        # Leaving hidden pieces out of the sweep (profile._hidden) pays on a
+        # survey of many points; on a section of few it costs more than it
+        # saves, and there every rock of a size of its own makes its path
+        # (the optimiser's ground edits: about 8 us a rock, twice their
+        # engine time). The path is the same either way, to the bit.
+        prune = n > SHARED_PATH_VERTICES
+        codes = np.arange(2 * n - 1)
+        canon = False
+        pieces = units
+    else:
+        # survey_path (``elems``): what profile._centre_path does with them.
+        prune = True
+        codes = elems
+        canon = True
+        pieces = no_units()
+    px, py, pseg = _centre_path_of(ground.x, ground.y, np.arange(n - 1), r, max_chord, prune,
+                                   codes, canon, pieces)
     return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
 
 
 # nogil: batches of rocks run on several Python threads at once; every rock
 # writes only its own rows, and draws from its own stream, so the results do
 # not depend on how the rocks are shared among threads.
-@njit(cache=CACHE, nogil=True)
+@compiled(nogil=True)
 def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, rows, rel,
                resume, stations, bars, out):
     """Run the rocks of one batch (``rows`` of ``rel``) and write their rows of ``out``.
@@ -191,12 +206,10 @@ def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, 
             # Rocks of one size share their centre path.
             if r == r0:
                 path = path0
-            elif elems.shape[0] == 0:
-                if units[0].shape[0] == 0:
-                    units = every_piece_units(ground.x, ground.y, max_chord)
-                path = _rock_path_of(ground, r, max_chord, units)
             else:
-                path = rock_path(ground, r, max_chord, elems)
+                if elems.shape[0] == 0 and units[0].shape[0] == 0:
+                    units = every_piece_units(ground.x, ground.y, max_chord)
+                path = _path(ground, r, max_chord, elems, units)
             r_prev = r
         if resume.mask[i]:
             rng[0] = resume.rngs[i]
@@ -319,7 +332,8 @@ def run_ensemble(
     # numba wants a uint64 scalar; Python ints above 2**63 need the wrap.
     k64 = np.uint64(int(key) % (1 << 64))
     max_chord = float(np.radians(settings.max_chord_deg))
-    ground = Ground(section.x, section.y, section.segment_material, section.material_table())
+    ground = Ground(*(_writable(a) for a in (section.x, section.y, section.segment_material,
+                                              section.material_table())))
     path0, r0, elems, path_seconds = _shared_path(ground, radius, max_chord)
 
     survey = ground.x.size > SHARED_PATH_VERTICES
@@ -507,9 +521,21 @@ def _resume(resume: tuple[np.ndarray, np.ndarray, np.ndarray] | None, n: int) ->
     if resume is None:
         return Resume(np.zeros(n, dtype=bool), np.zeros((n, columns.N_RESTART_COLS)),
                       np.zeros(n, dtype=np.uint64))
-    return Resume(np.ascontiguousarray(resume[0], dtype=bool),
-                  np.ascontiguousarray(resume[1], dtype=float),
-                  np.ascontiguousarray(resume[2], dtype=np.uint64))
+    return Resume(_writable(resume[0], bool), _writable(resume[1], float),
+                  _writable(resume[2], np.uint64))
+
+
+def _writable(a: np.ndarray, dtype: Any = None) -> np.ndarray:
+    """``a`` as a C-contiguous array numba types as writable (a copy only if it is not).
+
+    numba compiles a function anew for a read-only array (a type of its
+    own): the optimiser hands the engine its sections read-only (the plugin
+    proxy's guard), and its first run after an install compiled a second
+    variant of the kernel, about 30 s, for that alone. The kernel never
+    writes these; copying the few that are read-only costs microseconds.
+    """
+    out = np.ascontiguousarray(a, dtype=dtype)
+    return out if out.flags.writeable else out.copy()
 
 
 def _run_all(batch_args: Callable[[int, int], tuple], batches: _Batches, n: int,

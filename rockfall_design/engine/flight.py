@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ._jit import CACHE, hot
+from ._jit import compiled, hot
 from .columns import G
 
 
@@ -217,7 +216,7 @@ def next_landing(px, py, tree, x0, y0, vx, vy, k):
         return False, t, k
 
 
-@njit(cache=CACHE)
+@compiled
 def path_tree(px, py):
     """Tree of the highest vertex of the centre path over blocks of vertices.
 

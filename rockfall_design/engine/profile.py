@@ -23,15 +23,14 @@ Everything here is compiled with numba and works on plain arrays.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-from ._jit import CACHE, hot
+from ._jit import compiled, hot
 
 #: Relative tolerance used to merge breakpoints and collinear pieces.
 _EPS_X = 1e-12
 
 
-@njit(cache=CACHE)
+@compiled
 def ground_height(gx: np.ndarray, gy: np.ndarray, x: float) -> float:
     """Height of the ground at ``x`` (m), linear between vertices.
 
@@ -46,7 +45,7 @@ def ground_height(gx: np.ndarray, gy: np.ndarray, x: float) -> float:
     return gy[k] + (gy[k + 1] - gy[k]) * (x - gx[k]) / (gx[k + 1] - gx[k])
 
 
-@njit(cache=CACHE)
+@compiled
 def _arc_edges(t1x, t1y, t2x, t2y, max_chord):
     """Angles of the two normals at a vertex and the number of polygon corners."""
     phi1 = np.arctan2(t1x, -t1y)
@@ -55,7 +54,7 @@ def _arc_edges(t1x, t1y, t2x, t2y, max_chord):
     return phi1, phi2, m
 
 
-@njit(cache=CACHE)
+@compiled
 def _raw_pieces(gx, gy, seg_id, r, max_chord, elems):
     """Offset segments and circumscribed vertex arcs of an extended profile.
 
@@ -69,7 +68,7 @@ def _raw_pieces(gx, gy, seg_id, r, max_chord, elems):
     return _scaled_pieces(gx, gy, _piece_units(gx, gy, seg_id, max_chord, elems), r)
 
 
-@njit(cache=CACHE)
+@compiled
 def _unit_tangents(gx, gy, elems):
     """Unit tangents (tx, ty) of the ground segments the elements ``elems`` need.
 
@@ -93,7 +92,7 @@ def _unit_tangents(gx, gy, elems):
     return tx, ty
 
 
-@njit(cache=CACHE)
+@compiled
 def _convex(tx, ty, i):
     """Whether the ground turns clockwise at inner vertex ``i``: it carries an arc.
 
@@ -102,7 +101,7 @@ def _convex(tx, ty, i):
     return 0 < i < tx.shape[0] and tx[i - 1] * ty[i] - ty[i - 1] * tx[i] < -1e-12
 
 
-@njit(cache=CACHE)
+@compiled
 def _piece_units(gx, gy, seg_id, max_chord, elems):
     """What the pieces of :func:`_raw_pieces` are made of, whatever the radius.
 
@@ -196,7 +195,7 @@ def _piece_units(gx, gy, seg_id, max_chord, elems):
     return va, uax, uay, ka, vb, ubx, uby, kb, ch, sid
 
 
-@njit(cache=CACHE)
+@compiled
 def _scaled_pieces(gx, gy, units, r):
     """The pieces of :func:`_raw_pieces` for radius ``r`` (m) from :func:`_piece_units`."""
     va, uax, uay, ka, vb, ubx, uby, kb, ch, sid = units
@@ -226,20 +225,20 @@ def element_codes(n: int) -> np.ndarray:
     return np.arange(2 * n - 1, dtype=np.int64)
 
 
-@njit(cache=CACHE)
+@compiled
 def _grow(a, cap):
     b = np.empty(cap, dtype=a.dtype)
     b[: a.shape[0]] = a
     return b
 
 
-@njit(cache=CACHE)
+@compiled
 def _line_at(xa, ya, xb, yb, i, x):
     """Value of the line through piece i at x (extrapolated)."""
     return ya[i] + (yb[i] - ya[i]) * (x - xa[i]) / (xb[i] - xa[i])
 
 
-@njit(cache=CACHE)
+@compiled
 def _slope(xa, ya, xb, yb, i):
     return (yb[i] - ya[i]) / (xb[i] - xa[i])
 
@@ -249,7 +248,7 @@ def _slope(xa, ya, xb, yb, i):
 _HIDE_WINDOW = 32
 
 
-@njit(cache=CACHE)
+@compiled
 def _hidden(xa, ya, xb, yb, ex, ey, r, tol):
     """Pieces that lie below the circle of radius ``r`` about some ground vertex.
 
@@ -511,7 +510,7 @@ def _highest_within(hx, hy, cx, r, jlo, jhi, side):
     return w
 
 
-@njit(cache=CACHE)
+@compiled
 def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
     """The pieces of :func:`_raw_pieces` that :func:`_hidden` does not hide.
 
@@ -693,7 +692,7 @@ def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
     return xa[:p].copy(), ya[:p].copy(), xb[:p].copy(), yb[:p].copy(), sid[:p].copy()
 
 
-@njit(cache=CACHE)
+@compiled
 def _stable_order(a):
     """``np.argsort(a, kind="mergesort")`` (stable), fast when ``a`` is nearly sorted.
 
@@ -723,14 +722,14 @@ def _stable_order(a):
     return idx
 
 
-@njit(cache=CACHE)
+@compiled
 def centre_path(gx, gy, seg_mat, r, max_chord):
     """Centre path of a sphere of radius ``r`` on the ground polyline (see :func:`_centre_path`)."""
     return _centre_path(gx, gy, seg_mat, r, max_chord, True, np.arange(2 * gx.shape[0] - 1),
                         False)
 
 
-@njit(cache=CACHE, nogil=True)
+@compiled(nogil=True)
 def survey_path(gx, gy, seg_mat, r, max_chord, elems):
     """Centre path of radius ``r`` (m) made of the ground elements ``elems`` only.
 
@@ -813,7 +812,7 @@ def path_elements(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
     return every[keep]
 
 
-@njit(cache=CACHE, nogil=True)
+@compiled(nogil=True)
 def _near_path(gx, gy, px, py, reach_seg, reach_vtx):
     """Which elements (:func:`element_codes`) are near the polyline (px, py).
 
@@ -862,7 +861,7 @@ def _near_path(gx, gy, px, py, reach_seg, reach_vtx):
     return keep
 
 
-@njit(cache=CACHE)
+@compiled
 def _dist2(x, y, ax, ay, bx, by):
     """Squared distance (m^2) of the point (x, y) to the segment from (ax, ay) to (bx, by)."""
     dx = bx - ax
@@ -874,7 +873,7 @@ def _dist2(x, y, ax, ay, bx, by):
     return ex * ex + ey * ey
 
 
-@njit(cache=CACHE)
+@compiled
 def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
     """Centre path of a sphere of radius ``r`` on the ground polyline.
 
@@ -926,7 +925,7 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
     return _centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, no_units())
 
 
-@njit(cache=CACHE)
+@compiled
 def _extended(gx, gy, r, elems):
     """The profile extended level beyond both ends by ``2 r + 1`` (m), and its elements.
 
@@ -958,7 +957,7 @@ def _extended(gx, gy, r, elems):
     return ex, ey, eseg, ecodes
 
 
-@njit(cache=CACHE)
+@compiled
 def no_units():
     """Empty :func:`_piece_units`: :func:`_centre_path_of` makes them itself."""
     e = np.empty(0, dtype=np.int64)
@@ -967,7 +966,7 @@ def no_units():
     return e, f, f, k, e, f, f, k, f, e
 
 
-@njit(cache=CACHE, nogil=True)
+@compiled(nogil=True)
 def every_piece_units(gx, gy, max_chord):
     """:func:`_piece_units` of the whole extended profile, for every radius at once.
 
@@ -979,7 +978,7 @@ def every_piece_units(gx, gy, max_chord):
     return _piece_units(ex, ey, eseg, max_chord, ecodes)
 
 
-@njit(cache=CACHE)
+@compiled
 def _centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, units):
     """:func:`_centre_path`, from the pieces' ``units`` when given (not ``canon``).
 

@@ -120,7 +120,9 @@ def test_read_only_package_and_home_cache_in_the_temp_dir(tmp_path):
     (copy / "rockfall_design" / "engine" / "__pycache__").write_text("not a directory")
     tmpdir = tmp_path / "tmp"
     tmpdir.mkdir()
-    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
+    # Nor an XDG_CACHE_HOME of the caller's (a writable one would be used).
+    env = {k: v for k, v in os.environ.items()
+           if not k.startswith("NUMBA_") and k != "XDG_CACHE_HOME"}
     env.update(PYTHONPATH=str(copy), HOME=str(_unwritable(tmp_path)), TMPDIR=str(tmpdir),
                PYTHONDONTWRITEBYTECODE="1")
     code = (
@@ -295,3 +297,85 @@ def test_each_variant_compiled_is_announced_once(capsys):
     assert err.count("compiling the trajectory engine for this machine") == 1
     assert err.count("compiling another variant of the trajectory engine") == 1
     assert err.count("engine compiled in") == 2
+
+
+def _kernel_types(monkeypatch, *calls) -> list[tuple]:
+    """numba's types of the batch kernel's arguments for each ``run_ensemble(**kw)`` (no run)."""
+    from rockfall_design.engine import ensemble
+
+    seen: list[tuple] = []
+
+    def types_only(batch_args, batches, n, threads, progress):
+        args = batch_args(0, n)
+        seen.append(tuple(ensemble._run_batch.typeof_pyval(a) for a in args))
+        args[-1].caught_by[:] = -1  # what run_ensemble reads back of the rows
+        return n
+
+    monkeypatch.setattr(ensemble, "_run_all", types_only)
+    for sec, rel, kw in calls:
+        run_ensemble(sec, rel, key=1, **kw)
+    return seen
+
+
+def _read_only(*arrays: np.ndarray) -> None:
+    for a in arrays:
+        a.flags.writeable = False
+
+
+def test_the_optimisers_runs_use_the_kernel_variant_simulate_compiled(monkeypatch):
+    # The optimiser hands the engine read-only sections (the plugin proxy's
+    # guard) and resumes rocks from recorded states: numba types a read-only
+    # array apart, and the first optimise after an install compiled a second
+    # variant of the kernel (about 30 s). One variant serves both now.
+    sec, rel, bars = _case(40)
+    ro = Section(sec.x.copy(), sec.y.copy(), sec.segment_material.copy(), sec.materials)
+    _read_only(ro.x, ro.y, ro.segment_material)
+    n = len(rel)
+    mask, states = np.zeros(n, dtype=bool), np.zeros((n, columns.N_RESTART_COLS))
+    rngs = np.zeros(n, dtype=np.uint64)
+    _read_only(mask, states, rngs)
+    plain = (sec, rel, dict(stations=[80.0], grid=[10.0, 150.0]))
+    optimiser = (ro, rel, dict(stations=[80.0], grid=[10.0, 150.0], barriers=np.vstack(bars),
+                               record_speed=True, restart_stations=[50.0],
+                               resume=(mask, states, rngs)))
+    simulate_types, optimise_types = _kernel_types(monkeypatch, plain, optimiser)
+    assert optimise_types == simulate_types
+    assert ro.x.flags.writeable is False  # the caller's arrays are left as they were
+
+
+def test_a_constant_argument_compiles_no_variant_of_its_own():
+    # numba compiled a callee once for a constant argument (a literal type)
+    # and again for a variable one: 14 engine functions twice.
+    from numba import njit
+
+    from rockfall_design.engine._jit import one_variant
+
+    callee = one_variant(njit(cache=False)(lambda a, k: a + k))
+
+    @njit(cache=False)
+    def with_constant(a):
+        return callee(a, 1)
+
+    @njit(cache=False)
+    def with_variable(a, k):
+        return callee(a, k)
+
+    assert with_constant(2.0) == 3.0
+    assert with_variable(2.0, 5) == 7.0
+    assert len(callee.overloads) == 1
+
+
+def test_a_callee_that_needs_the_constant_still_gets_it():
+    # A tuple of mixed types indexed by the argument types only with the
+    # literal index: typing with the plain type fails, and numba's way applies.
+    from numba import njit
+
+    from rockfall_design.engine._jit import one_variant
+
+    pick = one_variant(njit(cache=False)(lambda t, i: t[i]))
+
+    @njit(cache=False)
+    def second(t):
+        return pick(t, 1)
+
+    assert second((1, 2.5)) == 2.5
