@@ -154,3 +154,15 @@ def pytest_collection_finish(session: pytest.Session) -> None:
         rd.simulate(ROOT / "projects" / "standard_slope.yaml", rocks=1, seed=0)
         sys.stderr.write(f"tests: engine ready in {time.perf_counter() - t0:.0f} s\n")
         sys.stderr.flush()
+
+
+@pytest.fixture(autouse=True)
+def _no_pdf_unless_asked(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+    """report.pdf only in the tests that read it (tests/report/test_pdf.py).
+
+    Each print starts a Chromium, seconds a report; the other tests of
+    --report look at the HTML and Markdown. ``ROCKFALL_DESIGN_PDF=0``
+    (docs/reports.md) reaches the commands run in subprocesses too.
+    """
+    if request.node.path.name != "test_pdf.py":
+        monkeypatch.setenv("ROCKFALL_DESIGN_PDF", "0")

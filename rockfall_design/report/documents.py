@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..version import __version__
 from .design_values import design_columns, design_tables, how_sure
-from .pdf import html_to_pdf, pdf_unavailable
+from .pdf import html_to_pdf, pdf_turned_off, pdf_unavailable
 from .sections import (
     Table,
     _alternatives_table,
@@ -507,10 +507,11 @@ def write_report(result: Any, directory: str | os.PathLike[str],
     outputs.write_text(out / "report.html", page)
     outputs.write_text(out / "report.md", render_markdown(ctx))
     written += [out / "report.html", out / "report.md"]
-    if pdf:
-        if _write_pdf(render_html(ctx, for_print=True, svgs=svgs), ctx, out / "report.pdf",
-                      outputs, note):
-            written.append(out / "report.pdf")
+    if pdf and pdf_turned_off():
+        outputs.remove(out / "report.pdf")  # never an older PDF beside a newer report
+    elif pdf and _write_pdf(render_html(ctx, for_print=True, svgs=svgs), ctx,
+                            out / "report.pdf", outputs, note):
+        written.append(out / "report.pdf")
     return written
 
 

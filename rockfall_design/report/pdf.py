@@ -28,7 +28,7 @@ import shutil
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-__all__ = ["chromium_path", "pdf_unavailable", "html_to_pdf", "PDF_HINT"]
+__all__ = ["chromium_path", "pdf_turned_off", "pdf_unavailable", "html_to_pdf", "PDF_HINT"]
 
 #: How to get the PDF, said when it cannot be made.
 PDF_HINT = ('install the pdf extra (pip install "rockfall-design[pdf]") and a Chromium '
@@ -55,6 +55,17 @@ def chromium_path() -> str | None:
         if found:
             return found
     return None
+
+
+def pdf_turned_off() -> bool:
+    """True where ``ROCKFALL_DESIGN_PDF=0``: --report writes the HTML and Markdown only.
+
+    Printing starts a Chromium (seconds each time): a batch of many reports,
+    or a test suite that does not look at the PDF, turns it off. Nothing is
+    said then (it was asked for); a report.pdf of an earlier run is removed,
+    as when the PDF cannot be made.
+    """
+    return os.environ.get("ROCKFALL_DESIGN_PDF", "").strip() == "0"
 
 
 def pdf_unavailable() -> str | None:

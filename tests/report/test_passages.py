@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import rockfall_design as rd
+from rockfall_design.project import load_project_text
 from rockfall_design.report.tables import PASSAGE_COLUMNS, passages_frame
 from rockfall_design.run.passages import QUANTITIES, barrier_values, property_marks
 
@@ -97,7 +98,12 @@ def test_the_stops_figure_shows_caught_rocks_and_says_where_the_others_went(chec
     assert "caught by a barrier" in title
     labels = fig.axes[0].get_legend_handles_labels()[1]
     assert any(label.startswith("held by fence") for label in labels)
-    gone = rd.simulate(PROJECTS / "standard_slope.yaml", rocks=200, seed=3)
+    # The standard slope with little rolling resistance: every rock leaves downslope.
+    slope = PROJECTS / "standard_slope.yaml"
+    text = slope.read_text().replace("rolling_resistance: 0.3   # mu_r",
+                                     "rolling_resistance: 0.05  # mu_r")
+    gone = rd.simulate(load_project_text(text, str(slope)), rocks=200, seed=3)
+    assert gone.summary["stops"]["exit_downslope"] == 200
     fig = gone.plot_stops()
     assert "200 left downslope" in fig.axes[0].get_title()
     bars = [p for p in fig.axes[0].patches if p.get_height() > 0]
