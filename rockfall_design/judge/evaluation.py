@@ -19,6 +19,7 @@ import numpy as np
 from ..engine import Section, columns
 from ..plugins import guard
 from ..plugins.concept import DEFAULT_CONFIDENCE, Check, SafetyConcept
+from ..plugins.manager import plugin_code
 from ..plugins.measure import Barrier, MeasureResult, Outcome
 from ..run.passages import Passages, barrier_values, property_marks, slope_deg_at
 from ..run.releases import section_from_project
@@ -255,8 +256,10 @@ class Evaluation:
             slope = slope_deg_at(self.study.section, float(fp.x))
             values = barrier_values(res.passing_height_m, res.velocity_ms, res.energy_kj,
                                     res.mass_kg, res.radius_m, slope)
+            with plugin_code():  # checked when placed; what it prints goes to stderr
+                properties = res.measure.design_properties()
             out.append(Passages("measure", res.index, p.label, float(fp.x), slope, values,
-                                property_marks(res.measure.design_properties())))
+                                property_marks(properties)))
         return out
 
     def resolved_project(self) -> Project:

@@ -272,6 +272,7 @@ def _figure_marks(axes: Mapping[str, Axes], evaluation: Evaluation | None) -> No
     :func:`rockfall_design.run.passages.property_marks`)."""
     if evaluation is None:
         return
+    from ..plugins.manager import plugin_code
     from ..plugins.measure import Barrier
 
     panel = {"passing_height_m": "height", "energy_kj": "energy"}
@@ -279,7 +280,10 @@ def _figure_marks(axes: Mapping[str, Axes], evaluation: Evaluation | None) -> No
         if not isinstance(p.footprint, Barrier):
             continue
         x = float(p.footprint.x)
-        for m in property_marks(p.measure.design_properties()):
+        # Plugin code (checked when the measure was placed): what it prints goes to stderr.
+        with plugin_code():
+            properties = p.measure.design_properties()
+        for m in property_marks(properties):
             ax = axes.get(panel.get(m.quantity, ""))
             if ax is None:
                 continue

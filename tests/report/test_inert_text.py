@@ -106,8 +106,10 @@ def test_dollars_in_a_name_do_not_stop_the_command(tmp_path, capsys):
     assert main(["simulate", str(project), "--rocks", "30", "--plot", str(tmp_path / "fig")]) \
         in (0, 1)
     assert "Traceback" not in capsys.readouterr().err
+    # Every figure, the passage figure at the project's one analysis station
+    # (its title carries the name too) included.
     assert sorted(p.name for p in (tmp_path / "fig").glob("*.png")) == [
-        "envelopes.png", "profile.png", "stops.png"]
+        "envelopes.png", "passing_station_1.png", "profile.png", "stops.png"]
 
 
 def test_markup_in_names_is_printed_as_written(tmp_path, capsys):

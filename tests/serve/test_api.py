@@ -165,7 +165,8 @@ def test_place_judges_a_fence_from_the_table_as_the_optimisers_screening(client,
     out = r.json()
     (m,) = out["measures"]
     assert m["x"] == 60.2 and m["x_table"] == 60.0
-    assert {c["name"] for c in m["checks"]} == {"height_factor", "energy_factor"}
+    # The project's concept (uni11211) checks a fence's design height and energy.
+    assert {c["name"] for c in m["checks"]} == {"design_height", "design_energy"}
     for c in m["checks"]:
         assert c["bound"] is not None and c["target"] > 0
     res = out["residual"]
