@@ -12,7 +12,7 @@ G = 9.81
 """Acceleration of gravity (m/s^2)."""
 
 # Columns of the material table (one row per material).
-M_MODEL = 0  #: impact model: 0 = spang, 1 = rn_rt, 2 = rough_soft
+M_MODEL = 0  #: impact model: 0 = spang, 1 = rn_rt
 M_E = 1  #: e (spang) or Rn (rn_rt), mean
 M_RT = 2  #: Rt (rn_rt)
 M_MU = 3  #: Coulomb friction coefficient mu, mean
@@ -24,13 +24,10 @@ M_SD_E = 8  #: standard deviation of e / Rn
 M_SD_MU = 9  #: standard deviation of mu
 M_SD_MUR = 10  #: standard deviation of mu_r
 M_ROUGH_H = 11  #: roughness height h_r (m): one-sided tilt up to atan(h_r / r)
-M_OBST = 12  #: mean obstacle height h_o (m) of the ground (rough_soft)
-M_VDRAG = 13  #: speed V_s (m/s) at which the resistance has doubled (rough_soft); 0 for none
-N_MAT_COLS = 14
+N_MAT_COLS = 12
 
 MODEL_SPANG = 0
 MODEL_RN_RT = 1
-MODEL_ROUGH_SOFT = 2
 
 # Columns of the settings vector.
 S_V_CONTACT = 0  #: outgoing normal speed below which the rock stays in contact (m/s)

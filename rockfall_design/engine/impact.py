@@ -16,26 +16,22 @@ from .columns import (
     M_MODEL,
     M_MU,
     M_MUR,
-    M_OBST,
     M_ROUGH,
     M_ROUGH_H,
     M_RT,
     M_SD_E,
     M_SD_MU,
     M_SD_MUR,
-    M_VDRAG,
     M_VSCALE,
     M_VSK,
-    MODEL_RN_RT,
-    MODEL_ROUGH_SOFT,
+    MODEL_SPANG,
 )
 from .flight import _unit_tangent
 from .rng import next_normal, next_uniform, truncated_normal
 
 
 @hot
-def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt_max=0.0,
-           mur=0.0, vdrag=0.0):
+def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt_max=0.0):
     """Velocity and spin after an impact on ground of outward normal (nx, ny).
 
     Parameters
@@ -49,7 +45,7 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
     r : float
         Rock radius (m).
     model : int
-        ``MODEL_SPANG``, ``MODEL_RN_RT`` or ``MODEL_ROUGH_SOFT``.
+        ``MODEL_SPANG`` or ``MODEL_RN_RT``.
     e : float
         Coefficient of restitution e (spang) or Rn (rn_rt), this impact's draw.
     rt : float
@@ -81,8 +77,6 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
     * spang, stick (|u| <= 7/2 mu p_n): v_t' = (5 v_t - 2 r w) / 7,
       w' = -v_t' / r;
     * spang, slip: v_t' = v_t - mu p_n sgn(u), w' = w - 5/2 mu p_n sgn(u) / r;
-    * rough_soft: as spang, with the resistance mu_0 (1 + (v / V_s)^2)
-      (PHYSICS.md, "The rough_soft law");
     * rn_rt: v_n' = -Rn v_n, v_t' = Rt v_t and w' = Rt w (PHYSICS.md,
       "Lumped-mass law"): the spin scales with the tangential speed, so a
       rolling rock stays rolling and no energy is gained.
@@ -132,23 +126,8 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
         q = vn / vsk
         ee = e / (1.0 + q * q)
     vn2 = -ee * vn
-    if model != MODEL_RN_RT:
+    if model == MODEL_SPANG:
         pn = -(1.0 + ee) * vn
-        if vdrag > 0.0:
-            q = (vn * vn + vt * vt) / (vdrag * vdrag)
-            mur = mur * (1.0 + q)
-        # The rolling-resistance moment mu_r N r acts while the ground pushes,
-        # in an impact as in contact: its angular impulse per unit mass is
-        # mu_r r p_n against the spin, at most stopping it (PHYSICS.md,
-        # "The transition to contact"). Without it a rock that bounces in
-        # small hops would escape the resistance that holds it in contact,
-        # and the answer would depend on v_contact.
-        if mur > 0.0 and w != 0.0:
-            dw = 2.5 * mur * pn / r
-            if abs(w) <= dw:
-                w = 0.0
-            else:
-                w = w - dw if w > 0.0 else w + dw
         u = vt + r * w
         if abs(u) <= 3.5 * mu * pn:
             vt2 = (5.0 * vt - 2.0 * r * w) / 7.0
@@ -164,19 +143,11 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
 
 
 @hot
-def _draw(mats, mat, rng, drawn, r):
-    """Draw this contact's e, mu and mu_r for material ``mat`` into ``drawn``.
-
-    For rough_soft, mu_r is the resistance at low speed of a rock of radius
-    ``r`` (m): the soil's own, drawn, plus h_o / (h_o + r) from the ground's
-    obstacles of mean height h_o (PHYSICS.md, "The rough_soft law").
-    """
+def _draw(mats, mat, rng, drawn):
+    """Draw this contact's e, mu and mu_r for material ``mat`` into ``drawn``."""
     drawn[0] = truncated_normal(rng, mats[mat, M_E], mats[mat, M_SD_E], 0.0, 1.0)
     drawn[1] = truncated_normal(rng, mats[mat, M_MU], mats[mat, M_SD_MU], 0.0, np.inf)
     drawn[2] = truncated_normal(rng, mats[mat, M_MUR], mats[mat, M_SD_MUR], 0.0, np.inf)
-    if int(mats[mat, M_MODEL]) == MODEL_ROUGH_SOFT:
-        ho = mats[mat, M_OBST]
-        drawn[2] += ho / (ho + r)
 
 
 @hot
@@ -190,7 +161,7 @@ def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
     """
     seg = pseg[k]
     mat = seg_mat[seg]
-    _draw(mats, mat, rng, drawn, r)
+    _draw(mats, mat, rng, drawn)
     tx, ty = _unit_tangent(px, py, k)
     nx = -ty
     ny = tx
@@ -210,8 +181,6 @@ def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
         mats[mat, M_ROUGH],
         rng,
         np.arctan(mats[mat, M_ROUGH_H] / r),
-        drawn[2],
-        mats[mat, M_VDRAG],
     )
     vn = vx * nx + vy * ny
     if vn >= v_contact:

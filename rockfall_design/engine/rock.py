@@ -20,7 +20,6 @@ from .columns import (
     EXIT_DOWNSLOPE,
     EXIT_UPSLOPE,
     FLIGHT,
-    M_VDRAG,
     O_CAUGHT,
     O_NOT_MET,
     O_PASSED_OVER,
@@ -49,7 +48,6 @@ from .columns import (
     G,
 )
 from .contact import SLIP_TOL, _contact_accel, _start_from_rest
-from .drag import along, drag_speed_at, drag_stop, drag_time
 from .flight import _unit_tangent, locate, next_landing, path_height
 from .impact import _collide, _draw
 from .recording import _record, _record_restart, _traj_row
@@ -322,7 +320,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         # ---- CONTACT: rolling and/or sliding on piece k ----
         seg = pseg[k]
         if seg != cur_seg:
-            _draw(mats, seg_mat[seg], rng, drawn, r)
+            _draw(mats, seg_mat[seg], rng, drawn)
             cur_seg = seg
         mu = drawn[1]
         mur = drawn[2]
@@ -361,13 +359,6 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             sigma = 0.0
         if s_zero and not rolling:
             s = 0.0
-        # rough_soft: a rolling rock's resistance grows as (v / V_s)^2, so
-        # dv/dt = a - c v^2 (PHYSICS.md, "The rough_soft law").
-        c = 0.0
-        if rolling:
-            vdr = mats[seg_mat[seg], M_VDRAG]
-            if vdr > 0.0 and mur > 0.0:
-                c = 5.0 / 7.0 * G * cosb * mur / (vdr * vdr)
         if dirn > 0:
             dist = np.hypot(px[k + 1] - x, py[k + 1] - y)
         else:
@@ -384,13 +375,6 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             if disc >= 0.0 and v + np.sqrt(disc) > 0.0:
                 t_end = 2.0 * dist / (v + np.sqrt(disc))
         t_zero = v / -a if a < 0.0 else np.inf
-        v_end = 0.0
-        d_zero = 0.0
-        if c > 0.0:
-            v_end = drag_speed_at(v, a, c, dist)
-            if dist > 0.0:
-                t_end = drag_time(v, v_end, a, c, dist) if v_end >= 0.0 else np.inf
-            t_zero, d_zero = drag_stop(v, a, c)
         t_slip = -sigma / dsig if (not rolling and sigma * dsig < 0.0) else np.inf
         t_spin = -s / dsp if (not rolling and s * dsp < 0.0) else np.inf
         ev = 0
@@ -407,19 +391,14 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         if tm == np.inf:
             status = STOPPED
             break
-        if c > 0.0:
-            # Rolling: the phase ends at the end of the piece or at a stop.
-            ds_ = dist if ev == 0 else min(d_zero, dist)
-            v1 = max(v_end, 0.0) if ev == 0 else 0.0
-        else:
-            ds_ = v * tm + 0.5 * a * tm * tm
-            if ds_ < 0.0:
-                ds_ = 0.0
-            if ds_ > dist:
-                ds_ = dist
-            v1 = v + a * tm
-            if v1 < 0.0 or ev == 1:
-                v1 = 0.0
+        ds_ = v * tm + 0.5 * a * tm * tm
+        if ds_ < 0.0:
+            ds_ = 0.0
+        if ds_ > dist:
+            ds_ = dist
+        v1 = v + a * tm
+        if v1 < 0.0 or ev == 1:
+            v1 = 0.0
         if rolling or ev == 2:
             s1 = v1 / r
         elif ev == 3:
@@ -441,7 +420,9 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                 j = np.searchsorted(bars[:, BR_X], x, side="left") - 1
             while 0 <= j < nbar and (bars[j, BR_X] - xn) * dirn <= 0.0:
                 dd = (bars[j, BR_X] - x) / dx
-                vs, ts = along(v, a, c, dd)
+                q = v * v + 2.0 * a * dd
+                vs = np.sqrt(q) if q > 0.0 else 0.0
+                ts = 2.0 * dd / (v + vs) if v + vs > 0.0 else 0.0
                 ss = vs / r if rolling else s + dsp * ts
                 hb = y + dy * dd - bars[j, BR_YG]
                 code, nvx, nvy, nw = _barrier_hit(
@@ -461,7 +442,9 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             j = np.searchsorted(st_x, x, side="right")
             while j < st_x.shape[0] and st_x[j] <= xn:
                 dd = (st_x[j] - x) / dx
-                vs, ts = along(v, a, c, dd)
+                q = v * v + 2.0 * a * dd
+                vs = np.sqrt(q) if q > 0.0 else 0.0
+                ts = 2.0 * dd / (v + vs) if v + vs > 0.0 else 0.0
                 ss = vs / r if rolling else s + dsp * ts
                 if (
                     _record(j, y + dy * dd - st_yg[j], vs * dx, vs * dy, -ss * dirn, t + ts,

@@ -60,11 +60,7 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "(no time step).",
         "Impacts by Newton restitution and Coulomb friction with the spin that friction "
         "gives the rock (impact_model spang), or by normal and tangential restitution "
-        "(rn_rt), optionally scaled with the impact speed (Pfeiffer & Bowen 1989), or by "
-        "spang's law with a resistance from the block's radius against the ground's "
-        "obstacles and from its softness, growing with the speed (rough_soft). The rolling "
-        "resistance acts in impacts as in contact, so the spang and rough_soft results do "
-        "not depend on engine.v_contact; rn_rt's do.",
+        "(rn_rt), optionally scaled with the impact speed (Pfeiffer & Bowen 1989).",
         "Scatter: restitution, friction and rolling resistance are drawn per impact from "
         "truncated normals with the standard deviations of scatter:, and the impact normal "
         "is tilted by the roughness; every draw comes from a seeded stream per rock.",
