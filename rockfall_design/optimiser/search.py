@@ -570,10 +570,16 @@ class _EditSearch:
         return self._designs([k for k in self.kept if k not in before], limit - 1e-9)
 
     def _cost(self, vec: np.ndarray) -> float:
-        """The fixed cost of a vector's ground edits, without a run (inf: no price)."""
+        """The fixed cost of a vector's ground edits, without a run (inf: no price, or
+        a geometry that does not fit)."""
+        screen = self.screen
         try:
-            return float(self.screen.cost(self.screen.measures(
-                _decode(self.cands, self.edit_slots, self.variables, vec))))
+            edits = screen.measures(_decode(self.cands, self.edit_slots, self.variables, vec))
+            # Placing first, as objective() does: a step may leave a geometry that
+            # does not fit (a ditch too narrow for its new depth), which is out of
+            # the space, not a fault of the measure's quantities().
+            place_measures(screen.project, screen.registry, edits, screen.section)
+            return float(screen.cost(edits))
         except (KeyError, ValueError, ProjectError):
             return math.inf
 
