@@ -125,12 +125,13 @@ def test_the_issues_done_when(two_zones):
 @pytest.mark.slow
 def test_alternatives_one_column_per_check_rounded(two_zones):
     a = two_zones.alternatives
-    assert {"height_factor", "energy_factor", "height_factor_bound"} <= set(a)
+    # design_two_zones is designed to UNI 11211 (design height and energy, braking)
+    assert {"design_height", "design_energy", "design_height_bound"} <= set(a)
     # A design with two measures gets a column per check of its second measure.
     two = [alt for alt in two_zones.summary["alternatives"]
            if alt["checks"] and len(alt["measures"]) == 2]
-    assert ({"height_factor_2", "energy_factor_2"} <= set(a)) is bool(two)
-    for col in [c for c in a if c.startswith(("height_factor", "energy_factor"))]:
+    assert ({"design_height_2", "design_energy_2"} <= set(a)) is bool(two)
+    for col in [c for c in a if c.startswith(("design_height", "design_energy"))]:
         values = a[col].dropna()
         assert (values == values.round(2)).all()
     assert str(a["cost"].dtype) == "Int64"
@@ -224,7 +225,11 @@ def test_report_of_optimise_is_self_contained(tmp_path, capsys):
     # Self-contained: no file or URL is loaded from outside the page.
     assert not re.search(r"""(src|href)\s*=\s*["'](?!#)""", html)
     assert "url(http" not in html and "<link" not in html and "<script" not in html
-    n_figures = 4 if summary["best"] else 1
+    # profile, envelopes, stops, alternatives, and a distribution figure per station
+    # and measure of the chosen design (passing_*.svg)
+    passing = len(list(out.glob("passing_*.svg")))
+    assert bool(passing) is bool(summary["best"])
+    n_figures = 4 + passing if summary["best"] else 1
     assert html.count("<svg") == n_figures and html.count("<figure") == n_figures
     for alt in summary["alternatives"]:
         assert alt["name"] in html and alt["name"] in md

@@ -60,7 +60,9 @@ def test_plot_and_report_show_the_binding_scenario_and_every_margin(tmp_path, ca
         assert str(s["seed"]) in md
     # figures: the margins, then the binding scenario's own
     assert md.index("(margins.svg)") < md.index("(profile.svg)")
-    assert html.count("<svg") == 4
+    # ... and one distribution figure per station and measure (passing_*.svg)
+    passing = list(report.glob("passing_*.svg"))
+    assert passing and html.count("<svg") == 4 + len(passing)
     assert ('<p id="verdict" class="verdict ok">Holds with confidence' in html) == (
         out["verdict"]["state"] == "holds with confidence")
     assert "<link" not in html and "<script" not in html and 'src="http' not in html
