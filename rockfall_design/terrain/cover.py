@@ -83,19 +83,30 @@ def classes_from_raster(path: str | os.PathLike[str], east: np.ndarray, north: n
     return out
 
 
-def _read_polygons(path: str | os.PathLike[str], attribute: str | None,
-                   dem_wkt: str) -> tuple[list[Any], list[Any]]:
-    """The polygons of a layer and their attribute values (None without attribute)."""
+def read_layer(path: str | os.PathLike[str], what: str,
+               dem_wkt: str) -> tuple[dict[str, Any], list[Any], list[Any]]:
+    """A vector layer's metadata, geometries (shapely) and field columns, in the DEM's CRS.
+
+    One line naming the file where GDAL cannot read it or its CRS is not the
+    DEM's (``what`` names the layer in that line).
+    """
     shown = os.fspath(path)
-    pyogrio = require("pyogrio", f"reading the polygon layer {shown}")
-    shapely = require("shapely", f"reading the polygon layer {shown}")
+    pyogrio = require("pyogrio", f"reading the {what} {shown}")
+    shapely = require("shapely", f"reading the {what} {shown}")
     try:
         meta, _, wkb, fields = pyogrio.raw.read(path)
     except Exception as exc:  # noqa: BLE001 - GDAL's errors on a foreign or damaged file
         reason = " ".join(str(exc).split())[:160] or type(exc).__name__
         raise TerrainError(shown, f"not a vector layer that can be read: {reason}") from None
-    same_crs(shown, meta.get("crs") or "", dem_wkt, "polygon layer")
-    shapes = list(shapely.from_wkb(wkb))
+    same_crs(shown, meta.get("crs") or "", dem_wkt, what)
+    return meta, list(shapely.from_wkb(wkb)), list(fields)
+
+
+def _read_polygons(path: str | os.PathLike[str], attribute: str | None,
+                   dem_wkt: str) -> tuple[list[Any], list[Any]]:
+    """The polygons of a layer and their attribute values (None without attribute)."""
+    shown = os.fspath(path)
+    meta, shapes, fields = read_layer(path, "polygon layer", dem_wkt)
     names = list(meta["fields"])
     if attribute is None:
         return shapes, [True] * len(shapes)

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cover import same_crs
+from .cover import read_layer
 from .cut import TerrainSection
 from .dem import Dem
 from .extra import TerrainError, require
@@ -76,15 +76,9 @@ class CorridorMap:
 def read_road(path: str | os.PathLike[str], dem_wkt: str = "") -> np.ndarray:
     """The road's map line (E, N) (m) from the first line feature of a vector layer."""
     shown = os.fspath(path)
-    pyogrio = require("pyogrio", f"reading the road {shown}")
+    _, geometries, _ = read_layer(path, "road", dem_wkt)
     shapely = require("shapely", f"reading the road {shown}")
-    try:
-        meta, _, wkb, _ = pyogrio.raw.read(path)
-    except Exception as exc:  # noqa: BLE001 - GDAL's errors on a foreign or damaged file
-        reason = " ".join(str(exc).split())[:160] or type(exc).__name__
-        raise TerrainError(shown, f"not a vector layer that can be read: {reason}") from None
-    same_crs(shown, meta.get("crs") or "", dem_wkt, "road")
-    for geometry in shapely.from_wkb(wkb):
+    for geometry in geometries:
         if geometry is not None and geometry.geom_type in ("LineString", "MultiLineString"):
             if geometry.geom_type == "MultiLineString":
                 geometry = shapely.line_merge(geometry)
