@@ -20,11 +20,12 @@ import math
 import os
 import re
 import stat
-import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
+
+from ..report.temporaries import make, remove_stale
 
 #: Largest request body (bytes): a project file or a section to import.
 MAX_BODY_BYTES = 1_000_000
@@ -155,7 +156,10 @@ def write_atomically(target: Path, text: str) -> None:
         umask = os.umask(0)
         os.umask(umask)
         mode = 0o666 & ~umask
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    # Named by its owner, as the commands' temporaries are: a server killed
+    # during a write leaves one that the next write here (or a run) removes.
+    remove_stale(target.parent)
+    fd, tmp = make(target.parent, target.name)
     try:
         try:
             write_bytes(fd, text.encode("utf-8"))

@@ -222,6 +222,37 @@ def test_upload_replaces_a_file_of_its_own_kind_and_keeps_its_mode(quarry):
     assert r.status_code == 200 and (d / "lib.yaml").read_text() == LIBRARY
 
 
+def test_a_write_leaves_no_temporary_of_a_killed_server_behind(quarry, monkeypatch):
+    """Save and Upload name their temporaries by owner, as the commands do (item 7).
+
+    A server killed during a write leaves ``.NAME.PID-HOST.RANDOM.tmp``; the
+    next write into that folder removes it once its process is gone.
+    """
+    from rockfall_design.report import temporaries
+
+    c, _, d = quarry
+    fd, made = temporaries.make(d, "quarry_stops_b.csv")
+    os.write(fd, b"half a file")
+    os.close(fd)
+    # As if another process, long gone, had made it.
+    dead = Path(made.replace(f".{os.getpid()}-", ".999999999-"))
+    os.rename(made, dead)
+    seen: list[str] = []
+    real = guards.write_bytes
+
+    def spy(fd: int, data: bytes) -> None:
+        seen.extend(p.name for p in d.iterdir() if p.name.endswith(".tmp"))
+        real(fd, data)
+
+    monkeypatch.setattr(guards, "write_bytes", spy)
+    r = c.post("/api/projects/calibrate_quarry/upload",
+               json={"path": "quarry_stops_b.csv", "text": STOPS, "replace": True})
+    assert r.status_code == 200, r.text
+    assert not dead.exists()
+    assert [n for n in seen if n.startswith(f".quarry_stops_b.csv.{os.getpid()}-")], seen
+    assert not [p for p in d.iterdir() if p.name.endswith(".tmp")]
+
+
 # ---- item 3: serve fails cleanly --------------------------------------------------------------
 
 
