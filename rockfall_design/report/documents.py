@@ -485,7 +485,7 @@ def write_report(result: Any, directory: str | os.PathLike[str],
     -------
     list of Path
     """
-    from .figures import figure_svg, save_figures
+    from .figures import inline_svg, svg_document
     from .outputs import OutputSet
 
     if outputs is None:
@@ -497,8 +497,13 @@ def write_report(result: Any, directory: str | os.PathLike[str],
     own = getattr(result, "report_context", None)
     ctx = own(figures) if callable(own) else report_context(result, figures)
     figs = {f["name"]: f["fig"] for f in ctx["figures"]}
-    written = save_figures(figs, out, ("svg",), outputs)
-    svgs = {name: figure_svg(fig) for name, fig in figs.items()}  # once, for both pages
+    # Each figure drawn once: its SVG file and the pages' inline copy are the same text.
+    documents = {name: svg_document(fig) for name, fig in figs.items()}
+    written = []
+    for name, document in documents.items():
+        outputs.write_text(out / f"{name}.svg", document)
+        written.append(out / f"{name}.svg")
+    svgs = {name: inline_svg(document) for name, document in documents.items()}
     page = render_html(ctx, svgs=svgs)
     outputs.write_text(out / "report.html", page)
     outputs.write_text(out / "report.md", render_markdown(ctx))

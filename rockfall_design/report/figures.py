@@ -556,11 +556,19 @@ def save_figures(
     return written
 
 
-def figure_svg(fig: Figure) -> str:
-    """The figure as an SVG document (text), for embedding in an HTML report."""
+def svg_document(fig: Figure) -> str:
+    """The figure as a whole SVG file's text, as :func:`save_figures` writes it."""
     buf = io.StringIO()
     fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
-    text = buf.getvalue()
-    # Inline SVG in HTML needs no XML prolog or DOCTYPE.
-    start = text.find("<svg")
-    return text[start:] if start >= 0 else text
+    return buf.getvalue()
+
+
+def inline_svg(document: str) -> str:
+    """An SVG file's text without its XML prolog and DOCTYPE, for inline use in HTML."""
+    start = document.find("<svg")
+    return document[start:] if start >= 0 else document
+
+
+def figure_svg(fig: Figure) -> str:
+    """The figure as an SVG document (text), for embedding in an HTML report."""
+    return inline_svg(svg_document(fig))

@@ -99,7 +99,12 @@ def passage_figure(p: Passages, project: str = "") -> Figure:
         Seven panels (:data:`~rockfall_design.run.passages.QUANTITIES`) and a
         box that says where and how many rocks.
     """
-    fig = RockfallFigure(figsize=(11, 12), layout="constrained")
+    # A fixed grid, not the constrained layout: the panels are alike and their
+    # labels short, and the layout engine's measuring of 14 axes' texts was
+    # most of the time a report took (3 to 5 such figures per run).
+    fig = RockfallFigure(figsize=(11, 12))
+    fig.subplots_adjust(left=0.07, right=0.93, bottom=0.05, top=0.94, wspace=0.38,
+                        hspace=0.32)
     axes = fig.subplots(4, 2).ravel()
     for ax, (key, what, unit) in zip(axes, QUANTITIES, strict=False):
         marks = [(m.label, m.value) for m in p.marks if m.quantity == key]
