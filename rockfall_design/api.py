@@ -565,7 +565,8 @@ def validate_project(project: Project, registry: Registry) -> None:
     PluginError
         Exit code 3, if a plugin misbehaves.
     """
-    from .studies.paths import check_study, validate_plugin_sections
+    from .judge.plan import validate_plugin_sections
+    from .studies.paths import check_study
 
     validate_plugin_sections(project, registry)
     if project.study is not None:

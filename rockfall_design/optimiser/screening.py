@@ -38,10 +38,10 @@ from ..run.reach import reaches_protected_zone
 from ..run.releases import draw_releases, engine_key, engine_settings, section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..judge.design_spec import DesignSpec
     from ..plugins import Registry
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
-    from .design_spec import DesignSpec
 
 from .space import STATION_STEP_M, _decode, _variables
 
@@ -158,7 +158,7 @@ class Screening:
         ``restart_stations`` (m), when given with ``stations``, are kept as
         restart stations, so that ground edits can still be judged.
         """
-        from .candidates import build_candidate_measure
+        from ..judge.candidates import build_candidate_measure
 
         self.project = project
         self.registry = registry
@@ -287,7 +287,7 @@ class Screening:
         KeyError or ValueError
             From the cost model: it has no price for one of the measures.
         """
-        from .costing import design_cost
+        from ..judge.costing import design_cost
 
         return design_cost(self.registry, self.spec, measures, self.section)
 

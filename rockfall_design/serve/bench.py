@@ -246,7 +246,7 @@ def default_spec(project: Project, registry: Registry) -> Any:
     ``protect.allowed_fraction`` (0 without a protected zone), and nothing is
     priced.
     """
-    from ..optimiser.design_spec import DesignSpec, resolve_design
+    from ..judge.design_spec import DesignSpec, resolve_design
 
     if project.design is not None:
         return resolve_design(project, registry)

@@ -5,9 +5,9 @@ from __future__ import annotations
 import gc
 from pathlib import Path
 
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.placing import build_concept, edited_section, place_measures
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.design_spec import resolve_design
 from rockfall_design.optimiser.space import _decode, _variables
 from rockfall_design.project import load_project
 
