@@ -133,7 +133,7 @@ class Bench:
         try:
             trial = self.run.place(entry.project, entry.registry, measures)
         except ProjectError as exc:
-            raise ServeError(400, _placed_message(exc.message)) from None
+            raise ServeError(400, placed_message(exc.message)) from None
         except InputError as exc:  # a ditch or berm with no restart station above it
             raise ServeError(400, str(exc)) from None
         res = trial.result
@@ -191,7 +191,7 @@ def _residual_dict(entry: ProjectEntry, sc: Screening, prot: dict[str, Any]) -> 
     }
 
 
-def _placed_message(message: str) -> str:
+def placed_message(message: str) -> str:
     """A placement error without the project file's line: the measure is the page's."""
     return re.sub(r"^.*?:\d+: ", "", message)
 
