@@ -45,10 +45,10 @@ from pathlib import Path
 import numpy as np
 
 from rockfall_design.errors import ProjectError
+from rockfall_design.judge.design_spec import resolve_design, with_residual_target
 from rockfall_design.judge.evaluation import evaluate_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.design_spec import resolve_design, with_residual_target
 from rockfall_design.optimiser.section import optimise
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project

@@ -27,6 +27,7 @@ from .results import DEFAULT_TRAJECTORIES, CheckResult, OptimiseResult, Simulati
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
+    from .optimiser.trials import TrialRun
     from .plugins import Registry
     from .project import Project
     from .run.simulation import Study
@@ -565,9 +566,36 @@ def validate_project(project: Project, registry: Registry) -> None:
     PluginError
         Exit code 3, if a plugin misbehaves.
     """
-    from .studies.paths import check_study, validate_plugin_sections
+    from .judge.plan import validate_plugin_sections
+    from .studies.paths import check_study
 
     validate_plugin_sections(project, registry)
     if project.study is not None:
         # the study's paths and values, against this project (after the sections above it)
         check_study(project, registry)
+
+
+def trial_run(project: Project, registry: Registry, rocks: int, seed: int, *,
+              table_step_m: float, restart_step_m: float, paths_drawn: int,
+              progress: Callable[[int], None] | None = None) -> TrialRun:
+    """The bare slope's rocks kept at dense stations, to judge measures placed by hand.
+
+    The run behind the browser app's section page: its
+    :meth:`~rockfall_design.optimiser.trials.TrialRun.place` judges measures
+    placed anywhere from the kept table, in milliseconds for barriers (see
+    :func:`rockfall_design.optimiser.trials.trial_run` for the parameters).
+
+    Raises
+    ------
+    ProjectError
+        Exit code 2, a project whose plugin sections do not resolve.
+    PluginError
+        Exit code 3, if a plugin misbehaves.
+    """
+    # Imported on first use, as every command's machinery here: `rockfall-design
+    # --help` does not load the engine.
+    from .optimiser.trials import trial_run as _trial_run
+
+    return _trial_run(project, registry, int(rocks), int(seed),
+                      table_step_m=table_step_m, restart_step_m=restart_step_m,
+                      paths_drawn=paths_drawn, progress=progress)

@@ -381,13 +381,13 @@ class OptimiseResult:
         ``items`` (``measure``, ``quantity``, ``unit``, ``count``,
         ``unit_price``, ``amount``, ``per_m``, ``source``), ``total`` (the
         chosen design's cost), ``currency``, ``length_m`` (the site length,
-        m): see :func:`rockfall_design.optimiser.design_spec.design_bill`.
+        m): see :func:`rockfall_design.judge.design_spec.design_bill`.
         """
         best = self.result.best
         if best is None:
             return None
-        from .optimiser.costing import design_bill
-        from .optimiser.design_spec import resolve_design
+        from .judge.costing import design_bill
+        from .judge.design_spec import resolve_design
         from .run.releases import section_from_project
 
         d = self.project.design

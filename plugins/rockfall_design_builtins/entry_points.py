@@ -1,13 +1,15 @@
-"""One plugin object per built-in, so that each has an entry point of its own.
+"""One plugin object per built-in safety concept, so that each has an entry point of its own.
 
 Every built-in measure, safety concept and cost model is registered by its
 own entry point (pyproject.toml, group ``rockfall_design``), named as the
-project file names it: ``fence``, ``wall``, ``ditch``, ``berm``,
-``boulder_row``, ``spang``, ``uni11211``, ``onr24810``, ``reliability``,
-``unit_prices``. So
-``--block fence`` leaves out the fence and nothing else, and a third party
-can replace one built-in by blocking it and registering its own class of
-that name.
+project file names it. So ``--block spang`` leaves out that concept and
+nothing else, and a third party can replace one built-in by blocking it and
+registering its own class of that name. The measures
+(:mod:`rockfall_design_builtins.measures`) and the cost model
+(:mod:`rockfall_design_builtins.costs.unit_prices`) are one module each,
+registered as they are; the safety concepts ``spang``, ``uni11211``,
+``onr24810`` and ``reliability`` still go through this module until they
+are split the same way.
 
 pluggy registers any object whose attributes are functions marked with
 ``@hookimpl`` (a module is only the most common such object). Each object
@@ -23,19 +25,13 @@ from types import ModuleType
 
 from rockfall_design import hookimpl
 
-from . import costs, measures, safety, safety_onr24810, safety_reliability
+from . import safety, safety_onr24810, safety_reliability
 
 __all__ = [
-    "berm",
-    "boulder_row",
-    "ditch",
-    "fence",
     "onr24810",
     "reliability",
     "spang",
     "uni11211",
-    "unit_prices",
-    "wall",
 ]
 
 
@@ -71,26 +67,12 @@ class OneBuiltin:
         return f"<built-in plugin {self.name!r}>"
 
 
-def _measure(kind: str) -> OneBuiltin:
-    return OneBuiltin(measures, "rockfall_design_measures", "kind", kind)
-
-
 def _concept(name: str, module: ModuleType = safety) -> OneBuiltin:
     return OneBuiltin(module, "rockfall_design_safety_concepts", "name", name)
 
 
-def _cost_model(name: str) -> OneBuiltin:
-    return OneBuiltin(costs, "rockfall_design_cost_models", "name", name)
-
-
-fence = _measure("fence")
-wall = _measure("wall")
-ditch = _measure("ditch")
-berm = _measure("berm")
-boulder_row = _measure("boulder_row")
 spang = _concept("spang")
 uni11211 = _concept("uni11211")
 # One module each (DESIGN.md: one module per built-in).
 onr24810 = _concept("onr24810", safety_onr24810)
 reliability = _concept("reliability", safety_reliability)
-unit_prices = _cost_model("unit_prices")

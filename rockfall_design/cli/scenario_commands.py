@@ -123,8 +123,8 @@ class ScenariosCheckResult:
         the same rocks as in :func:`check_across`, so the same numbers.
         """
         from ..api import check
-        from ..optimiser.across import scenario_runs
         from ..results import DEFAULT_TRAJECTORIES
+        from ..studies.scenarios import scenario_runs
 
         b = self.summary["binding"]
         run = next(r for r in scenario_runs(self.project, self.summary["seed"])

@@ -10,6 +10,7 @@ the project's safety concept.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -175,6 +176,39 @@ class Evaluation:
         prot = self.protect
         return (any(c.rejects for cs in self.checks for c in cs)
                 or (prot is not None and prot["fails_with_confidence"]))
+
+    def margin(self) -> tuple[float, str]:
+        """How far the design is from failing on these rocks: (relative slack, what binds).
+
+        The smallest, over the checks and the residual, of ``|b - t| / |t|``
+        with ``b`` the value with the confidence bounds in place (the point
+        value where there is no bound) and ``t`` its target; negative where
+        that fails. The residual's slack is ``(allowed - upper) / allowed`` of
+        the fraction reaching the protected zone (its Clopper-Pearson bound).
+        What binds is ``"<measure label>: <check name>"`` or ``"residual"``;
+        ``(inf, "")`` when nothing is checked.
+
+        See Also
+        --------
+        rockfall_design.judge.bounds : the bounds that ``b`` carries.
+        """
+        worst, what = math.inf, ""
+        for p, cs in zip(self.placed, self.checks, strict=True):
+            for c in cs:
+                v = c.bound if c.bound is not None else c.value
+                if v is None:
+                    continue
+                slack = abs(v - c.target) / max(abs(c.target), 1e-9)
+                if not c.holds_with_confidence:
+                    slack = -slack
+                if slack < worst:
+                    worst, what = slack, f"{p.label}: {c.name}"
+        prot = self.protect
+        if prot is not None and prot["allowed_fraction"] > 0:
+            slack = (prot["allowed_fraction"] - prot["upper_fraction"]) / prot["allowed_fraction"]
+            if slack < worst:
+                worst, what = slack, "residual"
+        return worst, what
 
     def _failed_checks(self, holds: Callable[[Check], bool]) -> Iterator[tuple[str, Check, str]]:
         """(measure label, check, " unit" or "") of every check that ``holds`` rejects."""

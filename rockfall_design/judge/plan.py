@@ -4,10 +4,11 @@ Every command validates the whole project file against the plugins (the
 measures' parameters and footprints, the safety concept, the design
 section) before it runs a rock. What that validation builds is the plan:
 the measures and their footprints on the bare section, the edited section
-and the safety concept (the ``design:`` section is the optimiser's,
-resolved by :func:`rockfall_design.optimiser.design_spec.resolve_design`). :func:`plan_for`
-builds it once and keeps it with the project, so the run that follows uses
-the same objects instead of asking the plugins again (a plugin is asked for
+and the safety concept (the ``design:`` section, what the optimiser may
+build, is resolved by :func:`rockfall_design.judge.design_spec.resolve_design`;
+:func:`validate_plugin_sections` runs both). :func:`plan_for` builds it
+once and keeps it with the project, so the run that follows uses the same
+objects instead of asking the plugins again (a plugin is asked for
 a measure's footprint once per command, and a misbehaving one fails before
 any rock runs).
 """
@@ -17,6 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from .design_spec import resolve_design
+
 if TYPE_CHECKING:  # pragma: no cover
     from ..engine import Section
     from ..plugins import Registry
@@ -25,7 +28,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..project import Project
     from .placing import PlacedMeasure
 
-__all__ = ["Plan", "plan_for"]
+__all__ = ["Plan", "plan_for", "validate_plugin_sections"]
 
 
 @dataclass(frozen=True)
@@ -98,3 +101,23 @@ def plan_for(project: Project, registry: Registry) -> Plan:
                 placed=tuple(placed), concept=concept, bare=bare, section=section)
     project._plan = plan
     return plan
+
+
+def validate_plugin_sections(project: Project, registry: Registry) -> None:
+    """The checks of the sections that plugins own: measures, safety concept and design.
+
+    :func:`rockfall_design.api.validate_project` runs them and then the
+    study's; a varied project of a study (which has no study) runs them alone
+    (:func:`rockfall_design.studies.check_study`, the study's and the
+    scenario checks' runs).
+
+    Raises
+    ------
+    ProjectError
+        Exit code 2, located at the offending key.
+    PluginError
+        Exit code 3, if a plugin misbehaves.
+    """
+    plan_for(project, registry)
+    if project.design is not None:
+        resolve_design(project, registry)

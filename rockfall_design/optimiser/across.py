@@ -46,9 +46,11 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from ..judge.evaluation import Evaluation
+from ..judge.design_spec import resolve_design, with_residual_target
+from ..judge.placing import build_concept
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins.concept import DEFAULT_CONFIDENCE
+from ..studies.scenarios import ScenarioRun, required_scenarios, scenario_runs
 from .alternatives import (
     FRESH_OFFSET,
     MAX_EXACT_PER_FAMILY,
@@ -71,90 +73,11 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
 
-__all__ = ["ScenarioRun", "AcrossResult", "margin", "optimise_across", "required_scenarios",
-           "scenario_runs"]
+__all__ = ["AcrossResult", "optimise_across"]
 
 #: Designs of one family screened in every scenario, at most.
 MAX_DESIGNS_PER_FAMILY = 400
 #: Offset of a scenario's fresh seed from its own seed (as the single optimiser's).
-
-
-@dataclass(frozen=True)
-class ScenarioRun:
-    """One scenario of a study, ready to run: its index, values, seed and project."""
-
-    index: int
-    values: dict[str, Any]
-    seed: int
-    project: Any  # Project
-
-    def head(self) -> dict[str, Any]:
-        """``{index, values, seed}``, the scenario's keys in every JSON object about it."""
-        return {"index": self.index, "values": dict(self.values), "seed": self.seed}
-
-
-def required_scenarios(share: float, k: int) -> int:
-    """Scenarios of ``k`` a design must hold in for ``share`` (``ceil(share k)``, at least 1)."""
-    return max(1, min(k, math.ceil(share * k - 1e-9)))
-
-
-def scenario_runs(project: Project, seed: int | None = None) -> list[ScenarioRun]:
-    """The study's scenarios of ``project`` as runnable projects, each with its own seed.
-
-    Parameters
-    ----------
-    project
-        With a ``study:`` section.
-    seed
-        The run seed (default ``rocks.seed``); scenario ``i`` runs with
-        :func:`~rockfall_design.studies.scenario_seed` ``(seed, i)``, as
-        ``rockfall-design study`` runs it.
-
-    Raises
-    ------
-    ProjectError
-        No ``study:`` section, or values that do not fit together.
-    """
-    from ..studies import scenarios, with_values
-
-    if project.study is None:
-        raise project.error_at(("design", "scenarios"), "the design's scenarios are those "
-                               "of a study: give a study: section")
-    run_seed = int(project.rocks.seed if seed is None else seed)
-    out = []
-    for sc in scenarios(project.study, run_seed):
-        p = with_values(project, sc.values)
-        p = p.model_copy(update={"rocks": p.rocks.model_copy(update={"seed": sc.seed})})
-        out.append(ScenarioRun(sc.index, dict(sc.values), int(sc.seed), p))
-    return out
-
-
-def margin(ev: Evaluation) -> tuple[float, str]:
-    """How far a design is from failing in one run: (relative slack, what binds).
-
-    The smallest, over the checks and the residual, of ``|b - t| / |t|``
-    with ``b`` the value with the confidence bounds in place (the point
-    value where there is no bound) and ``t`` its target; negative where that
-    fails. The residual's slack is ``(allowed - upper) / allowed`` of the
-    fraction reaching the protected zone (its Clopper-Pearson bound).
-    """
-    worst, what = math.inf, ""
-    for p, cs in zip(ev.placed, ev.checks, strict=True):
-        for c in cs:
-            v = c.bound if c.bound is not None else c.value
-            if v is None:
-                continue
-            slack = abs(v - c.target) / max(abs(c.target), 1e-9)
-            if not c.holds_with_confidence:
-                slack = -slack
-            if slack < worst:
-                worst, what = slack, f"{p.label}: {c.name}"
-    prot = ev.protect
-    if prot is not None and prot["allowed_fraction"] > 0:
-        slack = (prot["allowed_fraction"] - prot["upper_fraction"]) / prot["allowed_fraction"]
-        if slack < worst:
-            worst, what = slack, "residual"
-    return worst, what
 
 
 def _design_key(measures: Sequence[ProtectiveMeasure]) -> tuple:
@@ -222,9 +145,6 @@ class AcrossResult(OptimisationResult):
 
 def _build(run: ScenarioRun, registry: Registry, rocks: int | None) -> tuple[_Scenario, int]:
     """A scenario's screening with the rocks that can show its residual target."""
-    from ..judge.placing import build_concept
-    from .design_spec import resolve_design, with_residual_target
-
     project = run.project
     spec = resolve_design(project, registry)
     concept = build_concept(project, registry)
@@ -312,7 +232,7 @@ def _judge_design(scs: Sequence[_Scenario], measures: Sequence[ProtectiveMeasure
         exact += dec.exact
         decisions[j] = dec
         rows[j]["decision_rocks"] = dec.rocks
-        slack, rows[j]["binds_at"] = margin(dec.evaluation)
+        slack, rows[j]["binds_at"] = dec.evaluation.margin()
         rows[j]["margin"] = round(slack, 4) if math.isfinite(slack) else None
         if dec.admitted:
             rows[j]["admitted"] = True

@@ -33,11 +33,11 @@ from ..plugins import guard
 from ..plugins.measure import Barrier
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..judge.design_spec import DesignSpec
     from ..plugins import Registry
     from ..plugins.concept import Check, SafetyConcept
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
-    from .design_spec import DesignSpec
 
 from .screening import Screening, ScreenResult
 

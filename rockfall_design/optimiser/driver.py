@@ -23,7 +23,7 @@ from .alternatives import SEARCH_SEED, Alternative
 from .space import family_name
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .candidates import CandidateSpec
+    from ..judge.candidates import CandidateSpec
 
 
 @dataclass(frozen=True)

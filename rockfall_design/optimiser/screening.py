@@ -38,10 +38,10 @@ from ..run.reach import reaches_protected_zone
 from ..run.releases import draw_releases, engine_key, engine_settings, section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..judge.design_spec import DesignSpec
     from ..plugins import Registry
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
-    from .design_spec import DesignSpec
 
 from .space import STATION_STEP_M, _decode, _variables
 
@@ -158,7 +158,7 @@ class Screening:
         ``restart_stations`` (m), when given with ``stations``, are kept as
         restart stations, so that ground edits can still be judged.
         """
-        from .candidates import build_candidate_measure
+        from ..judge.candidates import build_candidate_measure
 
         self.project = project
         self.registry = registry
@@ -287,12 +287,33 @@ class Screening:
         KeyError or ValueError
             From the cost model: it has no price for one of the measures.
         """
-        from .costing import design_cost
+        from ..judge.costing import design_cost
 
         return design_cost(self.registry, self.spec, measures, self.section)
 
     # -- tables -------------------------------------------------------------------
-    def _table_for(self, edits: Sequence[ProfileEdit], edited: Section | None) -> _Table:
+    def table_for(self, edits: Sequence[ProfileEdit], edited: Section | None) -> _Table:
+        """The table of the search rocks on ground reshaped by ``edits``.
+
+        Only the rocks that pass the last restart station upslope of the
+        first edit run again, from their state saved there, on ``edited``
+        (the section with the edits applied); the others keep their bare
+        slope's row. Tables are cached per set of edits (their stations,
+        shapes and materials).
+
+        Parameters
+        ----------
+        edits
+            The profile edits (ditches, berms) of a design; none gives the
+            bare slope's table.
+        edited
+            The section with ``edits`` applied.
+
+        Raises
+        ------
+        ValueError
+            No restart station upslope of the first edit.
+        """
         if not edits:
             return self.bare
         key = tuple((round(e.x_start, 6), round(e.x_end, 6),
@@ -354,7 +375,7 @@ class Screening:
         edits = [p.footprint for p in placed if isinstance(p.footprint, ProfileEdit)]
         edited = edited_section(self.project, self.section, placed) if edits else None
         try:
-            table = self._table_for(edits, edited)
+            table = self.table_for(edits, edited)
         except ValueError as exc:
             return ScreenResult(math.inf, False, math.inf, [], [], self.n, reason=str(exc))
         try:

@@ -471,7 +471,7 @@ class _EditSearch:
                 self.seen[key] = big + fixed_cost
                 return self.seen[key]
             edited = edited_section(screen.project, screen.section, placed)
-            table = screen._table_for([p.footprint for p in placed], edited)
+            table = screen.table_for([p.footprint for p in placed], edited)
         except (KeyError, ValueError, ProjectError) as exc:
             tally.reasons["does not fit"] += 1
             tally.why = tally.why or getattr(exc, "message", None) or str(exc)

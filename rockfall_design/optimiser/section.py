@@ -24,9 +24,9 @@ from ..plugins.concept import DEFAULT_CONFIDENCE
 from ..run.reach import reaches_protected_zone
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..judge.design_spec import DesignSpec
     from ..plugins import Registry
     from ..project import Project
-    from .design_spec import DesignSpec
 from .alternatives import (
     FRESH_OFFSET,
     MAX_DEFERRED_KEPT,
@@ -442,8 +442,8 @@ def optimise(
     order of cost is decided. The best design overall is the cheapest family
     design that holds.
     """
+    from ..judge.design_spec import resolve_design, with_residual_target
     from ..judge.plan import plan_for
-    from .design_spec import resolve_design, with_residual_target
 
     t0 = time.perf_counter()
     plan = plan_for(project, registry)

@@ -21,8 +21,8 @@ import numpy as np
 from ..plugins.measure import Barrier
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..judge.candidates import CandidateSpec
     from ..plugins.measure import ProtectiveMeasure
-    from .candidates import CandidateSpec
 
 #: Spacing (m) of the stations where barrier candidates may stand.
 STATION_STEP_M = 0.5

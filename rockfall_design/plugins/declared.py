@@ -7,7 +7,7 @@ are in each field's metadata (``json_schema_extra={"design": ...}``, parsed by
 :func:`~rockfall_design.plugins.measure.design_role`); a plugin that declares nothing
 keeps the conventions of plugins written before declarations existed (fields
 named ``product``, ``height``, ``capacity_kj``; ``design_variables`` bounds).
-:mod:`rockfall_design.optimiser.design_spec` resolves a project's candidates with them.
+:mod:`rockfall_design.judge.design_spec` resolves a project's candidates with them.
 """
 
 from __future__ import annotations

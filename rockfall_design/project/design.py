@@ -393,7 +393,7 @@ class Design(_Model):
     """``design:``, what the least-cost optimiser may build and how it checks a design.
 
     Candidate parameters are kept raw (the measure plugins are loaded later,
-    see :func:`rockfall_design.optimiser.design_spec.resolve_design`), their shapes checked:
+    see :func:`rockfall_design.judge.design_spec.resolve_design`), their shapes checked:
     ``x`` is a station range ``[min, max]`` (m) inside the section; any other
     value is fixed (a number, string or boolean), a range ``[a, b]`` of
     numbers with a < b (a continuous design variable) or ``{options: [...]}``

@@ -2,9 +2,12 @@
 
 The bare slope's rocks are kept at dense stations.
 
-Built once per project run (:func:`build_bench`, the screening of the
-optimiser on the run's rocks); :meth:`Bench.place` judges measures placed
-anywhere through the one judgement of :mod:`rockfall_design.judge.outcomes`.
+Built once per project run (:func:`build_bench`, over
+:func:`rockfall_design.api.trial_run`: the optimiser's screening on the
+run's rocks); :meth:`Bench.place` judges measures placed anywhere through
+the one judgement of :mod:`rockfall_design.judge.outcomes`
+(:meth:`rockfall_design.optimiser.trials.TrialRun.place`). This module only
+turns those results into the page's JSON.
 """
 
 from __future__ import annotations
@@ -19,12 +22,14 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..judge.evaluation import protect_summary
-from ..judge.verdict import verdict_of
+from ..api import trial_run
+from ..errors import InputError, ProjectError
+from ..plugins.measure import Barrier
 from .guards import ServeError
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..optimiser.screening import Screening
+    from ..optimiser.trials import Trial, TrialRun
     from ..plugins import Registry
     from ..project import Project
     from .workbench import ProjectEntry
@@ -62,21 +67,6 @@ def _finite_percentiles(a: np.ndarray, qs: Sequence[float]) -> dict[str, list[fl
     return out
 
 
-def _p95_bounds(a: np.ndarray, confidence: float) -> list[list[float | None]]:
-    """Per column of ``a``: [lower, upper] confidence bound of the 95th percentile of its
-    finite values (None where too few rocks passed to bound it)."""
-    from ..judge.bounds import quantile_lower_bound, quantile_upper_bound
-
-    out = []
-    for j in range(a.shape[1]):
-        v = a[:, j]
-        v = v[np.isfinite(v)]
-        lo = quantile_lower_bound(v, 0.95, confidence) if v.size else None
-        hi = quantile_upper_bound(v, 0.95, confidence) if v.size else None
-        out.append([_num(lo), _num(hi)])
-    return out
-
-
 def _json_list(v: np.ndarray) -> list[float | None]:
     return [None if not math.isfinite(float(x)) else round(float(x), 4) for x in v]
 
@@ -87,15 +77,20 @@ def _num(v: float | None) -> float | None:
 
 @dataclass
 class Bench:
-    """One finished run: the screening table and what the page draws from it."""
+    """One finished run: the trial run's table and what the page draws from it."""
 
-    screening: Screening
+    run: TrialRun
     rocks: int
     seed: int
     runtime_s: float
     envelopes: dict[str, Any]
     stops: dict[str, Any]
     paths: list[list[list[float]]]
+
+    @property
+    def screening(self) -> Screening:
+        """The optimiser's screening behind the table (its rocks, allowance, confidence)."""
+        return self.run.screening
 
     def place(self, entry: ProjectEntry, raws: Sequence[Any]) -> dict[str, Any]:
         """Judge fences and walls at the given stations from the table.
@@ -133,74 +128,44 @@ class Bench:
         second, so the page sends it when the measure is let go, not on
         every move (``reshapes_ground`` in the answer says so).
         """
-        from ..errors import ProjectError
-        from ..judge.placing import edited_section, place_measures
-        from ..plugins.measure import ProfileEdit
-
         t0 = time.perf_counter()
-        sc = self.screening
         measures = [entry.build_measure(raw, i) for i, raw in enumerate(raws)]
         try:
-            placed = place_measures(entry.project, entry.registry, measures, sc.section)
+            trial = self.run.place(entry.project, entry.registry, measures)
         except ProjectError as exc:
-            raise ServeError(400, _placed_message(exc.message)) from None
-        edits = [p.footprint for p in placed if isinstance(p.footprint, ProfileEdit)]
-        table = sc.bare
-        if edits:
-            try:
-                # The screening's table for edited ground (its private helper: the
-                # one place that resumes rocks at a restart station).
-                table = sc._table_for(edits, edited_section(entry.project, sc.section, placed))
-            except ValueError as exc:
-                raise ServeError(400, f"{' + '.join(p.label for p in placed)}: {exc}") from None
-        cost = _cost(sc, placed)
-        res = sc.screen_placed(placed, table, cost)
-        out_measures = _measure_dicts(sc, placed, res, raws)
-        # The residual as check reports it (judge.evaluation), against the
-        # screening's allowance; the foot of the section stands in without protect:.
-        prot = protect_summary(sc.protect_x, int(res.residual), sc.n, sc.allowed_fraction,
-                               sc.confidence)
-        verdict = verdict_of({
-            "rocks": sc.n, "confidence": sc.confidence,
-            "protect": prot if entry.project.protect is not None else None,
-            "measures": [{k: m[k] for k in ("label", "type", "met", "checks")}
-                         for m in out_measures]})
+            raise ServeError(400, placed_message(exc.message)) from None
+        except InputError as exc:  # a ditch or berm with no restart station above it
+            raise ServeError(400, str(exc)) from None
+        res = trial.result
+        out_measures = _measure_dicts(self.run, trial, raws)
+        verdict = self.run.verdict(
+            [{k: m[k] for k in ("label", "type", "met", "checks")} for m in out_measures],
+            trial.protect if entry.project.protect is not None else None)
         return {
-            "measures": out_measures, "residual": _residual_dict(entry, sc, prot),
+            "measures": out_measures,
+            "residual": _residual_dict(entry, self.screening, trial.protect),
             # The verdict of check (judge.verdict) on these numbers: "untested"
             # for a measure no rock meets, never "holds".
             "verdict": verdict.as_dict(),
             "admitted": bool(res.feasible), "near": bool(res.near),
             "rejected": not res.feasible and not res.near,
-            "approximate": bool(res.approximate), "cost": _num(cost),
-            "reshapes_ground": bool(edits),
-            "rerun_rocks": int(table.rows.size) if table.rows is not None else 0,
+            "approximate": bool(res.approximate), "cost": _num(trial.cost),
+            "reshapes_ground": trial.reshapes_ground,
+            "rerun_rocks": trial.rerun_rocks,
             "elapsed_ms": round((time.perf_counter() - t0) * 1e3, 3),
         }
 
 
-def _cost(sc: Screening, placed: Sequence[Any]) -> float:
-    """The design's cost by the project's cost model; NaN without one or without a price."""
-    if sc.spec.cost_model is None:
-        return math.nan
-    try:
-        return float(sc.cost([p.measure for p in placed]))
-    except (KeyError, ValueError):
-        return math.nan  # the cost model has no price for it: shown as unknown
-
-
-def _measure_dicts(sc: Screening, placed: Sequence[Any], res: Any,
-                   raws: Sequence[Any]) -> list[dict[str, Any]]:
+def _measure_dicts(run: TrialRun, trial: Trial, raws: Sequence[Any]) -> list[dict[str, Any]]:
     """Per placed measure: its label, station, counts and checks, for the page."""
-    from ..plugins.measure import Barrier
-
     out = []
-    for p, r, checks in zip(placed, res.results, res.checks, strict=True):
+    res = trial.result
+    for p, r, checks in zip(trial.placed, res.results, res.checks, strict=True):
         fp = p.footprint
         x = float(fp.x) if isinstance(fp, Barrier) else float(fp.x_start)
         out.append({
             "index": p.index, "label": p.label, "type": raws[p.index]["type"],
-            "x": x, "x_table": float(sc.grid[sc.station(x)]),
+            "x": x, "x_table": run.table_station(x),
             "reshapes_ground": not isinstance(fp, Barrier),
             "met": int(r.met), "caught": int(r.caught), "passed_over": int(r.passed_over),
             "broken_through": int(r.broken_through), "rebounded": int(r.rebounded),
@@ -226,7 +191,7 @@ def _residual_dict(entry: ProjectEntry, sc: Screening, prot: dict[str, Any]) -> 
     }
 
 
-def _placed_message(message: str) -> str:
+def placed_message(message: str) -> str:
     """A placement error without the project file's line: the measure is the page's."""
     return re.sub(r"^.*?:\d+: ", "", message)
 
@@ -237,23 +202,6 @@ def _check_dict(c: Any) -> dict[str, Any]:
         d[k] = _num(d.get(k))
     d["holds_with_confidence"] = bool(c.holds_with_confidence)
     return d
-
-
-def default_spec(project: Project, registry: Registry) -> Any:
-    """The project's design section, or targets alone for a project without one.
-
-    Without ``design:`` the residual is judged as ``check`` judges it: against
-    ``protect.allowed_fraction`` (0 without a protected zone), and nothing is
-    priced.
-    """
-    from ..optimiser.design_spec import DesignSpec, resolve_design
-
-    if project.design is not None:
-        return resolve_design(project, registry)
-    allowed = float(project.protect.allowed_fraction) if project.protect is not None else 0.0
-    return DesignSpec(max_measures=4, residual_count=None, residual_fraction=allowed,
-                      fresh_rocks=None, fresh_seed=None, length_m=1.0, candidates=(),
-                      cost_model=None, products={})
 
 
 def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
@@ -270,35 +218,14 @@ def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
     progress
         Called with the rocks done; an exception it raises stops the run.
     """
-    from ..engine import Releases, run_ensemble
-    from ..engine.columns import STOPPED
-    from ..engine.trajectory import centre_points
-    from ..judge.placing import build_concept
-    from ..optimiser.screening import Screening
-    from ..run.releases import section_from_project
-
-    section = section_from_project(project)
-    x0, x1 = float(section.x[0]), float(section.x[-1])
-    stations = np.arange(x0, x1 + 1e-9, TABLE_STEP_M)
-    judged = project
-    if project.protect is None:
-        # The screening counts rocks reaching a protected zone; without one,
-        # the foot of the section stands in (the page says there is none).
-        from ..project.schema import Protect
-
-        judged = project.model_copy(update={"protect": Protect(x=x1)})
-    t0 = time.perf_counter()
-    sc = Screening(judged, registry, default_spec(project, registry),
-                   build_concept(project, registry), rocks=rocks, seed=seed,
-                   stations=stations, rock_progress=progress,
-                   restart_stations=np.arange(x0, x1 + 1e-9, RESTART_STEP_M))
-    runtime = time.perf_counter() - t0
+    run = trial_run(project, registry, rocks, seed, table_step_m=TABLE_STEP_M,
+                    restart_step_m=RESTART_STEP_M, paths_drawn=PATHS_DRAWN, progress=progress)
+    sc = run.screening
     qs = sorted({50.0, 95.0, *[float(q) for q in project.analysis.percentiles]})
     t = sc.bare
-    ground = section.ground_height(sc.grid)
     envelopes = {
-        "x": [round(float(v), 4) for v in sc.grid],
-        "ground": _json_list(ground),
+        "x": [round(float(v), 4) for v in run.grid],
+        "ground": _json_list(run.ground),
         "crossings": [int(c) for c in np.isfinite(t.h).sum(axis=0)],
         "height": _finite_percentiles(t.h, qs),
         "energy": _finite_percentiles(t.e_kj, qs),
@@ -306,29 +233,16 @@ def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
         # The 95th percentile's distribution-free bounds at the project's
         # confidence (the judge's order statistics), for the hover.
         "confidence": sc.confidence,
-        "height_p95_bounds": _p95_bounds(t.h, sc.confidence),
-        "energy_p95_bounds": _p95_bounds(t.e_kj, sc.confidence),
+        "height_p95_bounds": [list(b) for b in run.p95_bounds(t.h)],
+        "energy_p95_bounds": [list(b) for b in run.p95_bounds(t.e_kj)],
     }
-    stopped = t.status == STOPPED
-    counts, edges = np.histogram(t.x_end[stopped], bins=STOP_BINS, range=(x0, x1))
-    reach = 0
-    if project.protect is not None:
-        from ..run.reach import reaches_protected_zone
-
-        reach = int(reaches_protected_zone(t.max_x, t.status, float(project.protect.x)).sum())
+    x0, x1 = float(run.section.x[0]), float(run.section.x[-1])
+    stopped_x = run.stopped_x
+    counts, edges = np.histogram(stopped_x, bins=STOP_BINS, range=(x0, x1))
     stops = {"edges": [round(float(e), 4) for e in edges], "counts": counts.tolist(),
-             "stopped": int(stopped.sum()), "reaching": reach,
-             "p95_x": _num(float(np.percentile(t.x_end[stopped], 95))) if stopped.any() else None}
+             "stopped": int(stopped_x.size), "reaching": run.reaching,
+             "p95_x": _num(float(np.percentile(stopped_x, 95))) if stopped_x.size else None}
     # The first rocks' paths, from the same random streams (rock i draws from
     # stream i of the run's key): the rocks of the table, drawn.
-    k = min(PATHS_DRAWN, rocks)
-    rel = sc.releases
-    sub = Releases(radius=rel.radius[:k], density=rel.density, x=rel.x[:k],
-                   height=rel.height[:k], vx=rel.vx[:k], vy=rel.vy[:k], spin=rel.spin[:k],
-                   spin_rolling=rel.spin_rolling[:k])
-    tr = run_ensemble(section, sub, key=sc.key, settings=sc.settings, n_trajectories=k)
-    paths = []
-    for traj in tr.trajectories:
-        px, py = centre_points(traj, 12)
-        paths.append(np.column_stack([px, py]).round(3).tolist())
-    return Bench(sc, rocks, seed, runtime, envelopes, stops, paths)
+    paths = [p.round(3).tolist() for p in run.paths]
+    return Bench(run, rocks, seed, run.runtime_s, envelopes, stops, paths)

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .bench import Bench, _placed_message, build_bench
+from .bench import Bench, build_bench, placed_message
 from .guards import (
     MAX_BODY_BYTES,
     UPLOAD_KINDS,
@@ -236,7 +236,7 @@ class ProjectEntry:
             try:
                 place_measures(project, self.registry, measures, section_from_project(project))
             except ProjectError as exc:
-                raise ServeError(400, _placed_message(exc.message)) from None
+                raise ServeError(400, placed_message(exc.message)) from None
             project = project.model_copy(update={"measures": [
                 {k: v for k, v in r.items() if k != "label"} for r in raws]})
 

@@ -28,12 +28,13 @@ from typing import TYPE_CHECKING, Any
 from pydantic import ValidationError
 
 from ..errors import ProjectError
-from ..judge.plan import plan_for
+from ..judge.plan import validate_plugin_sections
 from ..project import Project
+from ..project.loading import attach_catalogues
 from ..project.messages import describe, did_you_mean, to_project_error
+from ..project.study import Range
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..plugins import Registry
     from ..project import Project
 
 __all__ = ["ALIASES", "NOT_VARIED", "PathError", "check_study", "parse_path", "set_input",
@@ -183,8 +184,6 @@ def set_input(data: dict[str, Any], path: str, value: Any) -> None:
 
 def _validate(project: Project, data: dict[str, Any]) -> Project:
     """``data`` as a validated Project that reports later problems in ``project``'s file."""
-    from ..project.loading import attach_catalogues
-
     new = Project.model_validate(data)
     new._source = project._source
     new._lines = project._lines  # plugin problems are then located in the same file
@@ -300,8 +299,6 @@ def check_study(project: Project, registry: Any = None) -> None:
     ProjectError
         At ``study.vary.<path>``, as :func:`with_values` raises it.
     """
-    from ..project.study import Range
-
     spec = project.study
     if spec is None:
         return
@@ -325,17 +322,3 @@ def check_study(project: Project, registry: Any = None) -> None:
                     ("study", "vary", path), f"value {describe(value)}: {where}{exc.message}"
                 ) from None
 
-
-def validate_plugin_sections(project: Project, registry: Registry) -> None:
-    """The checks of the sections that plugins own: measures, safety concept and design.
-
-    :func:`rockfall_design.api.validate_project` runs them and then the
-    study's; a varied project of a study (which has no study) runs them alone.
-    """
-    plan_for(project, registry)
-    if project.design is not None:
-        # Imported only here: the optimiser (scipy's optimisers with it) is not
-        # loaded for a project without a design section.
-        from ..optimiser.design_spec import resolve_design
-
-        resolve_design(project, registry)

@@ -23,8 +23,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import ProjectError
+from ..judge.plan import validate_plugin_sections
 from ..project import Project
-from .paths import scenario_base, validate_plugin_sections, with_values
+from .paths import scenario_base, with_values
 from .scenarios import Scenario, scenarios
 from .study_result import envelope_percentile
 

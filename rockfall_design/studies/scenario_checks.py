@@ -11,6 +11,14 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
+from ..judge.evaluation import evaluate
+from ..judge.plan import validate_plugin_sections
+from ..judge.verdict import UNTESTED, verdict_of_scenarios, with_verdict
+from ..plugins import default_registry
+from ..report.sections import values_text
+from .executors import run_tasks
+from .scenarios import required_scenarios, scenario_runs
+
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
     from ..project import Project
@@ -22,14 +30,9 @@ def _check_task(task: tuple[Any, int | None, tuple[str, ...]]) -> dict[str, Any]
     ``task`` is (scenario run, rocks, blocked plugins); the plugins are
     loaded where the task runs, as the command loads them.
     """
-    from ..judge.evaluation import evaluate
-    from ..judge.verdict import with_verdict
-    from ..optimiser.across import margin
-    from ..plugins import default_registry
-
     run, rocks, block = task
     ev = evaluate(run.project, default_registry(block), rocks=rocks)
-    slack, what = margin(ev)
+    slack, what = ev.margin()
     return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
             "binds_at": what, **with_verdict(ev.summary())}
 
@@ -63,13 +66,6 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
     dict
         The JSON object of ``check --scenarios --json``.
     """
-    from ..judge.evaluation import evaluate
-    from ..judge.verdict import with_verdict
-    from ..optimiser.across import margin, required_scenarios, scenario_runs
-    from ..report.sections import values_text
-    from .executors import run_tasks
-    from .paths import validate_plugin_sections
-
     runs = scenario_runs(project, seed)
     for run in runs:  # every scenario's plugin sections, before anything runs
         validate_plugin_sections(run.project, registry)
@@ -79,7 +75,7 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
     if scheduler is None and workers == 1:
         def one(run: Any) -> dict[str, Any]:
             ev = evaluate(run.project, registry, rocks=rocks)
-            slack, what = margin(ev)
+            slack, what = ev.margin()
             return {**run.head(), "margin": round(slack, 4) if math.isfinite(slack) else None,
                     "binds_at": what, **with_verdict(ev.summary())}
 
@@ -96,8 +92,6 @@ def check_across(project: Project, registry: Registry, *, rocks: int | None = No
     bind = ranked[min(required, len(ranked)) - 1]
     failures = [f"scenario {p['index']} ({values_text(p['values'])}): {f}"
                 for p in per for f in p.get("failures", [])]
-    from ..judge.verdict import UNTESTED, verdict_of_scenarios
-
     verdict = verdict_of_scenarios(per, required)
     return {
         "verdict": verdict.as_dict(),

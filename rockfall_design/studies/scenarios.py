@@ -32,15 +32,21 @@ still changes the rocks' sizes, from the same random numbers.)
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ..project.study import Range, Sample, StudySpec
+from .paths import with_values
 
-__all__ = ["Scenario", "scenario_seed", "scenarios"]
+if TYPE_CHECKING:  # pragma: no cover
+    from ..project import Project
+
+__all__ = ["Scenario", "ScenarioRun", "required_scenarios", "scenario_runs", "scenario_seed",
+           "scenarios"]
 
 #: Scenario seeds are kept below 2**53, so that they read back exactly from
 #: JSON in any language (a JavaScript number holds integers up to 2**53).
@@ -158,3 +164,57 @@ def scenarios(spec: StudySpec | Mapping[str, Any], run_seed: int) -> list[Scenar
                  seed=int(run_seed) if common else scenario_seed(run_seed, i))
         for i, values in enumerate(design_points(spec))
     ]
+
+
+@dataclass(frozen=True)
+class ScenarioRun:
+    """One scenario of a study, ready to run: its index, values, seed and project.
+
+    ``project`` is the study's project with the scenario's values set
+    (:func:`~rockfall_design.studies.with_values`) and ``rocks.seed`` set to
+    the scenario's seed.
+    """
+
+    index: int
+    values: dict[str, Any]
+    seed: int
+    project: Any  # Project
+
+    def head(self) -> dict[str, Any]:
+        """``{index, values, seed}``, the scenario's keys in every JSON object about it."""
+        return {"index": self.index, "values": dict(self.values), "seed": self.seed}
+
+
+def required_scenarios(share: float, k: int) -> int:
+    """Scenarios of ``k`` a design must hold in for ``share`` (``ceil(share k)``, at least 1)."""
+    # The tolerance keeps an exact share (0.25 of 4) from rounding up on float noise.
+    return max(1, min(k, math.ceil(share * k - 1e-9)))
+
+
+def scenario_runs(project: Project, seed: int | None = None) -> list[ScenarioRun]:
+    """The study's scenarios of ``project`` as runnable projects, each with its own seed.
+
+    Parameters
+    ----------
+    project
+        With a ``study:`` section.
+    seed
+        The run seed (default ``rocks.seed``); scenario ``i`` runs with
+        :func:`scenario_seed` ``(seed, i)``, as ``rockfall-design study``
+        runs it.
+
+    Raises
+    ------
+    ProjectError
+        No ``study:`` section, or values that do not fit together.
+    """
+    if project.study is None:
+        raise project.error_at(("design", "scenarios"), "the design's scenarios are those "
+                               "of a study: give a study: section")
+    run_seed = int(project.rocks.seed if seed is None else seed)
+    out = []
+    for sc in scenarios(project.study, run_seed):
+        p = with_values(project, sc.values)
+        p = p.model_copy(update={"rocks": p.rocks.model_copy(update={"seed": sc.seed})})
+        out.append(ScenarioRun(sc.index, dict(sc.values), int(sc.seed), p))
+    return out

@@ -17,8 +17,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from rockfall_design.errors import ProjectError
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.evaluation import evaluate
-from rockfall_design.optimiser.design_spec import resolve_design
 from rockfall_design.project import load_project, load_project_text
 
 DATA = Path(__file__).resolve().parents[1] / "data"

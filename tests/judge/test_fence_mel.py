@@ -16,9 +16,9 @@ from rockfall_design_builtins.safety import SpangConcept, Uni11211Concept
 
 from rockfall_design import MeasureResult
 from rockfall_design.errors import ProjectError
+from rockfall_design.judge.candidates import build_candidate_measure
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.evaluation import evaluate
-from rockfall_design.optimiser.candidates import build_candidate_measure
-from rockfall_design.optimiser.design_spec import resolve_design
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project, load_project_text
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from rockfall_design.errors import ProjectError
-from rockfall_design.optimiser.design_spec import resolve_design
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.optimiser.section import optimise
 from rockfall_design.project import load_project_text
 

@@ -1,4 +1,4 @@
-"""Tests of the design section resolved against the plugins (optimiser.design_spec)."""
+"""Tests of the design section resolved against the plugins (judge.design_spec)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from rockfall_design_builtins.measures import Wall, WallParams
 
 from rockfall_design import hookimpl
 from rockfall_design.errors import ProjectError
-from rockfall_design.optimiser.candidates import CandidateSpec, Product, build_candidate_measure
-from rockfall_design.optimiser.design_spec import DesignSpec, resolve_design
+from rockfall_design.judge.candidates import CandidateSpec, Product, build_candidate_measure
+from rockfall_design.judge.design_spec import DesignSpec, resolve_design
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project, load_project_text
 

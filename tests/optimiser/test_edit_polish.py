@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.design_spec import resolve_design
 from rockfall_design.optimiser.search import POLISH_SHIFTS, _BarrierSlots, _EditSearch, _Tally
 from rockfall_design.optimiser.space import STATION_STEP_M, _decode
 from rockfall_design.project import load_project

@@ -5,9 +5,9 @@ from __future__ import annotations
 import gc
 from pathlib import Path
 
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.placing import build_concept, edited_section, place_measures
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.design_spec import resolve_design
 from rockfall_design.optimiser.space import _decode, _variables
 from rockfall_design.project import load_project
 
@@ -31,9 +31,9 @@ def test_a_table_dropped_from_the_cache_does_not_lend_its_key_to_the_next(regist
         measures = screen.measures(_decode(spec.candidates, (ci,), variables, vec))
         placed = place_measures(project, registry, measures, screen.section)
         edited = edited_section(project, screen.section, placed)
-        table = screen._table_for([p.footprint for p in placed], edited)
+        table = screen.table_for([p.footprint for p in placed], edited)
         serials.append(table.serial)
-        assert screen._table_for([p.footprint for p in placed], edited) is table  # cached
+        assert screen.table_for([p.footprint for p in placed], edited) is table  # cached
         del table
         screen._edit_cache.clear()
         gc.collect()

@@ -6,9 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.placing import PlacedMeasure, build_concept
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.design_spec import resolve_design
 from rockfall_design.optimiser.search import _BarrierSlots
 from rockfall_design.project import load_project
 

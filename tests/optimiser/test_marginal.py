@@ -10,10 +10,10 @@ from typing import Any
 
 import pytest
 
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import Screening
 from rockfall_design.optimiser.alternatives import Alternative
-from rockfall_design.optimiser.design_spec import resolve_design
 from rockfall_design.optimiser.section import _bare_slope, _list_undecided
 from rockfall_design.plugins.concept import Check
 from rockfall_design.project import load_project_text

@@ -24,10 +24,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.evaluation import evaluate_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import STATION_STEP_M, Screening
-from rockfall_design.optimiser.design_spec import resolve_design
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project_text
 

@@ -1,4 +1,4 @@
-"""Tests of the built-in measures (plugins/rockfall_design_builtins/measures.py).
+"""Tests of the built-in measures (plugins/rockfall_design_builtins/measures/).
 
 Geometry and excavation areas are compared with values worked out by hand
 (closed forms or the shoelace formula on hand-listed vertices).
@@ -7,6 +7,7 @@ Geometry and excavation areas are compared with values worked out by hand
 from __future__ import annotations
 
 import math
+from importlib.metadata import entry_points
 
 import numpy as np
 import pluggy
@@ -15,6 +16,11 @@ from numpy.testing import assert_allclose
 from pydantic import ValidationError
 from rockfall_design_builtins import measures as builtin
 from rockfall_design_builtins.measures import Berm, BoulderRow, Ditch, Fence, Wall, cut_and_fill
+from rockfall_design_builtins.measures import berm as berm_module
+from rockfall_design_builtins.measures import boulder_row as boulder_row_module
+from rockfall_design_builtins.measures import ditch as ditch_module
+from rockfall_design_builtins.measures import fence as fence_module
+from rockfall_design_builtins.measures import wall as wall_module
 
 from rockfall_design import Barrier, BarrierBehaviour, ProfileEdit, ProtectiveMeasure
 from rockfall_design.engine import Material, Section
@@ -63,14 +69,27 @@ def check_edit(edit: ProfileEdit, section: Section) -> None:
 # ---------------------------------------------------------------------------
 
 
-def test_hook_registers_all_five_through_a_fresh_plugin_manager():
+def test_each_module_registers_its_one_measure_through_a_fresh_plugin_manager():
     pm = pluggy.PluginManager(hookspecs.PROJECT_NAME)
     pm.add_hookspecs(hookspecs)
-    pm.register(builtin, name="builtin_measures")
+    modules = [berm_module, boulder_row_module, ditch_module, fence_module, wall_module]
+    for module in modules:
+        pm.register(module, name=module.__name__)
     pm.check_pending()
-    classes = [c for result in pm.hook.rockfall_design_measures() for c in result]
+    results = pm.hook.rockfall_design_measures()
+    assert all(len(result) == 1 for result in results)  # one measure per module
+    classes = [c for result in results for c in result]
     assert sorted(c.kind for c in classes) == ["berm", "boulder_row", "ditch", "fence", "wall"]
     assert all(issubclass(c, ProtectiveMeasure) for c in classes)
+    # The package only names the classes: registering it registers nothing.
+    assert not hasattr(builtin, "rockfall_design_measures")
+
+
+def test_every_builtin_measure_and_cost_model_has_its_own_entry_point():
+    eps = {ep.name: ep.value for ep in entry_points(group="rockfall_design")}
+    for kind in ("fence", "wall", "ditch", "berm", "boulder_row"):
+        assert eps[kind] == f"rockfall_design_builtins.measures.{kind}"
+    assert eps["unit_prices"] == "rockfall_design_builtins.costs.unit_prices"
 
 
 @pytest.mark.parametrize("cls", ALL, ids=lambda c: c.kind)

@@ -19,9 +19,9 @@ import pytest
 
 from rockfall_design import testing
 from rockfall_design.cli.program import main
-from rockfall_design.optimiser.candidates import build_candidate_measure
-from rockfall_design.optimiser.costing import design_cost
-from rockfall_design.optimiser.design_spec import resolve_design
+from rockfall_design.judge.candidates import build_candidate_measure
+from rockfall_design.judge.costing import design_cost
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
 from rockfall_design.run.releases import section_from_project

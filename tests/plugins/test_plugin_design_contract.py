@@ -20,8 +20,8 @@ from rockfall_design import (
     hookimpl,
 )
 from rockfall_design.errors import PluginError
-from rockfall_design.optimiser.candidates import build_candidate_measure
-from rockfall_design.optimiser.design_spec import declared_design, resolve_design
+from rockfall_design.judge.candidates import build_candidate_measure
+from rockfall_design.judge.design_spec import declared_design, resolve_design
 from rockfall_design.optimiser.space import _decode, _discrete_choices, _variables
 from rockfall_design.plugins import call_plugin, load_registry
 from rockfall_design.plugins.measure import DesignRole, design_role

@@ -18,7 +18,7 @@ import pytest
 
 from rockfall_design.cli.program import main
 from rockfall_design.errors import ExitCode
-from rockfall_design.optimiser.design_spec import resolve_design
+from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.optimiser.space import _discrete_choices
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
@@ -201,8 +201,8 @@ def test_the_readme_catch_net_is_a_candidate_searched_by_its_own_height(tmp_path
     """The plugin guide's catch net, unchanged: its height is its own, not a product's."""
     import re
 
-    from rockfall_design.optimiser.candidates import build_candidate_measure
-    from rockfall_design.optimiser.costing import design_cost
+    from rockfall_design.judge.candidates import build_candidate_measure
+    from rockfall_design.judge.costing import design_cost
     from rockfall_design.run.releases import section_from_project
 
     guide = (ROOT / "docs" / "plugins.md").read_text(encoding="utf-8")

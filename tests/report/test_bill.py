@@ -10,8 +10,8 @@ from rockfall_design_builtins.costs import UnitPrices, UnitPricesParams
 from rockfall_design_builtins.measures import Ditch, Fence
 
 from rockfall_design import CostModel, CostParams
-from rockfall_design.optimiser.costing import design_bill, design_cost
-from rockfall_design.optimiser.design_spec import DesignSpec
+from rockfall_design.judge.costing import design_bill, design_cost
+from rockfall_design.judge.design_spec import DesignSpec
 from rockfall_design.plugins import load_registry
 
 

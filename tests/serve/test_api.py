@@ -16,8 +16,9 @@ from starlette.testclient import TestClient  # noqa: E402
 import rockfall_design as rd  # noqa: E402
 from rockfall_design.cli.program import main  # noqa: E402
 from rockfall_design.judge.placing import place_measures
+from rockfall_design.optimiser.trials import trial_spec
 from rockfall_design.serve.app import TOKEN_HEADER, create_app  # noqa: E402
-from rockfall_design.serve.bench import TABLE_STEP_M, default_spec
+from rockfall_design.serve.bench import TABLE_STEP_M
 from rockfall_design.serve.guards import MAX_BODY_BYTES
 from rockfall_design.serve.workbench import load_entries
 
@@ -181,7 +182,7 @@ def test_place_judges_a_fence_from_the_table_as_the_optimisers_screening(client,
     assert [c["value"] for c in m["checks"]] == pytest.approx(
         [c.value for c in ref.checks[0]])
     assert out["admitted"] == ref.feasible
-    assert sc.n == ROCKS and default_spec(entry.project, entry.registry).residual_fraction
+    assert sc.n == ROCKS and trial_spec(entry.project, entry.registry).residual_fraction
 
 
 def test_a_fence_no_rock_gets_through_gives_what_check_gives(client, project_copy):

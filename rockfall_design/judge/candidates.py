@@ -13,11 +13,11 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from ..errors import PluginError
-from ..judge.placing import unknown_measure_type
 from ..plugins import guard
 from ..plugins.declared import DeclaredDesign, declared_design
 from ..project import params_problem
 from ..project.locator import validated_params
+from .placing import unknown_measure_type
 
 if TYPE_CHECKING:  # pragma: no cover
 

@@ -53,8 +53,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from ..judge.margin import DEFAULT_CHECKER_POWER
-from ..judge.placing import build_concept, required_figures_problem, unknown_measure_type
 from ..plugins.cost_model import CostModel
 from ..plugins.declared import DeclaredDesign, declared_design
 from .candidates import (
@@ -64,6 +62,8 @@ from .candidates import (
     build_candidate_measure,
 )
 from .costing import _check_prices, _resolve_cost_model, design_bill, design_cost
+from .margin import DEFAULT_CHECKER_POWER
+from .placing import build_concept, required_figures_problem, unknown_measure_type
 
 if TYPE_CHECKING:  # pragma: no cover
 

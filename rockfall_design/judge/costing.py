@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
-from ..judge.placing import unknown_plugin_name
 from ..plugins import guard
 from ..plugins.cost_model import CostModel
 from .candidates import (
@@ -19,6 +18,7 @@ from .candidates import (
     _sample_params,
     build_candidate_measure,
 )
+from .placing import unknown_plugin_name
 
 if TYPE_CHECKING:  # pragma: no cover
     from collections.abc import Sequence
