@@ -14,6 +14,7 @@ chooses one with ``safety: {concept: NAME, ...parameters}``.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -273,6 +274,30 @@ class SafetyConcept(ABC):
         None (the default): the project's target alone.
         """
         return None
+
+    def statements(self, reaching: int | None, rocks: int,
+                   results: Sequence[MeasureResult], labels: Sequence[str]) -> list[str]:
+        """Sentences the report adds under "How sure", in the concept's own terms.
+
+        Parameters
+        ----------
+        reaching : int or None
+            Rocks that reached the protected zone (None: the project has none).
+        rocks : int
+            Rocks run.
+        results : sequence of MeasureResult
+            What the rocks did at each measure.
+        labels : sequence of str
+            Each measure's label, as the report names it.
+
+        Returns
+        -------
+        list of str
+            Plain sentences (none by default). A concept that judges the
+            design as a whole, a probability over the working life say,
+            states it here with its bound and its assumptions.
+        """
+        return []
 
     @abstractmethod
     def checks(self, result: MeasureResult) -> list[Check]:
