@@ -20,7 +20,7 @@ The public API is what this module exports:
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
-from .plugins.concept import Check, DesignValue, SafetyConcept, SafetyParams
+from .plugins.concept import Check, DesignBlock, DesignValue, SafetyConcept, SafetyParams
 from .plugins.cost_model import CostModel, CostParams
 from .plugins.hookspecs import hookimpl
 from .plugins.measure import (
@@ -102,6 +102,7 @@ __all__ = [
     "Barrier",
     "BarrierBehaviour",
     "Check",
+    "DesignBlock",
     "DesignValue",
     "CostModel",
     "CostParams",

@@ -54,6 +54,7 @@ from pydantic import ConfigDict, Field
 
 from rockfall_design import (
     Check,
+    DesignBlock,
     DesignValue,
     MeasureResult,
     SafetyConcept,
@@ -68,6 +69,7 @@ from rockfall_design import (
 __all__ = [
     "SpangConcept",
     "braking_check",
+    "design_mass",
     "gamma_d_field",
     "Uni11211Concept",
     "rockfall_design_safety_concepts",
@@ -229,6 +231,24 @@ def _factor_check(
     f_bound = provided / upper
     return Check(name, factor, target, bool(factor >= target), "-", detail, f_bound,
                  bool(f_bound >= target), None, f_best, fails, **named)
+
+
+def design_mass(block: DesignBlock | None, masses: np.ndarray, statistic: str,
+                confidence: float) -> tuple[float, float | None, float | None, str]:
+    """The mass of the design block (kg): point, lower and upper bound, and its words.
+
+    The project's design block (``rocks.design_block``, a block survey's
+    percentile or a return period's block) where it gives one, else the
+    ``statistic`` of the simulated rocks' ``masses`` with its order-statistic
+    bounds at ``confidence`` (None: too few rocks to bound it).
+    """
+    if block is not None:
+        return (block.mass_kg, block.lower_kg, block.upper_kg,
+                f"design block {block.mass_kg:.1f} kg (rocks.design_block: {block.source})")
+    point = _percentile(masses, float(statistic[1:]))
+    return (point, _statistic_lower(masses, statistic, confidence),
+            _statistic_bound(masses, statistic, confidence),
+            f"{statistic} mass {point:.1f} kg of the simulated rocks")
 
 
 def _reach_check(
@@ -521,7 +541,12 @@ class Uni11211Concept(SafetyConcept):
         d_d &= 2 \\, P(r_i), \\qquad f = \\max(f_{min}, d_d / 2)
 
     The percentiles of speed, height and mass are taken separately (the
-    design block need not be one of the rocks), as the standard does.
+    design block need not be one of the rocks), as the standard does. Where
+    the project gives a design block (``rocks.design_block``: a block
+    survey's percentile with its order-statistic bounds, or a return
+    period's block), :math:`m_d` is that block's mass times
+    :math:`\\gamma_{VolF} \\gamma_\\gamma` in place of :math:`P(m_i)`, and
+    the check's detail says so.
 
     The freeboard :math:`f` is at least ``f_min_m`` (0.5 m) and at least
     half the design block, so that the centre of the design block passes at
@@ -550,6 +575,8 @@ class Uni11211Concept(SafetyConcept):
     """
 
     name: ClassVar[str] = "uni11211"
+    #: m_d from the project's design block where it gives one.
+    uses_design_block: ClassVar[bool] = True
     #: An EAD concept: a fence's test figures are required (at their catalogue line).
     required_measure_params: ClassVar[tuple[str, ...]] = (
         "max_elongation_m", "residual_height_fraction")
@@ -689,27 +716,28 @@ class Uni11211Concept(SafetyConcept):
                          **named)
         p = _label(params.percentile)
         speed = _percentile(speeds, params.percentile)
-        mass = _percentile(masses, params.percentile)
+        mass, mass_l, mass_b, mass_text = design_mass(self.design_block, masses, p,
+                                                      params.confidence)
         e_d = self._design_energy(mass, speed)
         detail = (
-            f"E_d = 1/2 m_d v_d^2 = {_num(e_d, 'kJ')} with m_d = {p} mass {mass:.1f} kg "
+            f"E_d = 1/2 m_d v_d^2 = {_num(e_d, 'kJ')} with m_d = {mass_text} "
             f"x {params.gamma_volf:g} x {params.gamma_gamma:g}, v_d = {p} speed "
             f"{_num(speed, 'm/s')} x gamma_F {self.gamma_f:.4g}, over {_rocks(speeds.size)}; "
             f"limit {_num(capacity_kj, 'kJ')} / gamma_E {params.gamma_e:g} = {_num(target, 'kJ')}"
         )
         speed_b = _statistic_bound(speeds, p, params.confidence)
-        mass_b = _statistic_bound(masses, p, params.confidence)
         e_b = (None if speed_b is None or mass_b is None
                else self._design_energy(mass_b, speed_b))
         m_f = params.gamma_volf * params.gamma_gamma
         named["design_values"] = (
             DesignValue("v_d", f"design speed: {p} speed x gamma_F", speed * self.gamma_f,
                         "m/s", None if speed_b is None else speed_b * self.gamma_f),
-            DesignValue("m_d", f"design mass: {p} mass x gamma_VolF gamma_gamma", mass * m_f,
+            DesignValue("m_d", "design mass: " + ("the design block (rocks.design_block)"
+                        if self.design_block else f"{p} mass") + " x gamma_VolF gamma_gamma",
+                        mass * m_f,
                         "kg", None if mass_b is None else mass_b * m_f),
             DesignValue("E_d", "design energy 1/2 m_d v_d^2", e_d, "kJ", e_b), *figures)
         speed_l = _statistic_lower(speeds, p, params.confidence)
-        mass_l = _statistic_lower(masses, p, params.confidence)
         e_l = None if speed_l is None or mass_l is None else self._design_energy(mass_l,
                                                                                   speed_l)
         fails = e_l is not None and bool(e_l > target)

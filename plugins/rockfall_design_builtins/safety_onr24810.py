@@ -17,6 +17,9 @@ Checks, per measure (units m, kJ):
 ``design_energy`` (``capacity_kj``)
     :math:`E_d = \\gamma_F \\, E_{99}` against :math:`E_{SEL}` (``event:
     frequent``) or :math:`E_{MEL} / \\gamma_R` (``event: rare``).
+    With a design block (``rocks.design_block``) of mass :math:`m_d`:
+    :math:`E_d = \\gamma_F \\, P_{99}(\\tfrac12 m_d v_i^2)` over the rocks'
+    speeds :math:`v_i` (flagged for review).
 ``design_height`` (``height_m``)
     :math:`h_d + f = \\gamma_F \\, h_{99} + \\max(f_{min}, r_{99})`, the
     passing height perpendicular to the slope for a fence, against its
@@ -64,6 +67,7 @@ from pydantic import ConfigDict, Field
 
 from rockfall_design import (
     Check,
+    DesignValue,
     MeasureResult,
     SafetyConcept,
     SafetyParams,
@@ -101,6 +105,8 @@ class Onr24810Concept(SafetyConcept):
     )
     required_measure_params: ClassVar[tuple[str, ...]] = (
         "max_elongation_m", "residual_height_fraction")
+    #: E_d from the project's design block where it gives one.
+    uses_design_block: ClassVar[bool] = True
 
     class Params(SafetyParams):
         """Consequence class, event frequency and partial factors."""
@@ -150,37 +156,85 @@ class Onr24810Concept(SafetyConcept):
             if self.params.event == "frequent":
                 sel = _finite(props, "sel_kj")
                 limit, what = (capacity / 3.0 if sel is None else sel), "SEL"
+                symbol = "E_SEL"
             else:
                 limit = capacity / self.params.gamma_r
                 what = f"MEL / gamma_R {self.params.gamma_r:g}"
-            checks.append(self._design_check("design_energy", result.energy_kj, 0.0, limit,
-                                             f"{what} {limit:.1f} kJ", "kJ"))
+                symbol = "E_MEL / gamma_R"
+            figure = DesignValue(symbol, f"the kit's {what} (EAD 340059)", limit, "kJ",
+                                 source="product")
+            checks.append(self._energy_check(result, limit, f"{what} {limit:.1f} kJ", figure))
         height = _finite(props, "height_m")
         if height is not None:
             residual = _finite(props, "residual_height_m")
             if self.params.event == "frequent" and residual is not None:
-                target, what = residual, f"residual height {residual:.2f} m"
+                target, what, symbol = residual, f"residual height {residual:.2f} m", "h_R"
             else:
-                target, what = height, f"nominal height {height:.2f} m"
+                target, what, symbol = height, f"nominal height {height:.2f} m", "h_N"
             radius = np.asarray(result.radius_m, dtype=float)
             r99 = float(np.percentile(radius, 99.0)) if radius.size else 0.0
+            named = {"symbol": "h_d + f", "relation": "<=", "target_symbol": symbol,
+                     "design_values": (DesignValue(symbol, what.split(" ", 2)[0] + " height",
+                                                   target, "m", source="product"),)}
             checks.append(self._design_check("design_height", result.rated_passing_height_m,
-                                             max(self.params.f_min_m, r99), target, what, "m"))
+                                             max(self.params.f_min_m, r99), target, what, "m",
+                                             named=named))
         checks += braking_check(result, _finite(props, "max_elongation_m"), self.params.gamma_d)
         return checks
 
+    def _energy_check(self, result: MeasureResult, limit: float, against: str,
+                      figure: DesignValue) -> Check:
+        """``design_energy``: of the simulated rocks, or of the design block at their speeds.
+
+        With a design block (``rocks.design_block``) of mass :math:`m_d`, the
+        energy is that block's at the 99 % fractile speed,
+        :math:`E_d = \\gamma_F \\, \\tfrac12 m_d v_{99}^2` (the rocks' speeds
+        hardly depend on their size on a slope, the block's mass does not
+        come from them); its bounds are the speed's and the block's together.
+        **Flagged for review** against the text of ONR 24810.
+        """
+        block = self.design_block
+        named: dict[str, Any] = {"symbol": "E_d", "relation": "<=",
+                                 "target_symbol": figure.symbol, "design_values": (figure,)}
+        if block is None:
+            return self._design_check("design_energy", result.energy_kj, 0.0, limit, against,
+                                      "kJ", named=named)
+        named["design_values"] = (
+            DesignValue("m_d", "design mass: the design block (rocks.design_block)",
+                        block.mass_kg, "kg", block.upper_kg), figure)
+        speeds = np.asarray(result.velocity_ms, dtype=float)
+        energy = 0.5 * block.mass_kg * speeds**2 / 1000.0
+        return self._design_check(
+            "design_energy", energy, 0.0, limit, against, "kJ",
+            (block.lower_kg / block.mass_kg, block.upper_kg / block.mass_kg),
+            f"the design block's energy at the rocks' speeds, 1/2 m v^2 with m = "
+            f"{block.mass_kg:.1f} kg (rocks.design_block: {block.source})", named)
+
     def _design_check(self, name: str, values: Any, add: float, target: float, against: str,
-                      unit: str) -> Check:
-        """``gamma_F x P99(values) + add`` against ``target`` (holds if <=), with its bounds."""
+                      unit: str, scale: tuple[float, float] = (1.0, 1.0),
+                      what: str = "", named: dict[str, Any] | None = None) -> Check:
+        """``gamma_F x P99(values) + add`` against ``target`` (holds if <=), with its bounds.
+
+        ``scale``: factors on the lower and upper bound of the fractile for an
+        uncertainty beside the rocks' (a design block's mass bounds); ``what``
+        names the values in the detail; ``named``: the check's symbols and the
+        figures it is compared with (its own design value is added here).
+        """
+        named = dict(named or {})
+        figures = named.pop("design_values", ())
         v = np.asarray(values, dtype=float)
         c = self.params.confidence
         if v.size == 0:
-            return Check(name, None, target, True, unit, _NO_ROCK, None, True)
+            return Check(name, None, target, True, unit, _NO_ROCK, None, True, **named,
+                         design_values=figures)
         point, lower, upper = quantile_with_bounds(v, 0.99, c)
+        lower = None if lower is None else lower * scale[0]
+        upper = None if upper is None else upper * scale[1]
         g = self.factor
         value = g * point + add
         detail = (f"gamma_F {g:.3g} ({self.params.consequence_class}) x 99 % fractile "
-                  f"{point:.2f} {unit}" + (f" + freeboard {add:.2f} m" if add else "")
+                  f"{point:.2f} {unit}" + (f" of {what}" if what else "")
+                  + (f" + freeboard {add:.2f} m" if add else "")
                   + f" = {value:.2f} {unit} over {v.size} rocks, against {against} "
                   f"({self.params.event} events)")
         optimistic = None if lower is None else g * lower + add
@@ -189,11 +243,20 @@ class Onr24810Concept(SafetyConcept):
             need = rocks_to_bound_quantile(0.99, c)
             detail = f"{detail}; {v.size} rocks cannot bound the 99 % fractile: it needs {need}"
             return Check(name, value, target, bool(value <= target), unit, detail, None, False,
-                         need, optimistic, fails)
+                         need, optimistic, fails, **named,
+                         design_values=(*figures, self._value(named, value, None, unit)))
         bound = g * upper + add
         detail = f"{detail}; with the {100 * c:g} % bound {bound:.2f} {unit}"
         return Check(name, value, target, bool(value <= target), unit, detail, bound,
-                     bool(bound <= target), None, optimistic, fails)
+                     bool(bound <= target), None, optimistic, fails, **named,
+                     design_values=(*figures, self._value(named, value, bound, unit)))
+
+    def _value(self, named: dict[str, Any], value: float, bound: float | None,
+               unit: str) -> DesignValue:
+        """The check's own design value for the report's table, in the concept's symbol."""
+        symbol = named.get("symbol") or "value"
+        return DesignValue(symbol, f"design value: gamma_F {self.factor:.3g} x 99 % fractile",
+                           value, unit, bound)
 
 
 @hookimpl

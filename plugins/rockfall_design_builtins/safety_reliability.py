@@ -52,6 +52,7 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 from pydantic import ConfigDict, Field
@@ -134,6 +135,51 @@ class ReliabilityConcept(SafetyConcept):
         Held by the judge and the optimiser as the residual's allowance.
         """
         return -math.log1p(-self.params.target_failure_probability) / self.falls
+
+    def life(self, k: int, n: int) -> tuple[float, float, float]:
+        """:math:`P_f(T)` of ``k`` failing blocks of ``n`` and its Clopper-Pearson bounds (-)."""
+        c = self.params.confidence
+        n = max(int(n), 1)
+        return (life_probability(k / n, self.falls),
+                life_probability(fraction_lower_bound(k, n, c), self.falls),
+                life_probability(fraction_upper_bound(k, n, c), self.falls))
+
+    def statements(self, reaching: int | None, rocks: int,
+                   results: Sequence[MeasureResult], labels: Sequence[str]) -> list[str]:
+        """The working-life probability at the protected zone and at each measure, with bounds.
+
+        Then the assumptions they rest on, in words (see the module).
+        """
+        p = self.params
+        c = 100 * p.confidence
+        n = max(int(rocks), 1)
+        out = []
+        events = [("reaching the protected zone", reaching)] if reaching is not None else []
+        events += [(f"passing {label} (over, through or through a gap)",
+                    r.passed_over + r.broken_through + r.passed_through_gap)
+                   for r, label in zip(results, labels, strict=True)]
+        for what, k in events:
+            value, _, upper = self.life(int(k), n)
+            verdict = "within" if upper <= p.target_failure_probability else (
+                "above" if value > p.target_failure_probability else "not shown within")
+            out.append(
+                f"Probability of at least one block {what} within the working life: P_f = "
+                f"1 - exp(-lambda T k/n) = 1 - exp(-{p.annual_falls:g}/year x "
+                f"{p.working_life_years:g} years x {int(k):,}/{n:,}) = {value:.3g}; at most "
+                f"{upper:.3g} with {c:g} % confidence (the Clopper-Pearson upper bound of k/n "
+                f"through the same formula); {verdict} the target "
+                f"{p.target_failure_probability:g}.")
+        if out:
+            out.append(
+                f"Assumptions of these probabilities: falls arrive as a Poisson process of "
+                f"{p.annual_falls:g} a year over a working life of {p.working_life_years:g} "
+                f"years ({self.falls:g} falls expected); the simulated rocks are a fair sample "
+                "of those falls (release zones, sizes and ground as the project gives them); "
+                "blocks fail independently of each other; each block meets the measures "
+                "intact (damage left by earlier blocks is not modelled: they are taken to be "
+                "repaired after an event). Each probability holds on its own; that any "
+                "one of them happens is at most their sum (Marchelli, De Biagi & Peila 2020).")
+        return out
 
     def checks(self, result: MeasureResult) -> list[Check]:
         """``failure_probability`` of the measure, then its ``braking_distance`` (a fence's)."""

@@ -296,6 +296,12 @@ class Evaluation:
                                 property_marks(properties)))
         return out
 
+    def statements(self) -> list[str]:
+        """The safety concept's own sentences on this evaluation (``SafetyConcept.statements``)."""
+        reaching = None if self.study.project.protect is None else self.judgement.reaching
+        return list(self.concept.statements(reaching, self.study.result.n, self.results,
+                                            [p.label for p in self.placed]))
+
     def resolved_project(self) -> Project:
         """The project with every measure's and the concept's parameters resolved."""
         measures = [
@@ -332,6 +338,9 @@ class Evaluation:
         prot = self.protect
         if prot is not None:
             out["protect"] = prot
+        said = self.statements()
+        if said:
+            out["concept_statements"] = said
         out["ok"] = self.ok
         out["failures"] = self.failures()
         out["confidence"] = self.confidence

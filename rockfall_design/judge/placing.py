@@ -20,6 +20,7 @@ from ..engine import Section, barrier_table, columns
 from ..plugins import blocked_provider, guard
 from ..plugins.concept import SafetyConcept
 from ..plugins.measure import Barrier, BarrierBehaviour, ProfileEdit
+from .design_block import design_block_of
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
@@ -84,7 +85,18 @@ def build_concept(project: Project, registry: Registry) -> SafetyConcept:
     if cls is None:
         raise unknown_plugin_name(project, registry, "safety", ("safety", "concept"), name)
     params = project.validate_params(("safety",), cls.Params, raw, drop=("concept",))
-    return guard(registry).instantiate(cls, params)
+    concept = guard(registry).instantiate(cls, params)
+    if project.rocks.design_block is not None:
+        if not cls.uses_design_block:
+            # A design input the concept would silently ignore.
+            raise project.error_at(("rocks", "design_block"), (
+                f"the safety concept {name!r} designs on the simulated rocks, not on one "
+                "design block: choose a concept that uses it (uni11211, onr24810) or remove "
+                "rocks.design_block"))
+        # Bounded at the concept's confidence; a look of the optimiser at another
+        # confidence keeps these bounds (optimiser.decide.look_concept).
+        concept.design_block = design_block_of(project, params.confidence)
+    return concept
 
 
 def required_figures_problem(concept: SafetyConcept, measure_cls: Any,

@@ -80,6 +80,9 @@ class Alternative:
     residual: int | None = None
     fresh_residual: int | None = None
     fresh_failures: list[str] = field(default_factory=list)
+    #: The safety concept's own sentences on the fresh rocks that verified the
+    #: design (``SafetyConcept.statements``: a working-life probability, say).
+    fresh_statements: list[str] = field(default_factory=list)
     reason: str = ""
     evaluations: int = 0
     exact_evaluations: int = 0
@@ -115,6 +118,7 @@ class Alternative:
             "fresh_rocks": self.fresh_rocks,
             "fresh_seed": self.fresh_seed,
             "fresh_looks": self.fresh_looks,
+            "fresh_statements": self.fresh_statements,
             "reason": self.reason,
             "proof": self.proof,
             "dominated": self.dominated or None,

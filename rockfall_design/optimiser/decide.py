@@ -116,7 +116,12 @@ def checker_margin(spec: DesignSpec, confidence: float) -> CheckerMargin | None:
 def look_concept(registry: Registry, concept: SafetyConcept, confidence: float) -> SafetyConcept:
     """The project's safety concept with its bounds at a look's ``confidence``."""
     params = concept.params.model_copy(update={"confidence": float(confidence)})
-    return guard(registry).instantiate(type(concept), params)
+    look = guard(registry).instantiate(type(concept), params)
+    # The design block keeps its bounds at the project's confidence: the
+    # survey is one fixed sample, looked at once, not the growing rock sample
+    # the looks' confidences are spent on.
+    look.design_block = concept.design_block
+    return look
 
 
 def _verdict_of(ev: Evaluation) -> Verdict:

@@ -404,6 +404,7 @@ class _SettleState:
                                "checker_power": None if margin is None else margin.power}
         alt.fresh_residual = fresh.protect["reaching"] if fresh.protect else None
         alt.fresh_failures = fresh.failures()
+        alt.fresh_statements = fresh.statements()
         alt.feasible = True  # admitted with confidence on the deciding rocks
         alt.dominated = ""
         alt.reason = ""

@@ -14,6 +14,7 @@ chooses one with ``safety: {concept: NAME, ...parameters}``.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -21,7 +22,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from .measure import MeasureResult
 
-__all__ = ["Check", "DesignValue", "SafetyConcept", "SafetyParams", "DEFAULT_CONFIDENCE"]
+__all__ = ["Check", "DesignBlock", "DesignValue", "SafetyConcept", "SafetyParams",
+           "DEFAULT_CONFIDENCE"]
 
 #: One-sided confidence of the bounds on design values (``safety.confidence``).
 DEFAULT_CONFIDENCE = 0.95
@@ -83,6 +85,30 @@ class DesignValue:
     def as_dict(self) -> dict[str, Any]:
         return {"symbol": self.symbol, "meaning": self.meaning, "value": self.value,
                 "unit": self.unit, "bound": self.bound, "source": self.source}
+
+
+@dataclass(frozen=True)
+class DesignBlock:
+    """The project's design block (``rocks.design_block``), for the concepts that use one.
+
+    Attributes
+    ----------
+    mass_kg : float
+        Its mass (kg): the survey's percentile, or the return period's volume,
+        times ``rocks.density``.
+    lower_kg, upper_kg : float
+        The one-sided confidence bounds of a survey's percentile at the
+        project's confidence (order statistics); a return period's block,
+        which has none, is its own bounds.
+    source : str
+        One line saying where it comes from, for the report, e.g. "p98 of the
+        240 block volumes of survey blocks.csv = 2.10 m3 ...".
+    """
+
+    mass_kg: float
+    lower_kg: float
+    upper_kg: float
+    source: str
 
 
 @dataclass(frozen=True)
@@ -228,6 +254,12 @@ class SafetyConcept(ABC):
     #: line. E.g. ``("max_elongation_m", "residual_height_fraction")``: the
     #: EAD 340059 test figures of a fence, which the EAD concepts check.
     required_measure_params: ClassVar[tuple[str, ...]] = ()
+    #: Whether the concept designs on one block and takes its mass from the
+    #: project's design block (``rocks.design_block``) where one is given.
+    uses_design_block: ClassVar[bool] = False
+    #: The project's design block (set by the program after the concept is
+    #: built, bounded at the concept's confidence); None: the project gives none.
+    design_block: DesignBlock | None = None
 
     def __init__(self, params: SafetyParams) -> None:
         self.params = params
@@ -242,6 +274,30 @@ class SafetyConcept(ABC):
         None (the default): the project's target alone.
         """
         return None
+
+    def statements(self, reaching: int | None, rocks: int,
+                   results: Sequence[MeasureResult], labels: Sequence[str]) -> list[str]:
+        """Sentences the report adds under "How sure", in the concept's own terms.
+
+        Parameters
+        ----------
+        reaching : int or None
+            Rocks that reached the protected zone (None: the project has none).
+        rocks : int
+            Rocks run.
+        results : sequence of MeasureResult
+            What the rocks did at each measure.
+        labels : sequence of str
+            Each measure's label, as the report names it.
+
+        Returns
+        -------
+        list of str
+            Plain sentences (none by default). A concept that judges the
+            design as a whole, a probability over the working life say,
+            states it here with its bound and its assumptions.
+        """
+        return []
 
     @abstractmethod
     def checks(self, result: MeasureResult) -> list[Check]:

@@ -18,6 +18,7 @@ from pydantic import (
 )
 
 from ..arguments import MAX_ROCKS as _ARGUMENT_MAX_ROCKS
+from .design_block import DesignBlockSpec
 from .fields import (
     Boolean,
     Fraction,
@@ -473,6 +474,12 @@ class Rocks(_Model):
         "of one size class share one centre path: 0.005 (0.5 %) if not given, 0 keeps "
         "every size exact; at most 0.05. No effect on a section of fewer points or on "
         "rocks of one size.",
+    )
+    design_block: DesignBlockSpec | None = Field(
+        None,
+        description="The design block of the concepts that design on one block (uni11211, "
+        "onr24810): {survey: blocks.csv, percentile: 98} or {return_period_years: 100, "
+        "frequency: {a, b}}; none: the simulated rocks' masses.",
     )
 
     @model_validator(mode="after")

@@ -42,6 +42,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from ..errors import ProjectError
+from .design_block import inline_survey
 from .messages import (
     _ERROR_TYPE,
     _key_text,
@@ -126,7 +127,23 @@ def resolve_inputs(data: dict[str, Any], lines: _Lines, source: str, base_dir: P
                 rocks["release"], section, crs, where.error, base_dir)}
     elif isinstance(slope, dict) and ("csv" in slope or "dxf" in slope):
         out["slope"] = _survey_slope(slope, out.get("materials"), where, base_dir)
+    rocks = out.get("rocks")
+    if isinstance(rocks, dict) and "design_block" in rocks:
+        out["rocks"] = {**rocks, "design_block": _design_block(rocks["design_block"], where,
+                                                               base_dir)}
     return out
+
+
+def _design_block(block: Any, where: _Where, base_dir: Path) -> Any:
+    """``rocks.design_block`` with its block survey read (see ``project.design_block``)."""
+    at = ("rocks", "design_block", "survey")
+
+    def read(name: Any) -> tuple[str, str]:
+        relative = _file_name(name, where, at, "a block survey")
+        path = _resolve(relative, base_dir)
+        return _read_text(path, where, at, "block survey"), os.fspath(path)
+
+    return inline_survey(block, read)
 
 
 # ---- files named in the project ----------------------------------------------------

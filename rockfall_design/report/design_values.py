@@ -23,7 +23,8 @@ from typing import Any
 
 from .rounding import round_value
 
-__all__ = ["DesignTable", "design_tables", "design_columns", "how_sure", "state_of"]
+__all__ = ["DesignTable", "design_tables", "design_columns", "fresh_statements", "how_sure",
+           "state_of"]
 
 
 @dataclass
@@ -167,4 +168,14 @@ def how_sure(summary: Mapping[str, Any]) -> list[str]:
                f"{_pct(float(upper))} (Clopper-Pearson upper bound)")
             + (f"; allowed {_pct(float(p['allowed_fraction']))}."
                if p.get("allowed_fraction") is not None else "."))
+    lines += [str(s) for s in summary.get("concept_statements") or []]
     return lines
+
+
+def fresh_statements(best: Mapping[str, Any]) -> list[str]:
+    """The safety concept's sentences on the fresh rocks that verified the chosen design."""
+    said = list(best.get("fresh_statements") or [])
+    if not said:
+        return []
+    return [f"On the {int(best.get('fresh_rocks') or 0):,} fresh rocks (seed "
+            f"{best.get('fresh_seed')}) that verified the chosen design:", *said]

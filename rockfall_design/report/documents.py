@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..version import __version__
-from .design_values import design_columns, design_tables, how_sure
+from .design_values import design_columns, design_tables, fresh_statements, how_sure
 from .pdf import html_to_pdf, pdf_turned_off, pdf_unavailable
 from .sections import (
     Table,
@@ -261,7 +261,10 @@ def _optimiser_sentences(summary: Mapping[str, Any]) -> list[str]:
     best = summary.get("best")
     if isinstance(best, Mapping) and best.get("proof"):
         out.append(f"The optimiser's record of the decision: {best['proof']}.")
+    if isinstance(best, Mapping):
+        out += fresh_statements(best)
     return out
+
 
 
 def _set_verdict(ctx: dict[str, Any], verdict: Mapping[str, Any] | None) -> None:

@@ -75,6 +75,29 @@ def _flat(d: Mapping[str, Any], prefix: str = "") -> list[list[str]]:
     return rows
 
 
+def _block_text(block: Mapping[str, Any]) -> str:
+    """``rocks.design_block`` in a line: a survey's values are in their own table."""
+    if not block.get("blocks"):
+        return _text(dict(block))
+    unit = "m3" if block.get("quantity", "volume") == "volume" else "kg"
+    head = {k: v for k, v in block.items() if k not in ("blocks", "quantity")}
+    return (f"{_text(head)}; {len(block['blocks'])} block {block.get('quantity', 'volume')}s "
+            f"({unit}) in the table 'Block survey'")
+
+
+def _survey_table(block: Mapping[str, Any], per_row: int = 10) -> Table:
+    """The surveyed block sizes of ``rocks.design_block``, ``per_row`` a row, in file order."""
+    values = list(block["blocks"])
+    unit = "m3" if block.get("quantity", "volume") == "volume" else "kg"
+    rows = [[f"{i + 1}-{min(i + per_row, len(values))}",
+             ", ".join(_text(float(v)) for v in values[i:i + per_row])]
+            for i in range(0, len(values), per_row)]
+    return Table("Block survey", ["blocks", f"{block.get('quantity', 'volume')} ({unit})"],
+                 rows, note=f"{len(values)} blocks of rocks.design_block, as read from "
+                 f"{block.get('survey') or 'the project'}; the design block is their "
+                 f"{_text(block.get('percentile'))}th percentile.")
+
+
 def inputs_table(project: Any, command: str, resolved: Mapping[str, Any] | None = None,
             concepts: Mapping[str, str] | None = None) -> list[Table]:
     """Every input of the run, so that the report alone rebuilds the project.
@@ -104,15 +127,20 @@ def inputs_table(project: Any, command: str, resolved: Mapping[str, Any] | None 
         "in degrees, roughness_height_m and velocity_scaling_k as named. Scatter: the "
         "standard deviation of each parameter, drawn per impact (truncated normal)."))
     r = d["rocks"]
-    rows = [[k, _text(r[k])] for k in r if k != "release"]
+    block = r.get("design_block") or {}
+    rows = [[k, _text(r[k])] for k in r if k not in ("release", "design_block")]
     for i, z in enumerate(r["release"]):
         rows.append([f"release zone {i + 1}", _text(z)])
+    if block:
+        rows.append(["design_block", _block_text(block)])
     out.append(Table("Rocks", ["quantity", "value"], rows,
                      note="density kg/m3; radius m, volume m3 or mass kg (a number or a "
                      "distribution with its parameters); release: x (m, a range is sampled "
                      "uniformly), height above the ground (m), velocity [vx, vy] (m/s), spin "
                      "(rad/s), weight (share of the rocks). count and seed as written; the run "
                      "table gives the rocks and seeds used."))
+    if block.get("blocks"):
+        out.append(_survey_table(block))
     a = d["analysis"]
     rows = [[k, _text(v)] for k, v in a.items()]
     if d.get("protect"):

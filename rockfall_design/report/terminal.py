@@ -16,7 +16,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from .design_values import design_columns, design_tables, how_sure
+from .design_values import design_columns, design_tables, fresh_statements, how_sure
 from .outputs import OutputSet
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -439,6 +439,8 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
     extra = [_search_sentence(result)]
     if result.best is not None and result.best.proof:
         extra.append(f"The optimiser's record of the decision: {result.best.proof}.")
+    if result.best is not None:
+        extra += fresh_statements(result.best.as_dict())
     extra += _marginal_lines(result)
     if design is not None:
         parts.append(_how_sure_renderable(design, extra))

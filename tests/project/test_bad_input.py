@@ -375,7 +375,7 @@ def test_every_command_checks_the_whole_file(command, tmp_path, capsys):
     """A bad design: section is reported by simulate and check too, not only by optimise."""
     design = (ROOT / "projects" / "design_quarry.yaml").read_text(encoding="utf-8")
     path = tmp_path / "design_quarry.yaml"
-    for name in ("catalogue_costs.yaml", "catalogue_products.yaml"):
+    for name in ("catalogue_costs.yaml", "catalogue_products.yaml", "quarry_blocks.csv"):
         (tmp_path / name).write_text((ROOT / "projects" / name).read_text(encoding="utf-8"))
     bad = design.replace("- type: fence", "- type: fense", 1)
     path.write_text(bad, encoding="utf-8")
