@@ -1,0 +1,50 @@
+"""The rough_soft keys and a material's ranges: accepted where they belong, one clear line else."""
+
+from __future__ import annotations
+
+import pytest
+
+from rockfall_design.errors import ProjectError
+from rockfall_design.project import load_project
+
+PROJECT = """\
+name: t
+description: t
+slope:
+  points: [[0, 30], [40, 10], [80, 10]]
+  materials: g
+materials:
+  g: {{{material}}}
+rocks: {{count: 10, seed: 1, radius: 0.4, release: {{x: 1, height: 1, velocity: [0.5, 0]}}}}
+protect: {{x: 70}}
+"""
+
+
+def _load(tmp_path, material):
+    path = tmp_path / "p.yaml"
+    path.write_text(PROJECT.format(material=material))
+    return load_project(path)
+
+
+def test_rough_soft_takes_its_keys_and_ranges(tmp_path):
+    p = _load(tmp_path, "impact_model: rough_soft, restitution: 0.3, friction: 0.6, "
+                        "rolling_resistance: 0.2, obstacle_height_m: 0.1, drag_speed_ms: 6, "
+                        "ranges: {restitution: [0.2, 0.4], drag_speed_ms: [2, 15]}")
+    m = p.materials["g"]
+    assert (m.obstacle_height_m, m.drag_speed_ms) == (0.1, 6.0)
+    assert m.ranges == {"restitution": (0.2, 0.4), "drag_speed_ms": (2.0, 15.0)}
+
+
+@pytest.mark.parametrize(("material", "message"), [
+    ("restitution: 0.3, friction: 0.6, obstacle_height_m: 0.1",
+     "obstacle_height_m: only for impact_model rough_soft"),
+    ("restitution: 0.3, friction: 0.6, drag_speed_ms: 5", "drag_speed_ms: only for"),
+    ("restitution: 0.3, friction: 0.6, ranges: {restitution: [0.4, 0.5]}",
+     r"the range \[0.4, 0.5\] must hold the value 0.3"),
+    ("restitution: 0.3, friction: 0.6, ranges: {colour: [0, 1]}",
+     "'colour' is not a numeric parameter"),
+])
+def test_misplaced_keys_are_one_clear_error(tmp_path, material, message):
+    with pytest.raises(ProjectError, match=message) as err:
+        _load(tmp_path, material)
+    assert "p.yaml" in str(err.value)
