@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from rockfall_design.errors import ProjectError
 from rockfall_design.project import load_project
+
+LIBRARY = Path(__file__).resolve().parents[2] / "projects" / "materials.yaml"
 
 PROJECT = """\
 name: t
@@ -48,3 +52,36 @@ def test_misplaced_keys_are_one_clear_error(tmp_path, material, message):
     with pytest.raises(ProjectError, match=message) as err:
         _load(tmp_path, material)
     assert "p.yaml" in str(err.value)
+
+
+CALIBRATE = """\
+calibrate:
+  observed: stops.csv
+  fit: auto
+"""
+
+
+def test_fit_auto_takes_each_section_materials_calibrated_parameters_and_ranges(tmp_path):
+    path = tmp_path / "p.yaml"
+    text = PROJECT.replace("materials: g", "materials: [ground_vegetated_slope, ground_hard_floor]")
+    text = text.replace("  g: {{{material}}}", f"  library: {LIBRARY}")
+    path.write_text(text.format() + CALIBRATE)
+    (tmp_path / "stops.csv").write_text("x\n60\n")
+    p = load_project(path)
+    assert p.calibrate.fit == {
+        "materials.ground_vegetated_slope.restitution": (0.2, 0.36),
+        "materials.ground_vegetated_slope.rolling_resistance": (0.05, 0.6),
+        "materials.ground_vegetated_slope.obstacle_height_m": (0.0, 0.15),
+        "materials.ground_hard_floor.restitution": (0.35, 0.5),
+        "materials.ground_hard_floor.rolling_resistance": (0.02, 0.4),
+        "materials.ground_hard_floor.obstacle_height_m": (0.0, 0.15),
+    }
+
+
+def test_fit_auto_without_ranges_says_which_range_is_missing(tmp_path):
+    path = tmp_path / "p.yaml"
+    path.write_text(PROJECT.format(material="restitution: 0.3, friction: 0.6") + CALIBRATE)
+    (tmp_path / "stops.csv").write_text("x\n60\n")
+    with pytest.raises(ProjectError, match="fit: auto needs the range of "
+                                           "materials.g.restitution"):
+        load_project(path)
