@@ -223,8 +223,8 @@ def _run_table(result: Any, command: str) -> Table:
         repeat = (f"rockfall-design compare {project.source} --observed {obs.source} "
                   f"--seed {result.seed} --rocks {rocks}")
     e = project.engine
-    rows += [["engine", f"exact events; v_contact {e.v_contact:g} m/s, v_stop {e.v_stop:g} "
-              f"m/s, max_events {e.max_events:,}"],
+    rows += [["engine", f"exact events; contact hop ratio {e.contact_hop_ratio:g}; v_contact "
+              f"{e.v_contact:g} m/s, v_stop {e.v_stop:g} m/s, max_events {e.max_events:,}"],
              ["to repeat", repeat + " (the same numbers wherever the replicates run)"]]
     return Table("", ["item", "value"], rows)
 

@@ -12,7 +12,7 @@ G = 9.81
 """Acceleration of gravity (m/s^2)."""
 
 # Columns of the material table (one row per material).
-M_MODEL = 0  #: impact model: 0 = spang, 1 = rn_rt
+M_MODEL = 0  #: impact model: 0 = spang, 1 = rn_rt, 2 = rough_soft
 M_E = 1  #: e (spang) or Rn (rn_rt), mean
 M_RT = 2  #: Rt (rn_rt)
 M_MU = 3  #: Coulomb friction coefficient mu, mean
@@ -24,16 +24,31 @@ M_SD_E = 8  #: standard deviation of e / Rn
 M_SD_MU = 9  #: standard deviation of mu
 M_SD_MUR = 10  #: standard deviation of mu_r
 M_ROUGH_H = 11  #: roughness height h_r (m): one-sided tilt up to atan(h_r / r)
-N_MAT_COLS = 12
+M_OBST = 12  #: mean obstacle height h_o (m) of the ground (rough_soft)
+M_VDRAG = 13  #: speed V_s (m/s) at which the resistance has doubled (rough_soft); 0 for none
+N_MAT_COLS = 14
 
 MODEL_SPANG = 0
 MODEL_RN_RT = 1
+MODEL_ROUGH_SOFT = 2
+
+CONTACT_HOP_RATIO = 0.1
+"""kappa (-), default: a rebound whose hop is below max(h_r, kappa r) rolls on.
+
+ILLUSTRATIVE. The rockfall literature calls rolling the motion of a block
+whose bounces stay lower than its own size or the ground's asperities, a
+nearly continuous contact (Dorren 2003, "modes of motion"); no published
+value of the fraction of the radius was found. 0.1 r is a hop a tenth of the
+block's radius, which no field observation could tell from rolling on
+natural ground (PHYSICS.md, "The transition to contact").
+"""
 
 # Columns of the settings vector.
 S_V_CONTACT = 0  #: outgoing normal speed below which the rock stays in contact (m/s)
 S_V_STOP = 1  #: speed below which a rock that can be held is stopped (m/s)
 S_MAX_EVENTS = 2  #: event limit per rock
-N_SETTINGS = 3
+S_HOP_RATIO = 3  #: kappa: contact height h_c = max(h_r, kappa r) a rebound must clear (-)
+N_SETTINGS = 4
 
 # How a path ends.
 RUNNING = 0

@@ -16,22 +16,27 @@ from .columns import (
     M_MODEL,
     M_MU,
     M_MUR,
+    M_OBST,
     M_ROUGH,
     M_ROUGH_H,
     M_RT,
     M_SD_E,
     M_SD_MU,
     M_SD_MUR,
+    M_VDRAG,
     M_VSCALE,
     M_VSK,
-    MODEL_SPANG,
+    MODEL_RN_RT,
+    MODEL_ROUGH_SOFT,
+    G,
 )
 from .flight import _unit_tangent
 from .rng import next_normal, next_uniform, truncated_normal
 
 
 @hot
-def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt_max=0.0):
+def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt_max=0.0,
+           mur=0.0, vdrag=0.0):
     """Velocity and spin after an impact on ground of outward normal (nx, ny).
 
     Parameters
@@ -45,7 +50,7 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
     r : float
         Rock radius (m).
     model : int
-        ``MODEL_SPANG`` or ``MODEL_RN_RT``.
+        ``MODEL_SPANG``, ``MODEL_RN_RT`` or ``MODEL_ROUGH_SOFT``.
     e : float
         Coefficient of restitution e (spang) or Rn (rn_rt), this impact's draw.
     rt : float
@@ -63,6 +68,11 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
     tilt_max : float
         Largest one-sided tilt of the normal (rad), atan(h_r / r) for a
         roughness height h_r; 0 for none.
+    mur : float
+        Rolling resistance mu_0 of this impact's draw (-), rough_soft only.
+    vdrag : float
+        Speed V_s (m/s) at which the resistance has doubled, rough_soft
+        only; 0 for a resistance that does not grow with the speed.
 
     Returns
     -------
@@ -77,6 +87,10 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
     * spang, stick (|u| <= 7/2 mu p_n): v_t' = (5 v_t - 2 r w) / 7,
       w' = -v_t' / r;
     * spang, slip: v_t' = v_t - mu p_n sgn(u), w' = w - 5/2 mu p_n sgn(u) / r;
+    * rough_soft: first the resistance moment takes
+      min(|w|, 5/2 mu p_n / r) of the spin, mu = mu_0 (1 + (v / V_s)^2),
+      then as spang (PHYSICS.md, "The rough_soft law"); spang and rn_rt
+      impacts take no rolling resistance;
     * rn_rt: v_n' = -Rn v_n, v_t' = Rt v_t and w' = Rt w (PHYSICS.md,
       "Lumped-mass law"): the spin scales with the tangential speed, so a
       rolling rock stays rolling and no energy is gained.
@@ -126,8 +140,23 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
         q = vn / vsk
         ee = e / (1.0 + q * q)
     vn2 = -ee * vn
-    if model == MODEL_SPANG:
+    if model != MODEL_RN_RT:
         pn = -(1.0 + ee) * vn
+        # rough_soft only: the resistance moment mu N r acts while the ground
+        # pushes, in an impact as in contact, its angular impulse per unit
+        # mass mu r p_n against the spin, at most stopping it; mu grows with
+        # the speed as (v / V_s)^2 (PHYSICS.md, "The rough_soft law"). The
+        # spang law keeps its impact as published (Spang & Rautenstrauch
+        # 1988): its impacts take no rolling resistance.
+        if model == MODEL_ROUGH_SOFT and vdrag > 0.0:
+            q = (vn * vn + vt * vt) / (vdrag * vdrag)
+            mur = mur * (1.0 + q)
+        if model == MODEL_ROUGH_SOFT and mur > 0.0 and w != 0.0:
+            dw = 2.5 * mur * pn / r
+            if abs(w) <= dw:
+                w = 0.0
+            else:
+                w = w - dw if w > 0.0 else w + dw
         u = vt + r * w
         if abs(u) <= 3.5 * mu * pn:
             vt2 = (5.0 * vt - 2.0 * r * w) / 7.0
@@ -143,25 +172,38 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
 
 
 @hot
-def _draw(mats, mat, rng, drawn):
-    """Draw this contact's e, mu and mu_r for material ``mat`` into ``drawn``."""
+def _draw(mats, mat, rng, drawn, r):
+    """Draw this contact's e, mu and mu_r for material ``mat`` into ``drawn``.
+
+    For rough_soft, mu_r is the resistance at low speed of a rock of radius
+    ``r`` (m): the soil's own, drawn, plus h_o / (h_o + r) from the ground's
+    obstacles of mean height h_o (PHYSICS.md, "The rough_soft law").
+    """
     drawn[0] = truncated_normal(rng, mats[mat, M_E], mats[mat, M_SD_E], 0.0, 1.0)
     drawn[1] = truncated_normal(rng, mats[mat, M_MU], mats[mat, M_SD_MU], 0.0, np.inf)
     drawn[2] = truncated_normal(rng, mats[mat, M_MUR], mats[mat, M_SD_MUR], 0.0, np.inf)
+    if int(mats[mat, M_MODEL]) == MODEL_ROUGH_SOFT:
+        ho = mats[mat, M_OBST]
+        drawn[2] += ho / (ho + r)
 
 
 @hot
-def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn):
+def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn,
+             hop_ratio=0.0):
     """Impact on piece ``k``, then decide between flight and contact.
 
     Draws the material parameters of the piece (per impact), applies
-    :func:`impact`, and returns (vx, vy, w, mode, seg). If the outgoing normal
-    speed against the true piece is below ``v_contact`` the normal component
-    is removed and the rock continues in contact.
+    :func:`impact`, and returns (vx, vy, w, mode, seg). The rock flies again
+    only if its rebound clears the contact height: its hop above the piece,
+    v_n'^2 / (2 g n_y), n the piece's outward normal, must reach
+    h_c = max(h_r, ``hop_ratio`` r), h_r the ground's roughness height (m);
+    and its outgoing normal speed must reach ``v_contact`` (m/s), a numerical
+    floor. Otherwise the normal component is removed and the rock continues
+    in contact (PHYSICS.md, "The transition to contact").
     """
     seg = pseg[k]
     mat = seg_mat[seg]
-    _draw(mats, mat, rng, drawn)
+    _draw(mats, mat, rng, drawn, r)
     tx, ty = _unit_tangent(px, py, k)
     nx = -ty
     ny = tx
@@ -181,9 +223,15 @@ def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
         mats[mat, M_ROUGH],
         rng,
         np.arctan(mats[mat, M_ROUGH_H] / r),
+        drawn[2],
+        mats[mat, M_VDRAG],
     )
     vn = vx * nx + vy * ny
-    if vn >= v_contact:
+    # A hop lower than the ground's asperities or a small fraction of the
+    # block is rolling, not bouncing; with hop_ratio 0 (and no roughness
+    # height) v_contact alone decides, as before the criterion.
+    h_c = max(mats[mat, M_ROUGH_H], hop_ratio * r) if hop_ratio > 0.0 else 0.0
+    if vn >= v_contact and vn * vn >= 2.0 * G * ny * h_c:
         return vx, vy, w, FLIGHT, seg
     vt = vx * tx + vy * ty
     return vt * tx, vt * ty, w, CONTACT, seg

@@ -22,8 +22,11 @@ class Material:
     Attributes
     ----------
     impact_model : str
-        ``"spang"`` (restitution e, friction mu, spin) or ``"rn_rt"``
-        (lumped-mass v_n' = -Rn v_n, v_t' = Rt v_t).
+        ``"spang"`` (restitution e, friction mu, spin), ``"rn_rt"``
+        (lumped-mass v_n' = -Rn v_n, v_t' = Rt v_t) or ``"rough_soft"``
+        (spang's impact with a resistance from the block's radius against the
+        ground's obstacles and from its softness, growing with the speed;
+        PHYSICS.md, "The rough_soft law").
     restitution : float
         e (spang) or Rn (rn_rt), in [0, 1].
     friction : float
@@ -43,6 +46,11 @@ class Material:
         against the motion by an angle uniform in [0, atan(h_r / r)].
     sd_restitution, sd_friction, sd_rolling_resistance : float
         Standard deviations of the per-impact draws.
+    obstacle_height_m : float
+        Mean obstacle height h_o of the ground (m), rough_soft only.
+    drag_speed_ms : float
+        Speed V_s (m/s) at which the resistance has doubled, rough_soft only;
+        0 for a resistance that does not grow with the speed.
     """
 
     impact_model: str = "spang"
@@ -57,23 +65,30 @@ class Material:
     sd_friction: float = 0.0
     sd_rolling_resistance: float = 0.0
     roughness_height_m: float = 0.0
+    obstacle_height_m: float = 0.0
+    drag_speed_ms: float = 0.0
 
     def row(self) -> np.ndarray:
         """This material as a row of the engine's material table."""
         out = np.zeros(columns.N_MAT_COLS)
-        spang = self.impact_model == "spang"
-        out[columns.M_MODEL] = columns.MODEL_SPANG if spang else columns.MODEL_RN_RT
+        codes = {"spang": columns.MODEL_SPANG, "rn_rt": columns.MODEL_RN_RT,
+                 "rough_soft": columns.MODEL_ROUGH_SOFT}
+        out[columns.M_MODEL] = codes[self.impact_model]
         out[columns.M_E] = self.restitution
         out[columns.M_RT] = self.tangential_restitution
         out[columns.M_MU] = self.friction
         out[columns.M_MUR] = self.rolling_resistance
-        out[columns.M_VSCALE] = 1.0 if self.velocity_scaling else 0.0
+        # rough_soft's normal restitution always falls with the impact speed.
+        vscale = self.velocity_scaling or self.impact_model == "rough_soft"
+        out[columns.M_VSCALE] = 1.0 if vscale else 0.0
         out[columns.M_VSK] = self.velocity_scaling_k
         out[columns.M_ROUGH] = np.radians(self.roughness_deg)
         out[columns.M_SD_E] = self.sd_restitution
         out[columns.M_SD_MU] = self.sd_friction
         out[columns.M_SD_MUR] = self.sd_rolling_resistance
         out[columns.M_ROUGH_H] = self.roughness_height_m
+        out[columns.M_OBST] = self.obstacle_height_m
+        out[columns.M_VDRAG] = self.drag_speed_ms
         return out
 
 
@@ -193,7 +208,12 @@ class EngineSettings:
     Attributes
     ----------
     v_contact : float
-        Outgoing normal speed (m/s) below which a rock stays in contact.
+        Outgoing normal speed (m/s) below which a rock stays in contact: a
+        numerical floor (PHYSICS.md, "The transition to contact").
+    contact_hop_ratio : float
+        kappa (-): a rebound whose hop above the piece is lower than
+        h_c = max(roughness_height_m, kappa r) continues in contact; 0 leaves
+        the decision to ``v_contact`` alone. ILLUSTRATIVE default.
     v_stop : float
         Speed (m/s) below which a rock that the ground can hold is stopped.
     max_events : int
@@ -203,15 +223,17 @@ class EngineSettings:
         the centre path at a convex vertex.
     """
 
-    v_contact: float = 0.5
+    v_contact: float = 0.05
     v_stop: float = 0.05
     max_events: int = 10_000
     max_chord_deg: float = 5.0
+    contact_hop_ratio: float = columns.CONTACT_HOP_RATIO
 
     def vector(self) -> np.ndarray:
         out = np.zeros(columns.N_SETTINGS)
         out[columns.S_V_CONTACT] = self.v_contact
         out[columns.S_V_STOP] = self.v_stop
+        out[columns.S_HOP_RATIO] = self.contact_hop_ratio
         out[columns.S_MAX_EVENTS] = self.max_events
         return out
 

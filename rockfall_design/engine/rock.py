@@ -20,6 +20,7 @@ from .columns import (
     EXIT_DOWNSLOPE,
     EXIT_UPSLOPE,
     FLIGHT,
+    M_VDRAG,
     O_CAUGHT,
     O_NOT_MET,
     O_PASSED_OVER,
@@ -40,6 +41,7 @@ from .columns import (
     RS_X,
     RS_Y,
     RUNNING,
+    S_HOP_RATIO,
     S_MAX_EVENTS,
     S_V_CONTACT,
     S_V_STOP,
@@ -48,6 +50,7 @@ from .columns import (
     G,
 )
 from .contact import SLIP_TOL, _contact_accel, _start_from_rest
+from .drag import along, drag_speed_at, drag_stop, drag_time
 from .flight import _unit_tangent, locate, next_landing, path_height
 from .impact import _collide, _draw
 from .recording import _record, _record_restart, _traj_row
@@ -76,7 +79,8 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         segment under each piece, the material of each segment, the material
         table (``records.Path``).
     settings : ndarray of float, shape (N_SETTINGS,)
-        ``v_contact`` (m/s), ``v_stop`` (m/s), ``max_events``.
+        ``v_contact`` (m/s), ``v_stop`` (m/s), ``max_events``, the contact
+        hop ratio kappa (-).
     rock : ndarray of float, shape (N_REL_COLS,)
         The rock's row of the release table (columns ``REL_*``): radius (m),
         mass (kg), release x (m), clearance above the centre path (m),
@@ -147,6 +151,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
     srng = out.srng
     v_contact = settings[S_V_CONTACT]
     v_stop = settings[S_V_STOP]
+    hop_ratio = settings[S_HOP_RATIO]
     max_events = int(settings[S_MAX_EVENTS])
     npc = px.shape[0] - 1
     drawn = out.work[:WORK_CTX]
@@ -208,7 +213,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             mode = FLIGHT
         elif vn < -1e-9:
             vx, vy, w, mode, cur_seg = _collide(
-                vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
+                vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn, hop_ratio
             )
         else:
             mode = CONTACT
@@ -313,14 +318,14 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             max_x = max(max_x, x)
             n_imp += 1
             vx, vy, w, mode, cur_seg = _collide(
-                vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
+                vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn, hop_ratio
             )
             continue
 
         # ---- CONTACT: rolling and/or sliding on piece k ----
         seg = pseg[k]
         if seg != cur_seg:
-            _draw(mats, seg_mat[seg], rng, drawn)
+            _draw(mats, seg_mat[seg], rng, drawn, r)
             cur_seg = seg
         mu = drawn[1]
         mur = drawn[2]
@@ -359,6 +364,13 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             sigma = 0.0
         if s_zero and not rolling:
             s = 0.0
+        # rough_soft: a rolling rock's resistance grows as (v / V_s)^2, so
+        # dv/dt = a - c v^2 (PHYSICS.md, "The rough_soft law").
+        c = 0.0
+        if rolling:
+            vdr = mats[seg_mat[seg], M_VDRAG]
+            if vdr > 0.0 and mur > 0.0:
+                c = 5.0 / 7.0 * G * cosb * mur / (vdr * vdr)
         if dirn > 0:
             dist = np.hypot(px[k + 1] - x, py[k + 1] - y)
         else:
@@ -375,6 +387,13 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             if disc >= 0.0 and v + np.sqrt(disc) > 0.0:
                 t_end = 2.0 * dist / (v + np.sqrt(disc))
         t_zero = v / -a if a < 0.0 else np.inf
+        v_end = 0.0
+        d_zero = 0.0
+        if c > 0.0:
+            v_end = drag_speed_at(v, a, c, dist)
+            if dist > 0.0:
+                t_end = drag_time(v, v_end, a, c, dist) if v_end >= 0.0 else np.inf
+            t_zero, d_zero = drag_stop(v, a, c)
         t_slip = -sigma / dsig if (not rolling and sigma * dsig < 0.0) else np.inf
         t_spin = -s / dsp if (not rolling and s * dsp < 0.0) else np.inf
         ev = 0
@@ -391,14 +410,19 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         if tm == np.inf:
             status = STOPPED
             break
-        ds_ = v * tm + 0.5 * a * tm * tm
-        if ds_ < 0.0:
-            ds_ = 0.0
-        if ds_ > dist:
-            ds_ = dist
-        v1 = v + a * tm
-        if v1 < 0.0 or ev == 1:
-            v1 = 0.0
+        if c > 0.0:
+            # Rolling: the phase ends at the end of the piece or at a stop.
+            ds_ = dist if ev == 0 else min(d_zero, dist)
+            v1 = max(v_end, 0.0) if ev == 0 else 0.0
+        else:
+            ds_ = v * tm + 0.5 * a * tm * tm
+            if ds_ < 0.0:
+                ds_ = 0.0
+            if ds_ > dist:
+                ds_ = dist
+            v1 = v + a * tm
+            if v1 < 0.0 or ev == 1:
+                v1 = 0.0
         if rolling or ev == 2:
             s1 = v1 / r
         elif ev == 3:
@@ -420,9 +444,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                 j = np.searchsorted(bars[:, BR_X], x, side="left") - 1
             while 0 <= j < nbar and (bars[j, BR_X] - xn) * dirn <= 0.0:
                 dd = (bars[j, BR_X] - x) / dx
-                q = v * v + 2.0 * a * dd
-                vs = np.sqrt(q) if q > 0.0 else 0.0
-                ts = 2.0 * dd / (v + vs) if v + vs > 0.0 else 0.0
+                vs, ts = along(v, a, c, dd)
                 ss = vs / r if rolling else s + dsp * ts
                 hb = y + dy * dd - bars[j, BR_YG]
                 code, nvx, nvy, nw = _barrier_hit(
@@ -442,9 +464,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             j = np.searchsorted(st_x, x, side="right")
             while j < st_x.shape[0] and st_x[j] <= xn:
                 dd = (st_x[j] - x) / dx
-                q = v * v + 2.0 * a * dd
-                vs = np.sqrt(q) if q > 0.0 else 0.0
-                ts = 2.0 * dd / (v + vs) if v + vs > 0.0 else 0.0
+                vs, ts = along(v, a, c, dd)
                 ss = vs / r if rolling else s + dsp * ts
                 if (
                     _record(j, y + dy * dd - st_yg[j], vs * dx, vs * dy, -ss * dirn, t + ts,
@@ -509,7 +529,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             t2x, t2y = _unit_tangent(px, py, k)
             if vx * -t2y + vy * t2x < 0.0:
                 vx, vy, w, mode, cur_seg = _collide(
-                    vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
+                    vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn, hop_ratio
                 )
                 continue
         t2x, t2y = _unit_tangent(px, py, k)

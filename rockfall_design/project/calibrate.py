@@ -50,6 +50,17 @@ def _interval(value: Any) -> tuple[float, float]:
 Interval = Annotated[tuple[float, float], BeforeValidator(_interval)]
 
 
+#: ``fit: auto`` until the project expands it (rockfall_design.project.model):
+#: a key no input path can be, so that ``fit`` keeps one type and its errors
+#: their plain locations.
+AUTO_FIT = "*auto*"
+
+
+def _auto_fit_marker(value: Any) -> Any:
+    """``fit: auto`` as the one-entry mapping the project expands."""
+    return {AUTO_FIT: (0.0, 1.0)} if value == "auto" else value
+
+
 class CalibrateSpec(_Model):
     """The ``calibrate:`` section: observed stops, the inputs fitted and their ranges."""
 
@@ -58,8 +69,11 @@ class CalibrateSpec(_Model):
         "header row, then one row per block with x (its stop station, m) and optionally "
         "volume_m3 or mass_kg."
     )
-    fit: Annotated[dict[String, Interval], Field(min_length=1, max_length=MAX_FITTED)] = Field(
-        description="Input path (as in study.vary) -> [lo, hi], the range searched."
+    fit: Annotated[dict[String, Interval], Field(min_length=1, max_length=MAX_FITTED),
+                   BeforeValidator(_auto_fit_marker)] = Field(
+        description="Input path (as in study.vary) -> [lo, hi], the range searched; or "
+        "auto: for every material on the section the parameters its law calibrates "
+        "(CALIBRATED), each over the material's ranges: (docs/calibration.md)."
     )
     levels: dict[Label, Interval] = Field(
         default_factory=dict,
@@ -98,10 +112,22 @@ class CalibrateSpec(_Model):
         return self
 
 
+#: The parameters ``fit: auto`` calibrates, by impact law: the normal loss
+#: (restitution) and the loss in contact that a stop position depends on
+#: (rolling resistance, or R_t for the lumped-mass law), and for rough_soft the
+#: obstacle height, which alone makes the runout depend on the block's size.
+#: Friction is left out: stops hardly constrain it once rolling resistance is
+#: fitted (docs/calibration.md).
+CALIBRATED: dict[str, tuple[str, ...]] = {
+    "spang": ("restitution", "rolling_resistance"),
+    "rn_rt": ("restitution", "tangential_restitution"),
+    "rough_soft": ("restitution", "rolling_resistance", "obstacle_height_m"),
+}
+
 #: The choices of ``distance``, for the command line.
 DISTANCES: tuple[str, ...] = ("energy", "wasserstein")
 
 Distance = Literal["energy", "wasserstein"]
 
-__all__ = ["CalibrateSpec", "DISTANCES", "MAX_FITTED", "Distance"]
+__all__ = ["AUTO_FIT", "CALIBRATED", "CalibrateSpec", "DISTANCES", "MAX_FITTED", "Distance"]
 

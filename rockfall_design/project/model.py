@@ -15,7 +15,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, BeforeValidator, Field, PrivateAttr, model_validator
 
 from ..errors import ProjectError
-from .calibrate import CalibrateSpec
+from .calibrate import AUTO_FIT, CALIBRATED, MAX_FITTED, CalibrateSpec
 from .design import Design
 from .fields import (
     _DEFAULT_CONCEPT,
@@ -118,6 +118,26 @@ class Project(_Model):
         """The file the project was loaded from (``"<string>"`` for text)."""
         return self._source
 
+    def _auto_fit(self) -> dict[str, tuple[float, float]]:
+        """``calibrate.fit: auto``: each section material's calibrated parameters, its ranges."""
+        fit: dict[str, tuple[float, float]] = {}
+        for name in dict.fromkeys(self.slope.materials):
+            m = self.materials[name]
+            for key in CALIBRATED[m.impact_model]:
+                rng = (m.ranges or {}).get(key)
+                if rng is None:
+                    raise _fail(
+                        f"fit: auto needs the range of materials.{name}.{key}: give the "
+                        f"material ranges: {{{key}: [low, high]}} (the library's ground_ "
+                        "entries carry them) or list the inputs under fit:",
+                        ("calibrate", "fit"),
+                    )
+                fit[f"materials.{name}.{key}"] = (float(rng[0]), float(rng[1]))
+        if len(fit) > MAX_FITTED:
+            raise _fail(f"fit: auto gives {len(fit)} inputs, more than {MAX_FITTED}: list "
+                        "the inputs under fit:", ("calibrate", "fit"))
+        return fit
+
     @model_validator(mode="after")
     def _check_references(self) -> "Project":
         for i, name in enumerate(self.slope.materials):
@@ -147,6 +167,8 @@ class Project(_Model):
                 f"x {fmt(self.protect.x)} is outside the slope section {section}",
                 ("protect", "x"),
             )
+        if self.calibrate is not None and AUTO_FIT in self.calibrate.fit:
+            self.calibrate.fit = self._auto_fit()
         if self.design is not None:
             if self.protect is None:
                 raise _fail(

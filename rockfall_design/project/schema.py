@@ -53,15 +53,24 @@ class Scatter(_Model):
     )
 
 
+#: Parameters of a material that may carry a published range (``ranges:``).
+RANGED_KEYS = ("restitution", "tangential_restitution", "friction", "rolling_resistance",
+               "velocity_scaling_k", "roughness_deg", "roughness_height_m",
+               "obstacle_height_m", "drag_speed_ms")
+
+
 class Material(_Model):
     """Ground material of slope segments: impact and contact parameters."""
 
     impact_model: Annotated[
-        Literal["spang", "rn_rt"], BeforeValidator(_choice("spang", "rn_rt"))
+        Literal["spang", "rn_rt", "rough_soft"],
+        BeforeValidator(_choice("spang", "rn_rt", "rough_soft")),
     ] = Field(
         "spang",
-        description="Impact model: 'spang' (one restitution e) or 'rn_rt' "
-        "(normal Rn and tangential Rt restitution).",
+        description="Impact model: 'spang' (one restitution e), 'rn_rt' "
+        "(normal Rn and tangential Rt restitution) or 'rough_soft' (spang's impact with "
+        "a resistance from the block's radius against the ground's obstacles and from its "
+        "softness, growing with the speed; docs/PHYSICS.md).",
     )
     restitution: Fraction = Field(
         description="Restitution (-): e for impact_model spang, Rn for rn_rt; 0..1."
@@ -93,8 +102,24 @@ class Material(_Model):
         "or PyRockfall: per impact the normal tilts against the motion by an angle drawn "
         "uniformly in [0, atan(h_r / r)], r the rock radius; 0..25.",
     )
+    obstacle_height_m: Annotated[NonNegative, Field(le=25.0)] = Field(
+        0.0,
+        description="rough_soft: mean obstacle height h_o of the ground (m), Rockyfor3D's "
+        "MOH; a block of radius r adds h_o / (h_o + r) to the resistance; 0..25.",
+    )
+    drag_speed_ms: Positive | None = Field(
+        None,
+        description="rough_soft: speed V_s (m/s) at which the ground's resistance has "
+        "doubled, mu = mu_0 (1 + (v / V_s)^2); none for a resistance that does not grow.",
+    )
     scatter: Annotated[Scatter, BeforeValidator(_none_as_empty)] = Field(
         default_factory=Scatter, description="Standard deviations of the parameters."
+    )
+    ranges: dict[str, tuple[Number, Number]] | None = Field(
+        None,
+        description="The range [low, high] the material's source gives for each of its "
+        "numeric parameters (a library entry's published range): calibrate's prior range. "
+        "The simulation uses the values, never the ranges.",
     )
 
     @model_validator(mode="after")
@@ -104,11 +129,28 @@ class Material(_Model):
                 "required for impact_model rn_rt (tangential restitution Rt, 0..1)",
                 ("tangential_restitution",),
             )
-        if self.impact_model == "spang" and self.tangential_restitution is not None:
+        if self.impact_model != "rn_rt" and self.tangential_restitution is not None:
             raise _fail(
                 "only for impact_model rn_rt; remove it or set impact_model: rn_rt",
                 ("tangential_restitution",),
             )
+        for key, (low, high) in (self.ranges or {}).items():
+            value = getattr(self, key, None) if key in RANGED_KEYS else None
+            if value is None:
+                raise _fail(f"{key!r} is not a numeric parameter of this material (one of "
+                            f"{', '.join(RANGED_KEYS)})", ("ranges", key))
+            if not low <= value <= high:
+                raise _fail(f"the range [{low:g}, {high:g}] must hold the value {value:g}",
+                            ("ranges", key))
+        if self.impact_model != "rough_soft":
+            # By value, not by the keys given: a study or a calibration writes
+            # every default back (0 and none) before it validates again.
+            for key in ("obstacle_height_m", "drag_speed_ms"):
+                if getattr(self, key):
+                    raise _fail(
+                        "only for impact_model rough_soft; remove it or set "
+                        "impact_model: rough_soft", (key,),
+                    )
         return self
 
 
@@ -605,7 +647,16 @@ class EngineConfig(_Model):
     """Advanced numerical parameters of the trajectory engine."""
 
     v_contact: Positive = Field(
-        0.5, description="Below this outgoing normal speed (m/s) the rock stays in contact."
+        0.05, description="Below this outgoing normal speed (m/s) the rock stays in contact: "
+        "a numerical floor, not a property of the ground (docs/PHYSICS.md, 'The transition "
+        "to contact'); below the hop criterion it no longer moves the answer."
+    )
+    # The default is rockfall_design.engine.columns.CONTACT_HOP_RATIO (ILLUSTRATIVE,
+    # its source there); tests/project/test_project.py checks they agree.
+    contact_hop_ratio: Annotated[NonNegative, Field(le=10.0)] = Field(
+        0.1, description="kappa (-): a rebound whose hop above the ground is lower than "
+        "max(roughness_height_m, kappa x radius) continues rolling or sliding; "
+        "ILLUSTRATIVE; 0 leaves the decision to v_contact alone; 0..10."
     )
     v_stop: Positive = Field(0.05, description="Below this speed (m/s) the rock stops.")
     max_events: Annotated[Integer, Field(ge=10, le=10_000_000)] = Field(

@@ -60,7 +60,16 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "(no time step).",
         "Impacts by Newton restitution and Coulomb friction with the spin that friction "
         "gives the rock (impact_model spang), or by normal and tangential restitution "
-        "(rn_rt), optionally scaled with the impact speed (Pfeiffer & Bowen 1989).",
+        "(rn_rt), optionally scaled with the impact speed (Pfeiffer & Bowen 1989), or by "
+        "spang's law with a resistance from the block's radius against the ground's "
+        "obstacles and from its softness, growing with the speed, that acts in impacts as "
+        "in contact (rough_soft).",
+        "A rebound whose hop (the height its centre would rise above the ground) is below "
+        "the contact height max(roughness_height_m, engine.contact_hop_ratio x radius) "
+        "continues on the ground, rolling or sliding: the bounce-to-contact transition is a "
+        "property of the rock and the ground, and engine.v_contact is only a numerical floor "
+        "below which the answer no longer moves (tests/engine/test_engine_transition.py). "
+        "The ratio (0.1 by default) is ILLUSTRATIVE, not a published value.",
         "Scatter: restitution, friction and rolling resistance are drawn per impact from "
         "truncated normals with the standard deviations of scatter:, and the impact normal "
         "is tilted by the roughness; every draw comes from a seeded stream per rock.",

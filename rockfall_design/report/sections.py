@@ -247,8 +247,9 @@ def _run_table(result: Any, summary: Mapping[str, Any]) -> Table:
         rows.append(["safety concept", str(summary["safety_concept"])])
     e = project.engine
     rows.append(["engine", f"exact events (flight parabolas, impacts, rolling and sliding in "
-                 f"closed form); v_contact {e.v_contact:g} m/s, v_stop {e.v_stop:g} m/s, "
-                 f"max_events {e.max_events:,}"])
+                 f"closed form); contact when a rebound's hop is below max(roughness "
+                 f"height, {e.contact_hop_ratio:g} r); v_contact {e.v_contact:g} m/s, "
+                 f"v_stop {e.v_stop:g} m/s, max_events {e.max_events:,}"])
     registry = getattr(result, "registry", None) or getattr(result, "_registry", None)
     rows += _plugin_rows(registry, _used_plugins(project.resolved_dict(), result.command))
     return Table("", ["item", "value"], rows)

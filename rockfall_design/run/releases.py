@@ -53,6 +53,8 @@ def section_from_project(project: Project) -> Section:
                 velocity_scaling_k=m.velocity_scaling_k,
                 roughness_deg=m.roughness_deg,
                 roughness_height_m=m.roughness_height_m,
+                obstacle_height_m=m.obstacle_height_m,
+                drag_speed_ms=m.drag_speed_ms or 0.0,
                 sd_restitution=m.scatter.restitution,
                 sd_friction=m.scatter.friction,
                 sd_rolling_resistance=m.scatter.rolling_resistance,
@@ -70,6 +72,7 @@ def engine_settings(project: Project) -> EngineSettings:
         v_stop=e.v_stop,
         max_events=e.max_events,
         max_chord_deg=e.max_chord_deg,
+        contact_hop_ratio=e.contact_hop_ratio,
     )
 
 

@@ -52,11 +52,36 @@ def test_vertical_bounce_series():
     for k, row in enumerate(rebounds, start=1):
         assert row[T_VX] == 0.0
         assert_allclose(row[T_VY] ** 2 / (2 * G), e ** (2 * k) * h0, rtol=RTOL)
-    # It stops bouncing once the rebound speed is below v_contact, then rests.
-    v_last = rebounds[-1, T_VY]
-    assert v_last >= 0.5 and e * v_last < 0.5
+    # It stops bouncing once the hop would be below h_c = kappa r (no
+    # roughness height; PHYSICS.md, "The transition to contact"), then rests:
+    # hops 5 m x 0.36^k, the last of 0.030 m >= 0.02 m, the next 0.011 m.
+    h_c = columns.CONTACT_HOP_RATIO * r
+    h_last = rebounds[-1, T_VY] ** 2 / (2 * G)
+    assert len(rebounds) == 5 and h_last >= h_c and e * e * h_last < h_c
     assert columns.STATUS_NAMES[res.status[0]] == "stopped"
     assert_allclose(res.x_end[0], 0.0, atol=1e-12)
+
+
+@pytest.mark.parametrize(("rough_h", "v_contact", "hops"),
+                         [(0.1, 0.05, 3), (0.1, 0.5, 3), (0.0, 0.02, 5), (0.3, 0.05, 2)])
+def test_the_bounce_series_ends_at_the_contact_height(rough_h, v_contact, hops):
+    """Hops 5 m x 0.36^k end at the first below max(h_r, kappa r), whatever v_contact.
+
+    h_c = max(h_r, 0.1 x 0.2 m): 0.1 m ends after the hop of 0.233 m (3 hops),
+    0.02 m after 0.030 m (5), 0.3 m after 0.648 m (2); v_contact 0.05 or 0.5 m/s
+    (hops of 0.13 mm and 13 mm) does not enter (PHYSICS.md, "The transition").
+    A vertical drop meets no tilt from the roughness height (it turns the
+    normal against a tangential velocity, and there is none).
+    """
+    e, h0, r = 0.6, 5.0, 0.2
+    sec = section([[-10, 0], [10, 0]],
+                  Material(restitution=e, friction=0.5, roughness_height_m=rough_h))
+    res = run_one(sec, one_rock(r=r, x=0.0, h=h0),
+                  settings=EngineSettings(v_contact=v_contact))
+    tr = res.trajectories[0]
+    rebounds = tr[1:][tr[1:, T_MODE] == columns.FLIGHT]
+    assert len(rebounds) == hops
+    assert columns.STATUS_NAMES[res.status[0]] == "stopped"
 
 
 @pytest.mark.parametrize("v", [2.0, 7.5])

@@ -49,8 +49,12 @@ def profiles(draw, max_vertices: int = 12):
 
 @st.composite
 def materials(draw):
+    law = draw(st.sampled_from(["spang", "rn_rt", "rough_soft"]))
+    rough_soft = law == "rough_soft"
     return Material(
-        impact_model=draw(st.sampled_from(["spang", "rn_rt"])),
+        impact_model=law,
+        obstacle_height_m=draw(st.sampled_from([0.0, 0.05, 0.5])) if rough_soft else 0.0,
+        drag_speed_ms=draw(st.sampled_from([0.0, 2.0, 8.0])) if rough_soft else 0.0,
         restitution=draw(st.floats(0.0, 1.0)),
         tangential_restitution=draw(st.floats(0.0, 1.0)),
         friction=draw(st.floats(0.0, 1.5)),

@@ -12,6 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from rockfall_design.engine.columns import CONTACT_HOP_RATIO
 from rockfall_design.errors import ExitCode, InputError, ProjectError, RockfallError
 from rockfall_design.project import (
     Project,
@@ -160,12 +161,8 @@ def test_defaults_are_filled_in():
     assert project.analysis.envelope_points == 201
     assert project.protect is None
     engine = project.engine
-    assert (engine.v_contact, engine.v_stop, engine.max_events, engine.max_chord_deg) == (
-        0.5,
-        0.05,
-        10000,
-        5.0,
-    )
+    assert (engine.v_contact, engine.v_stop, engine.max_events, engine.max_chord_deg,
+            engine.contact_hop_ratio) == (0.05, 0.05, 10000, 5.0, CONTACT_HOP_RATIO)
 
 
 def test_long_forms_and_distributions():

@@ -1,0 +1,136 @@
+"""Rolling with a resistance that grows with the square of the speed: closed forms.
+
+PHYSICS.md, "The `rough_soft` law": on a piece, a rock rolling on soft or
+rough ground has dv/dt = a - c v^2 with a (m/s^2) and c (1/m) constant over
+the piece. Speed at a distance, time between two speeds, and speed and
+distance after a time are all closed forms, so the event loop keeps jumping
+from event to event without a time step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._jit import hot
+
+_LN2 = np.log(2.0)
+
+
+@hot
+def _logcosh(x):
+    """ln cosh x without overflow."""
+    ax = abs(x)
+    return ax + np.log1p(np.exp(-2.0 * ax)) - _LN2
+
+
+@hot
+def _logsinh(x):
+    """ln sinh x for x > 0 without overflow."""
+    return x + np.log1p(-np.exp(-2.0 * x)) - _LN2
+
+
+@hot
+def drag_speed_at(v, a, c, d):
+    """Speed (m/s) after rolling a distance ``d`` (m), or -1 if the rock stops first.
+
+    Notes
+    -----
+    From d(v^2)/ds = 2 (a - c v^2): v^2(s) = a/c + (v0^2 - a/c) exp(-2 c s).
+    """
+    q = a / c + (v * v - a / c) * np.exp(-2.0 * c * d)
+    if q <= 0.0:
+        return -1.0
+    return np.sqrt(q)
+
+
+@hot
+def _arc_from_log(y, hyper_sin):
+    """th with ln sinh th = y (``hyper_sin``) or ln cosh th = y, without overflow."""
+    if y > 30.0:
+        return y + _LN2
+    return np.arcsinh(np.exp(y)) if hyper_sin else np.arccosh(np.exp(y))
+
+
+@hot
+def drag_time(v0, v1, a, c, d):
+    """Time (s) to roll a distance ``d`` (m) from speed ``v0`` to ``v1`` (m/s).
+
+    Notes
+    -----
+    With V = sqrt(a/c) and k = c V (a > 0): v(t) = V tanh(th) below V and
+    V coth(th) above it, th = k t + th0, and the distance is
+    ln(cosh th / cosh th0) / c (ln(sinh th / sinh th0) / c), so th follows
+    from d without ever forming v = V (which a long piece reaches to round-off);
+    with W = sqrt(-a/c), k = c W (a < 0): v(t) = W tan(th0 - k t), distance
+    ln(cos th / cos th0) / c; with a = 0: v = v0 / (1 + c v0 t),
+    t = (exp(c d) - 1) / (c v0). Over a short distance the mean speed is
+    exact enough and better conditioned.
+    """
+    if c * d < 1e-7 or abs(v1 - v0) <= 1e-9 * (v0 + v1):
+        return 2.0 * d / (v0 + v1) if v0 + v1 > 0.0 else 0.0
+    if a > 0.0:
+        vt = np.sqrt(a / c)
+        k = c * vt
+        if v0 < vt:
+            th0 = np.arctanh(v0 / vt)
+            return (_arc_from_log(_logcosh(th0) + c * d, False) - th0) / k
+        th0 = np.arctanh(vt / v0)
+        return (_arc_from_log(_logsinh(th0) + c * d, True) - th0) / k
+    if a < 0.0:
+        wt = np.sqrt(-a / c)
+        th0 = np.arctan(v0 / wt)
+        q = np.cos(th0) * np.exp(c * d)
+        th = np.arccos(min(q, 1.0))
+        return (th0 - th) / (c * wt)
+    return np.expm1(c * d) / (c * v0)
+
+
+@hot
+def drag_stop(v0, a, c):
+    """Time (s) and distance (m) to a stop, (inf, inf) where the rock never stops (a >= 0)."""
+    if a >= 0.0:
+        return np.inf, np.inf
+    wt = np.sqrt(-a / c)
+    return np.arctan(v0 / wt) / (c * wt), np.log1p(c * v0 * v0 / -a) / (2.0 * c)
+
+
+@hot
+def drag_state(v0, a, c, t):
+    """Speed (m/s) and distance (m) after rolling for a time ``t`` (s)."""
+    if a > 0.0:
+        vt = np.sqrt(a / c)
+        k = c * vt
+        if v0 < vt:
+            th0 = np.arctanh(v0 / vt)
+            th = th0 + k * t
+            return vt * np.tanh(th), (_logcosh(th) - _logcosh(th0)) / c
+        if v0 > vt:
+            th0 = np.arctanh(vt / v0)
+            th = th0 + k * t
+            return vt / np.tanh(th), (_logsinh(th) - _logsinh(th0)) / c
+        return vt, vt * t
+    if a < 0.0:
+        wt = np.sqrt(-a / c)
+        th0 = np.arctan(v0 / wt)
+        th = max(th0 - c * wt * t, 0.0)
+        return wt * np.tan(th), (np.log(np.cos(th)) - np.log(np.cos(th0))) / c
+    return v0 / (1.0 + c * v0 * t), np.log1p(c * v0 * t) / c
+
+
+@hot
+def along(v, a, c, d):
+    """Speed (m/s) and time (s) of a rock in contact when it has moved ``d`` (m).
+
+    With ``c`` = 0 the constant-acceleration forms of PHYSICS.md
+    (v_d^2 = v^2 + 2 a d, t = 2 d / (v + v_d)); otherwise those of
+    :func:`drag_speed_at` and :func:`drag_time`.
+    """
+    if c > 0.0:
+        vs = drag_speed_at(v, a, c, d)
+        if vs < 0.0:
+            vs = 0.0
+        return vs, drag_time(v, vs, a, c, d)
+    q = v * v + 2.0 * a * d
+    vs = np.sqrt(q) if q > 0.0 else 0.0
+    ts = 2.0 * d / (v + vs) if v + vs > 0.0 else 0.0
+    return vs, ts

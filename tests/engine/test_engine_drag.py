@@ -1,0 +1,63 @@
+"""The closed forms of rolling with a resistance growing as v^2 (engine/drag.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from rockfall_design.engine import drag
+
+
+def _ode(a: float, c: float, v0: float, t: float) -> tuple[float, float]:
+    """Speed and distance after ``t`` from dv/dt = a - c v^2, integrated numerically."""
+    sol = solve_ivp(lambda _, y: [y[1], a - c * y[1] ** 2], [0.0, t], [0.0, v0],
+                    rtol=1e-11, atol=1e-12)
+    return float(sol.y[1, -1]), float(sol.y[0, -1])
+
+
+@pytest.mark.parametrize(("a", "c", "v0"), [
+    (3.0, 0.1, 1.0),    # accelerating towards the terminal speed from below
+    (3.0, 0.1, 9.0),    # braking towards it from above
+    (-2.0, 0.1, 5.0),   # braking to a stop
+    (0.0, 0.1, 4.0),    # level with no other loss: v0 / (1 + c v0 t)
+    (1e-3, 0.05, 2.0),  # nearly level
+])
+def test_state_speed_and_time_agree_with_the_equation(a, c, v0):
+    t = 1.5
+    if a < 0.0:
+        t = 0.9 * drag.drag_stop(v0, a, c)[0]
+    v_ode, s_ode = _ode(a, c, v0, t)
+    v, s = drag.drag_state(v0, a, c, t)
+    assert v == pytest.approx(v_ode, rel=1e-8, abs=1e-9)
+    assert s == pytest.approx(s_ode, rel=1e-8, abs=1e-9)
+    v1 = drag.drag_speed_at(v0, a, c, s_ode)
+    assert v1 == pytest.approx(v_ode, rel=1e-8, abs=1e-9)
+    assert drag.drag_time(v0, v1, a, c, s_ode) == pytest.approx(t, rel=1e-8)
+    assert drag.along(v0, a, c, s_ode)[1] == pytest.approx(t, rel=1e-8)
+
+
+def test_stop_time_and_distance_are_where_the_speed_is_zero():
+    a, c, v0 = -2.0, 0.1, 5.0
+    ts, ds = drag.drag_stop(v0, a, c)
+    v, s = drag.drag_state(v0, a, c, ts)
+    assert v == pytest.approx(0.0, abs=1e-12)
+    assert s == pytest.approx(ds, rel=1e-12)
+    assert drag.drag_speed_at(v0, a, c, 1.01 * ds) < 0.0     # never gets there
+    assert drag.drag_stop(v0, 1.0, c) == (np.inf, np.inf)    # never stops
+
+
+def test_a_long_piece_reaches_the_terminal_speed_in_finite_time():
+    # 400 m at a terminal speed of 2.36 m/s: v(s) equals it to round-off, and
+    # the time must still be finite and about the distance over that speed.
+    a, c, v0, d = 0.47, 0.0843, 8.43, 400.0
+    v1 = drag.drag_speed_at(v0, a, c, d)
+    t = drag.drag_time(v0, v1, a, c, d)
+    assert v1 == pytest.approx(np.sqrt(a / c), rel=1e-12)
+    assert np.isfinite(t) and t == pytest.approx(d / np.sqrt(a / c), rel=0.05)
+
+
+def test_without_growth_along_is_constant_acceleration():
+    vs, ts = drag.along(3.0, -1.0, 0.0, 2.0)
+    assert vs == pytest.approx(np.sqrt(9.0 - 4.0))
+    assert ts == pytest.approx(4.0 / (3.0 + vs))
