@@ -215,7 +215,7 @@ class ReliabilityConcept(SafetyConcept):
         return Check("failure_probability", value, p.target_failure_probability,
                      bool(value <= p.target_failure_probability), "-", detail, upper,
                      bool(upper <= p.target_failure_probability), needed, lower,
-                     bool(lower > p.target_failure_probability))
+                     bool(lower > p.target_failure_probability), "P_f", "<=", "P_t")
 
 
 @hookimpl

@@ -234,6 +234,9 @@ class Project(_Model):
                 data["rocks"]["size_step"] = self.size_step
             else:
                 data["rocks"].pop("size_step", None)
+        if data["rocks"].get("design_block") is None:
+            # absent unless given, so the record and hash of other projects are as before
+            data["rocks"].pop("design_block", None)
         if self.design is not None and data.get("design") is not None:
             # the catalogues inline, so the record (and its hash) holds the figures used
             design = data["design"]

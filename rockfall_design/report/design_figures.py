@@ -20,6 +20,17 @@ if TYPE_CHECKING:  # pragma: no cover
     pass
 
 
+def _slack(value: float, target: float, relation: str, unit: str) -> float:
+    """How far a check's value stands from its target on the safe side, relative (-).
+
+    ``relation`` ``">="`` (a safety factor) or ``"<="`` (a design value
+    against a limit, a braking distance, a probability); a check that names
+    none is taken as a factor when it is one (unit ``"-"``), else as a limit.
+    """
+    at_least = relation == ">=" or (not relation and unit == "-")
+    return value / target - 1.0 if at_least else 1.0 - value / target
+
+
 def _binding(checks: Sequence[Mapping[str, Any]]) -> str:
     """The check closest to its target (a failing one first): 'height 2.05/2.00'."""
     best: tuple[float, str] | None = None
@@ -28,7 +39,8 @@ def _binding(checks: Sequence[Mapping[str, Any]]) -> str:
         if v is None or t is None or not t:
             continue
         name = str(c.get("name", "")).removesuffix("_factor")
-        margin = float(v) / float(t) - 1.0 if c.get("ok", True) else -math.inf
+        margin = (_slack(float(v), float(t), str(c.get("relation") or ""),
+                         str(c.get("unit") or "-")) if c.get("ok", True) else -math.inf)
         text = f"{name} {float(v):.2f}/{float(t):.2f}" + ("" if c.get("ok", True) else " fails")
         if best is None or margin < best[0]:
             best = (margin, text)
@@ -90,9 +102,14 @@ def alternatives_figure(
     ax.set_ylim(y - 0.4, -0.6)
     ax.set_xlim(0, top * 1.05)
     ax.spines[["right", "top"]].set_visible(False)
-    ax.xaxis.set_major_locator(MaxNLocator(4))
-    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:,.0f}"))
-    ax.set_xlabel(f"cost ({currency})" if currency else "cost")
+    # Three ticks in thousands where costs run to six digits: four full numbers
+    # ran into each other under a narrow panel.
+    ax.xaxis.set_major_locator(MaxNLocator(3))
+    thousands = top >= 1e4
+    ax.xaxis.set_major_formatter(FuncFormatter(
+        lambda v, _: f"{v / 1e3:,.0f}" if thousands else f"{v:,.0f}"))
+    unit = ("thousand " if thousands else "") + currency
+    ax.set_xlabel(f"cost ({unit.strip()})" if unit.strip() else "cost")
     ax.grid(axis="x", alpha=0.3)
     head = "cheapest design of each family; * chosen, hatched: not admissible"
     ax.set_title(f"{title}: {head}" if title else head, loc="left")

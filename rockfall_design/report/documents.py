@@ -158,7 +158,16 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "with 3.7 million rocks at 95 %: the check says so (rocks_needed) and such a "
         "design stays undecided (marginal) within design.max_rocks. The rocks must be a "
         "fair sample of the falls that annual_falls counts (same release zones and "
-        "block sizes). ### The fence's MEL-test figures in the catalogue",
+        "block sizes). Each block meets the measures intact: the damage a fence takes from "
+        "earlier blocks within its working life is not modelled (it is taken to be "
+        "repaired after each event), which is optimistic for a fence hit often.",
+        "The design block (rocks.design_block) of uni11211 and onr24810 is the block's mass "
+        "only; its speed and passing height are the simulated rocks' percentiles, as the "
+        "codes combine them. A design block far larger than the simulated rocks is given "
+        "their speeds, which is right only as far as size does not change the paths; where "
+        "it does (the roughness and the rolling against the radius), simulate rocks of about "
+        "the design block's size. onr24810's use of it (E_d = gamma_F x the 99 % fractile "
+        "of 1/2 m_d v^2) is flagged for review against the standard's text.",
     )),
 )
 

@@ -207,3 +207,23 @@ def test_the_bundled_quarry_designs_on_its_synthetic_survey():
     block = design_block_of(project, 0.95)
     assert block.lower_kg < block.mass_kg < block.upper_kg
     assert "quarry_blocks.csv" in block.source
+
+
+def test_the_check_report_shows_the_survey_and_the_design_block_used(tmp_path, capsys):
+    """design_quarry's survey with a fence: the report lists the blocks, the check names them."""
+    from rockfall_design.cli.program import main
+
+    for name in ("quarry_blocks.csv", "catalogue_products.yaml", "catalogue_costs.yaml"):
+        (tmp_path / name).write_text((ROOT / "projects" / name).read_text(encoding="utf-8"))
+    text = (ROOT / "projects" / "design_quarry.yaml").read_text(encoding="utf-8")
+    text = text[:text.index("design:")] + (
+        "measures:\n  - {type: fence, x: 100, height: 5.0, capacity_kj: 5000, "
+        "max_elongation_m: 7.8, residual_height_fraction: 0.6}\n")
+    path = tmp_path / "quarry.yaml"
+    path.write_text(text, encoding="utf-8")
+    assert main(["check", str(path), "--rocks", "300", "--report", str(tmp_path / "r")]) in (0, 1)
+    capsys.readouterr()
+    page = (tmp_path / "r" / "report.md").read_text(encoding="utf-8")
+    assert "Block survey" in page and "240 block volumes (m3) in the table" in page
+    assert "design mass: the design block (rocks.design_block)" in page
+    assert "p98 of the 240 block volumes of survey quarry_blocks.csv" in page

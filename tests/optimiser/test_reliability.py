@@ -129,3 +129,23 @@ def test_check_states_the_life_probability_with_its_bound_and_assumptions(regist
     assert "Poisson process" in assumptions
     lines = how_sure(summary)
     assert lines[-3:] == [zone, fence, assumptions]
+
+
+def test_the_optimise_report_states_the_fresh_probability_and_its_assumptions(tmp_path,
+                                                                               capsys):
+    from rockfall_design.cli.program import main
+
+    text = (RELIABLE.replace("SEED", "5")
+            .replace("PRODUCTS", str(PROJECTS / "catalogue_products.yaml"))
+            .replace("COSTS", str(PROJECTS / "catalogue_costs.yaml")))
+    path = tmp_path / "reliable.yaml"
+    path.write_text(text, encoding="utf-8")
+    assert main(["optimise", str(path), "--report", str(tmp_path / "report")]) == 0
+    panel = capsys.readouterr().out
+    for name in ("report.md", "report.html"):
+        page = " ".join((tmp_path / "report" / name).read_text(encoding="utf-8").split())
+        assert "fresh rocks (seed" in page and "that verified the chosen design" in page
+        assert "Probability of at least one block reaching the protected zone" in page
+        assert "with 95 % confidence (the Clopper-Pearson upper bound" in page
+        assert "Poisson process of 0.2 a year over a working life of 50 years" in page
+    assert "Poisson process of 0.2 a year" in " ".join(panel.split())
