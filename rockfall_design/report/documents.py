@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..version import __version__
 from .design_values import design_columns, design_tables, how_sure
+from .listed import listed_lines
 from .pdf import html_to_pdf, pdf_turned_off, pdf_unavailable
 from .sections import (
     Table,
@@ -261,7 +262,8 @@ def _optimiser_sentences(summary: Mapping[str, Any]) -> list[str]:
     best = summary.get("best")
     if isinstance(best, Mapping) and best.get("proof"):
         out.append(f"The optimiser's record of the decision: {best['proof']}.")
-    return out
+    # The cheaper designs it could not decide, each with the rocks that would.
+    return out + listed_lines(summary.get("marginal"), str(summary.get("currency") or ""))
 
 
 def _set_verdict(ctx: dict[str, Any], verdict: Mapping[str, Any] | None) -> None:
