@@ -57,6 +57,7 @@ from ..judge.margin import DEFAULT_CHECKER_POWER
 from ..judge.placing import build_concept, required_figures_problem, unknown_measure_type
 from ..plugins.cost_model import CostModel
 from ..plugins.declared import DeclaredDesign, declared_design
+from ..project.schema import DEFAULT_MAX_ROCKS
 from .candidates import (
     CandidateSpec,
     Product,
@@ -125,7 +126,7 @@ class DesignSpec:
     candidates: tuple[CandidateSpec, ...]
     cost_model: CostModel
     products: dict[str, dict[str, Product]]
-    max_rocks: int = 50_000
+    max_rocks: int = DEFAULT_MAX_ROCKS
     checker_power: float | None = DEFAULT_CHECKER_POWER
 
 
