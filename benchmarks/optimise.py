@@ -192,7 +192,7 @@ def _listed_lines(res) -> list[str]:
     return out
 
 
-def _spread_lines(seeds: list[int], rows: list[dict], named: list[set]) -> list[str]:
+def _spread_lines(seeds: list[int], rows: list[dict], named: list[dict]) -> list[str]:
     costs = [r["cost"] for r in rows]
     finite = [c for c in costs if math.isfinite(c)]
     if not finite:
@@ -203,9 +203,10 @@ def _spread_lines(seeds: list[int], rows: list[dict], named: list[set]) -> list[
     # the cheapest choice of the seeds as marginal or not decided.
     for seed, c, nm in zip(seeds, costs, named, strict=True):
         if math.isfinite(c) and c > 1.03 * low:
+            m = nm.get(round(low, 2))
             out.append(f"  seed {seed}: {c:,.0f} is dearer than {low:,.0f} by more than "
                        f"3 %; its report names {low:,.0f}: "
-                       f"{'yes' if round(low, 2) in nm else 'NO'}")
+                       + ("NO" if m is None else f"yes: {m['reason'][:300]}"))
     return out
 
 
@@ -222,7 +223,7 @@ def _project_seeds(path: Path, project, registry, args, budget: int | None) -> l
         line, row = _run_line(seed, res, wall, cpu)
         print(line, flush=True)
         rows.append(row)
-        named.append({round(m["cost"], 2) for m in res.marginal})
+        named.append({round(m["cost"], 2): m for m in res.marginal})
         b = res.best
         if b is not None and args.check_seeds:
             held = _check_in_process(project, registry, b, args.check_seeds)
