@@ -165,7 +165,7 @@ DEFAULT_CHECKER_POWER = 0.9
 #: that the chosen design depends on the project and the seed only, never on the
 #: machine or its load. Set from benchmarks/optimise.py at seeds 11-15 on the
 #: bundled design projects (docs/speed.md, "The default rock budget"): the least
-#: budget tried (50,000, 200,000, 400,000) under which design_quarry and
+#: budget tried (50,000, 100,000, 200,000, 400,000) under which design_quarry and
 #: design_ditch_or_fence choose one design at every seed (at 50,000 they spread
 #: by 32 % and 4 %); design_two_zones still spreads there, for its checker's
 #: margin, not its budget.
