@@ -1,15 +1,15 @@
 """Coverage of the optimiser's sequential rule, in full (the suite runs a fast version).
 
-    python benchmarks/sequential.py [--reps 4000]
+    python benchmarks/sequential.py [--reps 4000] [--max-rocks N]
 
 For a design whose true residual fraction sits exactly on the target (the
 hardest case for both errors), it simulates the optimiser's looks
 (:func:`rockfall_design.judge.sequential.plan_looks`: 0.1 % allowed,
-3,000 to 50,000 rocks, 95 %) and prints the share of runs in which some look
-admits it and in which some look rejects it, each with its Clopper-Pearson
-99 % interval, for the spent schedule and for the naive rule that uses the
-fixed-sample bounds at every look. Both shares of the spent schedule must
-stay below 5 %.
+3,000 rocks to the default ``design.max_rocks``, 95 %) and prints the share
+of runs in which some look admits it and in which some look rejects it,
+each with its Clopper-Pearson 99 % interval, for the spent schedule and for
+the naive rule that uses the fixed-sample bounds at every look. Both shares
+of the spent schedule must stay below 5 %.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import numpy as np
 
 from rockfall_design.judge.bounds import fraction_lower_bound, fraction_upper_bound
 from rockfall_design.judge.sequential import plan_looks
+from rockfall_design.project.schema import DEFAULT_MAX_ROCKS
 
 
 def _run(sizes, p, conf, reps, rng):
@@ -39,10 +40,12 @@ def _run(sizes, p, conf, reps, rng):
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--reps", type=int, default=4000)
+    ap.add_argument("--max-rocks", type=int, default=DEFAULT_MAX_ROCKS,
+                    help="the last look (default: design.max_rocks's default)")
     args = ap.parse_args()
     rng = np.random.default_rng(20261124)
     for allowed, first in ((0.001, 3000), (0.01, 600), (0.05, 200)):
-        looks = plan_looks(first, 50_000, 0.95, allowed)
+        looks = plan_looks(first, args.max_rocks, 0.95, allowed)
         print(f"allowed {100 * allowed:g} %: looks {looks.sizes}, each at "
               f"{100 * looks.look_confidence:.3f} %")
         for label, conf in (("spent", looks.look_confidence), ("naive", 0.95)):

@@ -54,6 +54,25 @@ def in_memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
                   "Use fewer rocks or fewer analysis.envelope_points.")
 
 
+def decision_memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
+    """The guard for the last look of ``optimise``'s decisions (``design.max_rocks``).
+
+    A look keeps each rock's float32 height, energy and speed at the envelope
+    points (12 bytes a point, 14 counted for what the process holds besides)
+    but not :func:`in_memory_guard`'s float64 copies of all of them at once.
+    Measured, the peak resident memory of ``benchmarks/optimise.py`` at seeds
+    11-15 with looks up to 400,000 rocks (201 envelope points, 4 stations):
+    2.6 GiB deciding design_quarry, 3.1 GiB deciding design_ditch_or_fence,
+    design_embankment and design_two_zones in one process; this estimate
+    says 3.3 GiB, :func:`in_memory_guard` 10.0 GiB.
+    """
+    need = n_rocks * (14 * n_grid + 40 * n_stations + 200)
+    memory_guard(need, f"decisions of up to {n_rocks:,} rocks (design.max_rocks) with "
+                 f"{n_grid} envelope points",
+                 "Give a smaller --max-rocks (design.max_rocks) or fewer "
+                 "analysis.envelope_points.")
+
+
 def _rich_progress(elapsed: bool) -> Any:
     """A transient rich progress display on stderr (time remaining, or elapsed)."""
     from rich.console import Console

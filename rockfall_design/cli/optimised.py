@@ -68,7 +68,7 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
         elif result.best is not None:
             files.write_text(out / "design.yaml", design_yaml(result.best, source,
                                                               result.search_rocks,
-                                                              result.looks))
+                                                              result.looks, result.marginal))
         else:
             # A design.yaml of an earlier run must not sit beside a
             # summary that says there is no design.

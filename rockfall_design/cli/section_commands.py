@@ -13,6 +13,7 @@ from .common import (
     FIGURES,
     REPORT_FILES,
     comparable,
+    decision_memory_guard,
     figure_files,
     figures_and_report,
     in_memory_guard,
@@ -177,8 +178,9 @@ def cmd_optimise(args: argparse.Namespace) -> int:
         project = project.model_copy(update={"design": project.design.model_copy(
             update={"max_rocks": args.max_rocks})})
     n = args.rocks or project.rocks.count
-    in_memory_guard(max(n, project.design.max_rocks), project.analysis.envelope_points + 400,
-                     len(project.analysis.stations))
+    grid = project.analysis.envelope_points + 400
+    in_memory_guard(n, grid, len(project.analysis.stations))
+    decision_memory_guard(max(n, project.design.max_rocks), grid, len(project.analysis.stations))
     with OutputSet() as files:
         reserve(files, args.out, ("design.yaml", "alternatives.csv", "barriers.csv",
                                   "summary.json"))
@@ -324,7 +326,7 @@ def add_optimise_parser(sub: Any) -> None:
     )
     opt.add_argument("--max-rocks", type=int_at_least(1, "number", 2_000_000),
                      metavar="N", help="rocks of the last look of every decision (default: "
-                     "design.max_rocks of the project, 50,000): a design still undecided "
+                     "design.max_rocks of the project, 400,000): a design still undecided "
                      "there is marginal, and the report says how many rocks would decide it")
     add_block_option(opt)
     opt.set_defaults(func=cmd_optimise)

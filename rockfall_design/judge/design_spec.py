@@ -55,6 +55,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..plugins.cost_model import CostModel
 from ..plugins.declared import DeclaredDesign, declared_design
+from ..project.schema import DEFAULT_MAX_ROCKS
 from .candidates import (
     CandidateSpec,
     Product,
@@ -125,7 +126,7 @@ class DesignSpec:
     candidates: tuple[CandidateSpec, ...]
     cost_model: CostModel
     products: dict[str, dict[str, Product]]
-    max_rocks: int = 50_000
+    max_rocks: int = DEFAULT_MAX_ROCKS
     checker_power: float | None = DEFAULT_CHECKER_POWER
 
 

@@ -26,6 +26,7 @@ from .locator import Locator
 from .messages import _fail, describe, did_you_mean, fmt
 from .schema import (
     DEFAULT_CHECKER_POWER,
+    DEFAULT_MAX_ROCKS,
     MAX_COORDINATE_M,
     MAX_DESIGN_MEASURES,
     MAX_FAMILIES,
@@ -434,10 +435,11 @@ class Design(_Model):
         "(and by default) twice the rocks that decided it.",
     )
     max_rocks: Annotated[Integer, Field(ge=1, le=2_000_000)] = Field(
-        50_000,
+        DEFAULT_MAX_ROCKS,
         description="Rocks of the last look of every sequential decision: a design near a "
-        "limit is looked at with more and more rocks up to this; one still undecided here is "
-        "marginal (never admitted; the report lists it).",
+        "limit is looked at with more and more rocks up to this (the looks stop as soon as "
+        "it is decided); one still undecided here is marginal (never admitted; the report "
+        "lists it with the rocks that would decide it).",
     )
     fresh_seed: Annotated[Integer, Field(ge=0)] | None = Field(
         None, description="Seed of the re-check; default: the run's seed + 1000003."

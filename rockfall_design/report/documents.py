@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..version import __version__
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
+from .listed import listed_lines
 from .pdf import html_to_pdf, pdf_turned_off, pdf_unavailable
 from .sections import (
     Table,
@@ -281,7 +282,8 @@ def _optimiser_sentences(summary: Mapping[str, Any]) -> list[str]:
         out.append(f"The optimiser's record of the decision: {best['proof']}.")
     if isinstance(best, Mapping):
         out += fresh_statements(best)
-    return out
+    # The cheaper designs it could not decide, each with the rocks that would.
+    return out + listed_lines(summary.get("marginal"), str(summary.get("currency") or ""))
 
 
 

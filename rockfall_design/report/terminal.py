@@ -17,6 +17,7 @@ from rich.table import Table
 from rich.text import Text
 
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
+from .listed import SHOWN, listed_lines
 from .outputs import OutputSet
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -40,7 +41,7 @@ MAX_FILE_WIDTH = 200
 
 
 #: Marginal or undecided cheaper designs the optimise panel shows (the cheapest).
-_MARGINAL_SHOWN = 6
+_MARGINAL_SHOWN = SHOWN
 
 def fitted_console(renderable: Any, file: Any = None) -> Console:
     """A console as wide as the report's output can show it.
@@ -364,30 +365,8 @@ def _search_sentence(result: Any) -> str:
 
 def _marginal_lines(result: Any) -> list[str]:
     """The cheaper designs that are marginal or not decided, one sentence each."""
-    cur = escape(result.currency or "")
-    marginal = getattr(result, "marginal", None) or []
-    out = []
-    for m in marginal[:_MARGINAL_SHOWN]:
-        head = ("Short of the checker's margin, cheaper" if m.get("short_of_margin") else
-                "Marginal, cheaper" if m.get("decided", True) else "Not decided, cheaper")
-        out.append(f"- {head}: {m['name']} {m['cost']:,.0f} {cur}: "
-                   f"{'; '.join(m['labels'])}: {_marginal_values(m)}; "
-                   + ("it holds with these bounds, but a checker's check would "
-                      "confirm it less often than design.checker_power asks, with "
-                      "confidence" if m.get("short_of_margin") else
-                      "it holds with these bounds, but whether a checker's check "
-                      "would confirm it often enough (design.checker_power) is open; "
-                      "more rocks (--max-rocks) may decide it"
-                      if m.get("margin_undecided") else
-                      f"about {m['rocks_to_decide']:,} rocks would decide it "
-                      "(--max-rocks)" if m["rocks_to_decide"] else
-                      "its point value sits on the target" if m["values"] else
-                      "more rocks (--max-rocks) may decide it"))
-    if len(marginal) > _MARGINAL_SHOWN:
-        out.append(f"- ... and {len(marginal) - _MARGINAL_SHOWN} more cheaper designs "
-                   "marginal or not decided (listed under 'marginal' in --json and "
-                   "summary.json)")
-    return out
+    return listed_lines(getattr(result, "marginal", None), escape(result.currency or ""),
+                        _MARGINAL_SHOWN)
 
 
 def _bare_slope_line(result: Any) -> list[Any]:
@@ -455,42 +434,6 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
     (console or fitted_console(panel)).print(panel)
 
 
-def _marginal_values(m: dict[str, Any]) -> str:
-    """A marginal design's point values and bounds, one phrase each (see optimise.decide)."""
-    v = m["values"]
-    if v is None:  # a design across scenarios: why it is undecided
-        return m["reason"]
-    parts = []
-    for c in v["checks"]:
-        if c["value"] is None:
-            continue
-        rng = _check_range(c["bound"], c["optimistic"])
-        parts.append(f"{c['name']} {c['value']:.2f}{rng}, target {c['target']:.2f}")
-    r = v.get("residual")
-    if r is not None:
-        parts.append(f"residual {100 * r['fraction']:.3f} % ({100 * r['lower']:.3f} to "
-                     f"{100 * r['upper']:.3f} %), allowed {100 * r['allowed']:.3f} %")
-    return f"on {v['rocks']:,} rocks at {100 * v['confidence']:.4g} %: " + ", ".join(parts)
-
-
-def _check_range(bound: float | None, optimistic: float | None) -> str:
-    """A check's two confidence ends as " (a to b)", or the one it has, said as what it is.
-
-    ``bound`` is the value that holds with confidence, ``optimistic`` the one
-    a check would have at the other end (``plugins.concept.Check``). With too
-    few rocks at a measure a percentile has a lower order-statistic bound but
-    no upper one: only ``optimistic`` is known, and a range of that one value
-    ("1.12 to 1.12" beside a point value of 0.66) would read as a bound.
-    """
-    if bound is not None and optimistic is not None:
-        return f" ({min(bound, optimistic):.2f} to {max(bound, optimistic):.2f})"
-    if optimistic is not None:
-        return f" (at best {optimistic:.2f}; too few rocks to bound it the other way)"
-    if bound is not None:
-        return f" (with confidence {bound:.2f})"
-    return ""
-
-
 def alternatives_table(result: Any) -> Any:
     """alternatives.csv: one row per family, one column per check, rounded numbers.
 
@@ -512,13 +455,24 @@ def _margin_line(best: Any, rocks: int, confidence: float) -> str:
             "docs/sequential-decisions.md)\n")
 
 
+def _listed_head(listed: Any) -> str:
+    """design.yaml's lines on the cheaper designs not admitted, as comments ("" if none)."""
+    lines = listed_lines(listed)
+    if not lines:
+        return ""
+    return ("# cheaper designs not admitted (neither shown to hold nor to fail; the "
+            "cheapest first):\n" + "".join(f"#   {line}\n" for line in lines))
+
+
 def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
-                looks: Any = None) -> str:
+                looks: Any = None, listed: Any = None) -> str:
     """The project with the chosen measures, as YAML that ``check`` accepts.
 
     Its head records how the design was decided (the looks of the sequential
-    decision, see :mod:`rockfall_design.judge.sequential`) and how to repeat
-    the verification on fresh rocks.
+    decision, see :mod:`rockfall_design.judge.sequential`), how to repeat
+    the verification on fresh rocks, and the cheaper designs left marginal or
+    undecided (``listed``: ``OptimisationResult.marginal``; default the
+    chosen family's own) with the rocks that would decide each.
     """
     from ..project import dump_yaml
 
@@ -557,6 +511,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
         f"#   rockfall-design check design.yaml --seed {best.fresh_seed} "
         f"--rocks {best.fresh_rocks}\n"
         + _margin_line(best, ev.study.result.n, data["safety"]["confidence"])
+        + _listed_head(getattr(best, "marginal", None) if listed is None else listed)
         + "# The design: section is left out (its catalogue paths are relative to the\n"
         "# original project); check this file with: rockfall-design check design.yaml\n"
     )

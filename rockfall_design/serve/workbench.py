@@ -286,7 +286,8 @@ class ProjectEntry:
             job.result = res.summary()
             if res.best is not None:
                 job.files["design.yaml"] = design_yaml(res.best, self.path.name,
-                                                       res.search_rocks, res.looks)
+                                                       res.search_rocks, res.looks,
+                                                       res.marginal)
             # The report checks the chosen design again (for its figures): on request.
             job.files.update(lazy_files(OptimiseResult(project, res, self.registry)))
 
