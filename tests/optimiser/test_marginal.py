@@ -33,7 +33,8 @@ def _ditch_project(protect_x: float):
 @pytest.mark.parametrize(("protect_x", "holds"), [(150.0, True), (120.0, False)])
 def test_a_bare_slope_that_meets_the_residual_target_is_said(registry, protect_x, holds):
     """At x = 150 m no rock of 50,000 arrives on the bare slope (the target is 0.1 %): no
-    measure is needed, and the result says so; at 120 m about 0.8 % arrive."""
+    measure is needed, and the result says so; at 120 m 0.2 to 0.4 % arrive (0.6 to 0.8 %
+    before the contact transition's hop criterion), above the target."""
     project = _ditch_project(protect_x)
     spec = resolve_design(project, registry)
     concept = build_concept(project, registry)
@@ -45,7 +46,8 @@ def test_a_bare_slope_that_meets_the_residual_target_is_said(registry, protect_x
     assert bare["rocks"] == 4603 and bare["x"] == protect_x
     assert (bare["upper"] <= bare["allowed"]) is holds
     if not holds:
-        assert bare["reaching"] > 10
+        # The point value itself misses the target, not only its bound.
+        assert bare["reaching"] > bare["rocks"] * spec.residual_fraction
 
 
 @dataclass
@@ -204,7 +206,7 @@ def _settling(monkeypatch, verdict):
               "residual": {"reaching": 12, "fraction": 12 / 9206, "lower": 6e-4,
                            "upper": 2.2e-3, "allowed": 1e-3}}
     fresh = SimpleNamespace(results=[], checks=[], protect={"reaching": 12},
-                            failures=lambda: [])
+                            failures=lambda: [], statements=lambda: [])
     calls = []
 
     def verify_fresh(project, registry, measures, concept, *, rocks, seed, max_rocks,

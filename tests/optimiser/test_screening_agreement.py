@@ -49,7 +49,7 @@ def _project(name: str):
     # zone, p95 design values (p99 needs 299 rocks at a measure to be bounded).
     text = re.sub(r"residual: \{fraction: [0-9.]+\}", "residual: {fraction: 0.05}", text)
     text = text.replace("statistic: p99", "statistic: p95")
-    return load_project_text(text, name)
+    return load_project_text(text, name, base_dir=PROJECTS)  # its block survey, say
 
 
 def _random_params(cand, rng: np.random.Generator) -> dict:

@@ -178,7 +178,9 @@ def test_a_wide_rock_volume_range_outranks_a_small_friction_change(seed):
         rows = [e for e in result.summary["sensitivity"] if e["target"] == target]
         assert rows[0]["parameter"] == "rocks.volume"
         # ten times the mass: several times the energy; the friction barely moves it
-        assert rows[0]["effect"] > 10 * rows[1]["effect"]
+        # (the ratio of the effects: 7 to 130 at seeds 1-6 with the hop criterion of
+        # the transition to contact, the friction's p99 effect being noisy at 150 rocks)
+        assert rows[0]["effect"] > 5 * rows[1]["effect"]
 
 
 def test_a_sampled_study_adds_variance_based_indices():

@@ -175,7 +175,10 @@ function drawLegend(names) {
 function niceStep(range, n) {
   if (!(range > 0)) return 1;
   const raw = range / n, p = 10 ** Math.floor(Math.log10(raw)), f = raw / p;
-  return (f <= 1 ? 1 : f <= 2 ? 2 : f <= 5 ? 5 : 10) * p;
+  const step = (f <= 1 ? 1 : f <= 2 ? 2 : f <= 5 ? 5 : 10) * p;
+  // Never fewer than two intervals (three ticks): rounding 2.01 up to 5 would show 9.5
+  // rocks as 0 and 5 only. Only that jump can do it: the others at most halve n.
+  return range / step < 2 ? 2 * p : step;
 }
 function tickText(v, step) {
   const d = step >= 1 ? 0 : Math.min(6, Math.ceil(-Math.log10(step)));
