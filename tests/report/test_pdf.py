@@ -114,3 +114,35 @@ def test_without_the_pdf_extra_the_report_is_written_and_says_how_to_get_it(tmp_
     assert len(lines) == 1 and "pdf extra" in lines[0]
     html = (tmp_path / "report.html").read_text()
     assert "Model and limits" in html  # simulate's report too
+
+
+def _tables(ctx: dict) -> list:
+    """Every table of a report's context (objects with a title and columns), wherever it sits."""
+    found = []
+    for value in ctx.values():
+        for item in value if isinstance(value, list) else [value]:
+            if hasattr(item, "columns") and hasattr(item, "title"):
+                found.append(item)
+    return found
+
+
+@pytest.mark.parametrize(("command", "project"), [
+    ("simulate", PROJECTS / "standard_slope.yaml"),
+    ("optimise", ROOT / "tests" / "data" / "design_small.yaml"),
+])
+def test_the_pdf_of_simulate_and_optimise_holds_every_table_header(tmp_path, command,
+                                                                    project):
+    """Not only check's report: every column header of simulate's and optimise's reports
+    is in their PDFs (issue 36: "every report has ... a PDF whose text holds every table's
+    headers")."""
+    _pdf_or_skip()
+    run = getattr(rd, command)
+    result = run(project, seed=5, **({"rocks": 150} if command == "simulate" else {}))
+    result.save_report(tmp_path)  # the command line's --report writes the same files
+    text, _ = _pdf_text(tmp_path / "report.pdf")
+    flat = _squeezed(text)
+    tables = _tables(report_context(result, {}))
+    assert tables
+    missing = [(t.title, c) for t in tables for c in t.columns if c and _squeezed(c) not in flat]
+    assert not missing, missing
+    assert "Modelandlimits" in flat
