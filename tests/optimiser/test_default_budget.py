@@ -10,8 +10,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from rockfall_design.cli.program import build_parser
+from rockfall_design.judge.design_spec import DesignSpec
 from rockfall_design.judge.sequential import plan_looks
-from rockfall_design.optimiser.design_spec import DesignSpec
 from rockfall_design.project.design import Design
 from rockfall_design.project.schema import DEFAULT_MAX_ROCKS
 
