@@ -132,3 +132,31 @@ def test_a_folder_without_the_dataset_is_one_line(tmp_path, capsys):
     assert _script().main([str(tmp_path), str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "DTM_Blue_zone.stl: not found" in err
+
+
+def test_law_rough_soft_takes_the_ground_classes_by_role(tmp_path):
+    data = fake_dataset(tmp_path / "data")
+    spang, rough = tmp_path / "spang", tmp_path / "rough"
+    script = _script()
+    assert script.main([str(data), str(spang)]) == 0
+    assert script.main([str(data), str(rough), "--law", "rough_soft"]) == 0
+    # The section and the stops do not depend on the law.
+    for name in ("section_P1.csv", "stops_P1.csv", "stops_P2.csv", "stops_P1_a.csv"):
+        assert (rough / name).read_text() == (spang / name).read_text()
+    library = yaml.safe_load((ROOT / "projects" / "materials.yaml").read_text())
+    project = load_project(rough / "authume_P1.yaml")
+    for role, cls in script.GROUND_CLASSES.items():
+        m = project.materials[role]
+        assert m.impact_model == "rough_soft"
+        assert m.restitution == library[cls]["restitution"]
+        assert m.obstacle_height_m == library[cls]["obstacle_height_m"]
+    # What fit: auto gives for the vegetated slope and the floor, the walls left out.
+    fit = project.calibrate.fit
+    assert set(fit) == {f"materials.{r}.{k}" for r in ("vegetated", "floor")
+                        for k in ("restitution", "rolling_resistance", "obstacle_height_m")}
+    for path, rng in fit.items():
+        role, key = path.split(".")[1:]
+        assert list(rng) == library[script.GROUND_CLASSES[role]]["ranges"][key]
+    spec = yaml.safe_load((rough / "authume_P2_calibrated.yaml").read_text())
+    assert spec["materials"]["library"] == "calibrated_materials.yaml"
+    assert not (rough / "starting_materials.yaml").exists()
