@@ -41,12 +41,18 @@ from rockfall_design.studies.paths import with_values
 
 
 def refits(path: Path | None) -> list[tuple[str, dict[str, float]]]:
-    """The runs: the project as it is, then each replicate's values (path -> value)."""
+    """The runs: the project as it is, then each refit's values (path -> value).
+
+    Replicate 0 of ``replicates.csv`` is the best fit (the project's values
+    after ``--save-materials``) and is not run twice.
+    """
     runs: list[tuple[str, dict[str, float]]] = [("best fit", {})]
     if path is None:
         return runs
     with open(path, newline="", encoding="utf-8") as fh:
         for row in csv.DictReader(fh):
+            if row["replicate"] == "0":  # the best fit itself, run first already
+                continue
             values = {k: float(v) for k, v in row.items() if k.startswith("materials.")}
             runs.append((f"refit {row['replicate']}", values))
     return runs
