@@ -160,3 +160,31 @@ def test_law_rough_soft_takes_the_ground_classes_by_role(tmp_path):
     spec = yaml.safe_load((rough / "authume_P2_calibrated.yaml").read_text())
     assert spec["materials"]["library"] == "calibrated_materials.yaml"
     assert not (rough / "starting_materials.yaml").exists()
+
+
+def _refits_script():
+    spec = importlib.util.spec_from_file_location("authume_refits",
+                                                  ROOT / "examples" / "authume_refits.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
+def test_the_rough_soft_example_runs_with_its_refits(tmp_path, capsys):
+    data = fake_dataset(tmp_path / "data")
+    out = tmp_path / "authume"
+    assert _script().main([str(data), str(out), "--law", "rough_soft"]) == 0
+    code = main(["calibrate", str(out / "authume_P1.yaml"), "--rocks", "40", "--bootstrap",
+                 "2", "--workers", "1", "--json", "--out", str(out / "cal"),
+                 "--save-materials", str(out / "calibrated_materials.yaml")])
+    assert code == 0
+    capsys.readouterr()
+    assert _refits_script().main([str(out / "authume_P2_calibrated.yaml"),
+                                  str(out / "stops_P2.csv"), "--replicates",
+                                  str(out / "cal" / "replicates.csv"), "--rocks", "40"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    # The best fit, the two refits (replicate 0 is the best fit, not run twice), observed.
+    assert [line.split(":")[0] for line in lines] == ["best fit", "refit 1", "refit 2",
+                                                       "observed"]
+    assert all("levels inside" in line for line in lines[:3])
