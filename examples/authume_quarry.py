@@ -41,6 +41,16 @@ and writes into the output folder, for each profile:
   calibrated_materials.yaml`` writes, to predict P2 with what was fitted on
   P1 (``compare``).
 
+With ``--law rough_soft`` the projects take, in place of the textbook
+values, the bundled library's ``ground_`` classes of the ``rough_soft`` law
+by role (``ground_materials.yaml``: the vegetated slope
+``ground_vegetated_slope``, the walls ``ground_rock_face``, the benches and
+the floor ``ground_hard_floor``, rocky slopes ``ground_talus``), and their
+``calibrate:`` fits what ``fit: auto`` fits (restitution, rolling resistance
+and obstacle height over the class's range) for every role but the walls:
+``fit: auto`` itself would give nine inputs on these sections, more than
+``calibrate`` takes. Sections and stops are the same for either law.
+
 Coordinates in the dataset: x and z horizontal, y up (m). The stop positions
 lie about 2.8 m above the terrain surface beneath them (on the benches and
 the floor alike), a constant offset of the survey; only their positions on
@@ -56,6 +66,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 #: The terrain's zones (file stem) and the material of a segment over each.
 ZONES = (("DTM_Blue_zone", "vegetated"), ("DTM_Gray_zone", "floor"), ("DTM_Red_zone", "rocky"))
@@ -80,6 +91,54 @@ FIT = {"materials.vegetated.restitution": [0.0, 0.7],
        "materials.vegetated.rolling_resistance": [0.05, 3.0],
        "materials.floor.restitution": [0.0, 0.7],
        "materials.floor.rolling_resistance": [0.05, 3.0]}
+
+
+#: ``--law rough_soft``: the bundled library's ``ground_`` class of each role
+#: (docs/materials.md): the vegetated slope, the walls, the benches and the
+#: quarry floor (compact, Rockyfor3D soil type 5), the rocky slopes.
+GROUND_CLASSES = {"vegetated": "ground_vegetated_slope", "wall": "ground_rock_face",
+                  "floor": "ground_hard_floor", "rocky": "ground_talus"}
+
+#: The bundled materials library the ``ground_`` classes are copied from.
+LIBRARY = Path(__file__).resolve().parents[1] / "projects" / "materials.yaml"
+
+#: ``--law rough_soft``: the roles whose calibrated parameters are fitted. The
+#: walls are left out: ``fit: auto`` would fit three parameters of each of the
+#: three materials on a section (nine, more than calibrate's eight), and the
+#: blocks fall past the walls rather than roll on them, so the walls keep the
+#: library's ground_rock_face values.
+FITTED_ROLES = ("vegetated", "floor", "rocky")
+
+
+def ground_library(library: Path = LIBRARY) -> str:
+    """The roles' materials as a library: each a copy of its ``ground_`` class."""
+    entries = yaml.safe_load(library.read_text(encoding="utf-8"))
+    lines = ["# The Authume roles as the bundled library's ground_ classes (rough_soft law),",
+             f"# copied from {library.name} by examples/authume_quarry.py --law rough_soft.",
+             "# Their values are those of the library: ILLUSTRATIVE (see its sources)."]
+    for role, cls in GROUND_CLASSES.items():
+        lines.append(f"# {role}: copy of {cls}")
+        lines.append(yaml.safe_dump({role: entries[cls]}, sort_keys=False,
+                                    default_flow_style=None).rstrip())
+    return "\n".join(lines) + "\n"
+
+
+def ground_fit(materials: list[str], library: Path = LIBRARY) -> dict[str, list[float]]:
+    """The inputs ``fit: auto`` gives for the fitted roles on a section, with their ranges.
+
+    ``restitution``, ``rolling_resistance`` and ``obstacle_height_m`` of each
+    fitted role present, over its class's ``ranges:`` (as ``fit: auto`` does
+    for every material, see :data:`FITTED_ROLES` for why the walls are not).
+    """
+    entries = yaml.safe_load(library.read_text(encoding="utf-8"))
+    fit: dict[str, list[float]] = {}
+    for role in dict.fromkeys(materials):
+        if role not in FITTED_ROLES:
+            continue
+        ranges = entries[GROUND_CLASSES[role]]["ranges"]
+        for key in ("restitution", "rolling_resistance", "obstacle_height_m"):
+            fit[f"materials.{role}.{key}"] = [float(v) for v in ranges[key]]
+    return fit
 
 
 def read_stl(path: Path) -> np.ndarray:
@@ -210,11 +269,13 @@ def levels(p: dict, shortest: float = 3.5) -> dict[str, list[float]]:
     return out
 
 
-def project_text(name: str, p: dict, materials: str, seed: int, calibrate: bool) -> str:
+def project_text(name: str, p: dict, materials: str, seed: int, calibrate: bool,
+                 fit: dict | None = None) -> str:
     """The project file of profile ``name`` (section, materials library, rocks, calibrate:).
 
     ``calibrate=False``: a project to ``compare`` with (its ``calibrate:``
-    section still gives the levels and the observed file).
+    section still gives the levels and the observed file). ``fit``: the
+    inputs fitted and their ranges (default :data:`FIT`).
     """
     lv = levels(p)
     lines = [
@@ -239,7 +300,7 @@ def project_text(name: str, p: dict, materials: str, seed: int, calibrate: bool)
     lines.append("calibrate:")
     lines.append(f"  observed: stops_{name}.csv")
     lines.append("  fit:")
-    lines += [f"    {k}: [{lo:g}, {hi:g}]" for k, (lo, hi) in FIT.items()]
+    lines += [f"    {k}: [{lo:g}, {hi:g}]" for k, (lo, hi) in (fit or FIT).items()]
     lines.append("  levels: {" + ", ".join(f"{k}: [{lo:g}, {hi:g}]" for k, (lo, hi)
                                            in lv.items()) + "}")
     lines.append("  rocks: 500")
@@ -265,6 +326,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="seed of the random split of P1's blocks into halves (default 2023)")
     ap.add_argument("--upslope", type=float, default=4.0,
                     help="the section starts this far upslope of the drop point (m, default 4)")
+    ap.add_argument("--law", choices=("spang", "rough_soft"), default="spang",
+                    help="materials of the projects: spang (the textbook starting values, "
+                    "default) or rough_soft (the bundled library's ground_ classes by role, "
+                    "their calibrated parameters fitted over the classes' ranges)")
     args = ap.parse_args(argv)
 
     files = [args.data / "Geometries" / "STL" / f"{stem}.stl" for stem, _ in ZONES]
@@ -277,7 +342,12 @@ def main(argv: list[str] | None = None) -> int:
     triangles = np.concatenate(parts)
     zone = np.concatenate([np.full(len(t), k) for k, t in enumerate(parts)])
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "starting_materials.yaml").write_text(STARTING_MATERIALS, encoding="utf-8")
+    if args.law == "rough_soft":
+        start = "ground_materials.yaml"
+        (args.out / start).write_text(ground_library(), encoding="utf-8")
+    else:
+        start = "starting_materials.yaml"
+        (args.out / start).write_text(STARTING_MATERIALS, encoding="utf-8")
     for seed, name in enumerate(("P1", "P2"), start=1):
         p = profile(args.data, name, triangles, zone, args)
         with open(args.out / f"section_{name}.csv", "w", newline="", encoding="utf-8") as fh:
@@ -299,10 +369,12 @@ def main(argv: list[str] | None = None) -> int:
                 w = csv.writer(fh, lineterminator="\n")
                 w.writerow(["x", "mass_kg", "offset_m"])
                 w.writerows(part)
+        fit = ground_fit(p["materials"]) if args.law == "rough_soft" else None
         (args.out / f"authume_{name}.yaml").write_text(
-            project_text(name, p, "starting_materials.yaml", seed, True), encoding="utf-8")
+            project_text(name, p, start, seed, True, fit), encoding="utf-8")
         (args.out / f"authume_{name}_calibrated.yaml").write_text(
-            project_text(name, p, "calibrated_materials.yaml", seed, False), encoding="utf-8")
+            project_text(name, p, "calibrated_materials.yaml", seed, False, fit),
+            encoding="utf-8")
         sys.stdout.write(
             f"{name}: section of {len(p['x'])} points over {p['x'][-1]:.1f} m; "
             f"{len(p['stops'])} stops from {p['stops'].min():.1f} to {p['stops'].max():.1f} m, "

@@ -132,3 +132,59 @@ def test_a_folder_without_the_dataset_is_one_line(tmp_path, capsys):
     assert _script().main([str(tmp_path), str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "DTM_Blue_zone.stl: not found" in err
+
+
+def test_law_rough_soft_takes_the_ground_classes_by_role(tmp_path):
+    data = fake_dataset(tmp_path / "data")
+    spang, rough = tmp_path / "spang", tmp_path / "rough"
+    script = _script()
+    assert script.main([str(data), str(spang)]) == 0
+    assert script.main([str(data), str(rough), "--law", "rough_soft"]) == 0
+    # The section and the stops do not depend on the law.
+    for name in ("section_P1.csv", "stops_P1.csv", "stops_P2.csv", "stops_P1_a.csv"):
+        assert (rough / name).read_text() == (spang / name).read_text()
+    library = yaml.safe_load((ROOT / "projects" / "materials.yaml").read_text())
+    project = load_project(rough / "authume_P1.yaml")
+    for role, cls in script.GROUND_CLASSES.items():
+        m = project.materials[role]
+        assert m.impact_model == "rough_soft"
+        assert m.restitution == library[cls]["restitution"]
+        assert m.obstacle_height_m == library[cls]["obstacle_height_m"]
+    # What fit: auto gives for the vegetated slope and the floor, the walls left out.
+    fit = project.calibrate.fit
+    assert set(fit) == {f"materials.{r}.{k}" for r in ("vegetated", "floor")
+                        for k in ("restitution", "rolling_resistance", "obstacle_height_m")}
+    for path, rng in fit.items():
+        role, key = path.split(".")[1:]
+        assert list(rng) == library[script.GROUND_CLASSES[role]]["ranges"][key]
+    spec = yaml.safe_load((rough / "authume_P2_calibrated.yaml").read_text())
+    assert spec["materials"]["library"] == "calibrated_materials.yaml"
+    assert not (rough / "starting_materials.yaml").exists()
+
+
+def _refits_script():
+    spec = importlib.util.spec_from_file_location("authume_refits",
+                                                  ROOT / "examples" / "authume_refits.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.slow  # an end-to-end run of a few seconds: CI runs it with -m slow
+def test_the_rough_soft_example_runs_with_its_refits(tmp_path, capsys):
+    data = fake_dataset(tmp_path / "data")
+    out = tmp_path / "authume"
+    assert _script().main([str(data), str(out), "--law", "rough_soft"]) == 0
+    code = main(["calibrate", str(out / "authume_P1.yaml"), "--rocks", "40", "--bootstrap",
+                 "2", "--workers", "1", "--json", "--out", str(out / "cal"),
+                 "--save-materials", str(out / "calibrated_materials.yaml")])
+    assert code == 0
+    capsys.readouterr()
+    assert _refits_script().main([str(out / "authume_P2_calibrated.yaml"),
+                                  str(out / "stops_P2.csv"), "--replicates",
+                                  str(out / "cal" / "replicates.csv"), "--rocks", "40"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    # The best fit, the two refits (replicate 0 is the best fit, not run twice), observed.
+    assert [line.split(":")[0] for line in lines] == ["best fit", "refit 1", "refit 2",
+                                                       "observed"]
+    assert all("levels inside" in line for line in lines[:3])
