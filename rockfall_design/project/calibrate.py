@@ -28,8 +28,12 @@ from .fields import Integer, Label, String, _as_number, _choice, _Model
 from .messages import _fail, describe, fmt
 
 #: Most inputs fitted at once: every one costs evaluations, and a few dozen
-#: observed stops cannot pin down more than a handful.
-MAX_FITTED = 8
+#: observed stops cannot pin down more than a handful (the bootstrap says which
+#: are not identified). 12 lets ``fit: auto`` run on a section of four ground
+#: classes of the rough_soft law (three calibrated parameters each: a vegetated
+#: slope, walls, benches and a talus, as on the Authume profiles); it refused
+#: Authume P1's nine with the 8 of before.
+MAX_FITTED = 12
 #: Most simulated rocks per evaluation (each replicate makes ~100 evaluations).
 MAX_CALIBRATION_ROCKS = 200_000
 #: Most bootstrap replicates.

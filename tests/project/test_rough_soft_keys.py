@@ -85,3 +85,15 @@ def test_fit_auto_without_ranges_says_which_range_is_missing(tmp_path):
     with pytest.raises(ProjectError, match="fit: auto needs the range of "
                                            "materials.g.restitution"):
         load_project(path)
+
+
+def test_fit_auto_takes_three_rough_soft_grounds(tmp_path):
+    """Nine inputs (three ground classes x three calibrated parameters), as on Authume P1:
+    refused at 8 before, fitted now (MAX_FITTED 12)."""
+    path = tmp_path / "p.yaml"
+    text = PROJECT.replace("[80, 10]]", "[80, 10], [120, 9]]").replace(
+        "materials: g", "materials: [ground_vegetated_slope, ground_hard_floor, ground_rock_face]")
+    text = text.replace("  g: {{{material}}}", f"  library: {LIBRARY}")
+    path.write_text(text.format() + CALIBRATE)
+    (tmp_path / "stops.csv").write_text("x\n60\n")
+    assert len(load_project(path).calibrate.fit) == 9
