@@ -26,7 +26,7 @@ import os
 import re
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -156,13 +156,19 @@ def pytest_collection_finish(session: pytest.Session) -> None:
         sys.stderr.flush()
 
 
-@pytest.fixture(autouse=True)
-def _no_pdf_unless_asked(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.fixture(scope="session", autouse=True)
+def _no_pdf_unless_asked() -> Iterator[None]:
     """report.pdf only in the tests that read it (tests/report/test_pdf.py).
 
     Each print starts a Chromium, seconds a report; the other tests of
     --report look at the HTML and Markdown. ``ROCKFALL_DESIGN_PDF=0``
     (docs/reports.md) reaches the commands run in subprocesses too.
+    Session-scoped, so that it is in place before any fixture runs: pytest
+    sets up a module's or the session's fixtures before a test's function-scoped
+    autouse ones, and a function-scoped guard let the module-wide runs of
+    ``--report`` (tests/report/test_handin.py, the ``optimised`` fixture) print
+    a PDF no test read. tests/report/test_pdf.py turns it back on for itself.
     """
-    if request.node.path.name != "test_pdf.py":
-        monkeypatch.setenv("ROCKFALL_DESIGN_PDF", "0")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("ROCKFALL_DESIGN_PDF", "0")
+        yield

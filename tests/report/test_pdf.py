@@ -15,6 +15,7 @@ import io
 import os
 import re
 import unicodedata
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -54,6 +55,14 @@ def _pdf_text(path: Path) -> tuple[str, list[tuple[float, float]]]:
     return "\n".join(p.extract_text() for p in reader.pages), sizes
 
 
+@pytest.fixture(scope="module", autouse=True)
+def _pdf_asked() -> Iterator[None]:
+    """report.pdf printed in this module, which the suite's conftest turns off elsewhere."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.delenv("ROCKFALL_DESIGN_PDF", raising=False)
+        yield
+
+
 @pytest.fixture(scope="module")
 def printed(tmp_path_factory):
     _pdf_or_skip()
@@ -66,9 +75,16 @@ def printed(tmp_path_factory):
     return out, result
 
 
-def test_the_pdf_is_a4_with_page_numbers_and_the_project_on_every_page(printed):
-    out, result = printed
-    text, sizes = _pdf_text(out / "report.pdf")
+@pytest.fixture(scope="module")
+def pdf_read(printed) -> tuple[str, list[tuple[float, float]]]:
+    """The printed PDF's text and page sizes, read once: pypdf takes seconds per read."""
+    out, _ = printed
+    return _pdf_text(out / "report.pdf")
+
+
+def test_the_pdf_is_a4_with_page_numbers_and_the_project_on_every_page(printed, pdf_read):
+    _, result = printed
+    text, sizes = pdf_read
     a4 = {(595.0, 842.0), (842.0, 595.0)}  # points, portrait and landscape
     assert all((round(w), round(h)) in a4 for w, h in sizes), sizes
     pages = len(sizes)
@@ -78,9 +94,9 @@ def test_the_pdf_is_a4_with_page_numbers_and_the_project_on_every_page(printed):
     assert text.count(f"{result.project.name}: rockfall report") == pages
 
 
-def test_every_table_header_and_every_verdict_is_in_the_pdf(printed):
-    out, result = printed
-    text, _ = _pdf_text(out / "report.pdf")
+def test_every_table_header_and_every_verdict_is_in_the_pdf(printed, pdf_read):
+    _, result = printed
+    text, _ = pdf_read
     flat = _squeezed(text)
     ctx = report_context(result, {})
     tables = [ctx["run"], *ctx["inputs"], *ctx["results"], *ctx["design_values"]]
