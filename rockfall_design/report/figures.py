@@ -559,7 +559,7 @@ def save_figures(
 def svg_document(fig: Figure) -> str:
     """The figure as a whole SVG file's text, as :func:`save_figures` writes it."""
     buf = io.StringIO()
-    fig.savefig(buf, format="svg", bbox_inches="tight", metadata={"Date": None})
+    fig.savefig(buf, format="svg", dpi=150, bbox_inches="tight", metadata={"Date": None})
     return buf.getvalue()
 
 
