@@ -41,6 +41,9 @@ OTHER_PROGRAMS_OPTIONS = {
     "--n": "examples/stops_from_points.py",
     "--volume": "examples/stops_from_points.py",
     "--corridor": "examples/stops_from_points.py",
+    "--against": "benchmarks/optimise.py",
+    "--law": "examples/authume_quarry.py",
+    "--replicates": "examples/authume_refits.py",
 }
 
 
