@@ -14,8 +14,9 @@ import pluggy
 import pytest
 from numpy.testing import assert_allclose
 from pydantic import ValidationError
-from rockfall_design_builtins import safety as builtin_safety
 from rockfall_design_builtins.safety import SpangConcept, Uni11211Concept
+from rockfall_design_builtins.safety import spang as spang_module
+from rockfall_design_builtins.safety import uni11211 as uni11211_module
 
 from rockfall_design import (
     Barrier,
@@ -127,10 +128,13 @@ def by_name(checks: list[Check]) -> dict[str, Check]:
 def test_hook_registers_both_concepts():
     pm = pluggy.PluginManager(hookspecs_module.PROJECT_NAME)
     pm.add_hookspecs(hookspecs_module)
-    pm.register(builtin_safety)
+    pm.register(spang_module)
+    pm.register(uni11211_module)
     pm.check_pending()
-    (concepts,) = pm.hook.rockfall_design_safety_concepts()
-    assert concepts == [SpangConcept, Uni11211Concept]
+    # pluggy calls the later registered first; each module gives its one class.
+    returned = pm.hook.rockfall_design_safety_concepts()
+    assert returned == [[Uni11211Concept], [SpangConcept]]
+    concepts = [SpangConcept, Uni11211Concept]
     assert [c.name for c in concepts] == ["spang", "uni11211"]
     for concept in concepts:
         assert issubclass(concept, SafetyConcept) and concept.summary

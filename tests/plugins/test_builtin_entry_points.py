@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import importlib
 import json
+from importlib.metadata import entry_points
 from pathlib import Path
 
 import pytest
@@ -14,7 +16,7 @@ from rockfall_design.plugins import load_registry
 ROOT = Path(__file__).resolve().parents[2]
 
 MEASURES = ("berm", "boulder_row", "ditch", "fence", "wall")
-CONCEPTS = ("spang", "uni11211")
+CONCEPTS = ("onr24810", "reliability", "spang", "uni11211")
 COST_MODELS = ("unit_prices",)
 
 
@@ -28,7 +30,39 @@ def test_every_builtin_comes_from_its_own_entry_point():
     assert not [f for f in reg.failures if f.distribution == "rockfall-design"]
 
 
-@pytest.mark.parametrize("blocked", ["fence", "ditch", "uni11211", "unit_prices"])
+#: Each built-in's module: its entry point names it, and it registers that class alone.
+MODULES = {
+    **{m: f"rockfall_design_builtins.measures.{m}" for m in MEASURES},
+    **{c: f"rockfall_design_builtins.safety.{c}" for c in CONCEPTS},
+    "unit_prices": "rockfall_design_builtins.costs.unit_prices",
+}
+HOOKS = {"measure": ("rockfall_design_measures", "kind"),
+         "safety": ("rockfall_design_safety_concepts", "name"),
+         "cost": ("rockfall_design_cost_models", "name")}
+
+
+def test_each_entry_point_is_a_module_that_registers_one_class():
+    ours = {ep.name: ep for ep in entry_points(group="rockfall_design")
+            if ep.dist is not None and ep.dist.name == "rockfall-design"}
+    assert {name: ep.value for name, ep in ours.items()} == MODULES
+    for key, names in (("measure", MEASURES), ("safety", CONCEPTS), ("cost", COST_MODELS)):
+        hook, attr = HOOKS[key]
+        for name in names:
+            module = importlib.import_module(MODULES[name])
+            classes = getattr(module, hook)()
+            assert [getattr(c, attr) for c in classes] == [name]
+            # No other registration hook in the module: one built-in per module.
+            others = {h for h, _ in HOOKS.values()} - {hook}
+            assert not [h for h in others if hasattr(module, h)]
+
+
+def test_no_metaprogram_registers_the_builtins():
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("rockfall_design_builtins.entry_points")
+
+
+@pytest.mark.parametrize("blocked", ["fence", "ditch", "uni11211", "onr24810", "reliability",
+                                     "unit_prices"])
 def test_blocking_one_builtin_leaves_the_others(blocked):
     reg = load_registry(blocked=[blocked])
     every = {**reg.measures, **reg.safety_concepts, **reg.cost_models}

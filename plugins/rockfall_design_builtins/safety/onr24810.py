@@ -1,6 +1,7 @@
 """The built-in safety concept ``onr24810``: the Austrian rule for rockfall fences.
 
-An ordinary plugin (public ``rockfall_design`` API only, its own entry point).
+An ordinary plugin with an entry point of its own (``onr24810``): the public
+``rockfall_design`` API and the shared helpers of this package only.
 
 ONR 24810 (Austrian Standards) designs a net fence on the 99 % fractile of
 the simulated kinetic energies and passing heights at the fence, raised by
@@ -59,36 +60,28 @@ References
 
 from __future__ import annotations
 
-import math
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-from pydantic import ConfigDict, Field
+from pydantic import Field
 
 from rockfall_design import (
     Check,
     DesignValue,
     MeasureResult,
     SafetyConcept,
-    SafetyParams,
     hookimpl,
-    quantile_with_bounds,
-    rocks_to_bound_quantile,
 )
 
-from .safety import braking_check, gamma_d_field
+from .checks import braking_check, gamma_d_field
+from .limit_states import fractile_check
+from .shared import StrictParams, finite_property
 
 __all__ = ["Onr24810Concept", "rockfall_design_safety_concepts"]
 
 #: The EN 1990 K_FI of each consequence class times a base factor of 1.1 on
 #: the actions: ILLUSTRATIVE, flagged for review against ONR 24810 (see the module).
 _GAMMA_F = {"CC1": 0.9 * 1.1, "CC2": 1.0 * 1.1, "CC3": 1.1 * 1.1}
-_NO_ROCK = "no rock reached the measure"
-
-
-def _finite(properties: dict[str, float], key: str) -> float | None:
-    value = properties.get(key)
-    return None if value is None or not math.isfinite(float(value)) else float(value)
 
 
 class Onr24810Concept(SafetyConcept):
@@ -108,10 +101,8 @@ class Onr24810Concept(SafetyConcept):
     #: E_d from the project's design block where it gives one.
     uses_design_block: ClassVar[bool] = True
 
-    class Params(SafetyParams):
+    class Params(StrictParams):
         """Consequence class, event frequency and partial factors."""
-
-        model_config = ConfigDict(allow_inf_nan=False)
 
         consequence_class: Literal["CC1", "CC2", "CC3"] = Field(
             "CC2", description="Consequence class of a failure (EN 1990): CC1 low, CC2 "
@@ -151,10 +142,10 @@ class Onr24810Concept(SafetyConcept):
         """``design_energy``, ``design_height``, ``braking_distance``, as the measure has them."""
         props = result.measure.design_properties()
         checks = []
-        capacity = _finite(props, "capacity_kj")
+        capacity = finite_property(props, "capacity_kj")
         if capacity is not None:
             if self.params.event == "frequent":
-                sel = _finite(props, "sel_kj")
+                sel = finite_property(props, "sel_kj")
                 limit, what = (capacity / 3.0 if sel is None else sel), "SEL"
                 symbol = "E_SEL"
             else:
@@ -164,9 +155,9 @@ class Onr24810Concept(SafetyConcept):
             figure = DesignValue(symbol, f"the kit's {what} (EAD 340059)", limit, "kJ",
                                  source="product")
             checks.append(self._energy_check(result, limit, f"{what} {limit:.1f} kJ", figure))
-        height = _finite(props, "height_m")
+        height = finite_property(props, "height_m")
         if height is not None:
-            residual = _finite(props, "residual_height_m")
+            residual = finite_property(props, "residual_height_m")
             if self.params.event == "frequent" and residual is not None:
                 target, what, symbol = residual, f"residual height {residual:.2f} m", "h_R"
             else:
@@ -176,10 +167,11 @@ class Onr24810Concept(SafetyConcept):
             named = {"symbol": "h_d + f", "relation": "<=", "target_symbol": symbol,
                      "design_values": (DesignValue(symbol, what.split(" ", 2)[0] + " height",
                                                    target, "m", source="product"),)}
-            checks.append(self._design_check("design_height", result.rated_passing_height_m,
+            checks.append(self._fractile_check("design_height", result.rated_passing_height_m,
                                              max(self.params.f_min_m, r99), target, what, "m",
                                              named=named))
-        checks += braking_check(result, _finite(props, "max_elongation_m"), self.params.gamma_d)
+        checks += braking_check(result, finite_property(props, "max_elongation_m"),
+                                self.params.gamma_d)
         return checks
 
     def _energy_check(self, result: MeasureResult, limit: float, against: str,
@@ -197,69 +189,31 @@ class Onr24810Concept(SafetyConcept):
         named: dict[str, Any] = {"symbol": "E_d", "relation": "<=",
                                  "target_symbol": figure.symbol, "design_values": (figure,)}
         if block is None:
-            return self._design_check("design_energy", result.energy_kj, 0.0, limit, against,
+            return self._fractile_check("design_energy", result.energy_kj, 0.0, limit, against,
                                       "kJ", named=named)
         named["design_values"] = (
             DesignValue("m_d", "design mass: the design block (rocks.design_block)",
                         block.mass_kg, "kg", block.upper_kg), figure)
         speeds = np.asarray(result.velocity_ms, dtype=float)
         energy = 0.5 * block.mass_kg * speeds**2 / 1000.0
-        return self._design_check(
+        return self._fractile_check(
             "design_energy", energy, 0.0, limit, against, "kJ",
             (block.lower_kg / block.mass_kg, block.upper_kg / block.mass_kg),
             f"the design block's energy at the rocks' speeds, 1/2 m v^2 with m = "
             f"{block.mass_kg:.1f} kg (rocks.design_block: {block.source})", named)
 
-    def _design_check(self, name: str, values: Any, add: float, target: float, against: str,
-                      unit: str, scale: tuple[float, float] = (1.0, 1.0),
-                      what: str = "", named: dict[str, Any] | None = None) -> Check:
-        """``gamma_F x P99(values) + add`` against ``target`` (holds if <=), with its bounds.
 
-        ``scale``: factors on the lower and upper bound of the fractile for an
-        uncertainty beside the rocks' (a design block's mass bounds); ``what``
-        names the values in the detail; ``named``: the check's symbols and the
-        figures it is compared with (its own design value is added here).
-        """
-        named = dict(named or {})
-        figures = named.pop("design_values", ())
-        v = np.asarray(values, dtype=float)
-        c = self.params.confidence
-        if v.size == 0:
-            return Check(name, None, target, True, unit, _NO_ROCK, None, True, **named,
-                         design_values=figures)
-        point, lower, upper = quantile_with_bounds(v, 0.99, c)
-        lower = None if lower is None else lower * scale[0]
-        upper = None if upper is None else upper * scale[1]
-        g = self.factor
-        value = g * point + add
-        detail = (f"gamma_F {g:.3g} ({self.params.consequence_class}) x 99 % fractile "
-                  f"{point:.2f} {unit}" + (f" of {what}" if what else "")
-                  + (f" + freeboard {add:.2f} m" if add else "")
-                  + f" = {value:.2f} {unit} over {v.size} rocks, against {against} "
-                  f"({self.params.event} events)")
-        optimistic = None if lower is None else g * lower + add
-        fails = optimistic is not None and optimistic > target
-        if upper is None:
-            need = rocks_to_bound_quantile(0.99, c)
-            detail = f"{detail}; {v.size} rocks cannot bound the 99 % fractile: it needs {need}"
-            return Check(name, value, target, bool(value <= target), unit, detail, None, False,
-                         need, optimistic, fails, **named,
-                         design_values=(*figures, self._value(named, value, None, unit)))
-        bound = g * upper + add
-        detail = f"{detail}; with the {100 * c:g} % bound {bound:.2f} {unit}"
-        return Check(name, value, target, bool(value <= target), unit, detail, bound,
-                     bool(bound <= target), None, optimistic, fails, **named,
-                     design_values=(*figures, self._value(named, value, bound, unit)))
-
-    def _value(self, named: dict[str, Any], value: float, bound: float | None,
-               unit: str) -> DesignValue:
-        """The check's own design value for the report's table, in the concept's symbol."""
-        symbol = named.get("symbol") or "value"
-        return DesignValue(symbol, f"design value: gamma_F {self.factor:.3g} x 99 % fractile",
-                           value, unit, bound)
+    def _fractile_check(self, name: str, values: Any, add: float, target: float, against: str,
+                        unit: str, scale: tuple[float, float] = (1.0, 1.0), what: str = "",
+                        named: dict[str, Any] | None = None) -> Check:
+        """:func:`.limit_states.fractile_check` at this concept's factor and event."""
+        p = self.params
+        return fractile_check(name, values, add, target, f"{against} ({p.event} events)", unit,
+                              self.factor, f"gamma_F {self.factor:.3g} ({p.consequence_class})",
+                              p.confidence, scale, what, named)
 
 
 @hookimpl
 def rockfall_design_safety_concepts() -> list[type[SafetyConcept]]:
-    """The built-in ``onr24810`` concept."""
+    """The built-in ``onr24810`` concept, registered by its own entry point."""
     return [Onr24810Concept]
