@@ -18,7 +18,7 @@ import io
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib import colormaps
@@ -547,19 +547,27 @@ def save_figures(
             path = out / f"{name}.{fmt}"
 
             def writer(fh: io.BufferedWriter, fig: Figure = fig, fmt: str = fmt) -> None:
-                # Fixed metadata, so that the same run writes the same bytes.
-                meta = {"svg": {"Date": None}, "pdf": {"CreationDate": None}}.get(fmt, {})
-                fig.savefig(fh, format=fmt, dpi=150, bbox_inches="tight", metadata=meta)
+                _write_figure(fig, fh, fmt)
 
             outputs.write_with(path, writer)
             written.append(path)
     return written
 
 
+#: Fixed metadata per format, so that the same run writes the same bytes.
+_FIXED_METADATA = {"svg": {"Date": None}, "pdf": {"CreationDate": None}}
+
+
+def _write_figure(fig: Figure, fh: IO[Any], fmt: str) -> None:
+    """Write ``fig`` in ``fmt`` to ``fh``: the one place the figures' file settings live."""
+    fig.savefig(fh, format=fmt, dpi=150, bbox_inches="tight",
+                metadata=_FIXED_METADATA.get(fmt, {}))
+
+
 def svg_document(fig: Figure) -> str:
     """The figure as a whole SVG file's text, as :func:`save_figures` writes it."""
     buf = io.StringIO()
-    fig.savefig(buf, format="svg", dpi=150, bbox_inches="tight", metadata={"Date": None})
+    _write_figure(fig, buf, "svg")
     return buf.getvalue()
 
 
