@@ -51,6 +51,10 @@ def passage_name(p: Passages) -> str:
     return f"passing_{p.place}_{p.index + 1}"
 
 
+#: Steps of the empirical CDF drawn at most (see :func:`_panel`).
+_ECDF_POINTS = 1000
+
+
 def _panel(ax: Axes, values: np.ndarray, what: str, unit: str,
            marks: list[tuple[str, float]]) -> None:
     """One quantity: histogram, empirical CDF on a twin axis, the marks as lines."""
@@ -67,7 +71,14 @@ def _panel(ax: Axes, values: np.ndarray, what: str, unit: str,
     ax.set_ylabel("rocks", fontsize=7)
     cdf = ax.twinx()
     xs = np.sort(v)
-    cdf.step(xs, np.arange(1, xs.size + 1) / xs.size, where="post", color=_ECDF, lw=1.2)
+    share = np.arange(1, xs.size + 1) / xs.size
+    if xs.size > _ECDF_POINTS:
+        # Through 1,000 of its steps (each the same share of the rocks apart): the
+        # line a page shows is the same, and a step per rock of 50,000 made every
+        # report's SVG and PDF megabytes heavy and slow to draw and print.
+        keep = np.unique(np.linspace(0, xs.size - 1, _ECDF_POINTS).round().astype(int))
+        xs, share = xs[keep], share[keep]
+    cdf.step(xs, share, where="post", color=_ECDF, lw=1.2)
     cdf.set_ylim(0, 1.02)
     cdf.set_ylabel("share at or below", fontsize=7, color=_ECDF)
     cdf.tick_params(labelsize=7, colors=_ECDF)
