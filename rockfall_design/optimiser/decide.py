@@ -141,7 +141,8 @@ def _checks_at(registry: Registry, concept: SafetyConcept, results: Sequence[Any
 
 
 def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
-               checker_rocks: int) -> tuple[Verdict, list[str]]:
+               checker_rocks: int,
+               last_checker_rocks: int | None = None) -> tuple[Verdict, list[str]]:
     """A look's verdict, with the checker's margin (:mod:`rockfall_design.judge.margin`).
 
     Parameters
@@ -152,7 +153,14 @@ def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
     margin : CheckerMargin or None
         None: admitted when it holds with the look's bounds, as such.
     checker_rocks : int
-        Rocks of the checker's check the margin is for.
+        Rocks of the checker's check the margin is for, if this look decides.
+    last_checker_rocks : int, optional
+        Rocks of the checker's check if the last look decides (default
+        ``checker_rocks``). A design is rejected as short of the margin only
+        when it misses the margin for this check too: a larger check needs a
+        smaller margin, so a design short of the margin at an early look may
+        still show it at a later one; rejecting it early made the choice hang
+        on the seed (design_two_zones' 339,000 fence at seeds 14 and 15).
 
     Returns
     -------
@@ -168,13 +176,14 @@ def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
         [p.label for p in ev.placed],
         None if prot is None else int(prot["reaching"]),
         None if prot is None else float(prot["allowed_fraction"]),
-        ev.study.result.n, ev.confidence, margin, checker_rocks)
+        ev.study.result.n, ev.confidence, margin, checker_rocks, last_checker_rocks)
 
 
 def _with_margin(verdict: Verdict, checks_at: Callable[[float], list[list[Check]]],
                  labels: Sequence[str], reaching: int | None, allowed: float | None, n: int,
                  confidence: float, margin: CheckerMargin | None,
-                 checker_rocks: int) -> tuple[Verdict, list[str]]:
+                 checker_rocks: int,
+                 last_checker_rocks: int | None = None) -> tuple[Verdict, list[str]]:
     """:func:`judge_look` of any look: its verdict without the margin, its checks at any
     confidence (``checks_at``), the rocks reaching the protected zone of its ``n``."""
     if margin is None or verdict is Verdict.REJECTED:
@@ -189,8 +198,17 @@ def _with_margin(verdict: Verdict, checks_at: Callable[[float], list[list[Check]
     if holds:
         return Verdict.ADMITTED, []
     power = f"{100 * margin.power:g} %"
-    why = (f"a check of {checker_rocks:,} rocks at another seed would confirm it with "
-           f"{100 * margin.confidence:g} % confidence less than {power} of the time")
+    # Short of the margin only if short of the smallest margin a later look
+    # could still ask for: the checker's check of the last look's rocks.
+    last = checker_rocks if last_checker_rocks is None else max(checker_rocks,
+                                                                last_checker_rocks)
+    if last != checker_rocks:
+        m = margin.at_look(confidence, n, last, None if reaching is None else allowed)
+
+    def why(rocks: int, than: str = "less than") -> str:
+        return (f"a check of {rocks:,} rocks at another seed would confirm it with "
+                f"{100 * margin.confidence:g} % confidence {than} {power} of the time")
+
     short = []
     for lab, cs in zip(labels, checks_at(m.short), strict=True):
         for c in cs:
@@ -208,11 +226,11 @@ def _with_margin(verdict: Verdict, checks_at: Callable[[float], list[list[Check]
             and fraction_lower_bound(reaching, n, confidence) > m.residual_rate):
         short.append(f"{reaching:,} of {n:,} rocks reach the protected zone")
     if short:
-        return Verdict.REJECTED, [f"{'; '.join(short)} ({why})"]
+        return Verdict.REJECTED, [f"{'; '.join(short)} ({why(last)})"]
     if verdict is Verdict.ADMITTED:
         return Verdict.UNDECIDED, [
             f"it holds with {100 * confidence:.4g} % confidence on {n:,} rocks, but neither "
-            f"shows nor misses the checker's margin ({why.replace('less than', 'at least')})"]
+            f"shows nor misses the checker's margin ({why(checker_rocks, 'at least')})"]
     return Verdict.UNDECIDED, []
 
 
@@ -378,7 +396,8 @@ def decide(
         done = 0 if ev is None else ev.study.n
         ev = evaluate_design(project, registry, measures, lc, rocks=n, seed=seed, after=ev)
         simulated += n - done
-        verdict, short = judge_look(ev, registry, margin, checker_rocks or 2 * n)
+        verdict, short = judge_look(ev, registry, margin, checker_rocks or 2 * n,
+                                    checker_rocks or 2 * looks.sizes[-1])
         if verdict is Verdict.UNDECIDED and j + 1 < len(looks):
             continue
         values, fails = _ev_values(ev, allowed)
@@ -496,7 +515,7 @@ class Decider:
         reaching = None if s0.project.protect is None else int(sr.residual)
         return _with_margin(verdict, lambda c: _checks_at(s0.registry, s0.concept, sr.results, c),
                             sr.labels, reaching, s0.allowed_fraction, n, s0.confidence,
-                            self.margin, 2 * n)
+                            self.margin, 2 * n, 2 * self.looks.sizes[-1])
 
     def decide(self, measures: Sequence[ProtectiveMeasure], first: ScreenResult) -> Decision:
         """Decide a design that the first look (the search's screening) did not reject."""
@@ -518,7 +537,8 @@ class Decider:
                 exact += 1
                 simulated += sizes[j] - (0 if last is None else last.study.n)
                 last = ev
-                verdict, short = judge_look(ev, s0.registry, self.margin, 2 * sizes[j])
+                verdict, short = judge_look(ev, s0.registry, self.margin, 2 * sizes[j],
+                                            2 * sizes[-1])
             if verdict is not Verdict.UNDECIDED or j + 1 == len(sizes):
                 break
             j += 1
