@@ -250,3 +250,16 @@ def test_fit_auto_takes_every_profile_s_materials(tmp_path):
     fit = _fit_ranges(project, read_site(project))
     assert list(fit) == [f"materials.{m}.{k}" for m in ("soil", "rock", "gravel")
                          for k in ("restitution", "rolling_resistance")]
+
+
+def test_the_report_has_a_table_of_the_sets(tmp_path):
+    from rockfall_design.calibration.procedure import run_comparison
+
+    _stops(tmp_path)
+    (tmp_path / "site.yaml").write_text(
+        HEAD + "calibrate:\n  observed:\n    - stops.csv\n"
+        "    - {kind: speeds, x: 50, values: [6, 7.5, 8, 9, 7, 6.5]}\n" + FIT)
+    result = run_comparison(load_project(tmp_path / "site.yaml"), None, rocks=40)
+    result.save_report(tmp_path / "rep")
+    text = (tmp_path / "rep" / "report.md").read_text()
+    assert "Observation sets" in text and "speeds at x = 50 m" in text
