@@ -469,7 +469,7 @@ def _set_warnings(sets: list[dict[str, Any]]) -> list[str]:
 
 
 def _print_sets(sets: list[dict[str, Any]], console: Console) -> None:
-    """One row per observation set: kind, where, count, medians, distance, KS p."""
+    """One row per observation set: counts, medians, distance, KS p; a profile's levels."""
     from rich.markup import escape
     from rich.table import Table
 
@@ -477,19 +477,30 @@ def _print_sets(sets: list[dict[str, Any]], console: Console) -> None:
         return
     t = Table(title="observation sets (each kind, each profile)")
     for col in ("set", "source", "weight", "count", "observed p50", "simulated p50",
-                "distance", "KS p", ""):
+                "distance", "KS p", "passed", ""):
         t.add_column(col, justify="left" if col in ("set", "source", "") else "right")
     for s in sets:
         f = s["fit"]
         unit = "m/s" if s["kind"] == "speeds" else "m"
-        if f is None:
-            row = ["-", "none passed", "-", "-"]
-        else:
-            row = [f"{f['observed']['p50_m']:.2f} {unit}", f"{f['simulated']['p50_m']:.2f} "
-                   f"{unit}", f"{f['distance']:.2f} {unit}", f"{f['ks_pvalue']:.2g}"]
+        row = ["-", "none passed", "-", "-"] if f is None else [
+            f"{f['observed']['p50_m']:.2f} {unit}", f"{f['simulated']['p50_m']:.2f} {unit}",
+            f"{f['distance']:.2f} {unit}", f"{f['ks_pvalue']:.2g}"]
+        passed = s.get("passed_share")
         t.add_row(escape(s["label"]), escape(str(s["source"])), f"{s['weight']:g}",
-                  f"{s['count']:,}", *row, "" if s["consistent"] else "[red]NOT[/red]")
+                  f"{s['count']:,}", *row, "-" if passed is None else f"{100 * passed:.0f} %",
+                  "" if s["consistent"] else "[red]NOT[/red]")
     console.print(t)
+    for s in sets:
+        if s["profile"] and s["levels"]:  # the project's own levels are printed above
+            lt = Table(title=f"levels of {escape(s['label'])}: share of the stops")
+            for col in ("level", "x (m)", "observed", "interval", "simulated", ""):
+                lt.add_column(col, justify="left" if col in ("level", "") else "right")
+            for lv in s["levels"]:
+                lt.add_row(escape(lv["name"]), f"{lv['x'][0]:g}..{lv['x'][1]:g}",
+                           f"{lv['observed_share']:.2f} ({lv['observed_count']})",
+                           f"{lv['low']:.2f}..{lv['high']:.2f}", f"{lv['simulated_share']:.2f}",
+                           "" if lv["consistent"] else "[red]outside[/red]")
+            console.print(lt)
 
 
 def _print_fit(name: str, fit: dict[str, Any], levels: list[LevelShare],

@@ -326,12 +326,9 @@ def report_context(result: Any,
             results.append(corr)
     results.append(_fit_table(result.fit, calibrated))
     confidence = result.confidence if calibrated else 0.95
-    levels = _levels_table(result.levels, confidence)
-    if levels is not None:
-        results.append(levels)
-    sets = _sets_table(getattr(result, "sets", []), calibrated)
-    if sets is not None:
-        results.append(sets)
+    more = (_levels_table(result.levels, confidence),
+            _sets_table(getattr(result, "sets", []), calibrated))
+    results += [table for table in more if table is not None]
     figs = figures if figures is not None else result.figures()
     limits = [{"heading": CALIBRATION_LIMITS[0], "items": list(CALIBRATION_LIMITS[1])}]
     limits += [{"heading": h, "items": list(items)} for h, items in MODEL_LIMITS[:2]]

@@ -127,9 +127,7 @@ def run_calibration(
         raise project.error_at((), "the project has no calibrate: section (the observed stops "
                                "and the inputs to fit; see docs/calibration.md)")
     site = read_site(project, observed)
-    main = site.main_stops
-    obs = main.stops
-    assert obs is not None
+    main, obs = site.main_stops, site.main_observations
     n_rocks = int(spec.rocks if rocks is None else rocks)
     n_boot = int(spec.bootstrap if bootstrap is None else bootstrap)
     run_seed = int(project.rocks.seed if seed is None else seed)
@@ -224,9 +222,7 @@ def run_comparison(
             raise project.error_at((), "compare needs --observed, or a calibrate: section "
                                    "whose observed: sets it compares")
         site = read_site(project)
-        main = site.main_stops
-        obs = main.stops
-        assert obs is not None
+        main, obs = site.main_stops, site.main_observations
         sizes = profile_sizes(site.sets, "")
         problem = problem_for(project, {}, levels=main.levels, rocks=n, kind=kind,
                               sizes=sizes, sets=site.sets, profiles=site.profiles)

@@ -140,6 +140,13 @@ class Site:
         return next(s for s in self.sets if s.kind == "stops" and not s.profile)
 
     @property
+    def main_observations(self) -> Observations:
+        """The stops of :attr:`main_stops` (with their sizes and file)."""
+        stops = self.main_stops.stops
+        assert stops is not None  # a set of stops always has them
+        return stops
+
+    @property
     def single(self) -> bool:
         """Whether this is the single-file form: one set of stops, one section, weight 1."""
         return len(self.sets) == 1 and not self.profiles and self.sets[0].weight == 1.0

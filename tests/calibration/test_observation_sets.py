@@ -229,6 +229,12 @@ def test_two_profiles_share_their_materials_by_name(tmp_path, capsys):
     again = load_project(tmp_path / "cal" / "calibrated.yaml")
     assert again.calibrate.profiles == {"P2": "../p2.yaml"}
     assert "gravel" in again.materials
+    # compare without --observed predicts both profiles, each set with its verdict.
+    from rockfall_design.calibration.procedure import run_comparison
+
+    cmp = run_comparison(again, None, rocks=30)
+    assert [(s["profile"], s["kind"]) for s in cmp.sets] == [(None, "stops"), ("P2", "stops")]
+    assert cmp.consistent == all(s["consistent"] for s in cmp.sets)
 
 
 def test_fit_auto_takes_every_profile_s_materials(tmp_path):
@@ -263,3 +269,24 @@ def test_the_report_has_a_table_of_the_sets(tmp_path):
     result.save_report(tmp_path / "rep")
     text = (tmp_path / "rep" / "report.md").read_text()
     assert "Observation sets" in text and "speeds at x = 50 m" in text
+
+
+def test_the_bootstrap_resamples_every_set_each_on_its_own(monkeypatch):
+    from rockfall_design.calibration import uncertainty
+    from rockfall_design.calibration.fit import FitOutcome
+
+    seen = []
+
+    def fake_fit(problem, observed, seed):
+        seen.append(observed)
+        return FitOutcome({}, 0.0, 0, np.zeros(1), ())
+
+    monkeypatch.setattr(uncertainty, "fit", fake_fit)
+    stops, heights = np.arange(10.0), np.arange(100.0, 107.0)
+    uncertainty.run_replicate(uncertainty.ReplicateTask(None, stops, 3, 5))
+    uncertainty.run_replicate(uncertainty.ReplicateTask(None, (stops, heights), 3, 5))
+    single, (first, second) = seen
+    # The first set draws as the single-file form did; the second, its own values.
+    assert np.array_equal(single, first)
+    assert second.size == 7 and set(second) <= set(heights)
+    assert not np.array_equal(np.sort(second), heights)  # a resample, not the set itself
