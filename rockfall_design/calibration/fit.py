@@ -253,12 +253,20 @@ def problem_for(project: Project, fit_ranges: Mapping[str, tuple[float, float]],
 def _check_levels(project: Project, levels: Mapping[str, tuple[float, float]] | None,
                   sets: Sequence[ObservationSet] | None, profiles: Mapping[str, Project]
                   ) -> None:
-    """Every level lies (at least in part) on its section, else one line at its key."""
-    todo = [(("calibrate", "levels"), levels or {}, project)]
+    """Every level lies (at least in part) on its section, else one line at its key.
+
+    Without sets, ``levels`` at ``calibrate.levels``; with sets, each set of
+    stops' levels, at its own ``levels:`` or, where it takes the section's,
+    at ``calibrate.levels``.
+    """
+    todo = [] if sets else [(("calibrate", "levels"), levels or {}, project)]
+    entries = project.calibrate.entries if sets and project.calibrate is not None else []
     for i, s in enumerate(sets or []):
-        if s.kind == "stops" and s.profile:
-            todo.append((("calibrate", "observed", i, "levels"), s.levels,
-                         profiles[s.profile]))
+        if s.kind == "stops":
+            own = i < len(entries) and entries[i].levels is not None
+            todo.append((("calibrate", "observed", i, "levels") if own else
+                         ("calibrate", "levels"), s.levels,
+                         profiles[s.profile] if s.profile else project))
     for at, spans, on in todo:
         first, last = on.slope.x_range
         for name, (lo, hi) in spans.items():

@@ -290,3 +290,18 @@ def test_the_bootstrap_resamples_every_set_each_on_its_own(monkeypatch):
     assert np.array_equal(single, first)
     assert second.size == 7 and set(second) <= set(heights)
     assert not np.array_equal(np.sort(second), heights)  # a resample, not the set itself
+
+
+@pytest.mark.parametrize("entry, where", [
+    ("{file: stops.csv, levels: {far: [200, 300]}}", "calibrate.observed[0].levels.far"),
+    ("{file: stops.csv}\n  levels: {far: [200, 300]}", "calibrate.levels.far"),
+])
+def test_a_level_off_its_section_is_named_where_it_is_given(tmp_path, entry, where):
+    from rockfall_design.calibration.procedure import run_calibration
+
+    _stops(tmp_path)
+    (tmp_path / "site.yaml").write_text(HEAD + f"calibrate:\n  observed:\n    - {entry}\n"
+                                        + FIT + "  rocks: 30\n  bootstrap: 0\n")
+    with pytest.raises(ProjectError) as err:
+        run_calibration(load_project(tmp_path / "site.yaml"))
+    assert f": {where}: level [200, 300] lies outside" in str(err.value)
