@@ -389,6 +389,9 @@ class CalibrationResult:
             flag = " NOT IDENTIFIED" if p["identified"] is False else ""
             fitted.setdefault(key[0], []).append(f"{key[1]} {r['value']:g}{interval}{flag}")
         observed = f"{self.observations.source} ({self.observations.n} blocks)"
+        if self.sets:  # every set fitted, each with where it was observed
+            observed = "; ".join(f"{x['label']} from {x['source']} ({x['count']})"
+                                 for x in self.sets)
         parts = []
         for name, entry in self.materials_library(spread=spread).items():
             if name in fitted:

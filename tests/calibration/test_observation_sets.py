@@ -181,6 +181,8 @@ def test_heights_and_speeds_are_fitted_and_reported(tmp_path, capsys):
     again = load_project(tmp_path / "cal" / "calibrated.yaml")
     assert [e.kind for e in again.calibrate.entries] == ["stops", "passing_heights", "speeds"]
     assert again.calibrate.entries[1].file == "../marks.csv"
+    library = " ".join((tmp_path / "cal" / "materials.yaml").read_text().split())
+    assert "passing heights (vertical) at x = 35 m from" in library
     # compare without --observed: every set, each with its verdict.
     assert main(["compare", str(tmp_path / "cal" / "calibrated.yaml"), "--rocks", "60"]) == 0
     shown = " ".join(capsys.readouterr().out.split())
