@@ -476,7 +476,7 @@ def calibrate(
 
 def compare(
     project: Project | str | os.PathLike[str],
-    observed: str | os.PathLike[str],
+    observed: str | os.PathLike[str] | None = None,
     *,
     rocks: int | None = None,
     seed: int | None = None,
@@ -488,8 +488,10 @@ def compare(
     ----------
     project : Project or path
         E.g. the ``calibrated.yaml`` of a calibration on another profile.
-    observed : path
-        CSV of the observed stops (as ``calibrate.observed``).
+    observed : path, optional
+        CSV of the observed stops (as ``calibrate.observed``); None: every
+        observation set of the project's ``calibrate:`` section (each kind,
+        each profile), each reported (``.summary["sets"]``).
     rocks, seed : int, optional
         Simulated rocks and their seed (default ``rocks.count``, ``rocks.seed``).
     registry : Registry, optional
@@ -498,7 +500,7 @@ def compare(
     Returns
     -------
     ComparisonResult
-        ``.summary`` (``fit``, ``levels``), ``.figures()``, ``.print()``.
+        ``.summary`` (``fit``, ``levels``, and ``sets``), ``.figures()``, ``.print()``.
     """
     from .calibration.procedure import run_comparison
 

@@ -82,11 +82,17 @@ class ComparisonResult:
     seed: int
     rocks: int
     sizes: dict[str, Any] | None = None
+    #: Each observation set's statistics (:func:`~.terms.set_statistics`), when
+    #: the project's observation sets were compared (compare without --observed).
+    sets: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def summary(self) -> dict[str, Any]:
-        """``compare --json``: ``fit``, ``levels``, ``observations``, ``seed``, ``rocks``."""
-        return {
+        """``compare --json``: ``fit``, ``levels``, ``observations``, ``seed``, ``rocks``.
+
+        With observation sets, also ``sets`` (each set's statistics and verdict).
+        """
+        out = {
             "project": self.project.name,
             "observations": {"file": self.observations.source, "count": self.observations.n,
                              "sizes": self.sizes},
@@ -95,14 +101,32 @@ class ComparisonResult:
             "seed": self.seed,
             "rocks": self.rocks,
             "verdict": self.verdict_line,
-            "consistent": verdict(self.fit, self.levels)[0],
-            "warnings": _warnings([], self.fit, self.levels),
+            "consistent": self.consistent,
+            "warnings": _warnings([], self.fit, self.levels) + _set_warnings(self.sets),
         }
+        if self.sets:
+            out["sets"] = self.sets
+        return out
+
+    @property
+    def consistent(self) -> bool:
+        """Whether the prediction is consistent with every observation compared."""
+        if self.sets:
+            return all(s["consistent"] for s in self.sets)
+        return verdict(self.fit, self.levels)[0]
 
     @property
     def verdict_line(self) -> str:
         """Whether the prediction is consistent with the observations, naming the test."""
-        return verdict(self.fit, self.levels)[1]
+        if not self.sets:
+            return verdict(self.fit, self.levels)[1]
+        bad = [s["label"] for s in self.sets if not s["consistent"]]
+        if not bad:
+            return (f"consistent with every one of the {len(self.sets)} observation sets "
+                    "(two-sample Kolmogorov-Smirnov tests at 5 % and the levels' shares, "
+                    "each set on its own)")
+        return (f"NOT consistent with the observations: {len(bad)} of {len(self.sets)} "
+                f"sets fail their test ({'; '.join(bad)})")
 
     def figures(self) -> dict[str, Figure]:
         """The stop positions' figure (:data:`FIGURES` [0])."""
@@ -131,9 +155,9 @@ class ComparisonResult:
         console = _print_fit(self.project.name, self.fit, self.levels, console,
                    f"{self.observations.n} observed blocks, {self.rocks:,} simulated rocks, "
                    f"seed {self.seed}")
-        consistent, line = verdict(self.fit, self.levels)
-        colour = "green" if consistent else "red"
-        console.print(f"[{colour}]verdict:[/{colour}] {escape(line)}")
+        _print_sets(self.sets, console)
+        colour = "green" if self.consistent else "red"
+        console.print(f"[{colour}]verdict:[/{colour}] {escape(self.verdict_line)}")
         for w in self.summary["warnings"]:
             console.print(f"[yellow]warning:[/yellow] {escape(w)}")
 
@@ -172,6 +196,9 @@ class CalibrationResult:
     confidence: float
     sizes: dict[str, Any] | None = None
     runtime_s: float = 0.0
+    #: Each observation set's statistics at the best fit (:func:`~.terms.set_statistics`);
+    #: empty for the single-file form.
+    sets: list[dict[str, Any]] = field(default_factory=list)
     _figures: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
@@ -206,7 +233,11 @@ class CalibrationResult:
                        "replicate refitted with its own "
                        "simulation seed", "rough_intervals": self.rough, "seed": self.seed,
                        "evaluations": int(sum(r["evaluations"] for r in self.replicates))},
-            "warnings": _warnings(self.parameters, self.fit, self.levels, self.rough),
+            "warnings": _warnings(self.parameters, self.fit, self.levels, self.rough)
+            + _set_warnings(self.sets),
+            **({"sets": self.sets, "profiles": {o.name: o.project.source
+                                                for o in self.problem.others}}
+               if self.sets else {}),
         }
 
     @property
@@ -272,11 +303,48 @@ class CalibrationResult:
         spec = self.project.resolved_dict().get("calibrate")
         if spec is not None:
             fitted = self.observations.path or observed_file(self.project)
-            path = os.fspath(fitted.resolve())
-            if relative_to is not None:
+            path = None if fitted is None else os.fspath(fitted.resolve())
+            if relative_to is not None and path is not None:
                 path = os.path.relpath(path, relative_to)
-            data["calibrate"] = {**spec, "observed": path}
+            if isinstance(spec["observed"], str):
+                data["calibrate"] = {**spec, "observed": path}
+            else:
+                data["calibrate"] = self._sets_section(spec, path, relative_to)
         return data
+
+    def _sets_section(self, spec: dict[str, Any], fitted: str | None,
+                      relative_to: str | None) -> dict[str, Any]:
+        """The ``calibrate:`` section of the list form, its files relative to ``relative_to``.
+
+        The first set of stops on the project's own section names the file
+        this run fitted (``fitted``); every other file and every profile is
+        the one the project names, found from where the calibrated project
+        is written; ``fit`` the inputs this run fitted (with ``fit: auto``
+        over profiles, theirs too), so that a rerun fits the same.
+        """
+        import os
+        from pathlib import Path
+
+        home = Path(self.project.source).parent if self.project.source != "<string>" \
+            else Path.cwd()
+
+        def moved(name: str) -> str:
+            path = os.fspath((home / name).resolve())
+            return os.path.relpath(path, relative_to) if relative_to is not None else path
+
+        entries, first = [], True
+        for entry in spec["observed"]:
+            entry = dict(entry)
+            if entry.get("file") is not None:
+                own = entry["kind"] == "stops" and entry.get("profile") is None
+                entry["file"] = fitted if own and first else moved(entry["file"])
+                first = first and not own
+            entries.append(entry)
+        fit = {p: [lo, hi] for p, lo, hi in zip(self.problem.paths, self.problem.low,
+                                                  self.problem.high, strict=True)}
+        return {**spec, "observed": entries, "fit": fit,
+                **({"profiles": {k: moved(v) for k, v in spec["profiles"].items()}}
+                   if spec.get("profiles") else {})}
 
     def calibrated_project(self, spread: bool = True) -> Project:
         """:meth:`calibrated_data` validated as a project."""
@@ -321,6 +389,9 @@ class CalibrationResult:
             flag = " NOT IDENTIFIED" if p["identified"] is False else ""
             fitted.setdefault(key[0], []).append(f"{key[1]} {r['value']:g}{interval}{flag}")
         observed = f"{self.observations.source} ({self.observations.n} blocks)"
+        if self.sets:  # every set fitted, each with where it was observed
+            observed = "; ".join(f"{x['label']} from {x['source']} ({x['count']})"
+                                 for x in self.sets)
         parts = []
         for name, entry in self.materials_library(spread=spread).items():
             if name in fitted:
@@ -390,8 +461,49 @@ class CalibrationResult:
         _print_fit(self.project.name, self.fit, self.levels, console,
                    f"{self.observations.n} observed blocks, {self.problem.rocks:,} rocks per "
                    f"evaluation, seed {self.seed}, {self.runtime_s:.1f} s")
+        _print_sets(self.sets, console)
         for w in self.summary["warnings"]:
             console.print(f"[yellow]warning:[/yellow] {escape(w)}")
+
+
+def _set_warnings(sets: list[dict[str, Any]]) -> list[str]:
+    """Each observation set the simulation does not reproduce, one sentence each."""
+    return [f"{s['label']}: {s['verdict']}" for s in sets if not s["consistent"]]
+
+
+def _print_sets(sets: list[dict[str, Any]], console: Console) -> None:
+    """One row per observation set: counts, medians, distance, KS p; a profile's levels."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    if not sets:
+        return
+    t = Table(title="observation sets (each kind, each profile)")
+    for col in ("set", "source", "weight", "count", "observed p50", "simulated p50",
+                "distance", "KS p", "passed", ""):
+        t.add_column(col, justify="left" if col in ("set", "source", "") else "right")
+    for s in sets:
+        f = s["fit"]
+        unit = "m/s" if s["kind"] == "speeds" else "m"
+        row = ["-", "none passed", "-", "-"] if f is None else [
+            f"{f['observed']['p50_m']:.2f} {unit}", f"{f['simulated']['p50_m']:.2f} {unit}",
+            f"{f['distance']:.2f} {unit}", f"{f['ks_pvalue']:.2g}"]
+        passed = s.get("passed_share")
+        t.add_row(escape(s["label"]), escape(str(s["source"])), f"{s['weight']:g}",
+                  f"{s['count']:,}", *row, "-" if passed is None else f"{100 * passed:.0f} %",
+                  "" if s["consistent"] else "[red]NOT[/red]")
+    console.print(t)
+    for s in sets:
+        if s["profile"] and s["levels"]:  # the project's own levels are printed above
+            lt = Table(title=f"levels of {escape(s['label'])}: share of the stops")
+            for col in ("level", "x (m)", "observed", "interval", "simulated", ""):
+                lt.add_column(col, justify="left" if col in ("level", "") else "right")
+            for lv in s["levels"]:
+                lt.add_row(escape(lv["name"]), f"{lv['x'][0]:g}..{lv['x'][1]:g}",
+                           f"{lv['observed_share']:.2f} ({lv['observed_count']})",
+                           f"{lv['low']:.2f}..{lv['high']:.2f}", f"{lv['simulated_share']:.2f}",
+                           "" if lv["consistent"] else "[red]outside[/red]")
+            console.print(lt)
 
 
 def _print_fit(name: str, fit: dict[str, Any], levels: list[LevelShare],

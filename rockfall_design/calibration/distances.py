@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["LevelShare", "TEST_LEVEL", "distance", "fit_statistics", "level_shares",
+__all__ = ["LevelShare", "SPREAD_FLOOR", "TEST_LEVEL", "distance", "fit_statistics", "level_shares",
            "objective", "spread", "stop_positions", "verdict", "wilson_interval"]
 
 #: Significance level of compare's verdict (the two-sample KS test).
@@ -82,10 +82,20 @@ def distance(observed: np.ndarray, simulated: np.ndarray, kind: str = "energy") 
     raise ValueError(f"unknown distance {kind!r}")
 
 
-def spread(observed: np.ndarray) -> float:
-    """The observed stops' interquartile range (m), at least 1 m: the objective's scale."""
+#: The smallest scale L of each kind of observation (its unit): a guard against
+#: observations that happen to coincide (an interquartile range of 0), of the
+#: order of how precisely each is measured in the field: a stop to a metre, a
+#: mark's height to 10 cm, a speed from video to 0.5 m/s. ILLUSTRATIVE.
+SPREAD_FLOOR = {"stops": 1.0, "passing_heights": 0.1, "speeds": 0.5}
+
+
+def spread(observed: np.ndarray, floor: float = 1.0) -> float:
+    """The observed values' interquartile range, at least ``floor``: the objective's scale.
+
+    For stops (m) the floor is 1 m; other kinds take theirs from :data:`SPREAD_FLOOR`.
+    """
     q1, q3 = np.percentile(observed, [25, 75])
-    return float(max(q3 - q1, 1.0))
+    return float(max(q3 - q1, floor))
 
 
 def shares(x: np.ndarray, levels: Mapping[str, tuple[float, float]]) -> np.ndarray:

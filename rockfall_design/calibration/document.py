@@ -198,6 +198,36 @@ def _levels_table(levels: Sequence[Any], confidence: float) -> Table | None:
                  "consistent: the simulated share lies in it.")
 
 
+def _sets_table(sets: Sequence[Mapping[str, Any]], after_fit: bool) -> Table | None:
+    """Each observation set (kind, profile, station): observed and simulated, the test."""
+    if not sets:
+        return None
+    rows = []
+    for s in sets:
+        f = s["fit"]
+        unit = "m/s" if s["kind"] == "speeds" else "m"
+        if f is None:
+            stats = ["-", "no simulated rock passed", "-", "-"]
+        else:
+            stats = [f"{float(f['observed']['p50_m']):.2f} {unit}",
+                     f"{float(f['simulated']['p50_m']):.2f} {unit}",
+                     f"{float(f['distance']):.2f} {unit}", f"{float(f['ks_pvalue']):.3g}"]
+        passed = s.get("passed_share")
+        rows.append([s["label"], str(s["source"]), f"{float(s['weight']):g}",
+                     f"{int(s['count']):,}", *stats,
+                     "-" if passed is None else f"{100 * float(passed):.0f} %",
+                     "yes" if s["consistent"] else "NO"])
+    return Table("Observation sets", ["set", "source", "weight", "observed", "observed median",
+                                      "simulated median", "distance", "KS p",
+                                      "simulated rocks passing", "consistent"], rows,
+                 note="Each set of observations (stops, passing heights, speeds; on each "
+                 "profile) against the simulation" + (" at the best fit" if after_fit else "")
+                 + ": heights and speeds over the simulated rocks that passed the station; "
+                 "consistent: the two-sample Kolmogorov-Smirnov test at 5 % passes and the "
+                 "set's levels' shares lie in their Wilson intervals."
+                 + (" After a fit the p-values are optimistic." if after_fit else ""))
+
+
 def _run_table(result: Any, command: str) -> Table:
     project = result.project
     obs = result.observations
@@ -296,9 +326,9 @@ def report_context(result: Any,
             results.append(corr)
     results.append(_fit_table(result.fit, calibrated))
     confidence = result.confidence if calibrated else 0.95
-    levels = _levels_table(result.levels, confidence)
-    if levels is not None:
-        results.append(levels)
+    more = (_levels_table(result.levels, confidence),
+            _sets_table(getattr(result, "sets", []), calibrated))
+    results += [table for table in more if table is not None]
     figs = figures if figures is not None else result.figures()
     limits = [{"heading": CALIBRATION_LIMITS[0], "items": list(CALIBRATION_LIMITS[1])}]
     limits += [{"heading": h, "items": list(items)} for h, items in MODEL_LIMITS[:2]]

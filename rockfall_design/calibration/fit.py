@@ -26,7 +26,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -34,9 +34,15 @@ from ..errors import ProjectError
 from ..project import Project
 from ..studies.executors import stop_if_cancelled
 from ..studies.paths import with_values
-from .distances import objective, spread, stop_positions
+from ..studies.scenarios import scenario_seed
+from .distances import objective, stop_positions
+from .terms import ProfileRun, Term, scales_of, sets_objective, terms_for
 
-__all__ = ["FitOutcome", "FitProblem", "fit", "minimise", "problem_for", "simulated_stops"]
+if TYPE_CHECKING:  # pragma: no cover
+    from .sets import ObservationSet
+
+__all__ = ["FitOutcome", "FitProblem", "fit", "minimise", "problem_for", "simulated_sets",
+           "simulated_stops"]
 
 #: Points of the global stage per fitted input (at least MIN_DESIGN in all).
 DESIGN_PER_INPUT = 16
@@ -50,6 +56,10 @@ COARSE_ROCKS = 100
 LOCAL_PER_INPUT = 25
 #: The local stage stops when the simplex is this small (share of each range).
 X_TOLERANCE = 2e-3
+#: The rock seed of profile k (k >= 1) of a run with seed s is
+#: ``scenario_seed(s, PROFILE_SEED + k)``: its own stream, apart from the
+#: bootstrap replicates' (``scenario_seed(s, b)`` with b <= 2,000).
+PROFILE_SEED = 100_000
 
 
 @dataclass(frozen=True)
@@ -75,6 +85,14 @@ class FitProblem:
         ``"energy"`` or ``"wasserstein"``.
     x_range : tuple of float
         First and last station of the section (m).
+    terms : tuple of Term
+        One per observation set (:mod:`.terms`); empty for the single-file form,
+        whose one term is the stops on this section with ``levels`` (as before
+        sets existed, to the bit).
+    others : tuple of ProfileRun
+        The other profiles of the site (runs 1, 2, ...).
+    run_base : dict or None
+        ``base`` with the observation stations this section records (None: ``base``).
     """
 
     project: Project
@@ -86,10 +104,18 @@ class FitProblem:
     rocks: int = 1000
     kind: str = "energy"
     x_range: tuple[float, float] = (0.0, 1.0)
+    terms: tuple[Term, ...] = ()
+    others: tuple[ProfileRun, ...] = ()
+    run_base: dict[str, Any] | None = None
 
     @property
     def dimension(self) -> int:
         return len(self.paths)
+
+    @property
+    def all_terms(self) -> tuple[Term, ...]:
+        """The terms of the objective (the single-file form's one term of stops)."""
+        return self.terms or (Term("stops", levels=dict(self.levels)),)
 
     def values(self, u: Sequence[float]) -> dict[str, float]:
         """Path -> value of the point ``u`` of the unit cube of the ranges."""
@@ -110,10 +136,56 @@ def _base(project: Project, sizes: Mapping[str, Any] | None) -> dict[str, Any]:
     return base
 
 
+def _with_stations(base: dict[str, Any], stations: Sequence[float]) -> dict[str, Any]:
+    """``base`` whose runs record the passages at ``stations`` (m), nothing else changed."""
+    return {**base, "analysis": {**base["analysis"], "stations": [float(x) for x in stations]}}
+
+
+def _check_ends(plain: Project, base: dict[str, Any], fit_ranges: Mapping[str, Any],
+                located: Callable[[str, str], ProjectError], materials_only: bool = False
+                ) -> None:
+    """Each end of each fitted range is a valid value of ``plain`` (else ``located``'s error)."""
+    for path, ends in fit_ranges.items():
+        if materials_only and not path.startswith("materials."):
+            continue
+        for value in ends:
+            try:
+                with_values(plain, {path: float(value)}, base=base)
+            except ProjectError as exc:
+                raise located(path, exc.message) from None
+
+
+def _profile_runs(project: Project, sets: Sequence[ObservationSet],
+                  profiles: Mapping[str, Project], fit_ranges: Mapping[str, Any],
+                  materials: dict[str, Any], stations: Sequence[Sequence[float]]
+                  ) -> tuple[ProfileRun, ...]:
+    """The other profiles as every evaluation runs them: the site's materials, their stations."""
+    from .sets import profile_sizes
+
+    runs = []
+    for k, (name, other) in enumerate(profiles.items(), start=1):
+        sizes = profile_sizes(sets, name)
+        base = _base(other, sizes)
+        base["materials"] = {**base["materials"], **materials}
+        try:
+            plain = with_values(other, {}, base=base)
+        except ProjectError as exc:
+            raise project.error_at(("calibrate", "profiles", name), f"profile {name} with the "
+                                   f"site's materials and observed sizes: {exc.message}"
+                                   ) from None
+        _check_ends(plain, base, fit_ranges, lambda path, m, name=name: project.error_at(
+            ("calibrate", "fit", path), f"on profile {name}: {m}"), materials_only=True)
+        plain._plan = None
+        runs.append(ProfileRun(name, plain, _with_stations(base, stations[k]),
+                               tuple(map(float, other.slope.x_range)), sizes))
+    return tuple(runs)
+
+
 def problem_for(project: Project, fit_ranges: Mapping[str, tuple[float, float]], *,
                 levels: Mapping[str, tuple[float, float]] | None = None, rocks: int = 1000,
                 kind: str = "energy", sizes: Mapping[str, Any] | None = None,
-                at: tuple = ("calibrate", "fit")) -> FitProblem:
+                at: tuple = ("calibrate", "fit"), sets: Sequence[ObservationSet] | None = None,
+                profiles: Mapping[str, Project] | None = None) -> FitProblem:
     """The fit of ``project``'s inputs at ``fit_ranges``, each range's ends checked.
 
     Parameters
@@ -133,6 +205,11 @@ def problem_for(project: Project, fit_ranges: Mapping[str, tuple[float, float]],
         (:func:`~.observations.size_distribution`), or None to keep the project's.
     at
         Key path of the fitted ranges in the project file, for messages.
+    sets, profiles
+        The observation sets and the profiles they lie on (:func:`~.sets.read_site`):
+        one term of the objective per set, the profiles run with the site's
+        materials (:func:`~.sets.site_materials`). None (or the single-file
+        form): the stops on this section alone, with ``levels``.
 
     Raises
     ------
@@ -140,32 +217,62 @@ def problem_for(project: Project, fit_ranges: Mapping[str, tuple[float, float]],
         A path names no input, or an end of its range is not a valid value
         there, located at ``calibrate.fit.<path>``; or a level outside the section.
     """
+    from .sets import site_materials
+
     base = _base(project, sizes)
+    profiles = dict(profiles or {})
+    if profiles:  # one table of materials for the site, written to calibrated.yaml too
+        base["materials"] = site_materials(project, profiles)
     first, last = project.slope.x_range
-    for name, (lo, hi) in (levels or {}).items():
-        if hi <= first or lo >= last:
-            raise project.error_at(("calibrate", "levels", name),
-                                   f"level [{lo:g}, {hi:g}] lies outside the slope section "
-                                   f"[{first:g}, {last:g}] m")
+    _check_levels(project, levels, sets, profiles)
     try:
         plain = with_values(project, {}, base=base)
     except ProjectError as exc:  # the observed sizes do not fit the project
         raise project.error_at(("calibrate", "observed"), f"the observed sizes: {exc.message}"
                                ) from None
-    for path, ends in fit_ranges.items():
-        for value in ends:
-            try:
-                with_values(plain, {path: float(value)}, base=base)
-            except ProjectError as exc:
-                raise project.error_at((*at, path), exc.message) from None
+    _check_ends(plain, base, fit_ranges, lambda path, m: project.error_at((*at, path), m))
     plain._plan = None  # a worker needs the data alone
+    terms: tuple[Term, ...] = ()
+    others: tuple[ProfileRun, ...] = ()
+    run_base = None
+    if sets is not None and not (len(sets) == 1 and not profiles and sets[0].weight == 1.0):
+        terms, stations = terms_for(sets, ["", *profiles])
+        others = _profile_runs(project, sets, profiles, fit_ranges, base["materials"],
+                               stations)
+        run_base = _with_stations(base, stations[0]) if stations[0] else None
     return FitProblem(
         project=plain, base=base, paths=tuple(fit_ranges),
         low=tuple(float(lo) for lo, _ in fit_ranges.values()),
         high=tuple(float(hi) for _, hi in fit_ranges.values()),
         levels={str(k): (float(a), float(b)) for k, (a, b) in (levels or {}).items()},
         rocks=int(rocks), kind=kind, x_range=(float(first), float(last)),
+        terms=terms, others=others, run_base=run_base,
     )
+
+
+def _check_levels(project: Project, levels: Mapping[str, tuple[float, float]] | None,
+                  sets: Sequence[ObservationSet] | None, profiles: Mapping[str, Project]
+                  ) -> None:
+    """Every level lies (at least in part) on its section, else one line at its key.
+
+    Without sets, ``levels`` at ``calibrate.levels``; with sets, each set of
+    stops' levels, at its own ``levels:`` or, where it takes the section's,
+    at ``calibrate.levels``.
+    """
+    todo = [] if sets else [(("calibrate", "levels"), levels or {}, project)]
+    entries = project.calibrate.entries if sets and project.calibrate is not None else []
+    for i, s in enumerate(sets or []):
+        if s.kind == "stops":
+            own = i < len(entries) and entries[i].levels is not None
+            todo.append((("calibrate", "observed", i, "levels") if own else
+                         ("calibrate", "levels"), s.levels,
+                         profiles[s.profile] if s.profile else project))
+    for at, spans, on in todo:
+        first, last = on.slope.x_range
+        for name, (lo, hi) in spans.items():
+            if hi <= first or lo >= last:
+                raise project.error_at((*at, name), f"level [{lo:g}, {hi:g}] lies outside "
+                                       f"the slope section [{first:g}, {last:g}] m")
 
 
 def simulated_stops(problem: FitProblem, values: Mapping[str, float], seed: int
@@ -182,6 +289,49 @@ def simulated_stops(problem: FitProblem, values: Mapping[str, float], seed: int
     return stop_positions(run.x_end, run.status, problem.x_range)
 
 
+def _run(problem: FitProblem, k: int, values: Mapping[str, float], seed: int) -> Any:
+    """Run ``k`` of the problem (0: the project's own section) with ``values`` set."""
+    from ..run.simulation import run_study
+
+    stop_if_cancelled()
+    if k == 0:
+        project = with_values(problem.project, values, base=problem.run_base or problem.base)
+    else:
+        other = problem.others[k - 1]
+        # Only the ground is shared: another input (a release) is the project's own.
+        mine = {p: v for p, v in values.items() if p.startswith("materials.")}
+        project = with_values(other.project, mine, base=other.base)
+        seed = scenario_seed(int(seed), PROFILE_SEED + k)
+    return run_study(project, rocks=problem.rocks, seed=seed,
+                     progress=lambda _done: stop_if_cancelled())
+
+
+def simulated_sets(problem: FitProblem, values: Mapping[str, float], seed: int
+                   ) -> list[np.ndarray]:
+    """The simulated values of each term of ``problem`` with the inputs at ``values``.
+
+    Each profile that a term needs is run once (``problem.rocks`` rocks;
+    the project's own section with ``seed``, profile k with its own seed,
+    :data:`PROFILE_SEED`); a term of stops takes its stop stations (m), a
+    term of passages the heights or speeds of the rocks that passed its
+    station (:mod:`.terms`). The single-file form: its stops alone, as
+    :func:`simulated_stops`.
+    """
+    if not problem.terms:
+        return [simulated_stops(problem, values, seed)]
+    studies = {k: _run(problem, k, values, seed) for k in sorted({t.run for t in problem.terms})}
+    ranges = [problem.x_range, *(o.x_range for o in problem.others)]
+    out = []
+    for t in problem.terms:
+        study = studies[t.run]
+        if t.kind == "stops":
+            out.append(stop_positions(study.result.x_end, study.result.status, ranges[t.run]))
+        else:
+            a = study.crossing_arrays()[t.quantity][:, t.station]
+            out.append(np.asarray(a[np.isfinite(a)], dtype=float))
+    return out
+
+
 @dataclass(frozen=True)
 class FitOutcome:
     """The best point of one fit.
@@ -195,13 +345,17 @@ class FitOutcome:
     evaluations : int
         Engine runs the fit took (those of the global stage with fewer rocks).
     stops : ndarray
-        The simulated stops at the best point (m).
+        The simulated stops at the best point (m): of the first term (the stops
+        on the project's own section, where the single-file form has them).
+    simulated : tuple of ndarray
+        Each term's simulated values at the best point.
     """
 
     values: dict[str, float]
     objective: float
     evaluations: int
     stops: np.ndarray
+    simulated: tuple[np.ndarray, ...] = ()
 
 
 def minimise(f: Callable[[np.ndarray, bool], float], dimension: int, seed: int
@@ -257,38 +411,49 @@ def minimise(f: Callable[[np.ndarray, bool], float], dimension: int, seed: int
     return best_u, best
 
 
-def fit(problem: FitProblem, observed: np.ndarray, seed: int) -> FitOutcome:
-    """Fit the problem's inputs to ``observed`` stops, every evaluation with rocks ``seed``.
+def fit(problem: FitProblem, observed: np.ndarray | Sequence[np.ndarray], seed: int
+        ) -> FitOutcome:
+    """Fit the problem's inputs to the observations, every evaluation with rocks ``seed``.
 
     Parameters
     ----------
     problem
         From :func:`problem_for`.
     observed
-        Observed stop stations (m).
+        Observed stop stations (m) of the single-file form, or one array per
+        term of ``problem.terms`` (stops m, heights m, speeds m/s).
     seed
         The rock seed of every evaluation (common random numbers) and of the
         global stage's hypercube.
     """
-    scale = spread(observed)
-    seen: dict[tuple[float, ...], tuple[float, np.ndarray]] = {}
+    sets = [np.asarray(observed, dtype=float)] if isinstance(observed, np.ndarray) \
+        else [np.asarray(o, dtype=float) for o in observed]
+    terms = problem.all_terms
+    scales = scales_of(sets, terms)
+    seen: dict[tuple[float, ...], tuple[float, list[np.ndarray]]] = {}
     few = replace(problem, rocks=min(problem.rocks,
                                      max(COARSE_ROCKS, int(COARSE_SHARE * problem.rocks))))
     runs = [0]
+
+    def value(sim: list[np.ndarray]) -> float:
+        if not problem.terms:  # the single-file form, to the bit as before sets existed
+            return objective(sets[0], sim[0], problem.levels, problem.kind, scales[0])
+        return sets_objective(sets, sim, terms, problem.kind, scales)
 
     def evaluate(u: np.ndarray, coarse: bool = False) -> float:
         key = tuple(np.round(np.clip(u, 0.0, 1.0), 12))
         if coarse:
             runs[0] += 1
-            stops = simulated_stops(few, problem.values(key), seed)
-            return objective(observed, stops, problem.levels, problem.kind, scale)
+            return value(simulated_sets(few, problem.values(key), seed))
         if key not in seen:
             runs[0] += 1
-            stops = simulated_stops(problem, problem.values(key), seed)
-            seen[key] = (objective(observed, stops, problem.levels, problem.kind, scale), stops)
+            sim = simulated_sets(problem, problem.values(key), seed)
+            seen[key] = (value(sim), sim)
         return seen[key][0]
 
     u, _ = minimise(evaluate, problem.dimension, seed)
     key = tuple(np.round(np.clip(u, 0.0, 1.0), 12))
     evaluate(u)
-    return FitOutcome(problem.values(key), seen[key][0], runs[0], seen[key][1])
+    best, sim = seen[key]
+    main = next(i for i, t in enumerate(terms) if t.kind == "stops" and t.run == 0)
+    return FitOutcome(problem.values(key), best, runs[0], sim[main], tuple(sim))

@@ -208,10 +208,17 @@ def parse_observations(text: str, source: str, x_range: tuple[float, float],
     )
 
 
-def observed_file(project: Project) -> Path:
-    """The observed-stops file of the project's ``calibrate:`` section (relative to the file)."""
+def observed_file(project: Project) -> Path | None:
+    """The observed-stops file of the project's ``calibrate:`` section (relative to the file).
+
+    The file of the first set of stops on the project's own section; None
+    when that set's stops are given inline (``values:``).
+    """
     assert project.calibrate is not None
-    path = Path(project.calibrate.observed)
+    entry = next(e for e in project.calibrate.entries if e.kind == "stops" and e.profile is None)
+    if entry.file is None:
+        return None
+    path = Path(entry.file)
     if not path.is_absolute() and project.source != "<string>":
         path = Path(project.source).parent / path
     return path

@@ -24,19 +24,44 @@ from .calibrated import CalibrationResult, ComparisonResult
 from .distances import fit_statistics, level_shares
 from .observations import (
     Observations,
-    observed_file,
     read_observations,
     size_distribution,
     size_limits,
 )
+from .sets import Site, profile_sizes, read_site
+from .terms import set_statistics
 
 __all__ = ["run_calibration", "run_comparison"]
 
 
-def _observations(project: Project, path: str | os.PathLike[str] | None) -> Observations:
-    if path is None:
-        path = observed_file(project)
+def _observations(project: Project, path: str | os.PathLike[str]) -> Observations:
+    """The observed stops of ``path``, checked on the project's section."""
     return read_observations(path, project.slope.x_range, size_limits(project.rocks.density))
+
+
+def _fit_ranges(project: Project, site: Site) -> dict[str, tuple[float, float]]:
+    """The inputs fitted: ``calibrate.fit``; with ``fit: auto`` and profiles, theirs too.
+
+    ``fit: auto`` fits the calibrated parameters of every material on every
+    section of the site (the project's material of a name where several
+    define it, as the profiles run them).
+    """
+    from ..project.calibrate import auto_fit_ranges
+
+    spec = project.calibrate
+    assert spec is not None
+    if not (spec.auto and site.profiles):
+        return dict(spec.fit)
+    materials = dict(project.materials)
+    names = list(project.slope.materials)
+    for other in site.profiles.values():
+        for name, m in other.materials.items():
+            materials.setdefault(name, m)
+        names += list(other.slope.materials)
+    try:
+        return auto_fit_ranges(materials, names)
+    except ValueError as exc:
+        raise project.error_at(("calibrate", "fit"), str(exc)) from None
 
 
 def _load_on_this_thread(problem: Any) -> None:
@@ -101,15 +126,18 @@ def run_calibration(
     if spec is None:
         raise project.error_at((), "the project has no calibrate: section (the observed stops "
                                "and the inputs to fit; see docs/calibration.md)")
-    obs = _observations(project, observed)
+    site = read_site(project, observed)
+    main, obs = site.main_stops, site.main_observations
     n_rocks = int(spec.rocks if rocks is None else rocks)
     n_boot = int(spec.bootstrap if bootstrap is None else bootstrap)
     run_seed = int(project.rocks.seed if seed is None else seed)
-    sizes = size_distribution(obs)
-    problem = problem_for(project, spec.fit, levels=spec.levels, rocks=n_rocks,
-                          kind=spec.distance, sizes=sizes)
+    sizes = profile_sizes(site.sets, "")
+    problem = problem_for(project, _fit_ranges(project, site), levels=main.levels,
+                          rocks=n_rocks, kind=spec.distance, sizes=sizes, sets=site.sets,
+                          profiles=site.profiles)
     _load_on_this_thread(problem)
-    tasks = [ReplicateTask(problem, obs.x, b, run_seed) for b in range(n_boot + 1)]
+    data = obs.x if not problem.terms else tuple(s.values for s in site.sets)
+    tasks = [ReplicateTask(problem, data, b, run_seed) for b in range(n_boot + 1)]
     done = [0]
 
     def finished(_: int, __: Any) -> None:
@@ -121,21 +149,35 @@ def run_calibration(
     replicates = run_tasks(run_replicate, tasks, workers=workers, scheduler=scheduler,
                            pool=pool, on_done=finished)
     runtime = time.perf_counter() - t0
-    parameters, correlation = summarise(problem, replicates, spec.confidence, obs.n)
+    # The expanded interval's n: the smallest set's (the widest correction).
+    parameters, correlation = summarise(problem, replicates, spec.confidence,
+                                        min(s.n for s in site.sets))
     stops = np.asarray(replicates[0]["stops"])
+    simulated = replicates[0].get("simulated") or [stops]
     return CalibrationResult(
         project=project, problem=problem, observations=obs, parameters=parameters,
         correlation=correlation, replicates=replicates,
         fit=fit_statistics(obs.x, stops, spec.distance, problem.x_range),
-        levels=level_shares(obs.x, stops, spec.levels, spec.confidence),
+        levels=level_shares(obs.x, stops, main.levels, spec.confidence),
         simulated=stops, seed=run_seed, confidence=spec.confidence, sizes=sizes,
         runtime_s=runtime,
+        sets=_statistics(problem, site, simulated, spec.confidence),
     )
+
+
+def _statistics(problem: Any, site: Site, simulated: list[Any], confidence: float
+                ) -> list[dict[str, Any]]:
+    """Each observation set's statistics (:func:`~.terms.set_statistics`); [] for one file."""
+    if not problem.terms:
+        return []
+    ranges = {"": problem.x_range, **{o.name: o.x_range for o in problem.others}}
+    return set_statistics(site.sets, [np.asarray(v) for v in simulated], problem.kind,
+                          confidence, ranges, problem.rocks)
 
 
 def run_comparison(
     project: Project,
-    observed: str | os.PathLike[str],
+    observed: str | os.PathLike[str] | None,
     *,
     rocks: int | None = None,
     seed: int | None = None,
@@ -153,7 +195,9 @@ def run_comparison(
     project
         A validated project (e.g. a calibration's ``calibrated.yaml``).
     observed
-        The file of observed stops.
+        The file of observed stops; None: every observation set of the
+        project's ``calibrate:`` section (each kind, each profile), each
+        reported on its own.
     rocks, seed
         Simulated rocks and their seed (default ``rocks.count``, ``rocks.seed``).
     levels
@@ -163,20 +207,41 @@ def run_comparison(
         Of the observed shares' Wilson intervals.
     kind
         The distance reported.
-    """
-    from .fit import problem_for, simulated_stops
 
-    obs = _observations(project, observed)
-    if levels is None:
-        levels = project.calibrate.levels if project.calibrate is not None else {}
+    Raises
+    ------
+    ProjectError
+        No file given and no ``calibrate:`` section; a bad observation file.
+    """
+    from .fit import problem_for, simulated_sets, simulated_stops
+
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
-    sizes = size_distribution(obs)
-    problem = problem_for(project, {}, levels=levels, rocks=n, kind=kind, sizes=sizes)
-    stops = simulated_stops(problem, {}, s)
+    if observed is None:
+        if project.calibrate is None:
+            raise project.error_at((), "compare needs --observed, or a calibrate: section "
+                                   "whose observed: sets it compares")
+        site = read_site(project)
+        main, obs = site.main_stops, site.main_observations
+        sizes = profile_sizes(site.sets, "")
+        problem = problem_for(project, {}, levels=main.levels, rocks=n, kind=kind,
+                              sizes=sizes, sets=site.sets, profiles=site.profiles)
+        simulated = simulated_sets(problem, {}, s)
+        first = next(i for i, t in enumerate(problem.all_terms)
+                     if t.kind == "stops" and t.run == 0)
+        stops = simulated[first]
+        sets = _statistics(problem, site, simulated, confidence)
+    else:
+        obs = _observations(project, observed)
+        if levels is None:
+            levels = project.calibrate.levels if project.calibrate is not None else {}
+        sizes = size_distribution(obs)
+        problem = problem_for(project, {}, levels=levels, rocks=n, kind=kind, sizes=sizes)
+        stops = simulated_stops(problem, {}, s)
+        sets = []
     return ComparisonResult(
         project=project, observations=obs,
         fit=fit_statistics(obs.x, stops, kind, problem.x_range),
         levels=level_shares(obs.x, stops, problem.levels, confidence),
-        simulated=stops, seed=s, rocks=n, sizes=sizes,
+        simulated=stops, seed=s, rocks=n, sizes=sizes, sets=sets,
     )

@@ -83,7 +83,7 @@ class ReplicateTask:
     """
 
     problem: FitProblem
-    observed: np.ndarray
+    observed: np.ndarray | tuple[np.ndarray, ...]
     index: int
     seed: int
 
@@ -96,22 +96,34 @@ def replicate_seed(seed: int, index: int) -> int:
 def run_replicate(task: ReplicateTask) -> dict[str, Any]:
     """Fit one replicate: its resample of the observations with its own seed.
 
+    Every observation set is resampled, each on its own: its n values
+    drawn with replacement, from a generator of the run's seed, the
+    replicate and the set (the first set's draws those of the single-file
+    form's).
+
     Returns
     -------
     dict
         ``index``, ``seed``, ``values`` (path -> fitted value), ``objective``,
-        ``evaluations``; replicate 0 also ``stops`` (its simulated stops, m).
+        ``evaluations``; replicate 0 also ``stops`` (its simulated stops, m)
+        and, with observation sets, ``simulated`` (each set's simulated values).
     """
-    observed = np.asarray(task.observed, dtype=float)
+    single = isinstance(task.observed, np.ndarray)
+    sets = [np.asarray(task.observed, dtype=float)] if single \
+        else [np.asarray(o, dtype=float) for o in task.observed]
     seed = replicate_seed(task.seed, task.index)
     if task.index > 0:
-        rng = np.random.default_rng([int(task.seed), int(task.index)])
-        observed = rng.choice(observed, size=observed.size, replace=True)
-    out = fit(task.problem, observed, seed)
+        for j, observed in enumerate(sets):
+            key = [int(task.seed), int(task.index)] + ([j] if j else [])
+            rng = np.random.default_rng(key)
+            sets[j] = rng.choice(observed, size=observed.size, replace=True)
+    out = fit(task.problem, sets[0] if single else sets, seed)
     result: dict[str, Any] = {"index": task.index, "seed": seed, "values": out.values,
                               "objective": out.objective, "evaluations": out.evaluations}
     if task.index == 0:
         result["stops"] = out.stops
+        if not single:
+            result["simulated"] = list(out.simulated)
     return result
 
 

@@ -97,8 +97,10 @@ def add_calibrate_parser(sub: Any) -> None:
         "second profile or on held-out blocks.",
     )
     c.add_argument("project", type=Path, help="project file (YAML), e.g. a calibrated.yaml")
-    c.add_argument("--observed", type=Path, metavar="CSV", required=True,
-                   help="the observed stops (x, optionally volume_m3 or mass_kg)")
+    c.add_argument("--observed", type=Path, metavar="CSV",
+                   help="the observed stops (x, optionally volume_m3 or mass_kg); default: "
+                   "every observation set of the project's calibrate: section (stops, "
+                   "passing heights, speeds, on each profile), each reported")
     _common(c, "(default: rocks.count of the project)",
             "the observed set, the fit statistics, the levels, the figure and how to repeat "
             "the run")

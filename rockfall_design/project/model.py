@@ -15,7 +15,7 @@ from typing import Annotated, Any
 from pydantic import BaseModel, BeforeValidator, Field, PrivateAttr, model_validator
 
 from ..errors import ProjectError
-from .calibrate import AUTO_FIT, CALIBRATED, MAX_FITTED, CalibrateSpec
+from .calibrate import AUTO_FIT, CalibrateSpec, auto_fit_ranges
 from .design import Design
 from .fields import (
     _DEFAULT_CONCEPT,
@@ -120,23 +120,10 @@ class Project(_Model):
 
     def _auto_fit(self) -> dict[str, tuple[float, float]]:
         """``calibrate.fit: auto``: each section material's calibrated parameters, its ranges."""
-        fit: dict[str, tuple[float, float]] = {}
-        for name in dict.fromkeys(self.slope.materials):
-            m = self.materials[name]
-            for key in CALIBRATED[m.impact_model]:
-                rng = (m.ranges or {}).get(key)
-                if rng is None:
-                    raise _fail(
-                        f"fit: auto needs the range of materials.{name}.{key}: give the "
-                        f"material ranges: {{{key}: [low, high]}} (the library's ground_ "
-                        "entries carry them) or list the inputs under fit:",
-                        ("calibrate", "fit"),
-                    )
-                fit[f"materials.{name}.{key}"] = (float(rng[0]), float(rng[1]))
-        if len(fit) > MAX_FITTED:
-            raise _fail(f"fit: auto gives {len(fit)} inputs, more than {MAX_FITTED}: list "
-                        "the inputs under fit:", ("calibrate", "fit"))
-        return fit
+        try:
+            return auto_fit_ranges(self.materials, self.slope.materials)
+        except ValueError as exc:
+            raise _fail(str(exc), ("calibrate", "fit")) from None
 
     @model_validator(mode="after")
     def _check_references(self) -> "Project":
@@ -169,6 +156,11 @@ class Project(_Model):
             )
         if self.calibrate is not None and AUTO_FIT in self.calibrate.fit:
             self.calibrate.fit = self._auto_fit()
+            self.calibrate._auto = True
+        for i, entry in enumerate(self.calibrate.observed if self.calibrate else []):
+            if entry.profile is None and entry.x is not None and not first <= entry.x <= last:
+                raise _fail(f"station x {fmt(entry.x)} is outside the slope section {section}",
+                            ("calibrate", "observed", i, "x"))
         if self.design is not None:
             if self.protect is None:
                 raise _fail(
@@ -227,6 +219,9 @@ class Project(_Model):
         if data.get("calibrate") is None:
             # likewise: files without a calibration keep their record and hash
             data.pop("calibrate", None)
+        elif not data["calibrate"].get("profiles"):
+            # one section, as before profiles existed: the record and hash as before
+            data["calibrate"].pop("profiles", None)
         if data["rocks"].get("size_step") is None:
             # the step in effect where sizes are rounded (a survey, sizes that vary);
             # elsewhere absent, so that those records and hashes are as before
