@@ -46,10 +46,16 @@ values, the bundled library's ``ground_`` classes of the ``rough_soft`` law
 by role (``ground_materials.yaml``: the vegetated slope
 ``ground_vegetated_slope``, the walls ``ground_rock_face``, the benches and
 the floor ``ground_hard_floor``, rocky slopes ``ground_talus``), and their
-``calibrate:`` fits what ``fit: auto`` fits (restitution, rolling resistance
-and obstacle height over the class's range) for every role but the walls:
-``fit: auto`` itself would give nine inputs on these sections, more than
-``calibrate`` takes. Sections and stops are the same for either law.
+``calibrate:`` says ``fit: auto`` (the rolling resistance of every material
+on the section over its class's range, docs/calibration.md). Sections and
+stops are the same for either law.
+
+With ``--trace fall-line`` the section follows the terrain's fall line from
+the drop point down to the first flat ground, then runs straight to the
+middle of the stops (:func:`trace`); the stops are placed on that trace by
+their nearest point. On P2 the straight line crosses a terrace and a step
+that the blocks' corridor avoids (docs/calibration.md, "Why P2 was not
+predicted").
 
 Coordinates in the dataset: x and z horizontal, y up (m). The stop positions
 lie about 2.8 m above the terrain surface beneath them (on the benches and
@@ -102,14 +108,6 @@ GROUND_CLASSES = {"vegetated": "ground_vegetated_slope", "wall": "ground_rock_fa
 #: The bundled materials library the ``ground_`` classes are copied from.
 LIBRARY = Path(__file__).resolve().parents[1] / "projects" / "materials.yaml"
 
-#: ``--law rough_soft``: the roles whose calibrated parameters are fitted. The
-#: walls are left out: ``fit: auto`` would fit three parameters of each of the
-#: three materials on a section (nine, more than calibrate's eight), and the
-#: blocks fall past the walls rather than roll on them, so the walls keep the
-#: library's ground_rock_face values.
-FITTED_ROLES = ("vegetated", "floor", "rocky")
-
-
 def ground_library(library: Path = LIBRARY) -> str:
     """The roles' materials as a library: each a copy of its ``ground_`` class."""
     entries = yaml.safe_load(library.read_text(encoding="utf-8"))
@@ -121,24 +119,6 @@ def ground_library(library: Path = LIBRARY) -> str:
         lines.append(yaml.safe_dump({role: entries[cls]}, sort_keys=False,
                                     default_flow_style=None).rstrip())
     return "\n".join(lines) + "\n"
-
-
-def ground_fit(materials: list[str], library: Path = LIBRARY) -> dict[str, list[float]]:
-    """The inputs ``fit: auto`` gives for the fitted roles on a section, with their ranges.
-
-    ``restitution``, ``rolling_resistance`` and ``obstacle_height_m`` of each
-    fitted role present, over its class's ``ranges:`` (as ``fit: auto`` does
-    for every material, see :data:`FITTED_ROLES` for why the walls are not).
-    """
-    entries = yaml.safe_load(library.read_text(encoding="utf-8"))
-    fit: dict[str, list[float]] = {}
-    for role in dict.fromkeys(materials):
-        if role not in FITTED_ROLES:
-            continue
-        ranges = entries[GROUND_CLASSES[role]]["ranges"]
-        for key in ("restitution", "rolling_resistance", "obstacle_height_m"):
-            fit[f"materials.{role}.{key}"] = [float(v) for v in ranges[key]]
-    return fit
 
 
 def read_stl(path: Path) -> np.ndarray:
@@ -350,12 +330,12 @@ def levels(p: dict, shortest: float = 3.5) -> dict[str, list[float]]:
 
 
 def project_text(name: str, p: dict, materials: str, seed: int, calibrate: bool,
-                 fit: dict | None = None) -> str:
+                 fit: dict | str | None = None) -> str:
     """The project file of profile ``name`` (section, materials library, rocks, calibrate:).
 
     ``calibrate=False``: a project to ``compare`` with (its ``calibrate:``
     section still gives the levels and the observed file). ``fit``: the
-    inputs fitted and their ranges (default :data:`FIT`).
+    inputs fitted and their ranges (default :data:`FIT`), or ``"auto"``.
     """
     lv = levels(p)
     lines = [
@@ -381,8 +361,11 @@ def project_text(name: str, p: dict, materials: str, seed: int, calibrate: bool,
     ]
     lines.append("calibrate:")
     lines.append(f"  observed: stops_{name}.csv")
-    lines.append("  fit:")
-    lines += [f"    {k}: [{lo:g}, {hi:g}]" for k, (lo, hi) in (fit or FIT).items()]
+    if fit == "auto":
+        lines.append("  fit: auto")
+    else:
+        lines.append("  fit:")
+        lines += [f"    {k}: [{lo:g}, {hi:g}]" for k, (lo, hi) in (fit or FIT).items()]
     lines.append("  levels: {" + ", ".join(f"{k}: [{lo:g}, {hi:g}]" for k, (lo, hi)
                                            in lv.items()) + "}")
     lines.append("  rocks: 500")
@@ -422,7 +405,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--law", choices=("spang", "rough_soft"), default="spang",
                     help="materials of the projects: spang (the textbook starting values, "
                     "default) or rough_soft (the bundled library's ground_ classes by role, "
-                    "their calibrated parameters fitted over the classes' ranges)")
+                    "calibrate: fit: auto)")
     args = ap.parse_args(argv)
 
     files = [args.data / "Geometries" / "STL" / f"{stem}.stl" for stem, _ in ZONES]
@@ -462,7 +445,7 @@ def main(argv: list[str] | None = None) -> int:
                 w = csv.writer(fh, lineterminator="\n")
                 w.writerow(["x", "mass_kg", "offset_m"])
                 w.writerows(part)
-        fit = ground_fit(p["materials"]) if args.law == "rough_soft" else None
+        fit = "auto" if args.law == "rough_soft" else None
         (args.out / f"authume_{name}.yaml").write_text(
             project_text(name, p, start, seed, True, fit), encoding="utf-8")
         (args.out / f"authume_{name}_calibrated.yaml").write_text(
