@@ -46,10 +46,16 @@ values, the bundled library's ``ground_`` classes of the ``rough_soft`` law
 by role (``ground_materials.yaml``: the vegetated slope
 ``ground_vegetated_slope``, the walls ``ground_rock_face``, the benches and
 the floor ``ground_hard_floor``, rocky slopes ``ground_talus``), and their
-``calibrate:`` fits what ``fit: auto`` fits (restitution, rolling resistance
-and obstacle height over the class's range) for every role but the walls:
-``fit: auto`` itself would give nine inputs on these sections, more than
-``calibrate`` takes. Sections and stops are the same for either law.
+``calibrate:`` says ``fit: auto`` (the rolling resistance of every material
+on the section over its class's range, docs/calibration.md). Sections and
+stops are the same for either law.
+
+With ``--trace fall-line`` the section follows the terrain's fall line from
+the drop point down to the first flat ground, then runs straight to the
+middle of the stops (:func:`trace`); the stops are placed on that trace by
+their nearest point. On P2 the straight line crosses a terrace and a step
+that the blocks' corridor avoids (docs/calibration.md, "Why P2 was not
+predicted").
 
 Coordinates in the dataset: x and z horizontal, y up (m). The stop positions
 lie about 2.8 m above the terrain surface beneath them (on the benches and
@@ -102,14 +108,6 @@ GROUND_CLASSES = {"vegetated": "ground_vegetated_slope", "wall": "ground_rock_fa
 #: The bundled materials library the ``ground_`` classes are copied from.
 LIBRARY = Path(__file__).resolve().parents[1] / "projects" / "materials.yaml"
 
-#: ``--law rough_soft``: the roles whose calibrated parameters are fitted. The
-#: walls are left out: ``fit: auto`` would fit three parameters of each of the
-#: three materials on a section (nine, more than calibrate's eight), and the
-#: blocks fall past the walls rather than roll on them, so the walls keep the
-#: library's ground_rock_face values.
-FITTED_ROLES = ("vegetated", "floor", "rocky")
-
-
 def ground_library(library: Path = LIBRARY) -> str:
     """The roles' materials as a library: each a copy of its ``ground_`` class."""
     entries = yaml.safe_load(library.read_text(encoding="utf-8"))
@@ -121,24 +119,6 @@ def ground_library(library: Path = LIBRARY) -> str:
         lines.append(yaml.safe_dump({role: entries[cls]}, sort_keys=False,
                                     default_flow_style=None).rstrip())
     return "\n".join(lines) + "\n"
-
-
-def ground_fit(materials: list[str], library: Path = LIBRARY) -> dict[str, list[float]]:
-    """The inputs ``fit: auto`` gives for the fitted roles on a section, with their ranges.
-
-    ``restitution``, ``rolling_resistance`` and ``obstacle_height_m`` of each
-    fitted role present, over its class's ``ranges:`` (as ``fit: auto`` does
-    for every material, see :data:`FITTED_ROLES` for why the walls are not).
-    """
-    entries = yaml.safe_load(library.read_text(encoding="utf-8"))
-    fit: dict[str, list[float]] = {}
-    for role in dict.fromkeys(materials):
-        if role not in FITTED_ROLES:
-            continue
-        ranges = entries[GROUND_CLASSES[role]]["ranges"]
-        for key in ("restitution", "rolling_resistance", "obstacle_height_m"):
-            fit[f"materials.{role}.{key}"] = [float(v) for v in ranges[key]]
-    return fit
 
 
 def read_stl(path: Path) -> np.ndarray:
@@ -203,17 +183,97 @@ def simplify(x: np.ndarray, y: np.ndarray, keep: np.ndarray, tolerance: float) -
     return np.flatnonzero(chosen)
 
 
+def fall_line(triangles: np.ndarray, zone: np.ndarray, start: np.ndarray,
+              args: argparse.Namespace) -> np.ndarray:
+    """Map points (n, 2) of the fall line from ``start`` down to the first flat ground.
+
+    Each step of ``args.step`` m goes down the surface's steepest descent,
+    its gradient taken by central differences over ``args.baseline`` m (which
+    smooths the mesh's facets); the line ends where the ground is gentler
+    than ``args.flat_deg`` degrees (the first bench or floor: on flat ground
+    a block keeps the heading it came with rather than following the
+    terrain) or leaves the terrain. A block rolling or sliding down a slope
+    follows its fall line (Dorren 2003, "modes of motion"); on the Authume
+    terrain this line runs within about 1.5 m of the median path of the
+    dataset's own 3-D simulations over P2's upper slope (docs/calibration.md).
+    """
+    b = args.baseline
+    probe = np.array([[b, 0.0], [-b, 0.0], [0.0, b], [0.0, -b]])
+    points = [np.asarray(start, dtype=float)]
+    for _ in range(int(400.0 / args.step)):
+        h, _ = surface_height(triangles, zone, points[-1] + probe)
+        if not np.all(np.isfinite(h)):
+            break
+        grad = np.array([h[0] - h[1], h[2] - h[3]]) / (2.0 * b)
+        steep = float(np.hypot(*grad))
+        if math.degrees(math.atan(steep)) < args.flat_deg:
+            break
+        points.append(points[-1] - args.step * grad / steep)
+    return np.asarray(points)
+
+
+def trace(triangles: np.ndarray, zone: np.ndarray, origin: np.ndarray, target: np.ndarray,
+          args: argparse.Namespace) -> np.ndarray:
+    """The section's trace on the map: a polyline (n, 2) from upslope of ``origin``.
+
+    ``--trace line``: the straight line from the drop point ``origin`` to
+    ``target`` (the middle of the stops), from ``--upslope`` m above the
+    drop point to 400 m beyond it. ``--trace fall-line``: the same start, then
+    the fall line from the drop point (:func:`fall_line`) to the first flat
+    ground, then straight to ``target`` and on beyond it.
+    """
+    u = (target - origin) / np.linalg.norm(target - origin)
+    head = origin - args.upslope * u
+    if args.trace == "line":
+        return np.array([head, origin + 400.0 * u])
+    down = fall_line(triangles, zone, origin, args)
+    foot = down[-1]
+    ahead = target - foot
+    if np.linalg.norm(ahead) < args.step or ahead @ u <= 0.0:
+        ahead = u  # the fall line ends at or beyond the stops: keep the line's heading
+    ahead = ahead / np.linalg.norm(ahead)
+    tail = [target] if (target - foot) @ ahead > args.step else []
+    end = (tail[0] if tail else foot) + 400.0 * ahead
+    return np.array([head, *down, *tail, end])
+
+
+def along(poly: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
+    """Arc length s (m) every ``step`` m along a polyline, and the map points there."""
+    seg = np.hypot(*np.diff(poly, axis=0).T)
+    cum = np.r_[0.0, np.cumsum(seg)]
+    s = np.arange(0.0, cum[-1], step)
+    return s, np.c_[np.interp(s, cum, poly[:, 0]), np.interp(s, cum, poly[:, 1])]
+
+
+def onto(poly: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Arc length (m) of each map point's nearest point on a polyline, and its offset (m).
+
+    The offset is signed, positive to the left of the trace's direction.
+    """
+    a, b = poly[:-1], poly[1:]
+    d = b - a
+    length = np.hypot(d[:, 0], d[:, 1])
+    cum = np.r_[0.0, np.cumsum(length)]
+    rel = points[:, None, :] - a[None, :, :]
+    t = np.clip((rel * d[None]).sum(-1) / length**2, 0.0, 1.0)
+    gap = rel - t[..., None] * d[None]
+    k = np.argmin(np.hypot(gap[..., 0], gap[..., 1]), axis=1)
+    i = np.arange(len(points))
+    side = np.sign(d[k, 0] * rel[i, k, 1] - d[k, 1] * rel[i, k, 0])
+    return cum[k] + t[i, k] * length[k], side * np.hypot(gap[i, k, 0], gap[i, k, 1])
+
+
 def profile(data: Path, name: str, triangles: np.ndarray, zone: np.ndarray,
             args: argparse.Namespace) -> dict:
     """The section, the stops and the release of one profile (``P1`` or ``P2``)."""
     drops = np.loadtxt(data / "Drop_conditions" / f"positions_{name}.xyz", ndmin=2)
     ends = np.loadtxt(data / "EXP_endpoints" / f"Endpoints_{name}.txt", ndmin=2)
     origin = drops[:, [0, 2]].mean(0)
-    towards = ends[:, [0, 2]].mean(0) - origin
-    u = towards / np.linalg.norm(towards)
-    normal = np.array([-u[1], u[0]])
-    s = np.arange(-args.upslope, 400.0, args.step)
-    h, z = surface_height(triangles, zone, origin + s[:, None] * u)
+    target = ends[:, [0, 2]].mean(0)
+    u = (target - origin) / np.linalg.norm(target - origin)
+    poly = trace(triangles, zone, origin, target, args)
+    s, points = along(poly, args.step)
+    h, z = surface_height(triangles, zone, points)
     inside = np.flatnonzero(np.isfinite(h))
     first = inside[0]
     last = first + np.flatnonzero(np.diff(np.r_[inside, -9]) != 1)[0]  # first gap ends it
@@ -225,14 +285,14 @@ def profile(data: Path, name: str, triangles: np.ndarray, zone: np.ndarray,
     change = np.r_[True, np.array(names[1:]) != np.array(names[:-1]), True]
     idx = simplify(x, h, change, args.tolerance)
     seg = [names[i] for i in idx[:-1]]
-    stations = (ends[:, [0, 2]] - origin) @ u - s[0]
-    offsets = (ends[:, [0, 2]] - origin) @ normal
-    drop_x = (drops[:, [0, 2]] - origin) @ u - s[0]
+    stations, offsets = onto(poly, ends[:, [0, 2]])
+    drop_x = onto(poly, drops[:, [0, 2]])[0] - s[0]
     ground = float(np.interp(drop_x.mean(), x, h))
-    return {"x": x[idx], "y": h[idx], "materials": seg, "stops": stations, "offset": offsets,
-            "mass": ends[:, 3], "release_x": (float(drop_x.min()), float(drop_x.max())),
+    return {"x": x[idx], "y": h[idx], "materials": seg, "stops": stations - s[0],
+            "offset": offsets, "mass": ends[:, 3],
+            "release_x": (float(drop_x.min()), float(drop_x.max())),
             "release_height": float(drops[:, 1].mean() - ground), "heading_deg":
-            math.degrees(math.atan2(u[1], u[0]))}
+            math.degrees(math.atan2(u[1], u[0])), "trace": poly}
 
 
 def levels(p: dict, shortest: float = 3.5) -> dict[str, list[float]]:
@@ -270,12 +330,12 @@ def levels(p: dict, shortest: float = 3.5) -> dict[str, list[float]]:
 
 
 def project_text(name: str, p: dict, materials: str, seed: int, calibrate: bool,
-                 fit: dict | None = None) -> str:
+                 fit: dict | str | None = None) -> str:
     """The project file of profile ``name`` (section, materials library, rocks, calibrate:).
 
     ``calibrate=False``: a project to ``compare`` with (its ``calibrate:``
     section still gives the levels and the observed file). ``fit``: the
-    inputs fitted and their ranges (default :data:`FIT`).
+    inputs fitted and their ranges (default :data:`FIT`), or ``"auto"``.
     """
     lv = levels(p)
     lines = [
@@ -283,8 +343,10 @@ def project_text(name: str, p: dict, materials: str, seed: int, calibrate: bool,
         "# published tests (Garcia et al.; data: github.com/richefeu/AuthumeQuarryRockfalls_"
         "Data-in-Brief).",
         f"name: Authume quarry {name}",
-        f"description: Full-scale tests, profile {name}; section cut along heading "
-        f"{p['heading_deg']:.1f} deg of the dataset's x-z plane.",
+        f"description: Full-scale tests, profile {name}; section cut "
+        + ("along the fall line from the drop point, then towards the stops, "
+           if len(p["trace"]) > 2 else "along ")
+        + f"heading {p['heading_deg']:.1f} deg of the dataset's x-z plane.",
         "slope:",
         f"  csv: section_{name}.csv",
         "materials:",
@@ -299,8 +361,11 @@ def project_text(name: str, p: dict, materials: str, seed: int, calibrate: bool,
     ]
     lines.append("calibrate:")
     lines.append(f"  observed: stops_{name}.csv")
-    lines.append("  fit:")
-    lines += [f"    {k}: [{lo:g}, {hi:g}]" for k, (lo, hi) in (fit or FIT).items()]
+    if fit == "auto":
+        lines.append("  fit: auto")
+    else:
+        lines.append("  fit:")
+        lines += [f"    {k}: [{lo:g}, {hi:g}]" for k, (lo, hi) in (fit or FIT).items()]
     lines.append("  levels: {" + ", ".join(f"{k}: [{lo:g}, {hi:g}]" for k, (lo, hi)
                                            in lv.items()) + "}")
     lines.append("  rocks: 500")
@@ -326,10 +391,21 @@ def main(argv: list[str] | None = None) -> int:
                     help="seed of the random split of P1's blocks into halves (default 2023)")
     ap.add_argument("--upslope", type=float, default=4.0,
                     help="the section starts this far upslope of the drop point (m, default 4)")
+    ap.add_argument("--trace", choices=("line", "fall-line"), default="line",
+                    help="the section's trace on the map: line (straight from the drop "
+                    "point to the middle of the stops, default) or fall-line (down the "
+                    "terrain's fall line from the drop point to the first flat ground, then "
+                    "straight to the middle of the stops)")
+    ap.add_argument("--flat-deg", type=float, default=10.0,
+                    help="--trace fall-line: the fall line ends on ground gentler than "
+                    "this (degrees, default 10)")
+    ap.add_argument("--baseline", type=float, default=2.0,
+                    help="--trace fall-line: the surface's gradient is taken over this "
+                    "distance (m, default 2)")
     ap.add_argument("--law", choices=("spang", "rough_soft"), default="spang",
                     help="materials of the projects: spang (the textbook starting values, "
                     "default) or rough_soft (the bundled library's ground_ classes by role, "
-                    "their calibrated parameters fitted over the classes' ranges)")
+                    "calibrate: fit: auto)")
     args = ap.parse_args(argv)
 
     files = [args.data / "Geometries" / "STL" / f"{stem}.stl" for stem, _ in ZONES]
@@ -369,7 +445,7 @@ def main(argv: list[str] | None = None) -> int:
                 w = csv.writer(fh, lineterminator="\n")
                 w.writerow(["x", "mass_kg", "offset_m"])
                 w.writerows(part)
-        fit = ground_fit(p["materials"]) if args.law == "rough_soft" else None
+        fit = "auto" if args.law == "rough_soft" else None
         (args.out / f"authume_{name}.yaml").write_text(
             project_text(name, p, start, seed, True, fit), encoding="utf-8")
         (args.out / f"authume_{name}_calibrated.yaml").write_text(

@@ -44,6 +44,8 @@ OTHER_PROGRAMS_OPTIONS = {
     "--against": "benchmarks/optimise.py",
     "--law": "examples/authume_quarry.py",
     "--replicates": "examples/authume_refits.py",
+    "--trace": "examples/authume_quarry.py",
+    "--stations": "examples/authume_sensitivity.py",
 }
 
 

@@ -150,10 +150,11 @@ def test_law_rough_soft_takes_the_ground_classes_by_role(tmp_path):
         assert m.impact_model == "rough_soft"
         assert m.restitution == library[cls]["restitution"]
         assert m.obstacle_height_m == library[cls]["obstacle_height_m"]
-    # What fit: auto gives for the vegetated slope and the floor, the walls left out.
+    # The project says fit: auto: the rolling resistance of every material on the section.
+    spec = yaml.safe_load((rough / "authume_P1.yaml").read_text())
+    assert spec["calibrate"]["fit"] == "auto"
     fit = project.calibrate.fit
-    assert set(fit) == {f"materials.{r}.{k}" for r in ("vegetated", "floor")
-                        for k in ("restitution", "rolling_resistance", "obstacle_height_m")}
+    assert set(fit) == {f"materials.{r}.rolling_resistance" for r in set(project.slope.materials)}
     for path, rng in fit.items():
         role, key = path.split(".")[1:]
         assert list(rng) == library[script.GROUND_CLASSES[role]]["ranges"][key]
@@ -184,7 +185,49 @@ def test_the_rough_soft_example_runs_with_its_refits(tmp_path, capsys):
                                   str(out / "stops_P2.csv"), "--replicates",
                                   str(out / "cal" / "replicates.csv"), "--rocks", "40"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    # The best fit, the two refits (replicate 0 is the best fit, not run twice), observed.
-    assert [line.split(":")[0] for line in lines] == ["best fit", "refit 1", "refit 2",
-                                                       "observed"]
-    assert all("levels inside" in line for line in lines[:3])
+    # The best fit, the two refits (replicate 0 is the best fit, not run twice), each
+    # with issue 35's bench and below shares, the count over the refits, observed.
+    assert [line.split(":")[0] for line in lines] == [
+        "best fit", "  issue 35", "refit 1", "  issue 35", "refit 2", "  issue 35",
+        "refits", "observed"]
+    assert all("levels inside" in line for line in lines[0:6:2])
+    assert all("bench " in line and "below " in line for line in lines[1:6:2])
+    assert lines[6].startswith("refits: ") and " of 2 put both" in lines[6]
+
+
+def test_a_point_is_placed_on_a_bent_trace_by_arc_length_and_side():
+    script = _script()
+    poly = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]])
+    s, off = script.onto(poly, np.array([[4.0, 1.0], [12.0, 6.0], [9.0, 3.0], [9.0, -1.5]]))
+    # Left of the direction of travel is positive; the nearest segment decides.
+    assert np.allclose(s, [4.0, 16.0, 13.0, 9.0])
+    assert np.allclose(off, [1.0, -2.0, 1.0, -1.5])
+    arc, pts = script.along(poly, 2.5)
+    assert np.allclose(arc, np.arange(0.0, 20.0, 2.5)) and np.allclose(pts[5], [10.0, 2.5])
+
+
+def test_the_fall_line_trace_follows_the_slope_and_ends_on_flat_ground(tmp_path):
+    # On a ground that falls along x only, the fall line from the drop point is the
+    # straight line down x to the bench, so both traces give nearly the same section
+    # (the straight line heads for the middle of the stops, a degree or two off x).
+    data = fake_dataset(tmp_path / "data")
+    script = _script()
+    assert script.main([str(data), str(tmp_path / "line")]) == 0
+    assert script.main([str(data), str(tmp_path / "fall"), "--trace", "fall-line"]) == 0
+    for name in ("P1", "P2"):
+        a = np.loadtxt(tmp_path / "line" / f"stops_{name}.csv", delimiter=",", skiprows=1)
+        b = np.loadtxt(tmp_path / "fall" / f"stops_{name}.csv", delimiter=",", skiprows=1)
+        assert np.abs(a[:, 0] - b[:, 0]).max() < 1.0
+        pa = load_project(tmp_path / "line" / f"authume_{name}.yaml").slope.points
+        pb = load_project(tmp_path / "fall" / f"authume_{name}.yaml").slope.points
+        xa, ya = np.array(pa).T
+        xb, yb = np.array(pb).T
+        grid = np.arange(0.0, min(xa[-1], xb[-1]), 1.0)
+        assert np.abs(np.interp(grid, xa, ya) - np.interp(grid, xb, yb)).max() < 0.3
+    args = script.argparse.Namespace(step=0.5, baseline=2.0, flat_deg=10.0)
+    parts = [script.read_stl(f) for f in sorted((data / "Geometries" / "STL").glob("*.stl"))]
+    tri = np.concatenate(parts)
+    zone = np.concatenate([np.full(len(t), k) for k, t in enumerate(parts)])
+    down = script.fall_line(tri, zone, np.array([0.0, 370.0]), args)
+    assert np.allclose(down[:, 1], 370.0, atol=1e-6)  # straight down x, no drift across
+    assert 29.0 <= down[-1, 0] <= 33.0  # down the slope and the wall, ends on the bench
