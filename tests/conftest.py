@@ -163,6 +163,22 @@ def pytest_collection_finish(session: pytest.Session) -> None:
 
 
 @pytest.fixture(scope="session", autouse=True)
+def _terminal_as_in_one_process() -> Iterator[None]:
+    """A pytest-xdist worker's terminal as a plain run's: no COLUMNS or LINES of its own.
+
+    xdist sets ``COLUMNS=80`` and ``LINES=24`` in every worker; the terminal
+    report (report/terminal.py) takes a set ``COLUMNS`` as the user's wish and
+    wraps at 80 where a pipe would get the content's own width, so the tests
+    that read a printed panel saw other text on two workers than on one.
+    """
+    with pytest.MonkeyPatch.context() as mp:
+        if os.environ.get("PYTEST_XDIST_WORKER"):
+            mp.delenv("COLUMNS", raising=False)
+            mp.delenv("LINES", raising=False)
+        yield
+
+
+@pytest.fixture(scope="session", autouse=True)
 def _no_pdf_unless_asked() -> Iterator[None]:
     """report.pdf only in the tests that read it (tests/report/test_pdf.py).
 

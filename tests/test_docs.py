@@ -29,6 +29,7 @@ MAX_README_LINES = 300
 #: Options the pages name that belong to other programs than rockfall-design.
 OTHER_PROGRAMS_OPTIONS = {
     "--write": "benchmarks/golden.py",
+    "--dist": "pytest (pytest-xdist)",
     "--kernel-only": "benchmarks/engine.py",
     "--no-first-compile": "benchmarks/engine.py",
     "--seeds": "benchmarks/optimise.py",
