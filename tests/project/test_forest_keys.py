@@ -56,3 +56,11 @@ def test_a_bad_forest_key_is_one_clear_error(tmp_path, forest, message):
         _load(tmp_path, forest)
     text = str(err.value)
     assert "p.yaml" in text and "forest" in text and "\n" not in text.strip()
+
+
+def test_a_material_without_trees_records_and_hashes_as_before(tmp_path):
+    """The resolved record leaves out forest: where there is none (golden hashes unchanged)."""
+    p = _load(tmp_path, "stems_per_ha: 600, dbh_mean_cm: 30")
+    materials = p.resolved_dict()["materials"]
+    assert "forest" not in materials["g"]
+    assert materials["w"]["forest"]["stems_per_ha"] == 600.0
