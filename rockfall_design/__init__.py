@@ -32,6 +32,7 @@ from .plugins.measure import (
     ProfileEdit,
     ProtectiveMeasure,
     Quantity,
+    Stand,
 )
 from .version import __version__
 
@@ -114,6 +115,7 @@ __all__ = [
     "Quantity",
     "SafetyConcept",
     "SafetyParams",
+    "Stand",
     "fraction_upper_bound",
     "fraction_lower_bound",
     "quantile_lower_bound",

@@ -26,7 +26,11 @@ M_SD_MUR = 10  #: standard deviation of mu_r
 M_ROUGH_H = 11  #: roughness height h_r (m): one-sided tilt up to atan(h_r / r)
 M_OBST = 12  #: mean obstacle height h_o (m) of the ground (rough_soft)
 M_VDRAG = 13  #: speed V_s (m/s) at which the resistance has doubled (rough_soft); 0 for none
-N_MAT_COLS = 14
+M_STEMS = 14  #: forest: stem density N (stems per m^2 of map area); 0 for no forest
+M_DBH = 15  #: forest: mean stem diameter at breast height (m)
+M_SD_DBH = 16  #: forest: standard deviation of the stem diameter (m)
+M_TREE_H = 17  #: forest: height up to which a passing rock's centre meets a stem (m)
+N_MAT_COLS = 18
 
 MODEL_SPANG = 0
 MODEL_RN_RT = 1

@@ -20,6 +20,7 @@ from . import _native, columns
 from ._jit import DIGEST, compile_notice, compiled
 from .batching import FIRST_BATCH, FIRST_BATCH_FEW_POINTS, _Batches, default_threads
 from .flight import path_tree
+from .forest import F_N, F_STOP
 from .problem import (
     EngineSettings,
     EnsembleResult,
@@ -47,6 +48,7 @@ from .records import (
     REL_VY,
     REL_W,
     REL_X,
+    WORK_CTX,
     BatchOut,
     Ground,
     Path,
@@ -54,7 +56,7 @@ from .records import (
     RockOut,
     Stations,
 )
-from .rng import stream_start
+from .rng import forest_stream, stream_start
 from .rock import simulate_rock
 
 __all__ = [
@@ -189,7 +191,8 @@ def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, 
     ns = stations.x.shape[0]
     gh = np.empty(ns)
     ge = np.empty(ns)
-    rng = np.empty(1, dtype=np.uint64)
+    # The rock's stream and its forest's (rng.forest_stream).
+    rng = np.empty(2, dtype=np.uint64)
     work = np.zeros(N_WORK)  # each rock's scratch (RockOut.work): no allocation per rock
     empty_traj = np.empty((0, columns.N_TRAJ_COLS))
     ntr = out.traj.shape[0]
@@ -215,6 +218,7 @@ def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, 
             rng[0] = resume.rngs[i]
         else:
             rng[0] = stream_start(key, first_index + i)
+        forest_stream(rng)
         gh[:] = np.nan
         ge[:] = np.nan
         # Without speed recording grid_v is one scratch row shared by all rocks.
@@ -235,6 +239,8 @@ def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, 
             resume.states[i],
         )
         out.caught_by[i] = cb
+        out.n_stems[i] = work[WORK_CTX + F_N]
+        out.forest_stop[i] = work[WORK_CTX + F_STOP] > 0.5
         out.status[i] = st
         out.x_end[i] = xe
         out.y_end[i] = ye
@@ -369,6 +375,8 @@ def run_ensemble(
         restart_x=rs_x,
         restart_state=out.srec,
         restart_rng=out.srng,
+        stems_met=out.n_stems,
+        stopped_by_forest=out.forest_stop,
     )
 
 
@@ -379,6 +387,7 @@ def _outputs(n: int, n_grid: int, n_user: int, n_traj: int, max_points: int, n_b
         status=np.empty(n, dtype=np.int8), x_end=np.empty(n), y_end=np.empty(n),
         n_imp=np.empty(n, dtype=np.int64), n_ev=np.empty(n, dtype=np.int64),
         max_x=np.empty(n), dur=np.empty(n), caught_by=np.empty(n, dtype=np.int64),
+        n_stems=np.empty(n, dtype=np.int32), forest_stop=np.empty(n, dtype=np.bool_),
         grid_h=np.empty((n, n_grid), dtype=np.float32),
         grid_e=np.empty((n, n_grid), dtype=np.float32),
         grid_v=np.empty((n if record_speed else 1, n_grid), dtype=np.float32),

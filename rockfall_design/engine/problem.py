@@ -51,6 +51,14 @@ class Material:
     drag_speed_ms : float
         Speed V_s (m/s) at which the resistance has doubled, rough_soft only;
         0 for a resistance that does not grow with the speed.
+    stems_per_ha : float
+        A forest on this ground: stems per hectare of map area; 0 for none
+        (``engine.forest``).
+    dbh_mean_cm, dbh_sd_cm : float
+        Mean and standard deviation of the stems' diameter at breast height (cm).
+    tree_height_m : float
+        Height above the ground (m) up to which a passing rock's centre meets
+        a stem.
     """
 
     impact_model: str = "spang"
@@ -67,6 +75,10 @@ class Material:
     roughness_height_m: float = 0.0
     obstacle_height_m: float = 0.0
     drag_speed_ms: float = 0.0
+    stems_per_ha: float = 0.0
+    dbh_mean_cm: float = 0.0
+    dbh_sd_cm: float = 0.0
+    tree_height_m: float = 0.0
 
     def row(self) -> np.ndarray:
         """This material as a row of the engine's material table."""
@@ -89,6 +101,11 @@ class Material:
         out[columns.M_ROUGH_H] = self.roughness_height_m
         out[columns.M_OBST] = self.obstacle_height_m
         out[columns.M_VDRAG] = self.drag_speed_ms
+        # The engine's forest in SI units: stems per m^2, diameters in m.
+        out[columns.M_STEMS] = self.stems_per_ha / 1e4
+        out[columns.M_DBH] = self.dbh_mean_cm / 100.0
+        out[columns.M_SD_DBH] = self.dbh_sd_cm / 100.0
+        out[columns.M_TREE_H] = self.tree_height_m
         return out
 
 
@@ -125,6 +142,11 @@ class Section:
         object.__setattr__(self, "x", x)
         object.__setattr__(self, "y", y)
         object.__setattr__(self, "segment_material", sm)
+
+    @property
+    def forested(self) -> bool:
+        """Whether a material of the section carries a forest (``Material.stems_per_ha``)."""
+        return any(m.stems_per_ha > 0.0 for m in self.materials)
 
     def material_table(self) -> np.ndarray:
         return np.vstack([m.row() for m in self.materials])
@@ -286,6 +308,11 @@ class EnsembleResult:
         station; NaN where it never passed.
     restart_rng : ndarray of uint64, shape (N, R)
         Each rock's random stream there.
+    stems_met : ndarray of int32, shape (N,)
+        Stems of a forest each rock met (``engine.forest``); 0 without forest.
+        A resumed rock counts those it met after its restart station.
+    stopped_by_forest : ndarray of bool, shape (N,)
+        The rocks a stem stopped (their status is ``stopped``, at the stem).
     """
 
     radius: np.ndarray
@@ -310,6 +337,8 @@ class EnsembleResult:
     restart_x: np.ndarray
     restart_state: np.ndarray
     restart_rng: np.ndarray
+    stems_met: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int32))
+    stopped_by_forest: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
 
     @property
     def n(self) -> int:

@@ -76,6 +76,8 @@ def _record_restart(q, srec, srng, rng, drawn, ctx, mode, xs, yabs, vx, vy, w, t
     """The full state of a rock at the first passage of restart station row ``q``.
 
     ``ctx`` holds (cur_seg, n_imp, n_ev, max_x) at the start of the phase.
+    The forest's state is not kept: a resumed rock draws its next stem afresh
+    and counts the stems it meets from there.
     """
     srec[q, RS_MODE] = mode
     srec[q, RS_X] = xs

@@ -148,8 +148,10 @@ class RockOut(NamedTuple):
     work : ndarray of float, shape (N_WORK,)
         The rock's scratch, any values in: ``work[:WORK_CTX]`` the
         restitution, friction and rolling resistance drawn for the segment it
-        is on, ``work[WORK_CTX:]`` the segment, impacts, events and largest x
-        of a restart record. The caller allocates it once per batch, so that
+        is on, ``work[WORK_CTX:WORK_STEM]`` the segment, impacts, events and
+        largest x of a restart record, ``work[WORK_STEM:]`` the forest's
+        state (``forest.F_*``: where the next stem stands, its material, the
+        stems met, whether a stem stopped the rock). The caller allocates it once per batch, so that
         the rock's loop allocates nothing (see ``_jit.hot``).
     """
 
@@ -167,7 +169,9 @@ class RockOut(NamedTuple):
 
 #: ``RockOut.work``: where the context of a restart record starts, and its length.
 WORK_CTX = 3
-N_WORK = 7
+#: ``RockOut.work``: where the forest's state starts (``forest.F_*`` from there).
+WORK_STEM = 7
+N_WORK = 11
 
 
 class BatchOut(NamedTuple):
@@ -185,6 +189,8 @@ class BatchOut(NamedTuple):
     max_x: np.ndarray
     dur: np.ndarray
     caught_by: np.ndarray
+    n_stems: np.ndarray
+    forest_stop: np.ndarray
     grid_h: np.ndarray
     grid_e: np.ndarray
     grid_v: np.ndarray

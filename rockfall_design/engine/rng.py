@@ -74,3 +74,26 @@ def truncated_normal(state: np.ndarray, mean: float, sd: float, lo: float, hi: f
         if lo <= v <= hi:
             return v
     return min(max(mean, lo), hi)
+
+
+_FOREST_SALT = np.uint64(0xF0E5751A9D3C0B27)
+
+
+@hot
+def forest_stream(state: np.ndarray) -> None:
+    """Start the forest's stream, ``state[1]``, from the rock's stream ``state[0]``.
+
+    The stems a rock meets draw from a stream of their own, a bijective mix
+    of the rock's, so that a rock's impacts draw the same numbers with or
+    without a forest: its path is the same up to its first stem, which makes
+    designs with and without a forest comparable rock by rock (common random
+    numbers), and leaves every result without a forest as it was.
+    """
+    state[1] = mix64(state[0] ^ _FOREST_SALT)
+
+
+@hot
+def next_uniform_in(state: np.ndarray, i: int) -> float:
+    """Next draw from U[0, 1) of the stream ``state[i]`` (as :func:`next_uniform`)."""
+    state[i] = state[i] + _GAMMA
+    return float(mix64(state[i]) >> _S11) * (1.0 / 9007199254740992.0)

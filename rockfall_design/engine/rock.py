@@ -52,6 +52,7 @@ from .columns import (
 from .contact import SLIP_TOL, _contact_accel, _start_from_rest
 from .drag import along, drag_speed_at, drag_stop, drag_time
 from .flight import _unit_tangent, locate, next_landing, path_height
+from .forest import F_X, has_forest, meet_stem, next_stem, stem_in_flight
 from .impact import _collide, _draw
 from .recording import _record, _record_restart, _traj_row
 from .records import (
@@ -85,8 +86,8 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         The rock's row of the release table (columns ``REL_*``): radius (m),
         mass (kg), release x (m), clearance above the centre path (m),
         initial velocity (m/s), spin (rad/s), whether it starts rolling.
-    rng : ndarray of uint64, shape (1,)
-        The rock's random stream.
+    rng : ndarray of uint64, shape (2,)
+        The rock's random stream, and its forest's (``rng.forest_stream``).
     stations : Stations
         Stations (m), sorted, the ground height there (m), and the rows of
         ``out.cross`` and ``out.srec`` they write to (``records.Stations``).
@@ -104,7 +105,10 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
     Returns
     -------
     status : int
-        How the path ended (``STOPPED``, ``EXIT_*``, ``UNRESOLVED``, ``CAUGHT``).
+        How the path ended (``STOPPED``, ``EXIT_*``, ``UNRESOLVED``, ``CAUGHT``);
+        a rock a stem stopped is ``STOPPED`` (at the stem), with
+        ``out.work[WORK_CTX + forest.F_STOP]`` set and the stems met in
+        ``out.work[WORK_CTX + forest.F_N]``.
     x, y : float
         Final position of the centre (m).
     n_impacts : int
@@ -220,6 +224,14 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             vt = vx * tx + vy * ty
             vx = vt * tx
             vy = vt * ty
+    # The forest (forest.py): the next stem ahead, drawn only where there is
+    # forest ahead, so that a section without one draws nothing for it. A
+    # resumed rock draws it afresh (the distance to the next stem is
+    # exponential, without memory, and the section may differ from the one
+    # the record was made on) and counts its stems from there.
+    ctx[F_X] = np.inf
+    if has_forest(mats):
+        next_stem(px, pseg, seg_mat, mats, r, x, ctx, rng)
 
     while True:
         if n_ev >= max_events:
@@ -236,6 +248,11 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             k = locate(px, x, vx)
             leaves, tf, k = next_landing(px, py, tree, x, y, vx, vy, k)
             x1 = x + vx * tf
+            # A stem before the landing ends the flight there.
+            stem = vx > 0.0 and ctx[F_X] < x1
+            if stem:
+                x1 = ctx[F_X]
+                tf = (x1 - x) / vx
             # Barriers crossed by this flight, in the order of travel; the
             # first that changes the path ends the flight there.
             hit = -1
@@ -305,6 +322,17 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                                         st_x[j], ys, vx, vy - G * ts, w, t + ts)
                     j += 1
             t += tf
+            if stem:
+                y = y + vy * tf - 0.5 * G * tf * tf
+                vy -= G * tf
+                x = x1
+                max_x = max(max_x, x)
+                stopped, y, vx, vy, w = stem_in_flight(px, py, pseg, seg_mat, mats, r, m, x, y,
+                                                       vx, vy, w, ctx, rng)
+                if stopped:
+                    status = STOPPED
+                    break
+                continue
             if leaves:
                 x = px[npc] if vx > 0.0 else px[0]
                 y = y + vy * tf - 0.5 * G * tf * tf
@@ -435,6 +463,14 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         else:
             xn = x + dx * ds_
             yn = y + dy * ds_
+        if dirn > 0 and ctx[F_X] < xn:
+            # The phase ends at the next stem (forest.py).
+            dd = max((ctx[F_X] - x) / dx, 0.0)
+            v1, tm = along(v, a, c, dd)
+            s1 = v1 / r if rolling else s + dsp * tm
+            xn = ctx[F_X]
+            yn = y + dy * dd
+            ev = 4
         # Barriers met in this phase, in the order of travel.
         hit = -1
         if nbar > 0:
@@ -509,6 +545,14 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         vx = v1 * dx
         vy = v1 * dy
         w = -s1 * dirn
+        if ev == 4:
+            # On the ground the centre is r / cos(beta) above it.
+            stopped, vx, vy, w = meet_stem(mats, r, m, r / abs(tx), vx, vy, w, ctx, rng)
+            if stopped:
+                status = STOPPED
+                break
+            next_stem(px, pseg, seg_mat, mats, r, x, ctx, rng)
+            continue
         if ev != 0:
             continue
         # End of the piece: leave the section, fly off a convex vertex, or

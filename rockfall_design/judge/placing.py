@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -19,7 +19,7 @@ import numpy as np
 from ..engine import Section, barrier_table, columns
 from ..plugins import blocked_provider, guard
 from ..plugins.concept import SafetyConcept
-from ..plugins.measure import Barrier, BarrierBehaviour, ProfileEdit
+from ..plugins.measure import Barrier, BarrierBehaviour, ProfileEdit, Stand
 from .design_block import design_block_of
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -177,7 +177,9 @@ def place_measures(
             # stretch that another measure digs out or fills, that ground is
             # gone. At the stretch's edges the ground is unchanged, so a fence
             # on the outer edge of a ditch or berm is fine.
-            if lo + _EDGE_TOLERANCE_M < b.footprint.x < hi - _EDGE_TOLERANCE_M:
+            # A forest keeps the ground: a fence may stand in it.
+            if (e.footprint.forest is None
+                    and lo + _EDGE_TOLERANCE_M < b.footprint.x < hi - _EDGE_TOLERANCE_M):
                 raise project.error_at(
                     ("measures", b.index, "x"),
                     f"{b.label} stands inside {e.label} (measures[{e.index}]), which "
@@ -200,7 +202,8 @@ def edited_section(project: Project, section: Section, placed: Sequence[PlacedMe
     """The section with every profile edit spliced into the ground.
 
     New segments take the edit's material, or else the material of the
-    original ground at their midpoint.
+    original ground at their midpoint; under an edit with a ``forest`` (a
+    protection forest), a copy of that material carrying the stand.
     """
     edits = sorted(
         (p for p in placed if isinstance(p.footprint, ProfileEdit)),
@@ -223,6 +226,16 @@ def edited_section(project: Project, section: Section, placed: Sequence[PlacedMe
             xs.append(float(x))
             ys.append(float(y))
 
+    materials = list(section.materials)
+    copies: dict[tuple[int, Stand], int] = {}
+
+    def forested(mat: int, stand: Stand) -> int:
+        # One copy of each material per stand, carrying the stand's trees.
+        if (mat, stand) not in copies:
+            materials.append(replace(section.materials[mat], **asdict(stand)))
+            copies[(mat, stand)] = len(materials) - 1
+        return copies[(mat, stand)]
+
     cursor = section.x[0]
     for p in edits:
         e = p.footprint
@@ -235,12 +248,15 @@ def edited_section(project: Project, section: Section, placed: Sequence[PlacedMe
             )
         mat = None if e.material is None else names.index(e.material)
         extend(pts[:1, 0], pts[:1, 1], None)
+        first = len(mats)
         extend(pts[1:, 0], pts[1:, 1], mat)
+        if e.forest is not None:
+            mats[first:] = [forested(m, e.forest) for m in mats[first:]]
         cursor = e.x_end
     keep = section.x > cursor
     extend(section.x[keep], section.y[keep], None)
     return Section(
-        np.asarray(xs), np.asarray(ys), np.asarray(mats, dtype=np.int64), section.materials
+        np.asarray(xs), np.asarray(ys), np.asarray(mats, dtype=np.int64), tuple(materials)
     )
 
 

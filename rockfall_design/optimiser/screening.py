@@ -299,7 +299,7 @@ class Screening:
         first edit run again, from their state saved there, on ``edited``
         (the section with the edits applied); the others keep their bare
         slope's row. Tables are cached per set of edits (their stations,
-        shapes and materials).
+        shapes, materials and stands of trees).
 
         Parameters
         ----------
@@ -317,7 +317,8 @@ class Screening:
         if not edits:
             return self.bare
         key = tuple((round(e.x_start, 6), round(e.x_end, 6),
-                     tuple(np.round(np.asarray(e.points, float).ravel(), 6)), e.material)
+                     tuple(np.round(np.asarray(e.points, float).ravel(), 6)), e.material,
+                     e.forest)
                     for e in edits)
         hit = self._edit_cache.get(key)
         if hit is not None:

@@ -301,6 +301,31 @@ class Barrier:
 
 
 @dataclass(frozen=True)
+class Stand:
+    """A stand of trees a measure grows or keeps on its stretch (a protection forest).
+
+    Attributes
+    ----------
+    stems_per_ha : float
+        Stems per hectare of map area, > 0.
+    dbh_mean_cm, dbh_sd_cm : float
+        Mean (> 0) and standard deviation (>= 0, at most the mean) of the
+        stems' diameter at breast height (cm).
+    tree_height_m : float
+        Height (m) up to which a passing rock's centre meets a stem.
+
+    See Also
+    --------
+    rockfall_design.engine.forest : what a stem does to a rock.
+    """
+
+    stems_per_ha: float
+    dbh_mean_cm: float
+    dbh_sd_cm: float
+    tree_height_m: float
+
+
+@dataclass(frozen=True)
 class ProfileEdit:
     """A stretch of ground replaced by new vertices (an excavation or a fill).
 
@@ -318,6 +343,10 @@ class ProfileEdit:
     material : str or None
         Material of the new segments; None keeps the material of the
         original ground at each new segment.
+    forest : Stand or None
+        Trees on the stretch: each new segment's material carries this
+        stand (a protection forest; the points then follow the ground
+        unchanged, and a barrier may stand inside the stretch).
     """
 
     x_start: float
@@ -326,6 +355,7 @@ class ProfileEdit:
     catch_from: float
     catch_to: float
     material: str | None = None
+    forest: Stand | None = None
 
 
 class Outcome(enum.IntEnum):

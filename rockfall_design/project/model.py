@@ -229,6 +229,10 @@ class Project(_Model):
                 data["rocks"]["size_step"] = self.size_step
             else:
                 data["rocks"].pop("size_step", None)
+        for material in (data.get("materials") or {}).values():
+            if isinstance(material, dict) and material.get("forest") is None:
+                # a material without trees: absent, so the record and hash are as before
+                material.pop("forest", None)
         if data["rocks"].get("design_block") is None:
             # absent unless given, so the record and hash of other projects are as before
             data["rocks"].pop("design_block", None)

@@ -53,6 +53,44 @@ class Scatter(_Model):
     )
 
 
+#: Default height (m) up to which a passing rock's centre meets a stem.
+#: ILLUSTRATIVE. Stems taper, and Dorren & Berger's (2006) energy law was
+#: measured with impacts in the lower stem, where the diameter is near the
+#: DBH: counting only impacts in the lowest 5 m errs towards less protection
+#: than a stand of 20 to 30 m trees gives. Give the stand's own value where
+#: rocks are seen to hit higher (scars on the stems).
+DEFAULT_TREE_HEIGHT_M = 5.0
+#: Most stems per hectare: 20,000 (a stem per 0.5 m^2, a young thicket).
+MAX_STEMS_PER_HA = 20_000.0
+
+
+class Forest(_Model):
+    """A stand of trees on a material's ground (engine/forest.py, docs/materials.md)."""
+
+    stems_per_ha: Annotated[Positive, Field(le=MAX_STEMS_PER_HA)] = Field(
+        description="Stem density (stems per hectare of map area); 0 < N <= 20,000."
+    )
+    dbh_mean_cm: Annotated[Positive, Field(le=300.0)] = Field(
+        description="Mean stem diameter at breast height, DBH (cm); 0 < DBH <= 300."
+    )
+    dbh_sd_cm: NonNegative = Field(
+        0.0, description="Standard deviation of the DBH (cm), at most the mean; the DBH is "
+        "drawn from a normal distribution truncated to [0, 2 x mean]."
+    )
+    tree_height_m: Annotated[Positive, Field(le=100.0)] = Field(
+        DEFAULT_TREE_HEIGHT_M,
+        description="Height above the ground (m) up to which a passing rock's centre meets "
+        "a stem (default 5, ILLUSTRATIVE: the lower stem, where the diameter is near the DBH).",
+    )
+
+    @model_validator(mode="after")
+    def _check_spread(self) -> "Forest":
+        if self.dbh_sd_cm > self.dbh_mean_cm:
+            raise _fail(f"must be at most dbh_mean_cm ({self.dbh_mean_cm:g}); the DBH is "
+                        "drawn within [0, 2 x mean]", ("dbh_sd_cm",))
+        return self
+
+
 #: Parameters of a material that may carry a published range (``ranges:``).
 RANGED_KEYS = ("restitution", "tangential_restitution", "friction", "rolling_resistance",
                "velocity_scaling_k", "roughness_deg", "roughness_height_m",
@@ -114,6 +152,11 @@ class Material(_Model):
     )
     scatter: Annotated[Scatter, BeforeValidator(_none_as_empty)] = Field(
         default_factory=Scatter, description="Standard deviations of the parameters."
+    )
+    forest: Forest | None = Field(
+        None,
+        description="Trees on this ground: stems_per_ha, dbh_mean_cm, dbh_sd_cm, "
+        "tree_height_m; a rock meets stems and loses the energy they take (docs/materials.md).",
     )
     ranges: dict[str, tuple[Number, Number]] | None = Field(
         None,

@@ -75,7 +75,12 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "truncated normals with the standard deviations of scatter:, and the impact normal "
         "is tilted by the roughness; every draw comes from a seeded stream per rock.",
         "Fences and walls are barriers at a station with a nominal height and an energy "
-        "capacity; ditches and berms reshape the ground; boulder rows are blocks with gaps.",
+        "capacity; ditches and berms reshape the ground; boulder rows are blocks with gaps; "
+        "a protection forest is a stand of stems on a stretch.",
+        "A forest on the ground (a material's forest:): stems met with the probability the "
+        "rock's path and the stand give, each taking the energy of Dorren & Berger's (2006) "
+        "law; the run counts the rocks that met stems and those the forest stopped, with "
+        "Clopper-Pearson bounds.",
         "Design values are statistics of the rocks that met a measure, stated with one-sided "
         "order-statistic confidence bounds; the fraction of rocks reaching the protected "
         "zone with a Clopper-Pearson bound.",
@@ -86,8 +91,16 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "quantities and the cost.",
         "No shape but the sphere (slabs, discs and columns only through the scatter of the "
         "ground parameters), no fragmentation of a rock on impact, no rock hitting another.",
-        "No trees or forest, no air drag, no ground that deforms or is cratered beyond what "
-        "restitution and friction represent.",
+        "Of trees, only a stand of stems on a material (forest:) or the protection_forest "
+        "measure: a rock meets stems as a Poisson stand gives them, below the stem height, "
+        "and each takes Dorren & Berger's (2006) E_max = 38.7 DBH^2.31 J. Every impact is "
+        "taken as central (the most a stem can take; an eccentric one takes less and turns "
+        "the rock aside, which a section cannot show), without a species factor; no "
+        "deadwood, no crowns, no stand that grows, thins or has gaps; stems met only on "
+        "downslope travel. Treat the forest's effect as the most a stand of that density "
+        "and diameter gives, and check it against the stand on site (scars, stopped blocks).",
+        "No air drag, no ground that deforms or is cratered beyond what restitution and "
+        "friction represent.",
         "A fence is a line at its station with a braking distance. Its nominal height "
         "is measured perpendicular to the slope, as EAD 340059 defines it: a rock "
         "passes over where its centre is more than the nominal height from the ground "

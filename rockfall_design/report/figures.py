@@ -140,6 +140,7 @@ _GROUND_LINE = "#5b4a36"
 _STATION = "#1f5fa8"
 _MEASURE = "#1e8449"
 _PROTECT = "#e8a0a0"
+_FOREST = "#3b7d3b"  # forested segments, shaded up to the stem height
 
 
 # ---- pieces ---------------------------------------------------------------------
@@ -150,6 +151,24 @@ def _ground(ax: Axes, section: Any) -> None:
     ax.fill_between(section.x, section.y, ymin, color=_GROUND_FILL, zorder=1)
     ax.plot(section.x, section.y, color=_GROUND_LINE, lw=1.5, zorder=3, label="ground")
     ax.set_ylim(bottom=ymin)
+
+
+def _forest(ax: Axes, study: Study | StreamedStudy) -> None:
+    """Shade the forested segments up to their stem height, with what the forest did."""
+    section = study.section
+    counts = study.forest_counts()
+    if counts is None:
+        return
+    label = (f"forest: {counts[0]:,} of {study.n:,} rocks met stems, "
+             f"{counts[1]:,} stopped by it")
+    for k, mi in enumerate(section.segment_material):
+        mat = section.materials[mi]
+        if mat.stems_per_ha <= 0.0:
+            continue
+        xs, ys = section.x[k:k + 2], section.y[k:k + 2]
+        ax.fill_between(xs, ys, ys + mat.tree_height_m, color=_FOREST, alpha=0.3, lw=0,
+                        zorder=2, label=label)
+        label = None
 
 
 def _marks(ax: Axes, study: Study | StreamedStudy, label: bool = True) -> None:
@@ -249,6 +268,7 @@ def profile_figure(study: Study | StreamedStudy, evaluation: Evaluation | None =
     fig = RockfallFigure(figsize=(11, 5.5), layout="constrained")
     ax = fig.add_subplot()
     _ground(ax, study.section)
+    _forest(ax, study)
     paths = study.paths()
     if paths:
         # One collection, rasterised in SVG and PDF: hundreds of paths as vector

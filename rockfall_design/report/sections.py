@@ -288,7 +288,26 @@ def _ends_table(summary: Mapping[str, Any]) -> Table:
     note = ("Stop position x of the rocks at rest (m): "
             f"mean {_fixed(sx['mean'], 1)}, p50 {_fixed(sx['p50'], 1)}, "
             f"p95 {_fixed(sx['p95'], 1)}, max {_fixed(sx['max'], 1)}.")
+    forest = forest_text(summary)
+    if forest:
+        note += " " + forest
     return Table("How the paths ended", ["end", "rocks", "share"], rows, note=note)
+
+
+def forest_text(summary: Mapping[str, Any]) -> str:
+    """What the forest did, with the shares' Clopper-Pearson intervals; '' without one."""
+    f = summary.get("forest")
+    if not f:
+        return ""
+
+    def share(key: str) -> str:
+        s = f[key + "_share"]
+        return (f"{f[key]:,} rocks ({100 * s['fraction']:.1f} %, "
+                f"{100 * f['confidence']:g} % interval {100 * s['lower']:.1f} to "
+                f"{100 * s['upper']:.1f} %)")
+
+    return (f"Forest: {share('met_stems')} met at least one stem; {share('stopped')} were "
+            "stopped by a stem (counted among the stopped).")
 
 
 def _protect_text(summary: Mapping[str, Any]) -> str:

@@ -19,6 +19,7 @@ from rich.text import Text
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
 from .listed import SHOWN, listed_lines
 from .outputs import OutputSet
+from .sections import forest_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
@@ -136,6 +137,8 @@ def simulation_renderable(summary: dict[str, Any]) -> Group:
                  if p.get("unresolved") else "", style),
             ),
         ]
+    if "forest" in summary:
+        parts += [Text(""), Text(forest_text(summary))]
     stats = summary.get("statistics", {})
     if stats.get("method") == "histograms":
         parts += [

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..engine import EngineSettings, Material, Releases, Section
-from ..project.schema import MAX_RADIUS_M, MIN_RADIUS_M
+from ..project.schema import MAX_RADIUS_M, MIN_RADIUS_M, Forest
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..project import Project
@@ -58,11 +58,20 @@ def section_from_project(project: Project) -> Section:
                 sd_restitution=m.scatter.restitution,
                 sd_friction=m.scatter.friction,
                 sd_rolling_resistance=m.scatter.rolling_resistance,
+                **_forest_fields(m.forest),
             )
         )
     pts = np.asarray(project.slope.points, dtype=float)
     seg_mat = np.array([names.index(n) for n in project.slope.materials], dtype=np.int64)
     return Section(pts[:, 0], pts[:, 1], seg_mat, tuple(mats))
+
+
+def _forest_fields(forest: Forest | None) -> dict[str, float]:
+    """The engine material's forest fields of a material's ``forest:`` (none: no forest)."""
+    if forest is None:
+        return {}
+    return {"stems_per_ha": forest.stems_per_ha, "dbh_mean_cm": forest.dbh_mean_cm,
+            "dbh_sd_cm": forest.dbh_sd_cm, "tree_height_m": forest.tree_height_m}
 
 
 def engine_settings(project: Project) -> EngineSettings:

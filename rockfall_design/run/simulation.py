@@ -114,6 +114,13 @@ class Study:
         """Number of rocks per end state, indexed by the engine's status codes."""
         return np.bincount(self.result.status, minlength=len(STATUS_NAMES))
 
+    def forest_counts(self) -> tuple[int, int] | None:
+        """Rocks that met at least one stem, and rocks a stem stopped; None without a forest."""
+        if not self.section.forested:
+            return None
+        r = self.result
+        return int((r.stems_met > 0).sum()), int(r.stopped_by_forest.sum())
+
     def ends(self) -> dict[str, int]:
         """Rocks per end state by name: ``stopped``, ``exit_downslope``, ``caught``, ...
 

@@ -56,6 +56,8 @@ class StreamedStudy:
     events: int = 0
     reaching: int = 0
     reaching_unresolved: int = 0
+    met_stems: int = 0
+    forest_stopped: int = 0
     trajectories: list[np.ndarray] = field(default_factory=list)
     _counts: np.ndarray = field(default_factory=lambda: np.zeros(len(STATUS_NAMES), np.int64))
     _rest_x: list[np.ndarray] = field(default_factory=list)
@@ -100,6 +102,8 @@ class StreamedStudy:
             self._rest_x.append(r.x_end[stopped][:room].copy())
             self._rest_y.append(r.y_end[stopped][:room].copy())
         self._counts += part.status_counts()
+        self.met_stems += int((r.stems_met > 0).sum())
+        self.forest_stopped += int(r.stopped_by_forest.sum())
         protect = self.project.protect
         if protect is not None:
             n_reach, n_unresolved = protected_zone_counts(r.max_x, r.status, protect.x)
@@ -114,6 +118,10 @@ class StreamedStudy:
     def status_counts(self) -> np.ndarray:
         """Number of rocks per end state, indexed by the engine's status codes."""
         return self._counts.copy()
+
+    def forest_counts(self) -> tuple[int, int] | None:
+        """Rocks that met a stem and rocks a stem stopped, as :meth:`Study.forest_counts`."""
+        return (self.met_stems, self.forest_stopped) if self.section.forested else None
 
     def ends(self) -> dict[str, int]:
         """Rocks per end state by name, as :meth:`Study.ends`."""

@@ -95,6 +95,9 @@ def run_summary(
         },
         "stations": stations,
     }
+    forest = study.forest_counts()
+    if forest is not None:
+        out["forest"] = forest_block(*forest, int(study.n))
     protect = study.project.protect
     if protect is not None:
         n_reach, n_unresolved = reaching or (0, 0)
@@ -105,6 +108,38 @@ def run_summary(
             "unresolved": int(n_unresolved),
         }
     return out
+
+
+#: Two-sided confidence of the bounds of the forest's counts in a summary.
+FOREST_CONFIDENCE = 0.95
+
+
+def forest_block(met: int, stopped: int, n: int) -> dict[str, Any]:
+    """The summary's ``forest``: rocks that met a stem, rocks a stem stopped, with bounds.
+
+    Each count with its two-sided 95 % Clopper-Pearson interval of the share
+    of rocks (the bounds of ``judge.bounds.fraction_bounds``, which this room
+    cannot import: judge imports run), so that a report says how sure the
+    share is.
+
+    References
+    ----------
+    .. [1] Clopper, C.J. and Pearson, E.S. (1934). The use of confidence or
+       fiducial limits illustrated in the case of the binomial. Biometrika
+       26, 404-413.
+    """
+    from scipy.special import betaincinv  # on first use, as judge.bounds does
+
+    tail = (1.0 - FOREST_CONFIDENCE) / 2.0
+
+    def share(x: int) -> dict[str, float]:
+        lower = 0.0 if x <= 0 or n <= 0 else float(betaincinv(x, n - x + 1, tail))
+        upper = 1.0 if x >= n else float(betaincinv(x + 1, n - x, 1.0 - tail))
+        return {"fraction": x / n if n else 0.0, "lower": lower, "upper": upper}
+
+    return {"confidence": FOREST_CONFIDENCE,
+            "met_stems": int(met), "met_stems_share": share(met),
+            "stopped": int(stopped), "stopped_share": share(stopped)}
 
 
 def percentile_label(q: float) -> str:

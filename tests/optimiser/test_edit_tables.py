@@ -40,3 +40,24 @@ def test_a_table_dropped_from_the_cache_does_not_lend_its_key_to_the_next(regist
     assert screen.bare.serial == 0
     # Three runs, the third of the first geometry again after the cache lost it.
     assert len(set(serials)) == 3 and 0 not in serials
+
+
+def test_two_stands_on_one_stretch_are_two_tables(registry):
+    # A protection forest keeps the ground: two stands on one stretch share
+    # their points, and were one table when the cache knew edits by their
+    # shape alone.
+    project = load_project(PROJECTS / "design_forest_or_fence.yaml")
+    spec = resolve_design(project, registry)
+    concept = build_concept(project, registry)
+    screen = Screening(project, registry, spec, concept, rocks=300, seed=3)
+    (ci,) = sorted(screen.edit_candidates)
+    variables = _variables(spec.candidates, (ci,))
+    tables = []
+    for stems in ("low", "high"):
+        vec = [getattr(v, "high" if v.name == "stems_per_ha" and stems == "high" else "low")
+               for v in variables]
+        measures = screen.measures(_decode(spec.candidates, (ci,), variables, vec))
+        placed = place_measures(project, registry, measures, screen.section)
+        edited = edited_section(project, screen.section, placed)
+        tables.append(screen.table_for([p.footprint for p in placed], edited))
+    assert tables[0] is not tables[1] and tables[0].serial != tables[1].serial

@@ -15,7 +15,7 @@ from rockfall_design.plugins import load_registry
 
 ROOT = Path(__file__).resolve().parents[2]
 
-MEASURES = ("berm", "boulder_row", "ditch", "fence", "wall")
+MEASURES = ("berm", "boulder_row", "ditch", "fence", "protection_forest", "wall")
 CONCEPTS = ("onr24810", "reliability", "spang", "uni11211")
 COST_MODELS = ("unit_prices",)
 

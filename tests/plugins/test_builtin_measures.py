@@ -15,18 +15,27 @@ import pytest
 from numpy.testing import assert_allclose
 from pydantic import ValidationError
 from rockfall_design_builtins import measures as builtin
-from rockfall_design_builtins.measures import Berm, BoulderRow, Ditch, Fence, Wall, cut_and_fill
+from rockfall_design_builtins.measures import (
+    Berm,
+    BoulderRow,
+    Ditch,
+    Fence,
+    ProtectionForest,
+    Wall,
+    cut_and_fill,
+)
 from rockfall_design_builtins.measures import berm as berm_module
 from rockfall_design_builtins.measures import boulder_row as boulder_row_module
 from rockfall_design_builtins.measures import ditch as ditch_module
 from rockfall_design_builtins.measures import fence as fence_module
+from rockfall_design_builtins.measures import protection_forest as forest_module
 from rockfall_design_builtins.measures import wall as wall_module
 
 from rockfall_design import Barrier, BarrierBehaviour, ProfileEdit, ProtectiveMeasure
 from rockfall_design.engine import Material, Section
 from rockfall_design.plugins import hookspecs
 
-ALL = [Fence, Wall, Ditch, Berm, BoulderRow]
+ALL = [Fence, Wall, Ditch, Berm, BoulderRow, ProtectionForest]
 
 SIMPLE = [[0, 100], [30, 60], [60, 30], [80, 20], [120, 15], [200, 12]]
 
@@ -72,14 +81,16 @@ def check_edit(edit: ProfileEdit, section: Section) -> None:
 def test_each_module_registers_its_one_measure_through_a_fresh_plugin_manager():
     pm = pluggy.PluginManager(hookspecs.PROJECT_NAME)
     pm.add_hookspecs(hookspecs)
-    modules = [berm_module, boulder_row_module, ditch_module, fence_module, wall_module]
+    modules = [berm_module, boulder_row_module, ditch_module, fence_module, forest_module,
+               wall_module]
     for module in modules:
         pm.register(module, name=module.__name__)
     pm.check_pending()
     results = pm.hook.rockfall_design_measures()
     assert all(len(result) == 1 for result in results)  # one measure per module
     classes = [c for result in results for c in result]
-    assert sorted(c.kind for c in classes) == ["berm", "boulder_row", "ditch", "fence", "wall"]
+    assert sorted(c.kind for c in classes) == ["berm", "boulder_row", "ditch", "fence",
+                                               "protection_forest", "wall"]
     assert all(issubclass(c, ProtectiveMeasure) for c in classes)
     # The package only names the classes: registering it registers nothing.
     assert not hasattr(builtin, "rockfall_design_measures")
@@ -87,7 +98,7 @@ def test_each_module_registers_its_one_measure_through_a_fresh_plugin_manager():
 
 def test_every_builtin_measure_and_cost_model_has_its_own_entry_point():
     eps = {ep.name: ep.value for ep in entry_points(group="rockfall_design")}
-    for kind in ("fence", "wall", "ditch", "berm", "boulder_row"):
+    for kind in ("fence", "wall", "ditch", "berm", "boulder_row", "protection_forest"):
         assert eps[kind] == f"rockfall_design_builtins.measures.{kind}"
     assert eps["unit_prices"] == "rockfall_design_builtins.costs.unit_prices"
 
@@ -457,3 +468,40 @@ def test_cut_and_fill_split_at_crossings():
     # a crossing inside an interval: d = 1 at x=0, -3 at x=4 -> root at 1
     cut, fill = cut_and_fill(x_old, y_old, np.array([0.0, 4.0]), np.array([-1.0, 3.0]))
     assert_allclose([cut, fill], [0.5, 4.5])
+
+
+# ---------------------------------------------------------------------------
+# protection forest
+# ---------------------------------------------------------------------------
+
+
+def test_protection_forest_keeps_the_ground_and_carries_its_stand(simple):
+    m = build(ProtectionForest, x=25.0, length=50.0, stems_per_ha=600.0, dbh_mean_cm=30.0)
+    fp = m.footprint(simple)
+    check_edit(fp, simple)
+    # The ground unchanged: its own vertices inside the stretch, heights on it.
+    assert_allclose(fp.points[:, 0], [25.0, 30.0, 60.0, 75.0])
+    assert_allclose(fp.points[:, 1], simple.ground_height(fp.points[:, 0]))
+    assert fp.forest is not None and fp.forest.stems_per_ha == 600.0
+    assert fp.forest.dbh_sd_cm == pytest.approx(10.0)  # a third of the mean by default
+    assert (fp.catch_from, fp.catch_to) == (25.0, 75.0)
+
+
+def test_protection_forest_cost_is_the_discounted_yearly_cost_per_hectare(simple):
+    from rockfall_design_builtins.measures.protection_forest import present_worth_factor
+
+    m = build(ProtectionForest, x=25.0, length=50.0, stems_per_ha=600.0, dbh_mean_cm=30.0,
+              working_life_years=50.0, discount_rate=0.02)
+    q = m.quantities(simple)
+    # (1 - 1.02^-50) / 0.02 = 31.4236 (annuity tables).
+    assert present_worth_factor(50.0, 0.02) == pytest.approx(31.4236, abs=1e-4)
+    assert present_worth_factor(10.0, 0.0) == 10.0
+    assert q["forest_ha_year_per_m"] == pytest.approx(50.0 / 1e4 * 31.4236, rel=1e-5)
+    (bill,) = m.bill_from(q)
+    assert bill.name == "forest_ha_year" and bill.name in ProtectionForest.default_prices
+
+
+def test_protection_forest_spread_above_the_mean_is_refused():
+    with pytest.raises(ValidationError, match="dbh_sd_cm"):
+        ProtectionForest.Params(x=25.0, length=50.0, stems_per_ha=600.0, dbh_mean_cm=20.0,
+                                dbh_sd_cm=25.0)
