@@ -111,6 +111,10 @@ class _Table:
     oh: np.ndarray | None = None  # (len(rows), S - first_col)
     oe: np.ndarray | None = None
     ov: np.ndarray | None = None
+    #: The resumed rocks crossed forested ground: a resumed rock draws its next
+    #: stem afresh (engine.forest), so its path is not the full run's; the
+    #: screening treats those rocks as approximated and the exact run decides.
+    resumed_approximate: bool = False
     #: Which table this is, for the search's caches (0: the bare slope). Never
     #: ``id()``: a table dropped from the cache of edited tables frees its id
     #: for the next one, whose rocks would then be looked up under the old
@@ -350,6 +354,7 @@ class Screening:
             cols = np.searchsorted(res.grid, self.grid[first:])
             t.rows = idx
             t.first_col = first
+            t.resumed_approximate = bool(edited.forested)
             t.oh = res.grid_height[:, cols].astype(float)
             t.oe = res.grid_energy[:, cols].astype(float) / 1e3
             t.ov = res.grid_speed[:, cols].astype(float)
@@ -471,6 +476,8 @@ class Screening:
                           status=table.status.copy(), mass=self.mass, radius=self.radius)
         alive = np.ones(self.n, dtype=bool)
         approx = np.zeros(self.n, dtype=bool)
+        if table.resumed_approximate and table.rows is not None:
+            approx[table.rows] = True
         upstream: list[tuple[float, np.ndarray]] = []  # (station, rocks approximated there)
         outcomes: list[np.ndarray | None] = [None] * len(placed)
         meetings: list[np.ndarray | None] = [None] * len(placed)

@@ -16,7 +16,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-__all__ = ["listed_lines", "what_decides", "values_phrase"]
+__all__ = ["forest_text", "listed_lines", "what_decides", "values_phrase"]
 
 
 #: Marginal or undecided cheaper designs the panel, the report and design.yaml show.
@@ -107,3 +107,19 @@ def listed_lines(marginal: Sequence[Mapping[str, Any]] | None, currency: str = "
         out.append(f"- ... and {len(marginal) - shown} more cheaper designs marginal or not "
                    "decided (listed under 'marginal' in --json and summary.json)")
     return out
+
+
+def forest_text(summary: Mapping[str, Any]) -> str:
+    """What the forest did, with the shares' Clopper-Pearson intervals; '' without one."""
+    f = summary.get("forest")
+    if not f:
+        return ""
+
+    def share(key: str) -> str:
+        s = f[key + "_share"]
+        return (f"{f[key]:,} rocks ({100 * s['fraction']:.1f} %, "
+                f"{100 * f['confidence']:g} % interval {100 * s['lower']:.1f} to "
+                f"{100 * s['upper']:.1f} %)")
+
+    return (f"Forest: {share('met_stems')} met at least one stem; {share('stopped')} were "
+            "stopped by a stem (counted among the stopped).")

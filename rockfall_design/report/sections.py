@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 from ..run.passages import QUANTITIES
 from ..version import __version__
 from .design_values import state_of
+from .listed import forest_text
 from .tables import chosen_name, measure_text, passages_frame, round_value
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -292,22 +293,6 @@ def _ends_table(summary: Mapping[str, Any]) -> Table:
     if forest:
         note += " " + forest
     return Table("How the paths ended", ["end", "rocks", "share"], rows, note=note)
-
-
-def forest_text(summary: Mapping[str, Any]) -> str:
-    """What the forest did, with the shares' Clopper-Pearson intervals; '' without one."""
-    f = summary.get("forest")
-    if not f:
-        return ""
-
-    def share(key: str) -> str:
-        s = f[key + "_share"]
-        return (f"{f[key]:,} rocks ({100 * s['fraction']:.1f} %, "
-                f"{100 * f['confidence']:g} % interval {100 * s['lower']:.1f} to "
-                f"{100 * s['upper']:.1f} %)")
-
-    return (f"Forest: {share('met_stems')} met at least one stem; {share('stopped')} were "
-            "stopped by a stem (counted among the stopped).")
 
 
 def _protect_text(summary: Mapping[str, Any]) -> str:

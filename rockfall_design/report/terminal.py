@@ -17,9 +17,8 @@ from rich.table import Table
 from rich.text import Text
 
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
-from .listed import SHOWN, listed_lines
+from .listed import SHOWN, forest_text, listed_lines
 from .outputs import OutputSet
-from .sections import forest_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
