@@ -45,15 +45,14 @@ print(json.dumps(after_simulate))
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("helper", ["1", "0"])
-def test_the_first_compile_compiles_each_part_once(tmp_path, helper):
+def test_the_first_compile_compiles_each_part_once(tmp_path):
     # In an empty cache: the event loop is compiled once (here, before the
     # kernel, for the kernel's own argument types), the sweep by the helper
     # (loaded here from the cache it filled) or here, and the optimiser's run
     # on the same cache compiles nothing more. A wrong guess of the types
     # would compile the event loop a second time inside the kernel's compile.
     env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
-    env.update(XDG_CACHE_HOME=str(tmp_path), ROCKFALL_DESIGN_COMPILE_HELPER=helper,
+    env.update(XDG_CACHE_HOME=str(tmp_path), ROCKFALL_DESIGN_COMPILE_HELPER="1",
                ROCKFALL_DESIGN_NATIVE="0")
     out = subprocess.run([sys.executable, "-c", FIRST_RUN, str(ROOT / "projects" /
                                                                 "benchmark.yaml")],
@@ -61,7 +60,7 @@ def test_the_first_compile_compiles_each_part_once(tmp_path, helper):
     assert out.returncode == 0, out.stderr
     got = json.loads(out.stdout.splitlines()[-1])
     assert got["rock_compiles"] == 1
-    if helper == "1" and len(os.sched_getaffinity(0)) >= 2:
+    if len(os.sched_getaffinity(0)) >= 2:
         assert got["path_compiles"] == 0 and got["path_loads"] == 1
     else:
         assert got["path_compiles"] == 1
