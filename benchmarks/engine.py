@@ -1,7 +1,7 @@
 """Engine speed on the standard peer case: cold, warm and whole process, and the peer.
 
     python benchmarks/engine.py [--rocks 100000 1000000] [--peer-python PATH]
-        [--peer-case DIR] [--repeats 3] [--no-first-compile]
+        [--peer-case DIR] [--repeats 3] [--no-first-compile] [--against TREE]
     PYTHONPATH=OTHER_TREE python benchmarks/engine.py --kernel-only   # compare two engines
 
 The case is the standard peer case (../shared/peer-case/README.md):
@@ -24,6 +24,9 @@ interpreter from the peer-case folder), measured in the same run. Printed:
   speeds, resumed rocks), which must compile nothing more; and the load of
   the compiled engine in a fresh process (its first run of one rock less its
   second), through the kept machine code and through numba's cache;
+* with ``--against TREE``: the same figures of another version's engine in
+  the same run, alternated with this one's (first compile, cold
+  ``runtime_s``, the least CPU time of one-thread kernel runs);
 * the peer's rate and the ratios the aims are stated in (issue 27, item 11:
   cold ``runtime_s`` at least 20 times the peer's rate, whole process at
   1,000,000 rocks at least 10 times). Without a peer interpreter the peer's
@@ -223,7 +226,15 @@ print(json.dumps({"import": t1 - t0, "first": runs[0], "second": runs[1],
 """
 
 
-def first_compile(cache_home: Path) -> dict[str, float | bool | str]:
+def tree_env(tree: Path | None) -> dict[str, str]:
+    """The environment of a child that runs the engine of ``tree`` (this one if None)."""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    if tree is not None:
+        env["PYTHONPATH"] = str(tree)
+    return env
+
+
+def first_compile(cache_home: Path, tree: Path | None = None) -> dict[str, float | bool | str]:
     """The first run after an install, in an empty cache: compile, and what follows.
 
     ``simulate --rocks 10`` of the benchmark project in a fresh process with
@@ -234,7 +245,7 @@ def first_compile(cache_home: Path) -> dict[str, float | bool | str]:
     (:data:`LOAD_ENGINE`), through its kept machine code and through numba's
     own cache (``ROCKFALL_DESIGN_NATIVE=0``).
     """
-    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env = tree_env(tree)
     env["XDG_CACHE_HOME"] = str(cache_home)
     wall, _, _, err, cpu = run_child_full(simulate_cmd(10), env)
     said = [ln for ln in err.splitlines() if "engine compiled in" in ln]
@@ -271,6 +282,51 @@ def print_first_compile(fc: dict[str, float | bool | str]) -> None:
               f", numba's compiler {'built' if fc[f'{tag}_compiler'] else 'not built'}")
 
 
+KERNEL_ROCKS = 50_000
+"""Rocks of the one-thread kernel runs that compare two trees (least CPU time of five)."""
+
+
+def against(tree: Path, n: int, repeats: int) -> None:
+    """This tree against ``tree`` in the same run: first compile, cold and warm.
+
+    Each figure alternates the two trees (this one first), so that a change
+    of the machine's load falls on both: the first compile in an empty cache
+    (wall and CPU time, the helper process's included), ``runtime_s`` of
+    fresh processes at n rocks, and the least CPU time of five one-thread
+    kernel runs of :data:`KERNEL_ROCKS` rocks in one process (the warm kernel).
+    """
+    import tempfile
+
+    trees = {"this tree": None, f"against {tree}": tree}
+    for name, t in trees.items():
+        with tempfile.TemporaryDirectory(prefix="rockfall-design-first-") as tmp:
+            fc = first_compile(Path(tmp), t)
+        print(f"{name}: first compile wall {fc['wall']:.1f} s, CPU {fc['cpu']:.1f} s "
+              f"(said: {fc['said'] or 'nothing'}), optimiser's run "
+              f"{'COMPILED A SECOND VARIANT' if fc['opt_compiled'] else 'compiled nothing'}, "
+              f"load {fc['native_load']:.3f} s; load average {os.getloadavg()[0]:.1f}")
+    cold: dict[str, list[float]] = {name: [] for name in trees}
+    cpu: dict[str, list[float]] = {name: [] for name in trees}
+    for t in trees.values():
+        run_child_full(simulate_cmd(10), tree_env(t))  # compiled or loaded, not timed
+    for _ in range(repeats):
+        for name, t in trees.items():
+            _, _, out, _, _ = run_child_full(simulate_cmd(n), tree_env(t))
+            cold[name].append(json.loads(out)["runtime_s"])
+    for _ in range(2):
+        for name, t in trees.items():
+            _, _, out, _, _ = run_child_full(
+                [sys.executable, str(Path(__file__).resolve()), "--kernel-cpu",
+                 str(KERNEL_ROCKS)], tree_env(t))
+            cpu[name].append(json.loads(out)["cpu"])
+    for name in trees:
+        rt = sorted(cold[name])
+        print(f"{name}: cold runtime_s at {n:,} rocks best {rt[0]:.3f} s, median "
+              f"{rt[len(rt) // 2]:.3f} s; warm kernel, least CPU of 5 one-thread runs of "
+              f"{KERNEL_ROCKS:,} rocks: {', '.join(f'{c:.3f}' for c in cpu[name])} s")
+    print(f"load average {os.getloadavg()[0]:.1f}")
+
+
 def warm(n: int, repeats: int) -> tuple[float, float, list[float]]:
     """In this process: the first 1-rock run (s), then ``repeats`` runs of n rocks (s each).
 
@@ -299,7 +355,15 @@ def main() -> None:
     ap.add_argument("--kernel-only", action="store_true",
                     help="only the kernel figures (to compare two versions of the engine "
                          "in one session, e.g. with PYTHONPATH set to another tree)")
+    ap.add_argument("--against", type=Path, default=None, metavar="TREE",
+                    help="also measure the engine of TREE (a checkout or `git archive` of "
+                         "another version) in the same run: first compile, cold, warm kernel")
+    ap.add_argument("--kernel-cpu", type=int, default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.kernel_cpu:
+        t, events = kernel_cpu(args.kernel_cpu)
+        print(json.dumps({"cpu": t, "events": events}))
+        return
     if args.kernel_only:
         import rockfall_design
 
@@ -362,6 +426,9 @@ def main() -> None:
         wall, rss = whole[n]
         print(f"whole process, {n:,} rocks: {wall:.2f} s = {n / wall:,.0f} rocks/s "
               f"({n / wall / rate:.1f}x the peer), peak resident {rss:,.0f} MiB")
+    if args.against is not None:
+        print()
+        against(args.against.resolve(), n0, args.repeats)
 
 
 if __name__ == "__main__":

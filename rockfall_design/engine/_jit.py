@@ -25,15 +25,17 @@ installed is removed first (:func:`drop_stale_cache`).
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import hashlib
 import os
 import shutil
+import subprocess
 import sys
 import tempfile
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -269,7 +271,8 @@ def hot(fn: Callable[..., Any]) -> Any:
     """
     from numba import njit
 
-    return one_variant(njit(cache=CACHE, _nrt=False)(fn))
+    optimise_once()
+    return one_variant(njit(cache=CACHE, _nrt=False, no_cfunc_wrapper=True)(fn))
 
 
 def compiled(fn: Callable[..., Any] | None = None, *, nogil: bool = False) -> Any:
@@ -278,11 +281,20 @@ def compiled(fn: Callable[..., Any] | None = None, *, nogil: bool = False) -> An
     ``@compiled`` or ``@compiled(nogil=True)``: numba's ``njit(cache=...)``,
     with :func:`one_variant`. Use it, not ``njit``, for every function of the
     engine.
+
+    Neither this nor :func:`hot` has numba make a C-callable wrapper of the
+    function (``no_cfunc_wrapper``), which only numba's first-class function
+    types and ``cfunc`` use, and the engine neither: numba lowers one for
+    every function it compiles, about a twentieth of the first compile
+    (measured with ``py-spy`` on ``simulate projects/benchmark.yaml`` in an
+    empty cache), with its machine code. The Python wrapper stays: the
+    kernel is called from Python, and tests call the event loop's functions.
     """
     def wrap(f: Callable[..., Any]) -> Any:
         from numba import njit
 
-        return one_variant(njit(cache=CACHE, nogil=nogil)(f))
+        optimise_once()
+        return one_variant(njit(cache=CACHE, nogil=nogil, no_cfunc_wrapper=True)(f))
 
     return wrap if fn is None else wrap(fn)
 
@@ -314,20 +326,165 @@ def one_variant(dispatcher: Any) -> Any:
         return dispatcher
 
     def get_call_template(args: Sequence[Any], kws: dict[str, Any]) -> Any:
+        await_helper(dispatcher)
         plain = tuple(types.unliteral(a) for a in args)
         plain_kws = {k: types.unliteral(v) for k, v in kws.items()}
-        if plain != tuple(args) or plain_kws != kws:
-            try:
-                return base(dispatcher, plain, plain_kws)
-            except errors.TypingError:
-                pass
-        return base(dispatcher, args, kws)
+        with as_callee():
+            if plain != tuple(args) or plain_kws != kws:
+                try:
+                    return base(dispatcher, plain, plain_kws)
+                except errors.TypingError:
+                    pass
+            return base(dispatcher, args, kws)
 
     try:
         dispatcher.get_call_template = get_call_template
     except AttributeError:  # pragma: no cover - a dispatcher without __dict__
         pass
     return dispatcher
+
+
+_callee = threading.local()
+
+
+@contextlib.contextmanager
+def as_callee() -> Iterator[None]:
+    """Within: what numba compiles is compiled for a compiled caller (see :func:`optimise_once`)."""
+    _callee.depth = getattr(_callee, "depth", 0) + 1
+    try:
+        yield
+    finally:
+        _callee.depth -= 1
+
+
+def optimise_once() -> bool:
+    """Have LLVM's module passes run once on the kernel, not again on each function under it.
+
+    numba optimises each compiled function's module with every callee
+    linked in (its "cheap" and "full" module passes, at ``NUMBA_OPT``), then
+    links that module into each caller and optimises the whole again: the
+    event loop's code was optimised in the modules of ``simulate_rock``, of
+    the kernel and of every function between, the centre path's sweep in
+    four. A function compiled for a compiled caller (its typing calls it,
+    :func:`one_variant`) now keeps its module as LLVM's function passes left
+    it; the caller that Python calls (the kernel) runs the module passes on
+    everything at once, where LLVM inlines and optimises the callees as it
+    did. Results are bit-identical (no pass changes floating-point
+    semantics: numba compiles without fast-math); the kernel's speed is
+    measured in docs/speed.md. A callee later called from Python itself (a
+    test calling ``impact``) runs its less optimised code.
+
+    numba's ``CPUCodeLibrary`` is not public API: if it changes, nothing is
+    patched and numba's own behaviour applies. ``ROCKFALL_DESIGN_OPTIMISE_ONCE=0``
+    turns it off.
+
+    Returns
+    -------
+    bool
+        True if patched (now or before).
+    """
+    if os.environ.get("ROCKFALL_DESIGN_OPTIMISE_ONCE", "1") == "0":
+        return False
+    try:
+        from numba.core import codegen
+
+        cls = codegen.CPUCodeLibrary
+        full = cls._optimize_final_module
+    except (ImportError, AttributeError):  # pragma: no cover - numba changed
+        return False
+    if getattr(full, "_rockfall_design", False):
+        return True
+
+    def _optimize_final_module(self: Any) -> None:
+        if getattr(_callee, "depth", 0) > 0:
+            return
+        full(self)
+
+    _optimize_final_module._rockfall_design = True  # type: ignore[attr-defined]
+    cls._optimize_final_module = _optimize_final_module
+    return True
+
+
+HELPER_TIMEOUT = 900.0
+"""Longest wait (s) for a helper process's compile before compiling here instead."""
+
+_helpers: dict[int, subprocess.Popen] = {}  # id(dispatcher) -> the helper compiling it
+_helpers_lock = threading.Lock()
+
+
+def compile_in_helper(dispatchers: Sequence[Any], code: str, payload: bytes) -> bool:
+    """Have a second Python process compile ``dispatchers`` into the shared cache.
+
+    numba compiles one function at a time in a process (a global lock), and
+    the first compile of the engine is one thread's work; on a machine of
+    two or more cores, a helper process compiles an independent part of the
+    engine (the centre path's sweep, say) while this one compiles the rest.
+    When this process's compile reaches a call of one of ``dispatchers``
+    (its typing, :func:`one_variant`), it waits for the helper and loads the
+    compiled function from the cache (numba reads its index anew each time):
+    the machine code linked into the caller is the same as if this process
+    had compiled it. If the helper fails, or takes over :data:`HELPER_TIMEOUT`,
+    this process compiles the function itself, as before.
+
+    Parameters
+    ----------
+    dispatchers : sequence of numba dispatchers
+        What the helper compiles (each waited for on its first call).
+    code : str
+        The helper's program (``python -c``); it reads ``payload`` on stdin.
+    payload : bytes
+        Its input.
+
+    Returns
+    -------
+    bool
+        True if a helper was started. Not without a cache to share, on one
+        core, or with ``ROCKFALL_DESIGN_COMPILE_HELPER=0``.
+    """
+    if not CACHE or os.environ.get("ROCKFALL_DESIGN_COMPILE_HELPER", "1") == "0":
+        return False
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        cores = os.cpu_count() or 1
+    if cores < 2:
+        return False
+    try:
+        # Its own session: a Ctrl-C here does not print its traceback; it is
+        # ended at exit if still running.
+        proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                start_new_session=True)
+        assert proc.stdin is not None
+        proc.stdin.write(payload)
+        proc.stdin.close()
+    except (OSError, ValueError):
+        return False
+    atexit.register(_end_helper, proc)
+    with _helpers_lock:
+        for d in dispatchers:
+            _helpers[id(d)] = proc
+    return True
+
+
+def _end_helper(proc: subprocess.Popen) -> None:
+    if proc.poll() is None:
+        proc.kill()
+        with contextlib.suppress(OSError, subprocess.TimeoutExpired):
+            proc.wait(5)
+
+
+def await_helper(dispatcher: Any) -> None:
+    """Wait for the helper compiling ``dispatcher``, if any (:func:`compile_in_helper`)."""
+    with _helpers_lock:
+        proc = _helpers.pop(id(dispatcher), None)
+    if proc is None:
+        return
+    try:
+        proc.wait(HELPER_TIMEOUT)
+    except subprocess.TimeoutExpired:
+        _end_helper(proc)
+
 
 _notice_lock = threading.Lock()
 _checked: set[tuple[int, tuple]] = set()

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _native, columns
+from . import _first_compile, _native, columns
 from ._jit import DIGEST, compile_notice, compiled
 from .batching import FIRST_BATCH, FIRST_BATCH_FEW_POINTS, _Batches, default_threads
 from .flight import path_tree
@@ -579,6 +579,7 @@ def _run_all(batch_args: Callable[[int, int], tuple], batches: _Batches, n: int,
         compiled = (None if native is not None and native.accepts(args0)
                     else compile_notice(_run_batch, args0))
         if compiled is not None:
+            _first_compile.start(_path, args0)
             n_done += run(*first)
             compiled()
             if progress is not None:
