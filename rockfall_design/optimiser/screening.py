@@ -23,6 +23,8 @@ import numpy as np
 from ..engine import Releases, Section, columns, run_ensemble
 from ..errors import ProjectError
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
+from ..judge.candidates import build_candidate_measure
+from ..judge.costing import design_cost
 from ..judge.outcomes import (
     Judgement,
     RockFates,
@@ -158,8 +160,6 @@ class Screening:
         ``restart_stations`` (m), when given with ``stations``, are kept as
         restart stations, so that ground edits can still be judged.
         """
-        from ..judge.candidates import build_candidate_measure
-
         self.project = project
         self.registry = registry
         self.spec = spec
@@ -299,8 +299,6 @@ class Screening:
         KeyError or ValueError
             From the cost model: it has no price for one of the measures.
         """
-        from ..judge.costing import design_cost
-
         return design_cost(self.registry, self.spec, measures, self.section)
 
     # -- tables -------------------------------------------------------------------
