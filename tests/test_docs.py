@@ -42,6 +42,9 @@ OTHER_PROGRAMS_OPTIONS = {
     "--volume": "examples/stops_from_points.py",
     "--corridor": "examples/stops_from_points.py",
     "--against": "benchmarks/optimise.py",
+    "--across-only": "benchmarks/across.py",
+    "--no-check": "benchmarks/across.py",
+    "--project": "benchmarks/across.py",
     "--law": "examples/authume_quarry.py",
     "--replicates": "examples/authume_refits.py",
 }
