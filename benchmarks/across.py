@@ -1,6 +1,7 @@
 """Designs across scenarios: speed, and whether the chosen design holds in every scenario.
 
     python benchmarks/across.py [--project projects/design_two_zones.yaml] [--seed 11]
+                                [--rocks 1500] [--no-check] [--across-only]
 
 Adds a study of three scenarios to a bundled design project (the restitution
 of its first material at 0.9x, 1x and 1.1x its value, a grid) with
@@ -14,7 +15,11 @@ of its first material at 0.9x, 1x and 1.1x its value, a grid) with
 * the chosen design checked as an engineer would, ``check design.yaml
   --scenarios`` with the rocks that decided it and with twice as many
   (the seed of each check given): in how many scenarios it holds on the
-  point values and with confidence.
+  point values and with confidence (skipped with ``--no-check``).
+
+``--rocks`` sets the search rocks of both optimisations (default: the
+project's ``rocks.count``), and ``--across-only`` skips the one of the
+project as written, for a quick look at several seeds.
 
 Figures are from one run on this machine; run it again to compare.
 """
@@ -64,22 +69,31 @@ def main() -> None:
     parser.add_argument("--project", type=Path, default=ROOT / "projects" /
                         "design_two_zones.yaml")
     parser.add_argument("--seed", type=int, default=None)
+    parser.add_argument("--rocks", type=int, default=None,
+                        help="search rocks of both optimisations (default: the project's)")
+    parser.add_argument("--across-only", action="store_true",
+                        help="only the optimisation across the scenarios (no warm-up: its "
+                             "wall time then includes numba's compile, if not cached)")
+    parser.add_argument("--no-check", action="store_true",
+                        help="skip the check of the chosen design (two runs per scenario)")
     args = parser.parse_args()
     registry = load_registry()
     with tempfile.TemporaryDirectory() as tmp:
         tmpdir = Path(tmp)
         path = _study_project(args.project, tmpdir)
-        single = load_project(args.project)
-        optimise(single, rocks=200, seed=1, registry=registry)  # compile numba first
-        t0 = time.perf_counter()
-        one = optimise(single, seed=args.seed, registry=registry)
-        t_one = time.perf_counter() - t0
+        runs = []
+        if not args.across_only:
+            single = load_project(args.project)
+            optimise(single, rocks=200, seed=1, registry=registry)  # compile numba first
+            t0 = time.perf_counter()
+            one = optimise(single, rocks=args.rocks, seed=args.seed, registry=registry)
+            runs.append(("as written", one, time.perf_counter() - t0))
         across_project = load_project(path)
         t0 = time.perf_counter()
-        across = optimise(across_project, seed=args.seed, registry=registry)
-        t_across = time.perf_counter() - t0
-        for label, res, wall in (("as written", one, t_one), ("across 3 scenarios", across,
-                                                              t_across)):
+        across = optimise(across_project, rocks=args.rocks, seed=args.seed,
+                          registry=registry)
+        runs.append(("across 3 scenarios", across, time.perf_counter() - t0))
+        for label, res, wall in runs:
             s = res.summary
             best = res.best
             chosen = "none" if best is None else f"{best['name']} {best['cost']:,.0f}"
@@ -93,6 +107,8 @@ def main() -> None:
         b = block["binding"]
         print(f"binding scenario {b['index']} {b['values']}: margin {100 * b['margin']:+.1f} % "
               f"at {b['binds_at']}")
+        if args.no_check:
+            return
         from rockfall_design.cli.scenario_commands import across_design_yaml
 
         design = tmpdir / "design.yaml"

@@ -57,7 +57,7 @@ from rockfall_design.judge.design_spec import resolve_design, with_residual_targ
 from rockfall_design.judge.evaluation import evaluate_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.section import optimise
+from rockfall_design.optimiser.driver import optimise
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
 from rockfall_design.run.simulation import run_study

@@ -319,13 +319,11 @@ def optimise(
     ProjectError
         The project has no ``design:`` section.
     """
-    from .optimiser.section import optimise as _optimise
+    # design.scenarios: the cheapest design that holds across the study's scenarios
+    from .optimiser.driver import optimise as _optimise
 
     _checked(seed=seed)
     p = _project(project, registry)
-    if p.design is not None and p.design.scenarios is not None:
-        # design.scenarios: the cheapest design that holds across the study's scenarios
-        from .optimiser.across import optimise_across as _optimise  # type: ignore[assignment]
     if p.design is None:
         raise p.error_at((), "the project has no design: section to optimise "
                              "(see the README, 'Designing protection')")

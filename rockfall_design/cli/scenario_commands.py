@@ -24,7 +24,7 @@ every scenario (:func:`~rockfall_design.report.design_figures.margins_figure`);
 (:class:`ScenariosCheckResult`, rendered by :mod:`rockfall_design.report.documents`).
 
 For ``optimise`` with ``design.scenarios`` (see
-:mod:`rockfall_design.optimiser.across`) this module prints the scenario
+:mod:`rockfall_design.optimiser.driver`) this module prints the scenario
 lines of the report and writes ``design.yaml``.
 """
 
@@ -42,7 +42,7 @@ from ..report.sections import values_text
 from ..studies.scenario_checks import check_across
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..optimiser.across import AcrossResult
+    from ..optimiser.alternatives import AcrossResult
     from ..plugins import Registry
     from ..project import Project
     from ..report.outputs import OutputSet

@@ -41,6 +41,12 @@ upslope of it; the gap passage of a boulder row is drawn from another
 stream) is settled by the exact decision, which is why designs that miss the
 screening by a small margin are decided exactly too.
 
+The strategy seam: a family's designs come from :mod:`.search`
+(:func:`~.search.barrier_designs` with :class:`~.search.BarrierSlots`,
+:class:`~.search.EditSearch`), are decided by :class:`~.settle.FamilyDecision`
+in every scenario (:mod:`.scenario`; one on a single section), and
+:func:`~.driver.optimise` drives the families.
+
 A design that does not fit (a measure's ``footprint`` raises ValueError, two
 measures stand in one place) or that the cost model has no price for (its
 ``cost`` raises KeyError or ValueError) is not part of the design space.
@@ -52,8 +58,8 @@ from __future__ import annotations
 
 from .alternatives import Alternative, OptimisationResult
 from .decide import Decider, Decision, decide
+from .driver import optimise
 from .screening import RESTART_STEP_M, Screening, ScreenResult
-from .section import optimise
 from .space import (
     BARRIER_RANGE_STEPS,
     EDIT_STEP_M,

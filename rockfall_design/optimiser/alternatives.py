@@ -1,9 +1,9 @@
-"""The optimiser's results and the limits every driver shares.
+"""The optimiser's results and the limits of its search.
 
 :class:`Alternative` is one family's outcome (its cheapest design that holds,
 or why none does; the marginal and undecided designs cheaper than it),
 :class:`OptimisationResult` a whole search; the constants bound the work of
-one family whatever the driver (one section or the scenarios of a study).
+one family (on one section or across the scenarios of a study).
 """
 
 from __future__ import annotations
@@ -18,12 +18,8 @@ from ..judge.sequential import LookSchedule
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
+    from ..studies.scenarios import ScenarioRun
 from .decide import rocks_to_decide
-
-#: Designs the screening left undecided that are decided, per family (the rest are
-#: counted in the report as not decided).
-MAX_NEAR_PER_FAMILY = 40
-
 
 #: Designs that miss their targets on the point values of the search rocks, but not
 #: with confidence, decided per family when cheaper than its design (cheapest first).
@@ -179,6 +175,45 @@ class OptimisationResult:
                 "rocks": list(self.looks.sizes), "confidence": self.looks.confidence,
                 "look_confidence": self.looks.look_confidence},
         }
+
+
+@dataclass
+class AcrossResult(OptimisationResult):
+    """:class:`OptimisationResult` of a design across scenarios, with what each scenario said.
+
+    ``summary()`` has the keys of the single-scenario optimiser and
+    ``scenarios``: ``share``, ``required``, ``of``, ``per_scenario`` (the
+    chosen design in each scenario: ``index``, ``values``, ``seed``,
+    ``admitted``, ``decision_rocks``, ``margin``, ``binds_at``,
+    ``holds_on_fresh_rocks``, ``fresh_seed``, ``fresh_rocks``, ``reason``),
+    ``binding`` (the scenario of least margin) and ``next_cheaper`` (the
+    next cheaper design decided and the scenarios it failed in), all null
+    without a design.
+    """
+
+    share: float = 1.0
+    required: int = 1
+    runs: list[ScenarioRun] = field(default_factory=list)
+    per_family: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    def scenarios_block(self, name: str | None = None) -> dict[str, Any]:
+        """The ``scenarios`` object of the chosen design (or of family ``name``)."""
+        if name is None:
+            name = self.best.name if self.best is not None else None
+        info = self.per_family.get(name or "", {})
+        return {"share": self.share, "required": self.required, "of": len(self.runs),
+                "scenarios": [r.head() for r in self.runs],
+                "per_scenario": info.get("per_scenario"), "binding": info.get("binding"),
+                "next_cheaper": info.get("next_cheaper")}
+
+    def summary(self) -> dict[str, Any]:
+        out = super().summary()
+        for alt in out["alternatives"]:
+            info = self.per_family.get(alt["name"], {})
+            alt["scenarios"] = info.get("per_scenario")
+            alt["binding"] = info.get("binding")
+        out["scenarios"] = self.scenarios_block()
+        return out
 
 
 def fresh_failures(fresh: Evaluation) -> str:

@@ -23,6 +23,8 @@ import numpy as np
 from ..engine import Releases, Section, columns, run_ensemble
 from ..errors import ProjectError
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
+from ..judge.candidates import build_candidate_measure
+from ..judge.costing import design_cost
 from ..judge.outcomes import (
     Judgement,
     RockFates,
@@ -43,7 +45,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
 
-from .space import STATION_STEP_M, _decode, _variables
+from .space import STATION_STEP_M, decode, variables_of
 
 #: Spacing (m) of the restart stations upslope of ground-edit candidates.
 RESTART_STEP_M = 2.0
@@ -92,7 +94,7 @@ class _Approx:
 
 
 @dataclass
-class _Table:
+class Table:
     """Per rock: first downslope passage at the table stations, and how its path ended.
 
     A table for an edited section shares the bare table and overlays only what
@@ -162,8 +164,6 @@ class Screening:
         ``restart_stations`` (m), when given with ``stations``, are kept as
         restart stations, so that ground edits can still be judged.
         """
-        from ..judge.candidates import build_candidate_measure
-
         self.project = project
         self.registry = registry
         self.spec = spec
@@ -185,46 +185,15 @@ class Screening:
                                  else self.allowed_residual / max(self.n, 1))
         self.max_rocks = max(self.n, int(spec.max_rocks))
         self.confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
-        # Stations: every barrier candidate's range at STATION_STEP_M; restart
-        # stations upslope of every edit candidate's range.
-        x0, x1 = self.section.x[0], self.section.x[-1]
-        sts, restarts = [], [np.zeros(0)]
         r_max = float(np.max(self.releases.radius))
         self.margin = 2.0 * r_max + 0.5
         self.edit_candidates = {i for i, c in enumerate(spec.candidates) if self._is_edit(i)}
-        for i, c in enumerate(spec.candidates):
-            lo, hi = c.x_range
-            sts.append(np.arange(lo, hi + 1e-9, STATION_STEP_M))
-            if i in self.edit_candidates:
-                # Profile edits may start upslope of their x (a berm's cut face).
-                lo_r = max(x0, lo - 30.0 - self.margin)
-                restarts.append(np.arange(lo_r, hi + 1e-9, RESTART_STEP_M))
-        if stations is not None:
-            sts, restarts = [np.asarray(stations, dtype=float)], [np.zeros(0)]
-            if restart_stations is not None:
-                restarts = [np.asarray(restart_stations, dtype=float)]
-        self.grid = np.unique(np.clip(np.concatenate(sts + [np.array([self.protect_x])]), x0, x1))
-        self.restart_x = np.unique(np.clip(np.concatenate(restarts), x0, x1))
-        bare = run_ensemble(
-            self.section, self.releases, key=self.key, grid=self.grid,
-            restart_stations=self.restart_x, settings=self.settings, record_speed=True,
-            progress=rock_progress,
-        )
-        cols = np.searchsorted(bare.grid, self.grid)
-        self.bare = _Table(
-            h=bare.grid_height[:, cols].astype(float),
-            e_kj=bare.grid_energy[:, cols].astype(float) / 1e3,
-            v=bare.grid_speed[:, cols].astype(float),
-            max_x=bare.max_x, x_end=bare.x_end, status=bare.status,
-        )
-        self.restart_state = bare.restart_state
-        self.restart_rng = bare.restart_rng
-        self.mass = bare.mass
-        self.radius = bare.radius
+        self.grid, self.restart_x = self._stations(stations, restart_stations)
+        self._run_bare(rock_progress)
         # One uniform per rock for the gaps of a boulder row (common to all designs).
         self.u_gap = np.random.default_rng(np.random.SeedSequence([self.seed, 7919])).random(
             self.n)
-        self._edit_cache: dict[tuple, _Table] = {}
+        self._edit_cache: dict[tuple, Table] = {}
         # The first barrier of the search's placements, judged once per option and
         # table (see screen_placed): key -> (outcomes, result, held, checks).
         self._first: OrderedDict[tuple, tuple[np.ndarray, MeasureResult, np.ndarray,
@@ -235,6 +204,49 @@ class Screening:
         self.edit_runs = 0
         self.edit_rocks = 0
 
+    def _stations(self, stations: np.ndarray | None,
+                  restart_stations: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """The table's stations and the restart stations (m), see :meth:`__init__`.
+
+        By default every barrier candidate's range at STATION_STEP_M, and
+        restart stations upslope of every edit candidate's range; always the
+        protected zone's station.
+        """
+        x0, x1 = self.section.x[0], self.section.x[-1]
+        sts, restarts = [], [np.zeros(0)]
+        for i, c in enumerate(self.spec.candidates):
+            lo, hi = c.x_range
+            sts.append(np.arange(lo, hi + 1e-9, STATION_STEP_M))
+            if i in self.edit_candidates:
+                # Profile edits may start upslope of their x (a berm's cut face).
+                lo_r = max(x0, lo - 30.0 - self.margin)
+                restarts.append(np.arange(lo_r, hi + 1e-9, RESTART_STEP_M))
+        if stations is not None:
+            sts, restarts = [np.asarray(stations, dtype=float)], [np.zeros(0)]
+            if restart_stations is not None:
+                restarts = [np.asarray(restart_stations, dtype=float)]
+        grid = np.unique(np.clip(np.concatenate(sts + [np.array([self.protect_x])]), x0, x1))
+        return grid, np.unique(np.clip(np.concatenate(restarts), x0, x1))
+
+    def _run_bare(self, rock_progress: Callable[[int], None] | None) -> None:
+        """Run the search rocks on the bare slope: the table, and the restart states."""
+        bare = run_ensemble(
+            self.section, self.releases, key=self.key, grid=self.grid,
+            restart_stations=self.restart_x, settings=self.settings, record_speed=True,
+            progress=rock_progress,
+        )
+        cols = np.searchsorted(bare.grid, self.grid)
+        self.bare = Table(
+            h=bare.grid_height[:, cols].astype(float),
+            e_kj=bare.grid_energy[:, cols].astype(float) / 1e3,
+            v=bare.grid_speed[:, cols].astype(float),
+            max_x=bare.max_x, x_end=bare.x_end, status=bare.status,
+        )
+        self.restart_state = bare.restart_state
+        self.restart_rng = bare.restart_rng
+        self.mass = bare.mass
+        self.radius = bare.radius
+
     def _is_edit(self, ci: int) -> bool:
         """Does candidate ``ci`` edit the ground? Asked of its own footprint, never its name.
 
@@ -244,12 +256,12 @@ class Screening:
         searched (and reported) as a barrier.
         """
         cands = self.spec.candidates
-        variables = _variables(cands, (ci,))
+        variables = variables_of(cands, (ci,))
         probes = [[0.5 * (v.low + v.high) if not v.integer else 0 for v in variables],
                   [v.high for v in variables], [v.low for v in variables]]
         for vec in probes:
             try:
-                (m,) = self.measures(_decode(cands, (ci,), variables, vec))
+                (m,) = self.measures(decode(cands, (ci,), variables, vec))
                 footprint = guard(self.registry).measure(m).footprint(self.section)
             except ValueError:
                 continue
@@ -291,12 +303,10 @@ class Screening:
         KeyError or ValueError
             From the cost model: it has no price for one of the measures.
         """
-        from ..judge.costing import design_cost
-
         return design_cost(self.registry, self.spec, measures, self.section)
 
     # -- tables -------------------------------------------------------------------
-    def table_for(self, edits: Sequence[ProfileEdit], edited: Section | None) -> _Table:
+    def table_for(self, edits: Sequence[ProfileEdit], edited: Section | None) -> Table:
         """The table of the search rocks on ground reshaped by ``edits``.
 
         Only the rocks that pass the last restart station upslope of the
@@ -335,7 +345,7 @@ class Screening:
         state = self.restart_state[:, q]
         go = np.isfinite(state[:, columns.RS_X])
         idx = np.flatnonzero(go)
-        t = _Table(h=self.bare.h, e_kj=self.bare.e_kj, v=self.bare.v,
+        t = Table(h=self.bare.h, e_kj=self.bare.e_kj, v=self.bare.v,
                    max_x=self.bare.max_x.copy(), x_end=self.bare.x_end.copy(),
                    status=self.bare.status.copy(), serial=self.edit_runs + 1)
         if idx.size:
@@ -395,7 +405,7 @@ class Screening:
                        f"design: {why}")
         return self._verdict(placed, table, cost)
 
-    def screen_placed(self, placed: Sequence[PlacedMeasure], table: _Table,
+    def screen_placed(self, placed: Sequence[PlacedMeasure], table: Table,
                       cost: float, keys: Sequence[Hashable] | None = None) -> ScreenResult:
         """Judge measures already placed and priced on ``table`` (the search's fast path).
 
@@ -412,7 +422,7 @@ class Screening:
         self.evaluations += 1
         return self._verdict(placed, table, cost, keys)
 
-    def _verdict(self, placed: Sequence[PlacedMeasure], table: _Table,
+    def _verdict(self, placed: Sequence[PlacedMeasure], table: Table,
                  cost: float, keys: Sequence[Hashable] | None = None) -> ScreenResult:
         judgement, approx, first = self._judge(placed, table, keys)
         concept = guard(self.registry).concept(self.concept)
@@ -448,7 +458,7 @@ class Screening:
                             point_ok=all(c.ok for cs in checks for c in cs)
                             and judgement.reaching <= self.allowed_residual)
 
-    def judge(self, placed: Sequence[PlacedMeasure], table: _Table) -> tuple[Judgement, _Approx]:
+    def judge(self, placed: Sequence[PlacedMeasure], table: Table) -> tuple[Judgement, _Approx]:
         """The design's outcomes on the search rocks, by the one judgement.
 
         See :meth:`_judge`.
@@ -456,7 +466,7 @@ class Screening:
         judgement, approx, _ = self._judge(placed, table, None)
         return judgement, approx
 
-    def _judge(self, placed: Sequence[PlacedMeasure], table: _Table,
+    def _judge(self, placed: Sequence[PlacedMeasure], table: Table,
                keys: Sequence[Hashable] | None) -> tuple[Judgement, _Approx,
                                                         tuple[int, tuple] | None]:
         """The design's outcomes on the search rocks, by the one judgement.
@@ -504,20 +514,7 @@ class Screening:
                 here = out != columns.O_NOT_MET
             approx |= here
             upstream.append((fp.x, here))
-            # In place under the mask (no gather and scatter of the stopped rocks:
-            # thousands of placements are judged on thousands of rocks).
-            np.minimum(fates.max_x, fp.x, out=fates.max_x, where=stopped)
-            np.copyto(fates.x_end, fp.x, where=stopped)
-            if fp.behaviour == BarrierBehaviour.NET and fp.elongation_mel_m > 0.0:
-                # A net carries what it catches on by its braking distance (the engine's
-                # rule, clipped to the section as the engine does).
-                caught = np.flatnonzero(out == columns.O_CAUGHT)
-                x_stop = np.minimum(fp.x + braking_distances(fp, e_kj[caught]),
-                                    float(self.section.x[-1]))
-                fates.max_x[caught] = x_stop
-                fates.x_end[caught] = x_stop
-            np.copyto(fates.status, np.where(out == columns.O_CAUGHT, columns.CAUGHT,
-                                             columns.STOPPED), where=stopped, casting="unsafe")
+            self._stop(fates, fp, out, stopped, e_kj)
             alive &= ~stopped
             outcomes[i] = out
         if known is None:
@@ -535,8 +532,33 @@ class Screening:
             helds.insert(i0, known[2])
             outs.insert(i0, known[0])
             judgement = Judgement(results, helds, outs, part.reaching, part.unresolved)
-        # A measure's checks rest on approximated rocks when such rocks, from a
-        # barrier upslope of it, met it.
+        touched = self._touched(placed, judgement, upstream)
+        uncertain = int((approx & reaches_protected_zone(fates.max_x, fates.status,
+                                                         self.protect_x)).sum())
+        return judgement, _Approx(uncertain, bool(approx.any()), touched), first
+
+    def _stop(self, fates: RockFates, fp: Barrier, out: np.ndarray, stopped: np.ndarray,
+              e_kj: np.ndarray) -> None:
+        """End the paths of the rocks a barrier stopped (caught, or returned) at it."""
+        # In place under the mask (no gather and scatter of the stopped rocks:
+        # thousands of placements are judged on thousands of rocks).
+        np.minimum(fates.max_x, fp.x, out=fates.max_x, where=stopped)
+        np.copyto(fates.x_end, fp.x, where=stopped)
+        if fp.behaviour == BarrierBehaviour.NET and fp.elongation_mel_m > 0.0:
+            # A net carries what it catches on by its braking distance (the engine's
+            # rule, clipped to the section as the engine does).
+            caught = np.flatnonzero(out == columns.O_CAUGHT)
+            x_stop = np.minimum(fp.x + braking_distances(fp, e_kj[caught]),
+                                float(self.section.x[-1]))
+            fates.max_x[caught] = x_stop
+            fates.x_end[caught] = x_stop
+        np.copyto(fates.status, np.where(out == columns.O_CAUGHT, columns.CAUGHT,
+                                         columns.STOPPED), where=stopped, casting="unsafe")
+
+    def _touched(self, placed: Sequence[PlacedMeasure], judgement: Judgement,
+                 upstream: Sequence[tuple[float, np.ndarray]]) -> list[bool]:
+        """Does each measure's judgement rest on approximated rocks (such rocks, from a
+        barrier upslope of it, met it)?"""
         touched = []
         for p, out in zip(placed, judgement.outcomes, strict=True):
             start = _start(p.footprint)
@@ -545,9 +567,7 @@ class Screening:
                 if x < start:
                     before |= m
             touched.append(bool((before & (out != columns.O_NOT_MET)).any()))
-        uncertain = int((approx & reaches_protected_zone(fates.max_x, fates.status,
-                                                         self.protect_x)).sum())
-        return judgement, _Approx(uncertain, bool(approx.any()), touched), first
+        return touched
 
     def station(self, x: float) -> int:
         """Index of the table station nearest ``x`` (m)."""

@@ -3,9 +3,9 @@
 Catalogue choices in increasing order of cost; for each, every combination
 of barrier stations at once (the rocks each barrier lets on for sure, one
 matrix product), the first barrier's own checks as a filter, full screening
-of the rest (:func:`_barrier_designs`). Ground edits by
+of the rest (:func:`barrier_designs`). Ground edits by
 ``scipy.optimize.differential_evolution`` over their lattice, the barriers
-beside them enumerated for each geometry (:func:`_edit_designs`).
+beside them enumerated for each geometry (:class:`EditSearch`).
 """
 
 from __future__ import annotations
@@ -31,14 +31,14 @@ from ..run.reach import reaches_protected_zone
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
 
-from .screening import Screening, ScreenResult, _Table
+from .screening import Screening, ScreenResult, Table
 from .space import (
     STATION_STEP_M,
-    _decode,
-    _discrete_choices,
-    _lattice,
-    _Option,
-    _variables,
+    Option,
+    decode,
+    discrete_choices,
+    lattice,
+    variables_of,
 )
 
 #: Placements of one combination of catalogue choices screened in full, fewest through first.
@@ -51,7 +51,7 @@ MAX_EXACT_PER_LEVEL = 3
 UNDECIDED_HANDICAP = 1.1
 
 
-class _BarrierSlots:
+class BarrierSlots:
     """The barrier options of every barrier candidate, built and priced once per run.
 
     Per table (bare, or edited by a ground edit) and option, lazily: which
@@ -62,7 +62,7 @@ class _BarrierSlots:
 
     def __init__(self, screen: Screening) -> None:
         self.screen = screen
-        self.options: dict[int, list[_Option]] = {}
+        self.options: dict[int, list[Option]] = {}
         self.skipped: dict[int, Counter] = {}
         self._rows: dict[tuple[int, int, int], np.ndarray] = {}
         self._alone: dict[tuple[int, int], np.ndarray] = {}
@@ -70,16 +70,16 @@ class _BarrierSlots:
         # ask for the options of the level at hand): (ci, k, table key) -> codes.
         self._recent: dict[tuple[int, int, int], np.ndarray] = {}
 
-    def of(self, ci: int) -> list[_Option]:
+    def of(self, ci: int) -> list[Option]:
         """Options of candidate ``ci`` (every catalogue choice at every grid station)."""
         if ci in self.options:
             return self.options[ci]
         sc = self.screen
         c = sc.spec.candidates[ci]
-        out: list[_Option] = []
+        out: list[Option] = []
         skipped: Counter = Counter()
-        for d in _discrete_choices(c):
-            for x in _lattice(*c.x_range, STATION_STEP_M):
+        for d in discrete_choices(c):
+            for x in lattice(*c.x_range, STATION_STEP_M):
                 params = {**d, "x": float(x)}
                 try:
                     (m,) = sc.measures([(ci, params)])
@@ -99,18 +99,18 @@ class _BarrierSlots:
                     continue
                 if not isinstance(fp, Barrier):
                     continue
-                out.append(_Option(ci, params, m, fp, cost,
+                out.append(Option(ci, params, m, fp, cost,
                                    guard(sc.registry).measure(m).label(), sc.station(fp.x)))
         self.options[ci] = out
         self.skipped[ci] = skipped
         return out
 
     @staticmethod
-    def _table_key(j: int, table: _Table, table_id: int) -> int:
+    def _table_key(j: int, table: Table, table_id: int) -> int:
         # Stations upslope of an edit's restart see the bare table: share them.
         return 0 if (table.rows is None or j < table.first_col) else table_id
 
-    def _outcome(self, o: _Option, table: _Table) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+    def _outcome(self, o: Option, table: Table) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                            np.ndarray]:
         sc = self.screen
         h, e_kj, v = table.column(o.j)
@@ -118,7 +118,7 @@ class _BarrierSlots:
                                np.ones(sc.n, dtype=bool))
         return out, h, e_kj, v
 
-    def passes(self, ci: int, ks: np.ndarray, table: _Table, table_id: int) -> np.ndarray:
+    def passes(self, ci: int, ks: np.ndarray, table: Table, table_id: int) -> np.ndarray:
         """(len(ks), rocks) float32: 1 where option k lets the rock on for sure.
 
         A rock it stops (catches or returns) is 0, and so is one whose further
@@ -145,7 +145,7 @@ class _BarrierSlots:
             out[i] = row
         return out
 
-    def first_ok(self, ci: int, ks: np.ndarray, table: _Table, table_id: int) -> np.ndarray:
+    def first_ok(self, ci: int, ks: np.ndarray, table: Table, table_id: int) -> np.ndarray:
         """Do options ks pass their checks as the first barrier the rocks meet?
 
         The first barrier of a design meets every rock that crosses its station
@@ -180,18 +180,37 @@ class _BarrierSlots:
 
 
 @dataclass
-class _Screened:
-    """A design that passed the screening (or missed it within the margin)."""
+class Screened:
+    """A design that passed the screening (or missed it within the margin).
+
+    Attributes
+    ----------
+    cost : float
+        In the cost model's currency.
+    measures : list of ProtectiveMeasure
+    result : ScreenResult
+        Its screening on the search rocks of its scenario.
+    level : tuple
+        Its combination of catalogue choices (or edit geometry): the
+        decisions of one level are budgeted together.
+    scenario : int
+        The scenario whose search found it (0 on a single section).
+    """
 
     cost: float
     measures: list[ProtectiveMeasure]
     result: ScreenResult
     level: tuple
+    scenario: int = 0
 
 
 @dataclass
-class _Tally:
-    """What the designs of a family that were ruled out failed on (for the report)."""
+class Tally:
+    """What the designs of a family that were ruled out failed on (for the report).
+
+    One per scenario and family: the search counts the designs it screened and
+    why they failed, the decisions what they ruled out (``reasons``).
+    """
 
     reasons: Counter = field(default_factory=Counter)
     designs: int = 0
@@ -202,7 +221,21 @@ class _Tally:
     why: str = ""  # why the first design that did not fit did not
     searched: bool = False  # ground edits searched by scipy, not enumerated
 
+    @staticmethod
+    def merged(tallies: Sequence[Tally]) -> Tally:
+        """One tally of several scenarios' (itself for one): reasons summed, the designs and
+        capped levels of the scenario with most (each searches the same space)."""
+        if len(tallies) == 1:
+            return tallies[0]
+        out = Tally(designs=max(t.designs for t in tallies),
+                    capped_levels=max(t.capped_levels for t in tallies),
+                    searched=any(t.searched for t in tallies))
+        for t in tallies:
+            out.reasons.update(t.reasons)
+        return out
+
     def fail(self, sr: ScreenResult) -> None:
+        """Count a design the screening rejected, and keep the one closest to holding."""
         names = [c.name for cs in sr.checks for c in cs if not c.ok]
         if sr.reason:
             names = ["does not fit"]
@@ -255,15 +288,15 @@ def _level_combos(levels: list[np.ndarray]) -> Any:
                     heapq.heappush(heap, (c, nxt))
 
 
-def _barrier_designs(
+def barrier_designs(
     screen: Screening,
-    slots: _BarrierSlots,
+    slots: BarrierSlots,
     barrier_cis: Sequence[int],
     fixed: Sequence[ProtectiveMeasure],
     fixed_cost: float,
-    table: _Table,
+    table: Table,
     table_id: int,
-    tally: _Tally,
+    tally: Tally,
     cost_limit: float = math.inf,
 ) -> Any:
     """Designs of ``fixed`` measures plus one barrier per ``barrier_cis``, cheapest first.
@@ -275,7 +308,7 @@ def _barrier_designs(
     stop, judged by :func:`~rockfall_design.judge.outcomes.barrier_outcomes`);
     the combinations within the residual target (plus the screening margin)
     are screened in full, fewest reaching first, and those that pass (or
-    miss within the margin) are yielded as :class:`_Screened`, in order of
+    miss within the margin) are yielded as :class:`Screened`, in order of
     cost. Yields nothing more once the cost exceeds ``cost_limit``.
     """
     fixed = list(fixed)
@@ -285,7 +318,7 @@ def _barrier_designs(
             tally.designs += 1
             if sr.feasible or sr.near:
                 # Each geometry its own level: MAX_EXACT_PER_LEVEL counts per geometry.
-                yield _Screened(sr.cost, fixed, sr, (table_id,))
+                yield Screened(sr.cost, fixed, sr, (table_id,))
             else:
                 tally.fail(sr)
         return
@@ -308,52 +341,11 @@ def _barrier_designs(
             tally.over_limit = total if tally.over_limit is None else min(tally.over_limit, total)
             return
         ks = [members[s][idx[s]] for s in range(k_slots)]
-
-        def shaped(a: np.ndarray, s: int) -> np.ndarray:
-            return a.reshape([a.shape[0] if u == s else 1 for u in range(k_slots)])
-
-        xs = [np.array([opts[s][k].footprint.x for k in ks[s]]) for s in range(k_slots)]
-        valid = np.ones([len(k) for k in ks], dtype=bool)
-        for s in range(k_slots):
-            xv = shaped(xs[s], s)
-            for lo, hi in stretches:
-                valid &= ~((xv > lo + 1e-6) & (xv < hi - 1e-6))
-            for t in range(s):
-                xt = shaped(xs[t], t)
-                valid &= np.abs(xv - xt) >= MIN_BARRIER_SPACING_M
-                if barrier_cis[t] == barrier_cis[s]:
-                    valid &= xt < xv  # one order of two barriers of one candidate
-        n_comb = int(valid.size)
-        tally.designs += n_comb
-        # The first barrier a rock meets judges every rock that crosses it: its own
-        # checks decide, whatever stands downslope.
-        xb = np.stack(np.broadcast_arrays(*[shaped(xs[s], s) for s in range(k_slots)]))
-        first = np.argmin(xb, axis=0)
-        alone = [slots.first_ok(barrier_cis[s], ks[s], table, table_id)
-                 for s in range(k_slots)]
-        first_ok = np.zeros(valid.shape, dtype=bool)
-        all_ok = np.ones(valid.shape, dtype=bool)
-        for s in range(k_slots):
-            ok_s = np.broadcast_to(shaped(alone[s], s), valid.shape)
-            first_ok |= (first == s) & ok_s
-            all_ok &= ok_s
-        tally.reasons["first barrier's checks"] += int((valid & ~first_ok).sum())
-        valid &= first_ok
+        valid, all_ok = _placements(slots, barrier_cis, opts, ks, stretches, table, table_id,
+                                    tally)
         if not valid.any():
             continue
-        # Count only over the options that appear in some admissible placement.
-        used = [np.flatnonzero(valid.any(axis=tuple(u for u in range(k_slots) if u != s)))
-                for s in range(k_slots)]
-        sub = _through(reach, [slots.passes(barrier_cis[s], ks[s][used[s]], table, table_id)
-                               for s in range(k_slots)])
-        big = np.iinfo(np.int64).max
-        residual = np.full(valid.shape, big, dtype=np.int64)
-        residual[np.ix_(*used)] = sub
-        residual = np.where(valid, residual, big)
-        rmin = int(residual.min())
-        if rmin < big:
-            tally.min_residual = rmin if tally.min_residual is None else min(tally.min_residual,
-                                                                            rmin)
+        residual = _residuals(slots, barrier_cis, ks, valid, reach, table, table_id, tally)
         ok = residual <= limit
         tally.reasons["residual"] += int((valid & ~ok).sum())
         cand = np.flatnonzero(ok.ravel())
@@ -370,6 +362,70 @@ def _barrier_designs(
         found.sort(key=lambda d: (d.cost, not d.result.feasible, d.result.violation,
                                   d.result.residual))
         yield from found
+
+
+def _shaped(a: np.ndarray, s: int, k_slots: int) -> np.ndarray:
+    """``a`` along axis ``s`` of a ``k_slots``-dimensional grid of placements."""
+    return a.reshape([a.shape[0] if u == s else 1 for u in range(k_slots)])
+
+
+def _placements(slots: BarrierSlots, barrier_cis: Sequence[int], opts: list[list[Option]],
+                ks: list[np.ndarray], stretches: list[tuple[float, float]], table: Table,
+                table_id: int, tally: Tally) -> tuple[np.ndarray, np.ndarray]:
+    """Which placements of one level may hold, and which have every barrier's checks hold
+    on its own: (valid, all_ok), one axis per barrier.
+
+    A placement is out when a barrier stands on a ground edit's stretch, two
+    stand closer than :data:`~rockfall_design.judge.placing.MIN_BARRIER_SPACING_M`
+    (or two of one candidate in the other order), or the first barrier the
+    rocks meet fails its own checks: it meets every rock that crosses it, so
+    its checks decide whatever stands downslope.
+    """
+    k_slots = len(opts)
+    xs = [np.array([opts[s][k].footprint.x for k in ks[s]]) for s in range(k_slots)]
+    valid = np.ones([len(k) for k in ks], dtype=bool)
+    for s in range(k_slots):
+        xv = _shaped(xs[s], s, k_slots)
+        for lo, hi in stretches:
+            valid &= ~((xv > lo + 1e-6) & (xv < hi - 1e-6))
+        for t in range(s):
+            xt = _shaped(xs[t], t, k_slots)
+            valid &= np.abs(xv - xt) >= MIN_BARRIER_SPACING_M
+            if barrier_cis[t] == barrier_cis[s]:
+                valid &= xt < xv  # one order of two barriers of one candidate
+    tally.designs += int(valid.size)
+    xb = np.stack(np.broadcast_arrays(*[_shaped(xs[s], s, k_slots) for s in range(k_slots)]))
+    first = np.argmin(xb, axis=0)
+    alone = [slots.first_ok(barrier_cis[s], ks[s], table, table_id) for s in range(k_slots)]
+    first_ok = np.zeros(valid.shape, dtype=bool)
+    all_ok = np.ones(valid.shape, dtype=bool)
+    for s in range(k_slots):
+        ok_s = np.broadcast_to(_shaped(alone[s], s, k_slots), valid.shape)
+        first_ok |= (first == s) & ok_s
+        all_ok &= ok_s
+    tally.reasons["first barrier's checks"] += int((valid & ~first_ok).sum())
+    return valid & first_ok, all_ok
+
+
+def _residuals(slots: BarrierSlots, barrier_cis: Sequence[int], ks: list[np.ndarray],
+               valid: np.ndarray, reach: np.ndarray, table: Table, table_id: int,
+               tally: Tally) -> np.ndarray:
+    """Rocks through every barrier for sure, per valid placement (int64 max elsewhere)."""
+    k_slots = len(ks)
+    # Count only over the options that appear in some admissible placement.
+    used = [np.flatnonzero(valid.any(axis=tuple(u for u in range(k_slots) if u != s)))
+            for s in range(k_slots)]
+    sub = _through(reach, [slots.passes(barrier_cis[s], ks[s][used[s]], table, table_id)
+                           for s in range(k_slots)])
+    big = np.iinfo(np.int64).max
+    residual = np.full(valid.shape, big, dtype=np.int64)
+    residual[np.ix_(*used)] = sub
+    residual = np.where(valid, residual, big)
+    rmin = int(residual.min())
+    if rmin < big:
+        tally.min_residual = rmin if tally.min_residual is None else min(tally.min_residual,
+                                                                        rmin)
+    return residual
 
 
 def _most_through(screen: Screening) -> int:
@@ -390,15 +446,15 @@ def _most_through(screen: Screening) -> int:
 
 
 def _screen_placements(screen: Screening, opts: list, ks: list, fixed: list,
-                       order: np.ndarray, shape: tuple, table: _Table, table_id: int,
-                       idx: tuple, tally: _Tally) -> list[_Screened]:
+                       order: np.ndarray, shape: tuple, table: Table, table_id: int,
+                       idx: tuple, tally: Tally) -> list[Screened]:
     """Screen a level's placements in ``order`` (flat indices into ``shape``) in full.
 
     Stops once :data:`MAX_EXACT_PER_LEVEL` pass: more than the decisions this
     combination of catalogue choices gets.
     """
     k_slots = len(opts)
-    found: list[_Screened] = []
+    found: list[Screened] = []
     passed = 0
     for flat in order:
         pos = np.unravel_index(flat, shape)
@@ -413,7 +469,7 @@ def _screen_placements(screen: Screening, opts: list, ks: list, fixed: list,
             keys = [(o.ci, int(ks[s][pos[s]])) for s, o in enumerate(chosen)]
             sr = screen.screen_placed(placed, table, sum(o.cost for o in chosen), keys=keys)
         if sr.feasible or sr.near:
-            found.append(_Screened(sr.cost, ms, sr, (table_id,) + tuple(idx)))
+            found.append(Screened(sr.cost, ms, sr, (table_id,) + tuple(idx)))
             passed += sr.feasible
             if passed >= MAX_EXACT_PER_LEVEL:
                 break  # more than the decisions this combination gets
@@ -426,7 +482,7 @@ def _screen_placements(screen: Screening, opts: list, ks: list, fixed: list,
 POLISH_SHIFTS = 4
 
 
-class _EditSearch:
+class EditSearch:
     """The search of one family with ground edits: its objective and the designs it kept.
 
     Every ground edit costs a run of the rocks below its restart station, so
@@ -434,28 +490,28 @@ class _EditSearch:
     that the search comes back to geometries it has run) are searched with
     ``scipy.optimize.differential_evolution`` (:meth:`run`); for each edit
     geometry the family's barriers are enumerated exactly on its table
-    (:func:`_barrier_designs`). Every design that passed the screening on the
+    (:func:`barrier_designs`). Every design that passed the screening on the
     way is kept, cheapest first, for the exact decision. :meth:`around` then
     runs the lattice next to the design the decisions chose.
     """
 
-    def __init__(self, screen: Screening, slots: _BarrierSlots, fam: tuple[int, ...],
-                 tally: _Tally, cost_limit: float = math.inf) -> None:
+    def __init__(self, screen: Screening, slots: BarrierSlots, fam: tuple[int, ...],
+                 tally: Tally, cost_limit: float = math.inf) -> None:
         self.screen, self.slots, self.tally, self.cost_limit = screen, slots, tally, cost_limit
         self.cands = screen.spec.candidates
         tally.searched = True
         self.edit_slots = tuple(ci for ci in fam if ci in screen.edit_candidates)
         self.barrier_cis = [ci for ci in fam if ci not in screen.edit_candidates]
-        self.variables = _variables(self.cands, self.edit_slots, screen.edit_candidates)
+        self.variables = variables_of(self.cands, self.edit_slots, screen.edit_candidates)
         self.big = screen.penalty_floor
         self.seen: dict[tuple, float] = {}
-        self.kept: dict[tuple, _Screened] = {}
+        self.kept: dict[tuple, Screened] = {}
 
     def objective(self, vec: np.ndarray) -> float:
         """The search's value of a vector: the cost of its cheapest design the screening
         admits, with a handicap if only undecided, a penalty above every cost if none."""
         screen, tally, big = self.screen, self.tally, self.big
-        decoded = _decode(self.cands, self.edit_slots, self.variables, vec)
+        decoded = decode(self.cands, self.edit_slots, self.variables, vec)
         key = tuple((ci, tuple(sorted(p.items()))) for ci, p in decoded)
         if key in self.seen:
             return self.seen[key]
@@ -477,7 +533,7 @@ class _EditSearch:
             tally.why = tally.why or getattr(exc, "message", None) or str(exc)
             self.seen[key] = 4.0 * big
             return self.seen[key]
-        first = next(iter(_barrier_designs(screen, self.slots, self.barrier_cis, edits,
+        first = next(iter(barrier_designs(screen, self.slots, self.barrier_cis, edits,
                                            fixed_cost, table, table.serial, tally,
                                            self.cost_limit)), None)
         if first is None:
@@ -491,11 +547,11 @@ class _EditSearch:
         self.seen[key] = value
         return value
 
-    def _designs(self, keys: Any, limit: float) -> list[_Screened]:
+    def _designs(self, keys: Any, limit: float) -> list[Screened]:
         return sorted((self.kept[k] for k in keys if self.kept[k].cost <= limit),
                       key=lambda d: (d.cost, not d.result.feasible))
 
-    def run(self, seed: int) -> list[_Screened]:
+    def run(self, seed: int) -> list[Screened]:
         """Differential evolution over the lattice; the designs kept, cheapest first."""
         bounds = [(v.low, v.high) for v in self.variables]
         integrality = np.array([v.integer for v in self.variables])
@@ -533,7 +589,7 @@ class _EditSearch:
                 return None
         return vec
 
-    def around(self, measures: Sequence[Any], limit: float) -> list[_Screened]:
+    def around(self, measures: Sequence[Any], limit: float) -> list[Screened]:
         """Designs next to ``measures`` on the lattice and cheaper than ``limit``, newly run.
 
         The search samples the lattice through its own seed, but what it
@@ -574,7 +630,7 @@ class _EditSearch:
         a geometry that does not fit)."""
         screen = self.screen
         try:
-            edits = screen.measures(_decode(self.cands, self.edit_slots, self.variables, vec))
+            edits = screen.measures(decode(self.cands, self.edit_slots, self.variables, vec))
             # Placing first, as objective() does: a step may leave a geometry that
             # does not fit (a ditch too narrow for its new depth), which is out of
             # the space, not a fault of the measure's quantities().
@@ -583,14 +639,3 @@ class _EditSearch:
         except (KeyError, ValueError, ProjectError):
             return math.inf
 
-
-def _edit_designs(
-    screen: Screening,
-    slots: _BarrierSlots,
-    fam: tuple[int, ...],
-    tally: _Tally,
-    seed: int,
-    cost_limit: float = math.inf,
-) -> list[_Screened]:
-    """Designs of a family with ground edits, cheapest first (:meth:`_EditSearch.run`)."""
-    return _EditSearch(screen, slots, fam, tally, cost_limit).run(seed)

@@ -5,7 +5,7 @@ twice, up to ``design.max_measures``). A barrier candidate's designs are its
 catalogue choices (product and height, options, continuous parameters on a
 lattice of :data:`BARRIER_RANGE_STEPS` steps) at every station of a grid of
 :data:`STATION_STEP_M`; a ground edit's are searched on a lattice
-(:func:`_variables`, :func:`_decode`).
+(:func:`variables_of`, :func:`decode`).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ BARRIER_RANGE_STEPS = 10
 
 
 @dataclass(frozen=True)
-class _Var:
+class Var:
     """One coordinate of the search vector."""
 
     slot: int  # which measure of the family
@@ -88,32 +88,32 @@ def family_name(candidates: Sequence[CandidateSpec], fam: tuple[int, ...]) -> st
                                                                         strict=True))
 
 
-def _variables(
+def variables_of(
     cands: Sequence[CandidateSpec], fam: tuple[int, ...], edits: set[int] | None = None
-) -> list[_Var]:
-    out: list[_Var] = []
+) -> list[Var]:
+    out: list[Var] = []
     for slot, ci in enumerate(fam):
         c = cands[ci]
-        out.append(_Var(slot, "x", c.x_range[0], c.x_range[1], False, role="x"))
+        out.append(Var(slot, "x", c.x_range[0], c.x_range[1], False, role="x"))
         if c.products:
-            out.append(_Var(slot, c.product_field or "", 0, len(c.products) - 1, True,
+            out.append(Var(slot, c.product_field or "", 0, len(c.products) - 1, True,
                             role="product"))
             if c.height_field is not None:
                 nh = max(len(p.heights) for p in c.products)
-                out.append(_Var(slot, c.height_field, 0, nh - 1, True, role="height"))
+                out.append(Var(slot, c.height_field, 0, nh - 1, True, role="height"))
         for name, (lo, hi) in c.ranges.items():
             step = (hi - lo) / RANGE_STEPS
             if edits and ci in edits:
                 # Every new ground edit costs a run: a coarser lattice lets the
                 # search come back to designs it has already run.
                 step = max(step, EDIT_STEP_M if hi - lo > 4 * EDIT_STEP_M else step)
-            out.append(_Var(slot, name, lo, hi, False, step=step, role="range"))
+            out.append(Var(slot, name, lo, hi, False, step=step, role="range"))
         for name, opts in c.options.items():
-            out.append(_Var(slot, name, 0, len(opts) - 1, True, tuple(opts), role="option"))
+            out.append(Var(slot, name, 0, len(opts) - 1, True, tuple(opts), role="option"))
     return out
 
 
-def _decode(cands, fam, variables, vec) -> list[tuple[int, dict[str, Any]]]:
+def decode(cands, fam, variables, vec) -> list[tuple[int, dict[str, Any]]]:
     """Search vector -> [(candidate index, measure parameters)] ordered by station."""
     # Only what the search picks; build_candidate_measure adds the fixed values
     # and the product's own parameters.
@@ -161,7 +161,7 @@ def _decode(cands, fam, variables, vec) -> list[tuple[int, dict[str, Any]]]:
 
 
 @dataclass
-class _Option:
+class Option:
     """One barrier of one candidate: its parameters, measure, footprint and cost."""
 
     ci: int
@@ -173,14 +173,14 @@ class _Option:
     j: int  # station of the table
 
 
-def _lattice(lo: float, hi: float, step: float) -> np.ndarray:
+def lattice(lo: float, hi: float, step: float) -> np.ndarray:
     """lo, lo + step, ... up to hi (inclusive within round-off)."""
     if hi <= lo or step <= 0:
         return np.array([float(lo)])
     return lo + step * np.arange(math.floor((hi - lo) / step + 1e-9) + 1)
 
 
-def _discrete_choices(c: CandidateSpec) -> list[dict[str, Any]]:
+def discrete_choices(c: CandidateSpec) -> list[dict[str, Any]]:
     """Every catalogue choice of a candidate: product and height, options, range lattice."""
     axes: list[list[dict[str, Any]]] = []
     if c.products and c.product_field is not None:
@@ -190,7 +190,7 @@ def _discrete_choices(c: CandidateSpec) -> list[dict[str, Any]]:
     for name, opts in c.options.items():
         axes.append([{name: o} for o in opts])
     for name, (lo, hi) in c.ranges.items():
-        axes.append([{name: float(v)} for v in _lattice(lo, hi, (hi - lo) / BARRIER_RANGE_STEPS)])
+        axes.append([{name: float(v)} for v in lattice(lo, hi, (hi - lo) / BARRIER_RANGE_STEPS)])
     out = []
     for combo in itertools.product(*axes):
         d: dict[str, Any] = {}

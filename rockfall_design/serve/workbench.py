@@ -266,7 +266,7 @@ class ProjectEntry:
             400 without a ``design:`` section, or with ``design.scenarios``
             (optimise those with the command line); 409 while a job runs.
         """
-        from ..optimiser.section import optimise
+        from ..optimiser.driver import optimise
         from ..report.terminal import design_yaml
 
         if self.project.design is None:

@@ -10,7 +10,7 @@ import pytest
 from rockfall_design.cli.program import main
 from rockfall_design.project import load_project
 
-from ..optimiser.test_across import _text
+from ..optimiser.test_across import study_text
 
 FIGURES = ("profile", "envelopes", "stops", "margins")
 
@@ -22,7 +22,7 @@ def _json(capsys) -> dict:
 def _weak(tmp_path: Path, seed: int, share: str = "all") -> Path:
     """The four scenarios of test_across with a 300 kJ fence: the big rocks (1, 3) strain it."""
     path = tmp_path / "p.yaml"
-    path.write_text(_text(seed, share).replace("capacity_kj: 1000", "capacity_kj: 300"))
+    path.write_text(study_text(seed, share).replace("capacity_kj: 1000", "capacity_kj: 300"))
     return path
 
 
@@ -113,7 +113,7 @@ def test_margins_figure_marks_the_binding_scenario_and_the_count_required():
 
 def test_a_project_without_a_study_is_one_line_and_writes_nothing(tmp_path, capsys):
     path = tmp_path / "p.yaml"
-    text = _text().split("study:\n")[0] + "design:" + _text().split("design:", 1)[1]
+    text = study_text().split("study:\n")[0] + "design:" + study_text().split("design:", 1)[1]
     path.write_text(text.replace("  scenarios: all\n", ""))
     plot = tmp_path / "plot"
     assert main(["check", str(path), "--scenarios", "--plot", str(plot),

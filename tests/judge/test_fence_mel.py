@@ -237,7 +237,7 @@ def _small(tmp_path, rx050: str):
 
 def test_optimiser_passes_over_a_product_whose_net_reaches_the_protected_zone(tmp_path,
                                                                               registry):
-    from rockfall_design.optimiser.section import optimise
+    from rockfall_design.optimiser import optimise
 
     # The fence stands at 58..64 m and the protected zone starts at 150 m.
     plain = optimise(_small(tmp_path, "RX-050: {capacity_kj: 500, heights: [2, 3, 4]}"),

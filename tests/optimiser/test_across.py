@@ -9,8 +9,8 @@ import pytest
 
 from rockfall_design.cli.program import main
 from rockfall_design.errors import ProjectError
-from rockfall_design.optimiser.across import required_scenarios
 from rockfall_design.project import load_project_text
+from rockfall_design.studies.scenarios import required_scenarios
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"
@@ -57,7 +57,8 @@ design:
 """
 
 
-def _text(seed: int = 3, scenarios: str = "all") -> str:
+def study_text(seed: int = 3, scenarios: str = "all") -> str:
+    """The small study project (four scenarios) at ``seed`` with ``design.scenarios``."""
     return (SMALL.replace("SEED", str(seed)).replace("SCENARIOS", scenarios)
             .replace("PRODUCTS", str(PROJECTS / "catalogue_products.yaml"))
             .replace("COSTS", str(PROJECTS / "catalogue_costs.yaml")))
@@ -74,7 +75,7 @@ def _json(capsys) -> dict:
 
 
 def test_workers_without_scenarios_is_refused(tmp_path, capsys):
-    assert main(["check", str(_write(tmp_path, _text())), "--workers", "2"]) == 2
+    assert main(["check", str(_write(tmp_path, study_text())), "--workers", "2"]) == 2
     assert "give --scenarios too" in capsys.readouterr().err
 
 
@@ -89,29 +90,29 @@ def test_required_scenarios():
 def test_design_scenarios_is_checked_where_written():
     with pytest.raises(ProjectError, match=r"p.yaml:26: design.scenarios.share: expected a "
                                            r"number > 0 and <= 1, got 1.5"):
-        load_project_text(_text(scenarios="{share: 1.5}"), "p.yaml")
+        load_project_text(study_text(scenarios="{share: 1.5}"), "p.yaml")
     with pytest.raises(ProjectError, match=r"p.yaml:26: design.scenarios: expected all or"):
-        load_project_text(_text(scenarios="most"), "p.yaml")
-    no_study = _text().replace("study:\n  vary:\n    materials.talus.restitution: [0.2, 0.3]\n"
+        load_project_text(study_text(scenarios="most"), "p.yaml")
+    no_study = study_text().replace("study:\n  vary:\n    materials.talus.restitution: [0.2, 0.3]\n"
                                "    rocks.volume.lognormal.0: [0.5, 1.2]\n  scenarios: grid\n",
                                "")
     with pytest.raises(ProjectError, match=r"design.scenarios: the design's scenarios are "
                                            "those of a study"):
         load_project_text(no_study, "p.yaml")
-    share = load_project_text(_text(scenarios="{share: 0.5}"), "p.yaml")
+    share = load_project_text(study_text(scenarios="{share: 0.5}"), "p.yaml")
     assert share.design.scenario_share == 0.5
     assert share.resolved_dict()["design"]["scenarios"] == {"share": 0.5}
 
 
 def test_a_design_without_scenarios_keeps_its_record():
-    text = _text().replace("  scenarios: all\n", "")
+    text = study_text().replace("  scenarios: all\n", "")
     project = load_project_text(text, "p.yaml")
     assert project.design.scenarios is None
     assert "scenarios" not in project.resolved_dict()["design"]  # the hash is as before
 
 
 def test_check_scenarios_reports_every_scenario_and_the_binding_one(tmp_path, capsys):
-    path = _write(tmp_path, _text())
+    path = _write(tmp_path, study_text())
     assert main(["check", str(path), "--scenarios", "--json", "--workers", "1"]) == 0
     out = _json(capsys)
     # the same numbers on a pool of processes (each scenario carries its seed)
@@ -136,7 +137,7 @@ def test_check_scenarios_reports_every_scenario_and_the_binding_one(tmp_path, ca
 def test_check_scenarios_fails_and_names_the_scenarios(tmp_path, capsys):
     # 300 kJ holds the small rocks (scenarios 0 and 2), not the big ones (1 and 3):
     # margins of +55 % and -25 % or more on seeds 3, 4 and 5
-    weak = _text().replace("capacity_kj: 1000", "capacity_kj: 300")
+    weak = study_text().replace("capacity_kj: 1000", "capacity_kj: 300")
     path = _write(tmp_path, weak)
     assert main(["check", str(path), "--scenarios", "--json", "--workers", "1"]) == 1
     out = _json(capsys)
@@ -153,7 +154,7 @@ def test_check_scenarios_fails_and_names_the_scenarios(tmp_path, capsys):
 
 @pytest.mark.parametrize("seed", [3, 4])
 def test_optimise_across_all_scenarios_passes_check_in_every_scenario(tmp_path, capsys, seed):
-    path = _write(tmp_path, _text(seed))
+    path = _write(tmp_path, study_text(seed))
     out_dir = tmp_path / "out"
     assert main(["optimise", str(path), "--json", "--out", str(out_dir)]) == 0
     out = _json(capsys)
@@ -175,7 +176,7 @@ def test_optimise_across_all_scenarios_passes_check_in_every_scenario(tmp_path, 
 def test_a_share_of_the_scenarios_never_costs_more_than_all(tmp_path, capsys):
     costs = {}
     for share in ("all", "{share: 0.5}"):
-        path = _write(tmp_path, _text(3, share))
+        path = _write(tmp_path, study_text(3, share))
         assert main(["optimise", str(path), "--json"]) == 0
         out = _json(capsys)
         best = next(a for a in out["alternatives"] if a["name"] == out["best"]["name"])
@@ -186,7 +187,7 @@ def test_a_share_of_the_scenarios_never_costs_more_than_all(tmp_path, capsys):
 
 
 def test_optimise_across_terminal_report_names_the_binding_scenario(tmp_path, capsys):
-    path = _write(tmp_path, _text())
+    path = _write(tmp_path, study_text())
     assert main(["optimise", str(path)]) == 0
     text = capsys.readouterr().out
     assert "a design must hold in 4 of 4" in text and "Binding scenario" in text

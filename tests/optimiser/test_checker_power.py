@@ -8,7 +8,7 @@ import pytest
 
 from rockfall_design.errors import ProjectError
 from rockfall_design.judge.design_spec import resolve_design
-from rockfall_design.optimiser.section import optimise
+from rockfall_design.optimiser import optimise
 from rockfall_design.project import load_project_text
 
 SMALL_DESIGN = Path(__file__).resolve().parents[1] / "data" / "design_small.yaml"

@@ -1,5 +1,5 @@
 """The ground-edit search runs the lattice next to the design the decisions chose
-(search._EditSearch.around): what differential evolution's samples missed at one seed."""
+(search.EditSearch.around): what differential evolution's samples missed at one seed."""
 
 from __future__ import annotations
 
@@ -10,14 +10,14 @@ import numpy as np
 from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.search import POLISH_SHIFTS, _BarrierSlots, _EditSearch, _Tally
-from rockfall_design.optimiser.space import STATION_STEP_M, _decode
+from rockfall_design.optimiser.search import POLISH_SHIFTS, BarrierSlots, EditSearch, Tally
+from rockfall_design.optimiser.space import STATION_STEP_M, decode
 from rockfall_design.project import load_project
 
 PROJECTS = Path(__file__).resolve().parents[2] / "projects"
 
 
-def _search(registry) -> _EditSearch:
+def _search(registry) -> EditSearch:
     project = load_project(PROJECTS / "design_ditch_or_fence.yaml")
     spec = resolve_design(project, registry)
     project = project.model_copy(update={"protect": project.protect.model_copy(
@@ -25,7 +25,7 @@ def _search(registry) -> _EditSearch:
     screen = Screening(project, registry, spec, build_concept(project, registry), rocks=600,
                        seed=3)
     (ci,) = sorted(screen.edit_candidates)
-    return _EditSearch(screen, _BarrierSlots(screen), (ci,), _Tally())
+    return EditSearch(screen, BarrierSlots(screen), (ci,), Tally())
 
 
 def test_around_runs_the_cheaper_steps_of_the_chosen_geometry_near_its_station(registry):
@@ -34,7 +34,7 @@ def test_around_runs_the_cheaper_steps_of_the_chosen_geometry_near_its_station(r
     names = [v.name for v in variables]
     start = np.array([109.0 if n == "x" else 5.25 if n == "width" else 1.0
                       for n in names])  # depth: index 1 of its options, 1.5 m
-    (ditch,) = search.screen.measures(_decode(cands, slots, variables, start))
+    (ditch,) = search.screen.measures(decode(cands, slots, variables, start))
     assert (ditch.x, ditch.params.width, ditch.params.depth) == (109.0, 5.25, 1.5)
     assert np.array_equal(search._vector([ditch]), start)  # the vector of a design, back
     cost = search.screen.cost([ditch])

@@ -8,7 +8,7 @@ from pathlib import Path
 from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.placing import build_concept, edited_section, place_measures
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.space import _decode, _variables
+from rockfall_design.optimiser.space import decode, variables_of
 from rockfall_design.project import load_project
 
 PROJECTS = Path(__file__).resolve().parents[2] / "projects"
@@ -24,11 +24,11 @@ def test_a_table_dropped_from_the_cache_does_not_lend_its_key_to_the_next(regist
     concept = build_concept(project, registry)
     screen = Screening(project, registry, spec, concept, rocks=300, seed=3)
     (ci,) = sorted(screen.edit_candidates)
-    variables = _variables(spec.candidates, (ci,))
+    variables = variables_of(spec.candidates, (ci,))
     serials = []
     for end in ("low", "high", "low"):
         vec = [getattr(v, end) for v in variables]
-        measures = screen.measures(_decode(spec.candidates, (ci,), variables, vec))
+        measures = screen.measures(decode(spec.candidates, (ci,), variables, vec))
         placed = place_measures(project, registry, measures, screen.section)
         edited = edited_section(project, screen.section, placed)
         table = screen.table_for([p.footprint for p in placed], edited)

@@ -9,7 +9,7 @@ import numpy as np
 from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.placing import PlacedMeasure, build_concept
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.search import _BarrierSlots
+from rockfall_design.optimiser.search import BarrierSlots
 from rockfall_design.project import load_project
 
 PROJECTS = Path(__file__).resolve().parents[2] / "projects"
@@ -36,7 +36,7 @@ def test_placements_judged_with_the_first_barrier_remembered_are_judged_the_same
     project = project.model_copy(update={"protect": project.protect.model_copy(
         update={"allowed_fraction": spec.residual_fraction})})
     screen = Screening(project, registry, spec, concept, rocks=1500, seed=12)
-    slots = _BarrierSlots(screen)
+    slots = BarrierSlots(screen)
     up, down = slots.of(0), slots.of(1)
     rng = np.random.default_rng(5)
     # Few upslope options, many downslope ones: each upslope fence is met first

@@ -10,13 +10,19 @@ from typing import Any
 
 import pytest
 
-from rockfall_design.judge.design_spec import resolve_design
-from rockfall_design.judge.placing import build_concept
-from rockfall_design.optimiser import Screening
+from rockfall_design.judge.sequential import Verdict, plan_looks
+from rockfall_design.optimiser import settle
 from rockfall_design.optimiser.alternatives import Alternative
-from rockfall_design.optimiser.section import _bare_slope, _list_undecided
+from rockfall_design.optimiser.decide import Decision
+from rockfall_design.optimiser.driver import bare_slope
+from rockfall_design.optimiser.scenario import set_up
+from rockfall_design.optimiser.search import Tally
+from rockfall_design.optimiser.settle import FamilyDecision, proof_line
 from rockfall_design.plugins.concept import Check
 from rockfall_design.project import load_project_text
+from rockfall_design.studies.scenarios import ScenarioRun
+
+from .test_settle_levels import fake_scenario
 
 PROJECTS = Path(__file__).resolve().parents[2] / "projects"
 #: A design project that optimises in seconds, batches of rocks on both threads included.
@@ -36,18 +42,15 @@ def test_a_bare_slope_that_meets_the_residual_target_is_said(registry, protect_x
     measure is needed, and the result says so; at 120 m 0.2 to 0.4 % arrive (0.6 to 0.8 %
     before the contact transition's hop criterion), above the target."""
     project = _ditch_project(protect_x)
-    spec = resolve_design(project, registry)
-    concept = build_concept(project, registry)
-    project = project.model_copy(update={"protect": project.protect.model_copy(
-        update={"allowed_fraction": spec.residual_fraction})})
-    screen = Screening(project, registry, spec, concept, rocks=4603, seed=11)
-    bare = _bare_slope(screen, spec.residual_fraction, 0.95)
+    sc = set_up(ScenarioRun(0, {}, 11, project), registry, 4603)
+    bare = bare_slope(sc)
     assert bare["holds"] is holds
-    assert bare["rocks"] == 4603 and bare["x"] == protect_x
+    # The search rocks: at least those asked for, as many as show the target.
+    assert bare["rocks"] == sc.screen.n >= 4603 and bare["x"] == protect_x
     assert (bare["upper"] <= bare["allowed"]) is holds
     if not holds:
         # The point value itself misses the target, not only its bound.
-        assert bare["reaching"] > bare["rocks"] * spec.residual_fraction
+        assert bare["reaching"] > bare["rocks"] * bare["allowed"]
 
 
 @dataclass
@@ -56,6 +59,7 @@ class _Design:
     level: int
     result: Any
     measures: list
+    scenario: int = 0
 
 
 def _design(cost: float, level: int, violation: float, value: float = 1.2) -> _Design:
@@ -79,7 +83,10 @@ def test_cheaper_designs_a_budget_left_undecided_are_counted_and_listed_once_per
     skipped = [(_design(10.0, 1, 0.5), "budget"), (_design(10.0, 2, 0.1), "budget"),
                (_design(20.0, 3, 0.1), "budget"), (_design(30.0, 4, 0.1), "budget"),
                (_design(35.0, 6, 0.1, value=0.5), "budget"), (_design(50.0, 5, 0.1), "budget")]
-    _list_undecided(alt, skipped, 40.0, _screen())
+    sc = fake_scenario(None)
+    sc.screen = _screen()
+    family = FamilyDecision(alt, [sc], 1, [Tally()], skipped=skipped)
+    family.list_undecided(40.0)
     # Five designs are cheaper than the family's design (40); the one at 50 is not.
     assert alt.undecided == 5
     costs = [m["cost"] for m in alt.marginal]
@@ -96,15 +103,12 @@ def test_cheaper_designs_a_budget_left_undecided_are_counted_and_listed_once_per
 def test_the_proof_line_names_marginal_and_undecided_designs():
     from collections import Counter
 
-    from rockfall_design.judge.sequential import plan_looks
-    from rockfall_design.optimiser.section import _proof
-
     alt = Alternative(name="fence", family=(0,))
     alt.marginal = [{"cost": 1.0, "decided": True}, {"cost": 2.0, "decided": False}]
     alt.undecided = 7
     tally = SimpleNamespace(reasons=Counter({"height": 3}), capped_levels=0, searched=False,
                             designs=12)
-    text = _proof(alt, tally, plan_looks(4603, 50000, 0.95, 0.001), "EUR")
+    text = proof_line(alt, tally, plan_looks(4603, 50000, 0.95, 0.001))
     assert "or is marginal (1) or was not decided (7) (the cheapest that may hold listed)" in text
 
 
@@ -126,47 +130,54 @@ def test_the_same_seed_gives_the_same_design_on_one_thread_and_on_two(monkeypatc
     assert runs[0] == runs[1]
 
 
-def test_across_scenarios_designs_not_rejected_with_confidence_are_listed():
-    """A design marginal in some scenarios, or held back by a budget, is not "fails in too many
-    scenarios": it is counted and the cheapest (one per cost) listed with why."""
-    import importlib
+class _Fixed:
+    """A decider whose every decision is ``verdict`` (an evaluation with a margin of 0.1)."""
 
-    across = importlib.import_module("rockfall_design.optimiser.across")
+    margin = None
 
-    class _M:
-        kind = "fence"
-        params = SimpleNamespace(model_dump=lambda mode: {"x": 1.0})
+    def __init__(self, verdict: Verdict) -> None:
+        self.verdict = verdict
 
-        def label(self) -> str:
-            return "fence at 1 m"
-
-    alt = Alternative(name="fence", family=(0,))
-    d = [SimpleNamespace(cost=c, measures=[_M()]) for c in (10.0, 10.0, 20.0, 90.0)]
-    undecided = [(d[0], "marginal in scenario(s) 2"), (d[1], "marginal in scenario(s) 3"),
-                 (d[2], "not decided (budget)"), (d[3], "marginal in scenario(s) 1")]
-    across._list_undecided(alt, undecided, 50.0)
-    assert alt.undecided == 3
-    assert [(m["cost"], m["decided"], m["values"]) for m in alt.marginal] == [
-        (10.0, True, None), (20.0, False, None)]
-    assert alt.marginal[0]["reason"] == "marginal in scenario(s) 2"
+    def decide(self, measures, first):
+        ev = SimpleNamespace(margin=lambda: (0.1, "residual"))
+        reason = "" if self.verdict is Verdict.ADMITTED else f"{self.verdict.value} here"
+        return Decision(self.verdict, 4603, ev, reason, exact=1, simulated=4603)
 
 
-def test_the_proof_lines_reasons_are_never_cut():
-    import importlib
+def _across(*verdicts: Verdict) -> list[SimpleNamespace]:
+    scs = [fake_scenario(_Fixed(v)) for v in verdicts]
+    for j, sc in enumerate(scs):
+        sc.run.index = j
+        sc.screen.screen = lambda measures: SimpleNamespace(feasible=True, near=False,
+                                                            violation=0.0)
+    return scs
 
-    across = importlib.import_module("rockfall_design.optimiser.across")
-    long = ("scenario 2: fails with 99 % confidence on 4,603 rocks: fence: height_factor at "
-            "best 1.20, target 2.00; scenario 3: the same")
-    assert across._reason_key(long) == "fails with 99 % confidence on 4,603 rocks"
-    assert across._reason_key("fails the screening in scenario(s) 1, 2") == (
-        "fails the screening in scenario(s) 1, 2")
-    assert across._reason_key("") == "fails"
+
+@pytest.mark.parametrize(("verdicts", "required", "verdict", "failed_in"), [
+    ((Verdict.ADMITTED, Verdict.MARGINAL, Verdict.ADMITTED), 3, Verdict.MARGINAL, [1]),
+    ((Verdict.ADMITTED, Verdict.MARGINAL, Verdict.ADMITTED), 2, Verdict.ADMITTED, [1]),
+    ((Verdict.ADMITTED, Verdict.REJECTED, Verdict.MARGINAL), 2, Verdict.MARGINAL, [1, 2]),
+    ((Verdict.REJECTED, Verdict.REJECTED, Verdict.ADMITTED), 2, Verdict.REJECTED, [0, 1]),
+])
+def test_a_design_across_scenarios_is_rejected_only_where_it_fails_with_confidence(
+        verdicts, required, verdict, failed_in):
+    """Marginal in some scenarios is not "fails in too many scenarios": the design may hold
+    (it is listed, and the report says where it is marginal)."""
+    d = SimpleNamespace(measures=[], scenario=0,
+                        result=SimpleNamespace(feasible=True, near=False, violation=0.0))
+    dec = settle.decide_in_scenarios(_across(*verdicts), required, d)
+    assert dec.verdict is verdict
+    assert sorted(dec.failed_in) == failed_in
+    assert dec.exact == sum(p is not None for p in dec.per_scenario)
+    if verdict is not Verdict.ADMITTED:
+        assert all(f"scenario {j}:" in dec.reason for j in failed_in)
+        assert dec.values == {}  # one set of values per scenario: none for the design
 
 
 def test_a_residual_of_nothing_is_said_at_once(registry):
     """An allowed residual of 0 can never be shown with confidence: the optimiser says so
     instead of 'no design of this family fits on the section', and searches nothing."""
-    from rockfall_design.optimiser.section import optimise
+    from rockfall_design.optimiser import optimise
 
     text = (PROJECTS / "design_ditch_or_fence.yaml").read_text(encoding="utf-8")
     assert "residual: {fraction: 0.001}" in text
@@ -195,18 +206,14 @@ def test_a_marginal_designs_values_are_json_whatever_its_bounds():
 
 
 def _settling(monkeypatch, verdict):
-    """A family's state that has just admitted a design on 4,603 search rocks, and the fresh
-    check's verdict forced to ``verdict``."""
-    from rockfall_design.judge.sequential import Verdict
-    from rockfall_design.optimiser import section
-    from rockfall_design.optimiser.decide import Decision
-    from rockfall_design.optimiser.search import _Tally
-
+    """A family that decides one design admitted on 4,603 search rocks, with the fresh check's
+    verdict forced to ``verdict``."""
     values = {"rocks": 9206, "confidence": 0.9875, "checks": [],
               "residual": {"reaching": 12, "fraction": 12 / 9206, "lower": 6e-4,
                            "upper": 2.2e-3, "allowed": 1e-3}}
     fresh = SimpleNamespace(results=[], checks=[], protect={"reaching": 12},
-                            failures=lambda: [], statements=lambda: [])
+                            failures=lambda: [], statements=lambda: [],
+                            margin=lambda: (0.1, "residual"))
     calls = []
 
     def verify_fresh(project, registry, measures, concept, *, rocks, seed, max_rocks,
@@ -216,15 +223,18 @@ def _settling(monkeypatch, verdict):
                         "marginal: neither holds nor fails", looks=2, exact=2,
                         simulated=rocks * 2, values=values)
 
-    monkeypatch.setattr(section, "verify_fresh", verify_fresh)
+    class _Admits:
+        margin = None
+
+        def decide(self, measures, first):
+            return Decision(Verdict.ADMITTED, 4603, fresh, looks=1, exact=1, simulated=4603)
+
+    monkeypatch.setattr(settle, "verify_fresh", verify_fresh)
     alt = Alternative(name="fence", family=(0,))
-    decider = SimpleNamespace(screen=SimpleNamespace(project=None, registry=None),
-                              looks=SimpleNamespace(sizes=(4603, 9206, 50_000)), margin=None)
-    state = section._SettleState(alt, _Tally(), decider, SimpleNamespace(fresh_rocks=None),
-                                 concept=None, fresh_seed=1_000_010)
+    family = FamilyDecision(alt, [fake_scenario(_Admits(), fresh_seed=1_000_010)], 1, [Tally()])
     design = _design(90_000.0, 0, 0.0)
-    admitted = Decision(Verdict.ADMITTED, 4603, fresh, looks=1, exact=1, simulated=4603)
-    return state, design, admitted, calls
+    design.result.feasible, design.result.near = True, False
+    return family, design, calls
 
 
 def test_a_design_neither_held_nor_failed_on_fresh_rocks_is_listed_not_dropped(monkeypatch):
@@ -232,34 +242,31 @@ def test_a_design_neither_held_nor_failed_on_fresh_rocks_is_listed_not_dropped(m
     to 15 held on the point values of its fresh rocks but not with its bound: it was dropped as
     failing, and the report did not name it. The fresh check is sequential now (up to
     design.max_rocks); a design still undecided there is listed as marginal."""
-    from rockfall_design.judge.sequential import Verdict
 
-    state, design, admitted, calls = _settling(monkeypatch, Verdict.MARGINAL)
-    assert state._admitted(design, admitted) is False
+    family, design, calls = _settling(monkeypatch, Verdict.MARGINAL)
+    assert family.decide(design) is False
     assert calls == [(9206, 1_000_010, 50_000)]  # twice the deciding rocks, up to the cap
-    (entry,) = state.alt.marginal
+    (entry,) = family.alt.marginal
     assert entry["cost"] == 90_000.0 and entry["decided"] is True
     assert "admitted on 4,603 search rocks; on fresh rocks" in entry["reason"]
-    assert state.tally.reasons["marginal on fresh rocks"] == 1
-    assert not state.alt.holds_on_fresh_rocks and state.alt.rejected == 0
-    assert state.simulated == 18_412
+    assert family.tallies[0].reasons["marginal on fresh rocks"] == 1
+    assert not family.alt.holds_on_fresh_rocks and family.alt.rejected == 0
+    assert family.simulated == 4603 + 18_412
 
 
 def test_a_design_that_fails_on_fresh_rocks_with_confidence_is_rejected(monkeypatch):
-    from rockfall_design.judge.sequential import Verdict
 
-    state, design, admitted, _ = _settling(monkeypatch, Verdict.REJECTED)
-    assert state._admitted(design, admitted) is False
-    assert state.alt.marginal == [] and state.alt.rejected == 1
-    assert state.tally.reasons["fails with confidence on fresh rocks"] == 1
+    family, design, _ = _settling(monkeypatch, Verdict.REJECTED)
+    assert family.decide(design) is False
+    assert family.alt.marginal == [] and family.alt.rejected == 1
+    assert family.tallies[0].reasons["fails with confidence on fresh rocks"] == 1
 
 
 def test_a_design_that_holds_on_fresh_rocks_records_the_fresh_look_that_decided(monkeypatch):
-    from rockfall_design.judge.sequential import Verdict
 
-    state, design, admitted, _ = _settling(monkeypatch, Verdict.ADMITTED)
-    assert state._admitted(design, admitted) is True
-    alt = state.alt
+    family, design, _ = _settling(monkeypatch, Verdict.ADMITTED)
+    assert family.decide(design) is True
+    alt = family.alt
     assert alt.holds_on_fresh_rocks and alt.cost == 90_000.0
     assert alt.fresh_rocks == 18_412 and alt.fresh_seed == 1_000_010
     assert alt.decision_rocks == 4603

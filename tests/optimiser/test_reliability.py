@@ -16,7 +16,7 @@ from rockfall_design_builtins.safety_reliability import life_probability
 from rockfall_design.judge.bounds import fraction_upper_bound
 from rockfall_design.judge.evaluation import evaluate, evaluate_design
 from rockfall_design.judge.placing import build_concept
-from rockfall_design.optimiser.section import optimise
+from rockfall_design.optimiser import optimise
 from rockfall_design.project import load_project_text
 from rockfall_design.report.design_values import how_sure
 

@@ -22,7 +22,7 @@ from rockfall_design import (
 from rockfall_design.errors import PluginError
 from rockfall_design.judge.candidates import build_candidate_measure
 from rockfall_design.judge.design_spec import declared_design, resolve_design
-from rockfall_design.optimiser.space import _decode, _discrete_choices, _variables
+from rockfall_design.optimiser.space import decode, discrete_choices, variables_of
 from rockfall_design.plugins import call_plugin, load_registry
 from rockfall_design.plugins.measure import DesignRole, design_role
 from rockfall_design.project import load_project_text
@@ -117,13 +117,13 @@ def test_catalogue_roles_on_fields_of_any_name():
     spec = resolve_design(load_project_text(text), registry)
     (c,) = spec.candidates
     assert [p.name for p in c.products] == ["A", "B"] and c.ranges == {"height": (0.5, 1.5)}
-    choices = _discrete_choices(c)
+    choices = discrete_choices(c)
     assert {(ch["net_product"], ch["net_height"]) for ch in choices} == {
         ("A", 2.0), ("A", 3.0), ("B", 4.0)}
-    variables = _variables(spec.candidates, (0,))
+    variables = variables_of(spec.candidates, (0,))
     assert [(v.name, v.role) for v in variables] == [
         ("x", "x"), ("net_product", "product"), ("net_height", "height"), ("height", "range")]
-    ((_, params),) = _decode(spec.candidates, (0,), variables, [61.0, 1, 0, 1.0])
+    ((_, params),) = decode(spec.candidates, (0,), variables, [61.0, 1, 0, 1.0])
     assert params == {"x": 61.0, "net_product": "B", "net_height": 4.0, "height": 1.0}
     m = build_candidate_measure(c, registry, params)
     assert (m.params.energy, m.params.net_height, m.params.height) == (900.0, 4.0, 1.0)

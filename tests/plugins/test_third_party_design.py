@@ -19,7 +19,7 @@ import pytest
 from rockfall_design.cli.program import main
 from rockfall_design.errors import ExitCode
 from rockfall_design.judge.design_spec import resolve_design
-from rockfall_design.optimiser.space import _discrete_choices
+from rockfall_design.optimiser.space import discrete_choices
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
 
@@ -139,11 +139,11 @@ def test_its_space_is_its_declaration_plus_the_candidate(installed, tmp_path):
     fence, net = spec.candidates
     assert (net.products, net.ranges, net.options, net.fixed) == (
         (), {"height": (1.0, 6.0)}, {"layers": (1, 2, 3)}, {"capacity_kj": 90})
-    choices = _discrete_choices(net)
+    choices = discrete_choices(net)
     # every layer count at every height of the lattice: its height is not a product height
     assert {(c["height"], c["layers"]) for c in choices} >= {(1.0, 1), (2.5, 3), (6.0, 2)}
     assert all("product" not in c for c in choices)
-    assert {c["product"] for c in _discrete_choices(fence)} == {"RX-050", "RX-100"}
+    assert {c["product"] for c in discrete_choices(fence)} == {"RX-050", "RX-100"}
 
 
 @pytest.mark.parametrize("seed", [5, 7])
@@ -223,7 +223,7 @@ def test_the_readme_catch_net_is_a_candidate_searched_by_its_own_height(tmp_path
     (net,) = spec.candidates
     assert (net.products, net.ranges, net.fixed) == ((), {"height": (0.5, 3.0)},
                                                      {"capacity_kj": 250})
-    heights = sorted({c["height"] for c in _discrete_choices(net)})
+    heights = sorted({c["height"] for c in discrete_choices(net)})
     assert heights[0] == 0.5 and heights[-1] == 3.0 and len(heights) == 11
     m = build_candidate_measure(net, registry, {"x": 120.0, "height": 1.25})
     assert m.params.height == 1.25
