@@ -51,12 +51,12 @@ def test_two_stands_on_one_stretch_are_two_tables(registry):
     concept = build_concept(project, registry)
     screen = Screening(project, registry, spec, concept, rocks=300, seed=3)
     (ci,) = sorted(screen.edit_candidates)
-    variables = _variables(spec.candidates, (ci,))
+    variables = variables_of(spec.candidates, (ci,))
     tables = []
     for stems in ("low", "high"):
         vec = [getattr(v, "high" if v.name == "stems_per_ha" and stems == "high" else "low")
                for v in variables]
-        measures = screen.measures(_decode(spec.candidates, (ci,), variables, vec))
+        measures = screen.measures(decode(spec.candidates, (ci,), variables, vec))
         placed = place_measures(project, registry, measures, screen.section)
         edited = edited_section(project, screen.section, placed)
         tables.append(screen.table_for([p.footprint for p in placed], edited))
