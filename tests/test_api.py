@@ -223,8 +223,9 @@ def test_report_of_optimise_is_self_contained(tmp_path, capsys):
     assert {c["name"] for a in summary["alternatives"] for c in a["checks"]} <= set(csv.columns)
     html = (out / "report.html").read_text(encoding="utf-8")
     md = (out / "report.md").read_text(encoding="utf-8")
-    # Self-contained: no file or URL is loaded from outside the page.
-    assert not re.search(r"""(src|href)\s*=\s*["'](?!#)""", html)
+    # Self-contained: no file or URL is loaded from outside the page (a figure's
+    # rasterised rock paths are a data: image inside its SVG).
+    assert not re.search(r"""(src|href)\s*=\s*["'](?!#|data:image/png;base64,)""", html)
     assert "url(http" not in html and "<link" not in html and "<script" not in html
     # profile, envelopes, stops, alternatives, and a distribution figure per station
     # and measure of the chosen design (passing_*.svg)
