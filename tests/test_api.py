@@ -45,6 +45,17 @@ def two_zones(python_page_run):
     return r
 
 
+@pytest.mark.slow
+def test_the_python_page_block_runs(python_page_run):
+    """The Python page's block runs as written (conftest's ``python_page_run``).
+
+    It is here, beside the tests that read the same run (``two_zones``), so that
+    pytest-xdist's ``--dist loadscope`` gives them one worker and one run of it.
+    """
+    assert isinstance(python_page_run.namespace["r"].plot(), Figure)
+    assert (python_page_run.folder / "report" / "report.html").is_file()
+
+
 def _without_runtime(d: dict) -> dict:
     return {k: v for k, v in d.items() if k != "runtime_s"}
 
