@@ -15,7 +15,7 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from .judge.records import Bill, CheckSummary, DesignVerdict, State
+from .judge.records import Bill, CheckSummary, DesignVerdict, State, run_of
 from .judge.verdict import judged
 from .run.summary import RunSummary
 
@@ -38,16 +38,14 @@ if TYPE_CHECKING:  # pragma: no cover
 DEFAULT_TRAJECTORIES = 60
 
 
-def _stations_frame(summary: dict[str, Any]) -> pd.DataFrame:
+def _stations_frame(run: RunSummary) -> pd.DataFrame:
     """One row per analysis station: crossings and the statistics of each quantity."""
     rows = []
-    for s in summary.get("stations", []):
-        row: dict[str, Any] = {"x_m": s["x"], "crossings": s["crossings"]}
-        for key, block in s.items():
-            if not isinstance(block, dict):
-                continue
+    for s in run.stations:
+        row: dict[str, Any] = {"x_m": s.x, "crossings": s.crossings}
+        for key, block in s.blocks.items():
             base, _, unit = key.rpartition("_")
-            for stat, value in block.items():
+            for stat, value in block.to_json().items():
                 row[f"{base}_{stat}_{unit}"] = value
         rows.append(row)
     import pandas as pd  # on first use: simulate without tables need not load it
@@ -139,7 +137,7 @@ class SimulationResult:
     def stations(self) -> pd.DataFrame:
         """One row per analysis station: rocks passing and the statistics of height (m),
         speed (m/s) and energies (kJ), columns such as ``passing_height_p95_m``."""
-        return _stations_frame(self.summary)
+        return _stations_frame(run_of(self.record))
 
     @property
     def envelopes(self) -> pd.DataFrame:
