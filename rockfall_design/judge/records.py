@@ -385,9 +385,13 @@ class CheckSummary:
 
 
 def run_of(summary: RunSummary | CheckSummary | Mapping[str, Any]) -> RunSummary:
-    """The run's part of a summary: a record's, or a saved summary dict read back."""
+    """The run's part of a summary: a record's, or a saved summary dict read back.
+
+    A check's run carries the judge's residual (:class:`ProtectRecord`) as
+    its ``protect``, as the check's JSON does.
+    """
     if isinstance(summary, CheckSummary):
-        return summary.run
+        return replace(summary.run, protect=summary.protect)
     if isinstance(summary, RunSummary):
         return summary
     return RunSummary.from_json(summary)

@@ -11,7 +11,13 @@ from hypothesis import strategies as st
 
 from rockfall_design.api import check, load_project
 from rockfall_design.judge.evaluation import protect_record
-from rockfall_design.judge.records import CheckSummary, DesignVerdict, ProtectRecord, State
+from rockfall_design.judge.records import (
+    CheckSummary,
+    DesignVerdict,
+    ProtectRecord,
+    State,
+    run_of,
+)
 from rockfall_design.judge.verdict import verdict_of
 from rockfall_design.run.summary import RunSummary
 
@@ -32,6 +38,9 @@ def test_a_check_summary_is_its_record_and_reads_back_key_for_key(checked):
     again = CheckSummary.from_json(json.loads(json.dumps(d)))
     # Key order too: summary.json and --json print it as it is.
     assert json.dumps(again.to_json()) == json.dumps(d)
+    # The run seen through the check carries the judge's residual, as the JSON does.
+    assert run_of(record).protect == record.protect
+    assert run_of(d).protect.reaching == record.protect.reaching
     run = RunSummary.from_json(checked.study.summary())
     assert json.dumps(run.to_json()) == json.dumps(checked.study.summary())
 
