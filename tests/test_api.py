@@ -271,9 +271,14 @@ def test_report_of_simulate_and_check(tmp_path):
 def test_report_shows_confidence_bounds_when_the_summary_has_them(tmp_path):
     from rockfall_design.report.documents import render_html, render_markdown, report_context
 
+    from rockfall_design.judge.records import CheckSummary
+
     c = rd.check(QUARRY, rocks=60, seed=2)
-    c.summary["measures"][0]["checks"][0]["bound"] = 1.2345
-    c.summary["protect"]["upper_fraction"] = 0.0123
+    # The report reads the check's record: a saved summary with bounds, read back.
+    saved = c.summary
+    saved["measures"][0]["checks"][0]["bound"] = 1.2345
+    saved["protect"]["upper_fraction"] = 0.0123
+    c.record = CheckSummary.from_json(saved)
     ctx = report_context(c, figures={})
     html, md = render_html(ctx), render_markdown(ctx)
     for text in (html, md):

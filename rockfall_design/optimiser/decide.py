@@ -28,6 +28,7 @@ import numpy as np
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
 from ..judge.evaluation import Evaluation, evaluate_design
 from ..judge.margin import CheckerMargin
+from ..judge.plan import confidence_of
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins import guard
 from ..plugins.measure import Barrier
@@ -384,7 +385,7 @@ def decide(
         Rocks of the checker's check the margin is for (default: twice
         each look's rocks, the check design.yaml asks for if that look decides).
     """
-    confidence = float(concept.params.confidence)
+    confidence = confidence_of(concept)
     if looks is None:
         looks = plan_looks(rocks, int(max_rocks or rocks), confidence)
     lc = look_concept(registry, concept, looks.look_confidence)

@@ -33,8 +33,9 @@ from ..judge.outcomes import (
     judge_measures,
 )
 from ..judge.placing import PlacedMeasure, edited_section, place_measures
+from ..judge.plan import confidence_of
 from ..plugins import guard
-from ..plugins.concept import DEFAULT_CONFIDENCE, Check
+from ..plugins.concept import Check
 from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, ProfileEdit
 from ..run.reach import reaches_protected_zone
 from ..run.releases import draw_releases, engine_key, engine_settings, section_from_project
@@ -233,7 +234,7 @@ class Screening:
         self.allowed_fraction = (spec.residual_fraction if spec.residual_fraction is not None
                                  else self.allowed_residual / max(self.n, 1))
         self.max_rocks = max(self.n, int(spec.max_rocks))
-        self.confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
+        self.confidence = confidence_of(concept)
         r_max = float(np.max(self.releases.radius))
         self.margin = 2.0 * r_max + 0.5
         self.edit_candidates = {i for i, c in enumerate(spec.candidates) if self._is_edit(i)}
