@@ -269,9 +269,8 @@ def test_report_of_simulate_and_check(tmp_path):
 
 
 def test_report_shows_confidence_bounds_when_the_summary_has_them(tmp_path):
-    from rockfall_design.report.documents import render_html, render_markdown, report_context
-
     from rockfall_design.judge.records import CheckSummary
+    from rockfall_design.report.documents import render_html, render_markdown, report_context
 
     c = rd.check(QUARRY, rocks=60, seed=2)
     # The report reads the check's record: a saved summary with bounds, read back.
