@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExitCode
-from ..report.sections import values_text
+from ..project.study import values_text
 from ..studies.scenario_checks import Binding, ScenariosCheck, check_across
 
 if TYPE_CHECKING:  # pragma: no cover

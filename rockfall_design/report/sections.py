@@ -505,11 +505,6 @@ def _bill_table(bill: Bill) -> Table:
                  highlight=[False] * len(bill.items) + [True])
 
 
-def values_text(values: Mapping[str, Any]) -> str:
-    """A scenario's values as one line (``path = value, ...``), or "as written"."""
-    return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
-
-
 def _margin_text(margin: Any, binds_at: Any) -> str:
     return "no check to bind" if margin is None else (
         f"margin {100 * float(margin):+.1f} % at {binds_at}")

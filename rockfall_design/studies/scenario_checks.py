@@ -17,7 +17,7 @@ from ..judge.evaluation import evaluate
 from ..judge.plan import validate_plugin_sections
 from ..judge.verdict import UNTESTED, DesignVerdict, verdict_of_scenarios, with_verdict
 from ..plugins import default_registry
-from ..report.sections import values_text
+from ..project.study import values_text
 from .executors import run_tasks
 from .scenarios import required_scenarios, scenario_runs
 
