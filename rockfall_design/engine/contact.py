@@ -255,7 +255,7 @@ def drag_phase(v, s, sigma, sg, a, dsp, c, vdr, dist, sinb, cosb, mu, mur, r):
     PHYSICS.md, "Rolling and slipping with the ploughing drag". Speed and
     distance are the closed forms of dv/dt = a - c v^2 (``drag.py``); the spin
     of a slipping rock is linear in t, so the slip's zero is the root of a
-    closed form, bracketed (:func:`drag.slip_zero_time`); the bound of
+    closed form, bracketed (:func:`.drag.slip_zero_time`); the bound of
     rolling is reached at a speed in closed form.
     """
     rolling = sg == 0.0

@@ -133,7 +133,33 @@ def _distance_to_ground(gx, gy, X, Y):
 @SETTINGS
 @given(cases())
 def test_energy_never_increases(case):
-    sec, rel, bars = case
+    _assert_energy_never_increases(*case)
+
+
+def test_energy_never_increases_under_a_vanishing_drag():
+    """hypothesis's find: mu_0 of 6e-74 with V_s = 2 m/s gained energy.
+
+    The drag's closed forms divide by c = g cos(beta) mu_0 / V_s^2; with c
+    near zero they cancelled to noise (a rock rolling onto a 0.001 m step
+    of rough_soft ground gained 3e-3 J). A drag below round-off over a
+    piece is now no drag.
+    """
+    spang = Material(impact_model="spang", restitution=0.0, friction=0.0,
+                     rolling_resistance=0.0)
+    soft = Material(impact_model="rough_soft", restitution=0.0, friction=1.0,
+                    rolling_resistance=5.9331453690661985e-74, roughness_deg=3.0,
+                    drag_speed_ms=2.0)
+    x = np.array([0.0, 0.001, 0.002, 0.003, 0.004, 0.005, 0.006, 0.007, 0.008, 0.009, 0.059])
+    y = np.array([0.0] * 9 + [-0.00155741, -0.00155741])
+    sec = Section(x=x, y=y, segment_material=np.array([0, 0, 0, 0, 0, 0, 0, 1, 0, 0]),
+                  materials=(spang, soft))
+    rel = Releases(radius=np.full(4, 0.3), density=2650.0, x=np.zeros(4),
+                   height=np.zeros(4), vx=np.array([0.0, 0.0, 0.0, 1.0]), vy=np.zeros(4),
+                   spin=np.zeros(4), spin_rolling=np.zeros(4, dtype=bool))
+    _assert_energy_never_increases(sec, rel, [])
+
+
+def _assert_energy_never_increases(sec, rel, bars):
     res = _run(sec, rel, bars)
     for i, tr in enumerate(res.trajectories):
         m, r = res.mass[i], res.radius[i]
