@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import hot
 from .columns import G
-from .flight import _unit_tangent
+from .flight import unit_tangent
+from .jit import hot
 
 SLIP_TOL = 1e-9
 """Slip sigma = v - r s (m/s), or spin r s (m/s), within which it counts as zero."""
 
 
 @hot
-def _contact_accel(sinb, cosb, v, s, mu, mur, r):
+def contact_accel(sinb, cosb, v, s, mu, mur, r):
     """Accelerations of a rock in contact, moving along a piece.
 
     Parameters
@@ -89,7 +89,7 @@ def _contact_accel(sinb, cosb, v, s, mu, mur, r):
 
 
 @hot
-def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
+def start_from_rest(px, py, k, x, y, w, r, mu, mur):
     """Choose piece and direction for a rock at (almost) zero speed.
 
     Returns (k, dirn) with dirn = +1 or -1 for the direction in which the
@@ -110,11 +110,11 @@ def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
     best_d = 0
     for dirn in (1, -1):
         kk = kp if dirn > 0 else km
-        tx, ty = _unit_tangent(px, py, kk)
+        tx, ty = unit_tangent(px, py, kk)
         sinb = -dirn * ty
         cosb = tx
         s = -w * dirn
-        a = _contact_accel(sinb, cosb, 0.0, s, mu, mur, r)[0]
+        a = contact_accel(sinb, cosb, 0.0, s, mu, mur, r)[0]
         if a > best_a:
             best_a = a
             best_k = kk
