@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import ExitCode, InputError
 from .corridor_map import map_files, road_share, write_map
-from .corridor_report import _print_totals, _section_rule, corridor_summary, section_block
+from .corridor_report import corridor_summary, print_totals, section_block, section_rule
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
@@ -275,7 +275,7 @@ def each_section(
             done = body(SectionRun(section, subs[i], files, registry,
                                    None if ran is None else ran[i]))
             if not args.json:
-                _section_rule(section, len(subs), subs[i].seed)
+                section_rule(section, len(subs), subs[i].seed)
                 done.show()
             return done
 
@@ -295,7 +295,7 @@ def each_section(
     if args.json:
         sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
     else:
-        _print_totals(summary)
+        print_totals(summary)
     return summary
 
 

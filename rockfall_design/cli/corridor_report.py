@@ -115,7 +115,7 @@ def _corridor_verdict(blocks: Sequence[dict[str, Any]], command: str) -> dict[st
     return verdict_of_sections(items).as_dict()
 
 
-def _print_totals(summary: dict[str, Any]) -> None:
+def print_totals(summary: dict[str, Any]) -> None:
     """The corridor's table: one row per section, and the total."""
     from rich.markup import escape
     from rich.table import Table
@@ -229,7 +229,7 @@ def _print_scenario_totals(summary: dict[str, Any]) -> None:
         console.print(line, style="red", markup=False, highlight=False)
 
 
-def _section_rule(section: CorridorSection, of: int, seed: int) -> None:
+def section_rule(section: CorridorSection, of: int, seed: int) -> None:
     """The heading of a section's report; ``seed`` is the one it ran with (``--seed`` too)."""
     from rich.rule import Rule
 

@@ -184,7 +184,7 @@ def _check_rocks(c: Mapping[str, Any], met: int, n: int) -> int | None:
     return max(n + 1, int(math.ceil(n * (w / d) ** 2)))
 
 
-def _residual_rocks(reaching: int, n: int, allowed: float, confidence: float) -> int | None:
+def residual_rocks(reaching: int, n: int, allowed: float, confidence: float) -> int | None:
     """Fewest rocks whose Clopper-Pearson bound, at the observed rate, is within ``allowed``.
 
     None when no number of rocks can show it: an allowed fraction of 0, or an
@@ -277,7 +277,7 @@ def verdict_of(summary: Mapping[str, Any]) -> DesignVerdict:
             failed.append(f"{reaching:,} of {n:,} rocks ({_pct(prot['fraction'])}) reach "
                           f"{where}; allowed {_pct(allowed)}: {many}")
         elif not prot.get("ok_with_confidence"):
-            need = _residual_rocks(reaching, n, allowed, conf)
+            need = residual_rocks(reaching, n, allowed, conf)
             needs.append(need)
             if allowed <= 0.0:
                 settle = ("no number of rocks shows a fraction of 0: allow a fraction "

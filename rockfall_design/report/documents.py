@@ -26,19 +26,19 @@ from .listed import listed_lines
 from .pdf import html_to_pdf, pdf_turned_off, pdf_unavailable
 from .sections import (
     Table,
-    _alternatives_table,
-    _bill_table,
-    _checks_table,
-    _chosen_text,
-    _ends_table,
-    _margin_text,
-    _protect_text,
-    _resolved_inputs,
-    _run_table,
-    _scenarios_table,
-    _stations_table,
+    alternatives_table,
+    bill_table,
+    checks_table,
+    chosen_text,
+    ends_table,
     inputs_table,
+    margin_text,
     passages_table,
+    protect_text,
+    resolved_inputs,
+    run_table,
+    scenarios_table,
+    stations_table,
     values_text,
 )
 
@@ -212,8 +212,8 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
         "command": command,
         "version": __version__,
         "generated": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
-        "run": _run_table(result, summary),
-        "inputs": inputs_table(project, command, *_resolved_inputs(result)),
+        "run": run_table(result, summary),
+        "inputs": inputs_table(project, command, *resolved_inputs(result)),
         "results": [],
         "protect": "",
         "verdict": "",
@@ -230,32 +230,32 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
     stats_summary = design.summary if design is not None else (
         summary if command != "optimise" else None)
     if command == "optimise":
-        ctx["chosen"], ctx["chosen_measures"] = _chosen_text(summary)
-        ctx["results"].append(_alternatives_table(summary))
+        ctx["chosen"], ctx["chosen_measures"] = chosen_text(summary)
+        ctx["results"].append(alternatives_table(summary))
     if stats_summary is not None:
-        ctx["results"].append(_ends_table(stats_summary))
-        st = _stations_table(stats_summary)
+        ctx["results"].append(ends_table(stats_summary))
+        st = stations_table(stats_summary)
         if st is not None:
             ctx["results"].append(st)
-        ct = _checks_table(stats_summary)
+        ct = checks_table(stats_summary)
         if ct is not None:
             ctx["results"].append(ct)
         pt = passages_table(stats_summary)
         if pt is not None:
             ctx["results"].append(pt)
-        ctx["protect"] = _protect_text(stats_summary)
+        ctx["protect"] = protect_text(stats_summary)
         if stats_summary.get("measures") is not None:
             ctx["design_values"] = _design_value_tables(stats_summary)
             ctx["how_sure"] = how_sure(stats_summary)
     if command == "optimise":
-        ctx["how_sure"] += _optimiser_sentences(summary)
+        ctx["how_sure"] += optimiser_sentences(summary)
     _set_verdict(ctx, summary.get("verdict"))
     if command == "check" and not summary.get("verdict"):  # a summary from before verdicts
         ctx["verdict"] = ("Design holds on the point values." if summary["ok"]
                           else "Design fails.")
         ctx["failures"] = list(summary.get("failures", []))
     if summary.get("bill"):
-        ctx["bill"] = _bill_table(summary["bill"])
+        ctx["bill"] = bill_table(summary["bill"])
     if design is not None:
         ctx["results_note"] = (
             "Statistics, checks and figures of the chosen design on the "
@@ -280,7 +280,7 @@ def _design_value_tables(summary: Mapping[str, Any]) -> list[Table]:
             for t in design_tables(summary)]
 
 
-def _optimiser_sentences(summary: Mapping[str, Any]) -> list[str]:
+def optimiser_sentences(summary: Mapping[str, Any]) -> list[str]:
     """How ``optimise`` searched and decided, and its record of the decision, as sentences."""
     conf = 100 * float(summary.get("confidence") or 0.95)
     out = [f"The optimiser searched with {int(summary.get('search_rocks') or 0):,} rocks "
@@ -334,7 +334,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
     name = f"binding scenario {b['index']} ({values_text(b['values'])})"
     # The run: the project as written, the run seed the scenarios' seeds derive from.
     head = SimpleNamespace(project=project, command="check")
-    run = _run_table(head, {**binding.summary, "seed": summary["seed"],
+    run = run_table(head, {**binding.summary, "seed": summary["seed"],
                             "project_hash": project.resolved_hash()})
     for row in run.rows:
         if row[0] == "seed":
@@ -348,7 +348,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
         ["scenarios", f"{summary['of']}; the design must hold in {summary['required']} "
          f"(design.scenarios share {summary['share']:g})"],
         ["binding scenario", f"{b['index']} ({values_text(b['values'])}), seed {b['seed']}: "
-         + _margin_text(b["margin"], b["binds_at"])],
+         + margin_text(b["margin"], b["binds_at"])],
     ]
     ctx["run"] = run
     study = project.resolved_dict().get("study") or {}
@@ -360,7 +360,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
         note=f"Scenarios: {study.get('scenarios')}; seeds: {study.get('seeds')}. The other "
         "inputs are as written above.")]
     paths = list(dict.fromkeys(k for p in summary["scenarios"] for k in p["values"]))
-    ctx["results"] = [_scenarios_table(summary, paths)] + [
+    ctx["results"] = [scenarios_table(summary, paths)] + [
         Table(f"{name[0].upper()}{name[1:]}: {t.title}", t.columns, t.rows, t.note, t.highlight)
         for t in ctx["results"]]
     if ctx["protect"]:
@@ -369,7 +369,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
         "Every scenario of the study first; then the binding scenario (the one that decides "
         "the count required), "
         f"in full as check shows one scenario: scenario {b['index']}, seed {b['seed']}, "
-        + _margin_text(b["margin"], b["binds_at"]) + ".")
+        + margin_text(b["margin"], b["binds_at"]) + ".")
     ok = bool(summary["ok"])
     ctx["title"] = f"{project.name}: rockfall check over {summary['of']} scenarios"
     ctx["command"] = "check --scenarios"
@@ -378,7 +378,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
         f"{summary['of']} scenarios (on the point values; "
         f"{summary['holds_with_confidence_in']} with the confidence bounds); required: "
         f"{summary['required']}. Binding: scenario {b['index']}, "
-        + _margin_text(b["margin"], b["binds_at"]) + ".")
+        + margin_text(b["margin"], b["binds_at"]) + ".")
     ctx["verdict_ok"] = ok
     ctx["failures"] = list(summary.get("failures", []))
     if summary.get("verdict"):

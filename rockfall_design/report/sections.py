@@ -206,7 +206,8 @@ def _used_plugins(d: Mapping[str, Any], command: str) -> list[tuple[str, str]]:
     return used
 
 
-def _run_table(result: Any, summary: Mapping[str, Any]) -> Table:
+def run_table(result: Any, summary: Mapping[str, Any]) -> Table:
+    """The report's table of the run: program, project and its hash, rocks, seeds, engine."""
     import platform
 
     project = result.project
@@ -256,7 +257,8 @@ def _run_table(result: Any, summary: Mapping[str, Any]) -> Table:
     return Table("", ["item", "value"], rows)
 
 
-def _stations_table(summary: Mapping[str, Any]) -> Table | None:
+def stations_table(summary: Mapping[str, Any]) -> Table | None:
+    """The passages at each station (height, velocity, energy); None without stations."""
     stations = summary.get("stations") or []
     if not stations:
         return None
@@ -275,7 +277,8 @@ def _stations_table(summary: Mapping[str, Any]) -> Table | None:
                  "E: total kinetic energy. Percentiles over the rocks passing the station.")
 
 
-def _ends_table(summary: Mapping[str, Any]) -> Table:
+def ends_table(summary: Mapping[str, Any]) -> Table:
+    """How the rocks' paths ended: stopped on the section, left at either end, ..."""
     st = summary["stops"]
     n = max(int(summary["rocks"]), 1)
     rows = []
@@ -295,7 +298,8 @@ def _ends_table(summary: Mapping[str, Any]) -> Table:
     return Table("How the paths ended", ["end", "rocks", "share"], rows, note=note)
 
 
-def _protect_text(summary: Mapping[str, Any]) -> str:
+def protect_text(summary: Mapping[str, Any]) -> str:
+    """The protected zone and the rocks that reach it (with its bound), as a sentence."""
     p = summary.get("protect")
     if not p:
         return ""
@@ -310,7 +314,8 @@ def _protect_text(summary: Mapping[str, Any]) -> str:
     return text + "."
 
 
-def _checks_table(summary: Mapping[str, Any]) -> Table | None:
+def checks_table(summary: Mapping[str, Any]) -> Table | None:
+    """Each measure's checks (demand, capacity, factor); None without measures."""
     measures = summary.get("measures")
     if measures is None:
         return None
@@ -367,7 +372,8 @@ def passages_table(summary: Mapping[str, Any]) -> Table | None:
                  "figures passing_station_N and passing_measure_N show the distributions.")
 
 
-def _alternatives_table(summary: Mapping[str, Any]) -> Table:
+def alternatives_table(summary: Mapping[str, Any]) -> Table:
+    """The optimiser's alternatives with their costs and outcomes."""
     cur = summary.get("currency") or ""
     best = chosen_name(summary)
     alts = sorted(summary.get("alternatives", []),
@@ -411,7 +417,8 @@ def _alternatives_table(summary: Mapping[str, Any]) -> Table:
                  highlight=marks)
 
 
-def _chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
+def chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
+    """The sentence naming the chosen design, and the reasons listed under it."""
     best = chosen_name(summary)
     if best is None:
         return f"No admissible design: {summary.get('reason', '')}", []
@@ -423,7 +430,7 @@ def _chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
     return head, [measure_text(m) for m in alt.get("measures") or []]
 
 
-def _resolved_inputs(result: Any) -> tuple[dict[str, Any], dict[str, str]]:
+def resolved_inputs(result: Any) -> tuple[dict[str, Any], dict[str, str]]:
     """The project as run (every parameter resolved) and each safety concept's summary."""
     d = result.project.resolved_dict()
     evaluation = getattr(result, "evaluation", None)
@@ -455,7 +462,7 @@ def _money(v: float) -> str:
     return f"{v:,.2f}"
 
 
-def _bill_table(bill: Mapping[str, Any]) -> Table:
+def bill_table(bill: Mapping[str, Any]) -> Table:
     """The chosen design's bill: a line per quantity and fixed cost, and the total."""
     cur = bill.get("currency") or ""
     unit = f" ({cur})" if cur else ""
@@ -477,12 +484,13 @@ def values_text(values: Mapping[str, Any]) -> str:
     return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
 
 
-def _margin_text(margin: Any, binds_at: Any) -> str:
+def margin_text(margin: Any, binds_at: Any) -> str:
+    """The design's margin and the check that binds, as words."""
     return "no check to bind" if margin is None else (
         f"margin {100 * float(margin):+.1f} % at {binds_at}")
 
 
-def _scenarios_table(summary: Mapping[str, Any], paths: list[str]) -> Table:
+def scenarios_table(summary: Mapping[str, Any], paths: list[str]) -> Table:
     """Every scenario of ``check --scenarios``: values, seed, verdicts, margin, what binds."""
     b = summary["binding"]["index"]
     cols = ["", "#", *paths, "seed", "reaching", "holds", "with confidence", "margin",
