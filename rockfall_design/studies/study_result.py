@@ -20,7 +20,11 @@ import numpy as np
 
 from ..project import Project
 from ..project.messages import fmt
+from ..report.figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure, save_figures
+from ..report.terminal import fitted_console
+from ..version import __version__
 from .scenarios import Scenario
+from .sensitivity import joint_bounds, rank, relative_effect, targets
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -106,9 +110,6 @@ class StudyResult:
         ``sensitivity_confidence``, the c at which its ``effect_low`` ..
         ``effect_high`` hold (None if no scenario has bounds).
         """
-        from ..version import __version__
-        from .sensitivity import joint_bounds
-
         study = self.project.resolved_dict()["study"]
         joint = joint_bounds(self.results)
         scenarios = []
@@ -143,8 +144,6 @@ class StudyResult:
     @property
     def sensitivity_confidence(self) -> float | None:
         """The confidence c of the sensitivity's ``effect_low`` .. ``effect_high``."""
-        from .sensitivity import joint_bounds
-
         joint = joint_bounds(self.results)
         return None if joint is None else float(joint["confidence"])
 
@@ -181,7 +180,6 @@ class StudyResult:
         """
         import pandas as pd
 
-        from .sensitivity import targets
 
         table = targets(self.results)
         rows = []
@@ -206,7 +204,6 @@ class StudyResult:
         """Envelopes of passing height and energy along x, every scenario on one figure."""
         from matplotlib import colormaps
 
-        from ..report.figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure
 
         if any("envelope" not in result for result in self.results):
             raise ValueError("this study ran without its envelopes (envelopes=False); run it "
@@ -250,8 +247,6 @@ class StudyResult:
 
     def plot_tornado(self) -> Figure:
         """Tornado chart: for the targets moved most, each input's range of level means."""
-        from ..report.figures import RockfallFigure
-
         entries = self._sensitivity
         chosen: list[str] = []
         for e in entries:  # the targets, most moved first (relative to their own size)
@@ -310,8 +305,6 @@ class StudyResult:
     def save_figures(self, directory: str | os.PathLike[str],
                      formats: Sequence[str] = ("png",)) -> list[Path]:
         """Write :meth:`figures` into ``directory``, one file per figure and format."""
-        from ..report.figures import save_figures
-
         return save_figures(self.figures(), directory, formats)
 
     # ---- terminal --------------------------------------------------------------------
@@ -320,7 +313,6 @@ class StudyResult:
         from rich.table import Table
         from rich.text import Text
 
-        from ..report.terminal import fitted_console
 
         s = self.summary
         rate = len(self.results) * self.n_rocks / self.runtime_s if self.runtime_s else 0.0
@@ -348,7 +340,7 @@ class StudyResult:
         for col in ("target", "input", "effect", sure, "level means",
                     *(("S1",) if indices else ())):
             ranked.add_column(col, justify="left" if col in ("target", "input") else "right")
-        shown_entries = _by_target(s["sensitivity"])[:top]
+        shown_entries = by_target(s["sensitivity"])[:top]
         for e in shown_entries:
             unit = e["unit"]
             mark = "" if e.get("resolved", True) else " *"
@@ -417,15 +409,11 @@ def _interval(entry: dict[str, Any]) -> str:
     return f"{_number(low, unit)} .. {_number(high, unit)}"
 
 
-def _by_target(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+def by_target(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Sensitivity entries in the one order of ``--json`` (:func:`.sensitivity.rank`)."""
-    from .sensitivity import rank
-
     return rank(list(entries))
 
 
 def _relative(entry: dict[str, Any]) -> float:
     """An effect relative to its target's size (see :func:`.sensitivity.relative_effect`)."""
-    from .sensitivity import relative_effect
-
     return relative_effect(entry)
