@@ -10,9 +10,16 @@ functions return them.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from .judge.records import Bill, CheckSummary, DesignVerdict, State, run_of
+from .judge.verdict import judged
+from .run.summary import RunSummary
+
+FAILS, HOLDS_ON_POINT_VALUES = State.FAILS, State.HOLDS_ON_POINT_VALUES
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -31,16 +38,14 @@ if TYPE_CHECKING:  # pragma: no cover
 DEFAULT_TRAJECTORIES = 60
 
 
-def _stations_frame(summary: dict[str, Any]) -> pd.DataFrame:
+def _stations_frame(run: RunSummary) -> pd.DataFrame:
     """One row per analysis station: crossings and the statistics of each quantity."""
     rows = []
-    for s in summary.get("stations", []):
-        row: dict[str, Any] = {"x_m": s["x"], "crossings": s["crossings"]}
-        for key, block in s.items():
-            if not isinstance(block, dict):
-                continue
+    for s in run.stations:
+        row: dict[str, Any] = {"x_m": s.x, "crossings": s.crossings}
+        for key, block in s.blocks.items():
             base, _, unit = key.rpartition("_")
-            for stat, value in block.items():
+            for stat, value in block.to_json().items():
                 row[f"{base}_{stat}_{unit}"] = value
         rows.append(row)
     import pandas as pd  # on first use: simulate without tables need not load it
@@ -83,9 +88,16 @@ class SimulationResult:
         return int(self.study.n)
 
     @cached_property
+    def record(self) -> RunSummary:
+        """The run's summary as an object (:class:`~rockfall_design.run.summary.RunSummary`):
+        what the report reads."""
+        return self.study.run_summary()
+
+    @cached_property
     def summary(self) -> dict[str, Any]:
-        """The JSON-ready summary: the same dict as ``rockfall-design simulate --json``."""
-        return self.study.summary()
+        """The JSON-ready summary: the same dict as ``rockfall-design simulate --json``
+        (:attr:`record`'s ``to_json()``)."""
+        return self.record.to_json()
 
     @property
     def streamed(self) -> bool:
@@ -125,7 +137,7 @@ class SimulationResult:
     def stations(self) -> pd.DataFrame:
         """One row per analysis station: rocks passing and the statistics of height (m),
         speed (m/s) and energies (kJ), columns such as ``passing_height_p95_m``."""
-        return _stations_frame(self.summary)
+        return _stations_frame(run_of(self.record))
 
     @property
     def envelopes(self) -> pd.DataFrame:
@@ -250,23 +262,28 @@ class CheckResult(SimulationResult):
         self.registry = registry
 
     @cached_property
+    def record(self) -> CheckSummary:
+        """The check's summary as an object, judged
+        (:class:`~rockfall_design.judge.records.CheckSummary`): what the report reads."""
+        return judged(self.evaluation.record())
+
+    @cached_property
     def summary(self) -> dict[str, Any]:
         """The JSON-ready summary: the same dict as ``rockfall-design check --json``.
 
-        It begins with ``verdict`` (:func:`rockfall_design.judge.verdict.verdict_of`);
-        a check of nothing (``untested``) is not ``ok``.
+        :attr:`record`'s ``to_json()``. It begins with ``verdict``
+        (:func:`rockfall_design.judge.verdict.verdict_of`); a check of
+        nothing (``untested``) is not ``ok``.
         """
-        from .judge.verdict import with_verdict
-
-        return with_verdict(self.evaluation.summary())
+        return self.record.to_json()
 
     @property
-    def verdict(self) -> Any:
+    def verdict(self) -> DesignVerdict:
         """The verdict (:class:`~rockfall_design.judge.verdict.DesignVerdict`): one of
         "holds with confidence", "holds on point values only", "fails", "untested"."""
-        from .judge.verdict import verdict_of
-
-        return verdict_of(self.summary)
+        verdict = self.record.verdict
+        assert verdict is not None  # judged above
+        return verdict
 
     @property
     def ok(self) -> bool:
@@ -274,12 +291,12 @@ class CheckResult(SimulationResult):
 
         False when nothing was tested (no measure met and no protected zone).
         """
-        return bool(self.summary["ok"])
+        return self.record.ok
 
     @property
     def failures(self) -> list[str]:
         """One line per failed check."""
-        return list(self.summary.get("failures", []))
+        return list(self.record.failures)
 
     @cached_property
     def rocks(self) -> pd.DataFrame:
@@ -347,17 +364,13 @@ class OptimiseResult:
         return out
 
     @cached_property
-    def verdict(self) -> Any:
+    def verdict(self) -> DesignVerdict:
         """The verdict on the chosen design (:class:`~rockfall_design.judge.verdict.DesignVerdict`).
 
         The chosen design's check on the rocks that decided it, as ``check``
         gives it; a design that then fails on the fresh rocks holds on point
         values only; without a chosen design, ``fails`` with the reason.
         """
-        from dataclasses import replace
-
-        from .judge.verdict import FAILS, HOLDS_ON_POINT_VALUES, DesignVerdict, verdict_of
-
         best = self.result.best
         if best is None:
             reason = self.result.reason or "no family meets the targets"
@@ -365,7 +378,7 @@ class OptimiseResult:
                                  confidence=float(self.result.confidence))
         design = self.design
         assert design is not None
-        verdict = verdict_of(design.summary)
+        verdict = design.verdict
         if best.holds_on_fresh_rocks is False and verdict.holds:
             verdict = replace(
                 verdict, state=HOLDS_ON_POINT_VALUES,
@@ -375,13 +388,13 @@ class OptimiseResult:
         return verdict
 
     @cached_property
-    def bill(self) -> dict[str, Any] | None:
-        """The bill of the chosen design (None without one).
+    def bill_record(self) -> Bill | None:
+        """The bill of the chosen design as an object (None without one).
 
-        ``items`` (``measure``, ``quantity``, ``unit``, ``count``,
+        Its lines (``measure``, ``quantity``, ``unit``, ``count``,
         ``unit_price``, ``amount``, ``per_m``, ``source``), ``total`` (the
         chosen design's cost), ``currency``, ``length_m`` (the site length,
-        m): see :func:`rockfall_design.judge.design_spec.design_bill`.
+        m): see :func:`rockfall_design.judge.costing.design_bill`.
         """
         best = self.result.best
         if best is None:
@@ -394,7 +407,13 @@ class OptimiseResult:
         source = (f"catalogue {d.costs.file}" if d.costs.file else "design.costs.params")
         bill = design_bill(self._registry, resolve_design(self.project, self._registry),
                            best.measures, section_from_project(self.project), source)
-        return {**bill, "currency": self.result.currency or ""}
+        return replace(bill, currency=self.result.currency or "")
+
+    @property
+    def bill(self) -> dict[str, Any] | None:
+        """:attr:`bill_record` as the ``bill`` of ``optimise --json`` (None without one)."""
+        bill = self.bill_record
+        return None if bill is None else bill.to_json()
 
     @property
     def seed(self) -> int:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import os
 import re
 import sys
@@ -33,6 +34,11 @@ from pathlib import Path
 import pytest
 
 from rockfall_design.plugins import load_registry
+
+try:  # file locks, to share a slow run between xdist workers (not on Windows)
+    import fcntl
+except ImportError:  # pragma: no cover
+    fcntl = None
 
 #: The repository: its projects/, examples/ and README.md.
 ROOT = Path(__file__).resolve().parents[1]
@@ -71,7 +77,12 @@ def optimised(tmp_path_factory: pytest.TempPathFactory) -> Callable[[Path], Opti
     slow tests read the same run (the one verdict of every face of
     tests/report/test_handin.py, the fresh-rocks guarantee of
     tests/optimiser/test_optimise.py): they share it. The tests only read its
-    files; they must not change them.
+    files; they must not change them. Under pytest-xdist those tests sit in
+    different workers (``--dist loadscope`` keeps a module on one worker, not
+    two modules), so the run is kept in the folder all workers of the session
+    share, behind a file lock: the first worker to ask runs it, the others
+    wait for it and read its files (one optimise of design_ditch_or_fence, half
+    a minute to a minute, not two).
 
     It runs with the rock budget of 50,000 (``--max-rocks``; the default is
     400,000): what these tests check (one verdict on every face; the chosen
@@ -82,15 +93,36 @@ def optimised(tmp_path_factory: pytest.TempPathFactory) -> Callable[[Path], Opti
     from rockfall_design.cli.program import main
 
     runs: dict[Path, OptimiseRun] = {}
+    # The session's own folder: under xdist the workers' folders sit in one
+    # folder of the session, which is theirs to share; without xdist the
+    # session's folder itself (its parent holds earlier sessions' runs).
+    base = tmp_path_factory.getbasetemp()
+    shared = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+    def optimise_once(project: Path, d: Path) -> OptimiseRun:
+        done = d / "run.json"
+        if done.is_file():
+            kept = json.loads(done.read_text(encoding="utf-8"))
+            return OptimiseRun(kept["code"], kept["terminal"], d / "out", d / "report")
+        d.mkdir(exist_ok=True)
+        term = io.StringIO()
+        with contextlib.redirect_stdout(term):
+            code = main(["optimise", str(project), "--max-rocks", "50000",
+                         "--out", str(d / "out"), "--report", str(d / "report")])
+        done.write_text(json.dumps({"code": code, "terminal": term.getvalue()}),
+                        encoding="utf-8")
+        return OptimiseRun(code, term.getvalue(), d / "out", d / "report")
 
     def run(project: Path) -> OptimiseRun:
         if project not in runs:
-            d = tmp_path_factory.mktemp(f"optimise-{project.stem}")
-            term = io.StringIO()
-            with contextlib.redirect_stdout(term):
-                code = main(["optimise", str(project), "--max-rocks", "50000",
-                             "--out", str(d / "out"), "--report", str(d / "report")])
-            runs[project] = OptimiseRun(code, term.getvalue(), d / "out", d / "report")
+            d = shared / f"optimise-{project.stem}"
+            if fcntl is None:  # no file locks here (Windows): a run per worker
+                d = tmp_path_factory.mktemp(f"optimise-{project.stem}")
+                runs[project] = optimise_once(project, d)
+                return runs[project]
+            with open(shared / f"optimise-{project.stem}.lock", "w") as lock:
+                fcntl.flock(lock, fcntl.LOCK_EX)
+                runs[project] = optimise_once(project, d)
         return runs[project]
 
     return run
@@ -110,9 +142,9 @@ def python_page_run(tmp_path_factory: pytest.TempPathFactory) -> PythonPageRun:
 
     It runs in a folder of its own in which ``projects`` leads to the bundled
     projects, as a reader runs it from the repository. Its optimisation of
-    design_two_zones (seed 1) takes a minute: tests/test_docs.py checks what the
-    page promises, and tests/test_api.py reads the same result as the issue's example
-    rather than running it again.
+    design_two_zones (seed 1) takes a minute: tests/test_api.py checks what the
+    page promises and reads the same result as the issue's example rather than
+    running it again (one module, so one xdist worker and one run).
     """
     text = (ROOT / "docs" / "python.md").read_text(encoding="utf-8")
     block = re.search(r"```python\n(.*?)```", text[text.index("# From Python"):], re.S)

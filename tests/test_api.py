@@ -45,6 +45,17 @@ def two_zones(python_page_run):
     return r
 
 
+@pytest.mark.slow
+def test_the_python_page_block_runs(python_page_run):
+    """The Python page's block runs as written (conftest's ``python_page_run``).
+
+    It is here, beside the tests that read the same run (``two_zones``), so that
+    pytest-xdist's ``--dist loadscope`` gives them one worker and one run of it.
+    """
+    assert isinstance(python_page_run.namespace["r"].plot(), Figure)
+    assert (python_page_run.folder / "report" / "report.html").is_file()
+
+
 def _without_runtime(d: dict) -> dict:
     return {k: v for k, v in d.items() if k != "runtime_s"}
 
@@ -258,11 +269,15 @@ def test_report_of_simulate_and_check(tmp_path):
 
 
 def test_report_shows_confidence_bounds_when_the_summary_has_them(tmp_path):
+    from rockfall_design.judge.records import CheckSummary
     from rockfall_design.report.documents import render_html, render_markdown, report_context
 
     c = rd.check(QUARRY, rocks=60, seed=2)
-    c.summary["measures"][0]["checks"][0]["bound"] = 1.2345
-    c.summary["protect"]["upper_fraction"] = 0.0123
+    # The report reads the check's record: a saved summary with bounds, read back.
+    saved = c.summary
+    saved["measures"][0]["checks"][0]["bound"] = 1.2345
+    saved["protect"]["upper_fraction"] = 0.0123
+    c.record = CheckSummary.from_json(saved)
     ctx = report_context(c, figures={})
     html, md = render_html(ctx), render_markdown(ctx)
     for text in (html, md):

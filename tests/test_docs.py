@@ -258,15 +258,3 @@ def test_the_guide_marks_current_and_older_routes_as_the_manual_does():
     for route in ("bill(section)", "quantities(section)", "price(", "cost(", "design_variables"):
         assert route in guide
     assert guide.count("Current (since 0.1.0)") == guide.count("Kept for") == 4
-
-
-# --- The Python page (docs/python.md) --------------------------------------------------
-
-
-@pytest.mark.slow
-def test_the_python_page_block_runs(python_page_run):
-    """The block runs as written (conftest's ``python_page_run``, shared with test_api.py)."""
-    from matplotlib.figure import Figure
-
-    assert isinstance(python_page_run.namespace["r"].plot(), Figure)
-    assert (python_page_run.folder / "report" / "report.html").is_file()

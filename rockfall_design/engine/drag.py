@@ -1,10 +1,12 @@
-"""Rolling with a resistance that grows with the square of the speed: closed forms.
+"""Motion against a drag that grows with the square of the speed: closed forms.
 
-PHYSICS.md, "The `rough_soft` law": on a piece, a rock rolling on soft or
-rough ground has dv/dt = a - c v^2 with a (m/s^2) and c (1/m) constant over
-the piece. Speed at a distance, time between two speeds, and speed and
-distance after a time are all closed forms, so the event loop keeps jumping
-from event to event without a time step.
+PHYSICS.md, "The `rough_soft` law" and "Rolling and slipping with the
+ploughing drag": on a piece, a rock rolling or slipping on soft ground has
+dv/dt = a - c v^2 with a (m/s^2) and c (1/m) constant over the piece. Speed
+at a distance, time between two speeds, and speed and distance after a time
+are all closed forms, and a slipping rock's spin is linear in time, so the
+slip's zero is the root of a closed form (:func:`slip_zero_time`): the event
+loop keeps jumping from event to event without a time step.
 """
 
 from __future__ import annotations
@@ -134,3 +136,115 @@ def along(v, a, c, d):
     vs = np.sqrt(q) if q > 0.0 else 0.0
     ts = 2.0 * d / (v + vs) if v + vs > 0.0 else 0.0
     return vs, ts
+
+
+@hot
+def _slip_at(v0, sig0, a, c, rds, t):
+    """Slip sigma (m/s) and its rate (m/s^2) a time ``t`` (s) into a phase.
+
+    The speed follows dv/dt = a - c v^2 (:func:`drag_state`) and the spin's
+    part r s of the slip falls linearly, at ``rds`` = r ds/dt (m/s^2), so
+    sigma(t) = v(t) - (v0 - sig0) - rds t.
+    """
+    v = drag_state(v0, a, c, t)[0]
+    return v - (v0 - sig0) - rds * t, a - c * v * v - rds
+
+
+@hot
+def _slip_root(v0, sig0, sg, a, c, rds, lo, hi):
+    """The zero of the slip in [lo, hi] (s), where sg * sigma goes from > 0 to <= 0.
+
+    Newton's step where it stays inside the bracket and halves it at least as
+    fast as bisection would, bisection otherwise (the safeguarded Newton of
+    Press et al. 2007, section 9.4): the bracket always holds the root, so it
+    converges whatever the start, to the resolution of a double.
+    """
+    t = 0.5 * (lo + hi)
+    dx_old = hi - lo
+    dx = dx_old
+    f, df = _slip_at(v0, sig0, a, c, rds, t)
+    f *= sg
+    df *= sg
+    for _ in range(200):
+        if f == 0.0:
+            return t
+        if f > 0.0:
+            lo = t
+        else:
+            hi = t
+        if hi - lo <= 4.0 * np.finfo(np.float64).eps * hi:
+            return hi
+        tn = t - f / df if df != 0.0 else lo - 1.0
+        if lo < tn < hi and abs(2.0 * f) <= abs(dx_old * df):
+            dx_old = dx
+            dx = t - tn
+        else:
+            dx_old = dx
+            dx = 0.5 * (hi - lo)
+            tn = lo + dx
+        if tn == t:
+            return t
+        t = tn
+        f, df = _slip_at(v0, sig0, a, c, rds, t)
+        f *= sg
+        df *= sg
+    return hi
+
+
+@hot
+def slip_zero_time(v0, sig0, sg, a, c, rds, t_max):
+    """First time (s) in (0, ``t_max``] at which a slipping rock's slip reaches zero.
+
+    Parameters
+    ----------
+    v0 : float
+        Speed at the start of the phase (m/s).
+    sig0 : float
+        Slip sigma = v - r s at the start (m/s); 0 if it has just left zero.
+    sg : float
+        Sense of the slip in this phase (+1 or -1).
+    a, c : float
+        dv/dt = a - c v^2 (m/s^2, 1/m), c > 0.
+    rds : float
+        r ds/dt, the rate of the spin's part of the slip (m/s^2), constant.
+    t_max : float
+        End of the search (s): the phase's first other event, finite.
+
+    Returns
+    -------
+    float
+        The time of the zero, or inf if the slip keeps its sense up to
+        ``t_max``.
+
+    Notes
+    -----
+    d(sigma)/dt = a - c v^2 - rds changes sign at most once, where
+    v^2 = (a - rds) / c, since v(t) is monotone (towards sqrt(a / c), or to
+    a stop). Split there, sigma is monotone on each part, so a change of its
+    sign on a part brackets exactly one zero, which :func:`_slip_root` finds.
+    A slip that starts at zero (``sig0`` = 0) leaves it in the sense ``sg``
+    on the first part: only a return on the second part is a zero, so no
+    phase ends at its own start.
+    """
+    if not (t_max > 0.0 and t_max < np.inf):
+        return np.inf
+    split = t_max
+    q = (a - rds) / c
+    if q > 0.0:
+        vm = np.sqrt(q)
+        v1 = drag_state(v0, a, c, t_max)[0]
+        if (v0 - vm) * (v1 - vm) < 0.0:
+            # The rate changes sign inside: split at the speed vm.
+            d = np.log((v0 * v0 - a / c) / (q - a / c)) / (2.0 * c)
+            split = min(max(drag_time(v0, vm, a, c, d), 0.0), t_max)
+    ta = 0.0
+    fa = sg * sig0
+    for part in range(2):
+        tb = split if part == 0 else t_max
+        if tb > ta:
+            fb = sg * _slip_at(v0, sig0, a, c, rds, tb)[0]
+            if fa > 0.0 and fb <= 0.0:
+                return _slip_root(v0, sig0, sg, a, c, rds, ta, tb)
+            fa = fb
+            ta = tb
+    return np.inf

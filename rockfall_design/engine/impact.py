@@ -87,10 +87,11 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
     * spang, stick (|u| <= 7/2 mu p_n): v_t' = (5 v_t - 2 r w) / 7,
       w' = -v_t' / r;
     * spang, slip: v_t' = v_t - mu p_n sgn(u), w' = w - 5/2 mu p_n sgn(u) / r;
-    * rough_soft: first the resistance moment takes
-      min(|w|, 5/2 mu p_n / r) of the spin, mu = mu_0 (1 + (v / V_s)^2),
-      then as spang (PHYSICS.md, "The rough_soft law"); spang and rn_rt
-      impacts take no rolling resistance;
+    * rough_soft: first the ploughing drag slows the tangential velocity,
+      v_t <- v_t / (1 + mu_0 p_n |v_t| / V_s^2), and the resistance moment
+      takes min(|w|, 5/2 mu_0 p_n / r) of the spin, then as spang
+      (PHYSICS.md, "The rough_soft law"); spang and rn_rt impacts take no
+      rolling resistance;
     * rn_rt: v_n' = -Rn v_n, v_t' = Rt v_t and w' = Rt w (PHYSICS.md,
       "Lumped-mass law"): the spin scales with the tangential speed, so a
       rolling rock stays rolling and no energy is gained.
@@ -142,15 +143,16 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
     vn2 = -ee * vn
     if model != MODEL_RN_RT:
         pn = -(1.0 + ee) * vn
-        # rough_soft only: the resistance moment mu N r acts while the ground
-        # pushes, in an impact as in contact, its angular impulse per unit
-        # mass mu r p_n against the spin, at most stopping it; mu grows with
-        # the speed as (v / V_s)^2 (PHYSICS.md, "The rough_soft law"). The
-        # spang law keeps its impact as published (Spang & Rautenstrauch
-        # 1988): its impacts take no rolling resistance.
-        if model == MODEL_ROUGH_SOFT and vdrag > 0.0:
-            q = (vn * vn + vt * vt) / (vdrag * vdrag)
-            mur = mur * (1.0 + q)
+        # rough_soft only: the ground resists in an impact as in contact
+        # (PHYSICS.md, "The rough_soft law"). Its ploughing drag
+        # mu_0 (v_t / V_s)^2 N acts on the translation: over the normal
+        # impulse p_n, dv_t / dp = -mu_0 v_t^2 / V_s^2, integrated exactly,
+        # which slows v_t without ever reversing it. Its resistance moment
+        # mu_0 N r takes the angular impulse mu_0 r p_n from the spin, at most
+        # stopping it. The spang law keeps its impact as published (Spang &
+        # Rautenstrauch 1988): its impacts take no rolling resistance.
+        if model == MODEL_ROUGH_SOFT and vdrag > 0.0 and mur > 0.0:
+            vt = vt / (1.0 + mur * pn * abs(vt) / (vdrag * vdrag))
         if model == MODEL_ROUGH_SOFT and mur > 0.0 and w != 0.0:
             dw = 2.5 * mur * pn / r
             if abs(w) <= dw:

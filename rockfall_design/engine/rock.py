@@ -48,8 +48,8 @@ from .columns import (
     UNRESOLVED,
     G,
 )
-from .contact import SLIP_TOL, contact_accel, start_from_rest
-from .drag import along, drag_speed_at, drag_stop, drag_time
+from .contact import SLIP_TOL, constant_phase, contact_accel, drag_phase, start_from_rest
+from .drag import along
 from .flight import locate, next_landing, path_height, unit_tangent
 from .forest import F_X, has_forest, meet_stem, next_stem, stem_in_flight
 from .impact import collide, draw_contact
@@ -383,7 +383,11 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         sinb = -dy
         cosb = tx
         s = -w * dirn
-        a, dsig, dsp, _, s_zero = contact_accel(sinb, cosb, v, s, mu, mur, r)
+        # rough_soft: the ploughing drag mu_0 (v / V_s)^2 N on the translation,
+        # rolling or slipping (PHYSICS.md, "The rough_soft law").
+        vdr = mats[seg_mat[seg], M_VDRAG]
+        qd = v * v / (vdr * vdr) if (vdr > 0.0 and mur > 0.0) else 0.0
+        a, dsig, dsp, sgn, s_zero = contact_accel(sinb, cosb, v, s, mu, mur, r, qd)
         rolling = np.isnan(dsp)
         sigma = v - r * s
         if rolling or abs(sigma) <= SLIP_TOL:
@@ -392,71 +396,25 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             sigma = 0.0
         if s_zero and not rolling:
             s = 0.0
-        # rough_soft: a rolling rock's resistance grows as (v / V_s)^2, so
-        # dv/dt = a - c v^2 (PHYSICS.md, "The rough_soft law").
+        # dv/dt = a - c v^2: the drag's share of a rolling rock's deceleration
+        # is 5/7 of it, of a slipping rock's all of it.
         c = 0.0
-        if rolling:
-            vdr = mats[seg_mat[seg], M_VDRAG]
-            if vdr > 0.0 and mur > 0.0:
-                c = 5.0 / 7.0 * G * cosb * mur / (vdr * vdr)
+        if vdr > 0.0 and mur > 0.0:
+            c = (5.0 / 7.0 if rolling else 1.0) * G * cosb * mur / (vdr * vdr)
         if dirn > 0:
             dist = np.hypot(px[k + 1] - x, py[k + 1] - y)
         else:
             dist = np.hypot(x - px[k], y - py[k])
-        # Event times: end of piece, speed zero, slip zero, spin zero.
-        t_end = np.inf
-        if dist <= 0.0:
-            t_end = 0.0
-        elif a == 0.0:
-            if v > 0.0:
-                t_end = dist / v
-        else:
-            disc = v * v + 2.0 * a * dist
-            if disc >= 0.0 and v + np.sqrt(disc) > 0.0:
-                t_end = 2.0 * dist / (v + np.sqrt(disc))
-        t_zero = v / -a if a < 0.0 else np.inf
-        v_end = 0.0
-        d_zero = 0.0
+        # The next event: end of piece, speed zero, slip zero, spin zero (and,
+        # with the drag, a bound of rolling reached).
         if c > 0.0:
-            v_end = drag_speed_at(v, a, c, dist)
-            if dist > 0.0:
-                t_end = drag_time(v, v_end, a, c, dist) if v_end >= 0.0 else np.inf
-            t_zero, d_zero = drag_stop(v, a, c)
-        t_slip = -sigma / dsig if (not rolling and sigma * dsig < 0.0) else np.inf
-        t_spin = -s / dsp if (not rolling and s * dsp < 0.0) else np.inf
-        ev = 0
-        tm = t_end
-        if t_zero < tm:
-            ev = 1
-            tm = t_zero
-        if t_slip < tm:
-            ev = 2
-            tm = t_slip
-        if t_spin < tm:
-            ev = 3
-            tm = t_spin
+            ev, tm, ds_, v1, s1 = drag_phase(v, s, sigma, sgn, a, dsp, c, vdr, dist, sinb,
+                                             cosb, mu, mur, r)
+        else:
+            ev, tm, ds_, v1, s1 = constant_phase(v, s, sigma, rolling, a, dsig, dsp, dist, r)
         if tm == np.inf:
             status = STOPPED
             break
-        if c > 0.0:
-            # Rolling: the phase ends at the end of the piece or at a stop.
-            ds_ = dist if ev == 0 else min(d_zero, dist)
-            v1 = max(v_end, 0.0) if ev == 0 else 0.0
-        else:
-            ds_ = v * tm + 0.5 * a * tm * tm
-            if ds_ < 0.0:
-                ds_ = 0.0
-            if ds_ > dist:
-                ds_ = dist
-            v1 = v + a * tm
-            if v1 < 0.0 or ev == 1:
-                v1 = 0.0
-        if rolling or ev == 2:
-            s1 = v1 / r
-        elif ev == 3:
-            s1 = 0.0
-        else:
-            s1 = s + dsp * tm
         if ev == 0:
             xn = px[k + 1] if dirn > 0 else px[k]
             yn = py[k + 1] if dirn > 0 else py[k]

@@ -154,6 +154,80 @@ def _declared(registry: Registry, cls: Any, kind: str) -> DeclaredDesign:
         ) from None
 
 
+def _candidate_class(project: Project, registry: Registry, at: tuple, raw: dict[str, Any]
+                     ) -> type[ProtectiveMeasure]:
+    """The measure class of a candidate: a known type with a station x and known parameters."""
+    kind = raw["type"]
+    cls = registry.measures.get(kind)
+    if cls is None:
+        raise unknown_measure_type(project, registry, at + ("type",), kind)
+    fields = cls.Params.model_fields
+    if "x" not in fields:
+        raise project.error_at(
+            at + ("x",),
+            f"measure type {kind!r} has no station parameter x, so the optimiser cannot place it",
+        )
+    for key in raw:
+        if key != "type" and key not in fields:
+            raise project.unknown_name(at + (key,), key, list(fields), f"{kind} parameter")
+    return cls
+
+
+def _split_values(raw: dict[str, Any], product_field: str | None
+                  ) -> tuple[dict[str, Any], dict[str, tuple[float, float]],
+                             dict[str, tuple[Any, ...]]]:
+    """A candidate's values: fixed ones, ranges ``[low, high]`` and ``{options: [...]}``."""
+    fixed: dict[str, Any] = {}
+    ranges: dict[str, tuple[float, float]] = {}
+    options: dict[str, tuple[Any, ...]] = {}
+    for key, value in raw.items():
+        if key in ("type", "x", product_field):
+            continue
+        if isinstance(value, list):
+            ranges[key] = (float(value[0]), float(value[1]))
+        elif isinstance(value, dict):
+            options[key] = tuple(value["options"])
+        else:
+            fixed[key] = value
+    return fixed, ranges, options
+
+
+def _check_candidate_values(project: Project, cls: type[ProtectiveMeasure], at: tuple,
+                            raw: dict[str, Any], base: dict[str, Any], spec: CandidateSpec
+                            ) -> None:
+    """Every value through the measure's Params: the fixed ones together, each range end
+    and option on its own, the others at ``base`` (the plugin's example)."""
+
+    def check(values: dict[str, Any], where: tuple) -> None:
+        problem = params_problem(cls.Params, {**base, **values})
+        if problem is None:
+            return
+        loc, message = problem
+        if loc and loc[0] in values:
+            path = where + tuple(loc[1:])
+        elif loc and loc[0] in raw:
+            path = at + tuple(loc)
+        else:
+            path = at
+        raise project.error_at(path, message)
+
+    fields = cls.Params.model_fields
+    for product in spec.products:
+        _check_product(project, cls, spec.kind, product, base, fields, spec.declared)
+    check({}, at)
+    for key, (low, high) in spec.ranges.items():
+        not_numeric = _range_problem(cls.Params, key)
+        if not_numeric:
+            raise project.error_at(at + (key,) if key in raw else at, not_numeric)
+        for end, value in enumerate((low, high)):
+            check({key: value}, at + (key, end) if key in raw else at)
+    for key, opts in spec.options.items():
+        for k, value in enumerate(opts):
+            check({key: value}, at + (key, "options", k) if key in raw else at)
+    for end, value in enumerate(spec.x_range):
+        check({"x": value}, at + ("x", end))
+
+
 def resolve_candidate(
     project: Project,
     registry: Registry,
@@ -171,42 +245,13 @@ def resolve_candidate(
     assert design is not None
     at = ("design", "candidates", i)
     kind = raw["type"]
-    cls = registry.measures.get(kind)
-    if cls is None:
-        raise unknown_measure_type(project, registry, at + ("type",), kind)
+    cls = _candidate_class(project, registry, at, raw)
     fields = cls.Params.model_fields
-    if "x" not in fields:
-        raise project.error_at(
-            at + ("x",),
-            f"measure type {kind!r} has no station parameter x, so the optimiser cannot place it",
-        )
-    for key in raw:
-        if key != "type" and key not in fields:
-            raise project.unknown_name(at + (key,), key, list(fields), f"{kind} parameter")
     declared = _declared(registry, cls, kind)
-
-    product_field = declared.product
     products, supplied = _candidate_supply(project, i, raw, kind, catalogue, declared, fields)
-
-    # fixed values, ranges, options
     x_low, x_high = (float(v) for v in raw["x"])
-    fixed: dict[str, Any] = {}
-    ranges: dict[str, tuple[float, float]] = {}
-    options: dict[str, tuple[Any, ...]] = {}
-    for key, value in raw.items():
-        if key in ("type", "x", product_field):
-            continue
-        if isinstance(value, list):
-            ranges[key] = (float(value[0]), float(value[1]))
-        elif isinstance(value, dict):
-            options[key] = tuple(value["options"])
-        else:
-            fixed[key] = value
-
+    fixed, ranges, options = _split_values(raw, declared.product)
     _declared_defaults(project, at, kind, raw, supplied, fields, declared, ranges, options)
-
-    # check every value through the measure's Params: the fixed ones together,
-    # each range end and option on its own, the others at the plugin's example
     base: dict[str, Any] = {k: v for k, v in cls.example.items() if k in fields}
     base.update(fixed)
     base["x"] = x_low
@@ -216,45 +261,10 @@ def resolve_candidate(
         base.update(_product_params(products[0], fields, declared))
         if declared.height is not None:
             base[declared.height] = products[0].heights[0]
-
-    def check(values: dict[str, Any], where: tuple) -> None:
-        problem = params_problem(cls.Params, {**base, **values})
-        if problem is None:
-            return
-        loc, message = problem
-        if loc and loc[0] in values:
-            path = where + tuple(loc[1:])
-        elif loc and loc[0] in raw:
-            path = at + tuple(loc)
-        else:
-            path = at
-        raise project.error_at(path, message)
-
-    for product in products:
-        _check_product(project, cls, kind, product, base, fields, declared)
-    check({}, at)
-    for key, (low, high) in ranges.items():
-        not_numeric = _range_problem(cls.Params, key)
-        if not_numeric:
-            raise project.error_at(at + (key,) if key in raw else at, not_numeric)
-        for end, value in enumerate((low, high)):
-            check({key: value}, at + (key, end) if key in raw else at)
-    for key, opts in options.items():
-        for k, value in enumerate(opts):
-            check({key: value}, at + (key, "options", k) if key in raw else at)
-    for end, value in enumerate((x_low, x_high)):
-        check({"x": value}, at + ("x", end))
-
-    return CandidateSpec(
-        index=i,
-        kind=kind,
-        x_range=(x_low, x_high),
-        products=products,
-        fixed=fixed,
-        ranges=ranges,
-        options=options,
-        declared=declared,
-    )
+    spec = CandidateSpec(index=i, kind=kind, x_range=(x_low, x_high), products=products,
+                         fixed=fixed, ranges=ranges, options=options, declared=declared)
+    _check_candidate_values(project, cls, at, raw, base, spec)
+    return spec
 
 
 def _candidate_supply(project: Project, i: int, raw: dict[str, Any], kind: str,
@@ -428,6 +438,54 @@ def _check_product(
         raise locator.error_at(path, f"{kind} product {product.name!r}: {message}")
 
 
+def _picked_product(spec: CandidateSpec, fields: dict[str, Any], params: dict[str, Any],
+                    label: str) -> dict[str, Any]:
+    """The parameters a picked product sets; its picked height must be one it comes in."""
+    declared = spec.declared
+    assert declared.product is not None
+    name = params.get(declared.product)
+    if name is None:
+        raise ValueError(f"{label}: needs a {declared.product} (one of its catalogue "
+                         "products)")
+    try:
+        product = spec.product(name)
+    except KeyError as exc:
+        raise ValueError(f"{label}: {exc.args[0]}") from None
+    values = _product_params(product, fields, declared)
+    if declared.height is not None:
+        height = params.get(declared.height)
+        if height is None:
+            raise ValueError(f"{label}: needs a height (one of {product.heights} m)")
+        if not any(
+            math.isclose(height, h, rel_tol=1e-9, abs_tol=1e-9) for h in product.heights
+        ):
+            raise ValueError(
+                f"{label}: product {product.name!r} does not come in height {_fmt(height)} m "
+                f"(heights: {', '.join(_fmt(h) for h in product.heights)} m)"
+            )
+    return values
+
+
+def _check_picked(spec: CandidateSpec, values: dict[str, Any], label: str) -> None:
+    """Every picked value within its range (a hair of slack for rounding) or among its options."""
+    checks = [("x", spec.x_range)] + list(spec.ranges.items())
+    for key, (low, high) in checks:
+        if key not in values:
+            continue
+        value = values[key]
+        slack = 1e-9 * max(1.0, abs(low), abs(high))
+        if isinstance(value, int | float) and not low - slack <= value <= high + slack:
+            raise ValueError(
+                f"{label}: {key} = {_fmt(value)} is outside its range [{_fmt(low)}, {_fmt(high)}]"
+            )
+    for key, opts in spec.options.items():
+        if key in values and values[key] not in opts:
+            raise ValueError(
+                f"{label}: {key} = {_fmt(values[key])} is not one of its options "
+                f"({', '.join(_fmt(o) for o in opts)})"
+            )
+
+
 def build_candidate_measure(
     spec: CandidateSpec, registry: Registry, params: dict[str, Any]
 ) -> ProtectiveMeasure:
@@ -462,49 +520,12 @@ def build_candidate_measure(
         If the measure's class fails to instantiate.
     """
     cls = registry.measure(spec.kind)
-    fields = cls.Params.model_fields
     label = f"candidate {spec.index} ({spec.kind})"
     values: dict[str, Any] = dict(spec.fixed)
-    declared = spec.declared
     if spec.products:
-        assert declared.product is not None
-        name = params.get(declared.product)
-        if name is None:
-            raise ValueError(f"{label}: needs a {declared.product} (one of its catalogue "
-                             "products)")
-        try:
-            product = spec.product(name)
-        except KeyError as exc:
-            raise ValueError(f"{label}: {exc.args[0]}") from None
-        values.update(_product_params(product, fields, declared))
-        if declared.height is not None:
-            height = params.get(declared.height)
-            if height is None:
-                raise ValueError(f"{label}: needs a height (one of {product.heights} m)")
-            if not any(
-                math.isclose(height, h, rel_tol=1e-9, abs_tol=1e-9) for h in product.heights
-            ):
-                raise ValueError(
-                    f"{label}: product {product.name!r} does not come in height {_fmt(height)} m "
-                    f"(heights: {', '.join(_fmt(h) for h in product.heights)} m)"
-                )
+        values.update(_picked_product(spec, cls.Params.model_fields, params, label))
     values.update(params)
-    checks = [("x", spec.x_range)] + list(spec.ranges.items())
-    for key, (low, high) in checks:
-        if key not in values:
-            continue
-        value = values[key]
-        slack = 1e-9 * max(1.0, abs(low), abs(high))
-        if isinstance(value, int | float) and not low - slack <= value <= high + slack:
-            raise ValueError(
-                f"{label}: {key} = {_fmt(value)} is outside its range [{_fmt(low)}, {_fmt(high)}]"
-            )
-    for key, opts in spec.options.items():
-        if key in values and values[key] not in opts:
-            raise ValueError(
-                f"{label}: {key} = {_fmt(values[key])} is not one of its options "
-                f"({', '.join(_fmt(o) for o in opts)})"
-            )
+    _check_picked(spec, values, label)
     params, problem = validated_params(cls.Params, values)
     if problem is not None:
         loc, message = problem

@@ -9,7 +9,7 @@ the search and :func:`design_bill` itemises the chosen one.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ..plugins import guard
 from ..plugins.cost_model import CostModel
@@ -19,6 +19,7 @@ from .candidates import (
     sample_params,
 )
 from .placing import unknown_plugin_name
+from .records import Bill, BillLine
 
 if TYPE_CHECKING:  # pragma: no cover
     from collections.abc import Sequence
@@ -73,10 +74,48 @@ def design_cost(
     return total
 
 
+def _bill_lines(registry: Registry, spec: DesignSpec, m: ProtectiveMeasure, section: Section,
+                where: str) -> tuple[float, list[BillLine]]:
+    """One measure's price and its lines: itemised where the parts add up, else a lump sum."""
+    model, length = spec.cost_model, spec.length_m
+    priced = guard(registry).cost_model(model)
+    by_bill = type(model).price is not CostModel.price
+    label = guard(registry).measure(m).label()
+    quantities = guard(registry).measure(m).quantities(section)
+    if not by_bill:
+        whole = float(priced.cost(m, quantities, length))
+        return whole, [BillLine(label, "the measure as priced", 1.0, "lump sum", whole, whole,
+                                None, where)]
+    bill = guard(registry).measure(m).bill(section)
+    whole = float(priced.price(m, bill, quantities, length))
+    try:
+        fixed = float(priced.price(m, [], quantities, length))
+        parts = [float(priced.price(m, [q], quantities, length)) - fixed for q in bill]
+    except (KeyError, ValueError):
+        parts = None
+    if parts is None or not math.isclose(fixed + sum(parts), whole, rel_tol=1e-9, abs_tol=1e-6):
+        return whole, [BillLine(label, "the measure as priced", 1.0, "lump sum", whole, whole,
+                                None, where)]
+    lines = []
+    if fixed:
+        lines.append(BillLine(label, "fixed cost of the measure", 1.0, "each", fixed, fixed,
+                              None, where))
+    for q, amount in zip(bill, parts, strict=True):
+        count = q.amount * length
+        what = " ".join(str(b) for b in (
+            q.name, q.product, None if q.size is None else f"{q.size:g} m") if b is not None)
+        lines.append(BillLine(label, what, count, q.unit, amount / count if count else 0.0,
+                              amount, q.amount, where))
+    if not lines:  # a measure priced at nothing
+        lines.append(BillLine(label, "the measure as priced", 1.0, "lump sum", whole, whole,
+                              None, where))
+    return whole, lines
+
+
 def design_bill(
     registry: Registry, spec: DesignSpec, measures: Sequence[ProtectiveMeasure], section: Section,
     source: str = "",
-) -> dict[str, Any]:
+) -> Bill:
     """The bill of a design: per measure its quantities, unit prices and amounts.
 
     Built from the very numbers :func:`design_cost` adds up: each measure's
@@ -98,62 +137,25 @@ def design_bill(
 
     Returns
     -------
-    dict
-        ``items``: one dict per line, ``measure`` (its label), ``quantity``
-        (what is billed), ``count`` (how many ``unit``: over the whole site
-        length), ``unit``, ``unit_price`` (currency per unit), ``amount``
-        (currency), ``per_m`` (amount of the quantity per running metre of
-        slope, or None), ``source``; ``total`` (the sum of the measures'
-        prices, what :func:`design_cost` returns), ``length_m``, ``model``.
+    Bill
+        Its lines (:class:`~rockfall_design.judge.records.BillLine`), the
+        ``total`` (the sum of the measures' prices, what :func:`design_cost`
+        returns), ``length_m`` and the cost ``model``; ``to_json()`` gives
+        the ``bill`` of ``optimise --json``.
 
     Raises
     ------
     KeyError or ValueError
         From the cost model, as :func:`design_cost`.
     """
-    model, length = spec.cost_model, spec.length_m
-    priced = guard(registry).cost_model(model)
-    by_bill = type(model).price is not CostModel.price
-    where = f"cost model {model.name}" + (f", {source}" if source else "")
-    items: list[dict[str, Any]] = []
+    where = f"cost model {spec.cost_model.name}" + (f", {source}" if source else "")
+    items: list[BillLine] = []
     total = 0.0
     for m in measures:
-        label = guard(registry).measure(m).label()
-        quantities = guard(registry).measure(m).quantities(section)
-        if by_bill:
-            bill = guard(registry).measure(m).bill(section)
-            whole = float(priced.price(m, bill, quantities, length))
-        else:
-            bill = []
-            whole = float(priced.cost(m, quantities, length))
+        whole, lines = _bill_lines(registry, spec, m, section, where)
         total += whole
-        lines: list[dict[str, Any]] = []
-        if by_bill:
-            try:
-                fixed = float(priced.price(m, [], quantities, length))
-                parts = [float(priced.price(m, [q], quantities, length)) - fixed for q in bill]
-            except (KeyError, ValueError):
-                parts = None
-            if parts is not None and math.isclose(fixed + sum(parts), whole, rel_tol=1e-9,
-                                                  abs_tol=1e-6):
-                if fixed:
-                    lines.append({"measure": label, "quantity": "fixed cost of the measure",
-                                  "count": 1.0, "unit": "each", "unit_price": fixed,
-                                  "amount": fixed, "per_m": None, "source": where})
-                for q, amount in zip(bill, parts, strict=True):
-                    count = q.amount * length
-                    what = " ".join(str(b) for b in (
-                        q.name, q.product, None if q.size is None else f"{q.size:g} m")
-                        if b is not None)
-                    lines.append({"measure": label, "quantity": what, "count": count,
-                                  "unit": q.unit, "unit_price": amount / count if count else 0.0,
-                                  "amount": amount, "per_m": q.amount, "source": where})
-        if not lines:
-            lines.append({"measure": label, "quantity": "the measure as priced", "count": 1.0,
-                          "unit": "lump sum", "unit_price": whole, "amount": whole,
-                          "per_m": None, "source": where})
         items += lines
-    return {"items": items, "total": total, "length_m": length, "model": model.name}
+    return Bill(tuple(items), total, spec.length_m, spec.cost_model.name)
 
 
 def check_prices(

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..engine import Section, columns
 from ..plugins import guard
-from ..plugins.concept import DEFAULT_CONFIDENCE, Check, SafetyConcept
+from ..plugins.concept import Check, SafetyConcept
 from ..plugins.manager import plugin_code
 from ..plugins.measure import Barrier, MeasureResult, Outcome
 from ..run.passages import Passages, barrier_values, property_marks, slope_deg_at
@@ -35,7 +35,8 @@ from .placing import (
     edited_section,
     place_measures,
 )
-from .plan import plan_for
+from .plan import confidence_of, plan_for
+from .records import CheckSummary, MeasureRecord, ProtectRecord
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
@@ -52,11 +53,12 @@ __all__ = [
     "evaluate",
     "evaluate_design",
     "protect_summary",
+    "protect_record",
 ]
 
 
-def protect_summary(x: float, reaching: int, n: int, allowed: float, confidence: float,
-                    unresolved: int = 0) -> dict[str, Any]:
+def protect_record(x: float, reaching: int, n: int, allowed: float, confidence: float,
+                   unresolved: int = 0) -> ProtectRecord:
     """The rocks reaching a protected zone against what is allowed, as ``check`` reports it.
 
     Parameters
@@ -74,10 +76,9 @@ def protect_summary(x: float, reaching: int, n: int, allowed: float, confidence:
 
     Returns
     -------
-    dict
-        ``x``, ``reaching``, ``fraction``, ``upper_fraction`` and
-        ``lower_fraction`` (Clopper-Pearson), ``unresolved``,
-        ``allowed_fraction``, ``ok`` (the fraction is allowed),
+    ProtectRecord
+        The fraction with its Clopper-Pearson ``upper_fraction`` and
+        ``lower_fraction``, ``ok`` (the fraction is allowed),
         ``ok_with_confidence`` (its upper bound is) and
         ``fails_with_confidence`` (its lower bound exceeds the allowance).
         :func:`~rockfall_design.judge.verdict.verdict_of` reads it.
@@ -90,18 +91,17 @@ def protect_summary(x: float, reaching: int, n: int, allowed: float, confidence:
     fraction = reaching / n if n else 0.0
     upper = fraction_upper_bound(reaching, n, confidence)
     lower = fraction_lower_bound(reaching, n, confidence)
-    return {
-        "x": float(x),
-        "reaching": int(reaching),
-        "fraction": fraction,
-        "upper_fraction": upper,
-        "unresolved": int(unresolved),
-        "allowed_fraction": float(allowed),
-        "ok": fraction <= allowed,
-        "ok_with_confidence": upper <= allowed,
-        "lower_fraction": lower,
-        "fails_with_confidence": lower > allowed,
-    }
+    return ProtectRecord(x=float(x), reaching=int(reaching), fraction=fraction,
+                         unresolved=int(unresolved), upper_fraction=upper,
+                         allowed_fraction=float(allowed), ok=fraction <= allowed,
+                         ok_with_confidence=upper <= allowed, lower_fraction=lower,
+                         fails_with_confidence=lower > allowed)
+
+
+def protect_summary(x: float, reaching: int, n: int, allowed: float, confidence: float,
+                    unresolved: int = 0) -> dict[str, Any]:
+    """:func:`protect_record` as its JSON (``x``, ``reaching``, ``fraction``, ...)."""
+    return protect_record(x, reaching, n, allowed, confidence, unresolved).to_json()
 
 
 @dataclass
@@ -132,18 +132,19 @@ class Evaluation:
 
     @property
     def confidence(self) -> float:
-        """One-sided confidence of the bounds (``safety.confidence``)."""
-        return float(getattr(self.concept.params, "confidence", DEFAULT_CONFIDENCE))
+        """One-sided confidence of the bounds (``safety.confidence``, as the plan resolves it)."""
+        return confidence_of(self.concept)
 
     @property
-    def protect(self) -> dict[str, Any] | None:
+    def residual(self) -> ProtectRecord | None:
         """Rocks reaching the protected zone and whether that is within what is allowed.
 
         ``upper_fraction`` is the Clopper-Pearson upper bound of the fraction
         at :attr:`confidence`; ``ok_with_confidence`` compares it with the
         allowed fraction. ``lower_fraction`` is the Clopper-Pearson lower
         bound; ``fails_with_confidence`` says it exceeds the allowed fraction
-        (the residual misses its target with confidence).
+        (the residual misses its target with confidence). None without
+        ``protect:``.
         """
         p = self.study.project.protect
         if p is None:
@@ -153,29 +154,35 @@ class Evaluation:
         by_concept = self.concept.allowed_residual_fraction()
         if by_concept is not None:
             allowed = min(allowed, by_concept) if allowed > 0.0 else by_concept
-        return protect_summary(float(p.x), self.judgement.reaching, self.study.result.n,
-                               allowed, self.confidence, self.judgement.unresolved)
+        return protect_record(float(p.x), self.judgement.reaching, self.study.result.n,
+                              allowed, self.confidence, self.judgement.unresolved)
+
+    @property
+    def protect(self) -> dict[str, Any] | None:
+        """:attr:`residual` as its JSON (the optimiser's and the studies' callers read it)."""
+        prot = self.residual
+        return None if prot is None else prot.to_json()
 
     @property
     def ok(self) -> bool:
         """True when every check of every measure holds and the residual is allowed."""
         checks_ok = all(c.ok for cs in self.checks for c in cs)
-        prot = self.protect
-        return checks_ok and (prot is None or prot["ok"])
+        prot = self.residual
+        return checks_ok and (prot is None or prot.ok)
 
     @property
     def holds_with_confidence(self) -> bool:
         """``ok`` with every design value and the residual replaced by its upper bound."""
         checks_ok = all(c.holds_with_confidence for cs in self.checks for c in cs)
-        prot = self.protect
-        return checks_ok and (prot is None or prot["ok_with_confidence"])
+        prot = self.residual
+        return checks_ok and (prot is None or prot.ok_with_confidence)
 
     @property
     def fails_with_confidence(self) -> bool:
         """Some check, or the residual, misses its target even with its favourable bound."""
-        prot = self.protect
+        prot = self.residual
         return (any(c.rejects for cs in self.checks for c in cs)
-                or (prot is not None and prot["fails_with_confidence"]))
+                or (prot is not None and prot.fails_with_confidence))
 
     def margin(self) -> tuple[float, str]:
         """How far the design is from failing on these rocks: (relative slack, what binds).
@@ -203,9 +210,9 @@ class Evaluation:
                     slack = -slack
                 if slack < worst:
                     worst, what = slack, f"{p.label}: {c.name}"
-        prot = self.protect
-        if prot is not None and prot["allowed_fraction"] > 0:
-            slack = (prot["allowed_fraction"] - prot["upper_fraction"]) / prot["allowed_fraction"]
+        prot = self.residual
+        if prot is not None and prot.allowed_fraction > 0:
+            slack = (prot.allowed_fraction - prot.upper_fraction) / prot.allowed_fraction
             if slack < worst:
                 worst, what = slack, "residual"
         return worst, what
@@ -224,16 +231,16 @@ class Evaluation:
             value = "-" if c.value is None else f"{c.value:.2f}{unit}"
             out.append(f"{label}: {c.name} {value} does not meet its target "
                        f"{c.target:.2f}{unit} ({c.detail})")
-        prot = self.protect
-        if prot is not None and not prot["ok"]:
+        prot = self.residual
+        if prot is not None and not prot.ok:
             unresolved = (
-                f" ({prot['unresolved']} of them unresolved paths, counted as reaching it; "
-                "raise engine.max_events)" if prot["unresolved"] else ""
+                f" ({prot.unresolved} of them unresolved paths, counted as reaching it; "
+                "raise engine.max_events)" if prot.unresolved else ""
             )
             out.append(
-                f"{prot['reaching']} rocks ({100 * prot['fraction']:.2f} %) reach the protected "
-                f"zone at x >= {prot['x']:g} m{unresolved}; allowed "
-                f"{100 * prot['allowed_fraction']:.2f} %"
+                f"{prot.reaching} rocks ({100 * prot.fraction:.2f} %) reach the protected "
+                f"zone at x >= {prot.x:g} m{unresolved}; allowed "
+                f"{100 * prot.allowed_fraction:.2f} %"
             )
         return out
 
@@ -312,40 +319,30 @@ class Evaluation:
         return self.study.project.with_resolved_plugins(measures, safety)
 
     def summary(self) -> dict[str, Any]:
-        """JSON-ready: the simulate summary plus ``measures``, ``protect`` and ``ok``."""
-        out = self.study.summary()
-        out["safety_concept"] = self.concept.name
+        """JSON-ready: the simulate summary plus ``measures``, ``protect`` and ``ok``.
+
+        :meth:`record`'s ``to_json()`` (not yet judged: no ``verdict``).
+        """
+        return self.record().to_json()
+
+    def record(self) -> CheckSummary:
+        """The check's summary as an object: the run, the measures, the residual."""
         passing = {q.index: q.block() for q in self.passages()}
-        out["measures"] = [
-            {
-                "type": res.measure.kind,
-                "label": p.label,
-                "x": res.measure.x,
-                "params": res.measure.params.model_dump(mode="json"),
-                "met": res.met,
-                "caught": res.caught,
-                "passed_over": res.passed_over,
-                "broken_through": res.broken_through,
-                "rebounded": res.rebounded,
-                "passed_through_gap": res.passed_through_gap,
-                "checks": [c.as_dict() for c in cs],
-                "ok": all(c.ok for c in cs),
+        measures = tuple(
+            MeasureRecord(
+                type=res.measure.kind, label=p.label, x=res.measure.x,
+                params=res.measure.params.model_dump(mode="json"), met=res.met,
+                caught=res.caught, passed_over=res.passed_over,
+                broken_through=res.broken_through, rebounded=res.rebounded,
+                passed_through_gap=res.passed_through_gap, checks=tuple(cs),
                 # The distributions at a barrier (run.passages): None for a ground edit.
-                "passing": passing.get(res.index),
-            }
-            for p, res, cs in zip(self.placed, self.results, self.checks, strict=True)
-        ]
-        prot = self.protect
-        if prot is not None:
-            out["protect"] = prot
-        said = self.statements()
-        if said:
-            out["concept_statements"] = said
-        out["ok"] = self.ok
-        out["failures"] = self.failures()
-        out["confidence"] = self.confidence
-        out["holds_with_confidence"] = self.holds_with_confidence
-        return out
+                passing=passing.get(res.index))
+            for p, res, cs in zip(self.placed, self.results, self.checks, strict=True))
+        return CheckSummary(
+            run=self.study.run_summary(), safety_concept=self.concept.name, measures=measures,
+            protect=self.residual, concept_statements=tuple(self.statements()), ok=self.ok,
+            failures=tuple(self.failures()), confidence=self.confidence,
+            holds_with_confidence=self.holds_with_confidence)
 
     def _meeting(self, p: PlacedMeasure) -> np.ndarray:
         """(n, 3) record of each rock's first meeting of a barrier (NaN for edits)."""

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from ..plugins.concept import DEFAULT_CONFIDENCE
 from .design_spec import resolve_design
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -28,7 +29,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..project import Project
     from .placing import PlacedMeasure
 
-__all__ = ["Plan", "plan_for", "validate_plugin_sections"]
+__all__ = ["Plan", "plan_for", "confidence_of", "validate_plugin_sections"]
 
 
 @dataclass(frozen=True)
@@ -61,10 +62,28 @@ class Plan:
     section: Section
 
     @property
+    def confidence(self) -> float:
+        """One-sided confidence of every bound of the command (``safety.confidence``, -)."""
+        return confidence_of(self.concept)
+
+    @property
     def protect_x(self) -> float | None:
         """Station of the protected zone (m); None without ``protect:``."""
         protect = self.project.protect
         return None if protect is None else float(protect.x)
+
+
+def confidence_of(concept: SafetyConcept) -> float:
+    """The one-sided confidence of a safety concept's bounds (``safety.confidence``, -).
+
+    The one place that reads it: every concept's parameters inherit
+    ``confidence`` from :class:`~rockfall_design.plugins.concept.SafetyParams`,
+    which gives its default; the plan, the evaluation, the optimiser's
+    screening and the verdict take it from here (and a verdict carries it).
+    A concept whose parameter model does not inherit it (the contract asks
+    that it does) is given the contract's default.
+    """
+    return float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
 
 
 def plan_for(project: Project, registry: Registry) -> Plan:

@@ -21,10 +21,11 @@ the tool stands behind:
     measure and there is no protected zone. A measure that no rock meets is
     listed as untested under any verdict: its checks say nothing.
 
-The verdict is computed from the JSON-ready summary of a check (what
-:meth:`rockfall_design.judge.evaluation.Evaluation.summary` returns and ``check
---json`` prints), so it reads the same numbers as the report; it imports
-nothing from the optimiser or the study rooms.
+The verdict is computed from a check's record
+(:class:`~rockfall_design.judge.records.CheckSummary`, what
+:meth:`rockfall_design.judge.evaluation.Evaluation.record` returns and whose
+``to_json()`` ``check --json`` prints), so it reads the same numbers as the
+report; it imports nothing from the optimiser or the study rooms.
 """
 
 from __future__ import annotations
@@ -34,7 +35,18 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from ..plugins.concept import DEFAULT_CONFIDENCE, Check
 from .bounds import fraction_upper_bound, rocks_to_show_fraction
+from .records import (
+    CheckSummary,
+    DesignVerdict,
+    MeasureRecord,
+    ProtectRecord,
+    State,
+    check_from_json,
+    check_of,
+)
+from .records import check_state as state_of_check
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..project import Project
@@ -45,8 +57,10 @@ __all__ = [
     "FAILS",
     "UNTESTED",
     "STATES",
+    "State",
     "DesignVerdict",
     "verdict_of",
+    "judged",
     "with_verdict",
     "check_state",
     "verdict_of_scenarios",
@@ -54,87 +68,18 @@ __all__ = [
     "requirement_warnings",
 ]
 
-HOLDS_WITH_CONFIDENCE = "holds with confidence"
-HOLDS_ON_POINT_VALUES = "holds on point values only"
-FAILS = "fails"
-UNTESTED = "untested"
+HOLDS_WITH_CONFIDENCE = State.HOLDS_WITH_CONFIDENCE
+HOLDS_ON_POINT_VALUES = State.HOLDS_ON_POINT_VALUES
+FAILS = State.FAILS
+UNTESTED = State.UNTESTED
 #: The four states, from the one the tool stands behind to the one that says nothing.
-STATES = (HOLDS_WITH_CONFIDENCE, HOLDS_ON_POINT_VALUES, FAILS, UNTESTED)
+STATES = tuple(State)
 
 #: Beyond this many rocks the verdict says "more than" instead of a count.
 _MAX_ROCKS_NEEDED = 10**10
 
 
-@dataclass(frozen=True)
-class DesignVerdict:
-    """The verdict on one design (or a set of scenarios or sections).
-
-    Attributes
-    ----------
-    state : str
-        One of :data:`STATES`.
-    headline : str
-        One sentence that begins with the state's words, capitalised
-        ("Holds with confidence: ..."): the first line of every report.
-    details : tuple of str
-        What fails and by how much, or what is not settled and what would
-        settle it, or why nothing was tested; one line each.
-    untested : tuple of str
-        The labels of the measures that no rock met.
-    rocks_needed : int or None
-        For ``holds on point values only``: about how many rocks (in all,
-        at the observed rates) would settle every open item; None when no
-        number of rocks can (or for the other states).
-    confidence : float
-        The one-sided confidence of the bounds (-).
-    """
-
-    state: str
-    headline: str
-    details: tuple[str, ...] = ()
-    untested: tuple[str, ...] = ()
-    rocks_needed: int | None = None
-    confidence: float = 0.95
-    parts: tuple[tuple[str, str], ...] = field(default=(), repr=False)
-
-    @property
-    def holds(self) -> bool:
-        """True for both "holds" states (the checks pass on their point values)."""
-        return self.state in (HOLDS_WITH_CONFIDENCE, HOLDS_ON_POINT_VALUES)
-
-    @property
-    def with_confidence(self) -> bool:
-        """True only for ``holds with confidence``."""
-        return self.state == HOLDS_WITH_CONFIDENCE
-
-    def lines(self) -> list[str]:
-        """The headline and then each detail, as a report prints them."""
-        return [self.headline, *self.details]
-
-    @classmethod
-    def from_dict(cls, d: Mapping[str, Any]) -> DesignVerdict:
-        """The verdict from its :meth:`as_dict` (a section's JSON block, say)."""
-        return cls(str(d["state"]), str(d["headline"]), tuple(d.get("details") or ()),
-                   tuple(d.get("untested_measures") or ()), d.get("rocks_needed"),
-                   float(d.get("confidence") or 0.95),
-                   tuple((p["name"], p["state"]) for p in d.get("parts") or ()))
-
-    def as_dict(self) -> dict[str, Any]:
-        """JSON-ready: ``state``, ``headline``, ``details``, ``untested_measures``, ..."""
-        out: dict[str, Any] = {
-            "state": self.state,
-            "headline": self.headline,
-            "details": list(self.details),
-            "untested_measures": list(self.untested),
-            "rocks_needed": self.rocks_needed,
-            "confidence": self.confidence,
-        }
-        if self.parts:
-            out["parts"] = [{"name": n, "state": s} for n, s in self.parts]
-        return out
-
-
-def _head(state: str, text: str) -> str:
+def _head(state: State, text: str) -> str:
     return f"{state[0].upper()}{state[1:]}: {text}"
 
 
@@ -148,22 +93,17 @@ def _num(v: float | None, unit: str) -> str:
     return f"{v:,.2f}" if unit == "-" else f"{v:,.2f} {unit}"
 
 
-def _miss(c: Mapping[str, Any]) -> str:
+def _miss(c: Check) -> str:
     """How far a failed check's value is from its target: 'by 0.35 (18 % of the target)'."""
-    v, t, unit = c.get("value"), c.get("target"), str(c.get("unit", "-"))
+    v, t = c.value, c.target
     if v is None or t is None or not math.isfinite(v) or not math.isfinite(t):
-        return str(c.get("detail") or "it has no value")
+        return str(c.detail or "it has no value")
     gap = abs(v - t)
     rel = f" ({100 * gap / abs(t):.3g} % of the target)" if t else ""
-    return f"by {_num(gap, unit)}{rel}"
+    return f"by {_num(gap, c.unit)}{rel}"
 
 
-def _holds_with_bound(c: Mapping[str, Any]) -> bool:
-    owc = c.get("ok_with_confidence")
-    return bool(c.get("ok")) if owc is None else bool(owc)
-
-
-def _check_rocks(c: Mapping[str, Any], met: int, n: int) -> int | None:
+def _check_rocks(c: Check, met: int, n: int) -> int | None:
     """About how many rocks in all would settle a check that holds on its point value only.
 
     A sample too small to bound the statistic says how many rocks must meet
@@ -173,9 +113,9 @@ def _check_rocks(c: Mapping[str, Any], met: int, n: int) -> int | None:
     value is settled at about ``n (w / d)**2`` rocks. None: never (the value
     sits on the target).
     """
-    if c.get("rocks_needed") and met > 0:
-        return int(math.ceil(int(c["rocks_needed"]) * n / met))
-    v, b, t = c.get("value"), c.get("bound"), c.get("target")
+    if c.rocks_needed and met > 0:
+        return int(math.ceil(int(c.rocks_needed) * n / met))
+    v, b, t = c.value, c.bound, c.target
     if v is None or b is None or t is None or not all(map(math.isfinite, (v, b, t))):
         return None
     d, w = abs(v - t), abs(b - v)
@@ -216,197 +156,209 @@ def residual_rocks(reaching: int, n: int, allowed: float, confidence: float) -> 
     return hi
 
 
-def verdict_of(summary: Mapping[str, Any]) -> DesignVerdict:
-    """The verdict on a design from its check summary (``check --json``).
+@dataclass
+class _Findings:
+    """What the verdict has found so far: failures, open items and the rocks to settle them."""
+
+    n: int
+    confidence: float
+    failed: list[str] = field(default_factory=list)
+    open_items: list[str] = field(default_factory=list)
+    needs: list[int | None] = field(default_factory=list)
+
+    @property
+    def at(self) -> str:
+        return f"{100 * self.confidence:g} %"
+
+
+def _untested_verdict(summary: CheckSummary, untested: tuple[str, ...],
+                      untested_lines: tuple[str, ...]) -> DesignVerdict:
+    """The verdict when nothing was checked: no protected zone and no measure met."""
+    if not summary.measures:
+        text = ("no measure and no protected zone: nothing was checked. Add measures: "
+                "to check, or protect: {x: ...} to count the rocks reaching the zone.")
+    else:
+        text = (f"no rock of {summary.rocks:,} reached any measure and there is no protected "
+                "zone: nothing was checked. Place the measures where the rocks pass, or add "
+                "protect: {x: ...}.")
+    return DesignVerdict(UNTESTED, _head(UNTESTED, text), untested_lines, untested,
+                         confidence=summary.confidence)
+
+
+def _judge_checks(found: _Findings, m: MeasureRecord) -> None:
+    """Each check of a measure: failed (and by how much) or open (and what would settle it)."""
+    for c in m.checks:
+        if not c.ok:
+            found.failed.append(f"{m.label}: {c.name} {_num(c.value, c.unit)} misses its "
+                                f"target {_num(c.target, c.unit)} {_miss(c)}")
+        elif not c.holds_with_confidence:
+            need = _check_rocks(c, m.met, found.n)
+            found.needs.append(need)
+            bound = ("cannot be bounded yet" if c.bound is None
+                     else f"its {found.at} bound {_num(c.bound, c.unit)}")
+            found.open_items.append(
+                f"{m.label}: {c.name} {_num(c.value, c.unit)} meets its target "
+                f"{_num(c.target, c.unit)}, {bound} does not"
+                + (f"; about {need:,} rocks would settle it" if need else
+                   "; its value sits on the target"))
+
+
+def _judge_residual(found: _Findings, prot: ProtectRecord) -> None:
+    """The residual: failed (rocks too many) or open (what would settle its bound)."""
+    n, conf = found.n, found.confidence
+    reaching, allowed = prot.reaching, prot.allowed_fraction
+    where = f"the protected zone at x >= {prot.x:g} m"
+    if not prot.ok:
+        excess = reaching - int(math.floor(allowed * n + 1e-9))
+        many = f"{excess:,} rock{'s' if excess != 1 else ''} too many"
+        found.failed.append(f"{reaching:,} of {n:,} rocks ({_pct(prot.fraction)}) reach "
+                            f"{where}; allowed {_pct(allowed)}: {many}")
+        return
+    if prot.ok_with_confidence:
+        return
+    need = residual_rocks(reaching, n, allowed, conf)
+    found.needs.append(need)
+    if allowed <= 0.0:
+        settle = ("no number of rocks shows a fraction of 0: allow a fraction "
+                  "(protect.allowed_fraction, design.residual), e.g. 0.001, which "
+                  f"{rocks_to_show_fraction(0.001, conf, 0):,} rocks with none "
+                  "reaching show")
+    elif need is None:
+        settle = "its rate sits on the allowance; no number of rocks settles it"
+    else:
+        settle = f"about {need:,} rocks at this rate would settle it"
+    found.open_items.append(
+        f"{reaching:,} of {n:,} rocks ({_pct(prot.fraction)}) reach {where}, "
+        f"within the allowed {_pct(allowed)}, but the {found.at} upper bound "
+        f"{_pct(prot.upper_fraction)} is not; {settle}")
+
+
+def _summed_up(found: _Findings, untested: tuple[str, ...],
+               untested_lines: tuple[str, ...]) -> DesignVerdict:
+    """The verdict from what was found: fails, holds on point values only, or with confidence."""
+    n, conf = found.n, found.confidence
+    if found.failed:
+        miss = "s miss their targets" if len(found.failed) > 1 else " misses its target"
+        text = f"{len(found.failed)} requirement{miss} on {n:,} rocks."
+        return DesignVerdict(FAILS, _head(FAILS, text), tuple(found.failed) + untested_lines,
+                             untested, confidence=conf)
+    if found.open_items:
+        needs = found.needs
+        need = None if any(x is None for x in needs) else max(needs, default=None)
+        settle = (f" about {need:,} rocks would settle it (--rocks)." if need else
+                  " no number of rocks settles it as the requirement is written.")
+        text = (f"every check and the residual pass on their point values ({n:,} rocks), but "
+                f"not all with their {found.at} confidence bounds;" + settle)
+        return DesignVerdict(HOLDS_ON_POINT_VALUES, _head(HOLDS_ON_POINT_VALUES, text),
+                             tuple(found.open_items) + untested_lines, untested, need,
+                             confidence=conf)
+    text = (f"every check and the residual hold with their {found.at} upper confidence "
+            f"bounds on {n:,} rocks.")
+    return DesignVerdict(HOLDS_WITH_CONFIDENCE, _head(HOLDS_WITH_CONFIDENCE, text),
+                         untested_lines, untested, confidence=conf)
+
+
+def verdict_of(summary: CheckSummary | Mapping[str, Any]) -> DesignVerdict:
+    """The verdict on a design from its check summary.
 
     Parameters
     ----------
-    summary : mapping
-        ``rocks``, ``measures`` (each with ``label``, ``met`` and ``checks``),
-        ``protect`` (if the project has a protected zone) and ``confidence``.
+    summary : CheckSummary or mapping
+        The check's record (:meth:`rockfall_design.judge.evaluation.Evaluation.record`);
+        a dict of ``check --json`` is read back with
+        :meth:`~rockfall_design.judge.records.CheckSummary.from_json`. The
+        confidence is the one the summary carries (the plan's).
 
     Returns
     -------
     DesignVerdict
     """
-    n = int(summary.get("rocks") or 0)
-    conf = float(summary.get("confidence") or 0.95)
-    at = f"{100 * conf:g} %"
-    measures = list(summary.get("measures") or [])
-    prot = summary.get("protect")
-    untested = tuple(str(m.get("label") or m.get("type")) for m in measures
-                     if int(m.get("met") or 0) == 0)
+    summary = check_of(summary)
+    untested = tuple(m.label for m in summary.measures if m.met == 0)
     untested_lines = tuple(f"{u}: untested, no rock reached it (its checks say nothing)"
                            for u in untested)
-    if prot is None and len(untested) == len(measures):
-        if not measures:
-            text = ("no measure and no protected zone: nothing was checked. Add measures: "
-                    "to check, or protect: {x: ...} to count the rocks reaching the zone.")
-        else:
-            text = (f"no rock of {n:,} reached any measure and there is no protected zone: "
-                    "nothing was checked. Place the measures where the rocks pass, or add "
-                    "protect: {x: ...}.")
-        return DesignVerdict(UNTESTED, _head(UNTESTED, text), untested_lines, untested,
-                             None, conf)
-    failed: list[str] = []
-    open_items: list[str] = []
-    needs: list[int | None] = []
-    for m in measures:
-        label, met = str(m.get("label") or m.get("type")), int(m.get("met") or 0)
-        for c in m.get("checks") or []:
-            unit = str(c.get("unit", "-"))
-            if not c.get("ok"):
-                failed.append(f"{label}: {c['name']} {_num(c.get('value'), unit)} misses its "
-                              f"target {_num(c.get('target'), unit)} {_miss(c)}")
-            elif not _holds_with_bound(c):
-                need = _check_rocks(c, met, n)
-                needs.append(need)
-                bound = ("cannot be bounded yet" if c.get("bound") is None
-                         else f"its {at} bound {_num(c.get('bound'), unit)}")
-                open_items.append(
-                    f"{label}: {c['name']} {_num(c.get('value'), unit)} meets its target "
-                    f"{_num(c.get('target'), unit)}, {bound} does not"
-                    + (f"; about {need:,} rocks would settle it" if need else
-                       "; its value sits on the target"))
-    if prot is not None:
-        reaching, allowed = int(prot["reaching"]), float(prot["allowed_fraction"])
-        where = f"the protected zone at x >= {prot['x']:g} m"
-        if not prot.get("ok"):
-            excess = reaching - int(math.floor(allowed * n + 1e-9))
-            many = f"{excess:,} rock{'s' if excess != 1 else ''} too many"
-            failed.append(f"{reaching:,} of {n:,} rocks ({_pct(prot['fraction'])}) reach "
-                          f"{where}; allowed {_pct(allowed)}: {many}")
-        elif not prot.get("ok_with_confidence"):
-            need = residual_rocks(reaching, n, allowed, conf)
-            needs.append(need)
-            if allowed <= 0.0:
-                settle = ("no number of rocks shows a fraction of 0: allow a fraction "
-                          "(protect.allowed_fraction, design.residual), e.g. 0.001, which "
-                          f"{rocks_to_show_fraction(0.001, conf, 0):,} rocks with none "
-                          "reaching show")
-            elif need is None:
-                settle = "its rate sits on the allowance; no number of rocks settles it"
-            else:
-                settle = f"about {need:,} rocks at this rate would settle it"
-            open_items.append(
-                f"{reaching:,} of {n:,} rocks ({_pct(prot['fraction'])}) reach {where}, "
-                f"within the allowed {_pct(allowed)}, but the {at} upper bound "
-                f"{_pct(prot['upper_fraction'])} is not; {settle}")
-    if failed:
-        miss = "s miss their targets" if len(failed) > 1 else " misses its target"
-        text = f"{len(failed)} requirement{miss} on {n:,} rocks."
-        return DesignVerdict(FAILS, _head(FAILS, text), tuple(failed) + untested_lines,
-                             untested, None, conf)
-    if open_items:
-        need = None if any(x is None for x in needs) else max(needs, default=None)
-        settle = (f" about {need:,} rocks would settle it (--rocks)." if need else
-                  " no number of rocks settles it as the requirement is written.")
-        text = (f"every check and the residual pass on their point values ({n:,} rocks), but "
-                f"not all with their {at} confidence bounds;" + settle)
-        return DesignVerdict(HOLDS_ON_POINT_VALUES, _head(HOLDS_ON_POINT_VALUES, text),
-                             tuple(open_items) + untested_lines, untested, need, conf)
-    text = (f"every check and the residual hold with their {at} upper confidence bounds "
-            f"on {n:,} rocks.")
-    return DesignVerdict(HOLDS_WITH_CONFIDENCE, _head(HOLDS_WITH_CONFIDENCE, text),
-                         untested_lines, untested, None, conf)
+    if summary.protect is None and len(untested) == len(summary.measures):
+        return _untested_verdict(summary, untested, untested_lines)
+    found = _Findings(summary.rocks, summary.confidence)
+    for m in summary.measures:
+        _judge_checks(found, m)
+    if summary.protect is not None:
+        _judge_residual(found, summary.protect)
+    return _summed_up(found, untested, untested_lines)
 
 
-def check_state(check: Mapping[str, Any], met: int) -> str:
-    """The state of one check of a measure, in the verdict's words (:data:`STATES`).
+def judged(summary: CheckSummary) -> CheckSummary:
+    """The check summary headed by its verdict (:func:`verdict_of`).
 
-    ``untested`` when no rock met the measure and the check has no value (a
-    statistic of no rock says nothing; a check of geometry, such as a braking
-    distance against the protected zone, has its value without rocks and is
-    judged on it); ``fails`` when it misses its target on its point value;
-    ``holds with confidence`` when it holds with its bound in place (or the
-    concept reports no bound); else ``holds on point values only``.
+    Its JSON is what ``check --json`` prints: the verdict first, then the
+    summary's own keys, with ``ok`` and ``holds_with_confidence`` false when
+    nothing was tested (no vacuous "holds"), and every measure and each of
+    its checks with its ``state`` in the verdict's words: a measure no rock
+    met is ``untested``, never "ok".
+    """
+    return summary.with_verdict(verdict_of(summary))
+
+
+def check_state(check: Check | Mapping[str, Any], met: int) -> State:
+    """The state of one check of a measure, in the verdict's words (:class:`State`).
+
+    See :func:`rockfall_design.judge.records.check_state`; a check given as
+    its ``as_dict()`` is read back first.
 
     Parameters
     ----------
-    check : mapping
-        A check as :meth:`rockfall_design.plugins.concept.Check.as_dict` gives it.
+    check : Check or mapping
     met : int
         Rocks that met the measure.
 
     Returns
     -------
-    str
+    State
     """
-    if met <= 0 and check.get("value") is None:
-        return UNTESTED
-    if not check.get("ok"):
-        return FAILS
-    return HOLDS_WITH_CONFIDENCE if _holds_with_bound(check) else HOLDS_ON_POINT_VALUES
-
-
-def _with_check_states(measures: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """The measures with each check's ``state`` (:func:`check_state`) and the measure's."""
-    out = []
-    for m in measures:
-        met = int(m.get("met") or 0)
-        checks = [{**c, "state": check_state(c, met)} for c in m.get("checks") or []]
-        states = {c["state"] for c in checks}
-        # The measure's own word: a failing check's, else untested without a rock,
-        # else its least sure check's. A measure with no check has none.
-        state = (FAILS if FAILS in states else UNTESTED if met <= 0 else
-                 HOLDS_ON_POINT_VALUES if HOLDS_ON_POINT_VALUES in states else
-                 HOLDS_WITH_CONFIDENCE if checks else None)
-        out.append({**m, "checks": checks, "state": state})
-    return out
+    return state_of_check(check if isinstance(check, Check) else check_from_json(check), met)
 
 
 def with_verdict(summary: Mapping[str, Any]) -> dict[str, Any]:
-    """A check summary headed by its ``verdict``; a check of nothing is not ``ok``.
-
-    What ``check --json`` prints: the verdict first, then the summary's own
-    keys, with ``ok`` and ``holds_with_confidence`` false when nothing was
-    tested (no vacuous "holds"). Every measure and each of its checks carries
-    its ``state`` in the verdict's words (:func:`check_state`): a measure no
-    rock met is ``untested``, never "ok".
-    """
-    verdict = verdict_of(summary)
-    out = {"verdict": verdict.as_dict(), **summary}
-    if "measures" in out:
-        out["measures"] = _with_check_states(out["measures"])
-    if verdict.state == UNTESTED:
-        out["ok"] = out["holds_with_confidence"] = False
-    return out
+    """:func:`judged` of a summary dict (``Evaluation.summary()``), as ``check --json``."""
+    return judged(CheckSummary.from_json(summary)).to_json()
 
 
-def verdict_of_scenarios(scenarios: Sequence[Mapping[str, Any]], required: int
-                         ) -> DesignVerdict:
+def verdict_of_scenarios(scenarios: Sequence[CheckSummary | Mapping[str, Any]],
+                         required: int) -> DesignVerdict:
     """The verdict over the scenarios of ``check --scenarios``: it must hold in ``required``.
 
     Parameters
     ----------
-    scenarios : sequence of mapping
-        Each scenario's check summary (with its ``index``).
+    scenarios : sequence of CheckSummary or mapping
+        Each scenario's check summary (a dict with its ``index``).
     required : int
         Scenarios the design must hold in.
     """
-    per = [(s, verdict_of(s)) for s in scenarios]
-    conf = per[0][1].confidence if per else 0.95
+    per = [(s.get("index", i) if isinstance(s, Mapping) else i, verdict_of(s))
+           for i, s in enumerate(scenarios)]
+    if not per:
+        raise ValueError("a verdict over scenarios needs at least one scenario")
+    conf = per[0][1].confidence
     of = len(per)
-    parts = tuple((f"scenario {s.get('index', i)}", v.state) for i, (s, v) in enumerate(per))
+    parts = tuple((f"scenario {k}", v.state) for k, v in per)
     if all(v.state == UNTESTED for _, v in per):
         return DesignVerdict(UNTESTED, _head(UNTESTED, f"nothing was checked in any of the {of} "
                              "scenarios (no rock met a measure and no protected zone)."),
-                             per[0][1].details if per else (), (), None, conf, parts)
+                             per[0][1].details, confidence=conf, parts=parts)
     sure = sum(v.with_confidence for _, v in per)
     holds = sum(v.holds for _, v in per)
-    details = tuple(f"scenario {s.get('index', i)}: {v.headline}"
-                    for i, (s, v) in enumerate(per) if not v.with_confidence)
+    details = tuple(f"scenario {k}: {v.headline}" for k, v in per if not v.with_confidence)
     counts = (f"it holds with confidence in {sure} of {of} scenarios, on point values in "
               f"{holds}; required: {required}.")
     if sure >= required:
         return DesignVerdict(HOLDS_WITH_CONFIDENCE, _head(HOLDS_WITH_CONFIDENCE, counts),
-                             details, (), None, conf, parts)
+                             details, confidence=conf, parts=parts)
     if holds >= required:
         needs = [v.rocks_needed for _, v in per if v.state == HOLDS_ON_POINT_VALUES]
         need = None if any(x is None for x in needs) else max(needs, default=None)
         return DesignVerdict(HOLDS_ON_POINT_VALUES, _head(HOLDS_ON_POINT_VALUES, counts),
-                             details, (), need, conf, parts)
-    return DesignVerdict(FAILS, _head(FAILS, counts), details, (), None, conf, parts)
+                             details, (), need, confidence=conf, parts=parts)
+    return DesignVerdict(FAILS, _head(FAILS, counts), details, confidence=conf, parts=parts)
 
 
 def verdict_of_sections(sections: Iterable[tuple[str, DesignVerdict]]) -> DesignVerdict:
@@ -416,8 +368,10 @@ def verdict_of_sections(sections: Iterable[tuple[str, DesignVerdict]]) -> Design
     is; else it holds on point values only if a section does.
     """
     items = list(sections)
+    if not items:
+        raise ValueError("a verdict over sections needs at least one section")
     parts = tuple((name, v.state) for name, v in items)
-    conf = items[0][1].confidence if items else 0.95
+    conf = items[0][1].confidence
     for state in (FAILS, UNTESTED, HOLDS_ON_POINT_VALUES):
         bad = [name for name, v in items if v.state == state]
         if bad:
@@ -428,10 +382,10 @@ def verdict_of_sections(sections: Iterable[tuple[str, DesignVerdict]]) -> Design
                 state, _head(state, f"section{'s' if len(bad) > 1 else ''} "
                              f"{', '.join(bad)} of {len(items)}."),
                 tuple(f"{name}: {v.headline}" for name, v in items if not v.with_confidence),
-                (), need, conf, parts)
+                (), need, confidence=conf, parts=parts)
     return DesignVerdict(HOLDS_WITH_CONFIDENCE, _head(
-        HOLDS_WITH_CONFIDENCE, f"every one of the {len(items)} sections."), (), (), None, conf,
-        parts)
+        HOLDS_WITH_CONFIDENCE, f"every one of the {len(items)} sections."),
+        confidence=conf, parts=parts)
 
 
 def requirement_warnings(project: Project, command: str) -> list[str]:
@@ -451,7 +405,9 @@ def requirement_warnings(project: Project, command: str) -> list[str]:
     list of str
         ``file:line: key: message`` lines (empty when there is nothing to say).
     """
-    conf = float((project.safety or {}).get("confidence", 0.95))
+    # Before the plan: the file's confidence, or the default the contract's
+    # SafetyParams gives it (the same value the plan resolves to).
+    conf = float((project.safety or {}).get("confidence", DEFAULT_CONFIDENCE))
     example = rocks_to_show_fraction(0.001, conf, 0)
 
     def advice(written: str) -> str:

@@ -28,6 +28,7 @@ import numpy as np
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
 from ..judge.evaluation import Evaluation, evaluate_design
 from ..judge.margin import CheckerMargin
+from ..judge.plan import confidence_of
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins import guard
 from ..plugins.measure import Barrier
@@ -384,7 +385,7 @@ def decide(
         Rocks of the checker's check the margin is for (default: twice
         each look's rocks, the check design.yaml asks for if that look decides).
     """
-    confidence = float(concept.params.confidence)
+    confidence = confidence_of(concept)
     if looks is None:
         looks = plan_looks(rocks, int(max_rocks or rocks), confidence)
     lc = look_concept(registry, concept, looks.look_confidence)
@@ -483,7 +484,14 @@ class Decider:
         self.simulated = 0  # rocks of the look screenings (each counted when run)
 
     def _screening(self, j: int, stations: Sequence[float]) -> Screening:
-        """The screening of look ``j``, with at least ``stations`` (m) in its table."""
+        """The screening of look ``j``, with at least ``stations`` (m) in its table.
+
+        Look ``j`` goes on from look ``j - 1``'s rocks (the first look's are
+        the search's, whose table has every station): only its new rocks run,
+        ``sizes[j] - sizes[j - 1]`` of them. A station new to look ``j`` is
+        added to every earlier look it is missing from, each again only with
+        its own new rocks, so a look of ``2n`` rocks is never a fresh ``2n``.
+        """
         sc = self._screens.get(j)
         want = {round(float(x), 6) for x in stations}
         if sc is not None and want <= {round(float(x), 6) for x in sc.grid}:
@@ -491,9 +499,19 @@ class Decider:
         if sc is not None:
             want |= {round(float(x), 6) for x in sc.grid}
         s0 = self.screen
+        # A barrier's station is one of the search table's (the candidates'
+        # ranges on the grid), so the search's rocks have it; one that is not
+        # (none known) makes the look a run of all its rocks, as before.
+        # The search's own station values (not their rounding), so that the
+        # rocks of every look are recorded at the same x.
+        exact = {round(float(x), 6): float(x) for x in s0.grid}
+        prev: Screening | None = None
+        if want <= exact.keys():
+            prev = self._screening(j - 1, sorted(want)) if j > 1 else s0
+        xs = np.array(sorted(exact.get(k, k) for k in want))
         sc = Screening(s0.project, s0.registry, s0.spec, s0.concept, rocks=self.looks.sizes[j],
-                       seed=s0.seed, stations=np.array(sorted(want)))
-        self.simulated += sc.n
+                       seed=s0.seed, stations=xs, after=prev)
+        self.simulated += sc.rocks_run
         self._screens[j] = sc
         return sc
 

@@ -11,9 +11,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from ..judge.design_spec import DesignSpec, resolve_design, with_residual_target
-from ..judge.plan import plan_for
+from ..judge.plan import confidence_of, plan_for
 from ..judge.sequential import LookSchedule, plan_looks
-from ..plugins.concept import DEFAULT_CONFIDENCE
 from ..studies.scenarios import ScenarioRun
 from .alternatives import FRESH_OFFSET
 from .decide import Decider, checker_margin, look_concept
@@ -88,7 +87,7 @@ def set_up(run: ScenarioRun, registry: Registry, rocks: int | None) -> Scenario:
     concept = plan_for(run.project, registry).concept
     # Without a design section, resolve_design says so at the project's line.
     spec = resolve_design(run.project, registry)
-    confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
+    confidence = confidence_of(concept)
     n = int(run.project.rocks.count if rocks is None else rocks)
     # The design's residual target becomes the protected zone's allowance, so
     # that the exact checks, the fresh rocks and `check` of design.yaml agree.

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from collections import OrderedDict
 from collections.abc import Callable, Hashable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -33,8 +33,9 @@ from ..judge.outcomes import (
     judge_measures,
 )
 from ..judge.placing import PlacedMeasure, edited_section, place_measures
+from ..judge.plan import confidence_of
 from ..plugins import guard
-from ..plugins.concept import DEFAULT_CONFIDENCE, Check
+from ..plugins.concept import Check
 from ..plugins.measure import Barrier, BarrierBehaviour, MeasureResult, ProfileEdit
 from ..run.reach import reaches_protected_zone
 from ..run.releases import draw_releases, engine_key, engine_settings, section_from_project
@@ -135,6 +136,47 @@ class Table:
         return h, e, v
 
 
+def _columns_of(have: np.ndarray, want: np.ndarray) -> np.ndarray:
+    """Indices into the stations ``have`` (m) of every station of ``want`` (all there)."""
+    idx = np.searchsorted(have, want)
+    idx = np.minimum(idx, max(have.size - 1, 0))
+    if want.size and (have.size == 0 or not np.allclose(have[idx], want, rtol=0.0,
+                                                         atol=1e-9)):
+        raise ValueError("a screening goes on only from one with all of its stations")
+    return idx
+
+
+def _rows(releases: Any, first: int) -> Any:
+    """The rocks of ``releases`` from index ``first`` on."""
+    out = {}
+    for f in fields(releases):
+        a = getattr(releases, f.name)
+        out[f.name] = a if np.ndim(a) == 0 else np.asarray(a)[first:]
+    return type(releases)(**out)
+
+
+def _joined_tables(before: Table, cols: np.ndarray, more: Table) -> Table:
+    """The bare table ``before`` at its stations ``cols``, followed by ``more``'s rocks."""
+    if before.rows is not None:
+        raise ValueError("only a bare table goes on")
+    return Table(
+        h=np.concatenate([before.h[:, cols], more.h]),
+        e_kj=np.concatenate([before.e_kj[:, cols], more.e_kj]),
+        v=np.concatenate([before.v[:, cols], more.v]),
+        max_x=np.concatenate([before.max_x, more.max_x]),
+        x_end=np.concatenate([before.x_end, more.x_end]),
+        status=np.concatenate([before.status, more.status]),
+    )
+
+
+def _check_after(sc: Screening, after: Screening) -> int:
+    """The rocks of ``after`` that ``sc`` goes on from (see :meth:`Screening.__init__`)."""
+    if (after.seed != sc.seed or after.n > sc.n or after.project is not sc.project
+            or not np.array_equal(after.releases.x, sc.releases.x[:after.n])):
+        raise ValueError("a screening goes on only from the first rocks of the same run")
+    return after.n
+
+
 class Screening:
     """Fast, common-random-number evaluation of candidate designs (see module docs)."""
 
@@ -151,6 +193,7 @@ class Screening:
         stations: np.ndarray | None = None,
         rock_progress: Callable[[int], None] | None = None,
         restart_stations: np.ndarray | None = None,
+        after: Screening | None = None,
     ) -> None:
         """Run the search rocks on the bare slope and keep the table (see the class docs).
 
@@ -163,6 +206,13 @@ class Screening:
         (``rockfall-design serve`` shows progress and cancels this way).
         ``restart_stations`` (m), when given with ``stations``, are kept as
         restart stations, so that ground edits can still be judged.
+        ``after``, when given, is a screening of the first rocks of this one
+        (same project and seed, at most ``rocks``, its stations and restart
+        stations a superset of this one's): its rocks are not run again, only
+        the rocks after them (:meth:`_run_bare`). A later look of ``2n`` rocks
+        is then the look of ``n`` and ``n`` new ones, bit for bit the table of
+        all ``2n`` run at once (each rock draws from its own stream, and the
+        stations a run records at do not change its paths).
         """
         self.project = project
         self.registry = registry
@@ -184,12 +234,14 @@ class Screening:
         self.allowed_fraction = (spec.residual_fraction if spec.residual_fraction is not None
                                  else self.allowed_residual / max(self.n, 1))
         self.max_rocks = max(self.n, int(spec.max_rocks))
-        self.confidence = float(getattr(concept.params, "confidence", DEFAULT_CONFIDENCE))
+        self.confidence = confidence_of(concept)
         r_max = float(np.max(self.releases.radius))
         self.margin = 2.0 * r_max + 0.5
         self.edit_candidates = {i for i, c in enumerate(spec.candidates) if self._is_edit(i)}
         self.grid, self.restart_x = self._stations(stations, restart_stations)
-        self._run_bare(rock_progress)
+        #: Rocks this screening ran (those of ``after`` are not run again).
+        self.rocks_run = self.n - (0 if after is None else after.n)
+        self._run_bare(rock_progress, after)
         # One uniform per rock for the gaps of a boulder row (common to all designs).
         self.u_gap = np.random.default_rng(np.random.SeedSequence([self.seed, 7919])).random(
             self.n)
@@ -228,24 +280,42 @@ class Screening:
         grid = np.unique(np.clip(np.concatenate(sts + [np.array([self.protect_x])]), x0, x1))
         return grid, np.unique(np.clip(np.concatenate(restarts), x0, x1))
 
-    def _run_bare(self, rock_progress: Callable[[int], None] | None) -> None:
-        """Run the search rocks on the bare slope: the table, and the restart states."""
+    def _run_bare(self, rock_progress: Callable[[int], None] | None,
+                  after: Screening | None = None) -> None:
+        """Run the search rocks on the bare slope: the table, and the restart states.
+
+        With ``after`` (see :meth:`__init__`) only the rocks after its ``n``
+        run (``first_index``: each draws from its own stream) and its rows,
+        at this screening's stations, come first.
+        """
+        first = 0 if after is None else _check_after(self, after)
+        releases = self.releases if after is None else _rows(self.releases, first)
         bare = run_ensemble(
-            self.section, self.releases, key=self.key, grid=self.grid,
+            self.section, releases, key=self.key, grid=self.grid,
             restart_stations=self.restart_x, settings=self.settings, record_speed=True,
-            progress=rock_progress,
+            progress=rock_progress, first_index=first,
         )
         cols = np.searchsorted(bare.grid, self.grid)
-        self.bare = Table(
+        table = Table(
             h=bare.grid_height[:, cols].astype(float),
             e_kj=bare.grid_energy[:, cols].astype(float) / 1e3,
             v=bare.grid_speed[:, cols].astype(float),
             max_x=bare.max_x, x_end=bare.x_end, status=bare.status,
         )
-        self.restart_state = bare.restart_state
-        self.restart_rng = bare.restart_rng
-        self.mass = bare.mass
-        self.radius = bare.radius
+        state, rng = bare.restart_state, bare.restart_rng
+        mass, radius = bare.mass, bare.radius
+        if after is not None:
+            table = _joined_tables(after.bare, _columns_of(after.grid, self.grid), table)
+            q = _columns_of(after.restart_x, self.restart_x)
+            state = np.concatenate([after.restart_state[:, q], state])
+            rng = np.concatenate([after.restart_rng[:, q], rng])
+            mass = np.concatenate([after.mass, mass])
+            radius = np.concatenate([after.radius, radius])
+        self.bare = table
+        self.restart_state = state
+        self.restart_rng = rng
+        self.mass = mass
+        self.radius = radius
 
     def _is_edit(self, ci: int) -> bool:
         """Does candidate ``ci`` edit the ground? Asked of its own footprint, never its name.

@@ -187,28 +187,38 @@ def footprint_problem(fp: Barrier | ProfileEdit, measure: Any, section: Any) -> 
     name or None.
     """
     if isinstance(fp, Barrier):
-        why = (_number(fp.x, "x", -math.inf)
-               or _number(fp.height_m, "height_m", 0.0, low_open=True)
-               or _number(fp.capacity_kj, "capacity_kj", 0.0, allow_inf=True))
-        if why:
-            return why
-        b = fp.behaviour
-        if isinstance(b, bool) or not isinstance(b, int) or b not in set(BarrierBehaviour):
-            names = ", ".join(m.name for m in BarrierBehaviour)
-            return f"behaviour = {reprlib.repr(b)}: expected a BarrierBehaviour ({names})"
-        why = (_number(fp.restitution, "restitution", 0.0, 1.0)
-               or _number(fp.gap_m, "gap_m", 0.0)
-               or _number(fp.spacing_m, "spacing_m", 0.0, low_open=True))
-        if why:
-            return why
-        why = (_number(fp.slope_cos, "slope_cos", 0.0, 1.0, low_open=True)
-               or _mel_problem(fp))
-        if why:
-            return why
-        if fp.gap_m > fp.spacing_m:
-            return (f"gap_m = {fp.gap_m:g} wider than spacing_m = {fp.spacing_m:g}: "
-                    "the gaps lie between the blocks")
-        return _x_problem(float(fp.x), "x", measure, section)
+        return _barrier_problem(fp, measure, section)
+    return _edit_problem(fp, measure, section)
+
+
+def _barrier_problem(fp: Barrier, measure: Any, section: Any) -> str | None:
+    """What is wrong with a barrier's fields, or None (see :func:`footprint_problem`)."""
+    why = (_number(fp.x, "x", -math.inf)
+           or _number(fp.height_m, "height_m", 0.0, low_open=True)
+           or _number(fp.capacity_kj, "capacity_kj", 0.0, allow_inf=True))
+    if why:
+        return why
+    b = fp.behaviour
+    if isinstance(b, bool) or not isinstance(b, int) or b not in set(BarrierBehaviour):
+        names = ", ".join(m.name for m in BarrierBehaviour)
+        return f"behaviour = {reprlib.repr(b)}: expected a BarrierBehaviour ({names})"
+    why = (_number(fp.restitution, "restitution", 0.0, 1.0)
+           or _number(fp.gap_m, "gap_m", 0.0)
+           or _number(fp.spacing_m, "spacing_m", 0.0, low_open=True))
+    if why:
+        return why
+    why = (_number(fp.slope_cos, "slope_cos", 0.0, 1.0, low_open=True)
+           or _mel_problem(fp))
+    if why:
+        return why
+    if fp.gap_m > fp.spacing_m:
+        return (f"gap_m = {fp.gap_m:g} wider than spacing_m = {fp.spacing_m:g}: "
+                "the gaps lie between the blocks")
+    return _x_problem(float(fp.x), "x", measure, section)
+
+
+def _edit_problem(fp: ProfileEdit, measure: Any, section: Any) -> str | None:
+    """What is wrong with a profile edit's fields, or None (see :func:`footprint_problem`)."""
     why = (_number(fp.x_start, "x_start", -math.inf)
            or _number(fp.x_end, "x_end", -math.inf)
            or _number(fp.catch_from, "catch_from", -math.inf)
@@ -221,6 +231,11 @@ def footprint_problem(fp: Barrier | ProfileEdit, measure: Any, section: Any) -> 
         return f"catch_from = {fp.catch_from:g} above catch_to = {fp.catch_to:g}"
     if fp.material is not None and (not isinstance(fp.material, str) or not fp.material):
         return f"material = {reprlib.repr(fp.material)}: expected a material name or None"
+    return _edit_points_problem(fp, measure, section)
+
+
+def _edit_points_problem(fp: ProfileEdit, measure: Any, section: Any) -> str | None:
+    """What is wrong with a profile edit's points against its stretch and the ground, or None."""
     try:
         points = np.asarray(fp.points, dtype=float)
     except (TypeError, ValueError):

@@ -150,6 +150,20 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
             f"{who} failed in {method}(): {describe_exception(exc)}{wrote}; "
             "this is a bug in the plugin, not in the project"
         ) from exc
+    _check_returned(who, method, contract, value, plugin, args, handed)
+    return value
+
+
+def _check_returned(who: str, method: str, contract: Any, value: Any, plugin: Any,
+                    args: tuple[Any, ...], handed: list[tuple[str, np.ndarray]]) -> None:
+    """Refuse what a plugin's method did to its arrays or returned, against its contract.
+
+    Raises
+    ------
+    PluginError
+        The method made a handed array writeable again, returned a value of
+        the wrong type, or one whose fields its contract refuses.
+    """
     reopened = [n for n, array in handed if array.flags.writeable]
     if reopened:
         raise PluginError(
@@ -167,7 +181,6 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
             f"{who}: {method}() returned {type(value).__name__} with {why}; "
             "this is a bug in the plugin, not in the project"
         )
-    return value
 
 
 # ---------------------------------------------------------------------------

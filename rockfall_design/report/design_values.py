@@ -21,6 +21,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from ..judge.records import CheckSummary, MeasureRecord, State, check_of
+from ..plugins.concept import Check
 from .rounding import round_value
 
 __all__ = ["DesignTable", "design_tables", "design_columns", "fresh_statements", "how_sure",
@@ -65,60 +67,73 @@ def _fmt(v: Any, unit: str) -> str:
     return f"{r:,.2f}" if unit in ("-", "m") else f"{r:,g}"
 
 
-def state_of(check: Mapping[str, Any]) -> str:
-    """A check's state, or ``ok``/``FAILS`` for a summary from before states."""
-    return str(check.get("state") or ("ok" if check.get("ok") else "FAILS"))
+def state_of(check: Check | Mapping[str, Any], state: str | None = None) -> str:
+    """A check's state (``state``, or a dict's own), or ``ok``/``FAILS`` without one.
+
+    A summary judged before the verdict's states existed has none: its
+    checks say what the point values say.
+    """
+    if isinstance(check, Mapping):
+        state = state or check.get("state")
+        ok = bool(check.get("ok"))
+    else:
+        ok = check.ok
+    return str(state or ("ok" if ok else "FAILS"))
 
 
-def _requirement(c: Mapping[str, Any]) -> str:
+def _requirement(c: Check) -> str:
     """'requirement: E_d <= E_cap / gamma_E = 1,667 kJ' (or the check's name and target)."""
-    unit = str(c.get("unit", "-"))
-    target = _fmt(c.get("target"), unit) + ("" if unit == "-" else f" {unit}")
-    symbol, rel = c.get("symbol") or c.get("name"), c.get("relation") or "vs"
-    what = c.get("target_symbol") or "target"
+    target = _fmt(c.target, c.unit) + ("" if c.unit == "-" else f" {c.unit}")
+    symbol, rel = c.symbol or c.name, c.relation or "vs"
+    what = c.target_symbol or "target"
     return f"requirement: {symbol} {rel} {what} = {target}"
 
 
-def _measure_title(m: Mapping[str, Any]) -> str:
-    through = int(m.get("broken_through") or 0) + int(m.get("passed_through_gap") or 0)
-    met = int(m.get("met") or 0)
-    if met == 0:
-        return f"{m.get('label') or m.get('type')}: no rock met it (untested)"
-    return (f"{m.get('label') or m.get('type')}: {met:,} rocks met it, "
-            f"{int(m.get('caught') or 0):,} held, {int(m.get('passed_over') or 0):,} over, "
-            f"{through:,} through")
+def _measure_title(m: MeasureRecord) -> str:
+    if m.met == 0:
+        return f"{m.label}: no rock met it (untested)"
+    return (f"{m.label}: {m.met:,} rocks met it, {m.caught:,} held, {m.passed_over:,} over, "
+            f"{m.through:,} through")
 
 
-def design_tables(summary: Mapping[str, Any]) -> list[DesignTable]:
+def _value_rows(c: Check) -> list[list[str]]:
+    """The design values and product figures behind a check, a row each."""
+    rows = []
+    for d in c.design_values:
+        what = f"{d.meaning} (product)" if d.source == "product" else d.meaning
+        rows.append(["", d.symbol, what, _fmt(d.value, d.unit), _fmt(d.bound, d.unit),
+                     d.unit, ""])
+    return rows
+
+
+def design_tables(summary: CheckSummary | Mapping[str, Any]) -> list[DesignTable]:
     """One table per measure of a check summary: design values, figures, requirements.
 
     Rows, in the order a reader follows a check: each of its design values
     (from the rocks, with their bounds) and the product's figures it uses,
     then the check itself (its requirement, value, bound and state).
     """
+    summary = check_of(summary)
+    judged = summary.verdict is not None
     out = []
-    for m in summary.get("measures") or []:
+    for m in summary.measures:
         rows: list[list[str]] = []
         states: list[str] = []
-        for c in m.get("checks") or []:
-            for d in c.get("design_values") or []:
-                unit = str(d.get("unit", "-"))
-                what = str(d.get("meaning", ""))
-                if d.get("source") == "product":
-                    what = f"{what} (product)"
-                rows.append(["", str(d.get("symbol", "")), what, _fmt(d.get("value"), unit),
-                             _fmt(d.get("bound"), unit), unit, ""])
-                states.append("")
-            unit = str(c.get("unit", "-"))
-            rows.append([str(c.get("name")), str(c.get("symbol") or ""), _requirement(c),
-                         _fmt(c.get("value"), unit), _fmt(c.get("bound"), unit), unit,
-                         state_of(c)])
-            states.append(state_of(c))
+        check_states = m.check_states() if judged else [None] * len(m.checks)
+        for c, st in zip(m.checks, check_states, strict=True):
+            values = _value_rows(c)
+            rows += values
+            states += [""] * len(values)
+            word = state_of(c, st)
+            rows.append([c.name, c.symbol, _requirement(c), _fmt(c.value, c.unit),
+                         _fmt(c.bound, c.unit), c.unit, word])
+            states.append(word)
         if not rows:
             rows.append(["(none)", "", "the safety concept checks nothing of this measure",
                          "", "", "", ""])
             states.append("")
-        out.append(DesignTable(_measure_title(m), rows, states, str(m.get("state") or "")))
+        state = m.state if judged else None
+        out.append(DesignTable(_measure_title(m), rows, states, "" if state is None else state))
     return out
 
 
@@ -126,49 +141,48 @@ def _pct(f: float) -> str:
     return f"{100 * f:.3g} %"
 
 
-def how_sure(summary: Mapping[str, Any]) -> list[str]:
+#: What "How sure" says of each state of the verdict.
+_STATE_SENTENCES = {
+    State.HOLDS_ON_POINT_VALUES: "Every requirement holds on its value, but not every one "
+    "with its bound in place; so the design holds on point values only. What is open:",
+    State.FAILS: "A requirement is missed on its value itself; no number of rocks turns "
+    "that into a pass. What fails:",
+    State.UNTESTED: "Nothing was tested: no rock met a measure and there is no protected "
+    "zone to count rocks in.",
+}
+
+
+def how_sure(summary: CheckSummary | Mapping[str, Any]) -> list[str]:
     """The statistical proof of a check summary, as plain sentences (one per item).
 
     What the values are statistics of and with which confidence; what the
     verdict rests on (each open item, each failure); the rocks reaching the
     protected zone with their Clopper-Pearson bound.
     """
-    n = int(summary.get("rocks") or 0)
-    conf = float(summary.get("confidence") or 0.95)
-    at = f"{100 * conf:g} %"
-    verdict = summary.get("verdict") or {}
-    state = verdict.get("state")
+    summary = check_of(summary)
+    n = summary.rocks
+    at = f"{100 * summary.confidence:g} %"
+    verdict = summary.verdict
     lines = [f"Every design value above is a statistic of the {n:,} rocks of this run "
-             f"(seed {summary.get('seed')}) that met the measure, computed with the safety "
+             f"(seed {summary.run.seed}) that met the measure, computed with the safety "
              f"concept's partial factors. Beside each is its one-sided {at} confidence bound "
              "on the unsafe side: a percentile's from the order statistics of the sample "
              "(distribution-free), a maximum's the maximum itself. A requirement holds with "
              "confidence when it still holds with every bound in place of its value."]
-    if state == "holds with confidence":
+    if verdict is not None:
         lines.append(f"Every requirement holds with its bounds in place: the design holds "
-                     f"with {at} confidence on these rocks.")
-    elif state == "holds on point values only":
-        lines.append("Every requirement holds on its value, but not every one with its bound "
-                     "in place; so the design holds on point values only. What is open:")
-    elif state == "fails":
-        lines.append("A requirement is missed on its value itself; no number of rocks turns "
-                     "that into a pass. What fails:")
-    elif state == "untested":
-        lines.append("Nothing was tested: no rock met a measure and there is no protected "
-                     "zone to count rocks in.")
-    lines += [f"- {d}" for d in verdict.get("details") or []]
-    p = summary.get("protect")
-    if p:
-        upper = p.get("upper_fraction")
+                     f"with {at} confidence on these rocks."
+                     if verdict.state == State.HOLDS_WITH_CONFIDENCE
+                     else _STATE_SENTENCES[verdict.state])
+        lines += [f"- {d}" for d in verdict.details]
+    p = summary.protect
+    if p is not None:
         lines.append(
-            f"{int(p['reaching']):,} of {n:,} rocks ({_pct(float(p['fraction']))}) reached the "
-            f"protected zone at x >= {float(p['x']):g} m"
-            + ("" if upper is None else
-               f"; with {at} confidence the share of all rocks that would reach it is at most "
-               f"{_pct(float(upper))} (Clopper-Pearson upper bound)")
-            + (f"; allowed {_pct(float(p['allowed_fraction']))}."
-               if p.get("allowed_fraction") is not None else "."))
-    lines += [str(s) for s in summary.get("concept_statements") or []]
+            f"{p.reaching:,} of {n:,} rocks ({_pct(p.fraction)}) reached the protected zone at "
+            f"x >= {p.x:g} m; with {at} confidence the share of all rocks that would reach it "
+            f"is at most {_pct(p.upper_fraction)} (Clopper-Pearson upper bound); allowed "
+            f"{_pct(p.allowed_fraction)}.")
+    lines += list(summary.concept_statements)
     return lines
 
 

@@ -20,6 +20,8 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..judge.records import CheckSummary, DesignVerdict, State
+from ..run.summary import RunSummary
 from ..version import __version__
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
 from .listed import listed_lines
@@ -189,23 +191,11 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
 # ---- the parts of the context -------------------------------------------------
 
 
-def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """Everything the report templates show, as plain data.
-
-    Parameters
-    ----------
-    result : SimulationResult, CheckResult or OptimiseResult
-    figures : mapping of str to Figure, optional
-        Default: ``result.figures()``.
-    """
-    from .figures import CAPTIONS
-
-    if getattr(result, "across", False):  # check --scenarios
-        return _scenarios_context(result, figures)
-    summary = result.summary
-    project = result.project
-    command = result.command
-    ctx: dict[str, Any] = {
+def _opening_context(result: Any) -> dict[str, Any]:
+    """The head of the context: titles, the run's table, the inputs, empty result parts."""
+    project, command = result.project, result.command
+    summary = result.summary if command == "optimise" else result.record
+    return {
         "title": f"{project.name}: rockfall {'design' if command == 'optimise' else command}",
         "project": project.name,
         "description": project.description,
@@ -226,44 +216,54 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
         "design_values": [],
         "how_sure": [],
     }
+
+
+def _statistics_context(ctx: dict[str, Any], stats: RunSummary | CheckSummary) -> None:
+    """The run's tables (ends, stations, checks, passages), the protected zone, how sure."""
+    ctx["results"].append(ends_table(stats))
+    for table in (stations_table(stats), checks_table(stats), passages_table(stats)):
+        if table is not None:
+            ctx["results"].append(table)
+    ctx["protect"] = protect_text(stats)
+    if isinstance(stats, CheckSummary):
+        ctx["design_values"] = _design_value_tables(stats)
+        ctx["how_sure"] = how_sure(stats)
+
+
+def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """Everything the report templates show, as plain data.
+
+    Parameters
+    ----------
+    result : SimulationResult, CheckResult or OptimiseResult
+        Read through its records (``record``, ``design.record``,
+        ``bill_record``); an optimisation's own figures through its summary.
+    figures : mapping of str to Figure, optional
+        Default: ``result.figures()``.
+    """
+    from .figures import CAPTIONS
+
+    if getattr(result, "across", False):  # check --scenarios
+        return _scenarios_context(result, figures)
+    command = result.command
+    ctx = _opening_context(result)
     design = result.design if command == "optimise" else None
-    stats_summary = design.summary if design is not None else (
-        summary if command != "optimise" else None)
+    stats = design.record if design is not None else (
+        result.record if command != "optimise" else None)
     if command == "optimise":
-        ctx["chosen"], ctx["chosen_measures"] = chosen_text(summary)
-        ctx["results"].append(alternatives_table(summary))
-    if stats_summary is not None:
-        ctx["results"].append(ends_table(stats_summary))
-        st = stations_table(stats_summary)
-        if st is not None:
-            ctx["results"].append(st)
-        ct = checks_table(stats_summary)
-        if ct is not None:
-            ctx["results"].append(ct)
-        pt = passages_table(stats_summary)
-        if pt is not None:
-            ctx["results"].append(pt)
-        ctx["protect"] = protect_text(stats_summary)
-        if stats_summary.get("measures") is not None:
-            ctx["design_values"] = _design_value_tables(stats_summary)
-            ctx["how_sure"] = how_sure(stats_summary)
+        ctx["chosen"], ctx["chosen_measures"] = chosen_text(result.summary)
+        ctx["results"].append(alternatives_table(result.summary))
+    if stats is not None:
+        _statistics_context(ctx, stats)
     if command == "optimise":
-        ctx["how_sure"] += optimiser_sentences(summary)
-    _set_verdict(ctx, summary.get("verdict"))
-    if command == "check" and not summary.get("verdict"):  # a summary from before verdicts
-        ctx["verdict"] = ("Design holds on the point values." if summary["ok"]
-                          else "Design fails.")
-        ctx["failures"] = list(summary.get("failures", []))
-    if summary.get("bill"):
-        ctx["bill"] = bill_table(summary["bill"])
+        ctx["how_sure"] += optimiser_sentences(result.summary)
+        _set_verdict(ctx, result.verdict)
+        if result.bill_record is not None:
+            ctx["bill"] = bill_table(result.bill_record)
+    elif isinstance(stats, CheckSummary):
+        _set_verdict(ctx, stats.verdict)
     if design is not None:
-        ctx["results_note"] = (
-            "Statistics, checks and figures of the chosen design on the "
-            f"{int(design.summary['rocks']):,} rocks that decided it (seed "
-            f"{design.summary['seed']}); the search used {int(summary.get('search_rocks') or 0):,} "
-            f"rocks and the verification {int(summary.get('fresh_rocks') or 0):,} fresh rocks "
-            f"(seed {summary.get('fresh_seed')}); confidence "
-            f"{100 * float(summary.get('confidence') or 0.95):g} %.")
+        ctx["results_note"] = _decided_note(result, design.record)
     # Every report says what the model is and is not; the concepts' part where one judged.
     ctx["limits"] = [{"heading": h, "items": list(items)} for h, items in MODEL_LIMITS
                      if command in ("check", "optimise") or not h.startswith("Safety")]
@@ -273,9 +273,19 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
     return ctx
 
 
-def _design_value_tables(summary: Mapping[str, Any]) -> list[Table]:
+def _decided_note(result: Any, design: CheckSummary) -> str:
+    """Which rocks the chosen design's statistics are of, and the search's and verification's."""
+    opt = result.result
+    return ("Statistics, checks and figures of the chosen design on the "
+            f"{design.rocks:,} rocks that decided it (seed {design.run.seed}); the search "
+            f"used {int(opt.search_rocks or 0):,} rocks and the verification "
+            f"{int(opt.fresh_rocks or 0):,} fresh rocks (seed {opt.fresh_seed}); confidence "
+            f"{100 * float(opt.confidence):g} %.")
+
+
+def _design_value_tables(summary: CheckSummary) -> list[Table]:
     """The design values at each measure, a table each (:mod:`.design_values`)."""
-    cols = design_columns(float(summary.get("confidence") or 0.95))
+    cols = design_columns(summary.confidence)
     return [Table(t.title, cols, t.rows, highlight=[bool(x) for x in t.states])
             for t in design_tables(summary)]
 
@@ -299,19 +309,20 @@ def optimiser_sentences(summary: Mapping[str, Any]) -> list[str]:
     return out + listed_lines(summary.get("marginal"), str(summary.get("currency") or ""))
 
 
-
-def _set_verdict(ctx: dict[str, Any], verdict: Mapping[str, Any] | None) -> None:
-    """The verdict (``summary["verdict"]``) as the report's first lines.
+def _set_verdict(ctx: dict[str, Any], verdict: DesignVerdict | Mapping[str, Any] | None) -> None:
+    """The verdict as the report's first lines.
 
     What fails is said at once; what is open with confidence belongs to the
     statistics and is said under "How sure" (its ``details`` are there).
     """
     if not verdict:
         return
-    ctx["verdict"] = verdict["headline"]
-    ctx["verdict_state"] = verdict["state"]
-    ctx["verdict_ok"] = verdict["state"] == "holds with confidence"
-    ctx["failures"] = list(verdict.get("details") or []) if verdict["state"] == "fails" else []
+    if isinstance(verdict, Mapping):  # a summary's JSON (check --scenarios)
+        verdict = DesignVerdict.from_json(verdict)
+    ctx["verdict"] = verdict.headline
+    ctx["verdict_state"] = verdict.state.value
+    ctx["verdict_ok"] = verdict.with_confidence
+    ctx["failures"] = list(verdict.details) if verdict.state == State.FAILS else []
 
 
 def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[str, Any]:

@@ -591,7 +591,12 @@ _FIXED_METADATA = {"svg": {"Date": None}, "pdf": {"CreationDate": None}}
 
 def _write_figure(fig: Figure, fh: IO[Any], fmt: str) -> None:
     """Write ``fig`` in ``fmt`` to ``fh``: the one place the figures' file settings live."""
-    fig.savefig(fh, format=fmt, dpi=150, bbox_inches="tight",
+    # A figure with a layout engine (the constrained layout) already fits its
+    # page; cropping it "tight" costs a second full draw for a few points of
+    # margin: 53 s against 40 s for a simulate's six figures in PNG and SVG
+    # (load 14, alternated runs). The fixed grids (passage panels) are cropped.
+    tight = "tight" if fig.get_layout_engine() is None else None
+    fig.savefig(fh, format=fmt, dpi=150, bbox_inches=tight,
                 metadata=_FIXED_METADATA.get(fmt, {}))
 
 

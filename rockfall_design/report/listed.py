@@ -16,6 +16,9 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from ..judge.records import CheckSummary, run_of
+from ..run.summary import RunSummary, Share
+
 __all__ = ["forest_text", "listed_lines", "what_decides", "values_phrase"]
 
 
@@ -109,17 +112,17 @@ def listed_lines(marginal: Sequence[Mapping[str, Any]] | None, currency: str = "
     return out
 
 
-def forest_text(summary: Mapping[str, Any]) -> str:
+def forest_text(summary: RunSummary | CheckSummary | Mapping[str, Any]) -> str:
     """What the forest did, with the shares' Clopper-Pearson intervals; '' without one."""
-    f = summary.get("forest")
-    if not f:
+    f = run_of(summary).forest
+    if f is None:
         return ""
 
-    def share(key: str) -> str:
-        s = f[key + "_share"]
-        return (f"{f[key]:,} rocks ({100 * s['fraction']:.1f} %, "
-                f"{100 * f['confidence']:g} % interval {100 * s['lower']:.1f} to "
-                f"{100 * s['upper']:.1f} %)")
+    def share(count: int, s: Share) -> str:
+        return (f"{count:,} rocks ({100 * s.fraction:.1f} %, "
+                f"{100 * f.confidence:g} % interval {100 * s.lower:.1f} to "
+                f"{100 * s.upper:.1f} %)")
 
-    return (f"Forest: {share('met_stems')} met at least one stem; {share('stopped')} were "
-            "stopped by a stem (counted among the stopped).")
+    return (f"Forest: {share(f.met_stems, f.met_stems_share)} met at least one stem; "
+            f"{share(f.stopped, f.stopped_share)} were stopped by a stem (counted among "
+            "the stopped).")

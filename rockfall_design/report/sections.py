@@ -12,7 +12,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from ..judge.records import Bill, CheckSummary, MeasureRecord, ProtectRecord, check_of, run_of
 from ..run.passages import QUANTITIES
+from ..run.summary import RunStatistics, RunSummary
 from ..version import __version__
 from .design_values import state_of
 from .listed import forest_text
@@ -99,15 +101,8 @@ def _survey_table(block: Mapping[str, Any], per_row: int = 10) -> Table:
                  f"{_text(block.get('percentile'))}th percentile.")
 
 
-def inputs_table(project: Any, command: str, resolved: Mapping[str, Any] | None = None,
-            concepts: Mapping[str, str] | None = None) -> list[Table]:
-    """Every input of the run, so that the report alone rebuilds the project.
-
-    ``resolved`` is the project as run (measures and safety concept with
-    every parameter resolved, defaults included); ``concepts`` the summary
-    line of each safety concept (what it follows).
-    """
-    d = dict(resolved) if resolved is not None else project.resolved_dict()
+def _ground_inputs(d: Mapping[str, Any]) -> list[Table]:
+    """The slope section's points and the ground materials, as resolved."""
     out = []
     slope = d["slope"]
     pts = slope["points"]
@@ -127,6 +122,19 @@ def inputs_table(project: Any, command: str, resolved: Mapping[str, Any] | None 
         note="Restitution, friction and rolling resistance are dimensionless; roughness_deg "
         "in degrees, roughness_height_m and velocity_scaling_k as named. Scatter: the "
         "standard deviation of each parameter, drawn per impact (truncated normal)."))
+    return out
+
+
+def inputs_table(project: Any, command: str, resolved: Mapping[str, Any] | None = None,
+            concepts: Mapping[str, str] | None = None) -> list[Table]:
+    """Every input of the run, so that the report alone rebuilds the project.
+
+    ``resolved`` is the project as run (measures and safety concept with
+    every parameter resolved, defaults included); ``concepts`` the summary
+    line of each safety concept (what it follows).
+    """
+    d = dict(resolved) if resolved is not None else project.resolved_dict()
+    out = _ground_inputs(d)
     r = d["rocks"]
     block = r.get("design_block") or {}
     rows = [[k, _text(r[k])] for k in r if k not in ("release", "design_block")]
@@ -164,24 +172,29 @@ def inputs_table(project: Any, command: str, resolved: Mapping[str, Any] | None 
                          note="Its standard or paper, and how its factors map to it: the "
                          "section 'Model and limits' below."))
     if command == "optimise" and d.get("design"):
-        des = dict(d["design"])
-        rows = [[c.get("type", "?"), ", ".join(f"{k} {_text(v)}" for k, v in c.items()
-                                               if k != "type")]
-                for c in des.pop("candidates", [])]
-        out.append(Table("Candidate measures of the design", ["type", "range"], rows))
-        products = des.pop("products", None) or {}
-        costs = des.pop("costs", None) or {}
-        out.append(Table("Design settings", ["setting", "value"], _flat(des)))
-        if products:
-            out.append(Table("Product catalogue", ["measure type", "product", "properties"],
-                             [[kind, name, _text(p)] for kind, table in products.items()
-                              for name, p in table.items()],
-                             note="capacity_kj: energy class (kJ); heights: nominal heights "
-                             "(m) on offer."))
-        if costs:
-            out.append(Table("Cost catalogue", ["price", "value"], _flat(costs),
-                             note="Prices in the catalogue's currency, per the unit each key "
-                             "names; a barrier's by product and height (m), per running metre."))
+        out += _design_inputs(dict(d["design"]))
+    return out
+
+
+def _design_inputs(des: dict[str, Any]) -> list[Table]:
+    """The design section: candidates, settings, product and cost catalogues."""
+    rows = [[c.get("type", "?"), ", ".join(f"{k} {_text(v)}" for k, v in c.items()
+                                           if k != "type")]
+            for c in des.pop("candidates", [])]
+    out = [Table("Candidate measures of the design", ["type", "range"], rows)]
+    products = des.pop("products", None) or {}
+    costs = des.pop("costs", None) or {}
+    out.append(Table("Design settings", ["setting", "value"], _flat(des)))
+    if products:
+        out.append(Table("Product catalogue", ["measure type", "product", "properties"],
+                         [[kind, name, _text(p)] for kind, table in products.items()
+                          for name, p in table.items()],
+                         note="capacity_kj: energy class (kJ); heights: nominal heights "
+                         "(m) on offer."))
+    if costs:
+        out.append(Table("Cost catalogue", ["price", "value"], _flat(costs),
+                         note="Prices in the catalogue's currency, per the unit each key "
+                         "names; a barrier's by product and height (m), per running metre."))
     return out
 
 
@@ -206,47 +219,60 @@ def _used_plugins(d: Mapping[str, Any], command: str) -> list[tuple[str, str]]:
     return used
 
 
-def run_table(result: Any, summary: Mapping[str, Any]) -> Table:
+def _optimise_rows(result: Any) -> list[list[str]]:
+    """The rocks and seeds of an optimisation: search, decision, verification; its looks."""
+    opt = result.result
+    design = getattr(result, "design", None)
+    rows = [["search rocks and seed", f"{int(opt.search_rocks or 0):,} rocks, seed {opt.seed}"],
+            ["decision rocks and seed", f"{int(opt.rocks):,} rocks, seed {opt.seed}"
+             + (" (the chosen design's statistics below)" if design is not None else "")],
+            ["verification (fresh rocks) and seed",
+             f"{int(opt.fresh_rocks):,} rocks, seed {opt.fresh_seed}"],
+            ["designs screened", f"{int(opt.evaluations or 0):,}; "
+             f"{int(opt.exact_evaluations or 0):,} evaluated exactly"]]
+    looks = opt.looks
+    if looks is not None:
+        rows.append(["sequential looks (rocks)", ", ".join(f"{n:,}" for n in looks.sizes)
+                     + f"; each at {100 * float(looks.look_confidence):.4g} %"])
+    return rows
+
+
+def _statistics_row(stats: RunStatistics) -> list[list[str]]:
+    """How the statistics were taken: exact, or streamed with their accuracy."""
+    if stats.method == "histograms":
+        return [["statistics", "streamed in chunks: counts, means and maxima exact, "
+                 f"percentiles within {100 * (stats.relative_error or 0.0):g} %"]]
+    return [["statistics", "exact, over every rock"]] if stats.method else []
+
+
+def run_table(result: Any, summary: RunSummary | CheckSummary | Mapping[str, Any]) -> Table:
     """The report's table of the run: program, project and its hash, rocks, seeds, engine."""
     import platform
 
     project = result.project
+    if isinstance(summary, Mapping) and result.command != "optimise":
+        summary = check_of(summary) if "safety_concept" in summary else run_of(summary)
+    run = None if result.command == "optimise" else run_of(summary)
+    if run is None:
+        conf: float | None = float(result.result.confidence)
+        runtime = round(float(result.result.wall_s), 3)
+    else:
+        conf = summary.confidence if isinstance(summary, CheckSummary) else None
+        runtime = run.runtime_s
     rows = [["program", f"rockfall-design {__version__}, command {result.command}; Python "
              f"{platform.python_version()}"],
             ["project file", str(project.source)],
             ["project hash (sha256 of the resolved project)",
-             str(summary.get("project_hash") or project.resolved_hash())]]
-    conf = summary.get("confidence")
-    if result.command == "optimise":
-        design = getattr(result, "design", None)
-        rows += [["search rocks and seed", f"{int(summary.get('search_rocks') or 0):,} rocks, "
-                  f"seed {summary['seed']}"],
-                 ["decision rocks and seed", f"{int(summary['rocks']):,} rocks, seed "
-                  f"{summary['seed']}" + (" (the chosen design's statistics below)"
-                                          if design is not None else "")],
-                 ["verification (fresh rocks) and seed",
-                  f"{int(summary['fresh_rocks']):,} rocks, seed {summary['fresh_seed']}"],
-                 ["designs screened", f"{int(summary.get('designs_evaluated', 0)):,}; "
-                  f"{int(summary.get('exact_evaluations') or 0):,} evaluated exactly"]]
-        looks = summary.get("looks")
-        if looks:
-            rows.append(["sequential looks (rocks)", ", ".join(f"{n:,}" for n in looks["rocks"])
-                         + f"; each at {100 * float(looks['look_confidence']):.4g} %"])
-    else:
-        rows += [["rocks", f"{int(summary['rocks']):,}"],
-                 ["seed", str(summary["seed"])]]
+             str((run.project_hash if run is not None else "") or project.resolved_hash())]]
+    rows += _optimise_rows(result) if run is None else [["rocks", f"{run.rocks:,}"],
+                                                        ["seed", str(run.seed)]]
     if conf is not None:
         rows.append(["confidence (one-sided, of every bound)", f"{100 * float(conf):g} %"])
-    if summary.get("runtime_s") is not None:
-        rows.append(["run time", f"{float(summary['runtime_s']):,.1f} s"])
-    stats = summary.get("statistics") or {}
-    if stats.get("method") == "histograms":
-        rows.append(["statistics", "streamed in chunks: counts, means and maxima exact, "
-                     f"percentiles within {100 * stats['relative_error']:g} %"])
-    elif stats:
-        rows.append(["statistics", "exact, over every rock"])
-    if summary.get("safety_concept"):
-        rows.append(["safety concept", str(summary["safety_concept"])])
+    rows.append(["run time", f"{runtime:,.1f} s"])
+    if run is not None:
+        rows += _statistics_row(run.statistics)
+    if isinstance(summary, CheckSummary) and summary.safety_concept:
+        rows.append(["safety concept", summary.safety_concept])
     e = project.engine
     rows.append(["engine", f"exact events (flight parabolas, impacts, rolling and sliding in "
                  f"closed form); contact when a rebound's hop is below max(roughness "
@@ -257,9 +283,9 @@ def run_table(result: Any, summary: Mapping[str, Any]) -> Table:
     return Table("", ["item", "value"], rows)
 
 
-def stations_table(summary: Mapping[str, Any]) -> Table | None:
+def stations_table(summary: RunSummary | CheckSummary) -> Table | None:
     """The passages at each station (height, velocity, energy); None without stations."""
-    stations = summary.get("stations") or []
+    stations = run_of(summary).stations
     if not stations:
         return None
     cols = ["x (m)", "rocks passing", "h p50 (m)", "h p95 (m)", "h p99 (m)", "h max (m)",
@@ -267,78 +293,82 @@ def stations_table(summary: Mapping[str, Any]) -> Table | None:
             "E max (kJ)"]
     rows = []
     for s in stations:
-        h, v, e = s["passing_height_m"], s["velocity_ms"], s["energy_kj"]
-        rows.append([f"{s['x']:g}", f"{s['crossings']:,}",
-                     *(_fixed(h[q], 2) for q in ("p50", "p95", "p99", "max")),
-                     _fixed(v["p95"], 1), _fixed(v["max"], 1),
-                     *(_fixed(e[q], 0) for q in ("p50", "p95", "p99", "max"))])
+        h, v, e = s.passing_height_m, s.velocity_ms, s.energy_kj
+        rows.append([f"{s.x:g}", f"{s.crossings:,}",
+                     *(_fixed(h.at(q), 2) for q in ("p50", "p95", "p99", "max")),
+                     _fixed(v.p95, 1), _fixed(v.max, 1),
+                     *(_fixed(e.at(q), 0) for q in ("p50", "p95", "p99", "max"))])
     return Table("Analysis stations (first passage downslope)", cols, rows,
                  note="h: passing height of the rock centre above the ground; v: speed; "
                  "E: total kinetic energy. Percentiles over the rocks passing the station.")
 
 
-def ends_table(summary: Mapping[str, Any]) -> Table:
+def ends_table(summary: RunSummary | CheckSummary) -> Table:
     """How the rocks' paths ended: stopped on the section, left at either end, ..."""
-    st = summary["stops"]
-    n = max(int(summary["rocks"]), 1)
+    run = run_of(summary)
+    st = run.stops
+    n = max(run.rocks, 1)
     rows = []
     for label, key in (("stopped on the section", "stopped"),
                        ("left downslope end", "exit_downslope"),
                        ("left upslope end", "exit_upslope"),
                        ("caught by a barrier", "caught"),
                        ("unresolved (event limit)", "unresolved")):
-        rows.append([label, f"{st[key]:,}", f"{100 * st[key] / n:.1f} %"])
-    sx = st["x"]
+        count = st.count(key)
+        rows.append([label, f"{count:,}", f"{100 * count / n:.1f} %"])
+    sx = st.x
     note = ("Stop position x of the rocks at rest (m): "
-            f"mean {_fixed(sx['mean'], 1)}, p50 {_fixed(sx['p50'], 1)}, "
-            f"p95 {_fixed(sx['p95'], 1)}, max {_fixed(sx['max'], 1)}.")
-    forest = forest_text(summary)
+            f"mean {_fixed(sx.mean, 1)}, p50 {_fixed(sx.p50, 1)}, "
+            f"p95 {_fixed(sx.p95, 1)}, max {_fixed(sx.max, 1)}.")
+    forest = forest_text(run)
     if forest:
         note += " " + forest
     return Table("How the paths ended", ["end", "rocks", "share"], rows, note=note)
 
 
-def protect_text(summary: Mapping[str, Any]) -> str:
+def protect_text(summary: RunSummary | CheckSummary) -> str:
     """The protected zone and the rocks that reach it (with its bound), as a sentence."""
-    p = summary.get("protect")
-    if not p:
+    p = summary.protect
+    if p is None:
         return ""
-    text = (f"Protected zone x >= {p['x']:g} m: {p['reaching']:,} of {summary['rocks']:,} rocks "
-            f"reach it ({100 * p['fraction']:.2f} %)")
-    if p.get("upper_fraction") is not None:
-        text += f", upper confidence bound {100 * p['upper_fraction']:.2f} %"
-    if p.get("allowed_fraction") is not None:
-        text += f"; allowed {100 * p['allowed_fraction']:.2f} %"
-    if p.get("unresolved"):
-        text += f"; {p['unresolved']:,} unresolved paths counted as reaching it"
+    text = (f"Protected zone x >= {p.x:g} m: {p.reaching:,} of {run_of(summary).rocks:,} rocks "
+            f"reach it ({100 * p.fraction:.2f} %)")
+    if isinstance(p, ProtectRecord):
+        text += (f", upper confidence bound {100 * p.upper_fraction:.2f} %"
+                 f"; allowed {100 * p.allowed_fraction:.2f} %")
+    if p.unresolved:
+        text += f"; {p.unresolved:,} unresolved paths counted as reaching it"
     return text + "."
 
 
-def checks_table(summary: Mapping[str, Any]) -> Table | None:
+def _check_rows(m: MeasureRecord, states: list[str], bounds: bool, width: int) -> list[list[str]]:
+    """A measure's rows of the checks table: its counts, then a row per check."""
+    head = [m.label, f"{m.met:,}", f"{m.caught:,}", f"{m.passed_over:,}", f"{m.through:,}"]
+    if not m.checks:
+        return [head + ["(none)"] + [""] * (width - 6)]
+    rows = []
+    for k, (c, state) in enumerate(zip(m.checks, states, strict=True)):
+        row = (head if k == 0 else [""] * 5) + [c.name, _num(c.value, c.unit)]
+        if bounds:
+            row.append(_num(c.bound, c.unit))
+        rows.append(row + [_num(c.target, c.unit), c.unit, state, c.detail])
+    return rows
+
+
+def checks_table(summary: RunSummary | CheckSummary) -> Table | None:
     """Each measure's checks (demand, capacity, factor); None without measures."""
-    measures = summary.get("measures")
-    if measures is None:
+    if not isinstance(summary, CheckSummary):
         return None
-    bounds = any(c.get("bound") is not None for m in measures for c in m.get("checks", []))
+    bounds = any(c.bound is not None for m in summary.measures for c in m.checks)
     cols = ["measure", "met", "caught", "over", "through", "check", "value"]
     cols += ["bound"] if bounds else []
     cols += ["target", "unit", "verdict", "how"]
+    judged = summary.verdict is not None
     rows = []
-    for m in measures:
-        through = m.get("broken_through", 0) + m.get("passed_through_gap", 0)
-        head = [m.get("label", m.get("type", "?")), f"{m['met']:,}", f"{m['caught']:,}",
-                f"{m['passed_over']:,}", f"{through:,}"]
-        for k, c in enumerate(m.get("checks") or [None]):
-            first = head if k == 0 else [""] * 5
-            if c is None:
-                rows.append(first + ["(none)"] + [""] * (len(cols) - 6))
-                continue
-            unit = str(c.get("unit", "-"))
-            row = first + [str(c["name"]), _num(c.get("value"), unit)]
-            if bounds:
-                row.append(_num(c.get("bound"), unit))
-            row += [_num(c.get("target"), unit), unit, state_of(c), str(c.get("detail", ""))]
-            rows.append(row)
+    for m in summary.measures:
+        states = [state_of(c, st.value if judged else None)
+                  for c, st in zip(m.checks, m.check_states(), strict=True)]
+        rows += _check_rows(m, states, bounds, len(cols))
     return Table("Measures and their checks", cols, rows,
                  note="met: rocks that reached the measure; over: passed over it; through: "
                  "broke through or passed a gap. Value against target as the safety concept "
@@ -346,9 +376,13 @@ def checks_table(summary: Mapping[str, Any]) -> Table | None:
                  "measure, so its checks say nothing).")
 
 
-def passages_table(summary: Mapping[str, Any]) -> Table | None:
-    """Results at every station and barrier: a row per place and quantity (barriers.csv)."""
-    frame = passages_frame(summary)
+def passages_table(summary: RunSummary | CheckSummary | Mapping[str, Any]) -> Table | None:
+    """Results at every station and barrier: a row per place and quantity (barriers.csv).
+
+    The rows of barriers.csv (:func:`.tables.passages_frame`, which reads a
+    summary's JSON as the file does).
+    """
+    frame = passages_frame(summary if isinstance(summary, Mapping) else summary.to_json())
     if frame.empty:
         return None
     cols = ["place", "quantity", "unit", "rocks", "mean", "p50", "p95", "p99", "max",
@@ -462,21 +496,20 @@ def _money(v: float) -> str:
     return f"{v:,.2f}"
 
 
-def bill_table(bill: Mapping[str, Any]) -> Table:
+def bill_table(bill: Bill) -> Table:
     """The chosen design's bill: a line per quantity and fixed cost, and the total."""
-    cur = bill.get("currency") or ""
+    cur = bill.currency or ""
     unit = f" ({cur})" if cur else ""
-    rows = [[str(it["measure"]), str(it["quantity"]), _money(it["count"]), str(it["unit"]),
-             _money(it["unit_price"]), _money(it["amount"]), str(it.get("source") or "")]
-            for it in bill["items"]]
-    rows.append(["total", "", "", "", "", _money(bill["total"]), ""])
-    return Table(f"Bill of the chosen design (site length {bill['length_m']:g} m)",
+    rows = [[it.measure, it.quantity, _money(it.count), it.unit, _money(it.unit_price),
+             _money(it.amount), it.source] for it in bill.items]
+    rows.append(["total", "", "", "", "", _money(bill.total), ""])
+    return Table(f"Bill of the chosen design (site length {bill.length_m:g} m)",
                  ["measure", "quantity", "count", "unit", f"unit price{unit}",
                   f"amount{unit}", "price from"], rows,
                  note="count: the quantity over the whole site length (running metres, m3, "
                  "or each); amount = count x unit price; the total is the design's cost as the "
-                 f"optimiser compared it, priced by the cost model {bill.get('model', '')}.",
-                 highlight=[False] * len(bill["items"]) + [True])
+                 f"optimiser compared it, priced by the cost model {bill.model}.",
+                 highlight=[False] * len(bill.items) + [True])
 
 
 def values_text(values: Mapping[str, Any]) -> str:

@@ -6,6 +6,7 @@ the module ``rockfall_design/report.py``, whose names the package still offers.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -16,6 +17,8 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
+from ..judge.records import Bill, CheckSummary, DesignVerdict, State, check_of, run_of
+from ..run.summary import RunSummary
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
 from .listed import SHOWN, forest_text, listed_lines
 from .outputs import OutputSet
@@ -68,101 +71,102 @@ def _fmt(v: float | None, digits: int = 2) -> str:
     return "-" if v is None else f"{v:,.{digits}f}"
 
 
-def simulation_renderable(summary: dict[str, Any]) -> Group:
-    """The rich renderable of a ``simulate`` summary."""
-    n = summary["rocks"]
-    rate = n / summary["runtime_s"] if summary["runtime_s"] > 0 else float("nan")
-    head = Text.assemble(
-        (summary["project"], "bold"),
-        f"   {n:,} rocks, seed {summary['seed']}, "
-        f"{summary['runtime_s']:.2f} s ({rate:,.0f} rocks/s, {summary['events']:,} events)",
-    )
-    st = summary["stops"]
+#: The end states a run's panel lists: label and field of StopsSummary.
+_ENDS = (("stopped on the section", "stopped"), ("left downslope end", "exit_downslope"),
+         ("left upslope end", "exit_upslope"), ("unresolved (event limit)", "unresolved"),
+         ("caught by a barrier", "caught"))
+
+
+def _ends_table(run: RunSummary) -> Table:
+    """How the paths ended: rocks and share per end state (caught only where any were)."""
+    st = run.stops
     ends = Table(title="How the paths ended", show_edge=False, title_justify="left")
     ends.add_column("end")
     ends.add_column("rocks", justify="right")
     ends.add_column("share", justify="right")
-    for label, key in (
-        ("stopped on the section", "stopped"),
-        ("left downslope end", "exit_downslope"),
-        ("left upslope end", "exit_upslope"),
-        ("unresolved (event limit)", "unresolved"),
-        ("caught by a barrier", "caught"),
-    ):
-        if key == "caught" and not st.get(key):
+    for label, key in _ENDS:
+        count = st.count(key)
+        if key == "caught" and not count:
             continue
-        ends.add_row(label, f"{st[key]:,}", f"{100 * st[key] / max(n, 1):.1f} %")
-    sx = st["x"]
-    stops = Text(
-        f"Stop position x (m) of the rocks at rest: mean {_fmt(sx['mean'], 1)}, "
-        f"p50 {_fmt(sx['p50'], 1)}, p95 {_fmt(sx['p95'], 1)}, max {_fmt(sx['max'], 1)}"
+        ends.add_row(label, f"{count:,}", f"{100 * count / max(run.rocks, 1):.1f} %")
+    return ends
+
+
+def _stations_table(run: RunSummary) -> Table:
+    """The analysis stations: rocks passing, passing heights, speed and energies."""
+    tab = Table(
+        title="Analysis stations (first passage downslope)",
+        caption="h: passing height of the rock centre above ground (m); "
+        "v: speed (m/s); E: total kinetic energy (kJ)",
+        title_justify="left",
+        caption_justify="left",
+        show_edge=False,
     )
-    parts: list[Any] = [head, Text(""), ends, Text(""), stops]
-    if summary["stations"]:
-        tab = Table(
-            title="Analysis stations (first passage downslope)",
-            caption="h: passing height of the rock centre above ground (m); "
-            "v: speed (m/s); E: total kinetic energy (kJ)",
-            title_justify="left",
-            caption_justify="left",
-            show_edge=False,
-        )
-        tab.add_column("x (m)", justify="right", no_wrap=True)
-        tab.add_column("rocks", justify="right", no_wrap=True)
-        for q in ("p95", "p99", "max"):
-            tab.add_column(f"h {q}", justify="right", no_wrap=True)
-        tab.add_column("v max", justify="right")
-        for q in ("p95", "p99", "max"):
-            tab.add_column(f"E {q}", justify="right", no_wrap=True)
-        for s in summary["stations"]:
-            h, v, e = s["passing_height_m"], s["velocity_ms"], s["energy_kj"]
-            tab.add_row(
-                f"{s['x']:g}",
-                f"{s['crossings']:,}",
-                *(_fmt(h[q]) for q in ("p95", "p99", "max")),
-                _fmt(v["max"], 1),
-                *(_fmt(e[q], 0) for q in ("p95", "p99", "max")),
-            )
-        parts += [Text(""), tab]
-    if "protect" in summary:
-        p = summary["protect"]
-        style = "bold red" if p["reaching"] else "bold green"
-        parts += [
-            Text(""),
-            Text.assemble(
-                f"Protected zone x >= {p['x']:g} m: ",
-                (f"{p['reaching']:,} rocks reach it ({100 * p['fraction']:.2f} %)", style),
-                (f", {p['unresolved']:,} of them unresolved paths counted as reaching it"
-                 if p.get("unresolved") else "", style),
-            ),
-        ]
-    if "forest" in summary:
-        parts += [Text(""), Text(forest_text(summary))]
-    stats = summary.get("statistics", {})
-    if stats.get("method") == "histograms":
-        parts += [
-            Text(""),
-            Text(
-                f"A large run, streamed in chunks of {stats['chunk_rocks']:,} rocks: counts, "
-                "means and maxima are exact, percentiles within "
-                f"{100 * stats['relative_error']:g} % (stop positions within "
-                f"{stats['stop_x_error_m']:.2g} m).",
-                style="dim",
-            ),
-        ]
-    if st["unresolved"]:
-        parts.append(
-            Text(
-                f"{st['unresolved']} rocks reached the event limit and are reported as "
-                "unresolved (counted as reaching the protected zone, on the safe side); "
-                "raise engine.max_events.",
-                style="yellow",
-            )
-        )
-    return Group(*parts)
+    tab.add_column("x (m)", justify="right", no_wrap=True)
+    tab.add_column("rocks", justify="right", no_wrap=True)
+    for q in ("p95", "p99", "max"):
+        tab.add_column(f"h {q}", justify="right", no_wrap=True)
+    tab.add_column("v max", justify="right")
+    for q in ("p95", "p99", "max"):
+        tab.add_column(f"E {q}", justify="right", no_wrap=True)
+    for s in run.stations:
+        h, e = s.passing_height_m, s.energy_kj
+        tab.add_row(f"{s.x:g}", f"{s.crossings:,}", *(_fmt(h.at(q)) for q in ("p95", "p99", "max")),
+                    _fmt(s.velocity_ms.max, 1), *(_fmt(e.at(q), 0) for q in ("p95", "p99", "max")))
+    return tab
 
 
-def print_simulation(summary: dict[str, Any], console: Console | None = None) -> None:
+def _run_notes(run: RunSummary) -> list[Any]:
+    """The protected zone's count, the forest, a streamed run's accuracy, unresolved paths."""
+    parts: list[Any] = []
+    p = run.protect
+    if p is not None:
+        style = "bold red" if p.reaching else "bold green"
+        parts += [Text(""), Text.assemble(
+            f"Protected zone x >= {p.x:g} m: ",
+            (f"{p.reaching:,} rocks reach it ({100 * p.fraction:.2f} %)", style),
+            (f", {p.unresolved:,} of them unresolved paths counted as reaching it"
+             if p.unresolved else "", style))]
+    if run.forest is not None:
+        parts += [Text(""), Text(forest_text(run))]
+    stats = run.statistics
+    if stats.method == "histograms":
+        parts += [Text(""), Text(
+            f"A large run, streamed in chunks of {stats.chunk_rocks:,} rocks: counts, "
+            "means and maxima are exact, percentiles within "
+            f"{100 * (stats.relative_error or 0.0):g} % (stop positions within "
+            f"{stats.stop_x_error_m:.2g} m).", style="dim")]
+    if run.stops.unresolved:
+        parts.append(Text(
+            f"{run.stops.unresolved} rocks reached the event limit and are reported as "
+            "unresolved (counted as reaching the protected zone, on the safe side); "
+            "raise engine.max_events.", style="yellow"))
+    return parts
+
+
+def simulation_renderable(summary: RunSummary | CheckSummary | Mapping[str, Any]) -> Group:
+    """The rich renderable of a ``simulate`` summary (a record, or its JSON read back)."""
+    run = run_of(summary)
+    n = run.rocks
+    rate = n / run.runtime_s if run.runtime_s > 0 else float("nan")
+    head = Text.assemble(
+        (run.project, "bold"),
+        f"   {n:,} rocks, seed {run.seed}, "
+        f"{run.runtime_s:.2f} s ({rate:,.0f} rocks/s, {run.events:,} events)",
+    )
+    sx = run.stops.x
+    stops = Text(
+        f"Stop position x (m) of the rocks at rest: mean {_fmt(sx.mean, 1)}, "
+        f"p50 {_fmt(sx.p50, 1)}, p95 {_fmt(sx.p95, 1)}, max {_fmt(sx.max, 1)}"
+    )
+    parts: list[Any] = [head, Text(""), _ends_table(run), Text(""), stops]
+    if run.stations:
+        parts += [Text(""), _stations_table(run)]
+    return Group(*parts, *_run_notes(run))
+
+
+def print_simulation(summary: RunSummary | Mapping[str, Any],
+                     console: Console | None = None) -> None:
     panel = Panel(simulation_renderable(summary), title="rockfall-design simulate")
     (console or fitted_console(panel)).print(panel)
 
@@ -179,22 +183,11 @@ _VERDICT_STYLE = {"holds with confidence": "bold green",
                   "fails": "bold red", "untested": "bold magenta"}
 
 
-def _verdict_parts(verdict: dict[str, Any] | None) -> list[Any]:
-    """The verdict's headline and details: the first lines of a report."""
-    if not verdict:
-        return []
-    parts: list[Any] = [Text(verdict["headline"], style=_VERDICT_STYLE.get(verdict["state"],
-                                                                          "bold"))]
-    for line in verdict.get("details") or []:
-        parts.append(Text(f"  - {line}", style="red" if verdict["state"] == "fails" else ""))
-    return parts
-
-
-def _bill_table(bill: dict[str, Any]) -> Table:
+def _bill_table(bill: Bill) -> Table:
     """The bill of the chosen design: a line per quantity and fixed cost, the total."""
     # Words from the catalogue and the plugins are shown as written, never as markup.
-    cur = escape(bill.get("currency") or "")
-    tab = Table(title=f"Bill ({escape(bill['model'])}; site length {bill['length_m']:g} m)",
+    cur = escape(bill.currency or "")
+    tab = Table(title=f"Bill ({escape(bill.model)}; site length {bill.length_m:g} m)",
                 title_justify="left", show_edge=False, caption="count: over the whole site "
                 "length; unit prices as the catalogue gives them", caption_justify="left")
     for col, just in (("measure", "left"), ("quantity", "left"), ("count", "right"),
@@ -202,12 +195,12 @@ def _bill_table(bill: dict[str, Any]) -> Table:
                       (f"amount {cur}".strip(), "right")):
         tab.add_column(col, justify=just)
     last = None
-    for it in bill["items"]:
-        tab.add_row("" if it["measure"] == last else Text(it["measure"]), Text(it["quantity"]),
-                    f"{it['count']:,.2f}", Text(it["unit"]), f"{it['unit_price']:,.2f}",
-                    f"{it['amount']:,.2f}")
-        last = it["measure"]
-    tab.add_row("total", "", "", "", "", f"{bill['total']:,.2f}", style="bold")
+    for it in bill.items:
+        tab.add_row("" if it.measure == last else Text(it.measure), Text(it.quantity),
+                    f"{it.count:,.2f}", Text(it.unit), f"{it.unit_price:,.2f}",
+                    f"{it.amount:,.2f}")
+        last = it.measure
+    tab.add_row("total", "", "", "", "", f"{bill.total:,.2f}", style="bold")
     return tab
 
 
@@ -217,14 +210,14 @@ def _state_text(state: str) -> Text:
     return Text(state, style=style.replace("bold ", "") if state != "fails" else style)
 
 
-def _design_value_tables(summary: dict[str, Any]) -> list[Any]:
+def _design_value_tables(summary: CheckSummary) -> list[Any]:
     """The design values of every measure of a check summary, a rich table each.
 
     See :func:`rockfall_design.report.design_values.design_tables`: the
     concept's symbols against the product's figures, each check's
     requirement and state.
     """
-    conf = float(summary.get("confidence") or 0.95)
+    conf = summary.confidence
     parts: list[Any] = []
     for t in design_tables(summary):
         tab = Table(title=Text(t.title), title_justify="left", show_edge=False)
@@ -240,23 +233,21 @@ def _design_value_tables(summary: dict[str, Any]) -> list[Any]:
     return parts
 
 
-def _opening(summary: dict[str, Any]) -> list[Any]:
+def _opening(verdict: DesignVerdict | None) -> list[Any]:
     """The verdict and, when the design fails, what fails: the first lines of a report.
 
     The verdict's other details (what is open with confidence, how many rocks
     would settle it) are the statistics': they follow under "How sure".
     """
-    verdict = summary.get("verdict")
-    if not verdict:
+    if verdict is None:
         return []
-    parts: list[Any] = [Text(verdict["headline"],
-                             style=_VERDICT_STYLE.get(verdict["state"], "bold"))]
-    if verdict["state"] == "fails":
-        parts += [Text(f"  - {line}", style="red") for line in verdict.get("details") or []]
+    parts: list[Any] = [Text(verdict.headline, style=_VERDICT_STYLE.get(verdict.state, "bold"))]
+    if verdict.state == State.FAILS:
+        parts += [Text(f"  - {line}", style="red") for line in verdict.details]
     return parts
 
 
-def _how_sure_renderable(summary: dict[str, Any], extra: list[str] | None = None) -> Group:
+def _how_sure_renderable(summary: CheckSummary, extra: list[str] | None = None) -> Group:
     """The section "How sure": the statistics behind the verdict, in plain sentences."""
     parts: list[Any] = [Text("How sure", style="bold underline")]
     for line in [*how_sure(summary), *(extra or [])]:
@@ -264,39 +255,41 @@ def _how_sure_renderable(summary: dict[str, Any], extra: list[str] | None = None
     return Group(*parts)
 
 
-def _details(summary: dict[str, Any]) -> list[Any]:
+def _details(summary: CheckSummary) -> list[Any]:
     """How each check's value was computed, one dim line each."""
     parts: list[Any] = []
-    for m in summary.get("measures") or []:
-        for c in m["checks"]:
-            if c["detail"]:
-                parts.append(Text(f"  {m['label']}: {c['name']}: {c['detail']}", style="dim"))
+    for m in summary.measures:
+        for c in m.checks:
+            if c.detail:
+                parts.append(Text(f"  {m.label}: {c.name}: {c.detail}", style="dim"))
     return [Text("How each value was computed", style="bold"), *parts] if parts else []
 
 
-def check_renderable(summary: dict[str, Any]) -> Group:
-    """The rich renderable of a ``check`` summary.
+def check_renderable(summary: CheckSummary | Mapping[str, Any]) -> Group:
+    """The rich renderable of a ``check`` summary (a record, or its JSON read back).
 
     The verdict first, then the design values at each measure against the
     product's figures, then the run (how the paths ended, the stations, the
     protected zone), then "How sure" and how each value was computed.
     """
-    opening = _opening(summary)
+    summary = check_of(summary)
+    opening = _opening(summary.verdict)
     parts: list[Any] = [*opening, Text("")] if opening else []
-    parts += [Text(f"Design values (safety concept: {summary['safety_concept']})",
+    parts += [Text(f"Design values (safety concept: {summary.safety_concept})",
                    style="bold underline"), Text("")]
     parts += _design_value_tables(summary)
     parts += list(simulation_renderable(summary).renderables)
-    if not summary.get("verdict"):  # a summary from before verdicts: the point values' word
-        parts += [Text(""), Text("Design holds on the point values." if summary["ok"]
+    if summary.verdict is None:  # a summary from before verdicts: the point values' word
+        parts += [Text(""), Text("Design holds on the point values." if summary.ok
                                  else "Design fails:", style="bold")]
-        for line in summary.get("failures", []):
+        for line in summary.failures:
             parts.append(Text(f"  - {line}", style="red"))
     parts += [Text(""), _how_sure_renderable(summary), Text(""), *_details(summary)]
     return Group(*parts)
 
 
-def print_check(summary: dict[str, Any], console: Console | None = None) -> None:
+def print_check(summary: CheckSummary | Mapping[str, Any],
+                console: Console | None = None) -> None:
     panel = Panel(check_renderable(summary), title="rockfall-design check")
     (console or fitted_console(panel)).print(panel)
 
@@ -385,8 +378,8 @@ def _bare_slope_line(result: Any) -> list[Any]:
 
 
 def print_optimise(result: Any, project: Any, console: Console | None = None,
-                   summary: dict[str, Any] | None = None,
-                   design: dict[str, Any] | None = None) -> None:
+                   summary: Mapping[str, Any] | None = None,
+                   design: CheckSummary | Mapping[str, Any] | None = None) -> None:
     """The optimiser's report: the engineer's words first, the proof after.
 
     The verdict; the chosen design, its design values at each measure
@@ -397,7 +390,10 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
     optimiser's proof and the cheaper designs left marginal or undecided.
     """
     cur = escape(result.currency or "")
-    opening = _opening(summary or {})
+    verdict = (summary or {}).get("verdict")
+    opening = _opening(None if not verdict else DesignVerdict.from_json(verdict))
+    bill = (summary or {}).get("bill")
+    design = None if design is None else check_of(design)
     parts: list[Any] = [*opening, Text("")] if opening else []
     if result.best is not None:
         b = result.best
@@ -408,10 +404,10 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
                               + "; ".join(b.fresh_failures), style="bold yellow"))
         parts.append(Text(""))
         if design is not None:
-            parts += [Text(f"Design values (safety concept: {design['safety_concept']})",
+            parts += [Text(f"Design values (safety concept: {design.safety_concept})",
                            style="bold underline"), Text(""), *_design_value_tables(design)]
-        if (summary or {}).get("bill"):
-            parts += [_bill_table(summary["bill"]), Text("")]
+        if bill:
+            parts += [_bill_table(Bill.from_json(bill)), Text("")]
     else:
         parts += [Text(f"No admissible design: {result.reason}", style="bold red"), Text("")]
     parts += _bare_slope_line(result)

@@ -36,7 +36,14 @@ from .releases import (
     section_from_project,
 )
 from .streamed import REST_SAMPLE, STOP_BUCKETS, STREAM_REL_ERROR, StreamedStudy
-from .summary import STATION_QUANTITIES, STATISTICS, percentile_label, run_summary, stat_block
+from .summary import (
+    STATION_QUANTITIES,
+    STATISTICS,
+    RunSummary,
+    percentile_label,
+    run_record,
+    stat_block,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -268,7 +275,11 @@ class Study:
 
     # ---- the JSON summary ----------------------------------------------------
     def summary(self) -> dict[str, Any]:
-        """The run's summary as a JSON-ready dict (see the README for the keys)."""
+        """The run's summary as a JSON-ready dict: :meth:`run_summary`'s ``to_json()``."""
+        return self.run_summary().to_json()
+
+    def run_summary(self) -> RunSummary:
+        """The run's summary as an object (see the README for the keys of its JSON)."""
         r = self.result
         a = self.crossing_arrays()
         blocks = {
@@ -279,7 +290,7 @@ class Study:
         stop_block = stat_block(r.x_end[r.status == STOPPED])
         protect = self.project.protect
         reaching = None if protect is None else protected_zone_counts(r.max_x, r.status, protect.x)
-        return run_summary(self, r.events_total, crossings, blocks, stop_block, reaching)
+        return run_record(self, r.events_total, crossings, blocks, stop_block, reaching)
 
 
 def run_study(

@@ -11,7 +11,13 @@ from ..engine.columns import STATUS_NAMES, STOPPED
 from ..engine.trajectory import centre_points, end_counts
 from .histograms import LinearHistogram, LogHistogram
 from .reach import protected_zone_counts
-from .summary import STATION_QUANTITIES, histogram_blocks, percentile_label, run_summary
+from .summary import (
+    STATION_QUANTITIES,
+    RunSummary,
+    histogram_blocks,
+    percentile_label,
+    run_record,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -163,9 +169,13 @@ class StreamedStudy:
 
     def summary(self) -> dict[str, Any]:
         """As :meth:`Study.summary`, from the histograms."""
+        return self.run_summary().to_json()
+
+    def run_summary(self) -> RunSummary:
+        """As :meth:`Study.run_summary`, from the histograms."""
         blocks = {key: histogram_blocks(h) for key, h in self._station.items()}
         crossings = self._station["passing_height_m"].n
         stop_block = histogram_blocks(self._stops)[0]
         reaching = (None if self.project.protect is None
                     else (self.reaching, self.reaching_unresolved))
-        return run_summary(self, self.events, crossings, blocks, stop_block, reaching)
+        return run_record(self, self.events, crossings, blocks, stop_block, reaching)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -49,6 +51,379 @@ STATION_QUANTITIES: dict[str, tuple[str, float]] = {
 }
 
 
+# ---- the summary as typed objects ----------------------------------------------
+# A run's summary travels through the judge and the report as these objects;
+# ``to_json()`` gives the dict of ``simulate --json`` and summary.json (key for
+# key, in the same order: benchmarks/golden.py hashes it) and ``from_json``
+# reads such a dict back (a report of a saved run).
+
+
+@dataclass(frozen=True)
+class StatBlock:
+    """The statistics of one quantity over the rocks that have it.
+
+    Attributes
+    ----------
+    mean, p50, p95, p99, max : float or None
+        In the quantity's unit (m, m/s, kJ, rad/s as its key says); None
+        where no rock has a value. A stop block (``stops.x``) has no p99.
+    """
+
+    mean: float | None
+    p50: float | None
+    p95: float | None
+    p99: float | None
+    max: float | None
+
+    def at(self, statistic: str) -> float | None:
+        """The value of one of :data:`STATISTICS` by name."""
+        return getattr(self, statistic)
+
+    def to_json(self, statistics: tuple[str, ...] = STATISTICS) -> dict[str, float | None]:
+        """``{"mean": ..., "p50": ..., ...}`` for ``statistics`` (default all five)."""
+        return {k: getattr(self, k) for k in statistics}
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> StatBlock:
+        """From :meth:`to_json` (a missing statistic is None)."""
+        return cls(*(d.get(k) for k in STATISTICS))
+
+
+#: The statistics of the stop positions in a summary (``stops.x``).
+STOP_STATISTICS = ("mean", "p50", "p95", "max")
+
+
+@dataclass(frozen=True)
+class StopsSummary:
+    """How the paths ended: counts per end state and where the rocks at rest lie.
+
+    Attributes
+    ----------
+    x : StatBlock
+        Stop positions x of the rocks at rest (m); no p99.
+    stopped, exit_downslope, exit_upslope, unresolved, caught : int
+        Rocks per end state (unresolved: reached the event limit).
+    """
+
+    x: StatBlock
+    stopped: int
+    exit_downslope: int
+    exit_upslope: int
+    unresolved: int
+    caught: int
+
+    @property
+    def out_of_section(self) -> int:
+        """Rocks that left the section at either end."""
+        return self.exit_downslope + self.exit_upslope
+
+    def count(self, end: str) -> int:
+        """Rocks of the end state ``end`` (a field name)."""
+        return int(getattr(self, end))
+
+    def to_json(self) -> dict[str, Any]:
+        return {"x": self.x.to_json(STOP_STATISTICS), "stopped": self.stopped,
+                "out_of_section": self.out_of_section, "exit_downslope": self.exit_downslope,
+                "exit_upslope": self.exit_upslope, "unresolved": self.unresolved,
+                "caught": self.caught}
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> StopsSummary:
+        return cls(StatBlock.from_json(d.get("x") or {}), int(d.get("stopped", 0)),
+                   int(d.get("exit_downslope", 0)), int(d.get("exit_upslope", 0)),
+                   int(d.get("unresolved", 0)), int(d.get("caught", 0)))
+
+
+@dataclass(frozen=True)
+class StationSummary:
+    """The rocks passing one analysis station downslope for the first time.
+
+    Attributes
+    ----------
+    x : float
+        The station (m).
+    crossings : int
+        Rocks that passed it.
+    blocks : mapping of str to StatBlock
+        A block per key of :data:`STATION_QUANTITIES` (``passing_height_m``,
+        ``velocity_ms``, ``energy_kj``, ...), in the unit its key names.
+    """
+
+    x: float
+    crossings: int
+    blocks: Mapping[str, StatBlock]
+
+    @property
+    def passing_height_m(self) -> StatBlock:
+        """Passing height of the rock centre above the ground (m)."""
+        return self.blocks["passing_height_m"]
+
+    @property
+    def velocity_ms(self) -> StatBlock:
+        """Speed (m/s)."""
+        return self.blocks["velocity_ms"]
+
+    @property
+    def energy_kj(self) -> StatBlock:
+        """Total kinetic energy (kJ)."""
+        return self.blocks["energy_kj"]
+
+    def to_json(self) -> dict[str, Any]:
+        return {"x": self.x, "crossings": self.crossings,
+                **{key: block.to_json() for key, block in self.blocks.items()}}
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> StationSummary:
+        return cls(float(d.get("x", 0.0)), int(d.get("crossings", 0)),
+                   {k: StatBlock.from_json(v) for k, v in d.items() if isinstance(v, Mapping)})
+
+
+@dataclass(frozen=True)
+class Share:
+    """A share of the rocks with its two-sided Clopper-Pearson interval (-)."""
+
+    fraction: float
+    lower: float
+    upper: float
+
+    def to_json(self) -> dict[str, float]:
+        return {"fraction": self.fraction, "lower": self.lower, "upper": self.upper}
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> Share:
+        return cls(float(d.get("fraction", 0.0)), float(d.get("lower", 0.0)),
+                   float(d.get("upper", 1.0)))
+
+
+@dataclass(frozen=True)
+class ForestSummary:
+    """Rocks that met a stem of the forest and rocks a stem stopped, with their shares.
+
+    Attributes
+    ----------
+    confidence : float
+        Two-sided confidence of the shares' intervals (-).
+    met_stems, stopped : int
+        Rocks that met at least one stem; rocks a stem stopped.
+    met_stems_share, stopped_share : Share
+        The same as shares of all rocks, with their intervals.
+    """
+
+    confidence: float
+    met_stems: int
+    met_stems_share: Share
+    stopped: int
+    stopped_share: Share
+
+    def to_json(self) -> dict[str, Any]:
+        return {"confidence": self.confidence,
+                "met_stems": self.met_stems, "met_stems_share": self.met_stems_share.to_json(),
+                "stopped": self.stopped, "stopped_share": self.stopped_share.to_json()}
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> ForestSummary:
+        return cls(float(d.get("confidence", FOREST_CONFIDENCE)), int(d.get("met_stems", 0)),
+                   Share.from_json(d.get("met_stems_share") or {}), int(d.get("stopped", 0)),
+                   Share.from_json(d.get("stopped_share") or {}))
+
+
+@dataclass(frozen=True)
+class ReachSummary:
+    """The rocks reaching the protected zone (``protect.x``) in a run.
+
+    Attributes
+    ----------
+    x : float
+        Where the zone begins (m).
+    reaching : int
+        Rocks counted as reaching it (unresolved paths included, on the safe side).
+    fraction : float
+        ``reaching`` over the rocks of the run (-).
+    unresolved : int
+        Of ``reaching``, the paths that reached the event limit.
+    """
+
+    x: float
+    reaching: int
+    fraction: float
+    unresolved: int
+
+    def to_json(self) -> dict[str, Any]:
+        return {"x": self.x, "reaching": self.reaching, "fraction": self.fraction,
+                "unresolved": self.unresolved}
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> ReachSummary:
+        return cls(float(d.get("x", 0.0)), int(d.get("reaching", 0)),
+                   float(d.get("fraction", 0.0)), int(d.get("unresolved", 0)))
+
+
+@dataclass(frozen=True)
+class RunStatistics:
+    """How a run's statistics were obtained.
+
+    Attributes
+    ----------
+    method : {"exact", "histograms"}
+        Over every rock, or streamed in chunks into histograms.
+    chunk_rocks : int or None
+        Rocks per chunk of a streamed run.
+    relative_error : float or None
+        Relative error of a streamed run's percentiles (-).
+    stop_x_error_m : float or None
+        Error of a streamed run's stop positions (m).
+    """
+
+    method: str
+    chunk_rocks: int | None = None
+    relative_error: float | None = None
+    stop_x_error_m: float | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"method": self.method}
+        for key in ("chunk_rocks", "relative_error", "stop_x_error_m"):
+            if getattr(self, key) is not None:
+                out[key] = getattr(self, key)
+        return out
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any] | None) -> RunStatistics:
+        d = d or {}
+        return cls(str(d.get("method", "")), d.get("chunk_rocks"), d.get("relative_error"),
+                   d.get("stop_x_error_m"))
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """The summary of a run (``simulate --json``, summary.json), as an object.
+
+    Attributes
+    ----------
+    project, version : str
+        The project's name; the program's version.
+    rocks, seed : int
+        Rocks of the run and its seed.
+    size_step : float or None
+        Relative step of the size classes the radii were rounded to (-);
+        None where they were not.
+    project_hash : str
+        sha256 of the resolved project.
+    runtime_s : float
+        Wall time of the engine run (s).
+    events : int
+        Events of every path together.
+    statistics : RunStatistics
+    stops : StopsSummary
+    stations : tuple of StationSummary
+    forest : ForestSummary or None
+        None on a section without a forest.
+    protect : ReachSummary or None
+        None without ``protect:``.
+    """
+
+    project: str
+    version: str
+    rocks: int
+    seed: int
+    size_step: float | None
+    project_hash: str
+    runtime_s: float
+    events: int
+    statistics: RunStatistics
+    stops: StopsSummary
+    stations: tuple[StationSummary, ...]
+    forest: ForestSummary | None = None
+    protect: ReachSummary | None = field(default=None)
+
+    def to_json(self) -> dict[str, Any]:
+        """The dict of ``simulate --json``, key for key."""
+        out: dict[str, Any] = {"project": self.project, "version": self.version,
+                               "rocks": self.rocks, "seed": self.seed}
+        if self.size_step is not None:
+            out["size_step"] = self.size_step
+        out.update({"project_hash": self.project_hash, "runtime_s": self.runtime_s,
+                    "events": self.events, "statistics": self.statistics.to_json(),
+                    "stops": self.stops.to_json(),
+                    "stations": [s.to_json() for s in self.stations]})
+        if self.forest is not None:
+            out["forest"] = self.forest.to_json()
+        if self.protect is not None:
+            out["protect"] = self.protect.to_json()
+        return out
+
+    @classmethod
+    def from_json(cls, d: Mapping[str, Any]) -> RunSummary:
+        """From :meth:`to_json` (or a check's summary, whose run keys are the same)."""
+        forest, protect = d.get("forest"), d.get("protect")
+        return cls(
+            project=str(d.get("project", "")), version=str(d.get("version", "")),
+            rocks=int(d.get("rocks") or 0), seed=int(d.get("seed") or 0),
+            size_step=d.get("size_step"), project_hash=str(d.get("project_hash") or ""),
+            runtime_s=float(d.get("runtime_s") or 0.0), events=int(d.get("events") or 0),
+            statistics=RunStatistics.from_json(d.get("statistics")),
+            stops=StopsSummary.from_json(d.get("stops") or {}),
+            stations=tuple(StationSummary.from_json(s) for s in d.get("stations") or ()),
+            forest=None if forest is None else ForestSummary.from_json(forest),
+            protect=None if protect is None else ReachSummary.from_json(protect),
+        )
+
+
+def run_record(
+    study: Study | StreamedStudy,
+    events: int,
+    crossings: np.ndarray,
+    blocks: dict[str, list[dict[str, float | None]]],
+    stop_block: dict[str, float | None],
+    reaching: tuple[int, int] | None,
+    project_hash: str | None = None,
+) -> RunSummary:
+    """The summary of a run as a :class:`RunSummary`, the same for an exact and a streamed study.
+
+    ``reaching`` is (rocks counted as reaching the protected zone, how many of
+    them are unresolved paths counted so), None without a protected zone.
+    ``project_hash``: the project's :meth:`~rockfall_design.project.Project.resolved_hash`
+    if the caller has it already (it hashes the whole project: a study's
+    scenario computes it once).
+    """
+    counts = study.status_counts()
+    stations = tuple(
+        StationSummary(float(xs), int(crossings[j]),
+                       {key: StatBlock.from_json(blocks[key][j]) for key in STATION_QUANTITIES})
+        for j, xs in enumerate(study.stations))
+    stops = StopsSummary(
+        x=StatBlock.from_json(stop_block),
+        stopped=int(counts[STOPPED]),
+        exit_downslope=int(counts[EXIT_DOWNSLOPE]),
+        exit_upslope=int(counts[EXIT_UPSLOPE]),
+        unresolved=int(counts[UNRESOLVED]),
+        caught=int(counts[CAUGHT]),
+    )
+    forest = study.forest_counts()
+    protect = study.project.protect
+    reach = None
+    if protect is not None:
+        n_reach, n_unresolved = reaching or (0, 0)
+        reach = ReachSummary(float(protect.x), int(n_reach),
+                             n_reach / study.n if study.n else 0.0, int(n_unresolved))
+    return RunSummary(
+        project=study.project.name,
+        version=__version__,
+        rocks=int(study.n),
+        seed=int(study.seed),
+        # The relative step of the size classes the radii were rounded to, where
+        # they were (a survey, sizes that vary: run.releases.size_classes).
+        size_step=study.project.size_step if study.project.size_step > 0 else None,
+        project_hash=project_hash or study.project.resolved_hash(),
+        runtime_s=round(float(study.runtime_s), 6),
+        events=int(events),
+        statistics=RunStatistics.from_json(study.statistics),
+        stops=stops,
+        stations=stations,
+        forest=None if forest is None else forest_record(*forest, int(study.n)),
+        protect=reach,
+    )
+
+
 def run_summary(
     study: Study | StreamedStudy,
     events: int,
@@ -58,63 +433,16 @@ def run_summary(
     reaching: tuple[int, int] | None,
     project_hash: str | None = None,
 ) -> dict[str, Any]:
-    """The summary dict, the same for an exact and a streamed study.
-
-    ``reaching`` is (rocks counted as reaching the protected zone, how many of
-    them are unresolved paths counted so), None without a protected zone.
-    ``project_hash``: the project's :meth:`~rockfall_design.project.Project.resolved_hash`
-    if the caller has it already (it hashes the whole project: a study's
-    scenario computes it once).
-    """
-    counts = study.status_counts()
-    stations = []
-    for j, xs in enumerate(study.stations):
-        st: dict[str, Any] = {"x": float(xs), "crossings": int(crossings[j])}
-        st.update({key: blocks[key][j] for key in STATION_QUANTITIES})
-        stations.append(st)
-    out: dict[str, Any] = {
-        "project": study.project.name,
-        "version": __version__,
-        "rocks": int(study.n),
-        "seed": int(study.seed),
-        # The relative step of the size classes the radii were rounded to, where
-        # they were (a survey, sizes that vary: run.releases.size_classes).
-        **({"size_step": study.project.size_step} if study.project.size_step > 0 else {}),
-        "project_hash": project_hash or study.project.resolved_hash(),
-        "runtime_s": round(float(study.runtime_s), 6),
-        "events": int(events),
-        "statistics": dict(study.statistics),
-        "stops": {
-            "x": {k: stop_block[k] for k in ("mean", "p50", "p95", "max")},
-            "stopped": int(counts[STOPPED]),
-            "out_of_section": int(counts[EXIT_DOWNSLOPE] + counts[EXIT_UPSLOPE]),
-            "exit_downslope": int(counts[EXIT_DOWNSLOPE]),
-            "exit_upslope": int(counts[EXIT_UPSLOPE]),
-            "unresolved": int(counts[UNRESOLVED]),
-            "caught": int(counts[CAUGHT]),
-        },
-        "stations": stations,
-    }
-    forest = study.forest_counts()
-    if forest is not None:
-        out["forest"] = forest_block(*forest, int(study.n))
-    protect = study.project.protect
-    if protect is not None:
-        n_reach, n_unresolved = reaching or (0, 0)
-        out["protect"] = {
-            "x": float(protect.x),
-            "reaching": int(n_reach),
-            "fraction": n_reach / study.n if study.n else 0.0,
-            "unresolved": int(n_unresolved),
-        }
-    return out
+    """The summary dict (``simulate --json``): :func:`run_record`'s ``to_json()``."""
+    return run_record(study, events, crossings, blocks, stop_block, reaching,
+                      project_hash).to_json()
 
 
 #: Two-sided confidence of the bounds of the forest's counts in a summary.
 FOREST_CONFIDENCE = 0.95
 
 
-def forest_block(met: int, stopped: int, n: int) -> dict[str, Any]:
+def forest_record(met: int, stopped: int, n: int) -> ForestSummary:
     """The summary's ``forest``: rocks that met a stem, rocks a stem stopped, with bounds.
 
     Each count with its two-sided 95 % Clopper-Pearson interval of the share
@@ -132,14 +460,12 @@ def forest_block(met: int, stopped: int, n: int) -> dict[str, Any]:
 
     tail = (1.0 - FOREST_CONFIDENCE) / 2.0
 
-    def share(x: int) -> dict[str, float]:
+    def share(x: int) -> Share:
         lower = 0.0 if x <= 0 or n <= 0 else float(betaincinv(x, n - x + 1, tail))
         upper = 1.0 if x >= n else float(betaincinv(x + 1, n - x, 1.0 - tail))
-        return {"fraction": x / n if n else 0.0, "lower": lower, "upper": upper}
+        return Share(x / n if n else 0.0, lower, upper)
 
-    return {"confidence": FOREST_CONFIDENCE,
-            "met_stems": int(met), "met_stems_share": share(met),
-            "stopped": int(stopped), "stopped_share": share(stopped)}
+    return ForestSummary(FOREST_CONFIDENCE, int(met), share(met), int(stopped), share(stopped))
 
 
 def percentile_label(q: float) -> str:

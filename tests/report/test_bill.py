@@ -47,19 +47,19 @@ def registry():
 def test_unit_prices_itemised_add_up_to_the_design_cost(registry):
     s = spec(UnitPrices(UnitPricesParams.model_validate(PRICES)))
     bill = design_bill(registry, s, MEASURES, SECTION, "catalogue prices.yaml")
-    assert bill["total"] == pytest.approx(design_cost(registry, s, MEASURES, SECTION))
-    assert sum(it["amount"] for it in bill["items"]) == pytest.approx(bill["total"])
-    fence = [it for it in bill["items"] if it["measure"].startswith("fence")]
-    assert [(it["quantity"], it["count"], it["unit"], it["unit_price"]) for it in fence] == [
+    assert bill.total == pytest.approx(design_cost(registry, s, MEASURES, SECTION))
+    assert sum(it.amount for it in bill.items) == pytest.approx(bill.total)
+    fence = [it for it in bill.items if it.measure.startswith("fence")]
+    assert [(it.quantity, it.count, it.unit, it.unit_price) for it in fence] == [
         ("fixed cost of the measure", 1.0, "each", 10000.0),
         ("fence RX-100 4 m", pytest.approx(120.0), "m", pytest.approx(600.0))]
-    ditch = {it["quantity"]: it for it in bill["items"] if it["measure"].startswith("ditch")}
+    ditch = {it.quantity: it for it in bill.items if it.measure.startswith("ditch")}
     q = MEASURES[1].quantities(SECTION)
-    assert ditch["excavation_m3"]["count"] == pytest.approx(q["excavation_m3_per_m"] * 120)
-    assert ditch["excavation_m3"]["unit_price"] == pytest.approx(25.0)
-    for it in bill["items"]:
-        assert it["amount"] == pytest.approx(it["count"] * it["unit_price"])
-        assert it["source"] == "cost model unit_prices, catalogue prices.yaml"
+    assert ditch["excavation_m3"].count == pytest.approx(q["excavation_m3_per_m"] * 120)
+    assert ditch["excavation_m3"].unit_price == pytest.approx(25.0)
+    for it in bill.items:
+        assert it.amount == pytest.approx(it.count * it.unit_price)
+        assert it.source == "cost model unit_prices, catalogue prices.yaml"
 
 
 class _Flat(CostModel):
@@ -88,7 +88,7 @@ class _Discount(UnitPrices):
 def test_a_model_that_cannot_be_itemised_is_one_lump_sum_per_measure(registry, model):
     s = spec(model)
     bill = design_bill(registry, s, MEASURES, SECTION)
-    assert bill["total"] == pytest.approx(design_cost(registry, s, MEASURES, SECTION))
-    ditch = [it for it in bill["items"] if it["measure"].startswith("ditch")]
-    assert len(ditch) == 1 and ditch[0]["unit"] == "lump sum"
-    assert sum(it["amount"] for it in bill["items"]) == pytest.approx(bill["total"])
+    assert bill.total == pytest.approx(design_cost(registry, s, MEASURES, SECTION))
+    ditch = [it for it in bill.items if it.measure.startswith("ditch")]
+    assert len(ditch) == 1 and ditch[0].unit == "lump sum"
+    assert sum(it.amount for it in bill.items) == pytest.approx(bill.total)
