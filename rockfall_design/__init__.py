@@ -42,7 +42,7 @@ from .version import __version__
 # pytest11 entry point), does not import the engine, numba, scipy and pandas.
 _LAZY: dict[str, str] = {
     **dict.fromkeys(("check", "load_project", "optimise", "simulate", "study", "calibrate",
-                     "compare"), ".api"),
+                     "compare", "run_corridor"), ".api"),
     **dict.fromkeys(("CheckResult", "OptimiseResult", "SimulationResult"), ".results"),
     **dict.fromkeys(("CalibrationResult", "ComparisonResult"), ".calibration.calibrated"),
     "StudyResult": ".studies.study_result",
@@ -53,7 +53,16 @@ _LAZY: dict[str, str] = {
 }
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .api import calibrate, check, compare, load_project, optimise, simulate, study
+    from .api import (
+        calibrate,
+        check,
+        compare,
+        load_project,
+        optimise,
+        run_corridor,
+        simulate,
+        study,
+    )
     from .calibration.calibrated import CalibrationResult, ComparisonResult
     from .judge.bounds import (
         fraction_lower_bound,
@@ -94,6 +103,7 @@ __all__ = [
     "study",
     "calibrate",
     "compare",
+    "run_corridor",
     "SimulationResult",
     "CheckResult",
     "OptimiseResult",

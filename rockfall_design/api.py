@@ -22,6 +22,8 @@ from typing import TYPE_CHECKING, Any
 
 from .arguments import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .errors import InputError
+from .project import Corridor
+from .project import load_corridor as _load_corridor
 from .results import DEFAULT_TRAJECTORIES, CheckResult, OptimiseResult, SimulationResult
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -29,9 +31,10 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from .optimiser.trials import TrialRun
     from .plugins import Registry
-    from .project import Project
+    from .project import CorridorSection, Project
     from .run.simulation import Study
     from .run.streamed import StreamedStudy
+    from .studies.corridor import CorridorSummary, SectionOutcome
 
 __all__ = [
     "load_project",
@@ -41,6 +44,7 @@ __all__ = [
     "study",
     "calibrate",
     "compare",
+    "run_corridor",
     "SimulationResult",
     "CheckResult",
     "OptimiseResult",
@@ -102,13 +106,96 @@ def _project(project: Any, registry: Registry | None = None) -> Project:
     """A Project from a Project or a path (validated with ``registry``)."""
     if isinstance(project, str | os.PathLike):
         return load_project(project, registry=registry)
-    from .project import Corridor
-
     if isinstance(project, Corridor):
         raise InputError("a corridor runs section by section: pass one section's project "
-                         "(corridor.sections[i].project), or use the command line, which "
-                         "runs every section")
+                         "(corridor.sections[i].project), or run_corridor(), which runs "
+                         "every section")
     return project
+
+
+def run_corridor(
+    corridor: Corridor | str | os.PathLike[str],
+    command: str = "check",
+    *,
+    rocks: int | None = None,
+    seed: int | None = None,
+    registry: Registry | None = None,
+) -> tuple[CorridorSummary, list[Any]]:
+    """Run a command over every section of a corridor (``rockfall-design COMMAND CORRIDOR``).
+
+    Each section is an ordinary project, run as :func:`simulate`,
+    :func:`check`, :func:`optimise` or :func:`study` runs a project, in
+    order, each with its own seed derived from the run seed; then the
+    sections are added up
+    (:func:`~rockfall_design.studies.corridor.run_sections`).
+
+    Parameters
+    ----------
+    corridor : Corridor or path
+        From :func:`~rockfall_design.project.load_corridor`, or the path of a
+        corridor file (``sections:``).
+    command : str
+        ``simulate``, ``check`` (default), ``optimise`` or ``study``.
+    rocks : int, optional
+        Rocks of every section (default: each section's ``rocks.count``).
+    seed : int, optional
+        The run seed (default: the corridor's ``rocks.seed``).
+    registry : Registry, optional
+        The plugins (default: the installed ones).
+
+    Returns
+    -------
+    (CorridorSummary, list)
+        The corridor's result (``.to_json()`` is what ``--json`` prints,
+        ``.ok``, ``.totals``, ``.sections``) and each section's own result
+        (:class:`SimulationResult`, :class:`CheckResult`,
+        :class:`OptimiseResult` or :class:`~rockfall_design.StudyResult`).
+        The command line adds its file records to a section's JSON
+        (``optimise``: the design file's name); the numbers are the same.
+
+    Raises
+    ------
+    InputError
+        ``command`` is not one of the four, or the file is a single project.
+    """
+    # Imported here: the corridor's run loads the judge and the engine (numba), which
+    # `import rockfall_design.api` does not.
+    from .studies.corridor import COMMANDS, run_sections
+
+    if command not in COMMANDS:
+        raise InputError(f"a corridor runs {', '.join(COMMANDS)}, not {command!r}")
+    _checked(seed=seed)
+    c = _load_corridor(corridor) if isinstance(corridor, str | os.PathLike) else corridor
+    if not isinstance(c, Corridor):
+        raise InputError(f"{c.source}: not a corridor (no sections:): use {command}()")
+    reg = registry or default_registry()
+    for section in c.sections:
+        validate_project(section.project, reg)
+
+    def one(i: int, section: CorridorSection, section_seed: int) -> SectionOutcome:
+        return _section_outcome(command, section.project, rocks, section_seed, reg)
+
+    summary, done = run_sections(c, command, one, seed=seed)
+    return summary, [d.result for d in done]
+
+
+def _section_outcome(command: str, project: Project, rocks: int | None, seed: int,
+                     registry: Registry) -> SectionOutcome:
+    """One section's run of ``command`` through this API: its JSON, cost and result."""
+    from .studies.corridor import SectionOutcome  # as in run_corridor
+
+    if command == "simulate":
+        result: Any = simulate(project, rocks=rocks, seed=seed, trajectories=0)
+    elif command == "check":
+        result = check(project, rocks=rocks, seed=seed, trajectories=0, registry=registry)
+    elif command == "optimise":
+        result = optimise(project, rocks=rocks, seed=seed, registry=registry)
+        best = result.result.best
+        return SectionOutcome(result.summary, None if best is None else float(best.cost),
+                              result)
+    else:
+        result = study(project, rocks=rocks, seed=seed, registry=registry)
+    return SectionOutcome(result.summary, None, result)
 
 
 def _progress_callback(progress: bool | Callable[..., None], total: int,

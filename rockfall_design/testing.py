@@ -435,6 +435,11 @@ def run_one_rock(
 
 
     result = check(project, rocks=1, seed=seed, registry=reg, trajectories=0)
+    return _rock_run(result, release)
+
+
+def _rock_run(result: Any, release: Mapping[str, Any]) -> RockRun:
+    """The one rock of a ``check`` as a :class:`RockRun`: what each measure did to it."""
     table = result.outcomes
     held_by = int(result.rocks["caught_by_measure"].iloc[0])
     rock = result.rocks.iloc[0]

@@ -21,11 +21,12 @@ from ..report.documents import write_report
 from ..report.terminal import fitted_console
 from ..studies.paths import set_input, with_values
 from .charts import cloud_figure, stops_figure
-from .distances import LevelShare, verdict
+from .distances import FitStatistics, LevelShare, verdict
 from .document import report_context
 from .fit import FitProblem
 from .observations import Observations, observed_file
-from .uncertainty import intervals_flag, rounded
+from .terms import SetStatistics
+from .uncertainty import INTERVAL, FittedParameter, Replicate, intervals_flag, rounded
 
 if TYPE_CHECKING:  # pragma: no cover
     import os
@@ -52,21 +53,21 @@ def _material_key(path: str) -> tuple[str, str] | None:
     return None
 
 
-def _warnings(parameters: list[dict[str, Any]], fit: dict[str, Any],
+def _warnings(parameters: list[FittedParameter], fit: FitStatistics,
               levels: list[LevelShare], rough: str | None = None) -> list[str]:
     """What a reader of the calibration must not miss, one sentence each."""
     out = [rough] if rough else []
     for p in parameters:
-        if p["identified"] is False:
-            out.append(f"{p['path']}: not identified by the observations (its refits spread "
-                       f"over its range, the interval {100 * p['width_share']:.0f} % of it): do "
-                       "not use its value as if it were known")
-        if p["at_bound"]:
-            out.append(f"{p['path']}: the best value lies at the {p['at_bound']} end of its "
+        if p.identified is False:
+            out.append(f"{p.path}: not identified by the observations (its refits spread "
+                       f"over its range, the interval {100 * (p.width_share or 0.0):.0f} % of "
+                       "it): do not use its value as if it were known")
+        if p.at_bound:
+            out.append(f"{p.path}: the best value lies at the {p.at_bound} end of its "
                        "range: widen the range if the physics allows")
-    if fit.get("beyond_section", 0.0) > 0.05:
-        out.append(f"{100 * fit['beyond_section']:.0f} % of the simulated rocks leave the "
-                   "section at its lower end, where no block was observed")
+    if (fit.beyond_section or 0.0) > 0.05:
+        out.append(f"{100 * (fit.beyond_section or 0.0):.0f} % of the simulated rocks leave "
+                   "the section at its lower end, where no block was observed")
     for share in levels:
         if not share.consistent:
             out.append(f"level {share.name}: the simulated share {share.simulated_share:.2f} is "
@@ -81,7 +82,7 @@ class ComparisonResult:
 
     project: Project
     observations: Observations
-    fit: dict[str, Any]
+    fit: FitStatistics
     levels: list[LevelShare]
     simulated: np.ndarray
     seed: int
@@ -89,7 +90,7 @@ class ComparisonResult:
     sizes: dict[str, Any] | None = None
     #: Each observation set's statistics (:func:`~.terms.set_statistics`), when
     #: the project's observation sets were compared (compare without --observed).
-    sets: list[dict[str, Any]] = field(default_factory=list)
+    sets: list[SetStatistics] = field(default_factory=list)
 
     @property
     def summary(self) -> dict[str, Any]:
@@ -101,23 +102,28 @@ class ComparisonResult:
             "project": self.project.name,
             "observations": {"file": self.observations.source, "count": self.observations.n,
                              "sizes": self.sizes},
-            "fit": self.fit,
+            "fit": self.fit.to_json(),
             "levels": [s.as_dict() for s in self.levels],
             "seed": self.seed,
             "rocks": self.rocks,
             "verdict": self.verdict_line,
             "consistent": self.consistent,
-            "warnings": _warnings([], self.fit, self.levels) + _set_warnings(self.sets),
+            "warnings": self.warnings,
         }
         if self.sets:
-            out["sets"] = self.sets
+            out["sets"] = [s.to_json() for s in self.sets]
         return out
+
+    @property
+    def warnings(self) -> list[str]:
+        """What a reader of the comparison must not miss, one sentence each."""
+        return _warnings([], self.fit, self.levels) + _set_warnings(self.sets)
 
     @property
     def consistent(self) -> bool:
         """Whether the prediction is consistent with every observation compared."""
         if self.sets:
-            return all(s["consistent"] for s in self.sets)
+            return all(s.consistent for s in self.sets)
         return verdict(self.fit, self.levels)[0]
 
     @property
@@ -125,7 +131,7 @@ class ComparisonResult:
         """Whether the prediction is consistent with the observations, naming the test."""
         if not self.sets:
             return verdict(self.fit, self.levels)[1]
-        bad = [s["label"] for s in self.sets if not s["consistent"]]
+        bad = [s.label for s in self.sets if not s.consistent]
         if not bad:
             return (f"consistent with every one of the {len(self.sets)} observation sets "
                     "(two-sample Kolmogorov-Smirnov tests at 5 % and the levels' shares, "
@@ -157,7 +163,7 @@ class ComparisonResult:
         _print_sets(self.sets, console)
         colour = "green" if self.consistent else "red"
         console.print(f"[{colour}]verdict:[/{colour}] {escape(self.verdict_line)}")
-        for w in self.summary["warnings"]:
+        for w in self.warnings:
             console.print(f"[yellow]warning:[/yellow] {escape(w)}")
 
 
@@ -167,16 +173,14 @@ class CalibrationResult:
 
     Attributes
     ----------
-    parameters : list of dict
-        Per fitted input (:func:`~.uncertainty.summarise`): ``path``,
-        ``value``, ``low``, ``high``, ``sd``, ``range``, ``width_share``,
-        ``identified``, ``at_bound``.
+    parameters : list of FittedParameter
+        Per fitted input (:func:`~.uncertainty.summarise`).
     correlation : ndarray or None
         The parameters' correlation over the bootstrap replicates.
-    fit : dict
+    fit : FitStatistics
         :func:`~.distances.fit_statistics` at the best fit.
     levels : list of LevelShare
-    replicates : list of dict
+    replicates : list of Replicate
         Replicate 0 (the fit) and the bootstrap replicates.
     simulated : ndarray
         The simulated stops at the best fit (m).
@@ -185,10 +189,10 @@ class CalibrationResult:
     project: Project
     problem: FitProblem
     observations: Observations
-    parameters: list[dict[str, Any]]
+    parameters: list[FittedParameter]
     correlation: np.ndarray | None
-    replicates: list[dict[str, Any]]
-    fit: dict[str, Any]
+    replicates: list[Replicate]
+    fit: FitStatistics
     levels: list[LevelShare]
     simulated: np.ndarray
     seed: int
@@ -197,19 +201,35 @@ class CalibrationResult:
     runtime_s: float = 0.0
     #: Each observation set's statistics at the best fit (:func:`~.terms.set_statistics`);
     #: empty for the single-file form.
-    sets: list[dict[str, Any]] = field(default_factory=list)
+    sets: list[SetStatistics] = field(default_factory=list)
     _figures: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
     def values(self) -> dict[str, float]:
         """Path -> best value."""
-        return {p["path"]: p["value"] for p in self.parameters}
+        return {p.path: p.value for p in self.parameters}
 
     @property
     def bootstrap(self) -> np.ndarray:
         """(B, d) refitted values of the bootstrap replicates, in the order of the paths."""
-        return np.array([[r["values"][p] for p in self.problem.paths]
+        return np.array([[r.values[p] for p in self.problem.paths]
                          for r in self.replicates[1:]]).reshape(-1, len(self.problem.paths))
+
+    @property
+    def bootstrap_replicates(self) -> int:
+        """Bootstrap replicates B (replicate 0, the fit, not counted)."""
+        return len(self.replicates) - 1
+
+    @property
+    def evaluations(self) -> int:
+        """Evaluations of the distance over every replicate."""
+        return int(sum(r.evaluations for r in self.replicates))
+
+    @property
+    def warnings(self) -> list[str]:
+        """What a reader of the calibration must not miss, one sentence each."""
+        return (_warnings(self.parameters, self.fit, self.levels, self.rough)
+                + _set_warnings(self.sets))
 
     @property
     def summary(self) -> dict[str, Any]:
@@ -220,45 +240,42 @@ class CalibrationResult:
                     "matrix": [[float(v) for v in row] for row in self.correlation]}
         return {
             "project": self.project.name,
-            "parameters": self.parameters,
+            "parameters": [p.to_json() for p in self.parameters],
             "correlation": corr,
-            "fit": self.fit,
+            "fit": self.fit.to_json(),
             "levels": [s.as_dict() for s in self.levels],
             "observations": {"file": self.observations.source, "count": self.observations.n,
                              "sizes": self.sizes},
             "method": {"distance": self.problem.kind, "rocks": self.problem.rocks,
-                       "bootstrap": len(self.replicates) - 1, "confidence": self.confidence,
-                       "interval": "expanded percentile bootstrap (Hesterberg 2015), each "
-                       "replicate refitted with its own "
-                       "simulation seed", "rough_intervals": self.rough, "seed": self.seed,
-                       "evaluations": int(sum(r["evaluations"] for r in self.replicates))},
-            "warnings": _warnings(self.parameters, self.fit, self.levels, self.rough)
-            + _set_warnings(self.sets),
-            **({"sets": self.sets, "profiles": {o.name: o.project.source
-                                                for o in self.problem.others}}
+                       "bootstrap": self.bootstrap_replicates, "confidence": self.confidence,
+                       "interval": INTERVAL, "rough_intervals": self.rough, "seed": self.seed,
+                       "evaluations": self.evaluations},
+            "warnings": self.warnings,
+            **({"sets": [s.to_json() for s in self.sets],
+                "profiles": {o.name: o.project.source for o in self.problem.others}}
                if self.sets else {}),
         }
 
     @property
     def rough(self) -> str | None:
         """Why the intervals are not of the stated confidence (too few replicates), or None."""
-        return intervals_flag(len(self.replicates) - 1, self.confidence)
+        return intervals_flag(self.bootstrap_replicates, self.confidence)
 
     def parameters_table(self) -> pd.DataFrame:
         """One row per fitted input (``parameters.csv``)."""
         import pandas as pd
 
         rows = [{k: (v if not isinstance(v, list) else f"{v[0]:g}..{v[1]:g}")
-                 for k, v in p.items()} for p in self.parameters]
+                 for k, v in p.to_json().items()} for p in self.parameters]
         return pd.DataFrame(rows)
 
     def replicates_table(self) -> pd.DataFrame:
         """One row per replicate (``replicates.csv``): index, seed, objective, values."""
         import pandas as pd
 
-        return pd.DataFrame([{"replicate": r["index"], "seed": r["seed"],
-                              "objective": r["objective"], "evaluations": r["evaluations"],
-                              **r["values"]} for r in self.replicates])
+        return pd.DataFrame([{"replicate": r.index, "seed": r.seed,
+                              "objective": r.objective, "evaluations": r.evaluations,
+                              **r.values} for r in self.replicates])
 
     def calibrated_data(self, relative_to: str | None = None, spread: bool = True
                         ) -> dict[str, Any]:
@@ -292,12 +309,12 @@ class CalibrationResult:
         data = copy.deepcopy(self.problem.base)
         for p in self.parameters:
             # To its interval's precision: the digits beyond are noise.
-            set_input(data, p["path"], rounded(p)["value"])
-            key = _material_key(p["path"])
-            if spread and key is not None and p["sd"] is not None:
+            set_input(data, p.path, rounded(p).value)
+            key = _material_key(p.path)
+            if spread and key is not None and p.sd is not None:
                 scatter = data["materials"][key[0]].setdefault("scatter", {})
                 old = float(scatter.get(key[1]) or 0.0)
-                scatter[key[1]] = float(f"{math.hypot(old, p['sd']):.2g}")
+                scatter[key[1]] = float(f"{math.hypot(old, p.sd):.2g}")
         spec = self.project.resolved_dict().get("calibrate")
         if spec is not None:
             fitted = self.observations.path or observed_file(self.project)
@@ -375,18 +392,17 @@ class CalibrationResult:
         day = when or dt.datetime.now(dt.UTC).strftime("%Y-%m-%d")
         fitted: dict[str, list[str]] = {}
         for p in self.parameters:
-            key = p["path"].split(".")
+            key = p.path.split(".")
             if len(key) != 3 or key[0] != "materials":
                 continue  # not a material's parameter (e.g. the release height)
-            key = key[1:]
+            _, material, name = key
             r = rounded(p)
-            interval = "" if r["low"] is None else f" [{r['low']:g}, {r['high']:g}]"
-            flag = " NOT IDENTIFIED" if p["identified"] is False else ""
-            fitted.setdefault(key[0], []).append(f"{key[1]} {r['value']:g}{interval}{flag}")
+            interval = "" if r.low is None else f" [{r.low:g}, {r.high:g}]"
+            flag = " NOT IDENTIFIED" if p.identified is False else ""
+            fitted.setdefault(material, []).append(f"{name} {r.value:g}{interval}{flag}")
         observed = f"{self.observations.source} ({self.observations.n} blocks)"
         if self.sets:  # every set fitted, each with where it was observed
-            observed = "; ".join(f"{x['label']} from {x['source']} ({x['count']})"
-                                 for x in self.sets)
+            observed = "; ".join(f"{x.label} from {x.source} ({x.count})" for x in self.sets)
         parts = []
         for name, entry in self.materials_library(spread=spread).items():
             if name in fitted:
@@ -423,7 +439,7 @@ class CalibrationResult:
         from rich.table import Table
 
 
-        replicates = len(self.replicates) - 1
+        replicates = self.bootstrap_replicates
         kind = ("ROUGH intervals, not " if self.rough else "") + f"{100 * self.confidence:g} %"
         t = Table(title=f"fitted inputs ({kind}, {replicates} bootstrap replicates)")
         for col in ("input", "value", "low", "high", "range", "identified"):
@@ -432,9 +448,9 @@ class CalibrationResult:
             def num(v: Any) -> str:
                 return "-" if v is None else f"{v:g}"
             r = rounded(p)
-            ident = {True: "yes", False: "[red]NO[/red]", None: "-"}[p["identified"]]
-            t.add_row(escape(p["path"]), num(r["value"]), num(r["low"]), num(r["high"]),
-                      f"{p['range'][0]:g}..{p['range'][1]:g}", ident)
+            ident = {True: "yes", False: "[red]NO[/red]", None: "-"}[p.identified]
+            t.add_row(escape(p.path), num(r.value), num(r.low), num(r.high),
+                      f"{p.range[0]:g}..{p.range[1]:g}", ident)
         console = console or fitted_console(t)
         console.print(t)
         if self.correlation is not None:
@@ -450,16 +466,32 @@ class CalibrationResult:
                    f"{self.observations.n} observed blocks, {self.problem.rocks:,} rocks per "
                    f"evaluation, seed {self.seed}, {self.runtime_s:.1f} s")
         _print_sets(self.sets, console)
-        for w in self.summary["warnings"]:
+        for w in self.warnings:
             console.print(f"[yellow]warning:[/yellow] {escape(w)}")
 
 
-def _set_warnings(sets: list[dict[str, Any]]) -> list[str]:
+def _set_warnings(sets: list[SetStatistics]) -> list[str]:
     """Each observation set the simulation does not reproduce, one sentence each."""
-    return [f"{s['label']}: {s['verdict']}" for s in sets if not s["consistent"]]
+    return [f"{s.label}: {s.verdict}" for s in sets if not s.consistent]
 
 
-def _print_sets(sets: list[dict[str, Any]], console: Console) -> None:
+def _level_rows(title: str, levels: list[LevelShare], console: Console) -> None:
+    """A table of levels: each one's observed share, its interval, the simulated share."""
+    from rich.markup import escape
+    from rich.table import Table
+
+    lt = Table(title=title)
+    for col in ("level", "x (m)", "observed", "interval", "simulated", ""):
+        lt.add_column(col, justify="left" if col in ("level", "") else "right")
+    for s in levels:
+        lt.add_row(escape(s.name), f"{s.x[0]:g}..{s.x[1]:g}",
+                   f"{s.observed_share:.2f} ({s.observed_count})",
+                   f"{s.low:.2f}..{s.high:.2f}", f"{s.simulated_share:.2f}",
+                   "" if s.consistent else "[red]outside[/red]")
+    console.print(lt)
+
+
+def _print_sets(sets: list[SetStatistics], console: Console) -> None:
     """One row per observation set: counts, medians, distance, KS p; a profile's levels."""
     from rich.markup import escape
     from rich.table import Table
@@ -471,30 +503,22 @@ def _print_sets(sets: list[dict[str, Any]], console: Console) -> None:
                 "distance", "KS p", "passed", ""):
         t.add_column(col, justify="left" if col in ("set", "source", "") else "right")
     for s in sets:
-        f = s["fit"]
-        unit = "m/s" if s["kind"] == "speeds" else "m"
+        f = s.fit
+        unit = "m/s" if s.kind == "speeds" else "m"
         row = ["-", "none passed", "-", "-"] if f is None else [
-            f"{f['observed']['p50_m']:.2f} {unit}", f"{f['simulated']['p50_m']:.2f} {unit}",
-            f"{f['distance']:.2f} {unit}", f"{f['ks_pvalue']:.2g}"]
-        passed = s.get("passed_share")
-        t.add_row(escape(s["label"]), escape(str(s["source"])), f"{s['weight']:g}",
-                  f"{s['count']:,}", *row, "-" if passed is None else f"{100 * passed:.0f} %",
-                  "" if s["consistent"] else "[red]NOT[/red]")
+            f"{f.observed.p50_m:.2f} {unit}", f"{f.simulated.p50_m:.2f} {unit}",
+            f"{f.distance:.2f} {unit}", f"{f.ks_pvalue:.2g}"]
+        passed = s.passed_share
+        t.add_row(escape(s.label), escape(str(s.source)), f"{s.weight:g}",
+                  f"{s.count:,}", *row, "-" if passed is None else f"{100 * passed:.0f} %",
+                  "" if s.consistent else "[red]NOT[/red]")
     console.print(t)
     for s in sets:
-        if s["profile"] and s["levels"]:  # the project's own levels are printed above
-            lt = Table(title=f"levels of {escape(s['label'])}: share of the stops")
-            for col in ("level", "x (m)", "observed", "interval", "simulated", ""):
-                lt.add_column(col, justify="left" if col in ("level", "") else "right")
-            for lv in s["levels"]:
-                lt.add_row(escape(lv["name"]), f"{lv['x'][0]:g}..{lv['x'][1]:g}",
-                           f"{lv['observed_share']:.2f} ({lv['observed_count']})",
-                           f"{lv['low']:.2f}..{lv['high']:.2f}", f"{lv['simulated_share']:.2f}",
-                           "" if lv["consistent"] else "[red]outside[/red]")
-            console.print(lt)
+        if s.profile and s.levels:  # the project's own levels are printed above
+            _level_rows(f"levels of {escape(s.label)}: share of the stops", s.levels, console)
 
 
-def _print_fit(name: str, fit: dict[str, Any], levels: list[LevelShare],
+def _print_fit(name: str, fit: FitStatistics, levels: list[LevelShare],
                console: Console | None, head: str) -> Console:
     """The fit statistics and the level shares (shared by calibrate and compare); the console."""
     from rich.markup import escape
@@ -504,23 +528,12 @@ def _print_fit(name: str, fit: dict[str, Any], levels: list[LevelShare],
     t = Table(title=f"{escape(name)}: observed and simulated stops ({head})")
     for col in ("", "count", "mean", "p5", "p25", "p50", "p75", "p95"):
         t.add_column(col, justify="left" if not col else "right")
-    for label in ("observed", "simulated"):
-        d = fit[label]
-        t.add_row(label, f"{d['count']:,}", *(f"{d[k]:.1f}" for k in
-                                             ("mean_m", "p5_m", "p25_m", "p50_m", "p75_m",
-                                              "p95_m")))
+    for label, d in (("observed", fit.observed), ("simulated", fit.simulated)):
+        t.add_row(label, f"{d.count:,}", *(f"{v:.1f}" for v in d.row))
     console = console or fitted_console(t)
     console.print(t)
-    console.print(f"{fit['distance_kind']} distance {fit['distance']:.2f} m; Kolmogorov-Smirnov "
-                  f"D = {fit['ks_statistic']:.3f}, p = {fit['ks_pvalue']:.3g}")
+    console.print(f"{fit.distance_kind} distance {fit.distance:.2f} m; Kolmogorov-Smirnov "
+                  f"D = {fit.ks_statistic:.3f}, p = {fit.ks_pvalue:.3g}")
     if levels:
-        lt = Table(title="levels: share of the stops")
-        for col in ("level", "x (m)", "observed", "interval", "simulated", ""):
-            lt.add_column(col, justify="left" if col in ("level", "") else "right")
-        for s in levels:
-            lt.add_row(escape(s.name), f"{s.x[0]:g}..{s.x[1]:g}",
-                       f"{s.observed_share:.2f} ({s.observed_count})",
-                       f"{s.low:.2f}..{s.high:.2f}", f"{s.simulated_share:.2f}",
-                       "" if s.consistent else "[red]outside[/red]")
-        console.print(lt)
+        _level_rows("levels: share of the stops", levels, console)
     return console

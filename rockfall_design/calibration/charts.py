@@ -11,12 +11,12 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from ..report.figures import RockfallFigure
+from .uncertainty import FittedParameter
 
 __all__ = ["CAPTIONS", "cloud_figure", "stops_figure"]
 
@@ -68,7 +68,7 @@ def stops_figure(observed: np.ndarray, simulated: np.ndarray,
 
 
 def cloud_figure(paths: Sequence[str], replicates: np.ndarray,
-                 parameters: Sequence[Mapping[str, Any]]) -> Figure:
+                 parameters: Sequence[FittedParameter]) -> Figure:
     """The bootstrap replicates of the fitted parameters, each pair and each alone.
 
     Parameters
@@ -93,20 +93,20 @@ def cloud_figure(paths: Sequence[str], replicates: np.ndarray,
             pi, pj = parameters[i], parameters[j]
             if i == j:
                 if len(replicates):
-                    ax.hist(replicates[:, i], bins=15, range=tuple(pi["range"]), color=_SIM,
+                    ax.hist(replicates[:, i], bins=15, range=tuple(pi.range), color=_SIM,
                             alpha=0.6)
-                ax.axvline(pi["value"], color="k")
-                for end in (pi["low"], pi["high"]):
+                ax.axvline(pi.value, color="k")
+                for end in (pi.low, pi.high):
                     if end is not None:
                         ax.axvline(end, color="k", linestyle="--", linewidth=0.8)
-                ax.set_xlim(*pi["range"])
+                ax.set_xlim(*pi.range)
                 ax.set_yticks([])
             else:
                 if len(replicates):
                     ax.scatter(replicates[:, j], replicates[:, i], s=8, color=_SIM, alpha=0.6)
-                ax.plot([pj["value"]], [pi["value"]], marker="*", color="k", markersize=10)
-                ax.set_xlim(*pj["range"])
-                ax.set_ylim(*pi["range"])
+                ax.plot([pj.value], [pi.value], marker="*", color="k", markersize=10)
+                ax.set_xlim(*pj.range)
+                ax.set_ylim(*pi.range)
             if i == d - 1:
                 ax.set_xlabel(short[j], fontsize=8)
             if j == 0 and i > 0:

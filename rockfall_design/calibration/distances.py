@@ -29,8 +29,9 @@ import numpy as np
 
 from ..engine.columns import STOPPED
 
-__all__ = ["LevelShare", "SPREAD_FLOOR", "TEST_LEVEL", "distance", "fit_statistics", "level_shares",
-           "objective", "spread", "stop_positions", "verdict", "wilson_interval"]
+__all__ = ["FitStatistics", "LevelShare", "SampleStatistics", "SPREAD_FLOOR", "TEST_LEVEL",
+           "distance", "fit_statistics", "level_shares", "objective", "spread", "stop_positions",
+           "verdict", "wilson_interval"]
 
 #: Significance level of compare's verdict (the two-sample KS test).
 TEST_LEVEL = 0.05
@@ -187,24 +188,91 @@ def level_shares(observed: np.ndarray, simulated: np.ndarray,
     return out
 
 
-def _describe(x: np.ndarray) -> dict[str, Any]:
-    """Count, mean and percentiles (5, 25, 50, 75, 95) of stop stations (m)."""
-    p = np.percentile(x, [5, 25, 50, 75, 95])
-    return {"count": int(x.size), "mean_m": float(x.mean()),
-            **{f"p{q}_m": float(v) for q, v in zip((5, 25, 50, 75, 95), p, strict=True)}}
+@dataclass(frozen=True)
+class SampleStatistics:
+    """Count, mean and percentiles of a sample of stop stations (m; m/s for speeds).
+
+    The ``_m`` of the names is that of ``--json``'s keys, kept for a speed too.
+    """
+
+    count: int
+    mean_m: float
+    p5_m: float
+    p25_m: float
+    p50_m: float
+    p75_m: float
+    p95_m: float
+
+    @classmethod
+    def of(cls, x: np.ndarray) -> SampleStatistics:
+        """The statistics of the values ``x``."""
+        p = np.percentile(x, [5, 25, 50, 75, 95])
+        return cls(int(x.size), float(x.mean()), *(float(v) for v in p))
+
+    @property
+    def row(self) -> tuple[float, ...]:
+        """mean, p5, p25, p50, p75, p95: a table's row after the count."""
+        return (self.mean_m, self.p5_m, self.p25_m, self.p50_m, self.p75_m, self.p95_m)
+
+    def to_json(self) -> dict[str, Any]:
+        """``count``, ``mean_m``, ``p5_m`` .. ``p95_m`` as in ``--json``."""
+        return {"count": self.count, "mean_m": self.mean_m, "p5_m": self.p5_m,
+                "p25_m": self.p25_m, "p50_m": self.p50_m, "p75_m": self.p75_m,
+                "p95_m": self.p95_m}
+
+
+@dataclass(frozen=True)
+class FitStatistics:
+    """How well simulated values match observed ones (:func:`fit_statistics`).
+
+    Attributes
+    ----------
+    distance : float
+        The distance of ``distance_kind`` (m; m/s for speeds).
+    distance_kind : str
+        ``energy`` or ``wasserstein`` (:func:`distance`).
+    objective : float
+        The objective without levels (:func:`objective`).
+    ks_statistic, ks_pvalue : float
+        Two-sample Kolmogorov-Smirnov D and p (-).
+    observed, simulated : SampleStatistics
+    beyond_section : float or None
+        Share of the simulated rocks that left the section at its lower end
+        (-); None where no section's end applies (a passage's values).
+    """
+
+    distance: float
+    distance_kind: str
+    objective: float
+    ks_statistic: float
+    ks_pvalue: float
+    observed: SampleStatistics
+    simulated: SampleStatistics
+    beyond_section: float | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``fit`` of ``--json`` (``beyond_section`` only where it applies)."""
+        out: dict[str, Any] = {
+            "distance": self.distance, "distance_kind": self.distance_kind,
+            "objective": self.objective, "ks_statistic": self.ks_statistic,
+            "ks_pvalue": self.ks_pvalue, "observed": self.observed.to_json(),
+            "simulated": self.simulated.to_json()}
+        if self.beyond_section is not None:
+            out["beyond_section"] = self.beyond_section
+        return out
 
 
 def fit_statistics(observed: np.ndarray, simulated: np.ndarray, kind: str = "energy",
-                   x_range: tuple[float, float] | None = None) -> dict[str, Any]:
+                   x_range: tuple[float, float] | None = None) -> FitStatistics:
     """How well simulated stops match observed ones, without fitting anything.
 
     Returns
     -------
-    dict
+    FitStatistics
         ``distance`` (m, of ``kind``), ``distance_kind``, ``objective`` (no
         levels), ``ks_statistic`` and ``ks_pvalue`` (two-sample
         Kolmogorov-Smirnov, :func:`scipy.stats.ks_2samp`), ``observed`` and
-        ``simulated`` (:func:`_describe`), and ``beyond_section``: the share
+        ``simulated`` (:class:`SampleStatistics`), and ``beyond_section``: the share
         of simulated rocks that left the section at its lower end.
 
     Notes
@@ -216,21 +284,15 @@ def fit_statistics(observed: np.ndarray, simulated: np.ndarray, kind: str = "ene
     from scipy.stats import ks_2samp
 
     ks = ks_2samp(observed, simulated)
-    out = {
-        "distance": distance(observed, simulated, kind),
-        "distance_kind": kind,
-        "objective": objective(observed, simulated, {}, kind),
-        "ks_statistic": float(ks.statistic),
-        "ks_pvalue": float(ks.pvalue),
-        "observed": _describe(observed),
-        "simulated": _describe(simulated),
-    }
-    if x_range is not None:
-        out["beyond_section"] = float(np.mean(simulated >= x_range[1]))
-    return out
+    return FitStatistics(
+        distance=distance(observed, simulated, kind), distance_kind=kind,
+        objective=objective(observed, simulated, {}, kind),
+        ks_statistic=float(ks.statistic), ks_pvalue=float(ks.pvalue),
+        observed=SampleStatistics.of(observed), simulated=SampleStatistics.of(simulated),
+        beyond_section=None if x_range is None else float(np.mean(simulated >= x_range[1])))
 
 
-def verdict(fit: Mapping[str, Any], levels: Sequence[LevelShare], confidence: float = 0.95,
+def verdict(fit: FitStatistics, levels: Sequence[LevelShare], confidence: float = 0.95,
             level: float = TEST_LEVEL) -> tuple[bool, str]:
     """Whether a prediction is consistent with the observed stops, and the line that says so.
 
@@ -243,7 +305,7 @@ def verdict(fit: Mapping[str, Any], levels: Sequence[LevelShare], confidence: fl
     Parameters
     ----------
     fit
-        :func:`fit_statistics`' result (``ks_pvalue``).
+        :func:`fit_statistics`' result (its ``ks_pvalue``).
     levels
         :func:`level_shares`' result.
     confidence, level
@@ -266,7 +328,7 @@ def verdict(fit: Mapping[str, Any], levels: Sequence[LevelShare], confidence: fl
     Statistical Methods, 3rd ed., Wiley, sec. 5.4 (the two-sample
     Kolmogorov-Smirnov test).
     """
-    p = float(fit["ks_pvalue"])
+    p = float(fit.ks_pvalue)
     ks_ok = p >= level
     outside = [s.name for s in levels if not s.consistent]
     test = (f"two-sample Kolmogorov-Smirnov test at {100 * level:g} %: p = {p:.2g} "

@@ -25,8 +25,9 @@ from ..report.documents import MODEL_LIMITS
 from ..report.sections import Table, inputs_table
 from ..version import __version__
 from .charts import CAPTIONS
-from .distances import verdict
-from .uncertainty import rounded
+from .distances import FitStatistics, LevelShare, verdict
+from .terms import SetStatistics
+from .uncertainty import INTERVAL, rounded
 
 __all__ = ["CALIBRATION_LIMITS", "report_context"]
 
@@ -113,14 +114,13 @@ def _settings_table(result: Any) -> Table:
     rows = [[f"fit: {path}", f"{lo:g} .. {hi:g}"] for path, lo, hi in zip(p.paths, p.low,
                                                                          p.high, strict=True)]
     rows += [[f"level: {name}", f"{lo:g} .. {hi:g} m"] for name, (lo, hi) in p.levels.items()]
-    m = result.summary["method"]
-    rows += [["distance", str(m["distance"])],
-             ["simulated rocks per evaluation", f"{int(m['rocks']):,}"],
-             ["bootstrap replicates", f"{int(m['bootstrap']):,}"],
-             ["confidence of the intervals", f"{100 * float(m['confidence']):g} %"],
-             ["interval", str(m["interval"])]]
-    if m.get("rough_intervals"):
-        rows.append(["intervals flagged", str(m["rough_intervals"])])
+    rows += [["distance", str(p.kind)],
+             ["simulated rocks per evaluation", f"{int(p.rocks):,}"],
+             ["bootstrap replicates", f"{result.bootstrap_replicates:,}"],
+             ["confidence of the intervals", f"{100 * float(result.confidence):g} %"],
+             ["interval", INTERVAL]]
+    if result.rough:
+        rows.append(["intervals flagged", str(result.rough)])
     return Table("Calibration settings", ["setting", "value"], rows,
                  note="Ranges searched (the fitted inputs' values in the tables above are "
                  "where the search started); levels: stretches [from, to) of x whose shares "
@@ -133,12 +133,12 @@ def _parameters_table(result: Any) -> Table:
         conf = f"ROUGH, not {conf}"
     rows = []
     for p in result.parameters:
-        ident = {True: "yes", False: "NO: not pinned down", None: "-"}[p["identified"]]
-        share = "-" if p["width_share"] is None else f"{100 * p['width_share']:.0f} %"
+        ident = {True: "yes", False: "NO: not pinned down", None: "-"}[p.identified]
+        share = "-" if p.width_share is None else f"{100 * p.width_share:.0f} %"
         r = rounded(p)  # to the interval's precision
-        rows.append([p["path"], _g(r["value"], 12), _g(r["low"], 12), _g(r["high"], 12),
-                     f"{p['range'][0]:g} .. {p['range'][1]:g}", share, _g(p["sd"], 2), ident,
-                     p["at_bound"] or "-"])
+        rows.append([p.path, _g(r.value, 12), _g(r.low, 12), _g(r.high, 12),
+                     f"{p.range[0]:g} .. {p.range[1]:g}", share, _g(p.sd, 2), ident,
+                     p.at_bound or "-"])
     return Table("Fitted inputs", ["input", "best value", f"low ({conf})", f"high ({conf})",
                                    "range searched", "interval / range", "sd of refits",
                                    "identified", "at bound"], rows,
@@ -164,18 +164,14 @@ def _correlation_table(result: Any) -> Table | None:
                  "the blocks at the same places).")
 
 
-def _fit_table(fit: Mapping[str, Any], after_fit: bool) -> Table:
-    rows = []
-    for label in ("observed", "simulated"):
-        d = fit[label]
-        rows.append([label, f"{int(d['count']):,}",
-                     *(f"{float(d[k]):.1f}" for k in ("mean_m", "p5_m", "p25_m", "p50_m",
-                                                      "p75_m", "p95_m"))])
-    note = (f"{fit['distance_kind']} distance {float(fit['distance']):.2f} m; two-sample "
-            f"Kolmogorov-Smirnov D = {float(fit['ks_statistic']):.3f}, p = "
-            f"{float(fit['ks_pvalue']):.3g}")
-    if fit.get("beyond_section") is not None:
-        note += (f"; {100 * float(fit['beyond_section']):.1f} % of the simulated rocks left "
+def _fit_table(fit: FitStatistics, after_fit: bool) -> Table:
+    rows = [[label, f"{int(d.count):,}", *(f"{float(v):.1f}" for v in d.row)]
+            for label, d in (("observed", fit.observed), ("simulated", fit.simulated))]
+    note = (f"{fit.distance_kind} distance {float(fit.distance):.2f} m; two-sample "
+            f"Kolmogorov-Smirnov D = {float(fit.ks_statistic):.3f}, p = "
+            f"{float(fit.ks_pvalue):.3g}")
+    if fit.beyond_section is not None:
+        note += (f"; {100 * float(fit.beyond_section):.1f} % of the simulated rocks left "
                  "the section at its lower end (counted at its end)")
     note += (". After a fit the p-value is optimistic (the inputs were chosen to match these "
              "stops)." if after_fit else ". The project was not fitted to these "
@@ -184,7 +180,7 @@ def _fit_table(fit: Mapping[str, Any], after_fit: bool) -> Table:
                  ["", "count", "mean", "p5", "p25", "p50", "p75", "p95"], rows, note=note)
 
 
-def _levels_table(levels: Sequence[Any], confidence: float) -> Table | None:
+def _levels_table(levels: Sequence[LevelShare], confidence: float) -> Table | None:
     if not levels:
         return None
     rows = [[s.name, f"{s.x[0]:g} .. {s.x[1]:g}", f"{s.observed_count:,}",
@@ -199,25 +195,25 @@ def _levels_table(levels: Sequence[Any], confidence: float) -> Table | None:
                  "consistent: the simulated share lies in it.")
 
 
-def _sets_table(sets: Sequence[Mapping[str, Any]], after_fit: bool) -> Table | None:
+def _sets_table(sets: Sequence[SetStatistics], after_fit: bool) -> Table | None:
     """Each observation set (kind, profile, station): observed and simulated, the test."""
     if not sets:
         return None
     rows = []
     for s in sets:
-        f = s["fit"]
-        unit = "m/s" if s["kind"] == "speeds" else "m"
+        f = s.fit
+        unit = "m/s" if s.kind == "speeds" else "m"
         if f is None:
             stats = ["-", "no simulated rock passed", "-", "-"]
         else:
-            stats = [f"{float(f['observed']['p50_m']):.2f} {unit}",
-                     f"{float(f['simulated']['p50_m']):.2f} {unit}",
-                     f"{float(f['distance']):.2f} {unit}", f"{float(f['ks_pvalue']):.3g}"]
-        passed = s.get("passed_share")
-        rows.append([s["label"], str(s["source"]), f"{float(s['weight']):g}",
-                     f"{int(s['count']):,}", *stats,
+            stats = [f"{float(f.observed.p50_m):.2f} {unit}",
+                     f"{float(f.simulated.p50_m):.2f} {unit}",
+                     f"{float(f.distance):.2f} {unit}", f"{float(f.ks_pvalue):.3g}"]
+        passed = s.passed_share
+        rows.append([s.label, str(s.source), f"{float(s.weight):g}",
+                     f"{int(s.count):,}", *stats,
                      "-" if passed is None else f"{100 * float(passed):.0f} %",
-                     "yes" if s["consistent"] else "NO"])
+                     "yes" if s.consistent else "NO"])
     return Table("Observation sets", ["set", "source", "weight", "observed", "observed median",
                                       "simulated median", "distance", "KS p",
                                       "simulated rocks passing", "consistent"], rows,
@@ -239,17 +235,16 @@ def _run_table(result: Any, command: str) -> Table:
             ["observations", f"{obs.source} ({obs.n:,} blocks)"],
             ["seed", str(result.seed)]]
     if command == "calibrate":
-        m = result.summary["method"]
-        rows += [["rocks per evaluation", f"{int(m['rocks']):,}"],
-                 ["bootstrap replicates", f"{int(m['bootstrap']):,}; replicate b has its own "
+        rocks, boot = int(result.problem.rocks), int(result.bootstrap_replicates)
+        rows += [["rocks per evaluation", f"{rocks:,}"],
+                 ["bootstrap replicates", f"{boot:,}; replicate b has its own "
                   "seed, derived from the seed above"],
-                 ["evaluations of the distance", f"{int(m['evaluations']):,}"],
+                 ["evaluations of the distance", f"{int(result.evaluations):,}"],
                  ["run time", f"{float(getattr(result, 'runtime_s', 0.0)):,.1f} s"]]
         repeat = (f"rockfall-design calibrate {project.source} --observed {obs.source} "
-                  f"--seed {result.seed} --rocks {int(m['rocks'])} --bootstrap "
-                  f"{int(m['bootstrap'])}")
+                  f"--seed {result.seed} --rocks {rocks} --bootstrap {boot}")
     else:
-        rocks = int(result.summary["rocks"])
+        rocks = int(result.rocks)
         rows.append(["simulated rocks", f"{rocks:,}"])
         repeat = (f"rockfall-design compare {project.source} --observed {obs.source} "
                   f"--seed {result.seed} --rocks {rocks}")
@@ -265,20 +260,20 @@ def _verdict(result: Any, command: str, warnings: Sequence[str]) -> tuple[str, s
     n = result.observations.n
     if command == "calibrate":
         params = result.parameters
-        loose = [p["path"] for p in params if p["identified"] is False]
+        loose = [p.path for p in params if p.identified is False]
         head = (f"Calibrated {len(params)} input{'s' if len(params) != 1 else ''} on {n:,} "
                 "observed blocks")
         if loose:
             head += f": {len(loose)} not pinned down by the observations ({', '.join(loose)})"
-        elif all(p["identified"] for p in params):
+        elif all(p.identified for p in params):
             head += ": every input pinned down by the observations"
         else:
             head += " (no bootstrap: no intervals)"
         return head + ".", ("fit with warnings" if warnings else "fit without warnings")
     fit = result.fit
     consistent, line = verdict(fit, result.levels)
-    head = (f"Prediction of {n:,} observed blocks: {fit['distance_kind']} distance "
-            f"{float(fit['distance']):.2f} m, KS D = {float(fit['ks_statistic']):.2f}: "
+    head = (f"Prediction of {n:,} observed blocks: {fit.distance_kind} distance "
+            f"{float(fit.distance):.2f} m, KS D = {float(fit.ks_statistic):.2f}: "
             f"{line}.")
     return head, ("fit with warnings" if not consistent or warnings else "fit without warnings")
 
@@ -309,8 +304,7 @@ def report_context(result: Any,
     calibrated = hasattr(result, "parameters")
     command = "calibrate" if calibrated else "compare"
     project = result.project
-    summary = result.summary
-    warnings = list(summary.get("warnings") or [])
+    warnings = list(result.warnings)
     verdict, state = _verdict(result, command, warnings)
     # What was simulated: the project as fitted (observed sizes set, measures left out).
     resolved = result.problem.base if calibrated else None

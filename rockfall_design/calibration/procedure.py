@@ -32,7 +32,7 @@ from .observations import (
     size_limits,
 )
 from .sets import Site, profile_sizes, read_site
-from .terms import set_statistics
+from .terms import SetStatistics, set_statistics
 from .uncertainty import ReplicateTask, run_replicate, summarise
 
 __all__ = ["run_calibration", "run_comparison"]
@@ -149,8 +149,8 @@ def run_calibration(
     # The expanded interval's n: the smallest set's (the widest correction).
     parameters, correlation = summarise(problem, replicates, spec.confidence,
                                         min(s.n for s in site.sets))
-    stops = np.asarray(replicates[0]["stops"])
-    simulated = replicates[0].get("simulated") or [stops]
+    stops = np.asarray(replicates[0].stops)
+    simulated = replicates[0].simulated or [stops]
     return CalibrationResult(
         project=project, problem=problem, observations=obs, parameters=parameters,
         correlation=correlation, replicates=replicates,
@@ -163,7 +163,7 @@ def run_calibration(
 
 
 def _statistics(problem: Any, site: Site, simulated: list[Any], confidence: float
-                ) -> list[dict[str, Any]]:
+                ) -> list[SetStatistics]:
     """Each observation set's statistics (:func:`~.terms.set_statistics`); [] for one file."""
     if not problem.terms:
         return []

@@ -37,6 +37,8 @@ import numpy as np
 
 from .distances import (
     SPREAD_FLOOR,
+    FitStatistics,
+    LevelShare,
     distance,
     fit_statistics,
     level_shares,
@@ -49,8 +51,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..project import Project
     from .sets import ObservationSet
 
-__all__ = ["QUANTITY", "ProfileRun", "Term", "passage_term", "scales_of", "set_statistics",
-           "sets_objective", "terms_for"]
+__all__ = ["QUANTITY", "ProfileRun", "SetStatistics", "Term", "passage_term", "scales_of",
+           "set_statistics", "sets_objective", "terms_for"]
 
 #: The run's record (crossing arrays' key) of each passage kind.
 QUANTITY = {("passing_heights", "vertical"): "passing_height_m",
@@ -170,9 +172,71 @@ def scales_of(observed: Sequence[np.ndarray], terms: Sequence[Term]) -> list[flo
     return [spread(obs, SPREAD_FLOOR[t.kind]) for obs, t in zip(observed, terms, strict=True)]
 
 
+@dataclass(frozen=True)
+class SetStatistics:
+    """How well one observation set is reproduced (:func:`set_statistics`).
+
+    Attributes
+    ----------
+    kind : str
+        ``stops``, ``passing_heights`` or ``speeds``.
+    profile : str or None
+        The profile's name; None for the project's own section.
+    x : float or None
+        The station of a passage (m).
+    source : str
+        The file the set was read from.
+    count : int
+        Observed values.
+    weight : float
+        Its term's weight in the objective (-).
+    measured : str or None
+        Passing heights: ``vertical`` or ``normal``; None for the other kinds.
+    label : str
+        The set's name in tables and warnings.
+    levels : list of LevelShare
+        Stops: each level's shares; empty for a passage.
+    fit : FitStatistics or None
+        In the set's unit (m, or m/s for speeds); None when no simulated rock
+        passed the station.
+    passed_share : float or None
+        Passages: the share of the simulated rocks that passed the station (-).
+    consistent : bool
+        The two-sample Kolmogorov-Smirnov test at 5 % and the levels' shares pass.
+    verdict : str
+        The line that says so (:func:`~.distances.verdict`).
+    """
+
+    kind: str
+    profile: str | None
+    x: float | None
+    source: str
+    count: int
+    weight: float
+    measured: str | None
+    label: str
+    levels: list[LevelShare]
+    fit: FitStatistics | None
+    passed_share: float | None
+    consistent: bool
+    verdict: str
+
+    def to_json(self) -> dict[str, Any]:
+        """The entry of ``sets`` in ``--json`` (``passed_share`` for a passage only)."""
+        out: dict[str, Any] = {
+            "kind": self.kind, "profile": self.profile, "x": self.x, "source": self.source,
+            "count": self.count, "weight": self.weight, "measured": self.measured,
+            "label": self.label, "levels": [ls.as_dict() for ls in self.levels],
+            "fit": None if self.fit is None else self.fit.to_json()}
+        if self.kind != "stops":
+            out["passed_share"] = self.passed_share
+        out.update(consistent=self.consistent, verdict=self.verdict)
+        return out
+
+
 def set_statistics(sets: Sequence[ObservationSet], simulated: Sequence[np.ndarray],
                    kind: str, confidence: float, ranges: dict[str, tuple[float, float]],
-                   rocks: int) -> list[dict[str, Any]]:
+                   rocks: int) -> list[SetStatistics]:
     """How well each set's simulated values match its observed ones (``--json``'s ``sets``).
 
     Parameters
@@ -190,11 +254,11 @@ def set_statistics(sets: Sequence[ObservationSet], simulated: Sequence[np.ndarra
 
     Returns
     -------
-    list of dict
-        Per set: :meth:`~.sets.ObservationSet.as_dict`, ``fit``
+    list of SetStatistics
+        Per set: the fields of :meth:`~.sets.ObservationSet.as_dict`, ``fit``
         (:func:`~.distances.fit_statistics`, in the set's unit: m, or m/s for
         speeds; None when no simulated rock passed the station), ``levels``
-        (stops: :func:`~.distances.level_shares` as dicts), and for
+        (stops: :func:`~.distances.level_shares`), and for
         passages ``passed_share``: the share of the simulated rocks that
         passed the station; ``consistent`` and ``verdict``
         (:func:`~.distances.verdict`: the two-sample Kolmogorov-Smirnov test
@@ -202,20 +266,22 @@ def set_statistics(sets: Sequence[ObservationSet], simulated: Sequence[np.ndarra
     """
     out = []
     for s, sim in zip(sets, simulated, strict=True):
-        entry: dict[str, Any] = {**s.as_dict(), "label": s.label, "levels": []}
-        shares = []
+        shares: list[LevelShare] = []
+        passed = None
         if s.kind == "stops":
-            entry["fit"] = fit_statistics(s.values, sim, kind, ranges[s.profile])
+            fit = fit_statistics(s.values, sim, kind, ranges[s.profile])
             shares = level_shares(s.values, sim, s.levels, confidence)
-            entry["levels"] = [ls.as_dict() for ls in shares]
         else:
-            entry["fit"] = fit_statistics(s.values, sim, kind) if sim.size else None
-            entry["passed_share"] = float(sim.size) / max(int(rocks), 1)
-        if entry["fit"] is None:
-            entry["consistent"] = False
-            entry["verdict"] = (f"NOT consistent with the observations (no simulated rock "
-                                f"passed x = {s.station:g} m)")
+            fit = fit_statistics(s.values, sim, kind) if sim.size else None
+            passed = float(sim.size) / max(int(rocks), 1)
+        if fit is None:
+            consistent, line = False, ("NOT consistent with the observations (no simulated "
+                                       f"rock passed x = {s.station:g} m)")
         else:
-            entry["consistent"], entry["verdict"] = verdict(entry["fit"], shares, confidence)
-        out.append(entry)
+            consistent, line = verdict(fit, shares, confidence)
+        out.append(SetStatistics(
+            kind=s.kind, profile=s.profile or None, x=s.station, source=s.source, count=s.n,
+            weight=s.weight, measured=s.measured if s.kind == "passing_heights" else None,
+            label=s.label, levels=shares, fit=fit, passed_share=passed,
+            consistent=consistent, verdict=line))
     return out

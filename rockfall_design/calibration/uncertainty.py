@@ -39,9 +39,9 @@ import numpy as np
 from ..studies.scenarios import scenario_seed
 from .fit import FitProblem, fit
 
-__all__ = ["IDENTIFIED_SD_SHARE", "MIN_INTERVAL_REPLICATES", "ReplicateTask", "decimals",
-           "expanded_tail", "intervals_flag", "replicate_seed", "rounded", "run_replicate",
-           "summarise"]
+__all__ = ["IDENTIFIED_SD_SHARE", "INTERVAL", "MIN_INTERVAL_REPLICATES", "FittedParameter",
+           "Replicate", "ReplicateTask", "Rounded", "decimals", "expanded_tail", "intervals_flag",
+           "replicate_seed", "rounded", "run_replicate", "summarise"]
 
 #: A parameter whose refitted values spread with a standard deviation above
 #: this share of its range is reported as not identified by the observations:
@@ -65,6 +65,9 @@ MIN_INTERVAL_REPLICATES = 20
 #: Share of a fitted input's range to which the search pins its best value
 #: (as :data:`~.fit.X_TOLERANCE`): the precision of a value without an interval.
 SEARCH_PRECISION_SHARE = 2e-3
+#: How the intervals are made (``method.interval`` of ``calibrate --json``).
+INTERVAL = ("expanded percentile bootstrap (Hesterberg 2015), each replicate refitted with "
+            "its own simulation seed")
 
 
 @dataclass(frozen=True)
@@ -88,12 +91,106 @@ class ReplicateTask:
     seed: int
 
 
+@dataclass(frozen=True)
+class Replicate:
+    """One fitted replicate of the bootstrap (:func:`run_replicate`).
+
+    Attributes
+    ----------
+    index : int
+        0 for the fit itself, 1..B for the bootstrap.
+    seed : int
+        The replicate's simulation seed (:func:`replicate_seed`).
+    values : dict of str to float
+        Fitted input path -> fitted value (the input's unit).
+    objective : float
+        The distance at the fitted values (m, or m/s for speeds).
+    evaluations : int
+        Evaluations of the distance the fit made.
+    stops : ndarray or None
+        Replicate 0 only: its simulated stops (m).
+    simulated : list of ndarray or None
+        Replicate 0 with observation sets only: each set's simulated values
+        (m or m/s).
+    """
+
+    index: int
+    seed: int
+    values: dict[str, float]
+    objective: float
+    evaluations: int
+    stops: np.ndarray | None = None
+    simulated: list[Any] | None = None
+
+
+@dataclass(frozen=True)
+class FittedParameter:
+    """A fitted input: its best value, its bootstrap interval and its flags (:func:`summarise`).
+
+    Attributes
+    ----------
+    path : str
+        The input, as under ``fit:`` (``materials.scree.restitution``).
+    value : float
+        Replicate 0's fitted value (the input's unit).
+    range : tuple of float
+        (lowest, highest) value searched (the input's unit).
+    low, high : float or None
+        The expanded percentile interval (the input's unit); None without replicates.
+    sd : float or None
+        Standard deviation of the refitted values (the input's unit).
+    width_share : float or None
+        Interval width over range width (-).
+    identified : bool or None
+        False when the refits spread over the range (:data:`IDENTIFIED_SD_SHARE`);
+        None without replicates.
+    at_bound : str or None
+        ``"low"`` or ``"high"``: the best value lies at that end of the range.
+    """
+
+    path: str
+    value: float
+    range: tuple[float, float]
+    low: float | None = None
+    high: float | None = None
+    sd: float | None = None
+    width_share: float | None = None
+    identified: bool | None = None
+    at_bound: str | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The entry of ``parameters`` in ``calibrate --json`` (``range`` as a list)."""
+        return {"path": self.path, "value": self.value, "low": self.low, "high": self.high,
+                "sd": self.sd, "range": list(self.range), "width_share": self.width_share,
+                "identified": self.identified, "at_bound": self.at_bound}
+
+
+@dataclass(frozen=True)
+class Rounded:
+    """A fitted input's value, interval and sd as shown and written (:func:`rounded`).
+
+    Attributes
+    ----------
+    value : float
+        The best value to :func:`decimals` places, kept in range (the input's unit).
+    low, high : float or None
+        The interval's ends to the same places (the input's unit).
+    sd : float or None
+        The refits' standard deviation to 2 significant digits (the input's unit).
+    """
+
+    value: float
+    low: float | None
+    high: float | None
+    sd: float | None
+
+
 def replicate_seed(seed: int, index: int) -> int:
     """The simulation seed of replicate ``index`` (the run's own seed for replicate 0)."""
     return int(seed) if index == 0 else scenario_seed(int(seed), int(index))
 
 
-def run_replicate(task: ReplicateTask) -> dict[str, Any]:
+def run_replicate(task: ReplicateTask) -> Replicate:
     """Fit one replicate: its resample of the observations with its own seed.
 
     Every observation set is resampled, each on its own: its n values
@@ -103,10 +200,9 @@ def run_replicate(task: ReplicateTask) -> dict[str, Any]:
 
     Returns
     -------
-    dict
-        ``index``, ``seed``, ``values`` (path -> fitted value), ``objective``,
-        ``evaluations``; replicate 0 also ``stops`` (its simulated stops, m)
-        and, with observation sets, ``simulated`` (each set's simulated values).
+    Replicate
+        Replicate 0 also with ``stops`` (its simulated stops, m) and, with
+        observation sets, ``simulated`` (each set's simulated values).
     """
     single = isinstance(task.observed, np.ndarray)
     sets = [np.asarray(task.observed, dtype=float)] if single \
@@ -118,13 +214,10 @@ def run_replicate(task: ReplicateTask) -> dict[str, Any]:
             rng = np.random.default_rng(key)
             sets[j] = rng.choice(observed, size=observed.size, replace=True)
     out = fit(task.problem, sets[0] if single else sets, seed)
-    result: dict[str, Any] = {"index": task.index, "seed": seed, "values": out.values,
-                              "objective": out.objective, "evaluations": out.evaluations}
-    if task.index == 0:
-        result["stops"] = out.stops
-        if not single:
-            result["simulated"] = list(out.simulated)
-    return result
+    first = task.index == 0
+    return Replicate(index=task.index, seed=seed, values=out.values, objective=out.objective,
+                     evaluations=out.evaluations, stops=out.stops if first else None,
+                     simulated=list(out.simulated) if first and not single else None)
 
 
 def expanded_tail(confidence: float, n: int) -> float:
@@ -152,8 +245,8 @@ def expanded_tail(confidence: float, n: int) -> float:
     return float(stats.norm.cdf(-z))
 
 
-def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence: float,
-              observed: int = 0) -> tuple[list[dict[str, Any]], np.ndarray | None]:
+def summarise(problem: FitProblem, replicates: list[Replicate], confidence: float,
+              observed: int = 0) -> tuple[list[FittedParameter], np.ndarray | None]:
     """Each parameter's best value, interval and flags; the correlation of the parameters.
 
     Parameters
@@ -171,7 +264,7 @@ def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence:
     Returns
     -------
     (parameters, correlation)
-        One dict per fitted input: ``path``, ``value`` (replicate 0's),
+        One :class:`FittedParameter` per fitted input: ``path``, ``value`` (replicate 0's),
         ``low`` and ``high`` (the percentile interval; None without
         replicates), ``sd`` (of the refitted values), ``range``,
         ``width_share`` (interval width / range width), ``identified``
@@ -183,27 +276,27 @@ def summarise(problem: FitProblem, replicates: list[dict[str, Any]], confidence:
         matrix over the replicates (None with fewer than 3 replicates or
         one parameter).
     """
-    best = replicates[0]["values"]
-    boot = np.array([[r["values"][p] for p in problem.paths] for r in replicates[1:]])
+    best = replicates[0].values
+    boot = np.array([[r.values[p] for p in problem.paths] for r in replicates[1:]])
     tail = expanded_tail(confidence, observed) if observed else (1.0 - confidence) / 2
     params = []
     for j, path in enumerate(problem.paths):
         lo, hi = problem.low[j], problem.high[j]
         width = hi - lo
         value = float(best[path])
-        entry: dict[str, Any] = {"path": path, "value": value, "low": None, "high": None,
-                                 "sd": None, "range": [lo, hi], "width_share": None,
-                                 "identified": None}
+        near = AT_BOUND_SHARE * width
+        at_bound = "low" if value <= lo + near else "high" if value >= hi - near else None
+        entry = FittedParameter(path=path, value=value, range=(lo, hi), at_bound=at_bound)
         if len(boot) >= 2:
             a, b = np.quantile(boot[:, j], [tail, 1 - tail])
             # The interval holds the best value itself (a percentile interval
             # of a skewed bootstrap may not, with few replicates).
             a, b = min(float(a), value), max(float(b), value)
             sd = float(boot[:, j].std(ddof=1))
-            entry.update(low=a, high=b, sd=sd, width_share=(b - a) / width,
-                         identified=bool(sd <= IDENTIFIED_SD_SHARE * width))
-        near = AT_BOUND_SHARE * width
-        entry["at_bound"] = "low" if value <= lo + near else "high" if value >= hi - near else None
+            entry = FittedParameter(path=path, value=value, low=a, high=b, sd=sd,
+                                    range=(lo, hi), width_share=(b - a) / width,
+                                    identified=bool(sd <= IDENTIFIED_SD_SHARE * width),
+                                    at_bound=at_bound)
         params.append(entry)
     correlation = None
     if len(boot) >= 3 and len(problem.paths) > 1:
@@ -227,7 +320,7 @@ def intervals_flag(replicates: int, confidence: float) -> str | None:
             f"--bootstrap {MIN_INTERVAL_REPLICATES * 2} or more before using them")
 
 
-def decimals(parameter: dict[str, Any]) -> int:
+def decimals(parameter: FittedParameter) -> int:
     """The decimal places a fitted value is shown and written with: its interval's precision.
 
     Two significant digits of the interval's half-width (the last digit
@@ -238,7 +331,7 @@ def decimals(parameter: dict[str, Any]) -> int:
     Parameters
     ----------
     parameter
-        One of :func:`summarise`'s dicts (``low``, ``high``, ``range``).
+        One of :func:`summarise`'s entries (``low``, ``high``, ``range``).
 
     Notes
     -----
@@ -247,24 +340,25 @@ def decimals(parameter: dict[str, Any]) -> int:
     sec. 7.2.6): more digits are noise, and a 17-digit value read from a
     calibrated project suggests a knowledge of the ground no one has.
     """
-    lo, hi = parameter["range"]
+    lo, hi = parameter.range
     step = SEARCH_PRECISION_SHARE * (hi - lo)
-    if parameter.get("low") is not None and parameter["high"] > parameter["low"]:
-        step = (parameter["high"] - parameter["low"]) / 2
+    if parameter.low is not None and parameter.high is not None \
+            and parameter.high > parameter.low:
+        step = (parameter.high - parameter.low) / 2
     if not math.isfinite(step) or step <= 0:
         return 6
     return max(0, 1 - math.floor(math.log10(step)))
 
 
-def rounded(parameter: dict[str, Any]) -> dict[str, float | None]:
+def rounded(parameter: FittedParameter) -> Rounded:
     """value, low, high to :func:`decimals` (the value kept in range); sd to 2 digits."""
     places = decimals(parameter)
-    lo, hi = parameter["range"]
+    lo, hi = parameter.range
 
     def r(v: float | None) -> float | None:
         return None if v is None else round(float(v), places)
 
-    value = min(max(round(float(parameter["value"]), places), lo), hi)
-    sd = parameter.get("sd")
-    return {"value": value, "low": r(parameter.get("low")), "high": r(parameter.get("high")),
-            "sd": None if sd is None else float(f"{sd:.2g}")}
+    value = min(max(round(float(parameter.value), places), lo), hi)
+    sd = parameter.sd
+    return Rounded(value=value, low=r(parameter.low), high=r(parameter.high),
+                   sd=None if sd is None else float(f"{sd:.2g}"))

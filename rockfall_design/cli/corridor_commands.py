@@ -47,15 +47,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExitCode, InputError
-from .corridor_map import map_files, road_share, write_map
-from .corridor_report import corridor_summary, print_totals, section_block, section_rule
+from ..studies.corridor import CorridorSummary, SectionOutcome, run_sections, section_seeds
+from .corridor_map import map_files, write_map
+from .corridor_report import print_section_rule, print_totals
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
     from ..project import Corridor, CorridorSection
     from ..report.outputs import OutputSet
 
-__all__ = ["corridor_summary", "each_section", "SectionRun", "SectionDone",
+__all__ = ["each_section", "SectionRun", "SectionDone",
            "cli_simulate", "cli_check", "cli_optimise"]
 
 
@@ -143,11 +144,6 @@ def _section_args(args: argparse.Namespace, section: CorridorSection,
     return sub
 
 
-def _seeds(corridor: Corridor, args: argparse.Namespace) -> tuple[int, list[int]]:
-    run = corridor.seed if args.seed is None else int(args.seed)
-    return run, corridor.section_seeds(run)
-
-
 @dataclass
 class SectionRun:
     """What a command's per-section body gets from :func:`each_section`.
@@ -195,6 +191,34 @@ class SectionDone:
     cost: float | None = None
 
 
+def _reserve(files: OutputSet, args: argparse.Namespace, subs: Sequence[argparse.Namespace],
+             out_files: Sequence[str], figures: Sequence[str], report: bool,
+             extra: Sequence[Path] = ()) -> None:
+    """Reserve every section's files, the corridor's ``summary.json`` and ``extra``."""
+    from .common import REPORT_FILES, figure_files, reserve
+
+    for sub in subs:
+        reserve(files, sub.out, out_files)
+        if report:
+            reserve(files, sub.report, REPORT_FILES)
+        reserve(files, sub.plot, figure_files(figures, sub))
+    reserve(files, args.out, ("summary.json",))
+    if extra:
+        files.reserve(*extra)
+
+
+def _write_summary(files: OutputSet, args: argparse.Namespace, summary: CorridorSummary,
+                   write_extra: Callable[[OutputSet, dict[str, Any]], None] | None
+                   ) -> dict[str, Any]:
+    """Put the corridor's ``summary.json`` and its extra files in the set; its JSON."""
+    data = summary.to_json()
+    if args.out:
+        files.write_json(args.out / "summary.json", data)
+    if write_extra is not None:
+        write_extra(files, data)
+    return data
+
+
 def each_section(
     args: argparse.Namespace,
     corridor: Corridor,
@@ -208,92 +232,70 @@ def each_section(
     elsewhere: Callable[[Sequence[argparse.Namespace]], Sequence[Any] | None] | None = None,
     scenarios: bool = False,
     extra: tuple[Sequence[Path], Callable[[OutputSet, dict[str, Any]], None]] | None = None,
-) -> dict[str, Any]:
-    """Run a command over every section of a corridor: the pattern every command shares.
+) -> CorridorSummary:
+    """Run a command over every section of a corridor: the command line's side of it.
 
     Loads the plugins once (checking every section's plugin sections),
-    derives each section's seed, calls ``guard`` on each section, reserves
-    every section's files (``out_files`` under ``--out``, the figures
-    ``figures`` in every ``--plot-format`` under ``--plot``, the report's
-    files under ``--report`` when ``report``) and the corridor's
-    ``summary.json``, runs ``elsewhere`` (the sections' runs on a pool or a
-    cluster, or None) and then ``body`` on each section in order, printing
-    its rule and report unless ``--json``; then writes, prints and returns
-    the corridor's summary (:func:`corridor_summary`).
+    reserves every file, runs ``body`` on each section in order
+    (:func:`~rockfall_design.studies.corridor.run_sections`), printing its
+    rule and report unless ``--json``; then writes, prints and returns the totals.
 
     Parameters
     ----------
-    args
-        The command's options.
-    corridor
-        The corridor.
+    args, corridor
+        The command's options, and the corridor.
     command
         ``simulate``, ``check``, ``optimise`` or ``study`` (the JSON's ``command``).
     body
         One section's run, files and report.
     out_files, figures, report
-        The files each section writes (see above).
+        The files each section writes: ``out_files`` under ``--out``,
+        ``figures`` in every ``--plot-format`` under ``--plot``, the
+        report's under ``--report`` when ``report``.
     guard
         Refuses a section before anything runs (e.g. too many rocks for the memory).
     elsewhere
         Given every section's options, runs the sections elsewhere and
         returns one result per section (``SectionRun.ran``), or None.
     scenarios
-        ``check --scenarios`` (see :func:`corridor_summary`).
+        ``check --scenarios`` (see
+        :func:`~rockfall_design.studies.corridor.corridor_summary`).
     extra
         More files of the corridor (reserved first) and their writer, called
         with the set and the corridor's JSON (the map of a corridor on a DEM).
 
     Returns
     -------
-    dict
-        The corridor's JSON object.
+    CorridorSummary
+        The corridor's result (its ``to_json()`` the corridor's JSON object).
     """
     from ..report.outputs import OutputSet
-    from .common import REPORT_FILES, figure_files, reserve
 
     registry = _registry(corridor, args)
-    run_seed, seeds = _seeds(corridor, args)
+    _, seeds = section_seeds(corridor, args.seed)
     if guard is not None:
         for section in corridor.sections:
             guard(section)
     with OutputSet() as files:
         subs = [_section_args(args, s, seed) for s, seed in
                 zip(corridor.sections, seeds, strict=True)]
-        for sub in subs:
-            reserve(files, sub.out, out_files)
-            if report:
-                reserve(files, sub.report, REPORT_FILES)
-            reserve(files, sub.plot, figure_files(figures, sub))
-        reserve(files, args.out, ("summary.json",))
-        if extra is not None:
-            files.reserve(*extra[0])
+        _reserve(files, args, subs, out_files, figures, report, extra[0] if extra else ())
         ran = elsewhere(subs) if elsewhere is not None else None
 
-        def one(i: int) -> SectionDone:
-            section = corridor.sections[i]
+        def one(i: int, section: CorridorSection, seed: int) -> SectionOutcome:
             done = body(SectionRun(section, subs[i], files, registry,
                                    None if ran is None else ran[i]))
             if not args.json:
-                section_rule(section, len(subs), subs[i].seed)
+                print_section_rule(section, len(subs), seed)
                 done.show()
-            return done
+            return SectionOutcome(done.summary, done.cost)
 
-        # In this process, in order: the bodies write and print; where the
-        # runs themselves went elsewhere (a pool or a cluster, see
-        # _on_executors), the numbers are the same wherever a section ran.
-        done = [one(i) for i in range(len(subs))]
-        summary = corridor_summary(
-            corridor, command, run_seed, [{**section_block(s, d.summary), **road_share(corridor, i)}
-                                          for i, (s, d) in enumerate(
-                                              zip(corridor.sections, done, strict=True))],
-            [d.cost for d in done] if command == "optimise" else (), scenarios)
-        if args.out:
-            files.write_json(args.out / "summary.json", summary)
-        if extra is not None:
-            extra[1](files, summary)
+        # In this process, in order: the bodies write and print; where the runs went
+        # elsewhere (_on_executors), the numbers are the same wherever a section ran.
+        summary, _ = run_sections(corridor, command, one, seed=args.seed, scenarios=scenarios)
+        data = _write_summary(files, args, summary, extra[1] if extra else None)
     if args.json:
-        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
+        sys.stdout.write(json.dumps(data, allow_nan=False) + "\n")
     else:
         print_totals(summary)
     return summary
@@ -390,7 +392,7 @@ def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
     summary = each_section(args, corridor, "check", body, guard=guard, elsewhere=elsewhere,
                            out_files=("rocks.csv", "crossings.csv", "measures.csv",
                                       "summary.json"), figures=FIGURES)
-    return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
+    return int(ExitCode.OK if summary.ok else ExitCode.CHECK_FAILED)
 
 
 def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
@@ -430,7 +432,7 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
     summary = each_section(args, corridor, "optimise", body, guard=guard,
                            out_files=("design.yaml", "alternatives.csv", "summary.json"),
                            figures=FIGURES, extra=extra)
-    return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
+    return int(ExitCode.OK if summary.ok else ExitCode.CHECK_FAILED)
 
 
 def _check_scenarios(args: argparse.Namespace, corridor: Corridor,
@@ -459,10 +461,10 @@ def _check_scenarios(args: argparse.Namespace, corridor: Corridor,
             "--scenarios")
 
     def body(run: SectionRun) -> SectionDone:
-        summary = check_scenarios_with_files(run.section.project, run.args, run.registry,
-                                             run.files)
-        return SectionDone(summary, lambda: print_check_across(summary))
+        found = check_scenarios_with_files(run.section.project, run.args, run.registry,
+                                           run.files)
+        return SectionDone(found.to_json(), lambda: print_check_across(found))
 
     summary = each_section(args, corridor, "check", body, guard=guard, scenarios=True,
                            out_files=("summary.json",), figures=SCENARIO_FIGURES)
-    return int(ExitCode.OK if summary["totals"]["ok"] else ExitCode.CHECK_FAILED)
+    return int(ExitCode.OK if summary.ok else ExitCode.CHECK_FAILED)

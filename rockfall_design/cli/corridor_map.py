@@ -23,7 +23,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..project import Corridor
     from ..report.outputs import OutputSet
 
-__all__ = ["MEASURES_FILE", "map_files", "road_share", "write_map"]
+__all__ = ["MEASURES_FILE", "map_files", "write_map"]
 
 #: The measures' GeoPackage under --out.
 MEASURES_FILE = "measures.gpkg"
@@ -40,19 +40,6 @@ def _figures(args: argparse.Namespace) -> dict[Path, str]:
 def map_files(args: argparse.Namespace) -> list[Path]:
     """The files the map writes for these options (reserved before the run)."""
     return ([args.out / MEASURES_FILE] if args.out else []) + list(_figures(args))
-
-
-def road_share(corridor: Corridor, index: int) -> dict[str, Any]:
-    """``{"road": {station_m, length_m}}`` of a section of a corridor along a road, else ``{}``.
-
-    The station (m along the road) of the section's fall line and the length
-    of road it stands for (its ``design.site.length_m``), in its JSON block.
-    """
-    if corridor.map is None:
-        return {}
-    where = corridor.map.sections[index]
-    return {"road": {"station_m": round(float(where.station), 3),
-                     "length_m": round(float(where.length_m), 3)}}
 
 
 def _design_words(block: Mapping[str, Any]) -> str:

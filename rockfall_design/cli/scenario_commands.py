@@ -38,8 +38,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ExitCode
-from ..report.sections import values_text
-from ..studies.scenario_checks import check_across
+from ..project.study import values_text
+from ..studies.scenario_checks import Binding, ScenariosCheck, check_across
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..optimiser.alternatives import AcrossResult
@@ -52,7 +52,13 @@ __all__ = ["check_across", "cli_check_scenarios", "across_design_yaml", "print_a
            "print_check_across"]
 
 
-def print_check_across(summary: dict[str, Any]) -> None:
+def _binding_text(b: Binding) -> str:
+    """Where a binding scenario binds: its margin and check, or that nothing binds."""
+    return ("no check to bind" if b.margin is None else
+            f"margin {100 * b.margin:+.1f} % at {b.binds_at}")
+
+
+def print_check_across(check: ScenariosCheck) -> None:
     """The terminal report of ``check --scenarios``: a row per scenario, the verdict."""
     from rich.table import Table
 
@@ -63,31 +69,29 @@ def print_check_across(summary: dict[str, Any]) -> None:
                       ("holds", "left"), ("with conf.", "left"), ("margin", "right"),
                       ("binds at", "left")):
         table.add_column(col, justify=just)
-    for p in summary["scenarios"]:
-        table.add_row(str(p["index"]), values_text(p["values"]), str(p["seed"]),
-                      "yes" if p["ok"] else "NO", "yes" if p["holds_with_confidence"] else "no",
-                      "-" if p["margin"] is None else f"{100 * p['margin']:+.1f} %",
-                      p["binds_at"] or "-",
-                      style="" if p["ok"] else "red")
+    for p in check.scenarios:
+        b = p.binding
+        table.add_row(str(b.index), values_text(b.values), str(b.seed),
+                      "yes" if p.ok else "NO", "yes" if p.holds_with_confidence else "no",
+                      "-" if b.margin is None else f"{100 * b.margin:+.1f} %",
+                      b.binds_at or "-",
+                      style="" if p.ok else "red")
     console = fitted_console(table)
-    v = summary.get("verdict")
-    if v:  # the verdict first, in the words of every report
-        console.print(v["headline"], style="bold green" if v["state"] == "holds with confidence"
-                      else "bold red" if v["state"] == "fails" else "bold yellow",
-                      markup=False, highlight=False)
-    console.print(f"check over {summary['of']} scenarios, {summary['rocks']:,} rocks each, "
-                  f"run seed {summary['seed']}", style="bold", markup=False, highlight=False)
-    console.print(table)
-    b = summary["binding"]
-    console.print(f"Binding scenario {b['index']} ({values_text(b['values'])}): "
-                  + ("no check to bind" if b["margin"] is None else
-                     f"margin {100 * b['margin']:+.1f} % at {b['binds_at']}"),
+    v = check.verdict  # the verdict first, in the words of every report
+    console.print(v.headline, style="bold green" if v.state == "holds with confidence"
+                  else "bold red" if v.state == "fails" else "bold yellow",
                   markup=False, highlight=False)
-    verdict = (f"Design holds in {summary['holds_in']} of {summary['of']} scenarios; "
-               f"required: {summary['required']}")
-    console.print(verdict, style="bold green" if summary["ok"] else "bold red", markup=False,
+    console.print(f"check over {check.of} scenarios, {check.rocks:,} rocks each, "
+                  f"run seed {check.seed}", style="bold", markup=False, highlight=False)
+    console.print(table)
+    b = check.binding
+    console.print(f"Binding scenario {b.index} ({values_text(b.values)}): " + _binding_text(b),
+                  markup=False, highlight=False)
+    verdict = (f"Design holds in {check.holds_in} of {check.of} scenarios; "
+               f"required: {check.required}")
+    console.print(verdict, style="bold green" if check.ok else "bold red", markup=False,
                   highlight=False)
-    for line in summary["failures"]:
+    for line in check.failures:
         console.print("  " + line, style="dim", markup=False, highlight=False)
 
 
@@ -102,18 +106,23 @@ class ScenariosCheckResult:
     ----------
     project : Project
         The project as written (with its ``study:``).
-    summary : dict
-        The JSON of ``check --scenarios --json`` (:func:`check_across`).
+    check : ScenariosCheck
+        What :func:`check_across` found.
     """
 
     command = "check"
     #: The report shows every scenario, then the binding one in full.
     across = True
 
-    def __init__(self, project: Project, summary: dict[str, Any], registry: Registry) -> None:
+    def __init__(self, project: Project, check: ScenariosCheck, registry: Registry) -> None:
         self.project = project
-        self.summary = summary
+        self.check = check
         self._registry = registry
+
+    @cached_property
+    def summary(self) -> dict[str, Any]:
+        """The JSON of ``check --scenarios --json``, which the report is rendered from."""
+        return self.check.to_json()
 
     @cached_property
     def binding_check(self) -> Any:
@@ -126,18 +135,18 @@ class ScenariosCheckResult:
         from ..results import DEFAULT_TRAJECTORIES
         from ..studies.scenarios import scenario_runs
 
-        b = self.summary["binding"]
-        run = next(r for r in scenario_runs(self.project, self.summary["seed"])
-                   if r.index == b["index"])
-        return check(run.project, rocks=int(self.summary["rocks"]), seed=run.seed,
+        found = self.check
+        run = next(r for r in scenario_runs(self.project, found.seed)
+                   if r.index == found.binding.index)
+        return check(run.project, rocks=int(found.rocks), seed=run.seed,
                      trajectories=DEFAULT_TRAJECTORIES, registry=self._registry)
 
     def plot_margins(self) -> Any:
         """A bar per scenario: the margin, the binding scenario, the count required."""
         from ..report.design_figures import margins_figure
 
-        s = self.summary
-        return margins_figure(s["scenarios"], s["required"], s["binding"]["index"],
+        c = self.check
+        return margins_figure([p.to_json() for p in c.scenarios], c.required, c.binding.index,
                               self.project.name)
 
     def figures(self) -> dict[str, Any]:
@@ -155,23 +164,24 @@ def reserve_scenarios_files(files: OutputSet, args: argparse.Namespace) -> None:
 
 
 def check_scenarios_with_files(project: Project, args: argparse.Namespace, registry: Registry,
-                               files: OutputSet) -> dict[str, Any]:
+                               files: OutputSet) -> ScenariosCheck:
     """Check ``project`` in every scenario and put its files in the output set.
 
     ``args`` gives ``rocks``, ``seed``, ``block``, ``workers``,
     ``scheduler`` and the directories ``out`` (``summary.json``), ``plot``
     (:data:`SCENARIO_FIGURES` in every ``--plot-format``) and ``report``.
-    Returns the JSON object of ``check --scenarios``.
+    Returns what :func:`check_across` found.
     """
     from .common import figures_and_report
 
-    summary = check_across(project, registry, rocks=args.rocks, seed=args.seed,
-                           block=tuple(args.block), workers=args.workers,
-                           scheduler=args.scheduler)
+    found = check_across(project, registry, rocks=args.rocks, seed=args.seed,
+                         block=tuple(args.block), workers=args.workers,
+                         scheduler=args.scheduler)
+    result = ScenariosCheckResult(project, found, registry)
     if args.out:
-        files.write_json(args.out / "summary.json", summary)
-    figures_and_report(ScenariosCheckResult(project, summary, registry), args, files)
-    return summary
+        files.write_json(args.out / "summary.json", result.summary)
+    figures_and_report(result, args, files)
+    return found
 
 
 def cli_check_scenarios(args: argparse.Namespace, project: Project, registry: Registry) -> int:
@@ -182,12 +192,12 @@ def cli_check_scenarios(args: argparse.Namespace, project: Project, registry: Re
         raise project.error_at((), "check --scenarios needs a study: section (its scenarios)")
     with OutputSet() as files:
         reserve_scenarios_files(files, args)
-        summary = check_scenarios_with_files(project, args, registry, files)
+        found = check_scenarios_with_files(project, args, registry, files)
     if args.json:
-        sys.stdout.write(json.dumps(summary, allow_nan=False) + "\n")
+        sys.stdout.write(json.dumps(found.to_json(), allow_nan=False) + "\n")
     else:
-        print_check_across(summary)
-    return int(ExitCode.OK if summary["ok"] else ExitCode.CHECK_FAILED)
+        print_check_across(found)
+    return int(ExitCode.OK if found.ok else ExitCode.CHECK_FAILED)
 
 
 def print_across(result: AcrossResult) -> None:
@@ -200,11 +210,9 @@ def print_across(result: AcrossResult) -> None:
     lines = [f"Scenarios: a design must hold in {block['required']} of {block['of']} "
              f"(design.scenarios share {block['share']:g}), each with its own rocks."]
     if result.best is not None and block["binding"] is not None:
-        b = block["binding"]
-        lines.append(f"Binding scenario {b['index']} ({values_text(b['values'])}, seed "
-                     f"{b['seed']}): " + ("no check to bind" if b["margin"] is None else
-                                          f"margin {100 * b['margin']:+.1f} % at "
-                                          f"{b['binds_at']}"))
+        b = Binding.from_json(block["binding"])
+        lines.append(f"Binding scenario {b.index} ({values_text(b.values)}, seed "
+                     f"{b.seed}): " + _binding_text(b))
         nxt = block["next_cheaper"]
         if nxt is not None:
             lines.append(f"The next cheaper design ({nxt['cost']:,.0f}) fails in scenario(s) "
@@ -238,16 +246,14 @@ def across_design_yaml(result: AcrossResult, project_file: Path | str,
     # The project's confidence, not the look's (as design_yaml: a check is one look).
     data["safety"]["confidence"] = float(result.confidence)
     block = result.scenarios_block()
-    b = block["binding"]
+    b = Binding.from_json(block["binding"])
     head = (
         f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
         f"cost {best.cost:,.0f}, holding in {block['required']} of {block['of']} scenarios "
         "of the study.\n"
         f"# Each scenario has its own rocks: seeds derived from rocks.seed ({result.seed}); "
         f"rocks.count is the most rocks that decided it in a scenario.\n"
-        f"# binding scenario {b['index']} ({values_text(b['values'])}): "
-        + ("no check to bind" if b["margin"] is None else
-           f"margin {100 * b['margin']:+.1f} % at {b['binds_at']}") + "\n"
+        f"# binding scenario {b.index} ({values_text(b.values)}): " + _binding_text(b) + "\n"
         "# verification: each scenario's fresh rocks (its seed + 1000003, twice its rocks) "
         "held.\n"
         "# check it in every scenario with: rockfall-design check design.yaml --scenarios\n"

@@ -18,6 +18,7 @@ itself, by :func:`rockfall_design.studies.paths.with_values`.
 """
 
 import math
+from collections.abc import Mapping
 from typing import Annotated, Any, Literal
 
 from pydantic import (
@@ -212,3 +213,13 @@ class StudySpec(SectionModel):
     def sampled(self) -> bool:
         """True for a sampled (latin hypercube) study, False for a grid."""
         return isinstance(self.scenarios, Sample)
+
+
+def values_text(values: Mapping[str, Any]) -> str:
+    """A scenario's values as one line (``path = value, ...``), or "as written".
+
+    Here, beside the study's keys, so that the studies, the report and the
+    command line word a scenario alike without the studies loading the
+    report (and pandas with it) for one line of text.
+    """
+    return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"

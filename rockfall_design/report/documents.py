@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..judge.records import CheckSummary, DesignVerdict, State
+from ..project.study import values_text
 from ..run.summary import RunSummary
 from ..version import __version__
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
@@ -41,7 +42,6 @@ from .sections import (
     run_table,
     scenarios_table,
     stations_table,
-    values_text,
 )
 
 if TYPE_CHECKING:  # pragma: no cover

@@ -512,11 +512,6 @@ def bill_table(bill: Bill) -> Table:
                  highlight=[False] * len(bill.items) + [True])
 
 
-def values_text(values: Mapping[str, Any]) -> str:
-    """A scenario's values as one line (``path = value, ...``), or "as written"."""
-    return ", ".join(f"{k} = {v}" for k, v in values.items()) or "as written"
-
-
 def margin_text(margin: Any, binds_at: Any) -> str:
     """The design's margin and the check that binds, as words."""
     return "no check to bind" if margin is None else (

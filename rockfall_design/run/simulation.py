@@ -293,6 +293,24 @@ class Study:
         return run_record(self, r.events_total, crossings, blocks, stop_block, reaching)
 
 
+def _releases_after(project: Project, seed: int, n: int,
+                    after: Study | None) -> tuple[int, Releases]:
+    """The first rock to run and the releases of rocks ``first .. n - 1`` of a run.
+
+    Without ``after`` the run starts at rock 0. With it, the run goes on from
+    ``after``'s rocks: their releases are drawn (and dropped) first, in rock
+    order, so that the rocks after them get the releases a run of all ``n``
+    rocks at once would give them.
+    """
+    stream = ReleaseStream(project, seed)
+    if after is None:
+        return 0, stream.draw(n)
+    if after.seed != seed or after.first_rock != 0 or after.n > n:
+        raise ValueError("a run goes on only from the first rocks of the same run")
+    stream.draw(after.n)  # the releases of the rocks already run, in order
+    return after.n, stream.draw(n - after.n)
+
+
 def run_study(
     project: Project,
     *,
@@ -339,15 +357,9 @@ def run_study(
     s = int(project.rocks.seed if seed is None else seed)
     if section is None:
         section = section_from_project(project)
-    first = 0
-    stream = ReleaseStream(project, s)
+    first, releases = _releases_after(project, s, n, after)
     if after is not None:
-        if after.seed != s or after.first_rock != 0 or after.n > n:
-            raise ValueError("a run goes on only from the first rocks of the same run")
-        first = after.n
-        stream.draw(first)  # the releases of the rocks already run, in order
         n_trajectories = 0
-    releases = stream.draw(n - first)
     x0, x1 = section.x[0], section.x[-1]
     grid = np.linspace(x0, x1, int(project.analysis.envelope_points))
     t0 = time.perf_counter()
@@ -463,6 +475,14 @@ def simulate(
             on_chunk(study)
         return study
     size = int(chunk) if chunk is not None else chunk_rocks(project)
+    return _simulate_streamed(project, n, s, size, n_trajectories, progress, on_chunk)
+
+
+def _simulate_streamed(
+    project: Project, n: int, s: int, size: int, n_trajectories: int,
+    progress: Callable[[int], None] | None, on_chunk: Callable[[Study], None] | None,
+) -> StreamedStudy:
+    """:func:`simulate`'s streamed run: ``n`` rocks of seed ``s`` in chunks of ``size``."""
     section = section_from_project(project)
     grid = np.linspace(section.x[0], section.x[-1], int(project.analysis.envelope_points))
     stations = np.asarray(project.analysis.stations, dtype=float)

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
-    pass
+    from ..calibration.calibrated import CalibrationResult
 
 
 def study_tables(res: Any) -> list[dict[str, Any]]:
@@ -22,13 +22,13 @@ def study_tables(res: Any) -> list[dict[str, Any]]:
     return [_table("Scenarios", sc[cols]), _table("Sensitivity", sens[scols])]
 
 
-def calibration_tables(summary: dict[str, Any]) -> list[dict[str, Any]]:
+def calibration_tables(result: CalibrationResult) -> list[dict[str, Any]]:
     """A calibration's fitted values with their bootstrap intervals, and its fit."""
-    rows = [[p["path"], p["value"], p["low"], p["high"], p["range"], p["identified"],
-             p.get("at_bound") or ""] for p in summary["parameters"]]
-    fit = summary["fit"]
-    fit_rows = [[k, fit[k]] for k in ("distance_kind", "distance", "ks_statistic", "ks_pvalue")
-                if k in fit]
+    rows = [[p.path, p.value, p.low, p.high, p.range, p.identified, p.at_bound or ""]
+            for p in result.parameters]
+    fit = result.fit
+    fit_rows = [["distance_kind", fit.distance_kind], ["distance", fit.distance],
+                ["ks_statistic", fit.ks_statistic], ["ks_pvalue", fit.ks_pvalue]]
     return [{"title": "Fitted inputs", "rows": plain_json(rows),
              "columns": ["input", "value", "low", "high", "range", "identified", "at bound"]},
             {"title": "Fit", "columns": ["item", "value"], "rows": plain_json(fit_rows)}]

@@ -352,7 +352,7 @@ class ProjectEntry:
 
             res = run_calibration(project, rocks=n, bootstrap=b, seed=s, on_done=on_done)
             job.result = res.summary
-            job.tables = calibration_tables(res.summary)
+            job.tables = calibration_tables(res)
 
         job = self._start("calibrate", b + 1, work)
         job.stage = "replicates"

@@ -43,6 +43,7 @@ from ..run.simulation import Study, simulate
 from ..run.summary import STATION_QUANTITIES, STATISTICS, run_summary, stat_block
 from .executors import run_tasks
 from .paths import ALIASES, parse_path, scenario_base, shown, with_values
+from .scenario_result import BarrierBlock, BoundsLadder, ScenarioBounds, ScenarioResult
 from .scenarios import Scenario, scenarios
 from .sensitivity import (
     LADDER,
@@ -213,12 +214,12 @@ def _with_stations(project: Project, extra: Sequence[float]) -> Project:
     return copy
 
 
-def run_scenario(task: ScenarioTask) -> dict[str, Any]:
+def run_scenario(task: ScenarioTask) -> ScenarioResult:
     """Run one scenario: ``simulate`` of its project with its seed.
 
     Returns
     -------
-    dict
+    ScenarioResult
         ``index``, ``seed``, ``rocks``, ``events``, ``project_hash``, and the
         blocks ``stations``, ``stops`` and ``protect`` (if the project has a
         protected zone) exactly as ``simulate --json`` of the scenario's
@@ -237,32 +238,20 @@ def run_scenario(task: ScenarioTask) -> dict[str, Any]:
     study = simulate(_with_stations(project, extra), rocks=task.rocks, seed=task.seed)
     summary = _summary_of(study, own, project.resolved_hash())
     runtime = time.perf_counter() - t0
-    by_x = {st["x"]: st for st in summary["stations"]}
-    out: dict[str, Any] = {
-        "index": task.index,
-        "seed": task.seed,
-        "rocks": summary["rocks"],
-        "events": summary["events"],
-        "project_hash": summary["project_hash"],
-        "stations": [st for st in summary["stations"] if st["x"] in own],
-        "stops": summary["stops"],
-    }
-    if "protect" in summary:
-        out["protect"] = summary["protect"]
-        if project.measures:
-            out["protect_with_measures"] = _residual_with_measures(task)
-    if task.barriers:
-        out["measures"] = [
-            {"index": i, "label": label, "x": x, "crossings": by_x[x]["crossings"],
-             **{q: by_x[x][q] for q in QUANTITIES}}
-            for i, label, x in task.barriers
-        ]
-    out["bounds"] = _bounds(study, summary, task, _confidence(project),
-                            out.get("protect_with_measures"))
-    if task.envelope:
-        out["envelope"] = _envelope(study, envelope_percentile(project))
-    out["runtime_s"] = runtime
-    return out
+    stations = summary["stations"]
+    by_x = {st["x"]: st for st in stations}
+    protect = summary.get("protect")
+    with_measures = _residual_with_measures(task) if protect and project.measures else None
+    barriers = [BarrierBlock(i, label, x, by_x[x]["crossings"], by_x[x]["passing_height_m"],
+                             by_x[x]["energy_kj"]) for i, label, x in task.barriers]
+    return ScenarioResult(
+        index=task.index, seed=task.seed, rocks=summary["rocks"], events=summary["events"],
+        project_hash=summary["project_hash"],
+        stations=[st for st in stations if st["x"] in own], stops=summary["stops"],
+        bounds=_bounds(study, summary, task, _confidence(project), with_measures),
+        runtime_s=runtime, protect=protect, protect_with_measures=with_measures,
+        measures=barriers or None,
+        envelope=_envelope(study, envelope_percentile(project)) if task.envelope else None)
 
 
 def _residual_with_measures(task: ScenarioTask) -> dict[str, Any]:
@@ -343,7 +332,7 @@ def _confidence(project: Project) -> float:
 
 def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
             confidence: float, with_measures: dict[str, Any] | None = None
-            ) -> dict[str, Any]:
+            ) -> ScenarioBounds:
     """Confidence bounds of the scenario's design values, by name.
 
     Each p95 and p99 of passing height and energy at the stations and
@@ -355,7 +344,7 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
 
     Returns
     -------
-    dict
+    ScenarioBounds
         ``confidence`` (c); ``upper`` and ``lower``, the one-sided upper and
         lower bound of each design value at c (together a two-sided
         interval at 2c - 1); ``ladder``, the bounds the sensitivity needs
@@ -367,8 +356,9 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
     """
     rungs = [task.scenarios] if task.scenarios > 0 else list(LADDER)
     sides = ladder_confidences(confidence, rungs)
-    out: dict[str, Any] = {"confidence": confidence, "upper": {}, "lower": {}}
-    ladder: dict[str, Any] = {"scenarios": rungs, "upper": {}, "lower": {}}
+    out = ScenarioBounds(confidence, upper={}, lower={},
+                         ladder=BoundsLadder(scenarios=rungs, lower={}, upper={}))
+    ladder = out.ladder
     if isinstance(study, Study):
         arrays = study.crossing_arrays()
         columns = {float(x): j for j, x in enumerate(study.stations)}
@@ -386,18 +376,17 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
                     qs.append(float(stat[1:]) / 100)
         found = _order_bounds(samples, qs, confidence, sides)
         for name, (lower, upper, low_ladder, high_ladder) in zip(names, found, strict=True):
-            out["lower"][name], out["upper"][name] = lower, upper
-            ladder["lower"][name], ladder["upper"][name] = low_ladder, high_ladder
+            out.lower[name], out.upper[name] = lower, upper
+            ladder.lower[name], ladder.upper[name] = low_ladder, high_ladder
     protect = summary.get("protect")
     if protect is not None:
         n = int(summary["rocks"])
         for name, block in residual_names(protect, with_measures):
             x = int(block["reaching"])
-            out["upper"][name] = fraction_upper_bound(x, n, confidence)
-            out["lower"][name] = fraction_lower_bound(x, n, confidence)
+            out.upper[name] = fraction_upper_bound(x, n, confidence)
+            out.lower[name] = fraction_lower_bound(x, n, confidence)
             low, high = fraction_bounds(x, n, sides)
-            ladder["lower"][name], ladder["upper"][name] = low.tolist(), high.tolist()
-    out["ladder"] = ladder
+            ladder.lower[name], ladder.upper[name] = low.tolist(), high.tolist()
     return out
 
 
@@ -484,10 +473,10 @@ def run_tasks_of(
     *,
     workers: int | None = None,
     scheduler: Any = None,
-    on_done: Callable[[int, dict[str, Any]], None] | None = None,
+    on_done: Callable[[int, ScenarioResult], None] | None = None,
     pool: str = "threads",
     total: int | None = None,
-) -> list[dict[str, Any]]:
+) -> list[ScenarioResult]:
     """Run the tasks with :func:`~.executors.run_tasks`; results in scenario order.
 
     A scenario spends its time in the compiled engine, which releases the
@@ -527,9 +516,9 @@ def run_parametric(
     if progress is not None:
         done = [0, 0]  # scenarios, rocks
 
-        def on_done(i: int, result: dict[str, Any]) -> None:
+        def on_done(i: int, result: ScenarioResult) -> None:
             done[0] += 1
-            done[1] += int(result["rocks"])
+            done[1] += int(result.rocks)
             progress(done[0], len(chosen), done[1])
 
         progress(0, len(chosen), 0)

@@ -40,18 +40,22 @@ the sampling of the points themselves.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from ..project.messages import fmt
 from ..project.study import Range, StudySpec
+from .scenario_result import ScenarioResult
 
 __all__ = ["targets", "sensitivity", "TARGET_STATISTICS", "salib_available", "LADDER",
-           "ladder_confidences", "joint_bounds", "effect_interval"]
+           "ladder_confidences", "joint_bounds", "effect_interval", "SensitivityEntry",
+           "relative_effect", "rank", "JointBounds"]
 
 #: The statistics of passing height and energy that are design values.
 TARGET_STATISTICS = ("p95", "p99")
@@ -64,6 +68,61 @@ TARGET_STATISTICS = ("p95", "p99")
 #: study (``MAX_SCENARIOS``, 10,000).
 LADDER = tuple(sorted({2 ** m for m in range(15)} | {3 * 2 ** m for m in range(13)}))
 _QUANTITIES = (("passing_height_m", "m"), ("energy_kj", "kJ"))
+
+
+@dataclass(frozen=True)
+class SensitivityEntry:
+    """The effect of one varied input on one design value (:func:`sensitivity`).
+
+    Attributes
+    ----------
+    parameter : str
+        The input, as under ``vary:``.
+    target : str
+        The design value (``x=100 energy_kj p95``, ``x=150 residual``; :func:`targets`).
+    effect : float
+        ``high - low``, in ``unit``.
+    unit : str
+        ``m``, ``kJ`` or ``fraction``.
+    low, high : float
+        The lowest and highest mean of the design value over the input's levels (``unit``).
+    effect_low, effect_high : float or None
+        The effect's interval at the study's confidence, for all inputs of the
+        target together (:func:`effect_interval`); None where a scenario has
+        no bound of the target.
+    resolved : bool
+        ``effect_low > 0``: more than Monte Carlo noise (False without an interval).
+    s1, s1_conf : float or None
+        RBD-FAST's first-order index and its bootstrap spread (-), for a
+        sampled study with SALib; None otherwise (``S1``, ``S1_conf`` in JSON).
+    relative_effect : float
+        :func:`relative_effect` (-).
+    """
+
+    parameter: str
+    target: str
+    effect: float
+    unit: str
+    low: float
+    high: float
+    effect_low: float | None = None
+    effect_high: float | None = None
+    resolved: bool = False
+    s1: float | None = None
+    s1_conf: float | None = None
+    relative_effect: float = 0.0
+
+    def to_json(self) -> dict[str, Any]:
+        """The entry of ``sensitivity`` in ``study --json`` (``S1``, ``S1_conf`` if any)."""
+        out: dict[str, Any] = {
+            "parameter": self.parameter, "target": self.target, "effect": self.effect,
+            "unit": self.unit, "low": self.low, "high": self.high,
+            "effect_low": self.effect_low, "effect_high": self.effect_high,
+            "resolved": self.resolved}
+        if self.s1 is not None:
+            out["S1"], out["S1_conf"] = self.s1, self.s1_conf
+        out["relative_effect"] = self.relative_effect
+        return out
 
 
 def _value(block: Mapping[str, Any] | None, stat: str) -> float:
@@ -97,7 +156,7 @@ def residual_names(protect: Mapping[str, Any], with_measures: Mapping[str, Any] 
     return [(name, with_measures), (f"{name}, bare slope", protect)]
 
 
-def targets(results: Sequence[Mapping[str, Any]]) -> dict[str, tuple[str, np.ndarray]]:
+def targets(results: Sequence[ScenarioResult]) -> dict[str, tuple[str, np.ndarray]]:
     """Target name -> (unit, value per scenario; NaN where a scenario has none).
 
     Parameters
@@ -109,18 +168,18 @@ def targets(results: Sequence[Mapping[str, Any]]) -> dict[str, tuple[str, np.nda
     units: dict[str, str] = {}
     for result in results:
         row: dict[str, float] = {}
-        places = [(f"x={fmt(st['x'])}", st) for st in result["stations"]]
-        places += [(f"measures[{m['index']}] x={fmt(m['x'])}", m)
-                   for m in result.get("measures", ())]
+        places = [(f"x={fmt(st['x'])}", st) for st in result.stations]
+        places += [(f"measures[{m.index}] x={fmt(m.x)}", m.to_json())
+                   for m in result.measures or ()]
         for where, block in places:
             for quantity, unit in _QUANTITIES:
                 for stat in TARGET_STATISTICS:
                     name = f"{where} {quantity} {stat}"
                     row[name] = _value(block[quantity], stat)
                     units[name] = unit
-        protect = result.get("protect")
+        protect = result.protect
         if protect is not None:
-            for name, block in residual_names(protect, result.get("protect_with_measures")):
+            for name, block in residual_names(protect, result.protect_with_measures):
                 row[name] = float(block["fraction"])
                 units[name] = "fraction"
         rows.append(row)
@@ -137,7 +196,28 @@ def ladder_confidences(confidence: float, rungs: Sequence[int] = LADDER) -> list
     return [1.0 - (1.0 - confidence) / (2 * k) for k in rungs]
 
 
-def joint_bounds(results: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
+@dataclass(frozen=True)
+class JointBounds:
+    """Per scenario, the interval of each design value that holds for all scenarios at once.
+
+    Attributes
+    ----------
+    confidence : float
+        c, the smallest of the scenarios' (-).
+    scenario_confidence : float
+        ``1 - (1 - c) / k'``, the two-sided confidence of each scenario's interval (-).
+    lower, upper : list of dict of str to float or None
+        Per scenario, design value name -> bound (its unit; None where too
+        few rocks passed).
+    """
+
+    confidence: float
+    scenario_confidence: float
+    lower: list[dict[str, float | None]]
+    upper: list[dict[str, float | None]]
+
+
+def joint_bounds(results: Sequence[ScenarioResult]) -> JointBounds | None:
     """Per scenario, the interval of each design value that holds for all scenarios at once.
 
     Parameters
@@ -148,7 +228,7 @@ def joint_bounds(results: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
 
     Returns
     -------
-    dict or None
+    JointBounds or None
         ``confidence``: c, the smallest of the scenarios' (all the same unless
         the safety concept's confidence is varied); ``scenario_confidence``:
         ``1 - (1 - c) / k'``, the two-sided confidence of each scenario's
@@ -169,25 +249,24 @@ def joint_bounds(results: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
     independent or common. (Not over several design values together.)
     """
     k = len(results)
-    if k == 0 or any("ladder" not in r.get("bounds", {}) for r in results):
+    if k == 0:
         return None
     # k itself if every scenario has it (a study's tasks know k), else the
     # first rung of the ladder not below it (a conservative rounding)
-    exact = all(k in r["bounds"]["ladder"]["scenarios"] for r in results)
+    exact = all(k in r.bounds.ladder.scenarios for r in results)
     rung = k if exact else next((n for n in LADDER if n >= k), None)
     if rung is None:
         return None
-    confidence = min(float(r["bounds"]["confidence"]) for r in results)
+    confidence = min(float(r.bounds.confidence) for r in results)
     lower, upper = [], []
     for result in results:
-        ladder = result["bounds"]["ladder"]
-        if rung not in ladder["scenarios"]:
+        ladder = result.bounds.ladder
+        if rung not in ladder.scenarios:
             return None
-        at = list(ladder["scenarios"]).index(rung)
-        lower.append({name: v[at] for name, v in ladder["lower"].items()})
-        upper.append({name: v[at] for name, v in ladder["upper"].items()})
-    return {"confidence": confidence, "scenario_confidence": 1.0 - (1.0 - confidence) / rung,
-            "lower": lower, "upper": upper}
+        at = list(ladder.scenarios).index(rung)
+        lower.append({name: v[at] for name, v in ladder.lower.items()})
+        upper.append({name: v[at] for name, v in ladder.upper.items()})
+    return JointBounds(confidence, 1.0 - (1.0 - confidence) / rung, lower, upper)
 
 
 def effect_interval(keys: Sequence[Any], lower: Sequence[float | None],
@@ -304,10 +383,10 @@ def _indices(spec: StudySpec, points: Sequence[Mapping[str, Any]], y: np.ndarray
 def sensitivity(
     spec: StudySpec,
     points: Sequence[Mapping[str, Any]],
-    results: Sequence[Mapping[str, Any]],
+    results: Sequence[ScenarioResult],
     *,
     indices: bool | None = None,
-) -> list[dict[str, Any]]:
+) -> list[SensitivityEntry]:
     """The effect of every varied input on every target, largest first.
 
     Parameters
@@ -324,9 +403,9 @@ def sensitivity(
 
     Returns
     -------
-    list of dict
-        ``{parameter, target, effect, unit, low, high, effect_low,
-        effect_high, resolved}`` (and ``S1``, ``S1_conf`` with indices),
+    list of SensitivityEntry
+        ``parameter, target, effect, unit, low, high, effect_low,
+        effect_high, resolved`` (and ``s1``, ``s1_conf`` with indices),
         ranked by :func:`rank`: grouped by target, the targets by their
         largest ``relative_effect``, each target's inputs by ``effect``,
         largest first (ties: in study order). ``low`` and ``high`` are the lowest and
@@ -354,8 +433,8 @@ def sensitivity(
             lower: list[float | None] = [None] * len(results)
             upper: list[float | None] = [None] * len(results)
         else:
-            lower = [b.get(name) for b in joint["lower"]]
-            upper = [b.get(name) for b in joint["upper"]]
+            lower = [b.get(name) for b in joint.lower]
+            upper = [b.get(name) for b in joint.upper]
         for p, path in enumerate(spec.vary):
             order[(name, path)] = (t, p)
             keys = _level_keys(spec, path, [pt[path] for pt in points])
@@ -364,34 +443,30 @@ def sensitivity(
                 continue
             low, high = found
             interval = effect_interval(keys, lower, upper)
-            entry: dict[str, Any] = {
-                "parameter": path, "target": name, "effect": high - low,
-                "unit": unit, "low": low, "high": high,
-                "effect_low": None if interval is None else interval[0],
-                "effect_high": None if interval is None else interval[1],
-                "resolved": interval is not None and interval[0] > 0,
-            }
-            if path in s1:
-                entry["S1"], entry["S1_conf"] = s1[path]
-            out.append(entry)
-    for e in out:
-        e["relative_effect"] = relative_effect(e)
+            index, spread = s1.get(path, (None, None))
+            entry = SensitivityEntry(
+                parameter=path, target=name, effect=high - low, unit=unit, low=low, high=high,
+                effect_low=None if interval is None else interval[0],
+                effect_high=None if interval is None else interval[1],
+                resolved=interval is not None and interval[0] > 0, s1=index, s1_conf=spread)
+            out.append(dataclasses.replace(entry, relative_effect=relative_effect(entry)))
     return rank(out, order)
 
 
-def relative_effect(entry: Mapping[str, Any]) -> float:
+def relative_effect(entry: SensitivityEntry) -> float:
     """An effect relative to its design value's size, unit-free (-).
 
     ``effect / max(|low|, |high|)``: an energy that moves from 400 to 800 kJ
     and a height from 2 to 4 m are both 0.5, whatever their units; 0 where
     the design value is 0 at every level.
     """
-    size = max(abs(entry["low"]), abs(entry["high"]))
-    return float(entry["effect"] / size) if size > 0 else 0.0
+    size = max(abs(entry.low), abs(entry.high))
+    return float(entry.effect / size) if size > 0 else 0.0
 
 
-def rank(entries: Sequence[dict[str, Any]],
-         order: Mapping[tuple[str, str], tuple[int, int]] | None = None) -> list[dict[str, Any]]:
+def rank(entries: Sequence[SensitivityEntry],
+         order: Mapping[tuple[str, str], tuple[int, int]] | None = None
+         ) -> list[SensitivityEntry]:
     """The sensitivity's one order, for ``--json`` and the terminal alike.
 
     Grouped by design value (target), the groups by their largest
@@ -399,13 +474,12 @@ def rank(entries: Sequence[dict[str, Any]],
     fractions compare), each group by its raw ``effect`` (one unit within a
     group), largest first; ties in the study's order of targets and inputs.
     """
-    order = order or {(e["target"], e["parameter"]): (i, i) for i, e in enumerate(entries)}
-    groups: dict[str, list[dict[str, Any]]] = {}
+    order = order or {(e.target, e.parameter): (i, i) for i, e in enumerate(entries)}
+    groups: dict[str, list[SensitivityEntry]] = {}
     for e in entries:
-        groups.setdefault(e["target"], []).append(e)
+        groups.setdefault(e.target, []).append(e)
     targets_ranked = sorted(groups, key=lambda t: (-max(relative_effect(e) for e in groups[t]),
-                                                   min(order[(e["target"], e["parameter"])]
+                                                   min(order[(e.target, e.parameter)]
                                                        for e in groups[t])))
     return [e for t in targets_ranked
-            for e in sorted(groups[t], key=lambda e: (-e["effect"],
-                                                      order[(e["target"], e["parameter"])]))]
+            for e in sorted(groups[t], key=lambda e: (-e.effect, order[(e.target, e.parameter)]))]

@@ -23,8 +23,9 @@ from ..project.messages import fmt
 from ..report.figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure, save_figures
 from ..report.terminal import fitted_console
 from ..version import __version__
+from .scenario_result import ScenarioResult
 from .scenarios import Scenario
-from .sensitivity import joint_bounds, rank, relative_effect, targets
+from .sensitivity import SensitivityEntry, joint_bounds, rank, relative_effect, targets
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -63,7 +64,7 @@ class StudyResult:
         The study's project (with its ``study:`` section).
     scenario_list : list of Scenario
         Index, values and seed of each scenario.
-    results : list of dict
+    results : list of ScenarioResult
         Each scenario's result (:func:`~rockfall_design.studies.runner.run_scenario`).
     seed : int
         The run's seed, from which each scenario's seed was derived.
@@ -72,14 +73,15 @@ class StudyResult:
     """
 
     def __init__(self, project: Project, scenario_list: Sequence[Scenario],
-                 results: Sequence[dict[str, Any]], seed: int, runtime_s: float,
-                 sensitivity: list[dict[str, Any]]) -> None:
+                 results: Sequence[ScenarioResult], seed: int, runtime_s: float,
+                 sensitivity: list[SensitivityEntry]) -> None:
         self.project = project
         self.scenario_list = list(scenario_list)
         self.results = list(results)
         self.seed = int(seed)
         self.runtime_s = float(runtime_s)
-        self._sensitivity = sensitivity
+        #: The sensitivity's entries, in the one order of ``--json`` (:func:`~.sensitivity.rank`).
+        self.entries = list(sensitivity)
 
     def __repr__(self) -> str:
         return (f"<StudyResult {self.project.name!r}: {len(self.results)} scenarios of "
@@ -88,7 +90,7 @@ class StudyResult:
     @property
     def n_rocks(self) -> int:
         """Rocks per scenario."""
-        return int(self.results[0]["rocks"]) if self.results else 0
+        return int(self.results[0].rocks) if self.results else 0
 
     @cached_property
     def summary(self) -> dict[str, Any]:
@@ -117,14 +119,10 @@ class StudyResult:
                                                    strict=True)):
             block = {"index": scenario.index, "seed": scenario.seed,
                      "values": dict(scenario.values)}
-            block.update({key: v for key, v in result.items()
-                          if key not in ("index", "seed", "envelope", "runtime_s")})
-            if "bounds" in block:  # the ladder is the run's working: the bounds used show
-                bounds = {b: v for b, v in block["bounds"].items() if b != "ladder"}
-                if joint is not None:
-                    bounds["joint"] = {"confidence": joint["scenario_confidence"],
-                                       "lower": joint["lower"][k], "upper": joint["upper"][k]}
-                block["bounds"] = bounds
+            mine = None if joint is None else {"confidence": joint.scenario_confidence,
+                                               "lower": joint.lower[k], "upper": joint.upper[k]}
+            # the ladder is the run's working: the bounds used show
+            block.update(result.to_json(ladder=False, envelope=False, head=False, joint=mine))
             scenarios.append(block)
         return {
             "project": self.project.name,
@@ -137,15 +135,15 @@ class StudyResult:
             "sampling": study["scenarios"],
             "seeds": study["seeds"],
             "scenarios": scenarios,
-            "sensitivity": [dict(e) for e in self._sensitivity],
-            "sensitivity_confidence": None if joint is None else joint["confidence"],
+            "sensitivity": [e.to_json() for e in self.entries],
+            "sensitivity_confidence": None if joint is None else joint.confidence,
         }
 
     @property
     def sensitivity_confidence(self) -> float | None:
         """The confidence c of the sensitivity's ``effect_low`` .. ``effect_high``."""
         joint = joint_bounds(self.results)
-        return None if joint is None else float(joint["confidence"])
+        return None if joint is None else float(joint.confidence)
 
     @property
     def sensitivity(self) -> pd.DataFrame:
@@ -160,7 +158,7 @@ class StudyResult:
 
         cols = ["parameter", "target", "effect", "unit", "low", "high", "effect_low",
                 "effect_high", "resolved", "confidence"]
-        frame = pd.DataFrame(self._sensitivity)
+        frame = pd.DataFrame([e.to_json() for e in self.entries])
         if frame.empty:
             return pd.DataFrame(columns=cols)
         if "resolved" in frame.columns:
@@ -191,7 +189,8 @@ class StudyResult:
             for name, (_, values) in table.items():
                 row[name] = values[k]
             for side in ("upper", "lower"):
-                given = self.results[k].get("bounds", {}).get(side, {})
+                bounds = self.results[k].bounds
+                given = bounds.upper if side == "upper" else bounds.lower
                 for name in table:
                     if name in given:
                         bound = given[name]
@@ -205,7 +204,7 @@ class StudyResult:
         from matplotlib import colormaps
 
 
-        if any("envelope" not in result for result in self.results):
+        if any(result.envelope is None for result in self.results):
             raise ValueError("this study ran without its envelopes (envelopes=False); run it "
                              "again with envelopes=True to draw them")
         analysis = self.project.analysis
@@ -219,7 +218,8 @@ class StudyResult:
         colors = colormaps["viridis"](np.linspace(0.05, 0.95, max(n, 1)))
         for scenario, result, color in zip(self.scenario_list, self.results, colors,
                                            strict=False):
-            env = result["envelope"]
+            env = result.envelope
+            assert env is not None  # checked above
             x = np.asarray(env["x_m"], dtype=float)
             enough = np.asarray(env["crossings"]) >= min_rocks
             name = ", ".join(f"{_short(p)}={_text(v)}" for p, v in scenario.values.items())
@@ -247,13 +247,12 @@ class StudyResult:
 
     def plot_tornado(self) -> Figure:
         """Tornado chart: for the targets moved most, each input's range of level means."""
-        entries = self._sensitivity
+        entries = self.entries
         chosen: list[str] = []
         for e in entries:  # the targets, most moved first (relative to their own size)
-            if e["target"] not in chosen and (e["target"].endswith(" p95")
-                                              or _is_residual(e["target"])):
-                chosen.append(e["target"])
-        chosen.sort(key=lambda t: -max(_relative(e) for e in entries if e["target"] == t))
+            if e.target not in chosen and (e.target.endswith(" p95") or _is_residual(e.target)):
+                chosen.append(e.target)
+        chosen.sort(key=lambda t: -max(relative_effect(e) for e in entries if e.target == t))
         chosen = chosen[:_TORNADO_TARGETS]
         fig = RockfallFigure(figsize=(10, 2.2 + 1.9 * max(len(chosen), 1)),
                              layout="constrained")
@@ -265,30 +264,28 @@ class StudyResult:
             return fig
         axes = np.atleast_1d(fig.subplots(len(chosen), 1))
         for ax, target in zip(axes, chosen, strict=True):
-            rows = sorted((e for e in entries if e["target"] == target),
-                          key=lambda e: e["effect"])
-            names = [e["parameter"] + ("" if e.get("resolved", True) else " *") for e in rows]
-            lows = np.array([e["low"] for e in rows])
-            highs = np.array([e["high"] for e in rows])
-            resolved = [e.get("resolved", True) for e in rows]
+            rows = sorted((e for e in entries if e.target == target), key=lambda e: e.effect)
+            names = [e.parameter + ("" if e.resolved else " *") for e in rows]
+            lows = np.array([e.low for e in rows])
+            highs = np.array([e.high for e in rows])
+            resolved = [e.resolved for e in rows]
             ax.barh(names, highs - lows, left=lows, color=["#2980b9" if r else "#95a5a6"
                                                           for r in resolved], alpha=0.8)
             # The interval of each bar's length (the effect), drawn from its left end:
             # the bar's right end could lie anywhere on the error bar.
-            ends = [k for k, e in enumerate(rows) if e.get("effect_low") is not None]
+            ends = [(k, e) for k, e in enumerate(rows)
+                    if e.effect_low is not None and e.effect_high is not None]
             if ends:
-                at = np.array([lows[k] + rows[k]["effect"] for k in ends])
-                spread = np.array([[rows[k]["effect"] - rows[k]["effect_low"] for k in ends],
-                                   [rows[k]["effect_high"] - rows[k]["effect"] for k in ends]])
-                ax.errorbar(at, ends, xerr=np.clip(spread, 0.0, None), fmt="none",
+                at = np.array([lows[k] + e.effect for k, e in ends])
+                spread = np.array([[e.effect - (e.effect_low or 0.0) for _, e in ends],
+                                   [(e.effect_high or 0.0) - e.effect for _, e in ends]])
+                ax.errorbar(at, [k for k, _ in ends], xerr=np.clip(spread, 0.0, None), fmt="none",
                             ecolor="black", elinewidth=1.0, capsize=3)
             for k, e in enumerate(rows):
-                right = e["high"] if e.get("effect_high") is None else \
-                    max(e["high"], e["low"] + e["effect_high"])
-                ax.text(right, k, f"  {_number(e['effect'], e['unit'])}", va="center",
-                        fontsize=8)
+                right = e.high if e.effect_high is None else max(e.high, e.low + e.effect_high)
+                ax.text(right, k, f"  {_number(e.effect, e.unit)}", va="center", fontsize=8)
             ax.margins(x=0.15)
-            unit = rows[0]["unit"] if rows else ""
+            unit = rows[0].unit if rows else ""
             ax.set_title(f"{target} ({unit})", fontsize=9, loc="left")
             ax.grid(axis="x", alpha=0.3)
         c = self.sensitivity_confidence
@@ -314,7 +311,6 @@ class StudyResult:
         from rich.text import Text
 
 
-        s = self.summary
         rate = len(self.results) * self.n_rocks / self.runtime_s if self.runtime_s else 0.0
         head = Text.assemble(
             (self.project.name, "bold"),
@@ -334,25 +330,25 @@ class StudyResult:
         ranked = Table(title="Which input moves each design value (per design value, the "
                        "largest effect first; the design values moved most, relative to "
                        "their size, first)", show_edge=False, title_justify="left")
-        indices = any("S1" in e for e in s["sensitivity"])
-        c = s["sensitivity_confidence"]
+        indices = any(e.s1 is not None for e in self.entries)
+        c = self.sensitivity_confidence
         sure = "effect, sure" if c is None else f"effect at {_percent(c)}"
         for col in ("target", "input", "effect", sure, "level means",
                     *(("S1",) if indices else ())):
             ranked.add_column(col, justify="left" if col in ("target", "input") else "right")
-        shown_entries = by_target(s["sensitivity"])[:top]
+        shown_entries = rank(self.entries)[:top]
         for e in shown_entries:
-            unit = e["unit"]
-            mark = "" if e.get("resolved", True) else " *"
-            cells = [e["target"], e["parameter"], f"{_number(e['effect'], unit)} {unit}{mark}",
-                     _interval(e), f"{_number(e['low'], unit)} .. {_number(e['high'], unit)}"]
+            unit = e.unit
+            mark = "" if e.resolved else " *"
+            cells = [e.target, e.parameter, f"{_number(e.effect, unit)} {unit}{mark}",
+                     _interval(e), f"{_number(e.low, unit)} .. {_number(e.high, unit)}"]
             if indices:
-                cells.append("-" if "S1" not in e else f"{e['S1']:.2f} ± {e['S1_conf']:.2f}")
+                cells.append("-" if e.s1 is None else f"{e.s1:.2f} ± {e.s1_conf or 0.0:.2f}")
             ranked.add_row(*cells)
         from rich.console import Group
 
         parts: list[Any] = [head, table, ranked]
-        if any(not e.get("resolved", True) for e in shown_entries):
+        if any(not e.resolved for e in shown_entries):
             parts.append(Text(
                 f"* not resolved from Monte Carlo noise: at {_percent(c)} the effect may "
                 "be 0 (its interval reaches 0), or '-': too few rocks passed to bound "
@@ -401,19 +397,10 @@ def _percent(c: float | None) -> str:
     return "-" if c is None else f"{100 * c:g} %"
 
 
-def _interval(entry: dict[str, Any]) -> str:
+def _interval(entry: SensitivityEntry) -> str:
     """The interval of an effect, ``effect_low .. effect_high``, or '-' if it has none."""
-    low, high, unit = entry.get("effect_low"), entry.get("effect_high"), entry["unit"]
+    low, high, unit = entry.effect_low, entry.effect_high, entry.unit
     if low is None or high is None:
         return "-"
     return f"{_number(low, unit)} .. {_number(high, unit)}"
 
-
-def by_target(entries: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Sensitivity entries in the one order of ``--json`` (:func:`.sensitivity.rank`)."""
-    return rank(list(entries))
-
-
-def _relative(entry: dict[str, Any]) -> float:
-    """An effect relative to its target's size (see :func:`.sensitivity.relative_effect`)."""
-    return relative_effect(entry)

@@ -13,7 +13,7 @@ import pytest
 import yaml
 
 import rockfall_design as rd
-from rockfall_design.calibration.uncertainty import rounded
+from rockfall_design.calibration.uncertainty import FittedParameter, rounded
 from rockfall_design.cli.program import main
 from rockfall_design.project import load_project
 from rockfall_design.report.staging import MANIFEST
@@ -37,10 +37,10 @@ def result(site):
 
 def test_a_known_restitution_is_recovered_inside_its_interval(result):
     (p,) = result.parameters
-    assert p["path"] == PATH and p["low"] <= TRUTH <= p["high"]
-    assert abs(p["value"] - TRUTH) < 0.1
-    assert p["identified"] is True and p["at_bound"] is None
-    assert p["low"] <= p["value"] <= p["high"]
+    assert p.path == PATH and p.low <= TRUTH <= p.high
+    assert abs(p.value - TRUTH) < 0.1
+    assert p.identified is True and p.at_bound is None
+    assert p.low <= p.value <= p.high
     fit = result.summary["fit"]
     assert set(fit) >= {"distance", "ks_statistic", "ks_pvalue", "observed", "simulated"}
     assert fit["observed"]["count"] == 40 and fit["simulated"]["count"] == 100
@@ -54,8 +54,8 @@ def test_intervals_cover_the_truth_at_other_seeds(tmp_path):
     for seed in (2, 3, 4):
         site = write_site(tmp_path, observed_stops(40, seed=seed))
         (p,) = rd.calibrate(site, bootstrap=10, rocks=80, seed=seed, workers=2).parameters
-        inside.append(p["low"] <= TRUTH <= p["high"])
-        assert p["high"] - p["low"] < 0.3 and abs(p["value"] - TRUTH) < 0.1, p
+        inside.append(p.low <= TRUTH <= p.high)
+        assert p.high - p.low < 0.3 and abs(p.value - TRUTH) < 0.1, p
     assert sum(inside) >= 2, inside
 
 
@@ -66,7 +66,7 @@ def test_an_input_the_stops_do_not_depend_on_is_flagged_not_identified(tmp_path)
     site = write_site(tmp_path, observed_stops(30, seed=5), section)
     result = rd.calibrate(site, workers=1)
     (p,) = result.parameters
-    assert p["identified"] is False and p["width_share"] > 0.5
+    assert p.identified is False and p.width_share > 0.5
     assert any("not identified" in w for w in result.summary["warnings"])
 
 
@@ -102,8 +102,9 @@ def test_json_out_plot_and_calibrated_project(site, tmp_path, capsys):
     calibrated = load_project(out / "calibrated.yaml")
     soil = calibrated.materials["soil"]
     # Written to the interval's precision, not with 17 digits (issue 36 item 7).
-    best = rounded(summary["parameters"][0])
-    assert soil.restitution == best["value"]
+    best = rounded(FittedParameter(**{**summary["parameters"][0],
+                                      "range": tuple(summary["parameters"][0]["range"])}))
+    assert soil.restitution == best.value
     assert soil.restitution == pytest.approx(summary["parameters"][0]["value"], abs=5e-3)
     assert soil.scatter.restitution == float(f"{summary['parameters'][0]['sd']:.2g}")
     assert yaml.safe_load(lib.read_text())["soil"]["restitution"] == soil.restitution
@@ -112,7 +113,7 @@ def test_json_out_plot_and_calibrated_project(site, tmp_path, capsys):
     assert text == lib.read_text()
     assert (f"# law: spang\n# source: calibrated on {site.parent / 'stops.csv'} (40 blocks), "
             in text and f"seed {summary['method']['seed']} " in text)
-    assert (f"fitted: restitution {best['value']:g} [{best['low']:g}, {best['high']:g}]"
+    assert (f"fitted: restitution {best.value:g} [{best.low:g}, {best.high:g}]"
             in text)
     # Three replicates: the intervals are flagged as rough, not 95 % ones.
     assert "rough intervals from only 3 bootstrap replicates" in text
@@ -137,8 +138,8 @@ def test_compare_reports_a_bad_prediction_as_bad(site, capsys):
         "soil": project.materials["soil"].model_copy(update={"restitution": 0.7})}}),
         site.parent / "stops.csv", rocks=200)
     fair = rd.compare(project, site.parent / "stops.csv", rocks=200)
-    assert bouncy.fit["distance"] > 3 * fair.fit["distance"]
-    assert bouncy.fit["ks_pvalue"] < 0.01 < fair.fit["ks_pvalue"]
+    assert bouncy.fit.distance > 3 * fair.fit.distance
+    assert bouncy.fit.ks_pvalue < 0.01 < fair.fit.ks_pvalue
 
 
 def test_observed_sizes_set_the_simulated_rocks(tmp_path):
@@ -149,7 +150,7 @@ def test_observed_sizes_set_the_simulated_rocks(tmp_path):
         f"{x},{v:.3f}\n" for x, v in zip(xs, rng.lognormal(np.log(0.3), 0.5, len(xs)),
                                          strict=True)))
     result = rd.calibrate(site, bootstrap=0, workers=1)
-    assert result.parameters[0]["low"] is None  # no replicates, no interval
+    assert result.parameters[0].low is None  # no replicates, no interval
     median, sigma = result.sizes["volume"]["lognormal"]
     assert 0.15 < median < 0.6 and 0.2 < sigma < 0.9
     assert result.calibrated_project().rocks.volume.kind == "lognormal"

@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 import rockfall_design as rd
 import rockfall_design.api
 import rockfall_design.calibration.fit as fit
-from rockfall_design.calibration.uncertainty import decimals, rounded
+from rockfall_design.calibration.uncertainty import FittedParameter, decimals, rounded
 from rockfall_design.cli.program import main
 from rockfall_design.report.staging import MANIFEST
 
@@ -153,8 +153,8 @@ def test_values_are_written_to_their_intervals_precision(site):
     result = rd.calibrate(site, bootstrap=4, workers=1, rocks=60)
     (p,) = result.parameters
     written = result.calibrated_data()["materials"]["soil"]["restitution"]
-    assert written == rounded(p)["value"] == round(p["value"], decimals(p))
-    assert len(repr(written)) <= 8 and abs(written - p["value"]) <= 0.5 * 10 ** -decimals(p)
+    assert written == rounded(p).value == round(p.value, decimals(p))
+    assert len(repr(written)) <= 8 and abs(written - p.value) <= 0.5 * 10 ** -decimals(p)
 
 
 def test_compare_prints_a_verdict_naming_its_test(site, capsys):
@@ -248,10 +248,10 @@ def test_rounding_keeps_the_value_in_range_and_within_half_a_digit(lo, width, u,
     value = lo + u * width
     low, high = sorted((lo + a * width, lo + b * width))
     low, high = min(low, value), max(high, value)
-    p = {"value": value, "low": low, "high": high, "sd": width / 10, "range": [lo, hi]}
+    p = FittedParameter("x", value, low=low, high=high, sd=width / 10, range=(lo, hi))
     r, places = rounded(p), decimals(p)
-    assert lo <= r["value"] <= hi
-    assert abs(r["value"] - value) <= 0.5 * 10.0 ** -places + 1e-9 * max(1.0, abs(value))
+    assert lo <= r.value <= hi
+    assert abs(r.value - value) <= 0.5 * 10.0 ** -places + 1e-9 * max(1.0, abs(value))
     # Two significant digits of the half-width at least: the rounding is finer than it.
     if high > low:
         assert 10.0 ** -places <= (high - low) / 2 + 1e-12

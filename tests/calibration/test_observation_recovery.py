@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from rockfall_design.calibration.uncertainty import FittedParameter
 from rockfall_design.project import load_project, load_project_text
 
 from .calibration_helpers import SITE
@@ -54,16 +55,16 @@ def _write(path: Path, column: str, values: np.ndarray) -> None:
     path.write_text(f"{column}\n" + "".join(f"{v:.3f}\n" for v in values))
 
 
-def _fit(directory: Path, section: str, seed: int) -> dict[str, dict]:
+def _fit(directory: Path, section: str, seed: int) -> dict[str, FittedParameter]:
     from rockfall_design.calibration.procedure import run_calibration
 
     (directory / "site.yaml").write_text(HEAD + section + FIT + TAIL)
     result = run_calibration(load_project(directory / "site.yaml"), seed=seed)
-    return {p["path"]: p for p in result.parameters}
+    return {p.path: p for p in result.parameters}
 
 
-def _width(p: dict) -> float:
-    return p["high"] - p["low"]
+def _width(p: FittedParameter) -> float:
+    return p.high - p.low
 
 
 @pytest.mark.slow
@@ -104,6 +105,6 @@ def test_two_profiles_fitted_together_recover_the_shared_values(tmp_path, seed):
         # to 43 % of its range), and near the truth: measured within 0.028 of it.
         # The rough intervals of 8 replicates are not asserted to cover it: at seed 2
         # the restitution's (0.315 .. 0.349) misses 0.3 (docs/calibration.md).
-        assert p["identified"], p
-        assert p["width_share"] < 0.15, p
-        assert p["value"] == pytest.approx(truth, abs=0.05), p
+        assert p.identified, p
+        assert p.width_share < 0.15, p
+        assert p.value == pytest.approx(truth, abs=0.05), p

@@ -223,8 +223,8 @@ def test_two_profiles_share_their_materials_by_name(tmp_path, capsys):
     # The site's soil (0.3), not P2's own (0.9); P2's gravel added to the site's.
     assert p2.base["materials"]["soil"]["restitution"] == 0.3
     assert result.problem.base["materials"]["gravel"]["rolling_resistance"] == 0.6
-    assert [s["profile"] for s in result.sets] == [None, "P2"]
-    assert [lv["name"] for lv in result.sets[1]["levels"]] == ["bench"]
+    assert [s.profile for s in result.sets] == [None, "P2"]
+    assert [lv.name for lv in result.sets[1].levels] == ["bench"]
     assert main(["calibrate", str(tmp_path / "site.yaml"), "--out", str(tmp_path / "cal"),
                  "--bootstrap", "0", "--json"]) == 0
     capsys.readouterr()
@@ -235,8 +235,8 @@ def test_two_profiles_share_their_materials_by_name(tmp_path, capsys):
     from rockfall_design.calibration.procedure import run_comparison
 
     cmp = run_comparison(again, None, rocks=30)
-    assert [(s["profile"], s["kind"]) for s in cmp.sets] == [(None, "stops"), ("P2", "stops")]
-    assert cmp.consistent == all(s["consistent"] for s in cmp.sets)
+    assert [(s.profile, s.kind) for s in cmp.sets] == [(None, "stops"), ("P2", "stops")]
+    assert cmp.consistent == all(s.consistent for s in cmp.sets)
 
 
 def test_fit_auto_takes_every_profile_s_materials(tmp_path):

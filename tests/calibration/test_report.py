@@ -85,7 +85,7 @@ def test_calibrate_report_says_what_json_says(site, tmp_path, capsys):
 
 
 def test_an_input_not_pinned_down_is_flagged_and_headlined(result):
-    loose = [{**result.parameters[0], "identified": False, "width_share": 0.9}]
+    loose = [dataclasses.replace(result.parameters[0], identified=False, width_share=0.9)]
     ctx = report_context(dataclasses.replace(result, parameters=loose), figures={})
     assert "not pinned down" in ctx["verdict"] and PATH in ctx["verdict"]
     assert ctx["verdict_state"] == "fit with warnings"
@@ -101,8 +101,8 @@ def test_two_inputs_get_their_correlation(result):
                                   low=(0.05, 0.2), high=(0.7, 0.9))
     two = dataclasses.replace(
         result, problem=problem,
-        parameters=[result.parameters[0], {**result.parameters[0],
-                                           "path": "materials.soil.friction"}],
+        parameters=[result.parameters[0],
+                    dataclasses.replace(result.parameters[0], path="materials.soil.friction")],
         correlation=[[1.0, 0.77], [0.77, 1.0]])
     md = render_markdown(report_context(two, figures={}))
     assert "Correlation of the fitted inputs" in md and "| +0.77 |" in md

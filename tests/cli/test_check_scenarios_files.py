@@ -74,8 +74,9 @@ def test_the_figures_are_of_the_same_rocks_as_the_binding_scenario_checked(tmp_p
     from rockfall_design.studies.scenario_checks import check_across
 
     project = load_project(_weak(tmp_path, 4))
-    summary = check_across(project, registry, rocks=120)
-    result = ScenariosCheckResult(project, summary, registry)
+    found = check_across(project, registry, rocks=120)
+    result = ScenariosCheckResult(project, found, registry)
+    summary = found.to_json()
     drawn = dict(result.binding_check.summary)
     block = next(s for s in summary["scenarios"] if s["index"] == summary["binding"]["index"])
     block = {k: v for k, v in block.items() if k not in ("index", "values", "margin",

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from rockfall_design.cli.program import main
-from rockfall_design.errors import ProjectError
+from rockfall_design.errors import InputError, ProjectError
 from rockfall_design.project import (
     Corridor,
     Project,
@@ -329,3 +329,36 @@ def test_the_api_takes_one_section_at_a_time():
         rd.simulate(corridor)
     result = rd.simulate(corridor.sections[1].project, rocks=20)
     assert result.seed == corridor.sections[1].seed
+
+
+def _without_times(obj: object) -> object:
+    """A JSON object without its wall times (they differ between runs)."""
+    if isinstance(obj, dict):
+        return {k: _without_times(v) for k, v in obj.items() if k != "runtime_s"}
+    if isinstance(obj, list):
+        return [_without_times(v) for v in obj]
+    return obj
+
+
+@pytest.mark.parametrize("command", ["simulate", "check"])
+def test_the_api_runs_a_corridor_as_the_command_line_does(tmp_path, capsys, command):
+    import rockfall_design as rd
+
+    path = tmp_path / "c.yaml"
+    path.write_text(CORRIDOR.replace("capacity_kj: 1000", "capacity_kj: 1"))
+    main([command, str(path), "--json", "--workers", "1", "--seed", "11"])
+    cli = _json(capsys)
+    summary, results = rd.run_corridor(path, command, seed=11)
+    assert _without_times(summary.to_json()) == _without_times(cli)
+    assert len(results) == 2 and [b.name for b in summary.sections] == ["north", "south"]
+    if command == "check":
+        assert summary.ok is False and results[0].ok and not results[1].ok
+    with pytest.raises(InputError, match="a corridor runs"):
+        rd.run_corridor(path, "calibrate")
+
+
+def test_the_api_refuses_a_single_project_as_a_corridor():
+    import rockfall_design as rd
+
+    with pytest.raises(InputError, match="not a corridor"):
+        rd.run_corridor(ROOT / "projects" / "standard_slope.yaml")

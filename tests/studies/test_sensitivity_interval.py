@@ -24,6 +24,7 @@ from rockfall_design.judge.bounds import (
     quantile_upper_index,
 )
 from rockfall_design.project import load_project_text
+from rockfall_design.studies.scenario_result import BoundsLadder, ScenarioBounds, ScenarioResult
 from rockfall_design.studies.sensitivity import LADDER, effect_interval, joint_bounds
 
 from .test_study import RUNOUT
@@ -138,32 +139,35 @@ def test_the_effect_interval_holds_whenever_every_scenario_interval_does():
 
 
 def test_the_joint_bounds_take_the_first_rung_not_below_the_number_of_scenarios():
-    def result(c: float, value: float) -> dict:
+    def result(c: float, value: float) -> ScenarioResult:
         rungs = list(LADDER)
-        return {"bounds": {"confidence": c, "ladder": {
-            "scenarios": rungs,
-            "lower": {"t": [value - k for k in rungs]},
-            "upper": {"t": [value + k for k in rungs]}}}}
+        return _bounded(c, BoundsLadder(rungs, lower={"t": [value - k for k in rungs]},
+                                        upper={"t": [value + k for k in rungs]}))
 
     joint = joint_bounds([result(0.95, 100.0 * i) for i in range(9)])  # 9 scenarios: rung 12
-    assert joint["confidence"] == 0.95
-    assert joint["scenario_confidence"] == pytest.approx(1 - 0.05 / 12)
-    assert [b["t"] for b in joint["lower"]] == [100.0 * i - 12 for i in range(9)]
-    assert [b["t"] for b in joint["upper"]] == [100.0 * i + 12 for i in range(9)]
-    assert joint_bounds([result(0.95, 0.0), result(0.9, 0.0)])["confidence"] == 0.9
-    assert joint_bounds([result(0.95, 0.0), {"bounds": {"confidence": 0.95}}]) is None
+    assert joint.confidence == 0.95
+    assert joint.scenario_confidence == pytest.approx(1 - 0.05 / 12)
+    assert [b["t"] for b in joint.lower] == [100.0 * i - 12 for i in range(9)]
+    assert [b["t"] for b in joint.upper] == [100.0 * i + 12 for i in range(9)]
+    assert joint_bounds([result(0.95, 0.0), result(0.9, 0.0)]).confidence == 0.9
+    assert joint_bounds([result(0.95, 0.0), _bounded(0.95, BoundsLadder([], {}, {}))]) is None
     assert joint_bounds([]) is None
+
+
+def _bounded(confidence: float, ladder: BoundsLadder) -> ScenarioResult:
+    """A scenario's result with nothing but its bounds."""
+    return ScenarioResult(0, 0, 0, 0, "", [], {}, ScenarioBounds(confidence, {}, {}, ladder))
 
 
 def test_the_joint_bounds_are_at_k_itself_when_the_scenarios_were_bounded_for_it():
     # A study's tasks know k: each scenario is bounded for k alone, no rounding up.
-    def result(value: float) -> dict:
-        return {"bounds": {"confidence": 0.95, "ladder": {
-            "scenarios": [9], "lower": {"t": [value - 1]}, "upper": {"t": [value + 1]}}}}
+    def result(value: float) -> ScenarioResult:
+        return _bounded(0.95, BoundsLadder([9], lower={"t": [value - 1]},
+                                           upper={"t": [value + 1]}))
 
     joint = joint_bounds([result(10.0 * i) for i in range(9)])
-    assert joint["scenario_confidence"] == pytest.approx(1 - 0.05 / 9)
-    assert [b["t"] for b in joint["upper"]] == [10.0 * i + 1 for i in range(9)]
+    assert joint.scenario_confidence == pytest.approx(1 - 0.05 / 9)
+    assert [b["t"] for b in joint.upper] == [10.0 * i + 1 for i in range(9)]
 
 
 # ---- on a study ---------------------------------------------------------------------------------
@@ -271,7 +275,7 @@ def test_a_scenario_bounds_are_the_order_statistics_of_its_rocks():
     bounds = block["bounds"]
     assert bounds["upper"][ENERGY] == quantile_upper_bound(energy, 0.95, 0.95)
     assert bounds["lower"][ENERGY] == quantile_lower_bound(energy, 0.95, 0.95)
-    assert result.results[3]["bounds"]["ladder"]["scenarios"] == [4]  # k itself, alone
+    assert result.results[3].bounds.ladder.scenarios == [4]  # k itself, alone
     side = 1 - (1 - 0.95) / 8  # four scenarios: each side of each at 1 - (1 - c) / (2k)
     assert bounds["joint"]["upper"][ENERGY] == quantile_upper_bound(energy, 0.95, side)
     assert bounds["joint"]["lower"][ENERGY] == quantile_lower_bound(energy, 0.95, side)
