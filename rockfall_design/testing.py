@@ -47,11 +47,6 @@ from typing import TYPE_CHECKING, Any
 
 import pytest
 
-from . import CostModel, ProtectiveMeasure, SafetyConcept, hookimpl
-from .api import check, default_registry, validate_project
-from .plugins import load_registry
-from .project import load_project_text
-
 if TYPE_CHECKING:  # pragma: no cover
     from .plugins import Registry
     from .project import Project
@@ -88,6 +83,8 @@ OUTCOMES = ("not_met", "caught", "passed_over", "broken_through", "rebounded",
 
 def _plugin_for(classes: Sequence[type]) -> object:
     """A plugin object whose hooks return ``classes``, by their base class."""
+    from . import CostModel, ProtectiveMeasure, SafetyConcept, hookimpl
+
     def hook(base: type) -> Any:
         chosen = [c for c in classes if isinstance(c, type) and issubclass(c, base)]
         return hookimpl(lambda: chosen)
@@ -128,6 +125,8 @@ def make_registry(*plugins: object, blocked: Iterable[str] = (),
     AssertionError
         If one of ``plugins`` failed to load (the message gives the reason).
     """
+    from .plugins import load_registry
+
     classes = [p for p in plugins if isinstance(p, type)]
     extra: list[tuple[str, object]] = []
     for i, p in enumerate(p for p in plugins if not isinstance(p, type)):
@@ -171,11 +170,15 @@ def _registry(registry: Registry | None, classes: Sequence[type]) -> Registry:
     if registry is not None:
         return registry
     if classes:
+        from .api import default_registry
+
         known = default_registry()
         missing = [c for c in dict.fromkeys(classes) if known.measures.get(c.kind) is not c]
         if missing:
             return make_registry(*missing)
         return known
+    from .api import default_registry
+
     return default_registry()
 
 
@@ -216,6 +219,9 @@ def tiny_slope(
         a bad measure raises :class:`~rockfall_design.errors.ProjectError`
         naming the key, e.g. ``<tiny_slope>:1: measures[0].height: ...``.
     """
+    from .api import validate_project
+    from .project import load_project_text
+
     entries, classes = _measure_dicts(measures)
     data: dict[str, Any] = {
         "name": "tiny slope",
@@ -433,6 +439,7 @@ def run_one_rock(
         {"count": 1, "seed": seed, "density": density, "radius": radius, "release": release})
     project = project.model_copy(update={"rocks": rocks})
 
+    from .api import check
 
     result = check(project, rocks=1, seed=seed, registry=reg, trajectories=0)
     return _rock_run(result, release)
