@@ -163,11 +163,11 @@ def python_page_run(tmp_path_factory: pytest.TempPathFactory) -> PythonPageRun:
 
 def _engine_is_cached() -> bool:
     """True if numba's cache holds the engine's batch kernel (no compile ahead)."""
-    from rockfall_design.engine import _jit, ensemble
+    from rockfall_design.engine import ensemble, jit
 
     cache = getattr(ensemble._run_batch, "_cache", None)
     path = getattr(cache, "_cache_path", None)
-    if not _jit.CACHE or path is None:
+    if not jit.CACHE or path is None:
         return False
     return any(Path(path).glob("ensemble._run_batch-*.nbi"))
 

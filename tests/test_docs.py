@@ -33,6 +33,8 @@ OTHER_PROGRAMS_OPTIONS = {
     "--kernel-only": "benchmarks/engine.py",
     "--no-first-compile": "benchmarks/engine.py",
     "--seeds": "benchmarks/optimise.py",
+    "--no-reference": "benchmarks/optimise.py",
+    "--check-seeds": "benchmarks/optimise.py",
     "--points": "benchmarks/survey.py",
     "--varying-rocks": "benchmarks/survey.py",
     "--nthreads": "dask worker",

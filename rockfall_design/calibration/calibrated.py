@@ -16,8 +16,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..project import Project
+from ..project import Project, dump_yaml
+from ..report.documents import write_report
+from ..report.terminal import fitted_console
+from ..studies.paths import set_input, with_values
+from .charts import cloud_figure, stops_figure
 from .distances import FitStatistics, LevelShare, verdict
+from .document import report_context
 from .fit import FitProblem
 from .observations import Observations, observed_file
 from .terms import SetStatistics
@@ -136,22 +141,16 @@ class ComparisonResult:
 
     def figures(self) -> dict[str, Figure]:
         """The stop positions' figure (:data:`FIGURES` [0])."""
-        from .charts import stops_figure
-
         levels = {s.name: s.x for s in self.levels}
         return {FIGURES[0]: stops_figure(self.observations.x, self.simulated, levels,
                                          f"{self.project.name}: {self.observations.source}")}
 
     def report_context(self, figures: Mapping[str, Figure] | None = None) -> dict[str, Any]:
         """The report's context (:func:`~.document.report_context`)."""
-        from .document import report_context
-
         return report_context(self, figures)
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
-        from ..report.documents import write_report
-
         return write_report(self, directory)
 
     def print(self, console: Console | None = None) -> None:
@@ -306,7 +305,6 @@ class CalibrationResult:
         import copy
         import os
 
-        from ..studies.paths import set_input
 
         data = copy.deepcopy(self.problem.base)
         for p in self.parameters:
@@ -365,8 +363,6 @@ class CalibrationResult:
 
     def calibrated_project(self, spread: bool = True) -> Project:
         """:meth:`calibrated_data` validated as a project."""
-        from ..studies.paths import with_values
-
         return with_values(self.problem.project, {}, base=self.calibrated_data(spread=spread))
 
     def materials_library(self, spread: bool = True) -> dict[str, Any]:
@@ -392,7 +388,6 @@ class CalibrationResult:
         """
         import datetime as dt
 
-        from ..project import dump_yaml
 
         day = when or dt.datetime.now(dt.UTC).strftime("%Y-%m-%d")
         fitted: dict[str, list[str]] = {}
@@ -423,8 +418,6 @@ class CalibrationResult:
 
     def figures(self) -> dict[str, Figure]:
         """The stops' figure and the bootstrap cloud (:data:`FIGURES`)."""
-        from .charts import cloud_figure, stops_figure
-
         levels = {s.name: s.x for s in self.levels}
         return {
             FIGURES[0]: stops_figure(self.observations.x, self.simulated, levels,
@@ -434,14 +427,10 @@ class CalibrationResult:
 
     def report_context(self, figures: Mapping[str, Figure] | None = None) -> dict[str, Any]:
         """The report's context (:func:`~.document.report_context`)."""
-        from .document import report_context
-
         return report_context(self, figures)
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``report.html`` (self-contained) and ``report.md`` (with SVG figures)."""
-        from ..report.documents import write_report
-
         return write_report(self, directory)
 
     def print(self, console: Console | None = None) -> None:
@@ -449,7 +438,6 @@ class CalibrationResult:
         from rich.markup import escape
         from rich.table import Table
 
-        from ..report.terminal import fitted_console
 
         replicates = self.bootstrap_replicates
         kind = ("ROUGH intervals, not " if self.rough else "") + f"{100 * self.confidence:g} %"
@@ -536,7 +524,6 @@ def _print_fit(name: str, fit: FitStatistics, levels: list[LevelShare],
     from rich.markup import escape
     from rich.table import Table
 
-    from ..report.terminal import fitted_console
 
     t = Table(title=f"{escape(name)}: observed and simulated stops ({head})")
     for col in ("", "count", "mean", "p5", "p25", "p50", "p75", "p95"):

@@ -27,6 +27,8 @@ from typing import Any
 
 import numpy as np
 
+from ..engine.columns import STOPPED
+
 __all__ = ["FitStatistics", "LevelShare", "SampleStatistics", "SPREAD_FLOOR", "TEST_LEVEL",
            "distance", "fit_statistics", "level_shares", "objective", "spread", "stop_positions",
            "verdict", "wilson_interval"]
@@ -46,8 +48,6 @@ def stop_positions(x_end: np.ndarray, status: np.ndarray, x_range: tuple[float, 
     x_range
         (first, last) station of the section (m).
     """
-    from ..engine.columns import STOPPED
-
     x = np.asarray(x_end, dtype=float).copy()
     gone = np.asarray(status) != STOPPED
     mid = 0.5 * (x_range[0] + x_range[1])

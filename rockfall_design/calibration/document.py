@@ -24,6 +24,7 @@ import numpy as np
 from ..report.documents import MODEL_LIMITS
 from ..report.sections import Table, inputs_table
 from ..version import __version__
+from .charts import CAPTIONS
 from .distances import FitStatistics, LevelShare, verdict
 from .terms import SetStatistics
 from .uncertainty import INTERVAL, rounded
@@ -297,8 +298,6 @@ def report_context(result: Any,
     --------
     rockfall_design.report.documents.report_context : the other commands' context.
     """
-    from .charts import CAPTIONS
-
     # A calibration has fitted inputs; a comparison (compare) has none. Told
     # apart by that rather than by class, so that this module need not import
     # the results that import it.

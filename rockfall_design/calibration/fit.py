@@ -32,10 +32,12 @@ import numpy as np
 
 from ..errors import ProjectError
 from ..project import Project
+from ..run.simulation import run_study
 from ..studies.executors import stop_if_cancelled
 from ..studies.paths import with_values
 from ..studies.scenarios import scenario_seed
 from .distances import objective, stop_positions
+from .sets import profile_sizes, site_materials
 from .terms import ProfileRun, Term, scales_of, sets_objective, terms_for
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -160,8 +162,6 @@ def _profile_runs(project: Project, sets: Sequence[ObservationSet],
                   materials: dict[str, Any], stations: Sequence[Sequence[float]]
                   ) -> tuple[ProfileRun, ...]:
     """The other profiles as every evaluation runs them: the site's materials, their stations."""
-    from .sets import profile_sizes
-
     runs = []
     for k, (name, other) in enumerate(profiles.items(), start=1):
         sizes = profile_sizes(sets, name)
@@ -217,8 +217,6 @@ def problem_for(project: Project, fit_ranges: Mapping[str, tuple[float, float]],
         A path names no input, or an end of its range is not a valid value
         there, located at ``calibrate.fit.<path>``; or a level outside the section.
     """
-    from .sets import site_materials
-
     base = _base(project, sizes)
     profiles = dict(profiles or {})
     if profiles:  # one table of materials for the site, written to calibrated.yaml too
@@ -278,8 +276,6 @@ def _check_levels(project: Project, levels: Mapping[str, tuple[float, float]] | 
 def simulated_stops(problem: FitProblem, values: Mapping[str, float], seed: int
                     ) -> np.ndarray:
     """Stop stations (m) of ``problem.rocks`` rocks with the inputs set to ``values``."""
-    from ..run.simulation import run_study
-
     # A replicate on a pool's thread stops here, or between batches, once its
     # calibration is given up (Ctrl-C): a thread cannot be stopped from outside.
     stop_if_cancelled()
@@ -291,8 +287,6 @@ def simulated_stops(problem: FitProblem, values: Mapping[str, float], seed: int
 
 def _run(problem: FitProblem, k: int, values: Mapping[str, float], seed: int) -> Any:
     """Run ``k`` of the problem (0: the project's own section) with ``values`` set."""
-    from ..run.simulation import run_study
-
     stop_if_cancelled()
     if k == 0:
         project = with_values(problem.project, values, base=problem.run_base or problem.base)

@@ -20,8 +20,11 @@ from typing import Any
 import numpy as np
 
 from ..project import Project
+from ..project.calibrate import auto_fit_ranges
+from ..studies.executors import run_tasks
 from .calibrated import CalibrationResult, ComparisonResult
 from .distances import fit_statistics, level_shares
+from .fit import problem_for, simulated_sets, simulated_stops
 from .observations import (
     Observations,
     read_observations,
@@ -30,6 +33,7 @@ from .observations import (
 )
 from .sets import Site, profile_sizes, read_site
 from .terms import SetStatistics, set_statistics
+from .uncertainty import ReplicateTask, run_replicate, summarise
 
 __all__ = ["run_calibration", "run_comparison"]
 
@@ -39,15 +43,13 @@ def _observations(project: Project, path: str | os.PathLike[str]) -> Observation
     return read_observations(path, project.slope.x_range, size_limits(project.rocks.density))
 
 
-def _fit_ranges(project: Project, site: Site) -> dict[str, tuple[float, float]]:
+def fit_ranges(project: Project, site: Site) -> dict[str, tuple[float, float]]:
     """The inputs fitted: ``calibrate.fit``; with ``fit: auto`` and profiles, theirs too.
 
     ``fit: auto`` fits the calibrated parameters of every material on every
     section of the site (the project's material of a name where several
     define it, as the profiles run them).
     """
-    from ..project.calibrate import auto_fit_ranges
-
     spec = project.calibrate
     assert spec is not None
     if not (spec.auto and site.profiles):
@@ -78,7 +80,6 @@ def _load_on_this_thread(problem: Any) -> None:
     import scipy.optimize  # noqa: F401 - loaded for the replicates
     import scipy.stats.qmc  # noqa: F401
 
-    from .fit import simulated_stops
 
     simulated_stops(replace(problem, rocks=2), {}, 0)
 
@@ -118,10 +119,6 @@ def run_calibration(
         No ``calibrate:`` section, a bad observation file, a path that is
         not an input, or a range end that is not a valid value.
     """
-    from ..studies.executors import run_tasks
-    from .fit import problem_for
-    from .uncertainty import ReplicateTask, run_replicate, summarise
-
     spec = project.calibrate
     if spec is None:
         raise project.error_at((), "the project has no calibrate: section (the observed stops "
@@ -132,7 +129,7 @@ def run_calibration(
     n_boot = int(spec.bootstrap if bootstrap is None else bootstrap)
     run_seed = int(project.rocks.seed if seed is None else seed)
     sizes = profile_sizes(site.sets, "")
-    problem = problem_for(project, _fit_ranges(project, site), levels=main.levels,
+    problem = problem_for(project, fit_ranges(project, site), levels=main.levels,
                           rocks=n_rocks, kind=spec.distance, sizes=sizes, sets=site.sets,
                           profiles=site.profiles)
     _load_on_this_thread(problem)
@@ -213,8 +210,6 @@ def run_comparison(
     ProjectError
         No file given and no ``calibrate:`` section; a bad observation file.
     """
-    from .fit import problem_for, simulated_sets, simulated_stops
-
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
     if observed is None:

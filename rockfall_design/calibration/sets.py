@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import ProjectError
+from ..project import load_project
 from ..project.inputs import read_named_text
 from .observations import (
     MIN_OBSERVATIONS,
@@ -297,8 +298,6 @@ def _read_set(project: Project, i: int, entry: ObservedSpec, on: Project,
 
 def _load_profile(project: Project, name: str, file: str) -> Project:
     """The profile ``name``'s project, its file relative to ``project``'s."""
-    from ..project import load_project
-
     path = _relative(project, file)
     if not path.is_file():
         raise project.error_at(("calibrate", "profiles", name),

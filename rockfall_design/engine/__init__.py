@@ -6,8 +6,8 @@ pydantic, rich or pandas; the rest of the package builds on this.
 
 from pathlib import Path
 
-# _jit first: it decides where numba caches compiled code, before numba is imported.
-from . import _jit, ensemble  # noqa: I001
+# jit first: it decides where numba caches compiled code, before numba is imported.
+from . import ensemble, jit  # noqa: I001
 from .columns import STATUS_NAMES, G
 from .ensemble import run_ensemble
 from .problem import (
@@ -21,7 +21,7 @@ from .problem import (
 )
 
 # Before anything loads from numba's cache: drop it if any engine source changed.
-_jit.drop_stale_cache(ensemble._run_batch, Path(__file__).resolve().parent)
+jit.drop_stale_cache(ensemble._run_batch, Path(__file__).resolve().parent)
 
 __all__ = [
     "G",

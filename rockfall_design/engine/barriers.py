@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import hot
 from .columns import (
     B_BLOCKS,
     B_RIGID,
@@ -30,11 +29,12 @@ from .columns import (
     O_REBOUNDED,
 )
 from .flight import locate, path_height
+from .jit import hot
 from .rng import next_uniform
 
 
 @hot
-def _barrier_hit(bars, j, h, vx, vy, w, r, m, rng):
+def barrier_hit(bars, j, h, vx, vy, w, r, m, rng):
     """What barrier ``j`` does to a rock reaching its station.
 
     Parameters
@@ -87,7 +87,7 @@ def _barrier_hit(bars, j, h, vx, vy, w, r, m, rng):
 
 
 @hot
-def _meet(bar_out, bar_rec, j, code, h, vx, vy, w, t, m, r):
+def meet_barrier(bar_out, bar_rec, j, code, h, vx, vy, w, t, m, r):
     """Record the first meeting of barrier ``j``."""
     if bar_out[j] != O_NOT_MET:
         return
@@ -150,7 +150,7 @@ def braking_distance(e, sel, d_sel, mel, d_mel):
 
 
 @hot
-def _braked_stop(bars, j, e, vx, x, y, px, py):
+def braked_stop(bars, j, e, vx, x, y, px, py):
     """Where a rock that barrier ``j`` caught at ``x``, ``y`` with energy ``e`` (J) rests.
 
     Its braking distance (:func:`braking_distance`) on from the station in

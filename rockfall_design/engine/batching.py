@@ -69,7 +69,7 @@ hundreds of runs of a few thousand rocks there (its ground edits), for which bat
 of 1, 8 and 64 rocks cost more than they are worth."""
 
 
-class _Batches:
+class Batches:
     """Cuts rocks 0..n-1 into consecutive batches sized to :data:`BATCH_SECONDS`.
 
     Thread-safe. The results do not depend on where the cuts fall (each rock

@@ -8,17 +8,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import hot
 from .columns import G
 from .drag import drag_speed_at, drag_state, drag_stop, drag_time, slip_zero_time
-from .flight import _unit_tangent
+from .flight import unit_tangent
+from .jit import hot
 
 SLIP_TOL = 1e-9
 """Slip sigma = v - r s (m/s), or spin r s (m/s), within which it counts as zero."""
 
 
 @hot
-def _contact_accel(sinb, cosb, v, s, mu, mur, r, q=0.0):
+def contact_accel(sinb, cosb, v, s, mu, mur, r, q=0.0):
     """Accelerations of a rock in contact, moving along a piece.
 
     Parameters
@@ -140,7 +140,7 @@ def constant_phase(v, s, sigma, rolling, a, dsig, dsp, dist, r):
     rolling : bool
         True while the rock rolls without slip.
     a, dsig, dsp : float
-        dv/dt, d(sigma)/dt (m/s^2) and ds/dt (rad/s^2), of :func:`_contact_accel`.
+        dv/dt, d(sigma)/dt (m/s^2) and ds/dt (rad/s^2), of :func:`contact_accel`.
     dist : float
         Distance to the end of the piece (m).
     r : float
@@ -239,7 +239,7 @@ def drag_phase(v, s, sigma, sg, a, dsp, c, vdr, dist, sinb, cosb, mu, mur, r):
     dist : float
         Distance to the end of the piece (m).
     sinb, cosb, mu, mur, r : float
-        As :func:`_contact_accel`.
+        As :func:`contact_accel`.
 
     Returns
     -------
@@ -320,7 +320,7 @@ def _rolling_bound_speed(v, a, c, vdr, sinb, cosb, mu, mur):
 
 
 @hot
-def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
+def start_from_rest(px, py, k, x, y, w, r, mu, mur):
     """Choose piece and direction for a rock at (almost) zero speed.
 
     Returns (k, dirn) with dirn = +1 or -1 for the direction in which the
@@ -341,11 +341,11 @@ def _start_from_rest(px, py, k, x, y, w, r, mu, mur):
     best_d = 0
     for dirn in (1, -1):
         kk = kp if dirn > 0 else km
-        tx, ty = _unit_tangent(px, py, kk)
+        tx, ty = unit_tangent(px, py, kk)
         sinb = -dirn * ty
         cosb = tx
         s = -w * dirn
-        a = _contact_accel(sinb, cosb, 0.0, s, mu, mur, r)[0]
+        a = contact_accel(sinb, cosb, 0.0, s, mu, mur, r)[0]
         if a > best_a:
             best_a = a
             best_k = kk

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import hot
+from .jit import hot
 
 _LN2 = np.log(2.0)
 

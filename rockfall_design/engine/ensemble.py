@@ -16,11 +16,11 @@ from typing import Any
 
 import numpy as np
 
-from . import _first_compile, _native, columns
-from ._jit import DIGEST, compile_notice, compiled
-from .batching import FIRST_BATCH, FIRST_BATCH_FEW_POINTS, _Batches, default_threads
+from . import columns, first_compile, native_code
+from .batching import FIRST_BATCH, FIRST_BATCH_FEW_POINTS, Batches, default_threads
 from .flight import path_tree
 from .forest import F_N, F_STOP
+from .jit import DIGEST, compile_notice, compiled
 from .problem import (
     EngineSettings,
     EnsembleResult,
@@ -31,7 +31,7 @@ from .problem import (
     rock_mass,
 )
 from .profile import (
-    _centre_path_of,
+    centre_path_of,
     element_codes,
     every_piece_units,
     no_units,
@@ -96,7 +96,7 @@ def rock_path(ground, r, max_chord, elems):
 
 
 @compiled(nogil=True)
-def _rock_path_of(ground, r, max_chord, units):
+def rock_path_of(ground, r, max_chord, units):
     """:func:`rock_path` from every element, from ``units`` (``profile.every_piece_units``).
 
     The same path, to the bit; what does not depend on the radius (the arcs'
@@ -108,18 +108,18 @@ def _rock_path_of(ground, r, max_chord, units):
 
 @compiled(nogil=True)
 def _path(ground, r, max_chord, elems, units):
-    """:func:`rock_path` (``elems`` given) or :func:`_rock_path_of` (``elems`` empty).
+    """:func:`rock_path` (``elems`` given) or :func:`rock_path_of` (``elems`` empty).
 
     The one function the kernel calls for a rock's path, and the one call of
-    the sweep (``profile._centre_path_of``) in it: numba compiles every
+    the sweep (``profile.centre_path_of``) in it: numba compiles every
     function between the kernel and the sweep with the sweep's code linked
     in and optimised again, and a chain of three such wrappers cost about a
     tenth of the first compile. ``units`` is used with every element only
-    (``elems`` empty), as ``profile._centre_path_of`` wants.
+    (``elems`` empty), as ``profile.centre_path_of`` wants.
     """
     n = ground.x.shape[0]
     if elems.shape[0] == 0:
-        # Leaving hidden pieces out of the sweep (profile._hidden) pays on a
+        # Leaving hidden pieces out of the sweep (profile.hidden_pieces) pays on a
         # survey of many points; on a section of few it costs more than it
         # saves, and there every rock of a size of its own makes its path
         # (the optimiser's ground edits: about 8 us a rock, twice their
@@ -129,12 +129,12 @@ def _path(ground, r, max_chord, elems, units):
         canon = False
         pieces = units
     else:
-        # survey_path (``elems``): what profile._centre_path does with them.
+        # survey_path (``elems``): what profile.sweep_centre_path does with them.
         prune = True
         codes = elems
         canon = True
         pieces = no_units()
-    px, py, pseg = _centre_path_of(ground.x, ground.y, np.arange(n - 1), r, max_chord, prune,
+    px, py, pseg = centre_path_of(ground.x, ground.y, np.arange(n - 1), r, max_chord, prune,
                                    codes, canon, pieces)
     return Path(px, py, pseg, ground.seg_mat, ground.mats, path_tree(px, py))
 
@@ -348,7 +348,7 @@ def run_ensemble(
         (ground, path0, r0, elems, settings.vector(), max_chord, k64), int(first_index), order,
         rel, _resume(resume, n), stations_rec, bars, out)
     first = FIRST_BATCH if survey else FIRST_BATCH_FEW_POINTS
-    _run_all(batch_args, _Batches(n, batch_size, radius[order], r0, path_seconds, first), n,
+    _run_all(batch_args, Batches(n, batch_size, radius[order], r0, path_seconds, first), n,
              threads, progress)
 
     return EnsembleResult(
@@ -547,16 +547,16 @@ def _writable(a: np.ndarray, dtype: Any = None) -> np.ndarray:
     return out if out.flags.writeable else out.copy()
 
 
-def _run_all(batch_args: Callable[[int, int], tuple], batches: _Batches, n: int,
+def _run_all(batch_args: Callable[[int, int], tuple], batches: Batches, n: int,
              threads: int | None, progress: Callable[[int], None] | None) -> int:
     """Run every batch of the compiled kernel, on one thread or a pool; rocks done.
 
     The kernel is its kept machine code where that fits the arguments
-    (:mod:`._native`: no numba compiler to load), else numba's dispatcher,
+    (:mod:`.native_code`: no numba compiler to load), else numba's dispatcher,
     whose code is then kept for the next process. The first batch runs alone
     if it compiles the kernel (said on stderr).
     """
-    native = _native.load(_run_batch, DIGEST) if n else None
+    native = native_code.load(_run_batch, DIGEST) if n else None
 
     def run(a: int, b: int) -> int:
         t0 = time.perf_counter()
@@ -568,7 +568,7 @@ def _run_all(batch_args: Callable[[int, int], tuple], batches: _Batches, n: int,
             if native is None:
                 # Kept for the next process; not over a valid copy that only
                 # these arguments' types do not fit (read-only arrays, say).
-                _native.export(_run_batch, args, DIGEST)
+                native_code.export(_run_batch, args, DIGEST)
         batches.done(a, b, time.perf_counter() - t0)
         return b - a
 
@@ -579,7 +579,7 @@ def _run_all(batch_args: Callable[[int, int], tuple], batches: _Batches, n: int,
         compiled = (None if native is not None and native.accepts(args0)
                     else compile_notice(_run_batch, args0))
         if compiled is not None:
-            _first_compile.start(_path, args0)
+            first_compile.start(_path, args0)
             n_done += run(*first)
             compiled()
             if progress is not None:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import compiled, hot
 from .columns import G
+from .jit import compiled, hot
 
 
 @hot
@@ -77,7 +77,7 @@ def _clears(px, tree, nv, node, a, b, x0, y0, vx, vy, slack):
 
 
 @hot
-def _first_not_cleared(px, tree, nv, v, dirn, x0, y0, vx, vy):
+def first_not_cleared(px, tree, nv, v, dirn, x0, y0, vx, vy):
     """First vertex from ``v`` on, in direction ``dirn``, that the flight may not clear.
 
     A walk over the heap-ordered tree of :func:`path_tree`: a block cleared
@@ -158,7 +158,7 @@ def next_landing(px, py, tree, x0, y0, vx, vy, k):
     t = (B + sqrt(B^2 + 2 g C)) / g, written without cancellation.
 
     After ``LINEAR_PIECES`` pieces the walk skips every block of pieces that
-    the flight clears by a margin (:func:`_first_not_cleared`), so a flight
+    the flight clears by a margin (:func:`first_not_cleared`), so a flight
     over a survey of n vertices costs O(log n), not O(n). Only pieces that
     the test above would have passed are skipped, and the piece where it
     fails is tested exactly as before: the landing is the same to the bit.
@@ -187,14 +187,14 @@ def next_landing(px, py, tree, x0, y0, vx, vy, k):
                 if walked >= LINEAR_PIECES:
                     # Skip to the piece whose far end the flight may not clear.
                     if vx > 0.0:
-                        v = _first_not_cleared(px, tree, npc + 1, k + 1, 1, x0, y0, vx, vy)
+                        v = first_not_cleared(px, tree, npc + 1, k + 1, 1, x0, y0, vx, vy)
                         if v > npc:
                             return True, (px[npc] - x0) / vx, npc
                         if v - 1 > k:
                             k = v - 1
                             t_in = (px[k] - x0) / vx
                     else:
-                        v = _first_not_cleared(px, tree, npc + 1, k, -1, x0, y0, vx, vy)
+                        v = first_not_cleared(px, tree, npc + 1, k, -1, x0, y0, vx, vy)
                         if v < 0:
                             return True, (px[0] - x0) / vx, -1
                         if v < k:
@@ -258,7 +258,8 @@ def path_tree(px, py):
 
 
 @hot
-def _unit_tangent(px, py, k):
+def unit_tangent(px, py, k):
+    """Unit vector along segment ``k`` of the polyline ``(px, py)`` (from vertex k to k + 1)."""
     dx = px[k + 1] - px[k]
     dy = py[k + 1] - py[k]
     ln = np.hypot(dx, dy)

@@ -47,9 +47,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import hot
 from .columns import M_DBH, M_SD_DBH, M_STEMS, M_TREE_H
 from .flight import locate, path_height
+from .jit import hot
 from .records import WORK_CTX, WORK_STEM
 from .rng import next_uniform_in
 

@@ -1,6 +1,6 @@
 """Impacts: Newton restitution with Coulomb friction and spin, or the lumped-mass law.
 
-PHYSICS.md, 'Impact'. ``_collide`` draws the material's parameters for the
+PHYSICS.md, 'Impact'. ``collide`` draws the material's parameters for the
 impact, applies :func:`impact` and decides between flight and contact.
 """
 
@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import hot
 from .columns import (
     CONTACT,
     FLIGHT,
@@ -30,7 +29,8 @@ from .columns import (
     MODEL_ROUGH_SOFT,
     G,
 )
-from .flight import _unit_tangent
+from .flight import unit_tangent
+from .jit import hot
 from .rng import next_normal, next_uniform, truncated_normal
 
 
@@ -174,7 +174,7 @@ def impact(vx, vy, w, nx, ny, r, model, e, rt, mu, vscale, vsk, rough, rng, tilt
 
 
 @hot
-def _draw(mats, mat, rng, drawn, r):
+def draw_contact(mats, mat, rng, drawn, r):
     """Draw this contact's e, mu and mu_r for material ``mat`` into ``drawn``.
 
     For rough_soft, mu_r is the resistance at low speed of a rock of radius
@@ -190,7 +190,7 @@ def _draw(mats, mat, rng, drawn, r):
 
 
 @hot
-def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn,
+def collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn,
              hop_ratio=0.0):
     """Impact on piece ``k``, then decide between flight and contact.
 
@@ -205,8 +205,8 @@ def _collide(vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn
     """
     seg = pseg[k]
     mat = seg_mat[seg]
-    _draw(mats, mat, rng, drawn, r)
-    tx, ty = _unit_tangent(px, py, k)
+    draw_contact(mats, mat, rng, drawn, r)
+    tx, ty = unit_tangent(px, py, k)
     nx = -ty
     ny = tx
     vx, vy, w = impact(

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import compiled, hot
+from .jit import compiled, hot
 
 #: Relative tolerance used to merge breakpoints and collinear pieces.
 _EPS_X = 1e-12
@@ -55,7 +55,7 @@ def _arc_edges(t1x, t1y, t2x, t2y, max_chord):
 
 
 @compiled
-def _raw_pieces(gx, gy, seg_id, r, max_chord, elems):
+def raw_pieces(gx, gy, seg_id, r, max_chord, elems):
     """Offset segments and circumscribed vertex arcs of an extended profile.
 
     Returns arrays (xa, ya, xb, yb, sid) of straight pieces, each with
@@ -103,7 +103,7 @@ def _convex(tx, ty, i):
 
 @compiled
 def _piece_units(gx, gy, seg_id, max_chord, elems):
-    """What the pieces of :func:`_raw_pieces` are made of, whatever the radius.
+    """What the pieces of :func:`raw_pieces` are made of, whatever the radius.
 
     Each end of a piece is a ground vertex plus a radius times a unit
     vector: the segment's normal for an offset (radius ``r``), the normal at
@@ -197,7 +197,7 @@ def _piece_units(gx, gy, seg_id, max_chord, elems):
 
 @compiled
 def _scaled_pieces(gx, gy, units, r):
-    """The pieces of :func:`_raw_pieces` for radius ``r`` (m) from :func:`_piece_units`."""
+    """The pieces of :func:`raw_pieces` for radius ``r`` (m) from :func:`_piece_units`."""
     va, uax, uay, ka, vb, ubx, uby, kb, ch, sid = units
     npc = va.shape[0]
     xa = np.empty(npc)
@@ -216,10 +216,10 @@ def _scaled_pieces(gx, gy, units, r):
 
 
 def element_codes(n: int) -> np.ndarray:
-    """Codes of every element of a ground of ``n`` vertices (see :func:`_raw_pieces`).
+    """Codes of every element of a ground of ``n`` vertices (see :func:`raw_pieces`).
 
     ``2 i``: the arc at vertex ``i`` (none at the two ends of the ground
-    itself, but :func:`_centre_path` extends it); ``2 i + 1``: the offset of
+    itself, but :func:`sweep_centre_path` extends it); ``2 i + 1``: the offset of
     segment ``i``. In the order of the raw offset curve.
     """
     return np.arange(2 * n - 1, dtype=np.int64)
@@ -243,13 +243,13 @@ def _slope(xa, ya, xb, yb, i):
     return (yb[i] - ya[i]) / (xb[i] - xa[i])
 
 
-#: Vertices on each side of a piece among which :func:`_hidden` looks for one
+#: Vertices on each side of a piece among which :func:`hidden_pieces` looks for one
 #: whose circle hides the piece.
-_HIDE_WINDOW = 32
+HIDE_WINDOW = 32
 
 
 @compiled
-def _hidden(xa, ya, xb, yb, ex, ey, r, tol):
+def hidden_pieces(xa, ya, xb, yb, ex, ey, r, tol):
     """Pieces that lie below the circle of radius ``r`` about some ground vertex.
 
     The centre path is at or above the circle about every ground vertex
@@ -257,7 +257,7 @@ def _hidden(xa, ya, xb, yb, ex, ey, r, tol):
     circle over its whole extent, by a margin, is never on the path: the
     sweep of :func:`centre_path` need not consider it. The circle minus a
     straight piece is concave, so the piece is below it everywhere when it
-    is below at both ends. The vertices tried are the ``_HIDE_WINDOW`` on
+    is below at both ends. The vertices tried are the ``HIDE_WINDOW`` on
     either side of the foot of the piece's normal (the ground point that made
     it), nearest first (:func:`_hides`). On a dense, noisy survey most pieces
     are hidden so (the offsets and arcs of the points in the noise's
@@ -327,15 +327,17 @@ def _search_from(a, v, j):
 
 @hot
 def _hides(xa, ya, xb, yb, ex, ey, r, tol, j0):
-    """Whether the piece from (xa, ya) to (xb, yb) (m) is below a vertex's circle (:func:`_hidden`).
+    """Whether the piece from (xa, ya) to (xb, yb) (m) is below a vertex's circle.
+
+    See :func:`hidden_pieces`.
 
     Returns that and ``j`` (below), to start the next piece's search from
     (``j0``: a guess, any index).
 
     ``ex``, ``ey``: the vertices (m), sorted by x. Those tried are the
-    ``_HIDE_WINDOW`` on each side of ``j``, the index where the foot of the
+    ``HIDE_WINDOW`` on each side of ``j``, the index where the foot of the
     piece's normal falls among them, nearest first: ``j - 1`` down to
-    ``j - _HIDE_WINDOW`` and ``j + 1`` up to ``j + _HIDE_WINDOW`` (``j``
+    ``j - HIDE_WINDOW`` and ``j + 1`` up to ``j + HIDE_WINDOW`` (``j``
     itself is not tried, as it never was: the hidden pieces, and so the
     paths, stay what they were to the bit). A side is left at the first
     vertex that is ``r`` or more away from the piece's near end, in x: every
@@ -353,8 +355,8 @@ def _hides(xa, ya, xb, yb, ex, ey, r, tol, j0):
     m = 1e-9 * (1.0 + abs(ya) + abs(yb)) + 1e5 * tol
     r2 = r * r
     j = _search_from(ex, 0.5 * (xa + xb) + r * dy / ln, j0)
-    lo_end = max(j - _HIDE_WINDOW, 0)
-    hi_end = min(j + _HIDE_WINDOW, n - 1)
+    lo_end = max(j - HIDE_WINDOW, 0)
+    hi_end = min(j + HIDE_WINDOW, n - 1)
     ya_m = ya + m
     yb_m = yb + m
     # A vertex whose circle's top is not above both ends hides nothing (as
@@ -393,7 +395,7 @@ def _under(xa, xb, vx, vy, ya_m, yb_m, top, sr, r, r2):
         vy + np.sqrt(r2 - db * db) > yb_m
 
 
-#: Most edges of a vertex arc for which :func:`_visible_pieces` finds the
+#: Most edges of a vertex arc for which :func:`visible_pieces` finds the
 #: corners by turning a vector (the rounding it adds grows with the turns).
 _MAX_TURNS = 100_000
 
@@ -456,7 +458,7 @@ def _candidate(d, jlo, jhi, n):
     range (and not ``j`` itself).
     """
     w = jlo - 1 - d // 2 if d % 2 == 0 else jhi + 1 + d // 2
-    if w < 0 or w >= n or w < jhi - _HIDE_WINDOW or w > jlo + _HIDE_WINDOW:
+    if w < 0 or w >= n or w < jhi - HIDE_WINDOW or w > jlo + HIDE_WINDOW:
         return -1
     return w
 
@@ -477,7 +479,7 @@ def _surely_under(xa, ya, xb, yb, s, vx, vy, r, r2, mp):
         vy + np.sqrt(r2 - dbh * dbh) > (yb + 2.0 * s) + mp
 
 
-#: Most vertices an arc's middle edges are tried against (:func:`_visible_pieces`).
+#: Most vertices an arc's middle edges are tried against (:func:`visible_pieces`).
 _ARC_CANDIDATES = 6
 
 
@@ -511,11 +513,11 @@ def _highest_within(hx, hy, cx, r, jlo, jhi, side):
 
 
 @compiled
-def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
-    """The pieces of :func:`_raw_pieces` that :func:`_hidden` does not hide.
+def visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
+    """The pieces of :func:`raw_pieces` that :func:`hidden_pieces` does not hide.
 
-    The same arrays, to the bit, as ``_raw_pieces(gx, gy, seg_id, r,
-    max_chord, elems)`` less the pieces ``_hidden`` marks (tried against the
+    The same arrays, to the bit, as ``raw_pieces(gx, gy, seg_id, r,
+    max_chord, elems)`` less the pieces ``hidden_pieces`` marks (tried against the
     vertices whose arcs are in ``elems``), in the same order; every piece if
     not ``prune``. On a dense noisy survey most pieces are the edges of the
     arcs of vertices in the noise's hollows, hidden by their neighbours'
@@ -525,8 +527,8 @@ def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
     rounding of about 1e-16 a turn, far below ``s`` = 1e-9 (1 + |x| + |y| +
     r) m), and an edge that is hidden even so, for sure
     (:func:`_surely_under`), is left out without its exact corners: whatever
-    they are, ``_hidden`` hides it. The others are made exactly as
-    ``_raw_pieces`` makes them and tried exactly (:func:`_hides`).
+    they are, ``hidden_pieces`` hides it. The others are made exactly as
+    ``raw_pieces`` makes them and tried exactly (:func:`_hides`).
 
     The edges between two corners are tangent to the circle of radius ``r``
     about the vertex at their middles, so the foot of their normals is the
@@ -592,7 +594,7 @@ def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
         m = am[kv]
         if m == 0:
             continue
-        # The arc's polygon as _raw_pieces makes it: from the tangent point at
+        # The arc's polygon as raw_pieces makes it: from the tangent point at
         # phi1 through m corners at phi1 + (q + 0.5) delta, radius rc, to the
         # tangent point at phi2.
         phi1 = aphi1[kv]
@@ -693,7 +695,7 @@ def _visible_pieces(gx, gy, seg_id, r, max_chord, elems, prune, tol):
 
 
 @compiled
-def _stable_order(a):
+def stable_order(a):
     """``np.argsort(a, kind="mergesort")`` (stable), fast when ``a`` is nearly sorted.
 
     An insertion sort, whose work is the number of pairs out of order: the
@@ -724,9 +726,9 @@ def _stable_order(a):
 
 @compiled
 def centre_path(gx, gy, seg_mat, r, max_chord):
-    """Centre path of a sphere of radius ``r`` on the ground polyline (see :func:`_centre_path`)."""
-    return _centre_path(gx, gy, seg_mat, r, max_chord, True, np.arange(2 * gx.shape[0] - 1),
-                        False)
+    """Centre path of a sphere of radius ``r`` on the ground (:func:`sweep_centre_path`)."""
+    return sweep_centre_path(gx, gy, seg_mat, r, max_chord, True,
+                             np.arange(2 * gx.shape[0] - 1), False)
 
 
 @compiled(nogil=True)
@@ -736,14 +738,14 @@ def survey_path(gx, gy, seg_mat, r, max_chord, elems):
     The path of :func:`centre_path`, from the offsets of the segments and
     the arcs of the vertices in ``elems`` (sorted codes, see
     :func:`element_codes`), with crossings found from the pieces alone
-    (``canon`` of :func:`_centre_path`). When ``elems`` holds every element
+    (``canon`` of :func:`sweep_centre_path`). When ``elems`` holds every element
     that can be on the path (:func:`path_elements`), it is the same, to the
     bit, as this function over every element
     (tests/engine/test_engine_survey.py): on a dense noisy survey a rock of a
     size of its own then costs the sweep over the tops of the noise instead
     of over every point.
     """
-    return _centre_path(gx, gy, seg_mat, r, max_chord, True, elems, True)
+    return sweep_centre_path(gx, gy, seg_mat, r, max_chord, True, elems, True)
 
 
 def path_elements(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
@@ -802,7 +804,7 @@ def path_elements(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
     scale = max(abs(gx[0]), abs(gx[-1]), abs(gy).max(), 1.0)
     margin = 1e-9 * (scale + r_max)
     reach_vtx = r_min + r_max * (s - 1.0) + margin
-    keep = _near_path(gx, gy, px, py, r_min + margin, reach_vtx)
+    keep = near_path(gx, gy, px, py, r_min + margin, reach_vtx)
     # Every element near the ends: the vertices within reach_vtx of them,
     # and the segments that start (end) there.
     first = np.flatnonzero(gx <= gx[0] + reach_vtx)[-1]
@@ -813,7 +815,7 @@ def path_elements(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
 
 
 @compiled(nogil=True)
-def _near_path(gx, gy, px, py, reach_seg, reach_vtx):
+def near_path(gx, gy, px, py, reach_seg, reach_vtx):
     """Which elements (:func:`element_codes`) are near the polyline (px, py).
 
     A vertex within ``reach_vtx`` of it (m), its arc; a segment within
@@ -874,7 +876,7 @@ def _dist2(x, y, ax, ay, bx, by):
 
 
 @compiled
-def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
+def sweep_centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
     """Centre path of a sphere of radius ``r`` on the ground polyline.
 
     Parameters
@@ -889,7 +891,7 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
         Largest turn of a circumscribed arc edge (rad).
     prune : bool
         Leave out of the sweep the pieces that a vertex's circle hides
-        (:func:`_hidden`); the result is the same, found faster on dense
+        (:func:`hidden_pieces`); the result is the same, found faster on dense
         surveys. False only to test that.
     elems : ndarray of int
         Sorted codes of the ground elements (segment offsets, vertex arcs;
@@ -919,10 +921,10 @@ def _centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
     breakpoints of the pieces; within each elementary interval the lines of the
     covering pieces are walked from the top line at its left end, always
     switching to the line whose crossing comes first (the envelope of lines is
-    convex). Pieces hidden below a vertex's circle (:func:`_hidden`) are
+    convex). Pieces hidden below a vertex's circle (:func:`hidden_pieces`) are
     left out of the walk; every piece's ends stay breakpoints.
     """
-    return _centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, no_units())
+    return centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, no_units())
 
 
 @compiled
@@ -959,7 +961,7 @@ def _extended(gx, gy, r, elems):
 
 @compiled
 def no_units():
-    """Empty :func:`_piece_units`: :func:`_centre_path_of` makes them itself."""
+    """Empty :func:`_piece_units`: :func:`centre_path_of` makes them itself."""
     e = np.empty(0, dtype=np.int64)
     f = np.empty(0)
     k = np.empty(0, dtype=np.int8)
@@ -971,7 +973,7 @@ def every_piece_units(gx, gy, max_chord):
     """:func:`_piece_units` of the whole extended profile, for every radius at once.
 
     A run's rocks of sizes of their own on a section of few points each make
-    their path from these (:func:`_centre_path_of`), made once per batch: the
+    their path from these (:func:`centre_path_of`), made once per batch: the
     trigonometry of the arcs is most of a small section's path.
     """
     ex, ey, eseg, ecodes = _extended(gx, gy, 1.0, np.arange(2 * gx.shape[0] - 1))
@@ -979,8 +981,8 @@ def every_piece_units(gx, gy, max_chord):
 
 
 @compiled
-def _centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, units):
-    """:func:`_centre_path`, from the pieces' ``units`` when given (not ``canon``).
+def centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, units):
+    """:func:`sweep_centre_path`, from the pieces' ``units`` when given (not ``canon``).
 
     ``units``: :func:`every_piece_units` of this ground and ``max_chord``
     (``elems`` then every element), or :func:`no_units`.
@@ -996,7 +998,7 @@ def _centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, units):
         # the elements path_elements keeps, those are the tops the path
         # touches, which hide a piece within a vertex or two, where among
         # every vertex the nearest would be those in the hollows between.
-        xa, ya, xb, yb, sid = _visible_pieces(ex, ey, eseg, r, max_chord, ecodes, prune, tol)
+        xa, ya, xb, yb, sid = visible_pieces(ex, ey, eseg, r, max_chord, ecodes, prune, tol)
         npc = xa.shape[0]
         hidden = np.zeros(npc, np.bool_)
     else:
@@ -1004,7 +1006,7 @@ def _centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, units):
             units = _piece_units(ex, ey, eseg, max_chord, ecodes)
         xa, ya, xb, yb, sid = _scaled_pieces(ex, ey, units, r)
         npc = xa.shape[0]
-        hidden = _hidden(xa, ya, xb, yb, ex, ey, r, tol) if prune else np.zeros(npc, np.bool_)
+        hidden = hidden_pieces(xa, ya, xb, yb, ex, ey, r, tol) if prune else np.zeros(npc, np.bool_)
 
     # Breakpoints: all piece ends inside the section (canon: of the pieces not
     # hidden, since the path does not depend on the others'), and the section ends.
@@ -1025,7 +1027,7 @@ def _centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, units):
     # numba's np.sort (quicksort) takes ~1 us per element on these nearly
     # sorted breakpoints with many repeats; a stable sort gives the same values.
     bp = bp[:nb]
-    bp = bp[_stable_order(bp)]
+    bp = bp[stable_order(bp)]
     # Remove breakpoints closer than round-off.
     ub = np.empty(nb)
     nu = 0
@@ -1039,7 +1041,7 @@ def _centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, units):
         # The pieces (none hidden) in order of xa; stable, so that pieces that
         # start at the same x keep the order of the raw offset curve whatever
         # other pieces are there.
-        order = _stable_order(xa)
+        order = stable_order(xa)
     else:
         order = np.argsort(xa)
     nord = order.shape[0]

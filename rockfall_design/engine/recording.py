@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import hot
 from .columns import (
     C_H,
     C_T,
@@ -33,13 +32,14 @@ from .columns import (
     T_X,
     T_Y,
 )
+from .jit import hot
 
 
 @hot
-def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
+def record_passage(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
     """Record the first downslope passage of station ``j``; True if it was the first.
 
-    Hot path, compiled without reference counting (:func:`~._jit.hot`).
+    Hot path, compiled without reference counting (:func:`~.jit.hot`).
     """
     if not np.isnan(grid_h[j]):
         return False
@@ -57,7 +57,7 @@ def _record(j, h, vx, vy, w, t, m, r, st_user, grid_h, grid_e, grid_v, cross):
 
 
 @hot
-def _traj_row(traj, n, x, y, vx, vy, w, t, mode):
+def traj_row(traj, n, x, y, vx, vy, w, t, mode):
     """Append the state at an event to ``traj`` if there is room; the new count."""
     if n >= traj.shape[0]:
         return n
@@ -72,7 +72,7 @@ def _traj_row(traj, n, x, y, vx, vy, w, t, mode):
 
 
 @hot
-def _record_restart(q, srec, srng, rng, drawn, ctx, mode, xs, yabs, vx, vy, w, t):
+def record_restart(q, srec, srng, rng, drawn, ctx, mode, xs, yabs, vx, vy, w, t):
     """The full state of a rock at the first passage of restart station row ``q``.
 
     ``ctx`` holds (cur_seg, n_imp, n_ev, max_x) at the start of the phase.

@@ -152,7 +152,7 @@ class RockOut(NamedTuple):
         largest x of a restart record, ``work[WORK_STEM:]`` the forest's
         state (``forest.F_*``: where the next stem stands, its material, the
         stems met, whether a stem stopped the rock). The caller allocates it once per batch, so that
-        the rock's loop allocates nothing (see ``_jit.hot``).
+        the rock's loop allocates nothing (see ``jit.hot``).
     """
 
     grid_h: np.ndarray

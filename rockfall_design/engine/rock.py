@@ -9,8 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._jit import hot
-from .barriers import _barrier_hit, _braked_stop, _meet
+from .barriers import barrier_hit, braked_stop, meet_barrier
 from .columns import (
     BR_E,
     BR_X,
@@ -49,12 +48,13 @@ from .columns import (
     UNRESOLVED,
     G,
 )
-from .contact import SLIP_TOL, _contact_accel, _start_from_rest, constant_phase, drag_phase
+from .contact import SLIP_TOL, constant_phase, contact_accel, drag_phase, start_from_rest
 from .drag import along
-from .flight import _unit_tangent, locate, next_landing, path_height
+from .flight import locate, next_landing, path_height, unit_tangent
 from .forest import F_X, has_forest, meet_stem, next_stem, stem_in_flight
-from .impact import _collide, _draw
-from .recording import _record, _record_restart, _traj_row
+from .impact import collide, draw_contact
+from .jit import hot
+from .recording import record_passage, record_restart, traj_row
 from .records import (
     N_WORK,
     REL_H,
@@ -169,7 +169,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
     vy = vy0
     k = locate(px, x, vx)
     y = path_height(px, py, k, x)
-    tx, ty = _unit_tangent(px, py, k)
+    tx, ty = unit_tangent(px, py, k)
     w = -(vx * tx + vy * ty) / r if spin_rolling else w0
     t = 0.0
     n_imp = 0
@@ -216,7 +216,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         if vn > 1e-9:
             mode = FLIGHT
         elif vn < -1e-9:
-            vx, vy, w, mode, cur_seg = _collide(
+            vx, vy, w, mode, cur_seg = collide(
                 vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn, hop_ratio
             )
         else:
@@ -242,7 +242,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         ctx[2] = n_ev
         ctx[3] = max_x
         n_ev += 1
-        n_traj = _traj_row(traj, n_traj, x, y, vx, vy, w, t, mode)
+        n_traj = traj_row(traj, n_traj, x, y, vx, vy, w, t, mode)
 
         if mode == FLIGHT:
             k = locate(px, x, vx)
@@ -268,8 +268,8 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                     yb = y + vy * ts - 0.5 * G * ts * ts
                     vyb = vy - G * ts
                     hb = yb - bars[j, BR_YG]
-                    code, nvx, nvy, nw = _barrier_hit(bars, j, hb, vx, vyb, w, r, m, rng)
-                    _meet(bar_out, bar_rec, j, code, hb, vx, vyb, w, t + ts, m, r)
+                    code, nvx, nvy, nw = barrier_hit(bars, j, hb, vx, vyb, w, r, m, rng)
+                    meet_barrier(bar_out, bar_rec, j, code, hb, vx, vyb, w, t + ts, m, r)
                     if code == O_PASSED_OVER or code == O_PASSED_THROUGH_GAP:
                         j += jstep
                         continue
@@ -283,9 +283,9 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                     while j < st_x.shape[0] and st_x[j] <= xb:
                         ts = (st_x[j] - x) / vx
                         ys = y + vy * ts - 0.5 * G * ts * ts
-                        if _record(j, ys - st_yg[j], vx, vy - G * ts, w, t + ts, m, r,
+                        if record_passage(j, ys - st_yg[j], vx, vy - G * ts, w, t + ts, m, r,
                                    st_user, grid_h, grid_e, grid_v, cross) and st_srow[j] >= 0:
-                            _record_restart(st_srow[j], srec, srng, rng, drawn, ctx, FLIGHT,
+                            record_restart(st_srow[j], srec, srng, rng, drawn, ctx, FLIGHT,
                                             st_x[j], ys, vx, vy - G * ts, w, t + ts)
                         j += 1
                 tb = (xb - x) / vx
@@ -297,7 +297,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                     status = CAUGHT
                     caught_by = hit
                     # The net carries the rock on by its braking distance.
-                    x, y = _braked_stop(bars, hit, e_hit, vx, x, y, px, py)
+                    x, y = braked_stop(bars, hit, e_hit, vx, x, y, px, py)
                     max_x = max(max_x, x)
                     vx = 0.0
                     vy = 0.0
@@ -314,11 +314,11 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                     ts = (st_x[j] - x) / vx
                     ys = y + vy * ts - 0.5 * G * ts * ts
                     if (
-                        _record(j, ys - st_yg[j], vx, vy - G * ts, w, t + ts, m, r,
+                        record_passage(j, ys - st_yg[j], vx, vy - G * ts, w, t + ts, m, r,
                                 st_user, grid_h, grid_e, grid_v, cross)
                         and st_srow[j] >= 0
                     ):
-                        _record_restart(st_srow[j], srec, srng, rng, drawn, ctx, FLIGHT,
+                        record_restart(st_srow[j], srec, srng, rng, drawn, ctx, FLIGHT,
                                         st_x[j], ys, vx, vy - G * ts, w, t + ts)
                     j += 1
             t += tf
@@ -345,7 +345,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             vy -= G * tf
             max_x = max(max_x, x)
             n_imp += 1
-            vx, vy, w, mode, cur_seg = _collide(
+            vx, vy, w, mode, cur_seg = collide(
                 vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn, hop_ratio
             )
             continue
@@ -353,16 +353,16 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         # ---- CONTACT: rolling and/or sliding on piece k ----
         seg = pseg[k]
         if seg != cur_seg:
-            _draw(mats, seg_mat[seg], rng, drawn, r)
+            draw_contact(mats, seg_mat[seg], rng, drawn, r)
             cur_seg = seg
         mu = drawn[1]
         mur = drawn[2]
-        tx, ty = _unit_tangent(px, py, k)
+        tx, ty = unit_tangent(px, py, k)
         vt = vx * tx + vy * ty
         v = abs(vt)
         if v < v_stop:
             # Slow enough to be held, if the ground can hold it.
-            k2, d2 = _start_from_rest(px, py, k, x, y, w, r, mu, mur)
+            k2, d2 = start_from_rest(px, py, k, x, y, w, r, mu, mur)
             if d2 == 0:
                 status = STOPPED
                 vx = 0.0
@@ -371,7 +371,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                 break
             if v <= 1e-12:
                 k = k2
-                tx, ty = _unit_tangent(px, py, k)
+                tx, ty = unit_tangent(px, py, k)
                 dirn = d2
                 v = 0.0
             else:
@@ -387,7 +387,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
         # rolling or slipping (PHYSICS.md, "The rough_soft law").
         vdr = mats[seg_mat[seg], M_VDRAG]
         qd = v * v / (vdr * vdr) if (vdr > 0.0 and mur > 0.0) else 0.0
-        a, dsig, dsp, sgn, s_zero = _contact_accel(sinb, cosb, v, s, mu, mur, r, qd)
+        a, dsig, dsp, sgn, s_zero = contact_accel(sinb, cosb, v, s, mu, mur, r, qd)
         rolling = np.isnan(dsp)
         sigma = v - r * s
         if rolling or abs(sigma) <= SLIP_TOL:
@@ -447,9 +447,10 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                 vs, ts = along(v, a, c, dd)
                 ss = vs / r if rolling else s + dsp * ts
                 hb = y + dy * dd - bars[j, BR_YG]
-                code, nvx, nvy, nw = _barrier_hit(
+                code, nvx, nvy, nw = barrier_hit(
                     bars, j, hb, vs * dx, vs * dy, -ss * dirn, r, m, rng)
-                _meet(bar_out, bar_rec, j, code, hb, vs * dx, vs * dy, -ss * dirn, t + ts, m, r)
+                meet_barrier(bar_out, bar_rec, j, code, hb, vs * dx, vs * dy, -ss * dirn, t + ts,
+                             m, r)
                 if code == O_PASSED_OVER or code == O_PASSED_THROUGH_GAP:
                     j += dirn
                     continue
@@ -467,11 +468,11 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
                 vs, ts = along(v, a, c, dd)
                 ss = vs / r if rolling else s + dsp * ts
                 if (
-                    _record(j, y + dy * dd - st_yg[j], vs * dx, vs * dy, -ss * dirn, t + ts,
+                    record_passage(j, y + dy * dd - st_yg[j], vs * dx, vs * dy, -ss * dirn, t + ts,
                             m, r, st_user, grid_h, grid_e, grid_v, cross)
                     and st_srow[j] >= 0
                 ):
-                    _record_restart(st_srow[j], srec, srng, rng, drawn, ctx, CONTACT, st_x[j],
+                    record_restart(st_srow[j], srec, srng, rng, drawn, ctx, CONTACT, st_x[j],
                                     y + dy * dd, vs * dx, vs * dy, -ss * dirn, t + ts)
                 j += 1
         x = xn
@@ -482,7 +483,7 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             if code == O_CAUGHT:
                 status = CAUGHT
                 caught_by = hit
-                x, y = _braked_stop(bars, hit, e_hit, dx, x, y, px, py)
+                x, y = braked_stop(bars, hit, e_hit, dx, x, y, px, py)
                 max_x = max(max_x, x)
                 vx = 0.0
                 vy = 0.0
@@ -534,16 +535,16 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             continue
         k = k2
         if cr > cl + tol:
-            t2x, t2y = _unit_tangent(px, py, k)
+            t2x, t2y = unit_tangent(px, py, k)
             if vx * -t2y + vy * t2x < 0.0:
-                vx, vy, w, mode, cur_seg = _collide(
+                vx, vy, w, mode, cur_seg = collide(
                     vx, vy, w, k, px, py, pseg, seg_mat, mats, r, v_contact, rng, drawn, hop_ratio
                 )
                 continue
-        t2x, t2y = _unit_tangent(px, py, k)
+        t2x, t2y = unit_tangent(px, py, k)
         vt = vx * t2x + vy * t2y
         vx = vt * t2x
         vy = vt * t2y
 
-    n_traj = _traj_row(traj, n_traj, x, y, vx, vy, w, t, mode)
+    n_traj = traj_row(traj, n_traj, x, y, vx, vy, w, t, mode)
     return status, x, y, n_imp, n_ev, max_x, t, n_traj, caught_by

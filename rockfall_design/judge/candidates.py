@@ -123,7 +123,7 @@ def _product_params(product: Product, fields: Any, declared: DeclaredDesign) -> 
     return params
 
 
-def _sample_params(spec: CandidateSpec) -> list[dict[str, Any]]:
+def sample_params(spec: CandidateSpec) -> list[dict[str, Any]]:
     """A few designs of a candidate to price before the search (the middle first)."""
     out = []
     for t in (0.5, 0.0, 1.0):
@@ -228,13 +228,19 @@ def _check_candidate_values(project: Project, cls: type[ProtectiveMeasure], at: 
         check({"x": value}, at + ("x", end))
 
 
-def _resolve_candidate(
+def resolve_candidate(
     project: Project,
     registry: Registry,
     i: int,
     raw: dict[str, Any],
     catalogue: dict[str, dict[str, Product]],
 ) -> CandidateSpec:
+    """The ``i``-th entry of ``design.candidates`` (``raw``) as a checked candidate spec.
+
+    Its measure type, station and design variables are checked against the
+    plugin's parameter model and ``catalogue``; a problem is the project's
+    error at ``design.candidates[i]``.
+    """
     design = project.design
     assert design is not None
     at = ("design", "candidates", i)

@@ -1,7 +1,7 @@
 """Prices of designs: the cost model resolved once, a design's cost and its bill.
 
 Before any search every candidate's sample design is priced
-(:func:`_check_prices`): a quantity the cost catalogue does not price is an
+(:func:`check_prices`): a quantity the cost catalogue does not price is an
 error at ``design.costs``; then :func:`design_cost` prices the designs of
 the search and :func:`design_bill` itemises the chosen one.
 """
@@ -15,8 +15,8 @@ from ..plugins import guard
 from ..plugins.cost_model import CostModel
 from .candidates import (
     CandidateSpec,
-    _sample_params,
     build_candidate_measure,
+    sample_params,
 )
 from .placing import unknown_plugin_name
 from .records import Bill, BillLine
@@ -158,7 +158,7 @@ def design_bill(
     return Bill(tuple(items), total, spec.length_m, spec.cost_model.name)
 
 
-def _check_prices(
+def check_prices(
     project: Project, registry: Registry, candidates: Sequence[CandidateSpec], model: CostModel
 ) -> None:
     """Every candidate's quantities have a price: else an error at ``design.costs``.
@@ -179,7 +179,7 @@ def _check_prices(
     source = (f"catalogue {design.costs.file}" if design.costs.file
               else "catalogue in design.costs.params")
     for spec in candidates:
-        for params in _sample_params(spec):
+        for params in sample_params(spec):
             try:
                 measure = build_candidate_measure(spec, registry, params)
                 guard(registry).measure(measure).footprint(section)
@@ -199,7 +199,8 @@ def _check_prices(
             break
 
 
-def _resolve_cost_model(project: Project, registry: Registry) -> CostModel:
+def resolve_cost_model(project: Project, registry: Registry) -> CostModel:
+    """The cost model named in ``design.costs``, instantiated with its checked parameters."""
     design = project.design
     assert design is not None
     name = design.costs.model

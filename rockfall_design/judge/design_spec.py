@@ -59,10 +59,10 @@ from ..project.schema import DEFAULT_MAX_ROCKS
 from .candidates import (
     CandidateSpec,
     Product,
-    _resolve_candidate,
     build_candidate_measure,
+    resolve_candidate,
 )
-from .costing import _check_prices, _resolve_cost_model, design_bill, design_cost
+from .costing import check_prices, design_bill, design_cost, resolve_cost_model
 from .margin import DEFAULT_CHECKER_POWER
 from .placing import build_concept, required_figures_problem, unknown_measure_type
 
@@ -177,11 +177,11 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
         for kind, table in design.catalogue.items()
     }
     candidates = tuple(
-        _resolve_candidate(project, registry, i, raw, catalogue)
+        resolve_candidate(project, registry, i, raw, catalogue)
         for i, raw in enumerate(design.candidates)
     )
-    cost_model = _resolve_cost_model(project, registry)
-    _check_prices(project, registry, candidates, cost_model)
+    cost_model = resolve_cost_model(project, registry)
+    check_prices(project, registry, candidates, cost_model)
     concept = build_concept(project, registry)
     _check_required_figures(project, registry, concept)
     residual_count, residual_fraction = design.residual_count, design.residual_fraction

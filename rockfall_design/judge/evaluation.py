@@ -29,7 +29,7 @@ from .bounds import fraction_lower_bound, fraction_upper_bound
 from .outcomes import Judgement, RockFates, judge_measures
 from .placing import (
     PlacedMeasure,
-    _barrier_rows,
+    barrier_rows,
     build_concept,
     build_measures,
     edited_section,
@@ -349,7 +349,7 @@ class Evaluation:
         r = self.study.result
         if not isinstance(p.footprint, Barrier):
             return np.full((r.n, 3), np.nan)
-        _, owners = _barrier_rows(self.placed)
+        _, owners = barrier_rows(self.placed)
         return r.barrier_meeting[:, owners.index(p.index), :3]
 
 
@@ -455,7 +455,7 @@ def _evaluate_placed(
     ``record_speed``: keep the speeds along the section for the speed
     envelope (``check`` and the chosen design's figures; not the optimiser).
     """
-    bars, owners = _barrier_rows(placed)
+    bars, owners = barrier_rows(placed)
     study = run_study(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
                       progress=progress, section=section, barriers=bars, after=after,
                       record_speed=record_speed)

@@ -71,6 +71,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 from ..project.schema import DEFAULT_CHECKER_POWER
+from .bounds import fraction_upper_bound
 
 __all__ = ["DEFAULT_CHECKER_POWER", "MAX_CONFIDENCE", "CheckerMargin", "Margin", "residual_rate"]
 
@@ -167,7 +168,6 @@ def residual_rate(allowed: float, checker_rocks: int, confidence: float, power: 
     """
     from scipy.special import bdtri
 
-    from .bounds import fraction_upper_bound
 
     n = int(checker_rocks)
     if n <= 0 or allowed <= 0.0:

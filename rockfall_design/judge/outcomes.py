@@ -8,7 +8,7 @@ optimiser's screening hand their per-rock facts to :func:`judge_measures`:
   speed and energy there. The exact run takes them from the engine, which
   applies the barrier while the rock moves; the screening derives them from
   the rock's bare-slope passage with :func:`barrier_outcomes`, the same rule
-  as the engine's (``engine.barriers._barrier_hit``: over the top, through a gap,
+  as the engine's (``engine.barriers.barrier_hit``: over the top, through a gap,
   beyond the capacity, else caught or returned, in that order);
 * for every rock, how its path ended (:class:`RockFates`: farthest x, end x,
   status, mass, radius).
@@ -120,7 +120,7 @@ def barrier_outcomes(
 ) -> np.ndarray:
     """Outcome of each rock's first meeting with a barrier, from its passage at the station.
 
-    The engine's rule (``engine.barriers._barrier_hit``), for rocks whose passage
+    The engine's rule (``engine.barriers.barrier_hit``), for rocks whose passage
     is known without running them again: a rock whose centre passes above the
     top passes over; a row of blocks lets it through a gap with probability
     ``max(0, gap - 2 r) / spacing``; beyond the capacity it breaks through;

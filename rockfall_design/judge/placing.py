@@ -276,7 +276,8 @@ def _mel_columns(fp: Barrier) -> dict[str, float]:
             "elongation_mel_m": given(fp.elongation_mel_m)}
 
 
-def _barrier_rows(placed: Sequence[PlacedMeasure]) -> tuple[np.ndarray, list[int]]:
+def barrier_rows(placed: Sequence[PlacedMeasure]) -> tuple[np.ndarray, list[int]]:
+    """The engine's barrier table of the placed barriers, and the index of each row's measure."""
     rows, owners = [], []
     for p in placed:
         fp = p.footprint

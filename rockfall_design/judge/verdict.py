@@ -124,7 +124,7 @@ def _check_rocks(c: Check, met: int, n: int) -> int | None:
     return max(n + 1, int(math.ceil(n * (w / d) ** 2)))
 
 
-def _residual_rocks(reaching: int, n: int, allowed: float, confidence: float) -> int | None:
+def residual_rocks(reaching: int, n: int, allowed: float, confidence: float) -> int | None:
     """Fewest rocks whose Clopper-Pearson bound, at the observed rate, is within ``allowed``.
 
     None when no number of rocks can show it: an allowed fraction of 0, or an
@@ -216,7 +216,7 @@ def _judge_residual(found: _Findings, prot: ProtectRecord) -> None:
         return
     if prot.ok_with_confidence:
         return
-    need = _residual_rocks(reaching, n, allowed, conf)
+    need = residual_rocks(reaching, n, allowed, conf)
     found.needs.append(need)
     if allowed <= 0.0:
         settle = ("no number of rocks shows a fraction of 0: allow a fraction "

@@ -79,7 +79,7 @@ class _Contract:
 _NUMBER_DICT = _Contract((), _is_number_dict, "a dict of str to number (not NaN)")
 
 #: (provider key, method) -> contract; ``__init__`` is the class being instantiated.
-_CONTRACTS: dict[tuple[str, str], _Contract] = {
+CONTRACTS: dict[tuple[str, str], _Contract] = {
     ("measure", "__init__"): _Contract(),
     # ValueError: the measure does not fit on the section (bad input, exit 2).
     ("measure", "footprint"): _Contract(
@@ -100,10 +100,11 @@ _CONTRACTS: dict[tuple[str, str], _Contract] = {
                                          "a str or None"),
 }
 
-_NOUN = {"measure": "measure", "safety": "safety concept", "cost": "cost model"}
+#: Provider key -> the noun a message uses for such a plugin.
+PLUGIN_NOUN = {"measure": "measure", "safety": "safety concept", "cost": "cost model"}
 
 
-def _identify(plugin: Any) -> tuple[str, str]:
+def identify_plugin(plugin: Any) -> tuple[str, str]:
     """``(provider key, name)`` of a measure, safety concept or cost model (class or object)."""
     cls = plugin if inspect.isclass(plugin) else type(plugin)
     known = _IDENTIFIED.get(cls)
@@ -120,7 +121,7 @@ def _identify(plugin: Any) -> tuple[str, str]:
     raise TypeError(f"{cls.__qualname__} is not a measure, safety concept or cost model")
 
 
-#: ``_identify``'s answers by class.
+#: ``identify_plugin``'s answers by class.
 _IDENTIFIED: dict[type, tuple[str, str]] = {}
 
 

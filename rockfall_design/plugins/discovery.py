@@ -23,19 +23,20 @@ from typing import Any
 import pluggy
 from pydantic import BaseModel, ValidationError
 
-from ..errors import PluginError
+from ..errors import InputError, PluginError
+from ..project.messages import did_you_mean
 from . import hookspecs
 from .manager import (
-    _NAME_RE,
-    _SELECTOR_KEY,
+    NAME_RE,
     SECTIONS,
+    SELECTOR_KEY,
     PluginFailure,
     PluginOrigin,
     Registry,
-    _describe_exception,
-    _normalise,
-    _one_line,
+    describe_exception,
     is_real_interrupt,
+    normalise_name,
+    one_line,
     plugin_code,
 )
 from .measure import design_role
@@ -84,7 +85,7 @@ def _validate_class(cls: Any, section: str, base: type, name_attr: str) -> str |
     name = getattr(cls, name_attr, None)
     if not isinstance(name, str) or not name:
         return f"{label} has no {name_attr} (a non-empty string)"
-    if not _NAME_RE.fullmatch(name):
+    if not NAME_RE.fullmatch(name):
         return (f"{label} has {name_attr} {name!r}: use only lower-case letters, digits, "
                 "'_' and '-'")
     params = getattr(cls, "Params", None)
@@ -96,7 +97,7 @@ def _validate_class(cls: Any, section: str, base: type, name_attr: str) -> str |
     example = getattr(cls, "example", None)
     if not isinstance(example, dict):
         return f"{label} ({name_attr} {name!r}) has no example (a dict of parameters)"
-    selector = _SELECTOR_KEY.get(section)
+    selector = SELECTOR_KEY.get(section)
     if selector is not None and selector in example:
         return (f"{label} ({name_attr} {name!r}): example must not contain {selector!r} "
                 "(it holds the parameters only)")
@@ -109,12 +110,12 @@ def _validate_class(cls: Any, section: str, base: type, name_attr: str) -> str |
         where = ".".join(str(p) for p in first.get("loc", ())) or "example"
         more = f" (and {len(errs) - 1} more)" if len(errs) > 1 else ""
         return (f"{label} ({name_attr} {name!r}): example does not validate against "
-                f"Params: {where}: {_one_line(first.get('msg', ''))}{more}")
+                f"Params: {where}: {one_line(first.get('msg', ''))}{more}")
     except BaseException as exc:  # a validator of the plugin's own that breaks
         if is_real_interrupt(exc):
             raise
         return (f"{label} ({name_attr} {name!r}): validating the example raised "
-                f"{_describe_exception(exc)}")
+                f"{describe_exception(exc)}")
     if section == "measures":
         variables = getattr(cls, "design_variables", {})
         if not isinstance(variables, dict):
@@ -198,7 +199,7 @@ class _Loader:
 
     def __init__(self, blocked: Iterable[str]) -> None:
         self.blocked_names = sorted(dict.fromkeys(str(b) for b in blocked))
-        self.blocked_norm = {_normalise(b) for b in self.blocked_names}
+        self.blocked_norm = {normalise_name(b) for b in self.blocked_names}
         self.pm = pluggy.PluginManager(hookspecs.PROJECT_NAME)
         self.pm.add_hookspecs(hookspecs)
         for name in self.blocked_names:
@@ -207,14 +208,14 @@ class _Loader:
         self.plugins: dict[str, _Plugin] = {}
 
     def fail(self, plugin: str, dist: str | None, reason: str) -> None:
-        self.failures.append(PluginFailure(plugin, dist, _one_line(reason)))
+        self.failures.append(PluginFailure(plugin, dist, one_line(reason)))
 
     def register(self, name: str, dist: str | None, obtain: Callable[[], object],
                  version: str | None = None) -> None:
         """Import one plugin (``obtain``) and register it, or note why not."""
         pm = self.pm
-        if (_normalise(name) in self.blocked_norm
-                or (dist and _normalise(dist) in self.blocked_norm)):
+        if (normalise_name(name) in self.blocked_norm
+                or (dist and normalise_name(dist) in self.blocked_norm)):
             pm.set_blocked(name)
             return
         if pm.has_plugin(name) or name in self.plugins:
@@ -230,7 +231,7 @@ class _Loader:
             if is_real_interrupt(exc):
                 raise
             log.debug("plugin %s failed to import", name, exc_info=True)
-            self.fail(name, dist, f"import failed: {_describe_exception(exc)}")
+            self.fail(name, dist, f"import failed: {describe_exception(exc)}")
             return
         try:
             if pm.register(obj, name=name) is None:  # blocked by name
@@ -241,7 +242,7 @@ class _Loader:
             if isinstance(exc, ValueError) and "already registered" in str(exc):
                 reason = "the same object is already registered under another plugin name"
             else:
-                reason = f"cannot register: {_describe_exception(exc)}"
+                reason = f"cannot register: {describe_exception(exc)}"
             self.fail(name, dist, reason)
             return
         why = self._hooks_problem(name, obj)
@@ -310,7 +311,7 @@ class _Loader:
                 raise
             log.debug("hook %s of plugin %s raised", hook_name, plugin.name, exc_info=True)
             self.fail(plugin.name, plugin.distribution,
-                      f"{hook_name} raised {_describe_exception(exc)}")
+                      f"{hook_name} raised {describe_exception(exc)}")
             return []
         if result is None:
             return []
@@ -412,12 +413,12 @@ def blocked_provider(registry: Registry, section: str, name: str) -> str | None:
         The distribution (or plugin) name, or None if no blocked plugin
         provides it (or none can be loaded).
     """
-    blocked = {_normalise(b) for b in registry.blocked}
+    blocked = {normalise_name(b) for b in registry.blocked}
     if not blocked:
         return None
     eps = [ep for ep in _entry_points(None)
-           if _normalise(ep.name) in blocked
-           or (_dist_name(ep) and _normalise(_dist_name(ep) or "") in blocked)]
+           if normalise_name(ep.name) in blocked
+           or (_dist_name(ep) and normalise_name(_dist_name(ep) or "") in blocked)]
     if not eps:
         return None
     try:
@@ -444,15 +445,12 @@ def check_blocked_names(names: Iterable[str]) -> None:
         ``--block NAME: no installed plugin has this name (plugins: ...;
         distributions: ...)``, with "did you mean".
     """
-    from ..errors import InputError
-    from ..project.messages import did_you_mean
-
     eps = _entry_points(None)
     plugins = sorted({ep.name for ep in eps})
     dists = sorted({d for d in (_dist_name(ep) for ep in eps) if d})
-    known = {_normalise(n) for n in (*plugins, *dists)}
+    known = {normalise_name(n) for n in (*plugins, *dists)}
     for name in names:
-        if _normalise(name) not in known:
+        if normalise_name(name) not in known:
             hint = did_you_mean(name, [*plugins, *dists])
             raise InputError(
                 f"--block {name}: no installed plugin has this name{hint} (plugins: "

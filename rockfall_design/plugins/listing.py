@@ -10,6 +10,7 @@ import math
 from typing import Any
 
 from .manager import SECTIONS, Registry, log
+from .parameters import describe_parameters
 
 
 def _parameter_names(cls: type) -> list[str]:
@@ -22,8 +23,6 @@ def _parameter_names(cls: type) -> list[str]:
 
 def parameter_list(cls: type) -> list[dict[str, Any]]:
     """The described parameters of a class; an empty list if its model cannot be read."""
-    from .parameters import describe_parameters
-
     try:
         return describe_parameters(cls.Params)  # type: ignore[attr-defined]
     except Exception:  # pragma: no cover - a model pydantic itself cannot describe

@@ -29,7 +29,8 @@ from .measure import ProtectiveMeasure
 
 log = logging.getLogger(__name__)
 
-_NAME_RE = re.compile(r"[a-z0-9_-]+")
+#: What a plugin name (a distribution or entry-point name) may contain.
+NAME_RE = re.compile(r"[a-z0-9_-]+")
 
 
 @dataclass(frozen=True)
@@ -98,7 +99,7 @@ SECTIONS: tuple[tuple[str, str, str, type, str, str], ...] = (
     ("cost_models", "cost model", "rockfall_design_cost_models", CostModel, "name", "cost"),
 )
 # What a class's example must not contain: the key the project file uses to choose it.
-_SELECTOR_KEY = {"measures": "type", "safety_concepts": "concept"}
+SELECTOR_KEY = {"measures": "type", "safety_concepts": "concept"}
 
 
 @dataclass(frozen=True)
@@ -169,18 +170,19 @@ class Registry:
 # loading
 
 
-def _one_line(text: object) -> str:
+def one_line(text: object) -> str:
+    """``text`` as one line: its whitespace (newlines too) collapsed to single spaces."""
     return " ".join(str(text).split())
 
 
-def _normalise(name: str) -> str:
+def normalise_name(name: str) -> str:
     """PEP 503 normalisation, so that ``My_Plugin`` blocks ``my-plugin``."""
     return re.sub(r"[-_.]+", "-", name).lower()
 
 
-def _describe_exception(exc: BaseException) -> str:
+def describe_exception(exc: BaseException) -> str:
     """``Type: message (file:line)`` with the innermost frame outside importlib."""
-    text = f"{type(exc).__name__}: {_one_line(exc)}" if str(exc) else type(exc).__name__
+    text = f"{type(exc).__name__}: {one_line(exc)}" if str(exc) else type(exc).__name__
     frames = [f for f in traceback.extract_tb(exc.__traceback__)
               if not f.filename.startswith("<")]
     if frames:

@@ -36,6 +36,8 @@ from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 from pydantic_core import PydanticUndefined
 
+from .measure import design_role
+
 __all__ = ["describe_parameters", "unit_from_description", "UNIT_KEY"]
 
 #: The key of ``json_schema_extra`` that holds a parameter's unit.
@@ -220,8 +222,6 @@ def _unit(info: FieldInfo, description: str | None) -> str | None:
 
 def _design(model: type[BaseModel], name: str) -> dict[str, Any] | None:
     """The field's declared design role as JSON (see ``measures.design_role``), or None."""
-    from .measure import design_role
-
     try:
         role = design_role(model, name)
     except ValueError:  # a malformed declaration: the registry reports the class

@@ -25,9 +25,9 @@ import numpy as np
 
 from ..errors import PluginError
 from .concept import Check, SafetyConcept
-from .contract import _CONTRACTS, _NOUN, _identify
+from .contract import CONTRACTS, PLUGIN_NOUN, identify_plugin
 from .cost_model import CostModel
-from .manager import Registry, _describe_exception, is_real_interrupt, plugin_code
+from .manager import Registry, describe_exception, is_real_interrupt, plugin_code
 from .measure import Barrier, ProfileEdit, ProtectiveMeasure, Quantity
 
 #: numpy's message for a write into a read-only array.
@@ -116,10 +116,10 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
         safety concept or cost model, the distribution that provides it, the
         method, and the exception (type, message and the plugin's line).
     """
-    key, name = _identify(plugin)
-    contract = _CONTRACTS[(key, method)]
+    key, name = identify_plugin(plugin)
+    contract = CONTRACTS[(key, method)]
     provider = registry.provider.get((key, name))
-    who = f"{_NOUN[key]} {name!r}" + (f" (from {provider})" if provider else "")
+    who = f"{PLUGIN_NOUN[key]} {name!r}" + (f" (from {provider})" if provider else "")
     # The ground and the rocks' results are the core's: a plugin that wrote
     # into section.y would flatten the ground the engine then runs on.
     handed = _handed_arrays(args)
@@ -147,7 +147,7 @@ def call_plugin(registry: Registry, plugin: Any, method: str, *args: Any) -> Any
                  f"{', '.join(n for n, _ in handed)} are read-only)") if (
             isinstance(exc, ValueError) and _READ_ONLY in str(exc) and handed) else ""
         raise PluginError(
-            f"{who} failed in {method}(): {_describe_exception(exc)}{wrote}; "
+            f"{who} failed in {method}(): {describe_exception(exc)}{wrote}; "
             "this is a bug in the plugin, not in the project"
         ) from exc
     _check_returned(who, method, contract, value, plugin, args, handed)

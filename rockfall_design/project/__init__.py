@@ -58,8 +58,7 @@ The package, one room each (the names above are all importable from here):
 """
 
 # The package's face: every name callers import from ``rockfall_design.project``.
-# The public ones are listed in __all__; the others (limits, field types, and a
-# few private helpers used by rockfall_design.project.sources and the tests) are
+# The public ones are listed in __all__; the others (limits and field types) are
 # re-exported by name.
 from ..errors import ProjectError as ProjectError
 from .calibrate import CalibrateSpec
@@ -74,12 +73,6 @@ from .fields import Positive as Positive
 from .fields import String as String
 from .loading import load_corridor, load_corridor_text, load_project, load_project_text
 from .locator import Locator, params_problem
-from .messages import _ERROR_TYPE as _ERROR_TYPE
-from .messages import _key_text as _key_text
-from .messages import _line_of as _line_of
-from .messages import _message as _message
-from .messages import _options as _options
-from .messages import _yaml_path as _yaml_path
 from .messages import describe as describe
 from .messages import did_you_mean as did_you_mean
 from .messages import to_project_error as to_project_error

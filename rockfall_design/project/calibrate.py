@@ -38,8 +38,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BeforeValidator, Field, PrivateAttr, field_serializer, model_validator
 
-from .fields import Integer, Label, Number, String, _as_number, _choice, _Model
-from .messages import _fail, describe, fmt
+from .fields import Integer, Label, Number, SectionModel, String, as_number, choice
+from .messages import describe, fail, fmt
 
 #: Most inputs fitted at once: every one costs evaluations, and a few dozen
 #: observed stops cannot pin down more than a handful (the bootstrap says which
@@ -55,11 +55,11 @@ MAX_BOOTSTRAP = 2_000
 def _interval(value: Any) -> tuple[float, float]:
     """``[lo, hi]`` with lo < hi, both finite numbers."""
     if not isinstance(value, list | tuple) or len(value) != 2:
-        raise _fail(f"expected [lo, hi], got {describe(value)}")
-    lo = _as_number(value[0], (0,))
-    hi = _as_number(value[1], (1,))
+        raise fail(f"expected [lo, hi], got {describe(value)}")
+    lo = as_number(value[0], (0,))
+    hi = as_number(value[1], (1,))
     if not lo < hi:
-        raise _fail(f"expected [lo, hi] with lo < hi, got [{fmt(lo)}, {fmt(hi)}]")
+        raise fail(f"expected [lo, hi] with lo < hi, got [{fmt(lo)}, {fmt(hi)}]")
     return (lo, hi)
 
 
@@ -93,11 +93,11 @@ MAX_OBSERVED = 20
 MAX_PROFILES = 5
 
 
-class ObservedSpec(_Model):
+class ObservedSpec(SectionModel):
     """One observation set of ``calibrate.observed`` (the list form)."""
 
     kind: Annotated[Literal["stops", "passing_heights", "speeds"],
-                    BeforeValidator(_choice(*OBSERVED_KINDS))] = Field(
+                    BeforeValidator(choice(*OBSERVED_KINDS))] = Field(
         "stops", description="What was observed: stops (where each block stopped), "
         "passing_heights (the centre's height above the ground at the station x) or "
         "speeds (the speed at the station x).")
@@ -117,7 +117,7 @@ class ObservedSpec(_Model):
     weight: Annotated[Number, Field(gt=0.0, le=100.0)] = Field(
         1.0, description="Weight of this set's term in the objective (-).")
     measured: Annotated[Literal["vertical", "normal"],
-                        BeforeValidator(_choice("vertical", "normal"))] = Field(
+                        BeforeValidator(choice("vertical", "normal"))] = Field(
         "vertical", description="passing_heights: the height measured vertically (a "
         "mark on a tree stem) or normal to the slope.")
     levels: dict[Label, Interval] | None = Field(
@@ -127,19 +127,19 @@ class ObservedSpec(_Model):
     @model_validator(mode="after")
     def _check_entry(self) -> "ObservedSpec":
         if (self.file is None) == (self.values is None):
-            raise _fail("give either file: (a CSV) or values: (a list), and only one",
+            raise fail("give either file: (a CSV) or values: (a list), and only one",
                         ("file",))
         passage = self.kind != "stops"
         if passage and self.x is None:
-            raise _fail(f"a {self.kind} observation needs x: the station (m) where the "
+            raise fail(f"a {self.kind} observation needs x: the station (m) where the "
                         "blocks passed", ("x",))
         if not passage and self.x is not None:
-            raise _fail("stops have no station x: each block's stop position is the "
+            raise fail("stops have no station x: each block's stop position is the "
                         "observation", ("x",))
         if self.kind != "passing_heights" and "measured" in self.model_fields_set:
-            raise _fail("measured: is for passing_heights only", ("measured",))
+            raise fail("measured: is for passing_heights only", ("measured",))
         if passage and self.levels is not None:
-            raise _fail("levels: are for stops only", ("levels",))
+            raise fail("levels: are for stops only", ("levels",))
         _check_overlaps(self.levels or {}, ("levels",))
         return self
 
@@ -150,7 +150,7 @@ def _observed(value: Any) -> Any:
         return [{"file": value}]
     if isinstance(value, list | tuple):
         return [{"file": v} if isinstance(v, str) else v for v in value]
-    raise _fail("expected the file of observed stops, or a list of observation sets (kind, "
+    raise fail("expected the file of observed stops, or a list of observation sets (kind, "
                 f"file or values, ...), got {describe(value)}")
 
 
@@ -159,11 +159,11 @@ def _check_overlaps(levels: dict[str, tuple[float, float]], at: tuple) -> None:
     spans = sorted((lo, hi, name) for name, (lo, hi) in levels.items())
     for (_, hi, first), (lo, _, second) in zip(spans, spans[1:], strict=False):
         if lo < hi:
-            raise _fail(f"level {second!r} overlaps level {first!r}: each stop belongs to "
+            raise fail(f"level {second!r} overlaps level {first!r}: each stop belongs to "
                         "one level at most", (*at, second))
 
 
-class CalibrateSpec(_Model):
+class CalibrateSpec(SectionModel):
     """The ``calibrate:`` section: observed stops, the inputs fitted and their ranges."""
 
     observed: Annotated[list[ObservedSpec], Field(min_length=1, max_length=MAX_OBSERVED),
@@ -205,7 +205,7 @@ class CalibrateSpec(_Model):
         0.95, description="Confidence of the parameters' intervals and the levels' shares."
     )
     distance: Annotated[
-        Literal["energy", "wasserstein"], BeforeValidator(_choice("energy", "wasserstein"))
+        Literal["energy", "wasserstein"], BeforeValidator(choice("energy", "wasserstein"))
     ] = Field(
         "energy",
         description="Distance between the observed and simulated stop positions: energy "
@@ -219,16 +219,16 @@ class CalibrateSpec(_Model):
         for i, entry in enumerate(self.observed):
             if entry.profile is not None and entry.profile not in self.profiles:
                 known = ", ".join(self.profiles) or "none"
-                raise _fail(f"no profile {entry.profile!r} under calibrate.profiles "
+                raise fail(f"no profile {entry.profile!r} under calibrate.profiles "
                             f"(given: {known})", ("observed", i, "profile"))
             used.add(entry.profile)
         if not any(e.kind == "stops" and e.profile is None for e in self.observed):
-            raise _fail("observed: needs a set of stops on the project's own section (kind "
+            raise fail("observed: needs a set of stops on the project's own section (kind "
                         "stops, no profile:): the other kinds and profiles add to it",
                         ("observed",))
         for name in self.profiles:
             if name not in used:
-                raise _fail(f"profile {name!r} has no observation: give it one under "
+                raise fail(f"profile {name!r} has no observation: give it one under "
                             "observed: (with profile: " + name + ") or remove it",
                             ("profiles", name))
         return self

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import ProjectError
-from .messages import _key_text, _line_of, _Lines, did_you_mean
+from .messages import Lines, did_you_mean, key_text, line_of
 
 __all__ = ["Corridor", "CorridorSection", "MAX_SECTIONS", "section_seed", "split_sections"]
 
@@ -164,13 +164,13 @@ class _SectionLines(dict):
     """The line map of one section's project: project key path -> (line, kind).
 
     Its keys are the paths of the section's merged project (``("slope",
-    "points", 3)``); :func:`~.messages._key_text` asks :meth:`shown` for
+    "points", 3)``); :func:`~.messages.key_text` asks :meth:`shown` for
     the path as written in the file (``("sections", 1, "slope", "points",
     3)``), so messages name the key where the user wrote it. Plain data
     (no closures), so a section's project can be pickled to a worker.
     """
 
-    def __init__(self, file_lines: _Lines, index: int, given: dict[str, frozenset | None],
+    def __init__(self, file_lines: Lines, index: int, given: dict[str, frozenset | None],
                  shared: dict[str, frozenset | None]) -> None:
         super().__init__()
         self.file_lines = file_lines
@@ -222,7 +222,7 @@ def _merge(shared: dict, section: dict) -> dict:
     return data
 
 
-def split_sections(data: dict, lines: _Lines, source: str) -> list[tuple[str, dict, _Lines]]:
+def split_sections(data: dict, lines: Lines, source: str) -> list[tuple[str, dict, Lines]]:
     """Check the corridor's structure; (name, project data, line map) per section.
 
     Raises
@@ -235,7 +235,7 @@ def split_sections(data: dict, lines: _Lines, source: str) -> list[tuple[str, di
     """
 
     def error(path: tuple, message: str) -> ProjectError:
-        return ProjectError(source, _line_of(path, lines), _key_text(path, lines), message)
+        return ProjectError(source, line_of(path, lines), key_text(path, lines), message)
 
     items = data["sections"]
     if not isinstance(items, list) or not items:

@@ -14,16 +14,16 @@ from .fields import (
     Fraction,
     Integer,
     Positive,
+    SectionModel,
     String,
-    _as_number,
-    _check_typed_item,
-    _Model,
-    _raw,
+    as_number,
+    check_typed_item,
     lines_of_text,
     one_line,
+    plugin_data,
 )
 from .locator import Locator
-from .messages import _fail, describe, did_you_mean, fmt
+from .messages import describe, did_you_mean, fail, fmt
 from .schema import (
     DEFAULT_CHECKER_POWER,
     DEFAULT_MAX_ROCKS,
@@ -38,7 +38,7 @@ from .schema import (
 # --------------------------------------------------------------------------------------
 
 
-class ResidualFraction(_Model):
+class ResidualFraction(SectionModel):
     """``residual: {fraction: F}``: the fraction of rocks allowed in the protected zone."""
 
     fraction: Fraction = Field(
@@ -55,23 +55,23 @@ def _parse_residual(value: Any) -> Any:
         for key in value:
             if key != "fraction":
                 hint = did_you_mean(key, ["fraction"]) if isinstance(key, str) else ""
-                raise _fail(f"unknown key {key!r}{hint}; expected {forms}", (key,))
+                raise fail(f"unknown key {key!r}{hint}; expected {forms}", (key,))
         if "fraction" not in value:
-            raise _fail(f"required key 'fraction' is missing; expected {forms}")
-        fraction = _as_number(value["fraction"], ("fraction",))
+            raise fail(f"required key 'fraction' is missing; expected {forms}")
+        fraction = as_number(value["fraction"], ("fraction",))
         if not 0.0 <= fraction <= 1.0:
-            raise _fail(f"expected a number in 0..1, got {fmt(fraction)}", ("fraction",))
+            raise fail(f"expected a number in 0..1, got {fmt(fraction)}", ("fraction",))
         return ResidualFraction(fraction=fraction)
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise _fail(f"expected {forms}, got {describe(value)}")
+        raise fail(f"expected {forms}, got {describe(value)}")
     if isinstance(value, float) and not (math.isfinite(value) and value.is_integer()):
-        raise _fail(f"expected {forms}, got {describe(value)}")
+        raise fail(f"expected {forms}, got {describe(value)}")
     if value < 0:
-        raise _fail(f"expected {forms}, got {fmt(value)}")
+        raise fail(f"expected {forms}, got {fmt(value)}")
     return int(value)
 
 
-class Site(_Model):
+class Site(SectionModel):
     """The site: how much slope the measures span."""
 
     length_m: Annotated[Positive, Field(le=MAX_COORDINATE_M)] = Field(
@@ -109,22 +109,22 @@ def _mel_figures(entry: dict[str, Any], where: tuple) -> dict[str, float]:
     for key, (low, high, what) in _MEL_KEYS.items():
         if key not in entry:
             continue
-        value = _as_number(entry[key], where + (key,))
+        value = as_number(entry[key], where + (key,))
         if not low < value <= high:
-            raise _fail(
+            raise fail(
                 f"expected a number > {fmt(low)} and <= {fmt(high)} (the product's {what}), "
                 f"got {fmt(value)}",
                 where + (key,),
             )
         out[key] = value
-    if "sel_kj" in out and "capacity_kj" in entry and not out["sel_kj"] < _as_number(
+    if "sel_kj" in out and "capacity_kj" in entry and not out["sel_kj"] < as_number(
             entry["capacity_kj"], where + ("capacity_kj",)):
-        raise _fail(f"expected the SEL below capacity_kj = {fmt(entry['capacity_kj'])} kJ "
+        raise fail(f"expected the SEL below capacity_kj = {fmt(entry['capacity_kj'])} kJ "
                     f"(the MEL), got {fmt(out['sel_kj'])}", where + ("sel_kj",))
     return out
 
 
-def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
+def check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
     """A product catalogue, normalised: ``{kind: {name: {capacity_kj, heights, ...}}}``.
 
     ``capacity_kj`` (kJ) is a number > 0, ``heights`` (m) a non-empty list of
@@ -133,14 +133,14 @@ def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
     other keys of a product are kept as plain data.
     """
     if not isinstance(value, dict):
-        raise _fail(f"expected a mapping {_CATALOGUE_FORM}, got {describe(value)}")
+        raise fail(f"expected a mapping {_CATALOGUE_FORM}, got {describe(value)}")
     catalogue: dict[str, dict[str, dict[str, Any]]] = {}
     for kind, table in value.items():
         if not isinstance(kind, str) or not kind.strip():
-            raise _fail(f"expected the name of a measure type, got {describe(kind)}", (kind,))
+            raise fail(f"expected the name of a measure type, got {describe(kind)}", (kind,))
         one_line(kind, (kind,))
         if not isinstance(table, dict):
-            raise _fail(
+            raise fail(
                 f"expected a mapping of product name -> {{capacity_kj: E, heights: [h, ...]}}, "
                 f"got {describe(table)}",
                 (kind,),
@@ -149,13 +149,13 @@ def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
         for name, entry in table.items():
             where = (kind, name)
             if not isinstance(name, str) or not name.strip():
-                raise _fail(
+                raise fail(
                     f"expected a product name, got {describe(name)} (quote names such as '100')",
                     where,
                 )
             one_line(name, where)
             if not isinstance(entry, dict):
-                raise _fail(
+                raise fail(
                     f"expected a mapping {{capacity_kj: E, heights: [h, ...]}}, "
                     f"got {describe(entry)}",
                     where,
@@ -163,31 +163,31 @@ def _check_products(value: Any) -> dict[str, dict[str, dict[str, Any]]]:
             for key in ("capacity_kj", "heights"):
                 if key not in entry:
                     what = "energy class (kJ)" if key == "capacity_kj" else "heights (m)"
-                    raise _fail(f"required key {key!r} is missing (the product's {what})", where)
-            capacity = _as_number(entry["capacity_kj"], where + ("capacity_kj",))
+                    raise fail(f"required key {key!r} is missing (the product's {what})", where)
+            capacity = as_number(entry["capacity_kj"], where + ("capacity_kj",))
             if capacity <= 0:
-                raise _fail(
+                raise fail(
                     f"expected a number > 0, got {fmt(capacity)}", where + ("capacity_kj",)
                 )
             heights_raw = entry["heights"]
             if not isinstance(heights_raw, list | tuple) or not heights_raw:
-                raise _fail(
+                raise fail(
                     f"expected a non-empty list of heights (m), got {describe(heights_raw)}",
                     where + ("heights",),
                 )
             heights: list[float] = []
             for j, item in enumerate(heights_raw):
-                h = _as_number(item, where + ("heights", j))
+                h = as_number(item, where + ("heights", j))
                 if h <= 0:
-                    raise _fail(f"expected a number > 0, got {fmt(h)}", where + ("heights", j))
+                    raise fail(f"expected a number > 0, got {fmt(h)}", where + ("heights", j))
                 if h in heights:
-                    raise _fail(f"height {fmt(h)} is listed twice", where + ("heights", j))
+                    raise fail(f"height {fmt(h)} is listed twice", where + ("heights", j))
                 heights.append(h)
             rest = {k: v for k, v in entry.items() if k not in ("capacity_kj", "heights")}
             products[name] = {
                 "capacity_kj": capacity,
                 "heights": heights,
-                **_raw(rest, where),
+                **plugin_data(rest, where),
                 **_mel_figures(entry, where),
             }
         catalogue[kind] = products
@@ -200,26 +200,26 @@ def _parse_products(value: Any) -> Any:
         return None
     if isinstance(value, str):
         if not value.strip():
-            raise _fail("must not be empty (a catalogue file, e.g. catalogue_products.yaml)")
+            raise fail("must not be empty (a catalogue file, e.g. catalogue_products.yaml)")
         return value
     if not isinstance(value, dict):
-        raise _fail(
+        raise fail(
             f"expected a catalogue file (a path) or a mapping {_CATALOGUE_FORM}, "
             f"got {describe(value)}"
         )
-    return _check_products(value)
+    return check_products(value)
 
 
 def _parse_cost_params(value: Any) -> Any:
     if value is None:
         return None
     if not isinstance(value, dict):
-        raise _fail(f"expected a mapping of the cost model's parameters, got {describe(value)}")
+        raise fail(f"expected a mapping of the cost model's parameters, got {describe(value)}")
     lines_of_text(value)
-    return _raw(value, number_keys=True)
+    return plugin_data(value, number_keys=True)
 
 
-class DesignCosts(_Model):
+class DesignCosts(SectionModel):
     """``design.costs``: the cost model and its parameters (a file or inline)."""
 
     model: Annotated[String, Field(min_length=1)] = Field(
@@ -235,11 +235,11 @@ class DesignCosts(_Model):
     @model_validator(mode="after")
     def _one_source(self) -> "DesignCosts":
         if self.file is None and self.params is None:
-            raise _fail(
+            raise fail(
                 "give the cost model's parameters: file: PATH (a YAML file) or params: {...}"
             )
         if self.file is not None and self.params is not None:
-            raise _fail("give only one of file and params", ("params",))
+            raise fail("give only one of file and params", ("params",))
         return self
 
 
@@ -251,23 +251,23 @@ def _check_options(value: Any, subpath: tuple) -> list:
         extra = next((k for k in value if k != "options"), None)
         if extra is not None:
             hint = did_you_mean(extra, ["options"]) if isinstance(extra, str) else ""
-            raise _fail(
+            raise fail(
                 f"unknown key {extra!r}{hint}; expected {{options: [...]}}", subpath + (extra,)
             )
-        raise _fail("required key 'options' is missing: expected {options: [...]}", subpath)
+        raise fail("required key 'options' is missing: expected {options: [...]}", subpath)
     options = value["options"]
     where = subpath + ("options",)
     if not isinstance(options, list | tuple) or not options:
-        raise _fail(f"expected a non-empty list of options, got {describe(options)}", where)
+        raise fail(f"expected a non-empty list of options, got {describe(options)}", where)
     seen: list = []
     for k, item in enumerate(options):
         if item is None or not isinstance(item, bool | int | float | str):
-            raise _fail(
+            raise fail(
                 f"expected a number, string or boolean, got {describe(item)}", where + (k,)
             )
-        _raw(item, where + (k,))
+        plugin_data(item, where + (k,))
         if any(type(item) is type(s) and item == s for s in seen):
-            raise _fail(f"option {fmt(item)} is listed twice", where + (k,))
+            raise fail(f"option {fmt(item)} is listed twice", where + (k,))
         seen.append(item)
     return list(options)
 
@@ -276,21 +276,21 @@ def _check_candidate_value(value: Any, subpath: tuple) -> Any:
     """A candidate parameter: a fixed value, a range [min, max] or {options: [...]}."""
     if isinstance(value, list | tuple):
         if len(value) != 2:
-            raise _fail(
+            raise fail(
                 f"expected a range [min, max] of two numbers, got {describe(value)}; "
                 "for a choice write {options: [...]}",
                 subpath,
             )
         for k, item in enumerate(value):
             if isinstance(item, bool) or not isinstance(item, int | float):
-                raise _fail(
+                raise fail(
                     f"a range [min, max] needs numbers, got {describe(item)}; "
                     "for a choice write {options: [...]}",
                     subpath + (k,),
                 )
-        low, high = _as_number(value[0], subpath + (0,)), _as_number(value[1], subpath + (1,))
+        low, high = as_number(value[0], subpath + (0,)), as_number(value[1], subpath + (1,))
         if not low < high:
-            raise _fail(
+            raise fail(
                 f"expected a range [min, max] with min < max, got [{fmt(low)}, {fmt(high)}]; "
                 "for a fixed value give the number",
                 subpath,
@@ -299,8 +299,8 @@ def _check_candidate_value(value: Any, subpath: tuple) -> Any:
     if isinstance(value, dict):
         return {"options": _check_options(value, subpath)}
     if value is None or not isinstance(value, bool | int | float | str):
-        raise _fail(f"expected {_VALUE_FORMS}, got {describe(value)}", subpath)
-    return _raw(value, subpath)
+        raise fail(f"expected {_VALUE_FORMS}, got {describe(value)}", subpath)
+    return plugin_data(value, subpath)
 
 
 def _check_product_choice(value: Any, subpath: tuple) -> Any:
@@ -313,47 +313,47 @@ def _check_product_choice(value: Any, subpath: tuple) -> Any:
     elif isinstance(value, str):
         names = [value]
     elif not isinstance(value, list | tuple) or not value:
-        raise _fail(
+        raise fail(
             f"expected a product name or a non-empty list of names, got {describe(value)}",
             subpath,
         )
     for k, name in enumerate(names):
         at = where if isinstance(value, str) else where + (k,)
         if not isinstance(name, str) or not name.strip():
-            raise _fail(f"expected a product name, got {describe(name)}", at)
+            raise fail(f"expected a product name, got {describe(name)}", at)
         if name in names[:k]:
-            raise _fail(f"product {name!r} is listed twice", at)
-    return _raw(value, subpath)
+            raise fail(f"product {name!r} is listed twice", at)
+    return plugin_data(value, subpath)
 
 
 def _parse_candidates(value: Any) -> list[dict[str, Any]]:
     """``design.candidates``: a non-empty list of mappings with ``type`` and ``x: [min, max]``."""
     if not isinstance(value, list | tuple) or not value:
-        raise _fail(
+        raise fail(
             "expected a non-empty list of candidate measures (mappings such as "
             f"{{type: fence, x: [60, 110]}}), got {describe(value)}"
         )
     candidates = []
     for i, item in enumerate(value):
-        _check_typed_item(
+        check_typed_item(
             item, i, "a candidate measure (a mapping such as {type: fence, x: [60, 110]})"
         )
         if "x" not in item:
-            raise _fail(
+            raise fail(
                 "required key 'x' is missing (the station range [min, max] (m) where the "
                 "optimiser may place the measure)",
                 (i,),
             )
         x = item["x"]
         if not isinstance(x, list | tuple) or len(x) != 2:
-            raise _fail(
+            raise fail(
                 f"expected a station range [min, max] (m), got {describe(x)}; the optimiser "
                 "places the measure within it",
                 (i, "x"),
             )
-        low, high = _as_number(x[0], (i, "x", 0)), _as_number(x[1], (i, "x", 1))
+        low, high = as_number(x[0], (i, "x", 0)), as_number(x[1], (i, "x", 1))
         if not low < high:
-            raise _fail(
+            raise fail(
                 f"expected a station range [min, max] with min < max, "
                 f"got [{fmt(low)}, {fmt(high)}]",
                 (i, "x"),
@@ -363,7 +363,7 @@ def _parse_candidates(value: Any) -> list[dict[str, Any]]:
             if key in ("type", "x"):
                 continue
             if not isinstance(key, str):
-                raise _fail(f"keys must be names, got {describe(key)}", (i, key))
+                raise fail(f"keys must be names, got {describe(key)}", (i, key))
             if key == "product":
                 candidate[key] = _check_product_choice(item_value, (i, key))
             else:
@@ -381,16 +381,16 @@ def _parse_scenarios(value: Any) -> Any:
         if (isinstance(share, int | float) and not isinstance(share, bool)
                 and math.isfinite(share) and 0 < share <= 1):
             return {"share": float(share)}
-        raise _fail(f"expected a number > 0 and <= 1, got {describe(share)}", ("share",))
+        raise fail(f"expected a number > 0 and <= 1, got {describe(share)}", ("share",))
     if isinstance(value, dict):
         extra = sorted(str(k) for k in value if k != "share")
         if extra:
-            raise _fail(f"unknown key {extra[0]!r}; expected share", (extra[0],))
-        raise _fail("expected {share: S}", ())
-    raise _fail(f"expected all or {{share: S}} (0 < S <= 1), got {describe(value)}")
+            raise fail(f"unknown key {extra[0]!r}; expected share", (extra[0],))
+        raise fail("expected {share: S}", ())
+    raise fail(f"expected all or {{share: S}} (0 < S <= 1), got {describe(value)}")
 
 
-class Design(_Model):
+class Design(SectionModel):
     """``design:``, what the least-cost optimiser may build and how it checks a design.
 
     Candidate parameters are kept raw (the measure plugins are loaded later,
@@ -498,7 +498,7 @@ class Design(_Model):
         n, m = len(self.candidates), self.max_measures
         count = math.comb(n + m, m) - 1
         if count > MAX_FAMILIES:
-            raise _fail(
+            raise fail(
                 f"{n} candidates with max_measures {m} make {count:,} families of designs to "
                 f"search, at most {MAX_FAMILIES:,} are allowed: lower max_measures or "
                 "merge candidates",

@@ -46,8 +46,8 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, model_validator
 
 from ..errors import ProjectError
-from .fields import Number, Positive, String, _Model
-from .messages import _fail
+from .fields import Number, Positive, SectionModel, String
+from .messages import fail
 
 __all__ = ["BlockFrequency", "DesignBlockSpec", "MAX_SURVEY_BLOCKS", "SURVEY_COLUMNS",
            "inline_survey", "parse_block_survey"]
@@ -59,7 +59,7 @@ SURVEY_COLUMNS = {"volume_m3": "volume", "mass_kg": "mass"}
 MAX_SURVEY_BLOCKS = 1_000_000
 
 
-class BlockFrequency(_Model):
+class BlockFrequency(SectionModel):
     """The power law :math:`N(>V) = a V^{-b}`: falls per year larger than ``V`` (m3)."""
 
     a: Positive = Field(description="Falls per year of a volume of more than 1 m3 (1/year).")
@@ -68,7 +68,7 @@ class BlockFrequency(_Model):
         "et al. 2003).")
 
 
-class DesignBlockSpec(_Model):
+class DesignBlockSpec(SectionModel):
     """``rocks.design_block``: a survey's percentile, or a return period's block."""
 
     survey: String | None = Field(
@@ -92,23 +92,23 @@ class DesignBlockSpec(_Model):
         from_survey = self.survey is not None or self.blocks is not None
         from_period = self.return_period_years is not None or self.frequency is not None
         if from_survey and from_period:
-            raise _fail("give either a survey (survey, percentile) or a return period "
+            raise fail("give either a survey (survey, percentile) or a return period "
                         "(return_period_years, frequency), not both", ("return_period_years",))
         if from_survey:
             if self.blocks is None:
-                raise _fail("the survey file was not read (give survey: a CSV file name)",
+                raise fail("the survey file was not read (give survey: a CSV file name)",
                             ("survey",))
             if self.percentile is None:
-                raise _fail("give the percentile (%) of the surveyed blocks taken as the "
+                raise fail("give the percentile (%) of the surveyed blocks taken as the "
                             "design block, e.g. percentile: 98", ("percentile",))
             return self
         if self.return_period_years is None or self.frequency is None:
             missing = "frequency" if self.return_period_years is not None else \
                 "return_period_years"
-            raise _fail("give the design block as survey: blocks.csv with percentile: 98, "
+            raise fail("give the design block as survey: blocks.csv with percentile: 98, "
                         "or as return_period_years with frequency: {a, b}", (missing,))
         if self.percentile is not None:
-            raise _fail("percentile goes with a survey, not with a return period",
+            raise fail("percentile goes with a survey, not with a return period",
                         ("percentile",))
         return self
 

@@ -23,86 +23,89 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from .inputs import strip_controls
-from .messages import _fail, describe, did_you_mean, fmt
+from .messages import describe, did_you_mean, fail, fmt
 
 # --------------------------------------------------------------------------------------
 # Strict scalars and the base model
 # --------------------------------------------------------------------------------------
 
 
-def _as_number(value: Any, subpath: tuple = ()) -> float:
+def as_number(value: Any, subpath: tuple = ()) -> float:
     """``value`` as a finite float; bools, strings and None are rejected."""
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise _fail(f"expected a number, got {describe(value)}", subpath)
+        raise fail(f"expected a number, got {describe(value)}", subpath)
     try:
         number = float(value)
     except OverflowError:
-        raise _fail("number is too large", subpath) from None
+        raise fail("number is too large", subpath) from None
     if not math.isfinite(number):
-        raise _fail(f"must be finite, got {fmt(number)}", subpath)
+        raise fail(f"must be finite, got {fmt(number)}", subpath)
     return number
 
 
-def _as_integer(value: Any) -> int:
+def as_integer(value: Any) -> int:
     """``value`` as an int; integral floats (``1000.0``) are accepted, bools are not."""
     if isinstance(value, float) and not isinstance(value, bool):
         if not math.isfinite(value):
-            raise _fail(f"must be finite, got {fmt(value)}")
+            raise fail(f"must be finite, got {fmt(value)}")
         if value.is_integer():
             return int(value)
     if isinstance(value, bool) or not isinstance(value, int):
-        raise _fail(f"expected an integer, got {describe(value)}")
+        raise fail(f"expected an integer, got {describe(value)}")
     return value
 
 
 def _as_string(value: Any) -> str:
     if not isinstance(value, str):
-        raise _fail(f"expected a string, got {describe(value)}")
+        raise fail(f"expected a string, got {describe(value)}")
     return value
 
 
 def _as_bool(value: Any) -> bool:
     if not isinstance(value, bool):
-        raise _fail(f"expected true or false, got {describe(value)}")
+        raise fail(f"expected true or false, got {describe(value)}")
     return value
 
 
-def _as_list(value: Any) -> list:
+def as_list(value: Any) -> list:
+    """``value`` as a list (a tuple converted); anything else is a validation error."""
     if isinstance(value, tuple):
         return list(value)
     if not isinstance(value, list):
-        raise _fail(f"expected a list, got {describe(value)}")
+        raise fail(f"expected a list, got {describe(value)}")
     return value
 
 
-def _pair(what: str) -> Callable[[Any], tuple[float, float]]:
+def number_pair(what: str) -> Callable[[Any], tuple[float, float]]:
     """Validator for a ``[a, b]`` pair of finite numbers, ``what`` naming it in messages."""
 
     def check(value: Any) -> tuple[float, float]:
         if not isinstance(value, list | tuple) or len(value) != 2:
-            raise _fail(f"expected a pair {what}, got {describe(value)}")
-        return (_as_number(value[0], (0,)), _as_number(value[1], (1,)))
+            raise fail(f"expected a pair {what}, got {describe(value)}")
+        return (as_number(value[0], (0,)), as_number(value[1], (1,)))
 
     return check
 
 
-def _choice(*options: str) -> Callable[[Any], str]:
+def choice(*options: str) -> Callable[[Any], str]:
+    """Validator for one of the strings ``options``, with "did you mean" on a near miss."""
+
     def check(value: Any) -> str:
         if value not in options or not isinstance(value, str):
             hint = did_you_mean(value, options) if isinstance(value, str) else ""
-            raise _fail(f"expected one of {', '.join(options)}, got {describe(value)}{hint}")
+            raise fail(f"expected one of {', '.join(options)}, got {describe(value)}{hint}")
         return value
 
     return check
 
 
-def _none_as_empty(value: Any) -> Any:
+def none_as_empty(value: Any) -> Any:
     """An empty section (``analysis:`` with nothing under it) means "all defaults"."""
     return {} if value is None else value
 
 
-Number = Annotated[float, BeforeValidator(_as_number)]
-Integer = Annotated[int, BeforeValidator(_as_integer)]
+Number = Annotated[float, BeforeValidator(as_number)]
+Integer = Annotated[int, BeforeValidator(as_integer)]
 String = Annotated[str, BeforeValidator(_as_string)]
 Boolean = Annotated[bool, BeforeValidator(_as_bool)]
 #: Text shown to people (a project's name): control characters, which would
@@ -124,7 +127,7 @@ def one_line(value: Any, subpath: tuple = ()) -> Any:
     key, not silently changed: the file says something else than intended.
     """
     if isinstance(value, str) and _NOT_ONE_LINE.search(value):
-        raise _fail("expected one line of text without control characters (a newline, a "
+        raise fail("expected one line of text without control characters (a newline, a "
                     "tab, an escape), got " + describe(value), subpath)
     return value
 
@@ -154,7 +157,7 @@ NonNegative = Annotated[Number, Field(ge=0.0)]
 Positive = Annotated[Number, Field(gt=0.0)]
 
 
-class _Model(BaseModel):
+class SectionModel(BaseModel):
     """Base of every section: unknown keys are rejected with "did you mean"."""
 
     model_config = ConfigDict(extra="forbid", validate_default=False)
@@ -165,7 +168,7 @@ class _Model(BaseModel):
         if isinstance(data, cls):
             return data
         if not isinstance(data, dict):
-            raise _fail(f"expected a mapping of key: value, got {describe(data)}")
+            raise fail(f"expected a mapping of key: value, got {describe(data)}")
         fields = list(cls.model_fields)
         for key in data:
             if key not in cls.model_fields:
@@ -173,7 +176,7 @@ class _Model(BaseModel):
                     hint = did_you_mean(key, fields) or f"; expected one of {', '.join(fields)}"
                 else:
                     hint = f"; keys must be names, expected one of {', '.join(fields)}"
-                raise _fail(f"unknown key {key!r}{hint}", (key,))
+                raise fail(f"unknown key {key!r}{hint}", (key,))
         return data
 
 
@@ -182,7 +185,7 @@ class _Model(BaseModel):
 # --------------------------------------------------------------------------------------
 
 
-def _raw(value: Any, subpath: tuple = (), *, number_keys: bool = False) -> Any:
+def plugin_data(value: Any, subpath: tuple = (), *, number_keys: bool = False) -> Any:
     """Plain YAML data for a plugin, checked and copied.
 
     Accepts null, booleans, strings, integers, finite floats, lists and
@@ -195,76 +198,77 @@ def _raw(value: Any, subpath: tuple = (), *, number_keys: bool = False) -> Any:
         return value
     if isinstance(value, float):
         if not math.isfinite(value):
-            raise _fail(f"must be finite, got {fmt(value)}", subpath)
+            raise fail(f"must be finite, got {fmt(value)}", subpath)
         return value
     if isinstance(value, list | tuple):
-        return [_raw(item, subpath + (i,), number_keys=number_keys) for i, item in enumerate(value)]
+        return [plugin_data(item, subpath + (i,), number_keys=number_keys)
+                for i, item in enumerate(value)]
     if isinstance(value, dict):
         copied = {}
         for key, item in value.items():
             number = isinstance(key, int | float) and not isinstance(key, bool)
             if number and number_keys:
                 if not math.isfinite(key):
-                    raise _fail(f"keys must be finite, got {fmt(key)}", subpath + (key,))
+                    raise fail(f"keys must be finite, got {fmt(key)}", subpath + (key,))
             elif not isinstance(key, str):
-                raise _fail(f"keys must be names, got {describe(key)}", subpath + (key,))
-            copied[key] = _raw(item, subpath + (key,), number_keys=number_keys)
+                raise fail(f"keys must be names, got {describe(key)}", subpath + (key,))
+            copied[key] = plugin_data(item, subpath + (key,), number_keys=number_keys)
         return copied
-    raise _fail(f"unsupported value: {describe(value)}", subpath)
+    raise fail(f"unsupported value: {describe(value)}", subpath)
 
 
 
-def _check_typed_item(item: Any, i: int, expected: str) -> None:
+def check_typed_item(item: Any, i: int, expected: str) -> None:
     """An entry of ``measures:`` or ``design.candidates``: a mapping with a string ``type``."""
     if not isinstance(item, dict):
-        raise _fail(f"expected {expected}, got {describe(item)}", (i,))
+        raise fail(f"expected {expected}, got {describe(item)}", (i,))
     if "type" not in item:
-        raise _fail("required key 'type' is missing (the kind of measure, e.g. fence)", (i,))
+        raise fail("required key 'type' is missing (the kind of measure, e.g. fence)", (i,))
     kind = item["type"]
     if not isinstance(kind, str):
-        raise _fail(f"expected the name of a measure type, got {describe(kind)}", (i, "type"))
+        raise fail(f"expected the name of a measure type, got {describe(kind)}", (i, "type"))
     if not kind.strip():
-        raise _fail("must not be empty (the kind of measure, e.g. fence)", (i, "type"))
+        raise fail("must not be empty (the kind of measure, e.g. fence)", (i, "type"))
 
-def _parse_measures(value: Any) -> list[dict[str, Any]]:
+def parse_measures(value: Any) -> list[dict[str, Any]]:
     """``measures:``: a list of mappings, each with a non-empty string ``type``."""
     if value is None:
         return []
     if not isinstance(value, list | tuple):
-        raise _fail(f"expected a list of measures (mappings with a type), got {describe(value)}")
+        raise fail(f"expected a list of measures (mappings with a type), got {describe(value)}")
     measures = []
     for i, item in enumerate(value):
-        _check_typed_item(item, i, "a measure (a mapping such as {type: fence, x: 70, ...})")
-        measures.append(_raw(item, (i,)))
+        check_typed_item(item, i, "a measure (a mapping such as {type: fence, x: 70, ...})")
+        measures.append(plugin_data(item, (i,)))
     return measures
 
 
-_DEFAULT_CONCEPT = "spang"
+DEFAULT_CONCEPT = "spang"
 
 
-def _parse_safety(value: Any) -> dict[str, Any]:
+def parse_safety(value: Any) -> dict[str, Any]:
     """``safety:``: a mapping with a string ``concept`` (default spang), listed first."""
     if value is None:
-        return {"concept": _DEFAULT_CONCEPT}
+        return {"concept": DEFAULT_CONCEPT}
     if not isinstance(value, dict):
-        raise _fail(
+        raise fail(
             f"expected a mapping (concept: NAME and its parameters), got {describe(value)}"
         )
-    concept = value.get("concept", _DEFAULT_CONCEPT)
+    concept = value.get("concept", DEFAULT_CONCEPT)
     if not isinstance(concept, str):
-        raise _fail(
+        raise fail(
             f"expected the name of a safety concept, got {describe(concept)}", ("concept",)
         )
     if not concept.strip():
-        raise _fail("must not be empty (the name of a safety concept, e.g. spang)", ("concept",))
-    rest = _raw({k: v for k, v in value.items() if k != "concept"})
+        raise fail("must not be empty (the name of a safety concept, e.g. spang)", ("concept",))
+    rest = plugin_data({k: v for k, v in value.items() if k != "concept"})
     return {"concept": concept, **rest}
 
 
-def _plain_copy(value: Any, what: str) -> Any:
-    """:func:`_raw` for data a program passes in: problems are a ValueError (a bug)."""
+def plain_copy(value: Any, what: str) -> Any:
+    """:func:`plugin_data` for data a program passes in: problems are a ValueError (a bug)."""
     try:
-        return _raw(value)
+        return plugin_data(value)
     except PydanticCustomError as exc:
         where = "".join(f"[{p!r}]" for p in (exc.context or {}).get("subpath", ()))
         raise ValueError(f"{what}{where}: {exc.message()}") from None

@@ -13,21 +13,23 @@ from pydantic import ValidationError
 from pydantic_core import PydanticCustomError
 
 from ..errors import ProjectError
-from .design import _check_products
-from .fields import _raw, lines_of_text
+from .corridor import Corridor, CorridorSection, section_seed, split_sections
+from .design import check_products
+from .fields import lines_of_text, plugin_data
 from .inputs import read_named_text, read_text, strip_controls
 from .locator import Locator
 from .messages import (
-    _fail,
-    _key_text,
-    _line_of,
-    _Lines,
-    _yaml_path,
+    Lines,
     describe,
+    fail,
+    key_text,
+    line_of,
     to_project_error,
     unquoted,
+    yaml_path,
 )
 from .model import Project
+from .sources import resolve_inputs
 from .terrain_corridor import terrain_corridor
 from .yaml_file import parse_yaml
 
@@ -76,7 +78,7 @@ def load_project_text(
         if key not in data:
             continue
         raise ProjectError(
-            source, _line_of((key,), lines), key,
+            source, line_of((key,), lines), key,
             "this file lists sections (a corridor): load it with load_corridor; simulate, "
             "check, optimise and study run every section",
         )
@@ -84,7 +86,7 @@ def load_project_text(
     return _validated(data, lines, source, base)
 
 
-def _parse_top(text: str, source: str) -> tuple[dict, _Lines]:
+def _parse_top(text: str, source: str) -> tuple[dict, Lines]:
     """The YAML of a project file: a mapping of its top-level keys, and its line map."""
     data, lines = parse_yaml(text, source)
     if data is None:
@@ -94,7 +96,7 @@ def _parse_top(text: str, source: str) -> tuple[dict, _Lines]:
             got = describe(data)
         raise ProjectError(
             source,
-            _line_of((), lines),
+            line_of((), lines),
             "",
             f"expected a mapping of top-level keys (name, slope, materials, rocks, ...), "
             f"got {got}",
@@ -102,11 +104,9 @@ def _parse_top(text: str, source: str) -> tuple[dict, _Lines]:
     return data, lines
 
 
-def _validated(data: dict, lines: _Lines, source: str, base: Path) -> Project:
+def _validated(data: dict, lines: Lines, source: str, base: Path) -> Project:
     """A project from parsed data and its line map: files resolved, validated, catalogues."""
     # A slope from a survey file and materials from a library become inline data here.
-    from .sources import resolve_inputs
-
     data = resolve_inputs(data, lines, source, base)
     try:
         project = Project.model_validate(data)
@@ -123,7 +123,7 @@ def _validated(data: dict, lines: _Lines, source: str, base: Path) -> Project:
 
 def _catalogue_file(
     project: Project, relative: str, base_dir: Path, at: tuple, what: str
-) -> tuple[str, Any, _Lines]:
+) -> tuple[str, Any, Lines]:
     """Read and parse a catalogue file named in the project: (shown name, data, lines)."""
     path = Path(relative)
     if not path.is_absolute():
@@ -139,10 +139,10 @@ def _catalogue_file(
     return shown, data, lines
 
 
-def _custom_error(exc: PydanticCustomError, source: str, lines: _Lines) -> ProjectError:
-    """A ``_fail`` raised outside a model -> a ProjectError located by its subpath."""
-    path = _yaml_path(tuple((exc.context or {}).get("subpath", ())), lines)
-    return ProjectError(source, _line_of(path, lines), _key_text(path, lines), exc.message())
+def _custom_error(exc: PydanticCustomError, source: str, lines: Lines) -> ProjectError:
+    """A ``fail`` raised outside a model -> a ProjectError located by its subpath."""
+    path = yaml_path(tuple((exc.context or {}).get("subpath", ())), lines)
+    return ProjectError(source, line_of(path, lines), key_text(path, lines), exc.message())
 
 
 def attach_catalogues(project: Project, base_dir: Path) -> None:
@@ -155,7 +155,7 @@ def attach_catalogues(project: Project, base_dir: Path) -> None:
         )
         try:
             with unquoted():
-                design._catalogue = _check_products(data)
+                design._catalogue = check_products(data)
         except PydanticCustomError as exc:
             raise _custom_error(exc, shown, lines) from None
         design._products_locator = Locator(shown, lines, quote=False)
@@ -169,11 +169,11 @@ def attach_catalogues(project: Project, base_dir: Path) -> None:
         try:
             with unquoted():
                 if not isinstance(data, dict):
-                    raise _fail(
+                    raise fail(
                         f"expected a mapping of the cost model's parameters, got {describe(data)}"
                     )
                 lines_of_text(data)  # a currency or product name of one line, no control characters
-                design._cost_params = _raw(data, number_keys=True)
+                design._cost_params = plugin_data(data, number_keys=True)
         except PydanticCustomError as exc:
             raise _custom_error(exc, shown, lines) from None
         design._costs_locator = Locator(shown, lines, quote=False)
@@ -204,16 +204,14 @@ def load_corridor_text(
     ProjectError
         For the first problem, located in the file (``sections[1].slope...``).
     """
-    from .corridor import Corridor, CorridorSection, section_seed, split_sections
-
     data, lines = _parse_top(text, source)
     base = Path(source).parent if base_dir is None else Path(base_dir)
     where = None
     if "corridor" in data:
         # Sections along a road, cut from a DEM (the terrain extra).
         def error(path: Any, message: str) -> ProjectError:
-            full = _yaml_path(tuple(path), lines)
-            return ProjectError(source, _line_of(full, lines), _key_text(full, lines), message)
+            full = yaml_path(tuple(path), lines)
+            return ProjectError(source, line_of(full, lines), key_text(full, lines), message)
 
         data, where = terrain_corridor(data, error, base)
     if "sections" not in data:

@@ -15,14 +15,14 @@ from pydantic import BaseModel, ValidationError
 
 from ..errors import Interrupted, PluginError, ProjectError
 from .messages import (
-    _key_text,
-    _line_of,
-    _param_problems,
-    _strict_problems,
-    _yaml_path,
     describe,
     did_you_mean,
+    key_text,
+    line_of,
+    param_problems,
+    strict_problems,
     unquoted,
+    yaml_path,
 )
 
 
@@ -61,13 +61,13 @@ class Locator:
 
     def line(self, path: Sequence[str | int]) -> int | None:
         """Line of ``path`` (or of its nearest existing ancestor); None if unknown."""
-        return _line_of(_yaml_path(self.prefix + tuple(path), self._lines), self._lines)
+        return line_of(yaml_path(self.prefix + tuple(path), self._lines), self._lines)
 
     def error_at(self, path: Sequence[str | int], message: str) -> ProjectError:
         """A :class:`ProjectError` at ``path`` (see :meth:`.Project.error_at`)."""
-        full = _yaml_path(self.prefix + tuple(path), self._lines)
+        full = yaml_path(self.prefix + tuple(path), self._lines)
         return ProjectError(
-            self.source, _line_of(full, self._lines), _key_text(full, self._lines), message
+            self.source, line_of(full, self._lines), key_text(full, self._lines), message
         )
 
     def unknown_name(
@@ -101,12 +101,12 @@ class Locator:
         # then the problem earliest in the file
         located = []
         for order, (loc, message, rank) in enumerate(problems):
-            full = _yaml_path(self.prefix + path + loc, self._lines)
-            line = _line_of(full, self._lines)
+            full = yaml_path(self.prefix + path + loc, self._lines)
+            line = line_of(full, self._lines)
             located.append((rank, line if line is not None else 0, order, full, message))
         *_, full, message = min(located, key=lambda item: item[:3])
         raise ProjectError(
-            self.source, _line_of(full, self._lines), _key_text(full, self._lines), message
+            self.source, line_of(full, self._lines), key_text(full, self._lines), message
         )
 
 
@@ -115,13 +115,13 @@ def _check_params(
 ) -> tuple[BaseModel | None, list[tuple[tuple, str, int]]]:
     """``(instance, [])`` if ``data`` is valid for ``model``, else ``(None, problems)``."""
     problems: list[tuple[tuple, str, int]] = []  # (location, message, rank)
-    _strict_problems(model, data, (), problems)
+    strict_problems(model, data, (), problems)
     try:
         # A plugin's validators are plugin code: what they print goes to stderr.
         with contextlib.redirect_stdout(sys.stderr):
             instance = model.model_validate(data)
     except ValidationError as exc:
-        problems.extend(_param_problems(model, exc.errors()))
+        problems.extend(param_problems(model, exc.errors()))
     except BaseException as exc:
         # pydantic turns a validator's ValueError or AssertionError into a
         # validation error; anything else is a bug in the plugin's model

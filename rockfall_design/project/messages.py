@@ -25,16 +25,16 @@ from ..errors import ProjectError
 # Values described, "did you mean", and a validator's error with its place
 # --------------------------------------------------------------------------------------
 
-_ERROR_TYPE = "rockfall_project"
+ERROR_TYPE = "rockfall_project"
 
 
-def _fail(message: str, subpath: tuple = ()) -> PydanticCustomError:
+def fail(message: str, subpath: tuple = ()) -> PydanticCustomError:
     """An error to raise from a validator.
 
     ``subpath`` is appended to the location pydantic reports, so a model-level
     check can point at the field (or list item) it is about.
     """
-    return PydanticCustomError(_ERROR_TYPE, "{message}", {"message": message, "subpath": subpath})
+    return PydanticCustomError(ERROR_TYPE, "{message}", {"message": message, "subpath": subpath})
 
 
 def fmt(value: Any) -> str:
@@ -93,16 +93,16 @@ def did_you_mean(word: str, candidates: Any) -> str:
 
 
 #: key path -> (1-based line, node kind: "map" | "seq" | "scalar")
-_Lines = dict[tuple, tuple[int, str]]
+Lines = dict[tuple, tuple[int, str]]
 
 
-def _key_text(path: tuple, lines: _Lines) -> str:
+def key_text(path: tuple, lines: Lines) -> str:
     """Dotted key path as the user sees it: ``rocks.release[1].x``."""
     shown = getattr(lines, "shown", None)
     if shown is not None:
         # One section of a corridor: the key as written in the file
         # (``sections[1].slope...``), see project/corridor.py.
-        return _key_text(shown(path), lines.file_lines)  # type: ignore[attr-defined]
+        return key_text(shown(path), lines.file_lines)  # type: ignore[attr-defined]
     text = ""
     prefix: tuple = ()
     for element in path:
@@ -117,7 +117,7 @@ def _key_text(path: tuple, lines: _Lines) -> str:
     return text
 
 
-def _yaml_path(loc: tuple, lines: _Lines) -> tuple:
+def yaml_path(loc: tuple, lines: Lines) -> tuple:
     """Drop list indices that normalisation added (a single zone or material name
     stored as a list): an int under a YAML mapping or scalar that is not one of its keys."""
     path: tuple = ()
@@ -135,7 +135,7 @@ def _yaml_path(loc: tuple, lines: _Lines) -> tuple:
     return path
 
 
-def _line_of(path: tuple, lines: _Lines) -> int | None:
+def line_of(path: tuple, lines: Lines) -> int | None:
     """Line of ``path`` or of its nearest ancestor present in the file."""
     for end in range(len(path), -1, -1):
         hit = lines.get(path[:end])
@@ -156,11 +156,12 @@ _BOUNDS = {
 }
 
 
-def _message(error: dict) -> str:
+def error_message(error: dict) -> str:
+    """The plain-language message of one pydantic validation error (its type and context)."""
     kind = error["type"]
     ctx = error.get("ctx") or {}
     value = error.get("input")
-    if kind == _ERROR_TYPE:
+    if kind == ERROR_TYPE:
         return str(ctx["message"])
     if kind == "missing":
         return "required key is missing"
@@ -190,27 +191,27 @@ def _message(error: dict) -> str:
 
 
 def to_project_error(
-    exc: ValidationError, source: str, lines: _Lines, model: type[BaseModel]
+    exc: ValidationError, source: str, lines: Lines, model: type[BaseModel]
 ) -> ProjectError:
     located = []
     for order, error in enumerate(exc.errors()):
         loc = tuple(error["loc"])
         ctx = error.get("ctx") or {}
-        if error["type"] == _ERROR_TYPE:
+        if error["type"] == ERROR_TYPE:
             loc += tuple(ctx.get("subpath", ()))
         prefix = ""
         if loc and loc[-1] == "[key]":  # a bad mapping key, e.g. a material named 1
             loc = loc[:-1]
             prefix = "invalid key: "
-        path = _yaml_path(loc, lines)
-        line = _line_of(path, lines)
+        path = yaml_path(loc, lines)
+        line = line_of(path, lines)
         if error["type"] == "missing":
             message = _missing_message(_navigate(model, loc)[1], loc)
         else:
-            message = prefix + _message(error)
+            message = prefix + error_message(error)
         located.append((line if line is not None else 0, order, path, line, message))
     _, _, path, line, message = min(located, key=lambda item: item[:2])
-    return ProjectError(source, line, _key_text(path, lines), message)
+    return ProjectError(source, line, key_text(path, lines), message)
 
 
 # --------------------------------------------------------------------------------------
@@ -222,13 +223,13 @@ _SEQUENCE_ORIGINS = (list, tuple, set, frozenset, Sequence)
 _MAPPING_ORIGINS = (dict, Mapping)
 
 
-def _options(annotation: Any) -> list[Any]:
+def annotation_options(annotation: Any) -> list[Any]:
     """The alternatives of an annotation: ``Annotated`` unwrapped, unions flattened."""
     origin = typing.get_origin(annotation)
     if origin is Annotated:
-        return _options(typing.get_args(annotation)[0])
+        return annotation_options(typing.get_args(annotation)[0])
     if origin in _UNION_ORIGINS:
-        return [option for arg in typing.get_args(annotation) for option in _options(arg)]
+        return [option for arg in typing.get_args(annotation) for option in annotation_options(arg)]
     return [annotation]
 
 
@@ -275,12 +276,12 @@ def _field_of(model: type[BaseModel], key: Any) -> Any:
     return None
 
 
-def _strict_problems(annotation: Any, value: Any, loc: tuple, problems: list) -> None:
+def strict_problems(annotation: Any, value: Any, loc: tuple, problems: list) -> None:
     """Append ``(loc, message, 1)`` for values pydantic's lax mode would wrongly accept."""
     if isinstance(value, float) and not math.isfinite(value):
         problems.append((loc, f"must be finite, got {fmt(value)}", 1))
         return
-    options = _options(annotation)
+    options = annotation_options(annotation)
     kinds = _accepts(options)
     if isinstance(value, bool):
         if "number" in kinds and not kinds & {"bool", "any"}:
@@ -308,7 +309,7 @@ def _strict_problems(annotation: Any, value: Any, loc: tuple, problems: list) ->
                 inner = (typing.get_args(mapping) or (Any, Any))[-1]
             else:
                 inner = Any
-            _strict_problems(inner, item, loc + (key,), problems)
+            strict_problems(inner, item, loc + (key,), problems)
         return
     if isinstance(value, list | tuple):
         sequence = next((o for o in options if typing.get_origin(o) in _SEQUENCE_ORIGINS), None)
@@ -318,7 +319,7 @@ def _strict_problems(annotation: Any, value: Any, loc: tuple, problems: list) ->
                 inner = args[i] if i < len(args) else Any
             else:
                 inner = args[0] if args else Any
-            _strict_problems(inner, item, loc + (i,), problems)
+            strict_problems(inner, item, loc + (i,), problems)
 
 
 def _navigate(model: type[BaseModel], loc: tuple) -> tuple[tuple, Any, Any]:
@@ -332,7 +333,7 @@ def _navigate(model: type[BaseModel], loc: tuple) -> tuple[tuple, Any, Any]:
     annotation: Any = model
     owner: Any = None
     for element in loc:
-        options = _options(annotation)
+        options = annotation_options(annotation)
         model_option = next((o for o in options if _is_model(o)), None)
         mapping = next((o for o in options if typing.get_origin(o) in _MAPPING_ORIGINS), None)
         sequence = next((o for o in options if typing.get_origin(o) in _SEQUENCE_ORIGINS), None)
@@ -365,7 +366,7 @@ def _navigate(model: type[BaseModel], loc: tuple) -> tuple[tuple, Any, Any]:
 _NUMBER_ERRORS = {"float_type", "float_parsing", "int_type", "int_parsing"}
 
 
-def _param_problems(model: type[BaseModel], errors: list[Any]) -> list[tuple[tuple, str, int]]:
+def param_problems(model: type[BaseModel], errors: list[Any]) -> list[tuple[tuple, str, int]]:
     """Pydantic errors of a plugin model -> (location, one-line message, rank).
 
     The rank is 0 for an unknown key, reported before anything else, 1
@@ -380,7 +381,7 @@ def _param_problems(model: type[BaseModel], errors: list[Any]) -> list[tuple[tup
             problems.append((key_loc, "invalid key: " + _param_message(model, error)[1], 1))
             continue
         loc, owner, annotation = _navigate(model, tuple(error["loc"]))
-        options = _options(annotation)
+        options = annotation_options(annotation)
         if len(options) > 1 and len(error["loc"]) > len(loc):  # an error of a union member
             if loc in done:
                 continue
@@ -458,7 +459,7 @@ def _param_message(model: type[BaseModel], error: Any) -> tuple[tuple, str]:
     if kind == "literal_error":
         choices = [
             v
-            for o in _options(annotation)
+            for o in annotation_options(annotation)
             if typing.get_origin(o) is Literal
             for v in typing.get_args(o)
         ]
@@ -472,4 +473,4 @@ def _param_message(model: type[BaseModel], error: Any) -> tuple[tuple, str]:
         for prefix in ("Value error, ", "Assertion failed, "):
             message = message.removeprefix(prefix)
         return loc, message
-    return loc, _message(error)
+    return loc, error_message(error)

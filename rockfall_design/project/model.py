@@ -18,18 +18,18 @@ from ..errors import ProjectError
 from .calibrate import AUTO_FIT, CalibrateSpec, auto_fit_ranges
 from .design import Design
 from .fields import (
-    _DEFAULT_CONCEPT,
+    DEFAULT_CONCEPT,
     Prose,
+    SectionModel,
     String,
     Title,
-    _Model,
-    _none_as_empty,
-    _parse_measures,
-    _parse_safety,
-    _plain_copy,
+    none_as_empty,
+    parse_measures,
+    parse_safety,
+    plain_copy,
 )
 from .locator import Locator
-from .messages import _fail, did_you_mean, fmt
+from .messages import did_you_mean, fail, fmt
 from .schema import (
     DEFAULT_SIZE_STEP,
     SURVEY_POINTS,
@@ -43,7 +43,7 @@ from .schema import (
 from .study import StudySpec
 
 
-class Project(_Model):
+class Project(SectionModel):
     """A validated, normalised project file.
 
     Load one with :func:`.load_project` or :func:`.load_project_text`; the file
@@ -59,21 +59,21 @@ class Project(_Model):
         description="Ground materials by name."
     )
     rocks: Rocks = Field(description="The rock ensemble.")
-    analysis: Annotated[Analysis, BeforeValidator(_none_as_empty)] = Field(
+    analysis: Annotated[Analysis, BeforeValidator(none_as_empty)] = Field(
         default_factory=Analysis, description="What to evaluate."
     )
     protect: Protect | None = Field(None, description="Protection position; none if absent.")
-    engine: Annotated[EngineConfig, BeforeValidator(_none_as_empty)] = Field(
+    engine: Annotated[EngineConfig, BeforeValidator(none_as_empty)] = Field(
         default_factory=EngineConfig, description="Advanced numerical parameters."
     )
-    measures: Annotated[list[dict[str, Any]], BeforeValidator(_parse_measures)] = Field(
+    measures: Annotated[list[dict[str, Any]], BeforeValidator(parse_measures)] = Field(
         default_factory=list,
         description="Protective measures: mappings with a 'type' (the measure plugin's kind) "
         "and that plugin's parameters. Kept raw here; each plugin validates its own "
         "(see Project.validate_params).",
     )
-    safety: Annotated[dict[str, Any], BeforeValidator(_parse_safety)] = Field(
-        default_factory=lambda: {"concept": _DEFAULT_CONCEPT},
+    safety: Annotated[dict[str, Any], BeforeValidator(parse_safety)] = Field(
+        default_factory=lambda: {"concept": DEFAULT_CONCEPT},
         description="Safety concept: 'concept' (a name, default spang) and that concept's "
         "parameters. Kept raw here; the concept plugin validates them.",
     )
@@ -123,7 +123,7 @@ class Project(_Model):
         try:
             return auto_fit_ranges(self.materials, self.slope.materials)
         except ValueError as exc:
-            raise _fail(str(exc), ("calibrate", "fit")) from None
+            raise fail(str(exc), ("calibrate", "fit")) from None
 
     @model_validator(mode="after")
     def _check_references(self) -> "Project":
@@ -132,25 +132,25 @@ class Project(_Model):
                 hint = did_you_mean(name, self.materials) or (
                     f"; defined: {', '.join(map(str, self.materials))}"
                 )
-                raise _fail(f"undefined material {name!r}{hint}", ("slope", "materials", i))
+                raise fail(f"undefined material {name!r}{hint}", ("slope", "materials", i))
         first, last = self.slope.x_range
         section = f"[{fmt(first)}, {fmt(last)}] m"
         for i, zone in enumerate(self.rocks.release):
             low, high = zone.x
             if low < first or high > last:
                 shown = fmt(low) if low == high else f"[{fmt(low)}, {fmt(high)}]"
-                raise _fail(
+                raise fail(
                     f"release x {shown} is outside the slope section {section}",
                     ("rocks", "release", i, "x"),
                 )
         for i, x in enumerate(self.analysis.stations):
             if not first <= x <= last:
-                raise _fail(
+                raise fail(
                     f"station x {fmt(x)} is outside the slope section {section}",
                     ("analysis", "stations", i),
                 )
         if self.protect is not None and not first <= self.protect.x <= last:
-            raise _fail(
+            raise fail(
                 f"x {fmt(self.protect.x)} is outside the slope section {section}",
                 ("protect", "x"),
             )
@@ -159,17 +159,17 @@ class Project(_Model):
             self.calibrate._auto = True
         for i, entry in enumerate(self.calibrate.observed if self.calibrate else []):
             if entry.profile is None and entry.x is not None and not first <= entry.x <= last:
-                raise _fail(f"station x {fmt(entry.x)} is outside the slope section {section}",
+                raise fail(f"station x {fmt(entry.x)} is outside the slope section {section}",
                             ("calibrate", "observed", i, "x"))
         if self.design is not None:
             if self.protect is None:
-                raise _fail(
+                raise fail(
                     "the design needs protect: (the station x of the protected zone, which the "
                     "residual rocks are counted at)",
                     ("design",),
                 )
             if self.design.scenarios is not None and self.study is None:
-                raise _fail(
+                raise fail(
                     "the design's scenarios are those of a study: give a study: section "
                     "(see the README, 'Designs that hold across scenarios')",
                     ("design", "scenarios"),
@@ -177,14 +177,14 @@ class Project(_Model):
             for i, candidate in enumerate(self.design.candidates):
                 low, high = candidate["x"]
                 if low < first or high > last:
-                    raise _fail(
+                    raise fail(
                         f"station range [{fmt(low)}, {fmt(high)}] is outside the slope "
                         f"section {section}",
                         ("design", "candidates", i, "x"),
                     )
                 if low > self.protect.x:
                     # Rocks reach the zone before they reach such a measure.
-                    raise _fail(
+                    raise fail(
                         f"station range [{fmt(low)}, {fmt(high)}] lies inside the protected "
                         f"zone (beyond protect.x = {fmt(self.protect.x)} m): a measure there "
                         "cannot keep rocks out of it; place the candidates upslope of it",
@@ -294,7 +294,7 @@ class Project(_Model):
             measure has no string ``type`` or the safety section no string
             ``concept`` (a bug of the caller, not a user error).
         """
-        resolved_measures = _plain_copy(list(measures), "measures")
+        resolved_measures = plain_copy(list(measures), "measures")
         if len(resolved_measures) != len(self.measures):
             raise ValueError(
                 f"expected {len(self.measures)} resolved measure(s), got {len(resolved_measures)}"
@@ -302,7 +302,7 @@ class Project(_Model):
         for i, item in enumerate(resolved_measures):
             if not isinstance(item, dict) or not isinstance(item.get("type"), str):
                 raise ValueError(f"measures[{i}]: expected a mapping with a string 'type'")
-        resolved_safety = _plain_copy(dict(safety), "safety")
+        resolved_safety = plain_copy(dict(safety), "safety")
         if not isinstance(resolved_safety.get("concept"), str):
             raise ValueError("safety: expected a mapping with a string 'concept'")
         resolved_safety = {"concept": resolved_safety.pop("concept"), **resolved_safety}

@@ -26,22 +26,22 @@ from .fields import (
     NonNegative,
     Number,
     Positive,
+    SectionModel,
     String,
-    _as_list,
-    _as_number,
-    _choice,
-    _Model,
-    _none_as_empty,
-    _pair,
+    as_list,
+    as_number,
+    choice,
+    none_as_empty,
+    number_pair,
 )
-from .messages import _fail, describe, did_you_mean, fmt
+from .messages import describe, did_you_mean, fail, fmt
 
 # --------------------------------------------------------------------------------------
 # Sections
 # --------------------------------------------------------------------------------------
 
 
-class Scatter(_Model):
+class Scatter(SectionModel):
     """Standard deviations of the material parameters, drawn per impact (default 0)."""
 
     restitution: NonNegative = Field(
@@ -64,7 +64,7 @@ DEFAULT_TREE_HEIGHT_M = 5.0
 MAX_STEMS_PER_HA = 20_000.0
 
 
-class Forest(_Model):
+class Forest(SectionModel):
     """A stand of trees on a material's ground (engine/forest.py, docs/materials.md)."""
 
     stems_per_ha: Annotated[Positive, Field(le=MAX_STEMS_PER_HA)] = Field(
@@ -86,7 +86,7 @@ class Forest(_Model):
     @model_validator(mode="after")
     def _check_spread(self) -> "Forest":
         if self.dbh_sd_cm > self.dbh_mean_cm:
-            raise _fail(f"must be at most dbh_mean_cm ({self.dbh_mean_cm:g}); the DBH is "
+            raise fail(f"must be at most dbh_mean_cm ({self.dbh_mean_cm:g}); the DBH is "
                         "drawn within [0, 2 x mean]", ("dbh_sd_cm",))
         return self
 
@@ -97,12 +97,12 @@ RANGED_KEYS = ("restitution", "tangential_restitution", "friction", "rolling_res
                "obstacle_height_m", "drag_speed_ms")
 
 
-class Material(_Model):
+class Material(SectionModel):
     """Ground material of slope segments: impact and contact parameters."""
 
     impact_model: Annotated[
         Literal["spang", "rn_rt", "rough_soft"],
-        BeforeValidator(_choice("spang", "rn_rt", "rough_soft")),
+        BeforeValidator(choice("spang", "rn_rt", "rough_soft")),
     ] = Field(
         "spang",
         description="Impact model: 'spang' (one restitution e), 'rn_rt' "
@@ -150,7 +150,7 @@ class Material(_Model):
         description="rough_soft: speed V_s (m/s) at which the ground's resistance has "
         "doubled, mu = mu_0 (1 + (v / V_s)^2); none for a resistance that does not grow.",
     )
-    scatter: Annotated[Scatter, BeforeValidator(_none_as_empty)] = Field(
+    scatter: Annotated[Scatter, BeforeValidator(none_as_empty)] = Field(
         default_factory=Scatter, description="Standard deviations of the parameters."
     )
     forest: Forest | None = Field(
@@ -168,29 +168,29 @@ class Material(_Model):
     @model_validator(mode="after")
     def _check_impact_model(self) -> "Material":
         if self.impact_model == "rn_rt" and self.tangential_restitution is None:
-            raise _fail(
+            raise fail(
                 "required for impact_model rn_rt (tangential restitution Rt, 0..1)",
                 ("tangential_restitution",),
             )
         if self.impact_model != "rn_rt" and self.tangential_restitution is not None:
-            raise _fail(
+            raise fail(
                 "only for impact_model rn_rt; remove it or set impact_model: rn_rt",
                 ("tangential_restitution",),
             )
         for key, (low, high) in (self.ranges or {}).items():
             value = getattr(self, key, None) if key in RANGED_KEYS else None
             if value is None:
-                raise _fail(f"{key!r} is not a numeric parameter of this material (one of "
+                raise fail(f"{key!r} is not a numeric parameter of this material (one of "
                             f"{', '.join(RANGED_KEYS)})", ("ranges", key))
             if not low <= value <= high:
-                raise _fail(f"the range [{low:g}, {high:g}] must hold the value {value:g}",
+                raise fail(f"the range [{low:g}, {high:g}] must hold the value {value:g}",
                             ("ranges", key))
         if self.impact_model != "rough_soft":
             # By value, not by the keys given: a study or a calibration writes
             # every default back (0 and none) before it validates again.
             for key in ("obstacle_height_m", "drag_speed_ms"):
                 if getattr(self, key):
-                    raise _fail(
+                    raise fail(
                         "only for impact_model rough_soft; remove it or set "
                         "impact_model: rough_soft", (key,),
                     )
@@ -267,14 +267,14 @@ MAX_RELEASE_SPIN = 1000.0
 MAX_RELEASE_HEIGHT_M = 10_000.0
 
 
-class Slope(_Model):
+class Slope(SectionModel):
     """The 2-D slope section: a polyline of ground points and a material per segment."""
 
     points: Annotated[
-        list[Annotated[tuple[float, float], BeforeValidator(_pair("[x, y]"))]],
-        BeforeValidator(_as_list),
+        list[Annotated[tuple[float, float], BeforeValidator(number_pair("[x, y]"))]],
+        BeforeValidator(as_list),
     ] = Field(description="Ground points [x, y] (m), x strictly increasing downslope; at least 2.")
-    materials: Annotated[list[String], BeforeValidator(_as_list)] = Field(
+    materials: Annotated[list[String], BeforeValidator(as_list)] = Field(
         description="Material name for all segments, or a list with one name per segment "
         "(len(points) - 1). Always stored as the per-segment list."
     )
@@ -291,11 +291,11 @@ class Slope(_Model):
     @model_validator(mode="after")
     def _check_geometry(self) -> "Slope":
         if len(self.points) < 2:
-            raise _fail(f"expected at least 2 points, got {len(self.points)}", ("points",))
+            raise fail(f"expected at least 2 points, got {len(self.points)}", ("points",))
         for i, point in enumerate(self.points):
             for k, value in enumerate(point):
                 if abs(value) > MAX_COORDINATE_M:
-                    raise _fail(
+                    raise fail(
                         f"{'xy'[k]} = {fmt(value)} m is farther than {MAX_COORDINATE_M:,.0f} m "
                         "from the origin: give the section in metres, x measured along it "
                         "(from its top, say) and y as height",
@@ -303,13 +303,13 @@ class Slope(_Model):
                     )
         for i in range(1, len(self.points)):
             if self.points[i][0] <= self.points[i - 1][0]:
-                raise _fail(
+                raise fail(
                     f"x must increase strictly along the slope: x = {fmt(self.points[i][0])} "
                     f"follows x = {fmt(self.points[i - 1][0])}",
                     ("points", i),
                 )
         if len(self.materials) != self.n_segments:
-            raise _fail(
+            raise fail(
                 f"expected one material name per segment ({self.n_segments}), "
                 f"got {len(self.materials)}; or give a single name for all",
                 ("materials",),
@@ -327,7 +327,7 @@ class Slope(_Model):
         return (self.points[0][0], self.points[-1][0])
 
 
-class SizeSpec(_Model):
+class SizeSpec(SectionModel):
     """A rock size distribution, in the quantity given by :attr:`Rocks.size_quantity`.
 
     ``kind`` and the meaning of ``a`` and ``b``:
@@ -353,7 +353,7 @@ class SizeSpec(_Model):
     def _check_parameters(self) -> "SizeSpec":
         problem = _size_problem(self.kind, self.a, self.b)
         if problem:
-            raise _fail(problem)
+            raise fail(problem)
         return self
 
     def to_yaml(self) -> float | dict[str, list[float]]:
@@ -397,27 +397,27 @@ def _parse_size(value: Any) -> Any:
     )
     if isinstance(value, dict):
         if len(value) != 1:
-            raise _fail(f"expected {forms}, got a mapping with {len(value)} keys")
+            raise fail(f"expected {forms}, got a mapping with {len(value)} keys")
         ((kind, params),) = value.items()
         if kind not in _SIZE_KINDS:
             hint = did_you_mean(kind, _SIZE_KINDS) if isinstance(kind, str) else ""
-            raise _fail(
+            raise fail(
                 f"unknown distribution {kind!r}{hint}; expected {', '.join(_SIZE_KINDS)}",
                 (kind,),
             )
         if not isinstance(params, list | tuple) or len(params) != 2:
-            raise _fail(f"expected {_SIZE_KINDS[kind]}, got {describe(params)}", (kind,))
-        a = _as_number(params[0], (kind, 0))
-        b = _as_number(params[1], (kind, 1))
+            raise fail(f"expected {_SIZE_KINDS[kind]}, got {describe(params)}", (kind,))
+        a = as_number(params[0], (kind, 0))
+        b = as_number(params[1], (kind, 1))
         problem = _size_problem(kind, a, b)
         if problem:
-            raise _fail(problem, (kind,))
+            raise fail(problem, (kind,))
         return SizeSpec(kind=kind, a=a, b=b)
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise _fail(f"expected {forms}, got {describe(value)}")
-    number = _as_number(value)
+        raise fail(f"expected {forms}, got {describe(value)}")
+    number = as_number(value)
     if number <= 0:
-        raise _fail(f"expected a number > 0, got {fmt(number)}")
+        raise fail(f"expected a number > 0, got {fmt(number)}")
     return SizeSpec(kind="fixed", a=number, b=number)
 
 
@@ -449,13 +449,13 @@ SizeField = Annotated[SizeSpec | None, BeforeValidator(_parse_size), WithJsonSch
 
 def _parse_x_range(value: Any) -> tuple[float, float]:
     if isinstance(value, list | tuple):
-        low, high = _pair("[min, max]")(value)
+        low, high = number_pair("[min, max]")(value)
         if low > high:
-            raise _fail(f"expected [min, max] with min <= max, got [{fmt(low)}, {fmt(high)}]")
+            raise fail(f"expected [min, max] with min <= max, got [{fmt(low)}, {fmt(high)}]")
         return (low, high)
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise _fail(f"expected a number or [min, max], got {describe(value)}")
-    x = _as_number(value)
+        raise fail(f"expected a number or [min, max], got {describe(value)}")
+    x = as_number(value)
     return (x, x)
 
 
@@ -463,19 +463,19 @@ def _parse_spin(value: Any) -> float | str:
     if value == "rolling" and isinstance(value, str):
         return "rolling"
     if isinstance(value, str):
-        raise _fail(f"expected a number (rad/s) or 'rolling', got {describe(value)}")
-    spin = _as_number(value)
+        raise fail(f"expected a number (rad/s) or 'rolling', got {describe(value)}")
+    spin = as_number(value)
     if abs(spin) > MAX_RELEASE_SPIN:
-        raise _fail(f"expected a spin within +-{MAX_RELEASE_SPIN:g} rad/s, got {fmt(spin)}")
+        raise fail(f"expected a spin within +-{MAX_RELEASE_SPIN:g} rad/s, got {fmt(spin)}")
     return spin
 
 
 def _release_velocity(value: Any) -> tuple[float, float]:
     """A release ``velocity`` [vx, vy] (m/s), each component within MAX_RELEASE_SPEED."""
-    velocity = _pair("[vx, vy]")(value)
+    velocity = number_pair("[vx, vy]")(value)
     for k, v in enumerate(velocity):
         if abs(v) > MAX_RELEASE_SPEED:
-            raise _fail(
+            raise fail(
                 f"expected a speed within +-{MAX_RELEASE_SPEED:g} m/s, got {fmt(v)}", (k,)
             )
     return velocity
@@ -483,11 +483,11 @@ def _release_velocity(value: Any) -> tuple[float, float]:
 
 def _clearance(value: Any) -> float:
     """A release ``height``: the clearance (m) above the ground, so never negative."""
-    height = _as_number(value)
+    height = as_number(value)
     if height > MAX_RELEASE_HEIGHT_M:
-        raise _fail(f"expected a clearance <= {MAX_RELEASE_HEIGHT_M:,.0f} m, got {fmt(height)}")
+        raise fail(f"expected a clearance <= {MAX_RELEASE_HEIGHT_M:,.0f} m, got {fmt(height)}")
     if height < 0:
-        raise _fail(
+        raise fail(
             f"expected a clearance >= 0 (m), got {fmt(height)}: the release would start "
             "the rock below the ground (height is measured from the ground up; "
             "0 = resting on it)"
@@ -495,7 +495,7 @@ def _clearance(value: Any) -> float:
     return height
 
 
-class ReleaseZone(_Model):
+class ReleaseZone(SectionModel):
     """A release zone: where and how rocks start."""
 
     x: Annotated[
@@ -537,12 +537,12 @@ def _zones(value: Any) -> Any:
         return [value]
     if isinstance(value, list | tuple):
         if not value:
-            raise _fail("expected at least one release zone, got an empty list")
+            raise fail("expected at least one release zone, got an empty list")
         return list(value)
-    raise _fail(f"expected a release zone (mapping) or a list of zones, got {describe(value)}")
+    raise fail(f"expected a release zone (mapping) or a list of zones, got {describe(value)}")
 
 
-class Rocks(_Model):
+class Rocks(SectionModel):
     """The rock ensemble: how many, what size, where they are released.
 
     Exactly one of ``radius``, ``volume`` and ``mass`` is set; :attr:`size`
@@ -581,11 +581,11 @@ class Rocks(_Model):
     def _check_size(self) -> "Rocks":
         given = [name for name in ("radius", "volume", "mass") if getattr(self, name) is not None]
         if not given:
-            raise _fail(
+            raise fail(
                 "give the rock size as one of radius (m), volume (m3) or mass (kg)", ("radius",)
             )
         if len(given) > 1:
-            raise _fail(
+            raise fail(
                 f"give only one of radius, volume, mass; got {' and '.join(given)}",
                 (given[1],),
             )
@@ -595,7 +595,7 @@ class Rocks(_Model):
         # value, its maximum, or its mean or median (a tail beyond is cut off).
         least = spec.b if spec.kind == "uniform" else spec.a
         if least > top:
-            raise _fail(
+            raise fail(
                 f"expected sizes up to {fmt(float(f'{top:.6g}'))} {unit} (a sphere of "
                 f"{MAX_RADIUS_M:g} m radius), got {fmt(least)}",
                 (self.size_quantity,),
@@ -603,7 +603,7 @@ class Rocks(_Model):
         # And the size it must reach at least: its fixed value, its minimum,
         # its mean or median (a tail below is cut off).
         if spec.a < bottom:
-            raise _fail(
+            raise fail(
                 f"expected sizes of at least {fmt(float(f'{bottom:.6g}'))} {unit} (a sphere "
                 f"of {MIN_RADIUS_M:g} m radius), got {fmt(spec.a)}",
                 (self.size_quantity,),
@@ -659,11 +659,11 @@ class Rocks(_Model):
         return getattr(self, self.size_quantity)
 
 
-class Analysis(_Model):
+class Analysis(SectionModel):
     """What to evaluate along the section."""
 
     stations: Annotated[
-        list[Number], Field(max_length=MAX_STATIONS), BeforeValidator(_as_list)
+        list[Number], Field(max_length=MAX_STATIONS), BeforeValidator(as_list)
     ] = Field(
         default_factory=list,
         description="Stations x (m) where crossings are recorded; at most 1,000.",
@@ -671,7 +671,7 @@ class Analysis(_Model):
     percentiles: Annotated[
         list[Annotated[Number, Field(gt=0.0, lt=100.0)]],
         Field(max_length=MAX_PERCENTILES),
-        BeforeValidator(_as_list),
+        BeforeValidator(as_list),
     ] = Field(
         default_factory=lambda: [50.0, 95.0, 99.0],
         description="Percentiles (%) of height and energy reported, each in (0, 100).",
@@ -686,7 +686,7 @@ class Analysis(_Model):
     )
 
 
-class Protect(_Model):
+class Protect(SectionModel):
     """Where the protection is to be placed."""
 
     x: Number = Field(description="Position of the protective measure along the section (m).")
@@ -696,7 +696,7 @@ class Protect(_Model):
     )
 
 
-class EngineConfig(_Model):
+class EngineConfig(SectionModel):
     """Advanced numerical parameters of the trajectory engine."""
 
     v_contact: Positive = Field(

@@ -43,16 +43,17 @@ from pydantic import ValidationError
 
 from ..errors import ProjectError
 from .design_block import inline_survey
+from .inputs import max_file_bytes, note_input, read_named_text
 from .messages import (
-    _ERROR_TYPE,
-    _key_text,
-    _line_of,
-    _message,
-    _yaml_path,
+    ERROR_TYPE,
     describe,
     did_you_mean,
+    error_message,
+    key_text,
+    line_of,
     to_project_error,
     unquoted,
+    yaml_path,
 )
 from .schema import Material, Slope
 from .terrain_slope import is_terrain_slope, terrain_slope, terrain_zones
@@ -79,9 +80,9 @@ class _Where:
         self.lines = lines
 
     def error(self, path: Sequence[Any], message: str) -> ProjectError:
-        full = _yaml_path(tuple(path), self.lines)
+        full = yaml_path(tuple(path), self.lines)
         return ProjectError(
-            self.source, _line_of(full, self.lines), _key_text(full, self.lines), message
+            self.source, line_of(full, self.lines), key_text(full, self.lines), message
         )
 
 
@@ -166,8 +167,6 @@ def _check_file(path: Path, where: _Where, at: tuple, what: str) -> None:
     Not a directory, a device or a pipe to read for ever. The DXF reader
     opens the file itself, so this is checked before it is handed over.
     """
-    from .inputs import max_file_bytes
-
     try:
         info = path.stat()
     except OSError as exc:
@@ -185,8 +184,6 @@ def _check_file(path: Path, where: _Where, at: tuple, what: str) -> None:
 
 def _read_text(path: Path, where: _Where, at: tuple, what: str) -> str:
     """A referenced text file; a file that cannot be read is the project's error."""
-    from .inputs import read_named_text
-
     _check_file(path, where, at, what)
     try:
         # The one reader of every input file (size limit checked as it reads);
@@ -220,7 +217,7 @@ def _merge_library(materials: dict, where: _Where, base_dir: Path) -> dict[Any, 
         if not isinstance(data, dict):
             raise ProjectError(
                 shown,
-                _line_of((), lines),
+                line_of((), lines),
                 "",
                 f"expected a mapping of material names to materials, got {describe(data)}",
             )
@@ -235,7 +232,7 @@ def _check_library_material(name: Any, value: Any, shown: str, lines: _Lines) ->
     """Validate one library entry as an inline material is; errors name the library."""
     if not isinstance(name, str) or not name:
         raise ProjectError(
-            shown, _line_of((name,), lines), "",
+            shown, line_of((name,), lines), "",
             f"material names must be text, got {describe(name)}",
         )
     try:
@@ -328,9 +325,9 @@ def _slope_error(
     """The first problem :class:`Slope` found, located in the survey file or the project."""
     error = exc.errors()[0]
     loc = tuple(error["loc"])
-    if error["type"] == _ERROR_TYPE:
+    if error["type"] == ERROR_TYPE:
         loc += tuple((error.get("ctx") or {}).get("subpath", ()))
-    message = _message(error)
+    message = error_message(error)
     if loc[:1] == ("points",) and len(loc) >= 2 and isinstance(loc[1], int):
         column = "xy"[loc[2]] if len(loc) >= 3 and loc[2] in (0, 1) else "x"
         return section.error(loc[1], column, message)
@@ -512,7 +509,6 @@ class _DxfSection(_Section):
                 "python -m pip install 'rockfall-design[dxf]' (or '.[dxf]' in the repository)",
             ) from None
         _check_file(path, where, ("slope", "dxf"), "drawing")
-        from .inputs import note_input
 
         note_input(path, "survey drawing")
         try:

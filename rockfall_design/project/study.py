@@ -31,8 +31,8 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
-from .fields import Integer, String, _as_integer, _as_number, _choice, _Model
-from .messages import _fail, describe, did_you_mean, fmt
+from .fields import Integer, SectionModel, String, as_integer, as_number, choice
+from .messages import describe, did_you_mean, fail, fmt
 
 #: Most scenarios in one study: each is a full Monte Carlo run.
 MAX_SCENARIOS = 10_000
@@ -40,7 +40,7 @@ MAX_SCENARIOS = 10_000
 MAX_VARIED = 50
 
 
-class Range(_Model):
+class Range(SectionModel):
     """A continuous range of a numeric input: ``{range: [lo, hi], levels: N}``."""
 
     range: tuple[float, float] = Field(description="Lowest and highest value [lo, hi], lo < hi.")
@@ -56,11 +56,11 @@ class Range(_Model):
         if isinstance(data, dict) and "range" in data:
             value = data["range"]
             if not isinstance(value, list | tuple) or len(value) != 2:
-                raise _fail(f"expected [lo, hi], got {describe(value)}", ("range",))
-            lo = _as_number(value[0], ("range", 0))
-            hi = _as_number(value[1], ("range", 1))
+                raise fail(f"expected [lo, hi], got {describe(value)}", ("range",))
+            lo = as_number(value[0], ("range", 0))
+            hi = as_number(value[1], ("range", 1))
             if not lo < hi:
-                raise _fail(
+                raise fail(
                     f"expected [lo, hi] with lo < hi, got [{fmt(lo)}, {fmt(hi)}]", ("range",)
                 )
             data = {**data, "range": (lo, hi)}
@@ -79,31 +79,31 @@ def _parse_levels(value: Any) -> Any:
     """A list of values (kept as written) or a ``{range: ...}`` mapping."""
     if isinstance(value, list | tuple):
         if not value:
-            raise _fail("expected at least one value, got an empty list")
+            raise fail("expected at least one value, got an empty list")
         seen: list[Any] = []
         for i, item in enumerate(value):
             if isinstance(item, float) and not math.isfinite(item):
-                raise _fail(f"must be finite, got {fmt(item)}", (i,))
+                raise fail(f"must be finite, got {fmt(item)}", (i,))
             if any(type(item) is type(s) and item == s for s in seen):
-                raise _fail(f"value {fmt(item)} is listed twice", (i,))
+                raise fail(f"value {fmt(item)} is listed twice", (i,))
             seen.append(item)
         return list(value)
     if isinstance(value, dict):
         if "range" not in value:
-            raise _fail(
+            raise fail(
                 "expected a list of values or {range: [lo, hi]}, got a mapping without 'range'"
             )
         return Range.model_validate(value)
-    raise _fail(f"expected a list of values or {{range: [lo, hi]}}, got {describe(value)}")
+    raise fail(f"expected a list of values or {{range: [lo, hi]}}, got {describe(value)}")
 
 
 Levels = Annotated[list[Any] | Range, BeforeValidator(_parse_levels)]
 
 
-class Sample(_Model):
+class Sample(SectionModel):
     """A sampled study: ``{sample: latin_hypercube, n: 50, seed: 3}``."""
 
-    sample: Annotated[Literal["latin_hypercube"], BeforeValidator(_choice("latin_hypercube"))] = (
+    sample: Annotated[Literal["latin_hypercube"], BeforeValidator(choice("latin_hypercube"))] = (
         Field(description="Sampling design: latin_hypercube (scipy.stats.qmc.LatinHypercube).")
     )
     n: Annotated[Integer, Field(ge=2, le=MAX_SCENARIOS)] = Field(
@@ -126,20 +126,20 @@ def _parse_scenarios(value: Any) -> Any:
     if isinstance(value, Sample) or (value == "grid" and isinstance(value, str)):
         return value
     if not isinstance(value, dict):
-        raise _fail(f"expected {_SCENARIOS}, got {describe(value)}")
+        raise fail(f"expected {_SCENARIOS}, got {describe(value)}")
     for key in value:
         if key not in Sample.model_fields:
             hint = did_you_mean(str(key), list(Sample.model_fields)) or (
                 f"; expected one of {', '.join(Sample.model_fields)}")
-            raise _fail(f"unknown key {key!r}{hint}", (key,))
+            raise fail(f"unknown key {key!r}{hint}", (key,))
     if "sample" not in value:
-        raise _fail(f"expected {_SCENARIOS}: 'sample' is missing")
+        raise fail(f"expected {_SCENARIOS}: 'sample' is missing")
     if value["sample"] != "latin_hypercube" or not isinstance(value["sample"], str):
-        raise _fail(
+        raise fail(
             f"expected latin_hypercube, got {describe(value['sample'])}", ("sample",)
         )
     if "n" not in value:
-        raise _fail("required key is missing (the number of scenarios drawn)", ("n",))
+        raise fail("required key is missing (the number of scenarios drawn)", ("n",))
     limits = {"n": (2, MAX_SCENARIOS), "seed": (0, None)}
     numbers = {}
     for key, (low, high) in limits.items():
@@ -148,19 +148,19 @@ def _parse_scenarios(value: Any) -> Any:
         number = _as_integer_at(value[key], key)
         if number < low or (high is not None and number > high):
             bound = f">= {low}" if number < low else f"<= {high:,}"
-            raise _fail(f"expected an integer {bound}, got {number}", (key,))
+            raise fail(f"expected an integer {bound}, got {number}", (key,))
         numbers[key] = number
     return Sample(sample="latin_hypercube", **numbers)
 
 
 def _as_integer_at(value: Any, key: str) -> int:
     try:
-        return _as_integer(value)
+        return as_integer(value)
     except PydanticCustomError as exc:
-        raise _fail(exc.message(), (key,)) from None
+        raise fail(exc.message(), (key,)) from None
 
 
-class StudySpec(_Model):
+class StudySpec(SectionModel):
     """The ``study:`` section: which inputs vary, and which scenarios are run."""
 
     vary: Annotated[dict[String, Levels], Field(min_length=1, max_length=MAX_VARIED)] = Field(
@@ -178,7 +178,7 @@ class StudySpec(_Model):
     )
 
     seeds: Annotated[
-        Literal["independent", "common"], BeforeValidator(_choice("independent", "common"))
+        Literal["independent", "common"], BeforeValidator(choice("independent", "common"))
     ] = Field(
         "independent",
         description="independent: each scenario draws its own rocks (its seed derived from "
@@ -193,7 +193,7 @@ class StudySpec(_Model):
             for path, levels in self.vary.items():
                 if isinstance(levels, Range):
                     if levels.levels is None:
-                        raise _fail(
+                        raise fail(
                             "a range in a grid needs levels: N (how many evenly spaced "
                             "values to try), or give the values as a list",
                             ("vary", path),
@@ -202,7 +202,7 @@ class StudySpec(_Model):
                 else:
                     total *= len(levels)
             if total > MAX_SCENARIOS:
-                raise _fail(
+                raise fail(
                     f"the grid has {total:,} scenarios, more than {MAX_SCENARIOS:,}: use fewer "
                     "values or a sample ({sample: latin_hypercube, n: N})",
                     ("scenarios",),

@@ -13,7 +13,7 @@ from typing import Any
 import yaml
 
 from ..errors import ProjectError
-from .messages import _key_text, _Lines
+from .messages import Lines, key_text
 
 _MERGE_TAG = "tag:yaml.org,2002:merge"
 _MAX_NODES = 200_000  # guards against alias bombs ("billion laughs")
@@ -187,14 +187,14 @@ def _check_merges(root: yaml.Node, source: str) -> None:
             stack.extend(node.value)
 
 
-def _map_lines(loader: _Loader, root: yaml.Node, source: str) -> _Lines:
+def _map_lines(loader: _Loader, root: yaml.Node, source: str) -> Lines:
     """Walk the node tree: key path -> line, rejecting duplicate and non-scalar keys."""
     _check_merges(root, source)
-    lines: _Lines = {}
+    lines: Lines = {}
     budget = [_MAX_NODES]
 
     def error(node: yaml.Node, path: tuple, message: str) -> ProjectError:
-        return ProjectError(source, node.start_mark.line + 1, _key_text(path, lines), message)
+        return ProjectError(source, node.start_mark.line + 1, key_text(path, lines), message)
 
     def key_of(key_node: yaml.Node, path: tuple) -> Any:
         if not isinstance(key_node, yaml.ScalarNode):
@@ -263,7 +263,7 @@ def _map_lines(loader: _Loader, root: yaml.Node, source: str) -> _Lines:
     return lines
 
 
-def parse_yaml(text: str, source: str) -> tuple[Any, _Lines]:
+def parse_yaml(text: str, source: str) -> tuple[Any, Lines]:
     try:
         if _CLoader is not None and len(text) > LIBYAML_FROM:
             _count_values(text)

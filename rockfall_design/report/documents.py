@@ -29,19 +29,19 @@ from .listed import listed_lines
 from .pdf import html_to_pdf, pdf_turned_off, pdf_unavailable
 from .sections import (
     Table,
-    _alternatives_table,
-    _bill_table,
-    _checks_table,
-    _chosen_text,
-    _ends_table,
-    _margin_text,
-    _protect_text,
-    _resolved_inputs,
-    _run_table,
-    _scenarios_table,
-    _stations_table,
+    alternatives_table,
+    bill_table,
+    checks_table,
+    chosen_text,
+    ends_table,
     inputs_table,
+    margin_text,
     passages_table,
+    protect_text,
+    resolved_inputs,
+    run_table,
+    scenarios_table,
+    stations_table,
 )
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -202,8 +202,8 @@ def _opening_context(result: Any) -> dict[str, Any]:
         "command": command,
         "version": __version__,
         "generated": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
-        "run": _run_table(result, summary),
-        "inputs": inputs_table(project, command, *_resolved_inputs(result)),
+        "run": run_table(result, summary),
+        "inputs": inputs_table(project, command, *resolved_inputs(result)),
         "results": [],
         "protect": "",
         "verdict": "",
@@ -220,11 +220,11 @@ def _opening_context(result: Any) -> dict[str, Any]:
 
 def _statistics_context(ctx: dict[str, Any], stats: RunSummary | CheckSummary) -> None:
     """The run's tables (ends, stations, checks, passages), the protected zone, how sure."""
-    ctx["results"].append(_ends_table(stats))
-    for table in (_stations_table(stats), _checks_table(stats), passages_table(stats)):
+    ctx["results"].append(ends_table(stats))
+    for table in (stations_table(stats), checks_table(stats), passages_table(stats)):
         if table is not None:
             ctx["results"].append(table)
-    ctx["protect"] = _protect_text(stats)
+    ctx["protect"] = protect_text(stats)
     if isinstance(stats, CheckSummary):
         ctx["design_values"] = _design_value_tables(stats)
         ctx["how_sure"] = how_sure(stats)
@@ -251,15 +251,15 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
     stats = design.record if design is not None else (
         result.record if command != "optimise" else None)
     if command == "optimise":
-        ctx["chosen"], ctx["chosen_measures"] = _chosen_text(result.summary)
-        ctx["results"].append(_alternatives_table(result.summary))
+        ctx["chosen"], ctx["chosen_measures"] = chosen_text(result.summary)
+        ctx["results"].append(alternatives_table(result.summary))
     if stats is not None:
         _statistics_context(ctx, stats)
     if command == "optimise":
-        ctx["how_sure"] += _optimiser_sentences(result.summary)
+        ctx["how_sure"] += optimiser_sentences(result.summary)
         _set_verdict(ctx, result.verdict)
         if result.bill_record is not None:
-            ctx["bill"] = _bill_table(result.bill_record)
+            ctx["bill"] = bill_table(result.bill_record)
     elif isinstance(stats, CheckSummary):
         _set_verdict(ctx, stats.verdict)
     if design is not None:
@@ -290,7 +290,7 @@ def _design_value_tables(summary: CheckSummary) -> list[Table]:
             for t in design_tables(summary)]
 
 
-def _optimiser_sentences(summary: Mapping[str, Any]) -> list[str]:
+def optimiser_sentences(summary: Mapping[str, Any]) -> list[str]:
     """How ``optimise`` searched and decided, and its record of the decision, as sentences."""
     conf = 100 * float(summary.get("confidence") or 0.95)
     out = [f"The optimiser searched with {int(summary.get('search_rocks') or 0):,} rocks "
@@ -345,7 +345,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
     name = f"binding scenario {b['index']} ({values_text(b['values'])})"
     # The run: the project as written, the run seed the scenarios' seeds derive from.
     head = SimpleNamespace(project=project, command="check")
-    run = _run_table(head, {**binding.summary, "seed": summary["seed"],
+    run = run_table(head, {**binding.summary, "seed": summary["seed"],
                             "project_hash": project.resolved_hash()})
     for row in run.rows:
         if row[0] == "seed":
@@ -359,7 +359,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
         ["scenarios", f"{summary['of']}; the design must hold in {summary['required']} "
          f"(design.scenarios share {summary['share']:g})"],
         ["binding scenario", f"{b['index']} ({values_text(b['values'])}), seed {b['seed']}: "
-         + _margin_text(b["margin"], b["binds_at"])],
+         + margin_text(b["margin"], b["binds_at"])],
     ]
     ctx["run"] = run
     study = project.resolved_dict().get("study") or {}
@@ -371,7 +371,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
         note=f"Scenarios: {study.get('scenarios')}; seeds: {study.get('seeds')}. The other "
         "inputs are as written above.")]
     paths = list(dict.fromkeys(k for p in summary["scenarios"] for k in p["values"]))
-    ctx["results"] = [_scenarios_table(summary, paths)] + [
+    ctx["results"] = [scenarios_table(summary, paths)] + [
         Table(f"{name[0].upper()}{name[1:]}: {t.title}", t.columns, t.rows, t.note, t.highlight)
         for t in ctx["results"]]
     if ctx["protect"]:
@@ -380,7 +380,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
         "Every scenario of the study first; then the binding scenario (the one that decides "
         "the count required), "
         f"in full as check shows one scenario: scenario {b['index']}, seed {b['seed']}, "
-        + _margin_text(b["margin"], b["binds_at"]) + ".")
+        + margin_text(b["margin"], b["binds_at"]) + ".")
     ok = bool(summary["ok"])
     ctx["title"] = f"{project.name}: rockfall check over {summary['of']} scenarios"
     ctx["command"] = "check --scenarios"
@@ -389,7 +389,7 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
         f"{summary['of']} scenarios (on the point values; "
         f"{summary['holds_with_confidence_in']} with the confidence bounds); required: "
         f"{summary['required']}. Binding: scenario {b['index']}, "
-        + _margin_text(b["margin"], b["binds_at"]) + ".")
+        + margin_text(b["margin"], b["binds_at"]) + ".")
     ctx["verdict_ok"] = ok
     ctx["failures"] = list(summary.get("failures", []))
     if summary.get("verdict"):

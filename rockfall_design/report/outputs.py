@@ -58,17 +58,17 @@ from .interrupts import check_interrupt, note_commit
 from .staging import (
     MANIFEST,
     OutputError,
-    _discard,
-    _Entry,
-    _finish,
-    _key,
-    _manifests,
-    _open_target,
-    _refuse_foreign,
-    _refuse_input,
-    _signals_held,
-    _swap_in,
-    _umask,
+    StagedEntry,
+    current_umask,
+    discard_entries,
+    finish_entry,
+    manifests,
+    open_target,
+    refuse_foreign,
+    refuse_input,
+    signals_held,
+    swap_in,
+    target_key,
 )
 from .temporaries import make, remove_stale
 
@@ -119,9 +119,9 @@ class OutputSet:
 
     def __init__(self, *, keep_others: bool = False) -> None:
         #: Refuse a target that is a file this program did not write (see
-        #: :func:`~.staging._refuse_foreign`), when it is reserved and again at the commit.
+        #: :func:`~.staging.refuse_foreign`), when it is reserved and again at the commit.
         self.keep_others = keep_others
-        self._entries: dict[Path, _Entry] = {}
+        self._entries: dict[Path, StagedEntry] = {}
         self._created: list[Path] = []
         # The directories whose stale temporary files this set has looked for.
         self._swept: set[Path] = set()
@@ -129,7 +129,7 @@ class OutputSet:
         # discard() can react (say, on the first instruction of __exit__):
         # the temporary files are still removed when the set is dropped or
         # the interpreter exits. Both methods retire it.
-        self._finalizer = weakref.finalize(self, _discard, self._entries, self._created)
+        self._finalizer = weakref.finalize(self, discard_entries, self._entries, self._created)
 
     def __enter__(self) -> OutputSet:
         return self
@@ -149,12 +149,12 @@ class OutputSet:
         """True if ``path`` is written (or being written) in this set."""
         if not isinstance(path, str | os.PathLike):
             return False
-        entry = self._entries.get(_key(path))
+        entry = self._entries.get(target_key(path))
         return entry is not None and entry.state in ("open", "ready")
 
     def holds(self, path: str | os.PathLike[str]) -> bool:
         """True if ``path`` is in this set in any state: reserved, written or to be removed."""
-        return _key(path) in self._entries
+        return target_key(path) in self._entries
 
     # ---- adding files ----------------------------------------------------
     def reserve(self, *paths: str | os.PathLike[str]) -> None:
@@ -211,11 +211,11 @@ class OutputSet:
         OutputError
             If ``path`` is a file the run reads.
         """
-        key = _key(path)
-        _refuse_input(key)
+        key = target_key(path)
+        refuse_input(key)
         entry = self._entries.get(key)
         if entry is None:
-            self._entries[key] = _Entry(key, None, "remove")
+            self._entries[key] = StagedEntry(key, None, "remove")
             return
         if entry.state != "reserved":
             raise ValueError(f"{key} is written in this output set; it cannot also be removed")
@@ -248,15 +248,15 @@ class OutputSet:
             if unwritten:
                 raise RuntimeError(f"reserved but never written: {', '.join(unwritten)}")
             for entry in self._entries.values():
-                _finish(entry)
+                finish_entry(entry)
                 if self.keep_others and entry.tmp is not None:
-                    _refuse_foreign(entry.target)  # one the user put there during the run
+                    refuse_foreign(entry.target)  # one the user put there during the run
             # Recorded in the set, so that a failure from here on discards them too.
-            for manifest in _manifests(list(self._entries.values())):
+            for manifest in manifests(list(self._entries.values())):
                 self._entries[manifest.target] = manifest
-            with _signals_held():
+            with signals_held():
                 check_interrupt()  # one that came while the files were synced
-                backups = _swap_in(list(self._entries.values()))
+                backups = swap_in(list(self._entries.values()))
                 if self._entries:
                     note_commit()
                 # Nothing is left to clean up: the entries are in place and
@@ -277,22 +277,22 @@ class OutputSet:
         Does nothing once the set is committed or discarded.
         """
         # Held so that a second Ctrl-C cannot cut the clean-up short.
-        with _signals_held():
+        with signals_held():
             self._finalizer()
 
     # ---- internals -------------------------------------------------------
-    def _reserve(self, path: str | os.PathLike[str]) -> _Entry:
-        key = _key(path)
+    def _reserve(self, path: str | os.PathLike[str]) -> StagedEntry:
+        key = target_key(path)
         if key in self._entries:
             raise ValueError(f"{key} is already in this output set")
         # Held so that no interrupt can fall between creating the temporary
         # file (or a directory) and recording it, which would leave it behind.
         if key.is_dir():
             raise OutputError(key, "it is a directory", "nothing was written")
-        _refuse_input(key)
+        refuse_input(key)
         if self.keep_others:
-            _refuse_foreign(key)
-        with _signals_held():
+            refuse_foreign(key)
+        with signals_held():
             try:
                 missing = [d for d in (key.parent, *key.parent.parents) if not d.exists()]
                 # Recorded first: mkdir may fail half-way, having made some.
@@ -303,22 +303,22 @@ class OutputSet:
                     self._swept.add(key.parent)
                     remove_stale(key.parent)
                 fd, name = make(key.parent, key.name)
-                entry = self._entries[key] = _Entry(key, Path(name), "reserved")
+                entry = self._entries[key] = StagedEntry(key, Path(name), "reserved")
                 os.close(fd)
                 # mkstemp makes the file 0600; give it the mode open() would.
-                os.chmod(name, 0o666 & ~_umask())
+                os.chmod(name, 0o666 & ~current_umask())
             except OSError as exc:
                 raise OutputError(key, exc, "nothing was written") from None
         return entry
 
-    def _open(self, path: str | os.PathLike[str], mode: str) -> _Entry:
-        entry = self._entries.get(_key(path))
+    def _open(self, path: str | os.PathLike[str], mode: str) -> StagedEntry:
+        entry = self._entries.get(target_key(path))
         if entry is None:
             entry = self._reserve(path)
         elif entry.state != "reserved":
             raise ValueError(f"{entry.target} is already written in this output set")
         try:
-            entry.fh = _open_target(entry.tmp, entry.target, mode)  # type: ignore[arg-type]
+            entry.fh = open_target(entry.tmp, entry.target, mode)  # type: ignore[arg-type]
         except OSError as exc:
             raise OutputError(entry.target, exc) from None
         entry.state = "open"
@@ -331,7 +331,7 @@ class OutputSet:
         writer(entry.fh)  # type: ignore[arg-type]
         # Closed at once: a command may write many files; only streamed ones
         # stay open until the commit.
-        _finish(entry)
+        finish_entry(entry)
 
 
 @contextlib.contextmanager

@@ -245,7 +245,8 @@ def _statistics_row(stats: RunStatistics) -> list[list[str]]:
     return [["statistics", "exact, over every rock"]] if stats.method else []
 
 
-def _run_table(result: Any, summary: RunSummary | CheckSummary | Mapping[str, Any]) -> Table:
+def run_table(result: Any, summary: RunSummary | CheckSummary | Mapping[str, Any]) -> Table:
+    """The report's table of the run: program, project and its hash, rocks, seeds, engine."""
     import platform
 
     project = result.project
@@ -282,7 +283,8 @@ def _run_table(result: Any, summary: RunSummary | CheckSummary | Mapping[str, An
     return Table("", ["item", "value"], rows)
 
 
-def _stations_table(summary: RunSummary | CheckSummary) -> Table | None:
+def stations_table(summary: RunSummary | CheckSummary) -> Table | None:
+    """The passages at each station (height, velocity, energy); None without stations."""
     stations = run_of(summary).stations
     if not stations:
         return None
@@ -301,7 +303,8 @@ def _stations_table(summary: RunSummary | CheckSummary) -> Table | None:
                  "E: total kinetic energy. Percentiles over the rocks passing the station.")
 
 
-def _ends_table(summary: RunSummary | CheckSummary) -> Table:
+def ends_table(summary: RunSummary | CheckSummary) -> Table:
+    """How the rocks' paths ended: stopped on the section, left at either end, ..."""
     run = run_of(summary)
     st = run.stops
     n = max(run.rocks, 1)
@@ -323,7 +326,8 @@ def _ends_table(summary: RunSummary | CheckSummary) -> Table:
     return Table("How the paths ended", ["end", "rocks", "share"], rows, note=note)
 
 
-def _protect_text(summary: RunSummary | CheckSummary) -> str:
+def protect_text(summary: RunSummary | CheckSummary) -> str:
+    """The protected zone and the rocks that reach it (with its bound), as a sentence."""
     p = summary.protect
     if p is None:
         return ""
@@ -351,7 +355,8 @@ def _check_rows(m: MeasureRecord, states: list[str], bounds: bool, width: int) -
     return rows
 
 
-def _checks_table(summary: RunSummary | CheckSummary) -> Table | None:
+def checks_table(summary: RunSummary | CheckSummary) -> Table | None:
+    """Each measure's checks (demand, capacity, factor); None without measures."""
     if not isinstance(summary, CheckSummary):
         return None
     bounds = any(c.bound is not None for m in summary.measures for c in m.checks)
@@ -401,7 +406,8 @@ def passages_table(summary: RunSummary | CheckSummary | Mapping[str, Any]) -> Ta
                  "figures passing_station_N and passing_measure_N show the distributions.")
 
 
-def _alternatives_table(summary: Mapping[str, Any]) -> Table:
+def alternatives_table(summary: Mapping[str, Any]) -> Table:
+    """The optimiser's alternatives with their costs and outcomes."""
     cur = summary.get("currency") or ""
     best = chosen_name(summary)
     alts = sorted(summary.get("alternatives", []),
@@ -445,7 +451,8 @@ def _alternatives_table(summary: Mapping[str, Any]) -> Table:
                  highlight=marks)
 
 
-def _chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
+def chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
+    """The sentence naming the chosen design, and the reasons listed under it."""
     best = chosen_name(summary)
     if best is None:
         return f"No admissible design: {summary.get('reason', '')}", []
@@ -457,7 +464,7 @@ def _chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
     return head, [measure_text(m) for m in alt.get("measures") or []]
 
 
-def _resolved_inputs(result: Any) -> tuple[dict[str, Any], dict[str, str]]:
+def resolved_inputs(result: Any) -> tuple[dict[str, Any], dict[str, str]]:
     """The project as run (every parameter resolved) and each safety concept's summary."""
     d = result.project.resolved_dict()
     evaluation = getattr(result, "evaluation", None)
@@ -489,7 +496,7 @@ def _money(v: float) -> str:
     return f"{v:,.2f}"
 
 
-def _bill_table(bill: Bill) -> Table:
+def bill_table(bill: Bill) -> Table:
     """The chosen design's bill: a line per quantity and fixed cost, and the total."""
     cur = bill.currency or ""
     unit = f" ({cur})" if cur else ""
@@ -505,12 +512,13 @@ def _bill_table(bill: Bill) -> Table:
                  highlight=[False] * len(bill.items) + [True])
 
 
-def _margin_text(margin: Any, binds_at: Any) -> str:
+def margin_text(margin: Any, binds_at: Any) -> str:
+    """The design's margin and the check that binds, as words."""
     return "no check to bind" if margin is None else (
         f"margin {100 * float(margin):+.1f} % at {binds_at}")
 
 
-def _scenarios_table(summary: Mapping[str, Any], paths: list[str]) -> Table:
+def scenarios_table(summary: Mapping[str, Any], paths: list[str]) -> Table:
     """Every scenario of ``check --scenarios``: values, seed, verdicts, margin, what binds."""
     b = summary["binding"]["index"]
     cols = ["", "#", *paths, "seed", "reaching", "holds", "with confidence", "margin",

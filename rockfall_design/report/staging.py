@@ -2,7 +2,7 @@
 
 Each file of an output set is written to a temporary file in its target's
 directory (:class:`_TargetFile`), synced, and renamed into place with the
-others while Ctrl-C and SIGTERM are held (:func:`_swap_in`); the manifest of
+others while Ctrl-C and SIGTERM are held (:func:`swap_in`); the manifest of
 every directory says which files this program wrote, so that only those are
 ever replaced or removed, and no input of the run is overwritten.
 """
@@ -65,7 +65,7 @@ class _TargetFile(io.FileIO):
             raise OutputError(self.target, exc) from None
 
 
-def _open_target(path: Path, target: Path, mode: str) -> IO[Any]:
+def open_target(path: Path, target: Path, mode: str) -> IO[Any]:
     """``path`` opened for writing in ``mode`` ("w" or "wb"), its writes guarded."""
     buffered = io.BufferedWriter(_TargetFile(path, target))
     if "b" in mode:
@@ -75,7 +75,7 @@ def _open_target(path: Path, target: Path, mode: str) -> IO[Any]:
 
 
 @contextlib.contextmanager
-def _signals_held() -> Iterator[None]:
+def signals_held() -> Iterator[None]:
     """Hold SIGINT and SIGTERM while the block runs; deliver them after it.
 
     Their handlers are swapped for one that only notes the signal; after the
@@ -117,7 +117,7 @@ def _signals_held() -> Iterator[None]:
 
 
 @dataclasses.dataclass
-class _Entry:
+class StagedEntry:
     """One target of an output set and what is to replace it."""
 
     target: Path
@@ -130,7 +130,7 @@ class _Entry:
     fh: IO[Any] | None = None
 
 
-def _discard(entries: dict[Path, _Entry], created: list[Path]) -> None:
+def discard_entries(entries: dict[Path, StagedEntry], created: list[Path]) -> None:
     """Remove every temporary file of ``entries`` and the empty directories in ``created``.
 
     A module function rather than a method so that the set's finalizer can
@@ -153,7 +153,7 @@ def _discard(entries: dict[Path, _Entry], created: list[Path]) -> None:
     created.clear()
 
 
-def _refuse_input(target: Path) -> None:
+def refuse_input(target: Path) -> None:
     """Raise :class:`OutputError` if ``target`` is a file the run reads."""
     from ..project.inputs import input_at
 
@@ -165,7 +165,7 @@ def _refuse_input(target: Path) -> None:
             "into another directory", "nothing was written")
 
 
-def _refuse_foreign(target: Path) -> None:
+def refuse_foreign(target: Path) -> None:
     """Raise :class:`OutputError` if ``target`` is a file this program did not write.
 
     A file is this program's if the manifest of its directory lists it,
@@ -214,7 +214,7 @@ def _stamp(path: Path) -> dict[str, int] | None:
     return {"size": info.st_size, "mtime_ns": info.st_mtime_ns}
 
 
-def _manifests(entries: list[_Entry]) -> list[_Entry]:
+def manifests(entries: list[StagedEntry]) -> list[StagedEntry]:
     """The new manifest of every directory that ``entries`` write to or remove from.
 
     Each lists the files written now (stamped from their temporary files:
@@ -222,11 +222,11 @@ def _manifests(entries: list[_Entry]) -> list[_Entry]:
     still there unchanged. A removal of a file the old manifest does not
     list, or that changed since, becomes ``keep``: the file is the user's.
     """
-    by_dir: dict[Path, list[_Entry]] = {}
+    by_dir: dict[Path, list[StagedEntry]] = {}
     for entry in entries:
         if entry.target.name != MANIFEST:
             by_dir.setdefault(entry.target.parent, []).append(entry)
-    made: list[_Entry] = []
+    made: list[StagedEntry] = []
     for directory, group in by_dir.items():
         old = _read_manifest(directory)
         # Only what is still there, as it was written.
@@ -248,23 +248,23 @@ def _manifests(entries: list[_Entry]) -> list[_Entry]:
             fd, name = make(directory, MANIFEST)
         except OSError as exc:
             raise OutputError(target, exc) from None
-        entry = _Entry(target, Path(name), "reserved")
+        entry = StagedEntry(target, Path(name), "reserved")
         made.append(entry)
         os.close(fd)
-        os.chmod(name, 0o666 & ~_umask())
+        os.chmod(name, 0o666 & ~current_umask())
         text = json.dumps({"written_by": "rockfall-design", "files": dict(sorted(listed.items()))},
                           indent=1)
         try:
-            entry.fh = _open_target(entry.tmp, target, "w")  # type: ignore[arg-type]
+            entry.fh = open_target(entry.tmp, target, "w")  # type: ignore[arg-type]
         except OSError as exc:
             raise OutputError(target, exc) from None
         entry.state = "open"
         entry.fh.write(text + "\n")
-        _finish(entry)
+        finish_entry(entry)
     return made
 
 
-def _finish(entry: _Entry) -> None:
+def finish_entry(entry: StagedEntry) -> None:
     """Flush, sync to disk and close an open entry's file."""
     if entry.fh is None:
         return
@@ -277,7 +277,7 @@ def _finish(entry: _Entry) -> None:
     entry.fh, entry.state = None, "ready"
 
 
-def _swap_in(entries: list[_Entry]) -> list[Path]:
+def swap_in(entries: list[StagedEntry]) -> list[Path]:
     """Rename every entry into place, keeping the old targets aside; all or none.
 
     Returns the old targets' new names (to be deleted once the commit is
@@ -323,12 +323,13 @@ def _swap_in(entries: list[_Entry]) -> list[Path]:
     return backups
 
 
-def _key(path: str | os.PathLike[str]) -> Path:
+def target_key(path: str | os.PathLike[str]) -> Path:
     """The absolute path a target is known by, so one file cannot enter a set twice."""
     return Path(os.path.abspath(path))
 
 
-def _umask() -> int:
+def current_umask() -> int:
+    """The process's file-creation mask (read by setting it and setting it back)."""
     mask = os.umask(0)
     os.umask(mask)
     return mask

@@ -35,7 +35,7 @@ from .releases import (
     engine_settings,
     section_from_project,
 )
-from .streamed import _STOP_BUCKETS, REST_SAMPLE, STREAM_REL_ERROR, StreamedStudy
+from .streamed import REST_SAMPLE, STOP_BUCKETS, STREAM_REL_ERROR, StreamedStudy
 from .summary import (
     STATION_QUANTITIES,
     STATISTICS,
@@ -426,7 +426,7 @@ def study_memory(project: Project, rocks: int) -> int:
     n_log = probe.n_buckets
     # The histograms, and while adding to one of them its temporaries and a
     # fresh count array of the same size (np.bincount).
-    histograms = 8 * n_log * (3 * s + len(STATION_QUANTITIES) * u) + 8 * _STOP_BUCKETS
+    histograms = 8 * n_log * (3 * s + len(STATION_QUANTITIES) * u) + 8 * STOP_BUCKETS
     adding = probe.ADD_TEMPORARY_BYTES + 8 * n_log * s
     # The engine computes the next chunk while this one is being added: its
     # float32 envelope values and crossings are held too.

@@ -37,7 +37,7 @@ REST_SAMPLE = 20_000
 _CHUNK_VALUES = 4_000_000
 
 # Buckets of the where-rocks-stop histogram: a multiple of the figure's 80 bins.
-_STOP_BUCKETS = 80 * 820
+STOP_BUCKETS = 80 * 820
 
 
 @dataclass
@@ -80,7 +80,7 @@ class StreamedStudy:
         self._env_h = LogHistogram(s, STREAM_REL_ERROR)
         self._env_e = LogHistogram(s, STREAM_REL_ERROR)
         self._env_v = LogHistogram(s, STREAM_REL_ERROR)
-        self._stops = LinearHistogram(self.section.x[0], self.section.x[-1], _STOP_BUCKETS)
+        self._stops = LinearHistogram(self.section.x[0], self.section.x[-1], STOP_BUCKETS)
 
     @property
     def statistics(self) -> dict[str, Any]:
@@ -144,8 +144,8 @@ class StreamedStudy:
         return np.concatenate(self._rest_x), np.concatenate(self._rest_y)
 
     def stop_counts(self, bins: int) -> np.ndarray:
-        if _STOP_BUCKETS % bins:
-            raise ValueError(f"bins must divide {_STOP_BUCKETS}")
+        if STOP_BUCKETS % bins:
+            raise ValueError(f"bins must divide {STOP_BUCKETS}")
         return self._stops.counts[0].reshape(bins, -1).sum(axis=1)
 
     # ---- statistics ------------------------------------------------------

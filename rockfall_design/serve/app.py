@@ -70,9 +70,11 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, HTMLResponse, JSONResponse, Response
 from starlette.routing import Route
 
+from ..plugins import plugins_json
 from .guards import (
     MAX_BODY_BYTES,
     ServeError,
+    inside,
     non_finite_key,
     request_problem,
     version_of,
@@ -395,8 +397,6 @@ class _Endpoints:
         return _json(bench.place(e, raws))
 
     async def plugins(self, request: Request) -> Response:
-        from ..plugins import plugins_json
-
         reg = self.entries[0].registry if self.entries else None
         if reg is None:
             raise ServeError(404, "no project served")
@@ -519,8 +519,6 @@ def _page(token: str) -> Response:
 
 
 def _inside(e: ProjectEntry, name: str) -> Any:
-    from .guards import inside
-
     return inside(e.directory, name)
 
 

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
+from ..project.schema import Material
 from ..report.temporaries import make, remove_stale
 
 #: Largest request body (bytes): a project file or a section to import.
@@ -107,7 +108,7 @@ def referenced_outside(text: str, base: Path, root: Path) -> str | None:
     return None
 
 
-def _library_comments(text: str) -> dict[str, str]:
+def library_comments(text: str) -> dict[str, str]:
     """Each library entry's ``# source:`` comment line (the bundled library's convention)."""
     out: dict[str, str] = {}
     source = ""
@@ -322,7 +323,6 @@ def _yaml_kind(text: str) -> str:
     import yaml
     from pydantic import ValidationError
 
-    from ..project.schema import Material
 
     try:
         # Composed, not constructed: an alias bomb is not expanded here.

@@ -29,9 +29,9 @@ def calibration_tables(result: CalibrationResult) -> list[dict[str, Any]]:
     fit = result.fit
     fit_rows = [["distance_kind", fit.distance_kind], ["distance", fit.distance],
                 ["ks_statistic", fit.ks_statistic], ["ks_pvalue", fit.ks_pvalue]]
-    return [{"title": "Fitted inputs", "rows": _plain(rows),
+    return [{"title": "Fitted inputs", "rows": plain_json(rows),
              "columns": ["input", "value", "low", "high", "range", "identified", "at bound"]},
-            {"title": "Fit", "columns": ["item", "value"], "rows": _plain(fit_rows)}]
+            {"title": "Fit", "columns": ["item", "value"], "rows": plain_json(fit_rows)}]
 
 
 def _table(title: str, frame: Any) -> dict[str, Any]:
@@ -44,14 +44,15 @@ def _cell(v: Any) -> Any:
         v = v.item()
     if isinstance(v, float) and not math.isfinite(v):
         return None
-    return _plain(v)
+    return plain_json(v)
 
 
-def _plain(v: Any) -> Any:
+def plain_json(v: Any) -> Any:
+    """``v`` as plain JSON data: string keys, lists, scalars; anything else as its text."""
     if isinstance(v, dict):
-        return {str(k): _plain(x) for k, x in v.items()}
+        return {str(k): plain_json(x) for k, x in v.items()}
     if isinstance(v, list | tuple):
-        return [_plain(x) for x in v]
+        return [plain_json(x) for x in v]
     if isinstance(v, float | int | str | bool) or v is None:
         return v
     return str(v)

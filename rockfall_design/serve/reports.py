@@ -13,6 +13,8 @@ import io
 import threading
 from collections.abc import Callable
 
+from ..report.documents import render_html, report_context
+from ..report.figures import inline_svg, svg_document
 from ..results import CheckResult, OptimiseResult
 
 #: Figure formats the page offers for download.
@@ -32,9 +34,6 @@ def media_type(name: str) -> str:
 
 def report_files(result: CheckResult | OptimiseResult) -> dict[str, bytes]:
     """``report.html`` (as ``--report`` writes it) and every figure as PNG and SVG."""
-    from ..report.documents import render_html, report_context
-    from ..report.figures import inline_svg, svg_document
-
     figures = result.figures()  # made once, for the report and the downloads
     # Each figure rendered once as SVG: the download and report.html's inline copy are
     # the same text (rendering was most of a served report's time: three per figure).

@@ -25,22 +25,39 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..api import validate_project
+from ..arguments import MAX_BOOTSTRAP
+from ..calibration.procedure import run_calibration
+from ..errors import ProjectError, RockfallError
+from ..judge.evaluation import evaluate
+from ..judge.placing import build_measures, place_measures
+from ..optimiser.driver import optimise
+from ..plugins import guard
+from ..project import dump_yaml, load_project
+from ..project.loading import load_project_text
+from ..project.locator import params_problem
+from ..project.schema import Material
+from ..report.terminal import design_yaml
+from ..results import DEFAULT_TRAJECTORIES, CheckResult, OptimiseResult
+from ..run.releases import section_from_project
+from ..studies.runner import run_parametric
 from .bench import Bench, build_bench, placed_message
 from .guards import (
     MAX_BODY_BYTES,
     UPLOAD_KINDS,
     UPLOAD_SUFFIXES,
     ServeError,
-    _library_comments,
     file_kind,
     hidden_part,
     inside,
+    library_comments,
     referenced_outside,
     same_version,
     write_atomically,
 )
-from .job_tables import _plain, calibration_tables, study_tables
+from .job_tables import calibration_tables, plain_json, study_tables
 from .jobs import Cancelled, Job
+from .reports import lazy_files
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
@@ -85,8 +102,6 @@ class ProjectEntry:
     # -- what the page draws ------------------------------------------------------
     def describe(self) -> dict[str, Any]:
         """The section and everything on it, in metres, for the page."""
-        from ..run.releases import section_from_project
-
         p = self.project
         sec = section_from_project(p)
         # Material of every segment of the ground, by its name in the project
@@ -99,10 +114,8 @@ class ProjectEntry:
         for r in p.rocks.release:
             d = r.model_dump() if hasattr(r, "model_dump") else dict(r)
             releases.append({k: d.get(k) for k in ("x", "height", "weight")})
-        measures = [{k: _plain(v) for k, v in dict(raw).items()} for raw in p.measures]
+        measures = [{k: plain_json(v) for k, v in dict(raw).items()} for raw in p.measures]
         # Their labels, as the reports write them (the project validated when loaded).
-        from ..judge.placing import build_measures, place_measures
-
         placed = place_measures(p, self.registry, build_measures(p, self.registry), sec)
         labels = {q.index: q.label for q in placed}
         for i, m in enumerate(measures):
@@ -135,9 +148,6 @@ class ProjectEntry:
     # -- measures from the page ---------------------------------------------------
     def build_measure(self, raw: Any, i: int) -> Any:
         """A measure from ``{"type": ..., parameters}``, validated by its plugin's model."""
-        from ..plugins import guard
-        from ..project.locator import params_problem
-
         if not isinstance(raw, dict) or not isinstance(raw.get("type"), str):
             raise ServeError(400, f"measures[{i}]: expected an object with a 'type'")
         kind = raw["type"]
@@ -224,11 +234,6 @@ class ProjectEntry:
             400 for measures the plugins reject or rocks or seed out of
             range; 409 while a job of this project runs.
         """
-        from ..errors import ProjectError
-        from ..judge.evaluation import evaluate
-        from ..judge.placing import place_measures
-        from ..run.releases import section_from_project
-
         n, s = self._rocks_seed(rocks, seed)
         project = self.project
         if raws is not None:
@@ -241,9 +246,6 @@ class ProjectEntry:
                 {k: v for k, v in r.items() if k != "label"} for r in raws]})
 
         def work(job: Job) -> None:
-            from ..results import DEFAULT_TRAJECTORIES, CheckResult
-            from .reports import lazy_files
-
             ev = evaluate(project, self.registry, rocks=n, seed=s, progress=job.progress,
                           n_trajectories=DEFAULT_TRAJECTORIES)
             report = CheckResult(project, ev, self.registry)
@@ -266,9 +268,6 @@ class ProjectEntry:
             400 without a ``design:`` section, or with ``design.scenarios``
             (optimise those with the command line); 409 while a job runs.
         """
-        from ..optimiser.driver import optimise
-        from ..report.terminal import design_yaml
-
         if self.project.design is None:
             raise ServeError(400, f"{self.path.name}: the project has no design: section to "
                              "optimise")
@@ -279,9 +278,6 @@ class ProjectEntry:
         project = self.project
 
         def work(job: Job) -> None:
-            from ..results import OptimiseResult
-            from .reports import lazy_files
-
             res = optimise(project, self.registry, rocks=n, seed=s, progress=job.staged)
             job.result = res.summary()
             if res.best is not None:
@@ -306,8 +302,6 @@ class ProjectEntry:
             400 without a ``study:`` section or with rocks or seed out of
             range; 409 while a job of this project runs.
         """
-        from ..studies.runner import run_parametric
-
         if self.project.study is None:
             raise ServeError(400, f"{self.path.name}: the project has no study: section")
         n, s = self._rocks_seed(rocks, seed)
@@ -342,9 +336,6 @@ class ProjectEntry:
             400 without a ``calibrate:`` section or with rocks, seed or
             bootstrap out of range; 409 while a job runs.
         """
-        from ..arguments import MAX_BOOTSTRAP
-        from ..calibration.procedure import run_calibration
-
         spec = self.project.calibrate
         if spec is None:
             raise ServeError(400, f"{self.path.name}: the project has no calibrate: section")
@@ -407,7 +398,6 @@ class ProjectEntry:
         import yaml
         from pydantic import ValidationError
 
-        from ..project.schema import Material
 
         name = name or self.library_name()
         if name is None:
@@ -432,7 +422,7 @@ class ProjectEntry:
             raise ServeError(400, f"{name}{line}: not valid YAML") from None
         if not isinstance(data, dict) or not data:
             raise ServeError(400, f"{name}: expected a mapping of material names to materials")
-        sources = _library_comments(text)
+        sources = library_comments(text)
         out = []
         for key, value in data.items():
             try:
@@ -443,7 +433,7 @@ class ProjectEntry:
                 raise ServeError(400, f"{name}: {key}{'.' + where if where else ''}: "
                                  f"{err['msg']}") from None
             out.append({"name": str(key), "law": m.impact_model,
-                        "values": _plain(m.model_dump(mode="json", exclude_none=True)),
+                        "values": plain_json(m.model_dump(mode="json", exclude_none=True)),
                         "source": sources.get(str(key), "")})
         return {"path": str(target.relative_to(self.directory)), "materials": out}
 
@@ -461,10 +451,6 @@ class ProjectEntry:
             400 for a segment out of range or a material the library lacks;
             409 while a job of this project runs.
         """
-        from ..api import validate_project
-        from ..errors import RockfallError
-        from ..project import dump_yaml
-
         p = self.project
         n = len(p.slope.materials)
         if isinstance(segment, bool) or not isinstance(segment, int) or not 0 <= segment < n:
@@ -475,8 +461,6 @@ class ProjectEntry:
             names = ", ".join(m["name"] for m in lib["materials"])
             raise ServeError(400, f"material: {material!r} is not in {lib['path']} "
                              f"(it has {names})")
-        from ..project.schema import Material
-
         # A material of the project with that name but other values stays the
         # project's under a name of its own: the library's comes in as NAME
         # from LIBRARY.
@@ -622,10 +606,6 @@ class ProjectEntry:
             403 when it names a file outside the project's directory; 400
             with the command line's one-line message when it is not valid.
         """
-        from ..api import validate_project
-        from ..errors import RockfallError
-        from ..project.loading import load_project_text
-
         target = target or self.path.resolve()
         if not isinstance(text, str):
             raise ServeError(400, "text: expected the project file as a string")
@@ -649,9 +629,6 @@ def load_entries(paths: Sequence[Path], registry: Registry) -> list[ProjectEntry
     ProjectError
         A file is not a valid project (the command line's one-line message).
     """
-    from ..api import validate_project
-    from ..project import load_project
-
     out: list[ProjectEntry] = []
     seen: set[str] = set()
     for path in paths:

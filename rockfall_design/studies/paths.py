@@ -88,7 +88,7 @@ def parse_path(path: str) -> tuple[str | int, ...]:
     return tuple(keys)
 
 
-def _shown(keys: tuple) -> str:
+def shown(keys: tuple) -> str:
     """Keys back as a path: ``rocks.release[0].x``."""
     text = ""
     for key in keys:
@@ -114,7 +114,7 @@ def _absolute(keys: tuple, data: Mapping[str, Any]) -> tuple:
 
 def _step(container: Any, key: str | int, done: tuple) -> Any:
     """The key of ``container`` that ``key`` names (an index of a list, a key of a mapping)."""
-    where = _shown(done)
+    where = shown(done)
     if isinstance(container, list):
         if not isinstance(key, int):
             raise PathError(f"{where} is a list: expected an index such as {where}[0], got {key!r}")

@@ -22,13 +22,38 @@ from typing import Any
 
 import numpy as np
 
+from ..engine.columns import STOPPED
 from ..errors import ProjectError
+from ..judge.bounds import (
+    fraction_bounds,
+    fraction_lower_bound,
+    fraction_upper_bound,
+    quantile_index_table,
+)
+from ..judge.evaluation import evaluate
+from ..judge.placing import build_measures, place_measures
 from ..judge.plan import validate_plugin_sections
+from ..plugins import load_registry
+from ..plugins.measure import Barrier
 from ..project import Project
-from .paths import scenario_base, with_values
+from ..project.messages import describe
+from ..run.reach import protected_zone_counts
+from ..run.releases import section_from_project
+from ..run.simulation import Study, simulate
+from ..run.summary import STATION_QUANTITIES, STATISTICS, run_summary, stat_block
+from .executors import run_tasks
+from .paths import ALIASES, parse_path, scenario_base, shown, with_values
 from .scenario_result import BarrierBlock, BoundsLadder, ScenarioBounds, ScenarioResult
 from .scenarios import Scenario, scenarios
-from .study_result import envelope_percentile
+from .sensitivity import (
+    LADDER,
+    TARGET_STATISTICS,
+    ladder_confidences,
+    place_names,
+    residual_names,
+    sensitivity,
+)
+from .study_result import StudyResult, envelope_percentile
 
 __all__ = ["ScenarioTask", "prepare", "prepare_lazily", "run_parametric", "run_scenario",
            "run_tasks_of"]
@@ -82,14 +107,11 @@ def _relocated(project: Project, scenario: Scenario, exc: ProjectError) -> Proje
     on (``measures[0].height`` for a complaint at ``measures[0]``), else the
     first one; the message names the scenario and all its values.
     """
-    from ..project.messages import describe
-    from .paths import ALIASES, _shown, parse_path
-
     def key_text(path: str) -> str:
         keys = parse_path(path)
         if isinstance(keys[0], str) and keys[0] in ALIASES:
             keys = (*ALIASES[keys[0]], *keys[1:])
-        return _shown(keys)
+        return shown(keys)
 
     paths = list(scenario.values)
     blamed = next((p for p in paths if exc.key and (key_text(p).startswith(exc.key)
@@ -103,10 +125,6 @@ def _relocated(project: Project, scenario: Scenario, exc: ProjectError) -> Proje
 
 def _barriers(project: Project, registry: Any) -> tuple[tuple[int, str, float], ...]:
     """The barriers of a project, checked and placed as every command does."""
-    from ..judge.placing import build_measures, place_measures
-    from ..plugins.measure import Barrier
-    from ..run.releases import section_from_project
-
     validate_plugin_sections(project, registry)
     measures = build_measures(project, registry)
     placed = place_measures(project, registry, measures, section_from_project(project))
@@ -213,8 +231,6 @@ def run_scenario(task: ScenarioTask) -> ScenarioResult:
         ``runtime_s`` (not part of the study's JSON: it differs between
         runs).
     """
-    from ..run.simulation import simulate
-
     project = task.project
     own = [float(x) for x in project.analysis.stations]
     extra = sorted({x for _, _, x in task.barriers if x not in own})
@@ -254,8 +270,6 @@ def _residual_with_measures(task: ScenarioTask) -> dict[str, Any]:
         ``x`` (m), ``reaching``, ``fraction``, ``unresolved`` as ``check``'s
         ``protect``, and ``measures``: the labels of the measures in place.
     """
-    from ..judge.evaluation import evaluate
-
     ev = evaluate(task.project, _registry(), rocks=task.rocks, seed=task.seed)
     p = ev.protect or {}
     return {"x": p.get("x"), "reaching": int(p.get("reaching", 0)),
@@ -269,8 +283,6 @@ _REGISTRY: list[Any] = []
 def _registry() -> Any:
     """The installed plugins, loaded once per process (a worker's first scenario)."""
     if not _REGISTRY:
-        from ..plugins import load_registry
-
         _REGISTRY.append(load_registry())
     return _REGISTRY[0]
 
@@ -287,11 +299,6 @@ def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> dict[str
     ``project_hash``: the hash the summary gives, the scenario's project's
     (not that of its copy with the barriers' stations).
     """
-    from ..engine.columns import STOPPED
-    from ..run.reach import protected_zone_counts
-    from ..run.simulation import Study
-    from ..run.summary import STATION_QUANTITIES, STATISTICS, run_summary, stat_block
-
     if not isinstance(study, Study):
         return {**study.summary(), "project_hash": project_hash}
     r = study.result
@@ -347,9 +354,6 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
         ``upper`` at the one-sided confidence 1 - (1 - c) / (2k) each. It is
         left out of the study's JSON.
     """
-    from ..run.simulation import Study
-    from .sensitivity import LADDER, TARGET_STATISTICS, ladder_confidences, place_names
-
     rungs = [task.scenarios] if task.scenarios > 0 else list(LADDER)
     sides = ladder_confidences(confidence, rungs)
     out = ScenarioBounds(confidence, upper={}, lower={},
@@ -376,9 +380,6 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
             ladder.lower[name], ladder.upper[name] = low_ladder, high_ladder
     protect = summary.get("protect")
     if protect is not None:
-        from ..judge.bounds import fraction_bounds, fraction_lower_bound, fraction_upper_bound
-        from .sensitivity import residual_names
-
         n = int(summary["rocks"])
         for name, block in residual_names(protect, with_measures):
             x = int(block["reaching"])
@@ -400,8 +401,6 @@ def _order_bounds(samples: Sequence[np.ndarray], qs: Sequence[float], confidence
     bound at ``confidence`` is the one of ``check``,
     :func:`~rockfall_design.judge.bounds.quantile_upper_bound`).
     """
-    from ..judge.bounds import quantile_index_table
-
     ns = [int(v.size) for v in samples]
     levels = [confidence, *sides]
     lows = quantile_index_table(ns, qs, levels, "lower")
@@ -424,7 +423,7 @@ def _finite_counts(values: np.ndarray) -> np.ndarray:
     return np.isfinite(values).sum(axis=0)
 
 
-def _column_percentile(values: np.ndarray, q: float,
+def column_percentile(values: np.ndarray, q: float,
                        count: np.ndarray | None = None) -> np.ndarray:
     """The ``q``-th percentile (0..100) of each column's finite values; NaN if none.
 
@@ -454,8 +453,6 @@ def _column_percentile(values: np.ndarray, q: float,
 
 def _envelope(study: Any, q: float) -> dict[str, list[float]]:
     """x (m), crossings and the ``q`` envelopes of height (m) and energy (kJ) of a run."""
-    from ..run.simulation import Study
-
     label = f"{q:g}".replace(".", "_")
     if isinstance(study, Study):
         r = study.result
@@ -463,8 +460,8 @@ def _envelope(study: Any, q: float) -> dict[str, list[float]]:
         return {
             "x_m": np.asarray(r.grid, dtype=float).tolist(),
             "crossings": crossings.tolist(),
-            f"height_p{label}_m": _column_percentile(r.grid_height, q, crossings).tolist(),
-            f"energy_p{label}_kj": (_column_percentile(r.grid_energy, q) / 1e3).tolist(),
+            f"height_p{label}_m": column_percentile(r.grid_height, q, crossings).tolist(),
+            f"energy_p{label}_kj": (column_percentile(r.grid_energy, q) / 1e3).tolist(),
         }
     env = study.envelopes()  # a streamed run: from its histograms
     keep = ["x_m", "crossings", f"height_p{label}_m", f"energy_p{label}_kj"]
@@ -487,8 +484,6 @@ def run_tasks_of(
     (``pool="threads"``), which start at once; ``pool="processes"`` runs them
     on a process pool instead. The results are the same either way.
     """
-    from .executors import run_tasks
-
     return run_tasks(run_scenario, tasks, workers=workers, scheduler=scheduler, on_done=on_done,
                      pool=pool, total=total)
 
@@ -514,9 +509,6 @@ def run_parametric(
     called as ``progress(done, total, rocks_done)`` once the scenarios are
     known (``done`` 0) and as each finishes.
     """
-    from .sensitivity import sensitivity
-    from .study_result import StudyResult
-
     t0 = time.perf_counter()
     chosen, tasks = prepare_lazily(project, registry, rocks=rocks, seed=seed,
                                    envelopes=envelopes)

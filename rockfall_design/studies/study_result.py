@@ -20,6 +20,9 @@ import numpy as np
 
 from ..project import Project
 from ..project.messages import fmt
+from ..report.figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure, save_figures
+from ..report.terminal import fitted_console
+from ..version import __version__
 from .scenario_result import ScenarioResult
 from .scenarios import Scenario
 from .sensitivity import SensitivityEntry, joint_bounds, rank, relative_effect, targets
@@ -109,8 +112,6 @@ class StudyResult:
         ``sensitivity_confidence``, the c at which its ``effect_low`` ..
         ``effect_high`` hold (None if no scenario has bounds).
         """
-        from ..version import __version__
-
         study = self.project.resolved_dict()["study"]
         joint = joint_bounds(self.results)
         scenarios = []
@@ -177,6 +178,7 @@ class StudyResult:
         """
         import pandas as pd
 
+
         table = targets(self.results)
         rows = []
         for k, scenario in enumerate(self.scenario_list):
@@ -201,7 +203,6 @@ class StudyResult:
         """Envelopes of passing height and energy along x, every scenario on one figure."""
         from matplotlib import colormaps
 
-        from ..report.figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure
 
         if any(result.envelope is None for result in self.results):
             raise ValueError("this study ran without its envelopes (envelopes=False); run it "
@@ -246,8 +247,6 @@ class StudyResult:
 
     def plot_tornado(self) -> Figure:
         """Tornado chart: for the targets moved most, each input's range of level means."""
-        from ..report.figures import RockfallFigure
-
         entries = self.entries
         chosen: list[str] = []
         for e in entries:  # the targets, most moved first (relative to their own size)
@@ -303,8 +302,6 @@ class StudyResult:
     def save_figures(self, directory: str | os.PathLike[str],
                      formats: Sequence[str] = ("png",)) -> list[Path]:
         """Write :meth:`figures` into ``directory``, one file per figure and format."""
-        from ..report.figures import save_figures
-
         return save_figures(self.figures(), directory, formats)
 
     # ---- terminal --------------------------------------------------------------------
@@ -313,7 +310,6 @@ class StudyResult:
         from rich.table import Table
         from rich.text import Text
 
-        from ..report.terminal import fitted_console
 
         rate = len(self.results) * self.n_rocks / self.runtime_s if self.runtime_s else 0.0
         head = Text.assemble(

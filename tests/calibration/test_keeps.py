@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 
 import rockfall_design as rd
 import rockfall_design.api
-import rockfall_design.run.simulation as simulation
+import rockfall_design.calibration.fit as fit
 from rockfall_design.calibration.uncertainty import FittedParameter, decimals, rounded
 from rockfall_design.cli.program import main
 from rockfall_design.report.staging import MANIFEST
@@ -188,7 +188,7 @@ def test_ctrl_c_stops_the_replicates_under_way(site, monkeypatch):
     """
     calls, after = [0], [0]
     raised = threading.Event()
-    run_study = simulation.run_study
+    run_study = fit.run_study  # imported at fit's top: patched where it is called
 
     def counted(*args, **kwargs):
         calls[0] += 1
@@ -200,7 +200,7 @@ def test_ctrl_c_stops_the_replicates_under_way(site, monkeypatch):
             _thread.interrupt_main()
         return run_study(*args, **kwargs)
 
-    monkeypatch.setattr(simulation, "run_study", counted)
+    monkeypatch.setattr(fit, "run_study", counted)
     with pytest.raises(KeyboardInterrupt):
         rd.calibrate(site, bootstrap=6, workers=2, pool="threads", rocks=60)
     raised.set()  # the calibration has given up; count what still starts

@@ -240,7 +240,7 @@ def test_two_profiles_share_their_materials_by_name(tmp_path, capsys):
 
 
 def test_fit_auto_takes_every_profile_s_materials(tmp_path):
-    from rockfall_design.calibration.procedure import _fit_ranges
+    from rockfall_design.calibration.procedure import fit_ranges
     from rockfall_design.calibration.sets import read_site
 
     ranges = "ranges: {restitution: [0.1, 0.6], rolling_resistance: [0.1, 1.0]}"
@@ -255,7 +255,7 @@ def test_fit_auto_takes_every_profile_s_materials(tmp_path):
         "    - {file: stops_p2.csv, profile: P2}\n  fit: auto\n")
     project = load_project(tmp_path / "site.yaml")
     assert "materials.gravel.restitution" not in project.calibrate.fit
-    fit = _fit_ranges(project, read_site(project))
+    fit = fit_ranges(project, read_site(project))
     assert list(fit) == [f"materials.{m}.{k}" for m in ("soil", "rock", "gravel")
                          for k in ("restitution", "rolling_resistance")]
 

@@ -159,7 +159,7 @@ def test_slip_at_tolerance_starts_in_the_sense_of_its_rate(side, offset):
     mu, mur, r, v = 0.3, 0.1, 0.5, 3.0
     beta = np.radians(45.0 if side > 0 else -65.0)
     s = (v - offset) / r
-    a, dsig, ds, sg, s_zero = engine_contact._contact_accel(
+    a, dsig, ds, sg, s_zero = engine_contact.contact_accel(
         np.sin(beta), np.cos(beta), v, s, mu, mur, r
     )
     assert not np.isnan(ds) and not s_zero
@@ -175,9 +175,9 @@ def test_slip_decays_exactly_where_rolling_can_hold(deg):
     beta = np.radians(deg)
     lo, hi = -(7 * mu + 5 * mur) / 2, (7 * mu - 5 * mur) / 2
     holds = lo <= np.tan(beta) <= hi
-    _, d_pos, _, _, _ = engine_contact._contact_accel(np.sin(beta), np.cos(beta), v, (v - 0.1) / r,
+    _, d_pos, _, _, _ = engine_contact.contact_accel(np.sin(beta), np.cos(beta), v, (v - 0.1) / r,
                                             mu, mur, r)
-    _, d_neg, _, _, _ = engine_contact._contact_accel(np.sin(beta), np.cos(beta), v, (v + 0.1) / r,
+    _, d_neg, _, _, _ = engine_contact.contact_accel(np.sin(beta), np.cos(beta), v, (v + 0.1) / r,
                                             mu, mur, r)
     assert holds == (d_pos < 0 and d_neg > 0)
 

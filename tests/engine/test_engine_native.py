@@ -1,4 +1,4 @@
-"""The batch kernel's kept machine code (engine._native, issue 27 item 11).
+"""The batch kernel's kept machine code (engine.native_code, issue 27 item 11).
 
 A fresh process runs the kernel from the object code kept beside numba's
 cache, without building numba's compiler; these tests hold it to numba's
@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rockfall_design.engine import Material, _jit, _native, ensemble, run_ensemble
+from rockfall_design.engine import Material, ensemble, jit, native_code, run_ensemble
 from tests.engine_helpers import section
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -41,13 +41,13 @@ def _releases(n: int):
 
 def _kernel():
     """The native kernel, made (by a run through the dispatcher) if need be."""
-    if not _jit.CACHE:
+    if not jit.CACHE:
         pytest.skip("no cache directory: nothing is kept")
     sec = section(STANDARD, talus())
     run_ensemble(sec, _releases(4), key=1, threads=1, stations=[80.0], grid=[10.0, 150.0])
     # load() tries once per process: forget a try made before the code was kept.
-    _native._loaded.clear()
-    kernel = _native._load(ensemble._run_batch, _jit.DIGEST)
+    native_code._loaded.clear()
+    kernel = native_code._load(ensemble._run_batch, jit.DIGEST)
     if kernel is None:
         # Made and used on Linux x86-64 (the reference platform); elsewhere
         # the dispatcher runs, which these tests cannot hold to anything.
@@ -58,12 +58,12 @@ def _kernel():
 
 def test_the_native_kernel_gives_the_dispatchers_results_to_the_bit(monkeypatch):
     _kernel()
-    assert _native.load(ensemble._run_batch, _jit.DIGEST) is not None  # what run_ensemble uses
+    assert native_code.load(ensemble._run_batch, jit.DIGEST) is not None  # what run_ensemble uses
     sec = section(STANDARD, talus())
     kw = dict(key=9, stations=[40.0, 80.0], grid=np.linspace(0, 200, 11),
               n_trajectories=3, threads=2, record_speed=True)
     native = run_ensemble(sec, _releases(300), **kw)
-    monkeypatch.setattr(ensemble._native, "load", lambda *a: None)
+    monkeypatch.setattr(ensemble.native_code, "load", lambda *a: None)
     numba = run_ensemble(sec, _releases(300), **kw)
     for name in ("status", "x_end", "y_end", "n_events", "max_x", "duration", "crossings",
                  "grid_height", "grid_energy", "grid_speed"):
@@ -77,30 +77,31 @@ def test_arguments_of_other_types_go_to_the_dispatcher():
     x = np.arange(3.0)
     ro = x.copy()
     ro.flags.writeable = False
-    assert _native.arg_tags([x]) != _native.arg_tags([ro])
-    assert _native.arg_tags([x]) != _native.arg_tags([x.astype(np.float32)])
-    assert _native.arg_tags([x]) != _native.arg_tags([np.arange(6.0)[::2]])
+    assert native_code.arg_tags([x]) != native_code.arg_tags([ro])
+    assert native_code.arg_tags([x]) != native_code.arg_tags([x.astype(np.float32)])
+    assert native_code.arg_tags([x]) != native_code.arg_tags([np.arange(6.0)[::2]])
     assert not kernel.accepts([x])
 
 
 def test_code_kept_from_other_sources_is_not_loaded():
     _kernel()
-    assert _native._load(ensemble._run_batch, "0" * 64) is None
+    assert native_code._load(ensemble._run_batch, "0" * 64) is None
 
 
 def test_a_kept_kernel_for_another_cpu_is_not_loaded(tmp_path, monkeypatch):
     _kernel()
-    obj, meta = _native._paths(Path(ensemble._run_batch._cache._cache_path), ensemble._run_batch)
+    obj, meta = native_code._paths(Path(ensemble._run_batch._cache._cache_path),
+                                   ensemble._run_batch)
     data = json.loads(meta.read_text())
     data["host"]["cpu"] = "some-other-cpu"
     fake = tmp_path / meta.name
     fake.write_text(json.dumps(data))
-    monkeypatch.setattr(_native, "_paths", lambda *a: (obj, fake))
-    assert _native._load(ensemble._run_batch, _jit.DIGEST) is None
+    monkeypatch.setattr(native_code, "_paths", lambda *a: (obj, fake))
+    assert native_code._load(ensemble._run_batch, jit.DIGEST) is None
 
 
 def test_the_kept_kernel_files_go_with_a_stale_cache(tmp_path, monkeypatch):
-    monkeypatch.setattr(_jit, "CACHE", True)
+    monkeypatch.setattr(jit, "CACHE", True)
     src = tmp_path / "src"
     src.mkdir()
     (src / "ensemble.py").write_text("a = 1\n")
@@ -117,7 +118,7 @@ def test_the_kept_kernel_files_go_with_a_stale_cache(tmp_path, monkeypatch):
     class Disp:
         _cache = Cache()
 
-    assert _jit.drop_stale_cache(Disp(), src) == 2
+    assert jit.drop_stale_cache(Disp(), src) == 2
     assert not any(f.exists() for f in kept)
 
 
@@ -144,7 +145,8 @@ def test_a_process_that_loads_numbas_cache_keeps_the_code_for_the_next():
     # The kernel loaded from numba's cache (not compiled in the process) has
     # its object code in numba's data file; it must be kept from there too.
     _kernel()
-    obj, meta = _native._paths(Path(ensemble._run_batch._cache._cache_path), ensemble._run_batch)
+    obj, meta = native_code._paths(Path(ensemble._run_batch._cache._cache_path),
+                                   ensemble._run_batch)
     obj.unlink()
     meta.unlink()
     code = (
@@ -157,4 +159,4 @@ def test_a_process_that_loads_numbas_cache_keeps_the_code_for_the_next():
     assert run.returncode == 0, run.stderr
     assert "compiling" not in run.stderr
     assert obj.is_file() and meta.is_file()
-    assert json.loads(meta.read_text())["digest"] == _jit.DIGEST
+    assert json.loads(meta.read_text())["digest"] == jit.DIGEST

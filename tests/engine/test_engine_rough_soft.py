@@ -225,7 +225,7 @@ def test_the_slip_reaches_zero_where_the_equations_say(deg, v0, s0):
     r, mu, mus, vs = 0.4, 0.6, 0.3, 4.0
     sinb, cosb = math.sin(math.radians(deg)), math.cos(math.radians(deg))
     q = v0 * v0 / vs**2
-    a, _, dsp, sg, _ = contact._contact_accel(sinb, cosb, v0, s0, mu, mus, r, q)
+    a, _, dsp, sg, _ = contact.contact_accel(sinb, cosb, v0, s0, mu, mus, r, q)
     assert sg == 1.0
     c = G * cosb * mus / vs**2
     ev, tm, _, v1, s1 = contact.drag_phase(v0, s0, v0 - r * s0, sg, a, dsp, c, vs, 1e4, sinb,
@@ -243,7 +243,7 @@ def _phases(deg, v, s, mu, mus, vs, r, n=40):
     sinb, cosb = math.sin(math.radians(deg)), math.cos(math.radians(deg))
     x, out = 0.0, []
     for _ in range(n):
-        a, _, dsp, sg, s_zero = contact._contact_accel(sinb, cosb, v, s, mu, mus, r,
+        a, _, dsp, sg, s_zero = contact.contact_accel(sinb, cosb, v, s, mu, mus, r,
                                                        v * v / vs**2)
         rolling = sg == 0.0
         sigma = 0.0 if (rolling or abs(v - r * s) <= contact.SLIP_TOL) else v - r * s

@@ -14,8 +14,8 @@ import pytest
 from numpy.testing import assert_array_equal
 
 from rockfall_design.engine import Material, Releases, Section, barrier_table, columns, run_ensemble
-from rockfall_design.engine._jit import KEEP_SHARED, choose_cache_dir, shared_cache_dir
 from rockfall_design.engine.batching import THREADS_ENV, default_threads
+from rockfall_design.engine.jit import KEEP_SHARED, choose_cache_dir, shared_cache_dir
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -127,8 +127,8 @@ def test_read_only_package_and_home_cache_in_the_temp_dir(tmp_path):
                PYTHONDONTWRITEBYTECODE="1")
     code = (
         "import os, numpy as np\n"
-        "from rockfall_design.engine import _jit, rng\n"
-        "print(_jit.CACHE, os.environ['NUMBA_CACHE_DIR'])\n"
+        "from rockfall_design.engine import jit, rng\n"
+        "print(jit.CACHE, os.environ['NUMBA_CACHE_DIR'])\n"
         "rng.stream_start(np.uint64(1), 2)\n"
     )
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
@@ -180,7 +180,7 @@ def test_shared_cache_keeps_the_latest_few_of_other_sources(tmp_path):
 
 def test_another_copy_of_the_same_sources_does_not_compile_again(tmp_path):
     """A copy of the package elsewhere (as an installed one beside a checkout) loads the cache."""
-    from rockfall_design.engine import _jit, ensemble
+    from rockfall_design.engine import ensemble, jit
 
     here = Path(ensemble._run_batch._cache._cache_path)
     if here.parent.name != "rockfall-design":
@@ -202,7 +202,7 @@ def test_another_copy_of_the_same_sources_does_not_compile_again(tmp_path):
     module, where = out.stdout.split()
     assert Path(module).is_relative_to(copy) and Path(where) == here
     assert "compiling" not in out.stderr, out.stderr
-    assert _jit.CACHE
+    assert jit.CACHE
 
 
 class _FakeCache:
@@ -221,9 +221,9 @@ def test_a_cache_compiled_from_other_engine_sources_is_dropped(tmp_path, monkeyp
     # numba knows a cached function by its own file only; the engine's kernels
     # call functions of other files, so a change to any engine source must
     # drop the whole engine cache (and nothing else in that directory).
-    from rockfall_design.engine import _jit
+    from rockfall_design.engine import jit
 
-    monkeypatch.setattr(_jit, "CACHE", True)
+    monkeypatch.setattr(jit, "CACHE", True)
     src = tmp_path / "src"
     src.mkdir()
     (src / "rock.py").write_text("a = 1\n")
@@ -236,22 +236,22 @@ def test_a_cache_compiled_from_other_engine_sources_is_dropped(tmp_path, monkeyp
         f.write_bytes(b"x")
     disp = _FakeDispatcher(cache)
     # No mark yet: the cache's sources are unknown, so it goes.
-    assert _jit.drop_stale_cache(disp, src) == 2
+    assert jit.drop_stale_cache(disp, src) == 2
     assert theirs.exists() and not any(f.exists() for f in ours)
     # Same sources: kept.
     for f in ours:
         f.write_bytes(b"x")
-    assert _jit.drop_stale_cache(disp, src) == 0
+    assert jit.drop_stale_cache(disp, src) == 0
     assert all(f.exists() for f in ours)
     # A callee's file changed (not the caller's): dropped again.
     (src / "contact.py").write_text("b = 2\n")
-    assert _jit.drop_stale_cache(disp, src) == 2
+    assert jit.drop_stale_cache(disp, src) == 2
     assert not any(f.exists() for f in ours)
     # Without a cache, or with a dispatcher numba no longer shapes so, nothing happens.
-    monkeypatch.setattr(_jit, "CACHE", False)
-    assert _jit.drop_stale_cache(disp, src) == 0
-    monkeypatch.setattr(_jit, "CACHE", True)
-    assert _jit.drop_stale_cache(object(), src) == 0
+    monkeypatch.setattr(jit, "CACHE", False)
+    assert jit.drop_stale_cache(disp, src) == 0
+    monkeypatch.setattr(jit, "CACHE", True)
+    assert jit.drop_stale_cache(object(), src) == 0
 
 
 def test_simulate_of_a_bare_slope_loads_neither_pandas_nor_scipy(tmp_path):
@@ -278,7 +278,7 @@ def test_each_variant_compiled_is_announced_once(capsys):
     # variant too (some 30 s) without a word: the notice was once per function.
     from numba import njit
 
-    from rockfall_design.engine._jit import compile_notice
+    from rockfall_design.engine.jit import compile_notice
 
     @njit(cache=False)
     def twice(a):
@@ -348,7 +348,7 @@ def test_a_constant_argument_compiles_no_variant_of_its_own():
     # and again for a variable one: 14 engine functions twice.
     from numba import njit
 
-    from rockfall_design.engine._jit import one_variant
+    from rockfall_design.engine.jit import one_variant
 
     callee = one_variant(njit(cache=False)(lambda a, k: a + k))
 
@@ -370,7 +370,7 @@ def test_a_callee_that_needs_the_constant_still_gets_it():
     # literal index: typing with the plain type fails, and numba's way applies.
     from numba import njit
 
-    from rockfall_design.engine._jit import one_variant
+    from rockfall_design.engine.jit import one_variant
 
     pick = one_variant(njit(cache=False)(lambda t, i: t[i]))
 

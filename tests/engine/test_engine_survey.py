@@ -2,7 +2,7 @@
 
 ``flight.next_landing`` skips the blocks of the centre path that a flight
 clears (``flight.path_tree``), ``profile.centre_path`` leaves out of its
-sweep the pieces a vertex's circle hides (``profile._hidden``), and the
+sweep the pieces a vertex's circle hides (``profile.hidden_pieces``), and the
 path of a rock of a size of its own is made from the ground elements that
 the paths of the run's radii can lie on (``profile.path_elements``,
 ``profile.survey_path``); these tests hold them to the plain versions over
@@ -18,26 +18,26 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rockfall_design.engine import G, Material, Releases, Section, run_ensemble
-from rockfall_design.engine.batching import BATCH_SECONDS, _Batches
+from rockfall_design.engine.batching import BATCH_SECONDS, Batches
 from rockfall_design.engine.flight import (
     LINEAR_PIECES,
-    _first_not_cleared,
+    first_not_cleared,
     locate,
     next_landing,
     path_tree,
 )
 from rockfall_design.engine.profile import (
-    _HIDE_WINDOW,
-    _centre_path,
-    _hidden,
-    _near_path,
-    _raw_pieces,
-    _stable_order,
-    _visible_pieces,
+    HIDE_WINDOW,
     centre_path,
     element_codes,
+    hidden_pieces,
+    near_path,
     path_elements,
+    raw_pieces,
+    stable_order,
     survey_path,
+    sweep_centre_path,
+    visible_pieces,
 )
 
 SETTINGS = settings(
@@ -138,7 +138,7 @@ def test_the_first_vertex_not_cleared_is_the_first_by_brute_force(seed, v, dirn,
     nv = px.size
     v = min(v, nv - 1)
     vx = vx * dirn
-    got = _first_not_cleared(px, tree, nv, v, dirn, x0, y0, vx, vy)
+    got = first_not_cleared(px, tree, nv, v, dirn, x0, y0, vx, vy)
     t = (px - x0) / vx
     above = y0 + t * (vy - 0.5 * G * t) > py
     skipped = range(v, got) if dirn > 0 else range(got + 1, v + 1)
@@ -190,20 +190,20 @@ def test_runs_on_a_noisy_survey_are_the_same_on_one_and_two_threads():
 )
 def test_leaving_hidden_pieces_out_keeps_the_centre_path_to_the_bit(n, noise, seed, r, chord,
                                                                    canon):
-    # The sweep leaves out the pieces a vertex's circle hides (profile._hidden),
+    # The sweep leaves out the pieces a vertex's circle hides (profile.hidden_pieces),
     # and (canon) their ends as breakpoints; the path must be the one the
     # sweep over every piece gives.
     x, y = noisy_survey(n, noise, seed)
     seg = np.arange(n - 1)
     every = element_codes(n)
-    fast = _centre_path(x, y, seg, r, np.radians(chord), True, every, canon)
-    full = _centre_path(x, y, seg, r, np.radians(chord), False, every, canon)
+    fast = sweep_centre_path(x, y, seg, r, np.radians(chord), True, every, canon)
+    full = sweep_centre_path(x, y, seg, r, np.radians(chord), False, every, canon)
     for a, b in zip(fast, full, strict=True):
         np.testing.assert_array_equal(a, b)
 
 
 def _hidden_by_the_window(xa, ya, xb, yb, ex, ey, r, tol):
-    """profile._hidden as it was, vertex by vertex through the whole window (plain Python)."""
+    """profile.hidden_pieces as it was, vertex by vertex through the whole window (plain Python)."""
     out = np.zeros(xa.size, dtype=bool)
     for i in range(xa.size):
         dx = xb[i] - xa[i]
@@ -212,7 +212,7 @@ def _hidden_by_the_window(xa, ya, xb, yb, ex, ey, r, tol):
             continue
         m = 1e-9 * (1.0 + abs(ya[i]) + abs(yb[i])) + 1e5 * tol
         j = np.searchsorted(ex, 0.5 * (xa[i] + xb[i]) + r * dy / np.hypot(dx, dy))
-        for d in range(2 * _HIDE_WINDOW):
+        for d in range(2 * HIDE_WINDOW):
             w = j + (d + 1) // 2 if d % 2 else j - d // 2 - 1
             if not 0 <= w < ex.size:
                 continue
@@ -238,10 +238,10 @@ def _hidden_by_the_window(xa, ya, xb, yb, ex, ey, r, tol):
 )
 def test_the_visible_pieces_are_the_raw_pieces_that_are_not_hidden(n, noise, seed, r, chord,
                                                                    keep):
-    # _visible_pieces leaves out arc edges that a rough, slack test finds
+    # visible_pieces leaves out arc edges that a rough, slack test finds
     # hidden for sure, without making them, and stops looking along a side
     # of the window at the first vertex out of reach: the pieces must be
-    # _raw_pieces' less those the whole window hides, to the bit, and in order.
+    # raw_pieces' less those the whole window hides, to the bit, and in order.
     x, y = noisy_survey(n, noise, seed)
     mc = np.radians(chord)
     if keep == "kept":
@@ -257,15 +257,15 @@ def test_the_visible_pieces_are_the_raw_pieces_that_are_not_hidden(n, noise, see
     eseg = np.r_[0, np.arange(n - 1), n - 2]
     ecodes = np.r_[1, elems + 2, 2 * n + 1]
     tol = 1e-12 * 200.0
-    xa, ya, xb, yb, sid = _raw_pieces(ex, ey, eseg, r, mc, ecodes)
+    xa, ya, xb, yb, sid = raw_pieces(ex, ey, eseg, r, mc, ecodes)
     hv = ecodes[ecodes % 2 == 0] // 2
-    hidden = _hidden(xa, ya, xb, yb, ex[hv], ey[hv], r, tol)
+    hidden = hidden_pieces(xa, ya, xb, yb, ex[hv], ey[hv], r, tol)
     np.testing.assert_array_equal(hidden,
                                   _hidden_by_the_window(xa, ya, xb, yb, ex[hv], ey[hv], r, tol))
-    vis = _visible_pieces(ex, ey, eseg, r, mc, ecodes, True, tol)
+    vis = visible_pieces(ex, ey, eseg, r, mc, ecodes, True, tol)
     for a, b in zip(vis, (xa, ya, xb, yb, sid), strict=True):
         assert a.tobytes() == b[~hidden].tobytes()
-    for a, b in zip(_visible_pieces(ex, ey, eseg, r, mc, ecodes, False, tol),
+    for a, b in zip(visible_pieces(ex, ey, eseg, r, mc, ecodes, False, tol),
                     (xa, ya, xb, yb, sid), strict=True):
         assert a.tobytes() == b.tobytes()
 
@@ -286,7 +286,7 @@ def test_the_stable_order_is_the_merge_sorts(n, shuffle, ties, seed):
         if n > 1:
             i, j = g.integers(0, n, 2)
             a[i], a[j] = a[j], a[i]
-    np.testing.assert_array_equal(_stable_order(a), np.argsort(a, kind="stable"))
+    np.testing.assert_array_equal(stable_order(a), np.argsort(a, kind="stable"))
 
 
 def _dist2_to_pieces(x, y, px, py):
@@ -308,12 +308,12 @@ def _dist2_to_pieces(x, y, px, py):
 )
 def test_the_elements_near_the_path_are_those_within_reach_of_some_piece(n, noise, seed, r,
                                                                            spread):
-    # _near_path skips the pieces higher than a ground point by more than the
+    # near_path skips the pieces higher than a ground point by more than the
     # reach: it must keep what the distances to every piece keep.
     x, y = noisy_survey(n, noise, seed)
     px, py, _ = survey_path(x, y, np.arange(n - 1), r, np.radians(5.0), element_codes(n))
     reach_seg, reach_vtx = r * spread, r * spread * 1.001
-    keep = _near_path(x, y, px, py, reach_seg, reach_vtx)
+    keep = near_path(x, y, px, py, reach_seg, reach_vtx)
     to_pieces = _dist2_to_pieces(x, y, px, py)  # ground point i, path piece k
     to_segments = _dist2_to_pieces(px, py, x, y)  # path point k, ground segment i
     # A segment and a piece: the nearer of the four end-to-other distances.
@@ -329,9 +329,9 @@ def test_most_pieces_of_a_dense_noisy_survey_are_hidden():
     ext = 2 * r + 1
     ex = np.r_[x[0] - ext, x, x[-1] + ext]
     ey = np.r_[y[0], y, y[-1]]
-    xa, ya, xb, yb, _ = _raw_pieces(ex, ey, np.arange(x.size + 1), r, np.radians(5.0),
+    xa, ya, xb, yb, _ = raw_pieces(ex, ey, np.arange(x.size + 1), r, np.radians(5.0),
                                     element_codes(ex.size))
-    hidden = _hidden(xa, ya, xb, yb, ex, ey, r, 1e-12 * 200.0)
+    hidden = hidden_pieces(xa, ya, xb, yb, ex, ey, r, 1e-12 * 200.0)
     assert hidden.mean() > 0.9
 
 
@@ -400,7 +400,7 @@ def test_batches_hold_as_many_paths_as_fit_in_their_time():
     # Rock 0 has the shared radius; the others each a path of their own, of
     # 0.04 s: 2 per batch (BATCH_SECONDS 0.1), however cheap the rocks were.
     radius = np.r_[0.5, 0.5, np.linspace(0.3, 0.7, 20)]
-    b = _Batches(radius.size, 4096, radius, 0.5, 0.4 * BATCH_SECONDS)
+    b = Batches(radius.size, 4096, radius, 0.5, 0.4 * BATCH_SECONDS)
     a0, b0 = b.take()
     b.done(a0, b0, 1e-4)
     spans = []

@@ -10,14 +10,14 @@ from pathlib import Path
 
 import pytest
 
-from rockfall_design.engine import _jit
+from rockfall_design.engine import jit
 
 ROOT = Path(__file__).resolve().parents[2]
 
 FIRST_RUN = r"""
 import json, sys
 import numpy as np
-from rockfall_design.engine import _jit, ensemble, rock, run_ensemble, Section
+from rockfall_design.engine import jit, ensemble, rock, run_ensemble, Section
 from rockfall_design.project import load_project
 from rockfall_design.run.releases import draw_releases, engine_key, section_from_project
 
@@ -74,26 +74,26 @@ def test_a_failed_helper_leaves_the_compile_to_this_process(monkeypatch):
     # and compiles the callee itself.
     from numba import njit
 
-    callee = _jit.one_variant(njit(cache=False)(lambda a: a + 1))
+    callee = jit.one_variant(njit(cache=False)(lambda a: a + 1))
 
     @njit(cache=False)
     def caller(a):
         return callee(a) * 2
 
-    monkeypatch.setattr(_jit, "CACHE", True)
+    monkeypatch.setattr(jit, "CACHE", True)
     monkeypatch.setenv("ROCKFALL_DESIGN_COMPILE_HELPER", "1")
-    if not _jit.compile_in_helper([callee], "raise SystemExit(3)", b""):
+    if not jit.compile_in_helper([callee], "raise SystemExit(3)", b""):
         pytest.skip("one core: no helper")
     assert caller(1) == 4
 
 
 def test_no_helper_when_switched_off_or_without_a_cache(monkeypatch):
     monkeypatch.setenv("ROCKFALL_DESIGN_COMPILE_HELPER", "0")
-    assert not _jit.compile_in_helper([], "pass", b"")
+    assert not jit.compile_in_helper([], "pass", b"")
     monkeypatch.setenv("ROCKFALL_DESIGN_COMPILE_HELPER", "1")
-    monkeypatch.setattr(_jit, "CACHE", False)
-    assert not _jit.compile_in_helper([], "pass", b"")
-    _jit.await_helper(object())  # nothing to wait for
+    monkeypatch.setattr(jit, "CACHE", False)
+    assert not jit.compile_in_helper([], "pass", b"")
+    jit.await_helper(object())  # nothing to wait for
 
 
 def test_module_passes_are_left_to_the_caller_that_python_calls(monkeypatch):
@@ -102,9 +102,9 @@ def test_module_passes_are_left_to_the_caller_that_python_calls(monkeypatch):
     from numba.core import config
 
     monkeypatch.setattr(config, "LLVM_PASS_TIMINGS", True)  # numba records each pass run
-    assert _jit.optimise_once()
-    assert _jit.optimise_once()  # patched once, however often asked
-    callee = _jit.one_variant(njit(cache=False)(lambda a: a * 3.0))
+    assert jit.optimise_once()
+    assert jit.optimise_once()  # patched once, however often asked
+    callee = jit.one_variant(njit(cache=False)(lambda a: a * 3.0))
 
     @njit(cache=False)
     def caller(a):

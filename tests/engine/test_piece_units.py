@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rockfall_design.engine import Material, Section
-from rockfall_design.engine.ensemble import _rock_path_of, rock_path
+from rockfall_design.engine.ensemble import rock_path, rock_path_of
 from rockfall_design.engine.profile import every_piece_units
 from rockfall_design.engine.records import Ground
 
@@ -30,7 +30,7 @@ def test_the_path_from_the_units_is_the_path_to_the_bit(seed, n, chord):
     units = every_piece_units(ground.x, ground.y, mc)
     for r in rng.uniform(0.05, 2.0, 5):
         a = rock_path(ground, r, mc, EMPTY)
-        b = _rock_path_of(ground, r, mc, units)
+        b = rock_path_of(ground, r, mc, units)
         for name in ("px", "py", "pseg", "tree"):
             assert np.array_equal(getattr(a, name), getattr(b, name)), name
 
@@ -45,6 +45,6 @@ def test_the_units_do_not_depend_on_the_radius():
     assert units[0].size > 2 * (x.size - 1)  # the offsets and the arcs' edges
     for r in (0.01, 0.5, 3.0, 40.0):
         a = rock_path(ground, r, np.radians(5.0), EMPTY)
-        b = _rock_path_of(ground, r, np.radians(5.0), units)
+        b = rock_path_of(ground, r, np.radians(5.0), units)
         assert np.array_equal(a.px, b.px) and np.array_equal(a.py, b.py)
 

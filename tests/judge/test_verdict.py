@@ -16,7 +16,7 @@ from rockfall_design.judge.verdict import (
     STATES,
     UNTESTED,
     DesignVerdict,
-    _residual_rocks,
+    residual_rocks,
     verdict_of,
     verdict_of_scenarios,
     verdict_of_sections,
@@ -107,7 +107,7 @@ def test_a_measure_no_rock_meets_is_listed_as_untested_under_any_verdict():
                                                   (10, 2000, 0.01)])
 def test_the_rocks_that_settle_a_residual_are_the_fewest_at_the_observed_rate(reaching, n,
                                                                              allowed):
-    need = _residual_rocks(reaching, n, allowed, 0.95)
+    need = residual_rocks(reaching, n, allowed, 0.95)
     rate = reaching / n
 
     def bound(m):

@@ -32,11 +32,11 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 from pydantic import BaseModel
 
-from rockfall_design import project as project_module
 from rockfall_design.api import validate_project
 from rockfall_design.errors import RockfallError
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import Project, ProjectError, load_project_text
+from rockfall_design.project.messages import annotation_options
 
 from .test_project import EXAMPLE_DATA
 
@@ -63,10 +63,6 @@ junk = st.recursive(scalars, lambda inner: st.one_of(
     max_leaves=8)
 
 
-def _options(annotation: Any) -> list[Any]:
-    return project_module._options(annotation)
-
-
 def _section_models() -> dict[str, type[BaseModel]]:
     """Every pydantic model reachable from Project, by class name."""
     found: dict[str, type[BaseModel]] = {}
@@ -79,7 +75,7 @@ def _section_models() -> dict[str, type[BaseModel]]:
             stack = [info.annotation]
             while stack:
                 ann = stack.pop()
-                for option in _options(ann):
+                for option in annotation_options(ann):
                     if isinstance(option, type) and issubclass(option, BaseModel):
                         walk(option)
                     stack.extend(a for a in typing.get_args(option)
@@ -136,7 +132,7 @@ def value_for(annotation: Any, name: str, depth: int) -> st.SearchStrategy:
 
 
 def _by_type(annotation: Any, depth: int) -> st.SearchStrategy:
-    options = _options(annotation)
+    options = annotation_options(annotation)
     for option in options:
         if isinstance(option, type) and issubclass(option, BaseModel):
             return model_tree(option, depth + 1) if depth < 4 else junk

@@ -63,7 +63,7 @@ def test_design_yaml_and_the_report_name_the_undecided_designs():
     import yaml
 
     from rockfall_design.project import load_project
-    from rockfall_design.report.documents import _optimiser_sentences
+    from rockfall_design.report.documents import optimiser_sentences
     from rockfall_design.report.terminal import design_yaml
     project = load_project(Path(__file__).resolve().parents[1] / "data" / "design_small.yaml")
     concept = SimpleNamespace(name="spang", params=SimpleNamespace(
@@ -80,5 +80,5 @@ def test_design_yaml_and_the_report_name_the_undecided_designs():
     assert "(--max-rocks 520000)" in text
     assert yaml.safe_load(text)["rocks"]["count"] == 9_206  # still a project check reads
     assert "not admitted" not in design_yaml(best, "p.yaml", 4_603, None, [])
-    lines = _optimiser_sentences({"marginal": [_entry()], "currency": "EUR"})
+    lines = optimiser_sentences({"marginal": [_entry()], "currency": "EUR"})
     assert lines[-1].endswith("about 512,345 rocks would decide it (--max-rocks 520000)")

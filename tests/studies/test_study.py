@@ -290,7 +290,7 @@ def test_the_function_keeps_its_name_over_the_package():
 
 
 def test_the_scenario_envelope_percentile_is_numpys():
-    from rockfall_design.studies.runner import _column_percentile
+    from rockfall_design.studies.runner import column_percentile
 
     rng = np.random.default_rng(3)
     table = rng.lognormal(size=(500, 6)).astype(np.float32)
@@ -300,7 +300,7 @@ def test_the_scenario_envelope_percentile_is_numpys():
     for q in (0, 50, 95, 99, 100):
         with np.errstate(all="ignore"), pytest.warns(RuntimeWarning):
             expected = np.nanpercentile(table.astype(float), q, axis=0)
-        np.testing.assert_allclose(_column_percentile(table, q), expected, rtol=1e-12)
+        np.testing.assert_allclose(column_percentile(table, q), expected, rtol=1e-12)
 
 
 def _sorted_percentile(values, q):
@@ -321,7 +321,7 @@ def _sorted_percentile(values, q):
 def test_the_envelope_percentile_is_the_column_sorts_to_the_bit(seed):
     # The study's JSON numbers must not move: the same order statistics,
     # interpolated in the same float64 operations (float32 tables, as the engine's).
-    from rockfall_design.studies.runner import _column_percentile
+    from rockfall_design.studies.runner import column_percentile
 
     rng = np.random.default_rng(seed)
     for shape in [(2000, 13), (40, 5), (3, 4), (1, 3)]:
@@ -329,7 +329,7 @@ def test_the_envelope_percentile_is_the_column_sorts_to_the_bit(seed):
         table[rng.random(shape) < 0.4] = np.nan
         table[:, 0] = np.nan
         for q in (0, 12.5, 50, 95, 99, 100):
-            got, want = _column_percentile(table, q), _sorted_percentile(table, q)
+            got, want = column_percentile(table, q), _sorted_percentile(table, q)
             assert got.tobytes() == want.tobytes()
 
 

@@ -249,7 +249,7 @@ CACHE: bool = _configure()
 """Whether the engine's compiled functions are cached on disk (``cache=`` of ``njit``)."""
 
 DIGEST: str = sources_digest(ENGINE_DIR)
-"""Digest of the engine's sources (what the kept machine code of ``_native`` is checked by)."""
+"""Digest of the engine's sources (what the kept machine code of ``native_code`` is checked by)."""
 
 
 def hot(fn: Callable[..., Any]) -> Any:
@@ -306,7 +306,7 @@ def one_variant(dispatcher: Any) -> Any:
     a literal (``Literal[int](0)``, ``Literal[bool](True)``) and compiles the
     callee for it, apart from the variant a variable argument gets: the
     engine compiled 14 of its functions twice so, among them the centre
-    path's sweep (``profile._centre_path_of``, ``_visible_pieces``), about a
+    path's sweep (``profile.centre_path_of``, ``_visible_pieces``), about a
     fifth of the first compile (measured with numba's compile events). The
     callee is linked into its caller's module either way, where LLVM
     propagates the constant as it did; the machine code differs by branch
@@ -590,7 +590,7 @@ def drop_stale_cache(dispatcher: Any, sources_dir: Path) -> int:
         if where.is_dir():
             for f in where.iterdir():
                 # numba's index and data files, and the kernel's kept object
-                # code (engine._native).
+                # code (engine.native_code).
                 if f.suffix in (".nbi", ".nbc", ".nbo", ".nbj") and \
                         f.name.split(".", 1)[0] in stems:
                     with contextlib.suppress(FileNotFoundError):

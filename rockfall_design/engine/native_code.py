@@ -98,7 +98,7 @@ def _paths(cache_dir: Path, dispatcher: Any) -> tuple[Path, Path]:
     """Where the object code of ``dispatcher`` and its description are kept.
 
     Named as numba names its files (``<module>.<function>``), so that
-    ``_jit.drop_stale_cache`` removes them with numba's.
+    ``jit.drop_stale_cache`` removes them with numba's.
     """
     fn = dispatcher.py_func
     stem = f"{fn.__module__.rsplit('.', 1)[-1]}.{fn.__qualname__}.native"

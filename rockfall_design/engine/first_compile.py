@@ -7,7 +7,7 @@ drag and barrier functions under it) and the centre path's sweep
 under them), each about two fifths of the first compile, the kernel's own
 typing, lowering and optimisation of the whole the last fifth. numba compiles
 in one thread per process, so on a machine of two cores or more the sweep is
-compiled by a helper process (:func:`._jit.compile_in_helper`) while this
+compiled by a helper process (:func:`.jit.compile_in_helper`) while this
 process compiles the event loop; the kernel's compile then loads the sweep
 from the cache the helper filled. The machine code is the same; what the
 user waits for is about three fifths of the compile.
@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _jit, columns
+from . import columns, jit
 from .profile import every_piece_units, no_units
 from .records import N_WORK, RockOut
 from .rock import simulate_rock
@@ -33,12 +33,12 @@ from .rock import simulate_rock
 HELPER = r"""
 import pickle, sys
 sys.path.insert(0, {root!r})
-from rockfall_design.engine import _jit, ensemble, profile
+from rockfall_design.engine import jit, ensemble, profile
 ground, r, max_chord, elems = pickle.load(sys.stdin.buffer)
 units = profile.no_units()
 for disp, args in ((ensemble._path, (ground, r, max_chord, elems, units)),
                    (profile.every_piece_units, (ground.x, ground.y, max_chord))):
-    with _jit.as_callee():
+    with jit.as_callee():
         disp.compile(tuple(disp.typeof_pyval(a) for a in args))
 """
 """The helper's program: compile the sweep for the kernel's types, into the shared cache."""
@@ -76,14 +76,14 @@ def start(path_fn: Any, args0: tuple) -> None:
     Does nothing for a part already compiled or cached; where no helper can
     be started, the kernel's compile compiles the sweep itself, as before.
     """
-    sweep = [(d, a) for d, a in sweep_args(path_fn, args0) if _jit.will_compile(d, a)]
+    sweep = [(d, a) for d, a in sweep_args(path_fn, args0) if jit.will_compile(d, a)]
     if sweep:
         ground, _, _, elems, _, max_chord = args0[:6]
         payload = pickle.dumps((ground, sweep[0][1][1], max_chord, elems))
         root = str(Path(__file__).resolve().parents[2])
-        _jit.compile_in_helper([d for d, _ in sweep], HELPER.format(root=root), payload)
+        jit.compile_in_helper([d for d, _ in sweep], HELPER.format(root=root), payload)
     rock_args = event_loop_args(args0)
-    if _jit.will_compile(simulate_rock, rock_args):
-        # For the kernel, which optimises it with the rest (_jit.optimise_once).
-        with _jit.as_callee():
+    if jit.will_compile(simulate_rock, rock_args):
+        # For the kernel, which optimises it with the rest (jit.optimise_once).
+        with jit.as_callee():
             simulate_rock.compile(tuple(simulate_rock.typeof_pyval(a) for a in rock_args))
