@@ -45,8 +45,6 @@ OTHER_PROGRAMS_OPTIONS = {
     "--volume": "examples/stops_from_points.py",
     "--corridor": "examples/stops_from_points.py",
     "--against": "benchmarks/optimise.py",
-    "--no-reference": "benchmarks/optimise.py",
-    "--check-seeds": "benchmarks/optimise.py",
     "--across-only": "benchmarks/across.py",
     "--no-check": "benchmarks/across.py",
     "--project": "benchmarks/across.py",
