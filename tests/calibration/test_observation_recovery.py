@@ -81,12 +81,12 @@ def test_passing_heights_pin_down_what_stops_alone_leave_open(tmp_path, seed):
     # Stops alone leave the restitution open over more than a quarter of its range
     # (measured 28 to 43 % at seeds 1-3); the heights narrow it at least threefold
     # (measured six- to tenfold) and the rolling resistance's at least twofold.
-    assert alone[e]["width_share"] > 0.25
+    assert alone[e].width_share > 0.25
     assert _width(both[e]) < _width(alone[e]) / 3
     assert _width(both[rr]) < _width(alone[rr]) / 2
     # With the heights, both best values near the truth (measured within 0.003 and 0.02).
-    assert both[e]["value"] == pytest.approx(TRUTH[e], abs=0.02)
-    assert both[rr]["value"] == pytest.approx(TRUTH[rr], abs=0.05)
+    assert both[e].value == pytest.approx(TRUTH[e], abs=0.02)
+    assert both[rr].value == pytest.approx(TRUTH[rr], abs=0.05)
 
 
 @pytest.mark.slow
