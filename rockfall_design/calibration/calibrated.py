@@ -277,30 +277,35 @@ class CalibrationResult:
                               "objective": r.objective, "evaluations": r.evaluations,
                               **r.values} for r in self.replicates])
 
-    def calibrated_data(self, relative_to: str | None = None, spread: bool = True
+    def calibrated_data(self, relative_to: str | None = None, spread: bool = False
                         ) -> dict[str, Any]:
         """The calibrated project as data (``calibrated.yaml``).
 
         The fitted inputs set to their best values; the rocks' size fitted
-        to the observed blocks' (if they had sizes); for a fitted material
-        parameter with a per-impact scatter, the scatter widened by the
-        bootstrap's standard deviation of the fitted value (added in
-        quadrature), so that a later run carries the uncertainty of the
-        ground as well as its variability. The ``calibrate:`` section is
-        kept, its ``observed`` the file this calibration fitted (``--observed``
-        if given, else the project's), relative to ``relative_to`` (the
-        directory the file is written to), so that a rerun fits the same
-        observations and ``compare`` finds its levels.
-        ``spread=False`` keeps the project's scatter as it was.
+        to the observed blocks' (if they had sizes); every material's
+        per-impact scatter as the project (or its library class) gives it:
+        the ground's variability from one impact to the next (aleatory). The
+        uncertainty of a fitted value (the bootstrap's standard deviation,
+        epistemic) is not drawn by a run: it is recorded beside the values
+        (:meth:`uncertainty_lines`, ``parameters.csv``). ``spread=True``
+        widens the scatter of a fitted material parameter by that standard
+        deviation (added in quadrature) instead, as before issue 35.
+        The ``calibrate:`` section is kept, its ``observed`` the file this
+        calibration fitted (``--observed`` if given, else the project's),
+        relative to ``relative_to`` (the directory the file is written to),
+        so that a rerun fits the same observations and ``compare`` finds its
+        levels.
 
         Notes
         -----
         A per-impact scatter is drawn anew at every impact, whereas the
         uncertainty of a calibrated mean is one unknown value for the whole
-        slope: the widened scatter is the simple way to carry it into every
-        later command. A study (``study:`` with the interval's ends in
-        ``vary``) is the rigorous one, and the intervals in ``--json`` give
-        its values.
+        slope. Written into the scatter it is averaged over the impacts of a
+        path, and it shifts where the rocks stop wherever a value sits near a
+        threshold (Authume P1's slope share 0.06 became 0.30,
+        docs/calibration.md), so it is not the default. The rigorous way to
+        carry it is a study (``study:`` with the interval's ends in
+        ``vary``), with the intervals of ``--json``.
         """
         import copy
         import os
@@ -361,15 +366,15 @@ class CalibrationResult:
                 **({"profiles": {k: moved(v) for k, v in spec["profiles"].items()}}
                    if spec.get("profiles") else {})}
 
-    def calibrated_project(self, spread: bool = True) -> Project:
+    def calibrated_project(self, spread: bool = False) -> Project:
         """:meth:`calibrated_data` validated as a project."""
         return with_values(self.problem.project, {}, base=self.calibrated_data(spread=spread))
 
-    def materials_library(self, spread: bool = True) -> dict[str, Any]:
+    def materials_library(self, spread: bool = False) -> dict[str, Any]:
         """The calibrated project's materials, as a library file holds them."""
         return self.calibrated_data(spread=spread)["materials"]
 
-    def materials_library_text(self, spread: bool = True, when: str | None = None) -> str:
+    def materials_library_text(self, spread: bool = False, when: str | None = None) -> str:
         """The calibrated materials as a library file, each entry with its law and source.
 
         Every entry is preceded by the two comment lines the bundled library
@@ -398,8 +403,9 @@ class CalibrationResult:
             _, material, name = key
             r = rounded(p)
             interval = "" if r.low is None else f" [{r.low:g}, {r.high:g}]"
+            sd = "" if r.sd is None else f" sd {r.sd:g}"
             flag = " NOT IDENTIFIED" if p.identified is False else ""
-            fitted.setdefault(material, []).append(f"{name} {r.value:g}{interval}{flag}")
+            fitted.setdefault(material, []).append(f"{name} {r.value:g}{interval}{sd}{flag}")
         observed = f"{self.observations.source} ({self.observations.n} blocks)"
         if self.sets:  # every set fitted, each with where it was observed
             observed = "; ".join(f"{x.label} from {x.source} ({x.count})" for x in self.sets)
@@ -415,6 +421,28 @@ class CalibrationResult:
             parts.append(f"# law: {law}\n# source: {' '.join(source.split())}\n"
                          + dump_yaml({name: entry}))
         return "".join(parts)
+
+    def uncertainty_lines(self, spread: bool = False) -> list[str]:
+        """Comment lines (without ``#``) on the fitted values' uncertainty, one per input.
+
+        Each fitted input's best value, its bootstrap standard deviation and
+        interval, and whether the written file draws that standard deviation
+        (``spread``) or not: the values' uncertainty (epistemic) is recorded,
+        not mixed into the per-impact scatter (aleatory), unless asked.
+        """
+        if not any(p.sd is not None for p in self.parameters):
+            return []
+        how = ("added in quadrature to the per-impact scatter of a fitted material parameter"
+               if spread else "NOT drawn by a run (the scatter is the materials' own)")
+        out = [f"uncertainty of the fitted values (bootstrap sd, {how}):"]
+        for p in self.parameters:
+            r = rounded(p)
+            if r.sd is None:
+                continue
+            flag = ", NOT IDENTIFIED" if p.identified is False else ""
+            out.append(f"  {p.path} = {r.value:g}, sd {r.sd:g}, interval [{r.low:g}, "
+                       f"{r.high:g}]{flag}")
+        return out
 
     def figures(self) -> dict[str, Figure]:
         """The stops' figure and the bootstrap cloud (:data:`FIGURES`)."""

@@ -67,17 +67,24 @@ def add_calibrate_parser(sub: Any) -> None:
                    metavar="B", help="bootstrap replicates (default: calibrate.bootstrap; 0: "
                    "the best fit only, no intervals)")
     p.add_argument("--out", type=Path, metavar="DIR",
-                   help="write calibrated.yaml (the project with the fitted values, their "
-                   "spread added to the materials' scatter), materials.yaml (its materials as "
-                   "a library, each entry's source the observations, date and seed), "
+                   help="write calibrated.yaml (the project with the fitted values, the "
+                   "materials' own scatter, the values' uncertainty as comments), "
+                   "materials.yaml (its materials as a library, each entry's source the "
+                   "observations, date and seed), "
                    "parameters.csv, replicates.csv and summary.json (with the run record) "
                    "into DIR")
     p.add_argument("--save-materials", type=Path, metavar="FILE",
                    help="write the calibrated project's materials as a materials library "
                    "(materials: {library: FILE}), as --out's materials.yaml")
-    p.add_argument("--keep-scatter", action="store_true",
-                   help="write calibrated.yaml and --save-materials with the materials' "
-                   "scatter as it was, without the spread of the fit")
+    scatter = p.add_mutually_exclusive_group()
+    scatter.add_argument("--keep-scatter", action="store_true",
+                         help="write calibrated.yaml and --save-materials with the "
+                         "materials' scatter as it was, without the spread of the fit "
+                         "(the default)")
+    scatter.add_argument("--widen-scatter", action="store_true",
+                         help="add each fitted material parameter's bootstrap standard "
+                         "deviation to its per-impact scatter in calibrated.yaml and "
+                         "--save-materials (the default before issue 35)")
     p.add_argument("--workers", type=int_at_least(1, "number of workers"), metavar="N",
                    help="fit N replicates at once on the local pool (default: one per core)")
     p.add_argument("--pool", choices=("threads", "processes"), default="threads",
@@ -123,10 +130,11 @@ def _header(result: Any, spread: bool) -> str:
     scatter = ("the scatter of a fitted material parameter\n# includes the spread of its fit"
                if spread else "the materials' scatter\n# is the project's, without the spread "
                "of the fit")
+    lines = "".join(f"# {line}\n" for line in result.uncertainty_lines(spread))
     return (f"# Calibrated by rockfall-design calibrate from {result.observations.source} "
             f"({result.observations.n} blocks), seed {result.seed}.\n"
             f"# Fitted values and their intervals: parameters.csv; {scatter} "
-            "(see docs/calibration.md).\n")
+            f"(see docs/calibration.md).\n{lines}")
 
 
 def _one_section(args: argparse.Namespace) -> tuple[Any, Any]:
@@ -204,7 +212,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                            scheduler=args.scheduler, pool=args.pool,
                            progress=sys.stderr.isatty(), registry=registry)
         summary = result.summary
-        spread = not args.keep_scatter
+        spread = bool(args.widen_scatter)
         if args.out:
             out: Path = args.out
             files.write_text(out / "calibrated.yaml", _header(result, spread)
