@@ -508,6 +508,7 @@ def calibrate(
     progress: bool | Callable[[int, int], None] = False,
     registry: Registry | None = None,
     pool: str = "threads",
+    prior: bool | None = None,
 ) -> Any:
     """Back-analyse the inputs of a project's ``calibrate:`` section (``calibrate`` command).
 
@@ -537,6 +538,11 @@ def calibrate(
         ``progress(done, total)`` with replicates done.
     registry : Registry, optional
         The plugins (default: the installed ones).
+    prior : bool, optional
+        A fit regularised by the literature (each input's value as the
+        prior's mode, its range as ±2 sd; docs/calibration.md, "The
+        method"). None: with ``fit: auto``; False: the criterion alone
+        (``--no-prior``); True: also for the inputs listed under ``fit:``.
 
     Returns
     -------
@@ -551,7 +557,7 @@ def calibrate(
         whole_number(rocks, "rocks", 1, MAX_ROCKS)
     p = _project(project, registry or default_registry())
     kw = dict(observed=observed, rocks=rocks, bootstrap=bootstrap, seed=seed, workers=workers,
-              scheduler=scheduler, pool=pool)
+              scheduler=scheduler, pool=pool, prior=prior)
     bar, callback = _replicate_progress(progress)
     if bar is None:
         return run_calibration(p, on_done=callback, **kw)

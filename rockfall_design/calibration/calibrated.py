@@ -25,6 +25,7 @@ from .distances import FitStatistics, LevelShare, verdict
 from .document import report_context
 from .fit import FitProblem
 from .observations import Observations, observed_file
+from .prior import PRIOR_SIGMAS
 from .terms import SetStatistics
 from .uncertainty import INTERVAL, FittedParameter, Replicate, intervals_flag, rounded
 
@@ -58,7 +59,11 @@ def _warnings(parameters: list[FittedParameter], fit: FitStatistics,
     """What a reader of the calibration must not miss, one sentence each."""
     out = [rough] if rough else []
     for p in parameters:
-        if p.identified is False:
+        if p.held_by_prior:
+            out.append(f"{p.path}: held near its class's value by the prior, not pinned down "
+                       f"by the observations (its posterior sd is {100 * (p.prior_share or 0):.0f}"
+                       " % of the prior's): its value is the literature's, not the site's")
+        elif p.identified is False:
             out.append(f"{p.path}: not identified by the observations (its refits spread "
                        f"over its range, the interval {100 * (p.width_share or 0.0):.0f} % of "
                        "it): do not use its value as if it were known")
@@ -249,12 +254,28 @@ class CalibrationResult:
             "method": {"distance": self.problem.kind, "rocks": self.problem.rocks,
                        "bootstrap": self.bootstrap_replicates, "confidence": self.confidence,
                        "interval": INTERVAL, "rough_intervals": self.rough, "seed": self.seed,
-                       "evaluations": self.evaluations},
+                       "evaluations": self.evaluations, "prior": self.prior_summary},
             "warnings": self.warnings,
             **({"sets": [s.to_json() for s in self.sets],
                 "profiles": {o.name: o.project.source for o in self.problem.others}}
                if self.sets else {}),
         }
+
+    @property
+    def prior_summary(self) -> dict[str, Any] | None:
+        """``method.prior`` of ``--json``: the prior's modes, its sd and weight; None without.
+
+        ``modes``: path -> the class's value; ``noise``: s_D of the fit itself
+        (:func:`~.prior.criterion_noise`); ``penalty``: the prior's term at the
+        best fit, s_D * sum z**2 (the criterion alone is ``objective`` of
+        ``replicates.csv``).
+        """
+        if not self.problem.prior:
+            return None
+        first = self.replicates[0]
+        return {"kind": f"two-piece normal, the range at +-{PRIOR_SIGMAS:g} sd of the value",
+                "modes": dict(zip(self.problem.paths, self.problem.prior, strict=True)),
+                "noise": first.noise, "penalty": first.penalty}
 
     @property
     def rough(self) -> str | None:
@@ -273,8 +294,11 @@ class CalibrationResult:
         """One row per replicate (``replicates.csv``): index, seed, objective, values."""
         import pandas as pd
 
+        prior = {} if not self.problem.prior else None
         return pd.DataFrame([{"replicate": r.index, "seed": r.seed,
                               "objective": r.objective, "evaluations": r.evaluations,
+                              **(prior if prior is not None else
+                                 {"prior_penalty": r.penalty, "prior_noise": r.noise}),
                               **r.values} for r in self.replicates])
 
     def calibrated_data(self, relative_to: str | None = None, spread: bool = False
@@ -477,10 +501,20 @@ class CalibrationResult:
                 return "-" if v is None else f"{v:g}"
             r = rounded(p)
             ident = {True: "yes", False: "[red]NO[/red]", None: "-"}[p.identified]
+            if p.held_by_prior:
+                ident = "[red]NO[/red] (prior)"
             t.add_row(escape(p.path), num(r.value), num(r.low), num(r.high),
                       f"{p.range[0]:g}..{p.range[1]:g}", ident)
         console = console or fitted_console(t)
         console.print(t)
+        prior = self.prior_summary
+        if prior is not None:
+            console.print(f"regularised by the prior (each input's value in the project, its "
+                          f"range as +-{PRIOR_SIGMAS:g} sd), weighed by the criterion's "
+                          f"sampling noise s_D = {prior['noise']:.3g}; the prior's term at the "
+                          f"best fit {prior['penalty']:.3g}, the criterion "
+                          f"{self.replicates[0].objective:.3g} (--no-prior: the criterion "
+                          "alone)")
         if self.correlation is not None:
             c = Table(title="correlation of the fitted inputs (bootstrap)")
             c.add_column("")

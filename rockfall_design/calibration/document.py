@@ -134,6 +134,8 @@ def _parameters_table(result: Any) -> Table:
     rows = []
     for p in result.parameters:
         ident = {True: "yes", False: "NO: not pinned down", None: "-"}[p.identified]
+        if p.held_by_prior:
+            ident = f"NO: held by the prior ({100 * (p.prior_share or 0.0):.0f} % of its sd)"
         share = "-" if p.width_share is None else f"{100 * p.width_share:.0f} %"
         r = rounded(p)  # to the interval's precision
         rows.append([p.path, _g(r.value, 12), _g(r.low, 12), _g(r.high, 12),
@@ -147,7 +149,9 @@ def _parameters_table(result: Any) -> Table:
                  "interval; interval / range: how much of the searched range the interval "
                  "fills; identified NO: the refits spread over the range (their standard "
                  "deviation above half that of values spread evenly over it), so the "
-                 "observations do not pin the input down; at bound: the best value lies at "
+                 "observations do not pin the input down; held by the prior: a regularised "
+                 "fit kept it near its class's value, the observations narrowing its prior "
+                 "sd by less than a factor 1/sqrt(2); at bound: the best value lies at "
                  "that end of the range (widen it if the physics allows).")
 
 

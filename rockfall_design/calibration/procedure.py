@@ -95,6 +95,7 @@ def run_calibration(
     scheduler: Any = None,
     pool: str = "threads",
     on_done: Callable[[int, int], None] | None = None,
+    prior: bool | None = None,
 ) -> CalibrationResult:
     """Calibrate ``project``'s ``calibrate.fit`` inputs to its observed stops.
 
@@ -112,6 +113,13 @@ def run_calibration(
         Where the replicates run (:func:`~rockfall_design.studies.executors.run_tasks`).
     on_done
         Called as ``on_done(done, total)`` as replicates finish.
+    prior
+        Regularise the fit by the literature (each input's value in the
+        project as the prior's mode, its range as ±2 sd; :mod:`.prior`).
+        None (default): with ``fit: auto``, whose values and ranges are the
+        classes' published ones; False: the criterion alone, the ranges only
+        as bounds (as before issue 35); True: also for inputs listed under
+        ``fit:`` (each one's value in the project must lie in its range).
 
     Raises
     ------
@@ -131,7 +139,7 @@ def run_calibration(
     sizes = profile_sizes(site.sets, "")
     problem = problem_for(project, fit_ranges(project, site), levels=main.levels,
                           rocks=n_rocks, kind=spec.distance, sizes=sizes, sets=site.sets,
-                          profiles=site.profiles)
+                          profiles=site.profiles, prior=spec.auto if prior is None else prior)
     _load_on_this_thread(problem)
     data = obs.x if not problem.terms else tuple(s.values for s in site.sets)
     tasks = [ReplicateTask(problem, data, b, run_seed) for b in range(n_boot + 1)]

@@ -85,6 +85,11 @@ def add_calibrate_parser(sub: Any) -> None:
                          help="add each fitted material parameter's bootstrap standard "
                          "deviation to its per-impact scatter in calibrated.yaml and "
                          "--save-materials (the default before issue 35)")
+    p.add_argument("--prior", action=argparse.BooleanOptionalAction, default=None,
+                   help="regularise the fit by the literature: each input's project value "
+                   "as the prior's mode, its range as +-2 sd, weighed by the criterion's "
+                   "sampling noise (default: on with fit: auto, off for inputs listed "
+                   "under fit:); --no-prior fits the criterion alone, the ranges as bounds")
     p.add_argument("--workers", type=int_at_least(1, "number of workers"), metavar="N",
                    help="fit N replicates at once on the local pool (default: one per core)")
     p.add_argument("--pool", choices=("threads", "processes"), default="threads",
@@ -210,7 +215,8 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         result = calibrate(project, observed=args.observed, rocks=args.rocks,
                            bootstrap=args.bootstrap, seed=args.seed, workers=args.workers,
                            scheduler=args.scheduler, pool=args.pool,
-                           progress=sys.stderr.isatty(), registry=registry)
+                           progress=sys.stderr.isatty(), registry=registry,
+                           prior=args.prior)
         summary = result.summary
         spread = bool(args.widen_scatter)
         if args.out:

@@ -106,6 +106,7 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--save-materials": ["materials library"],
         "--keep-scatter": ["calibrated.yaml", "scatter as it was", "the default"],
         "--widen-scatter": ["standard deviation", "per-impact scatter", "--save-materials"],
+        "--no-prior": ["prior", "fit: auto", "--no-prior", "sampling noise"],
         "--report": ["report.html", "report.md", "DIR", "fitted inputs"],
         "--workers": ["local pool", "one per core"],
         "--pool": ["threads", "processes", "same results"],
