@@ -26,6 +26,7 @@ from .document import report_context
 from .fit import FitProblem
 from .observations import Observations, observed_file
 from .prior import PRIOR_SIGMAS
+from .screen import Screened
 from .terms import SetStatistics
 from .uncertainty import INTERVAL, FittedParameter, Replicate, intervals_flag, rounded
 
@@ -207,6 +208,9 @@ class CalibrationResult:
     #: Each observation set's statistics at the best fit (:func:`~.terms.set_statistics`);
     #: empty for the single-file form.
     sets: list[SetStatistics] = field(default_factory=list)
+    #: The screen of a ``fit: auto`` (:func:`~.screen.screen`): every input
+    #: measured, those left out with ``kept`` False; empty without a screen.
+    screened: list[Screened] = field(default_factory=list)
     _figures: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
@@ -233,7 +237,8 @@ class CalibrationResult:
     @property
     def warnings(self) -> list[str]:
         """What a reader of the calibration must not miss, one sentence each."""
-        return (_warnings(self.parameters, self.fit, self.levels, self.rough)
+        return ([s.line for s in self.screened if not s.kept]
+                + _warnings(self.parameters, self.fit, self.levels, self.rough)
                 + _set_warnings(self.sets))
 
     @property
@@ -254,7 +259,8 @@ class CalibrationResult:
             "method": {"distance": self.problem.kind, "rocks": self.problem.rocks,
                        "bootstrap": self.bootstrap_replicates, "confidence": self.confidence,
                        "interval": INTERVAL, "rough_intervals": self.rough, "seed": self.seed,
-                       "evaluations": self.evaluations, "prior": self.prior_summary},
+                       "evaluations": self.evaluations, "prior": self.prior_summary,
+                       "screen": [x.to_json() for x in self.screened] or None},
             "warnings": self.warnings,
             **({"sets": [s.to_json() for s in self.sets],
                 "profiles": {o.name: o.project.source for o in self.problem.others}}

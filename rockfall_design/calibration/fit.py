@@ -50,8 +50,8 @@ from .terms import ProfileRun, Term, scales_of, sets_objective, terms_for
 if TYPE_CHECKING:  # pragma: no cover
     from .sets import ObservationSet
 
-__all__ = ["FitOutcome", "FitProblem", "fit", "minimise", "problem_for", "simulated_sets",
-           "simulated_stops"]
+__all__ = ["FitOutcome", "FitProblem", "criterion_for", "fit", "minimise", "problem_for",
+           "simulated_sets", "simulated_stops"]
 
 #: Points of the global stage per fitted input (at least MIN_DESIGN in all).
 DESIGN_PER_INPUT = 16
@@ -442,6 +442,44 @@ def minimise(f: Callable[[np.ndarray, bool], float], dimension: int, seed: int
     return best_u, best
 
 
+def criterion_for(problem: FitProblem, observed: np.ndarray | Sequence[np.ndarray],
+                  seed: int, with_noise: bool = False
+                  ) -> tuple[Callable[[Sequence[np.ndarray]], float], float | None]:
+    """The criterion D of simulated values against ``observed``, and its noise s_D.
+
+    Parameters
+    ----------
+    problem
+        From :func:`problem_for`.
+    observed
+        As :func:`fit`'s.
+    seed
+        Of the noise's draws (:func:`~.prior.criterion_noise`).
+    with_noise
+        Whether to measure s_D (else None).
+
+    Returns
+    -------
+    (value, noise)
+        ``value(simulated)``: D of :func:`simulated_sets`' output (-); s_D (-) or None.
+    """
+    sets = [np.asarray(observed, dtype=float)] if isinstance(observed, np.ndarray) \
+        else [np.asarray(o, dtype=float) for o in observed]
+    terms = problem.all_terms
+    scales = scales_of(sets, terms)
+    noise = None
+    if with_noise:
+        noise = criterion_noise(sets, terms, problem.kind, scales, problem.rocks, seed,
+                                None if problem.terms else problem.levels)
+
+    def value(sim: Sequence[np.ndarray]) -> float:
+        if not problem.terms:  # the single-file form, to the bit as before sets existed
+            return objective(sets[0], sim[0], problem.levels, problem.kind, scales[0])
+        return sets_objective(sets, sim, terms, problem.kind, scales)
+
+    return value, noise
+
+
 def fit(problem: FitProblem, observed: np.ndarray | Sequence[np.ndarray], seed: int,
         diagnose: bool = False) -> FitOutcome:
     """Fit the problem's inputs to the observations, every evaluation with rocks ``seed``.
@@ -467,29 +505,18 @@ def fit(problem: FitProblem, observed: np.ndarray | Sequence[np.ndarray], seed: 
     observations; ``objective`` is the criterion alone at the best point,
     ``penalty`` the prior's term.
     """
-    sets = [np.asarray(observed, dtype=float)] if isinstance(observed, np.ndarray) \
-        else [np.asarray(o, dtype=float) for o in observed]
+    value, noise = criterion_for(problem, observed, seed, with_noise=bool(problem.prior))
     terms = problem.all_terms
-    scales = scales_of(sets, terms)
     seen: dict[tuple[float, ...], tuple[float, list[np.ndarray]]] = {}
     few = replace(problem, rocks=min(problem.rocks,
                                      max(COARSE_ROCKS, int(COARSE_SHARE * problem.rocks))))
     runs = [0]
-    noise = None
-    if problem.prior:
-        noise = criterion_noise(sets, terms, problem.kind, scales, problem.rocks, seed,
-                                None if problem.terms else problem.levels)
 
     def penalty(key: tuple[float, ...]) -> float:
         if noise is None:
             return 0.0
         theta = [problem.values(key)[p] for p in problem.paths]
         return noise * prior_penalty(theta, problem.prior, problem.low, problem.high)
-
-    def value(sim: list[np.ndarray]) -> float:
-        if not problem.terms:  # the single-file form, to the bit as before sets existed
-            return objective(sets[0], sim[0], problem.levels, problem.kind, scales[0])
-        return sets_objective(sets, sim, terms, problem.kind, scales)
 
     def evaluate(u: np.ndarray, coarse: bool = False) -> float:
         key = tuple(np.round(np.clip(u, 0.0, 1.0), 12))

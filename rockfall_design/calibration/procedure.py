@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -24,13 +25,15 @@ from ..project.calibrate import auto_fit_ranges
 from ..studies.executors import run_tasks
 from .calibrated import CalibrationResult, ComparisonResult
 from .distances import fit_statistics, level_shares
-from .fit import problem_for, simulated_sets, simulated_stops
+from .fit import FitProblem, problem_for, simulated_sets, simulated_stops
 from .observations import (
     Observations,
     read_observations,
     size_distribution,
     size_limits,
 )
+from .screen import Screened
+from .screen import screen as screen_inputs
 from .sets import Site, profile_sizes, read_site
 from .terms import SetStatistics, set_statistics
 from .uncertainty import ReplicateTask, run_replicate, summarise
@@ -75,8 +78,6 @@ def _load_on_this_thread(problem: Any) -> None:
     Ctrl-C then waited for them. On the caller's thread the interrupt stops
     it at once, and the replicates start evaluating, where they check it.
     """
-    from dataclasses import replace
-
     import scipy.optimize  # noqa: F401 - loaded for the replicates
     import scipy.stats.qmc  # noqa: F401
 
@@ -96,6 +97,7 @@ def run_calibration(
     pool: str = "threads",
     on_done: Callable[[int, int], None] | None = None,
     prior: bool | None = None,
+    screen: bool | None = None,
 ) -> CalibrationResult:
     """Calibrate ``project``'s ``calibrate.fit`` inputs to its observed stops.
 
@@ -120,6 +122,10 @@ def run_calibration(
         classes' published ones; False: the criterion alone, the ranges only
         as bounds (as before issue 35); True: also for inputs listed under
         ``fit:`` (each one's value in the project must lie in its range).
+    screen
+        Leave out of the fit an input that moves the criterion by less than
+        its sampling noise over its range (:mod:`.screen`; it keeps its
+        value). None (default): with a prior; False: fit every input.
 
     Raises
     ------
@@ -142,6 +148,8 @@ def run_calibration(
                           profiles=site.profiles, prior=spec.auto if prior is None else prior)
     _load_on_this_thread(problem)
     data = obs.x if not problem.terms else tuple(s.values for s in site.sets)
+    problem, screened = _screened(problem, data, run_seed,
+                                  bool(problem.prior) if screen is None else screen)
     tasks = [ReplicateTask(problem, data, b, run_seed) for b in range(n_boot + 1)]
     done = [0]
 
@@ -166,8 +174,27 @@ def run_calibration(
         levels=level_shares(obs.x, stops, main.levels, spec.confidence),
         simulated=stops, seed=run_seed, confidence=spec.confidence, sizes=sizes,
         runtime_s=runtime,
-        sets=_statistics(problem, site, simulated, spec.confidence),
+        sets=_statistics(problem, site, simulated, spec.confidence), screened=screened,
     )
+
+
+def _screened(problem: FitProblem, data: Any, seed: int, on: bool
+              ) -> tuple[FitProblem, list[Screened]]:
+    """The problem without the inputs the screen leaves out (:func:`~.screen.screen`).
+
+    Off, or without a prior (whose modes the screen starts from): the problem
+    as it is and no screen.
+    """
+    if not on or not problem.prior:
+        return problem, []
+    screened = screen_inputs(problem, data, seed)
+    keep = [j for j, s in enumerate(screened) if s.kept]
+    if len(keep) == problem.dimension:
+        return problem, screened
+    return replace(problem, paths=tuple(problem.paths[j] for j in keep),
+                   low=tuple(problem.low[j] for j in keep),
+                   high=tuple(problem.high[j] for j in keep),
+                   prior=tuple(problem.prior[j] for j in keep)), screened
 
 
 def _statistics(problem: Any, site: Site, simulated: list[Any], confidence: float

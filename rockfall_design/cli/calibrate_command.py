@@ -90,6 +90,11 @@ def add_calibrate_parser(sub: Any) -> None:
                    "as the prior's mode, its range as +-2 sd, weighed by the criterion's "
                    "sampling noise (default: on with fit: auto, off for inputs listed "
                    "under fit:); --no-prior fits the criterion alone, the ranges as bounds")
+    p.add_argument("--screen", action=argparse.BooleanOptionalAction, default=None,
+                   help="before a regularised fit, leave out each input that moves the "
+                   "criterion by less than its sampling noise over its range (it keeps its "
+                   "class's value; a warning names it); default: with the prior; "
+                   "--no-screen fits every input")
     p.add_argument("--workers", type=int_at_least(1, "number of workers"), metavar="N",
                    help="fit N replicates at once on the local pool (default: one per core)")
     p.add_argument("--pool", choices=("threads", "processes"), default="threads",
@@ -216,7 +221,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                            bootstrap=args.bootstrap, seed=args.seed, workers=args.workers,
                            scheduler=args.scheduler, pool=args.pool,
                            progress=sys.stderr.isatty(), registry=registry,
-                           prior=args.prior)
+                           prior=args.prior, screen=args.screen)
         summary = result.summary
         spread = bool(args.widen_scatter)
         if args.out:

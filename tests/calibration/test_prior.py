@@ -129,3 +129,19 @@ def test_what_the_stops_do_not_see_stays_at_the_class_value_and_is_flagged(tmp_p
     assert p.held_by_prior and p.identified is False
     assert any("held near its class's value by the prior" in w
                for w in result.summary["warnings"])
+
+
+def test_the_screen_leaves_out_what_the_stops_cannot_see_and_says_so(tmp_path):
+    fit = "{materials.soil.restitution: [0.05, 0.7], materials.unused.restitution: [0.05, 0.7]}"
+    site = _site_with_class_value(tmp_path, 0.45, fit, bootstrap=0)
+    result = rd.calibrate(site, workers=1, prior=True)
+    assert [p.path for p in result.parameters] == ["materials.soil.restitution"]
+    screen = {s["path"]: s for s in result.summary["method"]["screen"]}
+    assert screen["materials.unused.restitution"]["kept"] is False
+    assert screen["materials.unused.restitution"]["effect"] == 0.0  # on no segment
+    assert screen["materials.soil.restitution"]["kept"] is True
+    assert any(w.startswith("materials.unused.restitution: left out of the fit and kept at "
+                            "its class's value 0.4") for w in result.warnings)
+    assert result.calibrated_project().materials["unused"].restitution == 0.4
+    every = rd.calibrate(site, workers=1, prior=True, screen=False)
+    assert len(every.parameters) == 2 and every.summary["method"]["screen"] is None

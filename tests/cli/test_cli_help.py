@@ -107,6 +107,7 @@ EXPECTED: dict[str, dict[str, list[str]]] = {
         "--keep-scatter": ["calibrated.yaml", "scatter as it was", "the default"],
         "--widen-scatter": ["standard deviation", "per-impact scatter", "--save-materials"],
         "--no-prior": ["prior", "fit: auto", "--no-prior", "sampling noise"],
+        "--no-screen": ["leave out", "sampling noise", "class's value", "--no-screen"],
         "--report": ["report.html", "report.md", "DIR", "fitted inputs"],
         "--workers": ["local pool", "one per core"],
         "--pool": ["threads", "processes", "same results"],
