@@ -55,9 +55,15 @@ CALIBRATION_LIMITS: tuple[str, tuple[str, ...]] = (
         "The fit runs on the bare slope (the project's measures are left out: the "
         "observations are of the site as it was). A simulated rock that leaves the section "
         "at its lower end counts as stopped at its end.",
-        "calibrated.yaml (--out) adds the bootstrap spread of a fitted material parameter "
-        "to its per-impact scatter: a simple way to carry the uncertainty into later runs; "
-        "a study over the interval's ends is the rigorous one.",
+        "calibrated.yaml (--out) keeps each material's own per-impact scatter (the ground's "
+        "variability) and records the bootstrap spread of a fitted value (what the "
+        "observations leave unknown) as comments that no run draws from; a study over the "
+        "interval's ends carries that uncertainty into a design (--widen-scatter adds it to "
+        "the scatter instead).",
+        "With fit: auto the fit is regularised by the classes' values and ranges (a prior): "
+        "an input held near its class's value by the prior, not by the observations, is "
+        "flagged, and an input that moves the criterion by less than its sampling noise is "
+        "left out and keeps its class's value (docs/calibration.md, The method).",
     ))
 
 
