@@ -319,7 +319,7 @@ class CalibrationResult:
         epistemic) is not drawn by a run: it is recorded beside the values
         (:meth:`uncertainty_lines`, ``parameters.csv``). ``spread=True``
         widens the scatter of a fitted material parameter by that standard
-        deviation (added in quadrature) instead, as before issue 35.
+        deviation (added in quadrature) instead (the former default).
         The ``calibrate:`` section is kept, its ``observed`` the file this
         calibration fitted (``--observed`` if given, else the project's),
         relative to ``relative_to`` (the directory the file is written to),

@@ -115,17 +115,11 @@ def run_calibration(
         Where the replicates run (:func:`~rockfall_design.studies.executors.run_tasks`).
     on_done
         Called as ``on_done(done, total)`` as replicates finish.
-    prior
-        Regularise the fit by the literature (each input's value in the
-        project as the prior's mode, its range as ±2 sd; :mod:`.prior`).
-        None (default): with ``fit: auto``, whose values and ranges are the
-        classes' published ones; False: the criterion alone, the ranges only
-        as bounds (as before issue 35); True: also for inputs listed under
-        ``fit:`` (each one's value in the project must lie in its range).
-    screen
-        Leave out of the fit an input that moves the criterion by less than
-        its sampling noise over its range (:mod:`.screen`; it keeps its
-        value). None (default): with a prior; False: fit every input.
+    prior, screen
+        A fit regularised by each input's value and range (:mod:`.prior`),
+        and the inputs that move the criterion by less than its noise left
+        out (:mod:`.screen`). None: with ``fit: auto``; False: neither (the
+        criterion alone, as before); True: also for a listed ``fit:``.
 
     Raises
     ------
@@ -138,18 +132,12 @@ def run_calibration(
         raise project.error_at((), "the project has no calibrate: section (the observed stops "
                                "and the inputs to fit; see docs/calibration.md)")
     site = read_site(project, observed)
-    main, obs = site.main_stops, site.main_observations
-    n_rocks = int(spec.rocks if rocks is None else rocks)
+    obs = site.main_observations
     n_boot = int(spec.bootstrap if bootstrap is None else bootstrap)
     run_seed = int(project.rocks.seed if seed is None else seed)
     sizes = profile_sizes(site.sets, "")
-    problem = problem_for(project, fit_ranges(project, site), levels=main.levels,
-                          rocks=n_rocks, kind=spec.distance, sizes=sizes, sets=site.sets,
-                          profiles=site.profiles, prior=spec.auto if prior is None else prior)
-    _load_on_this_thread(problem)
-    data = obs.x if not problem.terms else tuple(s.values for s in site.sets)
-    problem, screened = _screened(problem, data, run_seed,
-                                  bool(problem.prior) if screen is None else screen)
+    problem, data, screened = _prepared(project, site, int(spec.rocks if rocks is None
+                                                           else rocks), run_seed, prior, screen)
     tasks = [ReplicateTask(problem, data, b, run_seed) for b in range(n_boot + 1)]
     done = [0]
 
@@ -171,11 +159,31 @@ def run_calibration(
         project=project, problem=problem, observations=obs, parameters=parameters,
         correlation=correlation, replicates=replicates,
         fit=fit_statistics(obs.x, stops, spec.distance, problem.x_range),
-        levels=level_shares(obs.x, stops, main.levels, spec.confidence),
+        levels=level_shares(obs.x, stops, site.main_stops.levels, spec.confidence),
         simulated=stops, seed=run_seed, confidence=spec.confidence, sizes=sizes,
         runtime_s=runtime,
         sets=_statistics(problem, site, simulated, spec.confidence), screened=screened,
     )
+
+
+def _prepared(project: Project, site: Site, rocks: int, seed: int, prior: bool | None,
+              screen: bool | None) -> tuple[FitProblem, Any, list[Screened]]:
+    """The fit's problem (screened), the observed data the replicates resample, the screen.
+
+    ``prior`` and ``screen`` as :func:`run_calibration`'s (None: with ``fit: auto``).
+    """
+    spec = project.calibrate
+    assert spec is not None
+    problem = problem_for(project, fit_ranges(project, site), levels=site.main_stops.levels,
+                          rocks=rocks, kind=spec.distance, sizes=profile_sizes(site.sets, ""),
+                          sets=site.sets, profiles=site.profiles,
+                          prior=spec.auto if prior is None else prior)
+    _load_on_this_thread(problem)
+    data = site.main_observations.x if not problem.terms \
+        else tuple(s.values for s in site.sets)
+    problem, screened = _screened(problem, data, seed,
+                                  bool(problem.prior) if screen is None else screen)
+    return problem, data, screened
 
 
 def _screened(problem: FitProblem, data: Any, seed: int, on: bool

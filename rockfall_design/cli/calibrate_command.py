@@ -76,25 +76,7 @@ def add_calibrate_parser(sub: Any) -> None:
     p.add_argument("--save-materials", type=Path, metavar="FILE",
                    help="write the calibrated project's materials as a materials library "
                    "(materials: {library: FILE}), as --out's materials.yaml")
-    scatter = p.add_mutually_exclusive_group()
-    scatter.add_argument("--keep-scatter", action="store_true",
-                         help="write calibrated.yaml and --save-materials with the "
-                         "materials' scatter as it was, without the spread of the fit "
-                         "(the default)")
-    scatter.add_argument("--widen-scatter", action="store_true",
-                         help="add each fitted material parameter's bootstrap standard "
-                         "deviation to its per-impact scatter in calibrated.yaml and "
-                         "--save-materials (the default before issue 35)")
-    p.add_argument("--prior", action=argparse.BooleanOptionalAction, default=None,
-                   help="regularise the fit by the literature: each input's project value "
-                   "as the prior's mode, its range as +-2 sd, weighed by the criterion's "
-                   "sampling noise (default: on with fit: auto, off for inputs listed "
-                   "under fit:); --no-prior fits the criterion alone, the ranges as bounds")
-    p.add_argument("--screen", action=argparse.BooleanOptionalAction, default=None,
-                   help="before a regularised fit, leave out each input that moves the "
-                   "criterion by less than its sampling noise over its range (it keeps its "
-                   "class's value; a warning names it); default: with the prior; "
-                   "--no-screen fits every input")
+    _fit_options(p)
     p.add_argument("--workers", type=int_at_least(1, "number of workers"), metavar="N",
                    help="fit N replicates at once on the local pool (default: one per core)")
     p.add_argument("--pool", choices=("threads", "processes"), default="threads",
@@ -124,6 +106,29 @@ def add_calibrate_parser(sub: Any) -> None:
     c.add_argument("--out", type=Path, metavar="DIR", help="write summary.json into DIR")
     add_block_option(c)
     c.set_defaults(func=cmd_compare)
+
+
+def _fit_options(p: argparse.ArgumentParser) -> None:
+    """calibrate's options on what is written and how the fit is regularised."""
+    scatter = p.add_mutually_exclusive_group()
+    scatter.add_argument("--keep-scatter", action="store_true",
+                         help="write calibrated.yaml and --save-materials with the "
+                         "materials' scatter as it was, without the spread of the fit "
+                         "(the default)")
+    scatter.add_argument("--widen-scatter", action="store_true",
+                         help="add each fitted material parameter's bootstrap standard "
+                         "deviation to its per-impact scatter in calibrated.yaml and "
+                         "--save-materials (the former default)")
+    p.add_argument("--prior", action=argparse.BooleanOptionalAction, default=None,
+                   help="regularise the fit by the literature: each input's project value "
+                   "as the prior's mode, its range as +-2 sd, weighed by the criterion's "
+                   "sampling noise (default: on with fit: auto, off for inputs listed "
+                   "under fit:); --no-prior fits the criterion alone, the ranges as bounds")
+    p.add_argument("--screen", action=argparse.BooleanOptionalAction, default=None,
+                   help="before a regularised fit, leave out each input that moves the "
+                   "criterion by less than its sampling noise over its range (it keeps its "
+                   "class's value; a warning names it); default: with the prior; "
+                   "--no-screen fits every input")
 
 
 def run_record(args: argparse.Namespace, project: Any, seed: int, rocks: int
