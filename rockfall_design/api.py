@@ -508,6 +508,8 @@ def calibrate(
     progress: bool | Callable[[int, int], None] = False,
     registry: Registry | None = None,
     pool: str = "threads",
+    prior: bool | None = None,
+    screen: bool | None = None,
 ) -> Any:
     """Back-analyse the inputs of a project's ``calibrate:`` section (``calibrate`` command).
 
@@ -537,6 +539,16 @@ def calibrate(
         ``progress(done, total)`` with replicates done.
     registry : Registry, optional
         The plugins (default: the installed ones).
+    prior : bool, optional
+        A fit regularised by the literature (each input's value as the
+        prior's mode, its range as ±2 sd; docs/calibration.md, "The
+        method"). None: with ``fit: auto``; False: the criterion alone
+        (``--no-prior``); True: also for the inputs listed under ``fit:``.
+    screen : bool, optional
+        Leave out of a regularised fit the inputs that move the criterion by
+        less than its sampling noise over their range (they keep their
+        class's value; the warnings name them). None: with a prior; False:
+        fit every input (``--no-screen``).
 
     Returns
     -------
@@ -551,7 +563,7 @@ def calibrate(
         whole_number(rocks, "rocks", 1, MAX_ROCKS)
     p = _project(project, registry or default_registry())
     kw = dict(observed=observed, rocks=rocks, bootstrap=bootstrap, seed=seed, workers=workers,
-              scheduler=scheduler, pool=pool)
+              scheduler=scheduler, pool=pool, prior=prior, screen=screen)
     bar, callback = _replicate_progress(progress)
     if bar is None:
         return run_calibration(p, on_done=callback, **kw)

@@ -25,6 +25,8 @@ from .distances import FitStatistics, LevelShare, verdict
 from .document import report_context
 from .fit import FitProblem
 from .observations import Observations, observed_file
+from .prior import PRIOR_SIGMAS
+from .screen import Screened
 from .terms import SetStatistics
 from .uncertainty import INTERVAL, FittedParameter, Replicate, intervals_flag, rounded
 
@@ -58,7 +60,11 @@ def _warnings(parameters: list[FittedParameter], fit: FitStatistics,
     """What a reader of the calibration must not miss, one sentence each."""
     out = [rough] if rough else []
     for p in parameters:
-        if p.identified is False:
+        if p.held_by_prior:
+            out.append(f"{p.path}: held near its class's value by the prior, not pinned down "
+                       f"by the observations (its posterior sd is {100 * (p.prior_share or 0):.0f}"
+                       " % of the prior's): its value is the literature's, not the site's")
+        elif p.identified is False:
             out.append(f"{p.path}: not identified by the observations (its refits spread "
                        f"over its range, the interval {100 * (p.width_share or 0.0):.0f} % of "
                        "it): do not use its value as if it were known")
@@ -202,6 +208,9 @@ class CalibrationResult:
     #: Each observation set's statistics at the best fit (:func:`~.terms.set_statistics`);
     #: empty for the single-file form.
     sets: list[SetStatistics] = field(default_factory=list)
+    #: The screen of a ``fit: auto`` (:func:`~.screen.screen`): every input
+    #: measured, those left out with ``kept`` False; empty without a screen.
+    screened: list[Screened] = field(default_factory=list)
     _figures: dict[str, Any] = field(default_factory=dict, repr=False)
 
     @property
@@ -228,7 +237,8 @@ class CalibrationResult:
     @property
     def warnings(self) -> list[str]:
         """What a reader of the calibration must not miss, one sentence each."""
-        return (_warnings(self.parameters, self.fit, self.levels, self.rough)
+        return ([s.line for s in self.screened if not s.kept]
+                + _warnings(self.parameters, self.fit, self.levels, self.rough)
                 + _set_warnings(self.sets))
 
     @property
@@ -249,12 +259,29 @@ class CalibrationResult:
             "method": {"distance": self.problem.kind, "rocks": self.problem.rocks,
                        "bootstrap": self.bootstrap_replicates, "confidence": self.confidence,
                        "interval": INTERVAL, "rough_intervals": self.rough, "seed": self.seed,
-                       "evaluations": self.evaluations},
+                       "evaluations": self.evaluations, "prior": self.prior_summary,
+                       "screen": [x.to_json() for x in self.screened] or None},
             "warnings": self.warnings,
             **({"sets": [s.to_json() for s in self.sets],
                 "profiles": {o.name: o.project.source for o in self.problem.others}}
                if self.sets else {}),
         }
+
+    @property
+    def prior_summary(self) -> dict[str, Any] | None:
+        """``method.prior`` of ``--json``: the prior's modes, its sd and weight; None without.
+
+        ``modes``: path -> the class's value; ``noise``: s_D of the fit itself
+        (:func:`~.prior.criterion_noise`); ``penalty``: the prior's term at the
+        best fit, s_D * sum z**2 (the criterion alone is ``objective`` of
+        ``replicates.csv``).
+        """
+        if not self.problem.prior:
+            return None
+        first = self.replicates[0]
+        return {"kind": f"two-piece normal, the range at +-{PRIOR_SIGMAS:g} sd of the value",
+                "modes": dict(zip(self.problem.paths, self.problem.prior, strict=True)),
+                "noise": first.noise, "penalty": first.penalty}
 
     @property
     def rough(self) -> str | None:
@@ -273,34 +300,42 @@ class CalibrationResult:
         """One row per replicate (``replicates.csv``): index, seed, objective, values."""
         import pandas as pd
 
+        prior = {} if not self.problem.prior else None
         return pd.DataFrame([{"replicate": r.index, "seed": r.seed,
                               "objective": r.objective, "evaluations": r.evaluations,
+                              **(prior if prior is not None else
+                                 {"prior_penalty": r.penalty, "prior_noise": r.noise}),
                               **r.values} for r in self.replicates])
 
-    def calibrated_data(self, relative_to: str | None = None, spread: bool = True
+    def calibrated_data(self, relative_to: str | None = None, spread: bool = False
                         ) -> dict[str, Any]:
         """The calibrated project as data (``calibrated.yaml``).
 
         The fitted inputs set to their best values; the rocks' size fitted
-        to the observed blocks' (if they had sizes); for a fitted material
-        parameter with a per-impact scatter, the scatter widened by the
-        bootstrap's standard deviation of the fitted value (added in
-        quadrature), so that a later run carries the uncertainty of the
-        ground as well as its variability. The ``calibrate:`` section is
-        kept, its ``observed`` the file this calibration fitted (``--observed``
-        if given, else the project's), relative to ``relative_to`` (the
-        directory the file is written to), so that a rerun fits the same
-        observations and ``compare`` finds its levels.
-        ``spread=False`` keeps the project's scatter as it was.
+        to the observed blocks' (if they had sizes); every material's
+        per-impact scatter as the project (or its library class) gives it:
+        the ground's variability from one impact to the next (aleatory). The
+        uncertainty of a fitted value (the bootstrap's standard deviation,
+        epistemic) is not drawn by a run: it is recorded beside the values
+        (:meth:`uncertainty_lines`, ``parameters.csv``). ``spread=True``
+        widens the scatter of a fitted material parameter by that standard
+        deviation (added in quadrature) instead (the former default).
+        The ``calibrate:`` section is kept, its ``observed`` the file this
+        calibration fitted (``--observed`` if given, else the project's),
+        relative to ``relative_to`` (the directory the file is written to),
+        so that a rerun fits the same observations and ``compare`` finds its
+        levels.
 
         Notes
         -----
         A per-impact scatter is drawn anew at every impact, whereas the
         uncertainty of a calibrated mean is one unknown value for the whole
-        slope: the widened scatter is the simple way to carry it into every
-        later command. A study (``study:`` with the interval's ends in
-        ``vary``) is the rigorous one, and the intervals in ``--json`` give
-        its values.
+        slope. Written into the scatter it is averaged over the impacts of a
+        path, and it shifts where the rocks stop wherever a value sits near a
+        threshold (Authume P1's slope share 0.06 became 0.30,
+        docs/calibration.md), so it is not the default. The rigorous way to
+        carry it is a study (``study:`` with the interval's ends in
+        ``vary``), with the intervals of ``--json``.
         """
         import copy
         import os
@@ -361,15 +396,15 @@ class CalibrationResult:
                 **({"profiles": {k: moved(v) for k, v in spec["profiles"].items()}}
                    if spec.get("profiles") else {})}
 
-    def calibrated_project(self, spread: bool = True) -> Project:
+    def calibrated_project(self, spread: bool = False) -> Project:
         """:meth:`calibrated_data` validated as a project."""
         return with_values(self.problem.project, {}, base=self.calibrated_data(spread=spread))
 
-    def materials_library(self, spread: bool = True) -> dict[str, Any]:
+    def materials_library(self, spread: bool = False) -> dict[str, Any]:
         """The calibrated project's materials, as a library file holds them."""
         return self.calibrated_data(spread=spread)["materials"]
 
-    def materials_library_text(self, spread: bool = True, when: str | None = None) -> str:
+    def materials_library_text(self, spread: bool = False, when: str | None = None) -> str:
         """The calibrated materials as a library file, each entry with its law and source.
 
         Every entry is preceded by the two comment lines the bundled library
@@ -398,8 +433,9 @@ class CalibrationResult:
             _, material, name = key
             r = rounded(p)
             interval = "" if r.low is None else f" [{r.low:g}, {r.high:g}]"
+            sd = "" if r.sd is None else f" sd {r.sd:g}"
             flag = " NOT IDENTIFIED" if p.identified is False else ""
-            fitted.setdefault(material, []).append(f"{name} {r.value:g}{interval}{flag}")
+            fitted.setdefault(material, []).append(f"{name} {r.value:g}{interval}{sd}{flag}")
         observed = f"{self.observations.source} ({self.observations.n} blocks)"
         if self.sets:  # every set fitted, each with where it was observed
             observed = "; ".join(f"{x.label} from {x.source} ({x.count})" for x in self.sets)
@@ -415,6 +451,28 @@ class CalibrationResult:
             parts.append(f"# law: {law}\n# source: {' '.join(source.split())}\n"
                          + dump_yaml({name: entry}))
         return "".join(parts)
+
+    def uncertainty_lines(self, spread: bool = False) -> list[str]:
+        """Comment lines (without ``#``) on the fitted values' uncertainty, one per input.
+
+        Each fitted input's best value, its bootstrap standard deviation and
+        interval, and whether the written file draws that standard deviation
+        (``spread``) or not: the values' uncertainty (epistemic) is recorded,
+        not mixed into the per-impact scatter (aleatory), unless asked.
+        """
+        if not any(p.sd is not None for p in self.parameters):
+            return []
+        how = ("added in quadrature to the per-impact scatter of a fitted material parameter"
+               if spread else "NOT drawn by a run (the scatter is the materials' own)")
+        out = [f"uncertainty of the fitted values (bootstrap sd, {how}):"]
+        for p in self.parameters:
+            r = rounded(p)
+            if r.sd is None:
+                continue
+            flag = ", NOT IDENTIFIED" if p.identified is False else ""
+            out.append(f"  {p.path} = {r.value:g}, sd {r.sd:g}, interval [{r.low:g}, "
+                       f"{r.high:g}]{flag}")
+        return out
 
     def figures(self) -> dict[str, Figure]:
         """The stops' figure and the bootstrap cloud (:data:`FIGURES`)."""
@@ -449,10 +507,20 @@ class CalibrationResult:
                 return "-" if v is None else f"{v:g}"
             r = rounded(p)
             ident = {True: "yes", False: "[red]NO[/red]", None: "-"}[p.identified]
+            if p.held_by_prior:
+                ident = "[red]NO[/red] (prior)"
             t.add_row(escape(p.path), num(r.value), num(r.low), num(r.high),
                       f"{p.range[0]:g}..{p.range[1]:g}", ident)
         console = console or fitted_console(t)
         console.print(t)
+        prior = self.prior_summary
+        if prior is not None:
+            console.print(f"regularised by the prior (each input's value in the project, its "
+                          f"range as +-{PRIOR_SIGMAS:g} sd), weighed by the criterion's "
+                          f"sampling noise s_D = {prior['noise']:.3g}; the prior's term at the "
+                          f"best fit {prior['penalty']:.3g}, the criterion "
+                          f"{self.replicates[0].objective:.3g} (--no-prior: the criterion "
+                          "alone)")
         if self.correlation is not None:
             c = Table(title="correlation of the fitted inputs (bootstrap)")
             c.add_column("")

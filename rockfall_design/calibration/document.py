@@ -55,9 +55,15 @@ CALIBRATION_LIMITS: tuple[str, tuple[str, ...]] = (
         "The fit runs on the bare slope (the project's measures are left out: the "
         "observations are of the site as it was). A simulated rock that leaves the section "
         "at its lower end counts as stopped at its end.",
-        "calibrated.yaml (--out) adds the bootstrap spread of a fitted material parameter "
-        "to its per-impact scatter: a simple way to carry the uncertainty into later runs; "
-        "a study over the interval's ends is the rigorous one.",
+        "calibrated.yaml (--out) keeps each material's own per-impact scatter (the ground's "
+        "variability) and records the bootstrap spread of a fitted value (what the "
+        "observations leave unknown) as comments that no run draws from; a study over the "
+        "interval's ends carries that uncertainty into a design (--widen-scatter adds it to "
+        "the scatter instead).",
+        "With fit: auto the fit is regularised by the classes' values and ranges (a prior): "
+        "an input held near its class's value by the prior, not by the observations, is "
+        "flagged, and an input that moves the criterion by less than its sampling noise is "
+        "left out and keeps its class's value (docs/calibration.md, The method).",
     ))
 
 
@@ -134,6 +140,8 @@ def _parameters_table(result: Any) -> Table:
     rows = []
     for p in result.parameters:
         ident = {True: "yes", False: "NO: not pinned down", None: "-"}[p.identified]
+        if p.held_by_prior:
+            ident = f"NO: held by the prior ({100 * (p.prior_share or 0.0):.0f} % of its sd)"
         share = "-" if p.width_share is None else f"{100 * p.width_share:.0f} %"
         r = rounded(p)  # to the interval's precision
         rows.append([p.path, _g(r.value, 12), _g(r.low, 12), _g(r.high, 12),
@@ -147,7 +155,9 @@ def _parameters_table(result: Any) -> Table:
                  "interval; interval / range: how much of the searched range the interval "
                  "fills; identified NO: the refits spread over the range (their standard "
                  "deviation above half that of values spread evenly over it), so the "
-                 "observations do not pin the input down; at bound: the best value lies at "
+                 "observations do not pin the input down; held by the prior: a regularised "
+                 "fit kept it near its class's value, the observations narrowing its prior "
+                 "sd by less than a factor 1/sqrt(2); at bound: the best value lies at "
                  "that end of the range (widen it if the physics allows).")
 
 

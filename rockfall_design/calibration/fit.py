@@ -37,14 +37,21 @@ from ..studies.executors import stop_if_cancelled
 from ..studies.paths import with_values
 from ..studies.scenarios import scenario_seed
 from .distances import objective, stop_positions
+from .prior import (
+    criterion_noise,
+    posterior_shares,
+    prior_centres,
+    prior_penalty,
+    prior_sds,
+)
 from .sets import profile_sizes, site_materials
 from .terms import ProfileRun, Term, scales_of, sets_objective, terms_for
 
 if TYPE_CHECKING:  # pragma: no cover
     from .sets import ObservationSet
 
-__all__ = ["FitOutcome", "FitProblem", "fit", "minimise", "problem_for", "simulated_sets",
-           "simulated_stops"]
+__all__ = ["FitOutcome", "FitProblem", "criterion_for", "fit", "minimise", "problem_for",
+           "simulated_sets", "simulated_stops"]
 
 #: Points of the global stage per fitted input (at least MIN_DESIGN in all).
 DESIGN_PER_INPUT = 16
@@ -95,6 +102,10 @@ class FitProblem:
         The other profiles of the site (runs 1, 2, ...).
     run_base : dict or None
         ``base`` with the observation stations this section records (None: ``base``).
+    prior : tuple of float
+        Each input's prior mode (its class's value, :mod:`.prior`): the fit is
+        then regularised (maximum a posteriori); empty: the criterion alone,
+        the ranges only as bounds.
     """
 
     project: Project
@@ -109,6 +120,7 @@ class FitProblem:
     terms: tuple[Term, ...] = ()
     others: tuple[ProfileRun, ...] = ()
     run_base: dict[str, Any] | None = None
+    prior: tuple[float, ...] = ()
 
     @property
     def dimension(self) -> int:
@@ -185,7 +197,8 @@ def problem_for(project: Project, fit_ranges: Mapping[str, tuple[float, float]],
                 levels: Mapping[str, tuple[float, float]] | None = None, rocks: int = 1000,
                 kind: str = "energy", sizes: Mapping[str, Any] | None = None,
                 at: tuple = ("calibrate", "fit"), sets: Sequence[ObservationSet] | None = None,
-                profiles: Mapping[str, Project] | None = None) -> FitProblem:
+                profiles: Mapping[str, Project] | None = None, prior: bool = False
+                ) -> FitProblem:
     """The fit of ``project``'s inputs at ``fit_ranges``, each range's ends checked.
 
     Parameters
@@ -210,6 +223,9 @@ def problem_for(project: Project, fit_ranges: Mapping[str, tuple[float, float]],
         one term of the objective per set, the profiles run with the site's
         materials (:func:`~.sets.site_materials`). None (or the single-file
         form): the stops on this section alone, with ``levels``.
+    prior
+        Regularise the fit by each input's value in the project as the prior's
+        mode and its range as the prior's ±2 sd (:mod:`.prior`).
 
     Raises
     ------
@@ -245,7 +261,17 @@ def problem_for(project: Project, fit_ranges: Mapping[str, tuple[float, float]],
         levels={str(k): (float(a), float(b)) for k, (a, b) in (levels or {}).items()},
         rocks=int(rocks), kind=kind, x_range=(float(first), float(last)),
         terms=terms, others=others, run_base=run_base,
+        prior=_prior(project, base, fit_ranges, at) if prior else (),
     )
+
+
+def _prior(project: Project, base: dict[str, Any],
+           fit_ranges: Mapping[str, tuple[float, float]], at: tuple) -> tuple[float, ...]:
+    """The prior's modes (:func:`~.prior.prior_centres`), or one line at ``at``."""
+    try:
+        return prior_centres(base, fit_ranges)
+    except ValueError as exc:
+        raise project.error_at(at, str(exc)) from None
 
 
 def _check_levels(project: Project, levels: Mapping[str, tuple[float, float]] | None,
@@ -343,6 +369,14 @@ class FitOutcome:
         on the project's own section, where the single-file form has them).
     simulated : tuple of ndarray
         Each term's simulated values at the best point.
+    penalty : float
+        The prior's term at the best point, s_D * sum z**2 (-); 0 without a prior.
+    noise : float or None
+        s_D, the criterion's sampling noise that weighs the prior
+        (:func:`~.prior.criterion_noise`); None without a prior.
+    prior_shares : tuple of float or None
+        Each input's posterior sd over its prior sd (``fit(..., diagnose=True)``
+        with a prior), else None.
     """
 
     values: dict[str, float]
@@ -350,6 +384,9 @@ class FitOutcome:
     evaluations: int
     stops: np.ndarray
     simulated: tuple[np.ndarray, ...] = ()
+    penalty: float = 0.0
+    noise: float | None = None
+    prior_shares: tuple[float, ...] | None = None
 
 
 def minimise(f: Callable[[np.ndarray, bool], float], dimension: int, seed: int
@@ -405,8 +442,46 @@ def minimise(f: Callable[[np.ndarray, bool], float], dimension: int, seed: int
     return best_u, best
 
 
-def fit(problem: FitProblem, observed: np.ndarray | Sequence[np.ndarray], seed: int
-        ) -> FitOutcome:
+def criterion_for(problem: FitProblem, observed: np.ndarray | Sequence[np.ndarray],
+                  seed: int, with_noise: bool = False
+                  ) -> tuple[Callable[[Sequence[np.ndarray]], float], float | None]:
+    """The criterion D of simulated values against ``observed``, and its noise s_D.
+
+    Parameters
+    ----------
+    problem
+        From :func:`problem_for`.
+    observed
+        As :func:`fit`'s.
+    seed
+        Of the noise's draws (:func:`~.prior.criterion_noise`).
+    with_noise
+        Whether to measure s_D (else None).
+
+    Returns
+    -------
+    (value, noise)
+        ``value(simulated)``: D of :func:`simulated_sets`' output (-); s_D (-) or None.
+    """
+    sets = [np.asarray(observed, dtype=float)] if isinstance(observed, np.ndarray) \
+        else [np.asarray(o, dtype=float) for o in observed]
+    terms = problem.all_terms
+    scales = scales_of(sets, terms)
+    noise = None
+    if with_noise:
+        noise = criterion_noise(sets, terms, problem.kind, scales, problem.rocks, seed,
+                                None if problem.terms else problem.levels)
+
+    def value(sim: Sequence[np.ndarray]) -> float:
+        if not problem.terms:  # the single-file form, to the bit as before sets existed
+            return objective(sets[0], sim[0], problem.levels, problem.kind, scales[0])
+        return sets_objective(sets, sim, terms, problem.kind, scales)
+
+    return value, noise
+
+
+def fit(problem: FitProblem, observed: np.ndarray | Sequence[np.ndarray], seed: int,
+        diagnose: bool = False) -> FitOutcome:
     """Fit the problem's inputs to the observations, every evaluation with rocks ``seed``.
 
     Parameters
@@ -419,26 +494,38 @@ def fit(problem: FitProblem, observed: np.ndarray | Sequence[np.ndarray], seed: 
     seed
         The rock seed of every evaluation (common random numbers) and of the
         global stage's hypercube.
+    diagnose
+        With a prior: also each input's posterior sd over its prior sd
+        (:func:`~.prior.posterior_shares`, 1 + 2 d**2 more evaluations).
+
+    Notes
+    -----
+    With ``problem.prior`` the search minimises the criterion plus the
+    prior's term, s_D * sum z**2 (:mod:`.prior`), s_D measured on these
+    observations; ``objective`` is the criterion alone at the best point,
+    ``penalty`` the prior's term.
     """
-    sets = [np.asarray(observed, dtype=float)] if isinstance(observed, np.ndarray) \
-        else [np.asarray(o, dtype=float) for o in observed]
+    value, noise = criterion_for(problem, observed, seed, with_noise=bool(problem.prior))
     terms = problem.all_terms
-    scales = scales_of(sets, terms)
     seen: dict[tuple[float, ...], tuple[float, list[np.ndarray]]] = {}
     few = replace(problem, rocks=min(problem.rocks,
                                      max(COARSE_ROCKS, int(COARSE_SHARE * problem.rocks))))
     runs = [0]
 
-    def value(sim: list[np.ndarray]) -> float:
-        if not problem.terms:  # the single-file form, to the bit as before sets existed
-            return objective(sets[0], sim[0], problem.levels, problem.kind, scales[0])
-        return sets_objective(sets, sim, terms, problem.kind, scales)
+    def penalty(key: tuple[float, ...]) -> float:
+        if noise is None:
+            return 0.0
+        theta = [problem.values(key)[p] for p in problem.paths]
+        return noise * prior_penalty(theta, problem.prior, problem.low, problem.high)
 
     def evaluate(u: np.ndarray, coarse: bool = False) -> float:
         key = tuple(np.round(np.clip(u, 0.0, 1.0), 12))
         if coarse:
             runs[0] += 1
-            return value(simulated_sets(few, problem.values(key), seed))
+            return value(simulated_sets(few, problem.values(key), seed)) + penalty(key)
+        return criterion(key) + penalty(key)
+
+    def criterion(key: tuple[float, ...]) -> float:
         if key not in seen:
             runs[0] += 1
             sim = simulated_sets(problem, problem.values(key), seed)
@@ -449,5 +536,11 @@ def fit(problem: FitProblem, observed: np.ndarray | Sequence[np.ndarray], seed: 
     key = tuple(np.round(np.clip(u, 0.0, 1.0), 12))
     evaluate(u)
     best, sim = seen[key]
+    shares = None
+    if diagnose and noise is not None:
+        sd = prior_sds(u, problem.prior, problem.low, problem.high)
+        shares = tuple(float(v) for v in posterior_shares(
+            lambda x: criterion(tuple(np.round(np.clip(x, 0.0, 1.0), 12))), u, sd, noise))
     main = next(i for i, t in enumerate(terms) if t.kind == "stops" and t.run == 0)
-    return FitOutcome(problem.values(key), best, runs[0], sim[main], tuple(sim))
+    return FitOutcome(problem.values(key), best, runs[0], sim[main], tuple(sim),
+                      penalty=penalty(key), noise=noise, prior_shares=shares)

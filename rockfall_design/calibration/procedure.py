@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -24,13 +25,15 @@ from ..project.calibrate import auto_fit_ranges
 from ..studies.executors import run_tasks
 from .calibrated import CalibrationResult, ComparisonResult
 from .distances import fit_statistics, level_shares
-from .fit import problem_for, simulated_sets, simulated_stops
+from .fit import FitProblem, problem_for, simulated_sets, simulated_stops
 from .observations import (
     Observations,
     read_observations,
     size_distribution,
     size_limits,
 )
+from .screen import Screened
+from .screen import screen as screen_inputs
 from .sets import Site, profile_sizes, read_site
 from .terms import SetStatistics, set_statistics
 from .uncertainty import ReplicateTask, run_replicate, summarise
@@ -75,8 +78,6 @@ def _load_on_this_thread(problem: Any) -> None:
     Ctrl-C then waited for them. On the caller's thread the interrupt stops
     it at once, and the replicates start evaluating, where they check it.
     """
-    from dataclasses import replace
-
     import scipy.optimize  # noqa: F401 - loaded for the replicates
     import scipy.stats.qmc  # noqa: F401
 
@@ -95,6 +96,8 @@ def run_calibration(
     scheduler: Any = None,
     pool: str = "threads",
     on_done: Callable[[int, int], None] | None = None,
+    prior: bool | None = None,
+    screen: bool | None = None,
 ) -> CalibrationResult:
     """Calibrate ``project``'s ``calibrate.fit`` inputs to its observed stops.
 
@@ -112,6 +115,11 @@ def run_calibration(
         Where the replicates run (:func:`~rockfall_design.studies.executors.run_tasks`).
     on_done
         Called as ``on_done(done, total)`` as replicates finish.
+    prior, screen
+        A fit regularised by each input's value and range (:mod:`.prior`),
+        and the inputs that move the criterion by less than its noise left
+        out (:mod:`.screen`). None: with ``fit: auto``; False: neither (the
+        criterion alone, as before); True: also for a listed ``fit:``.
 
     Raises
     ------
@@ -124,16 +132,12 @@ def run_calibration(
         raise project.error_at((), "the project has no calibrate: section (the observed stops "
                                "and the inputs to fit; see docs/calibration.md)")
     site = read_site(project, observed)
-    main, obs = site.main_stops, site.main_observations
-    n_rocks = int(spec.rocks if rocks is None else rocks)
+    obs = site.main_observations
     n_boot = int(spec.bootstrap if bootstrap is None else bootstrap)
     run_seed = int(project.rocks.seed if seed is None else seed)
     sizes = profile_sizes(site.sets, "")
-    problem = problem_for(project, fit_ranges(project, site), levels=main.levels,
-                          rocks=n_rocks, kind=spec.distance, sizes=sizes, sets=site.sets,
-                          profiles=site.profiles)
-    _load_on_this_thread(problem)
-    data = obs.x if not problem.terms else tuple(s.values for s in site.sets)
+    problem, data, screened = _prepared(project, site, int(spec.rocks if rocks is None
+                                                           else rocks), run_seed, prior, screen)
     tasks = [ReplicateTask(problem, data, b, run_seed) for b in range(n_boot + 1)]
     done = [0]
 
@@ -155,11 +159,50 @@ def run_calibration(
         project=project, problem=problem, observations=obs, parameters=parameters,
         correlation=correlation, replicates=replicates,
         fit=fit_statistics(obs.x, stops, spec.distance, problem.x_range),
-        levels=level_shares(obs.x, stops, main.levels, spec.confidence),
+        levels=level_shares(obs.x, stops, site.main_stops.levels, spec.confidence),
         simulated=stops, seed=run_seed, confidence=spec.confidence, sizes=sizes,
         runtime_s=runtime,
-        sets=_statistics(problem, site, simulated, spec.confidence),
+        sets=_statistics(problem, site, simulated, spec.confidence), screened=screened,
     )
+
+
+def _prepared(project: Project, site: Site, rocks: int, seed: int, prior: bool | None,
+              screen: bool | None) -> tuple[FitProblem, Any, list[Screened]]:
+    """The fit's problem (screened), the observed data the replicates resample, the screen.
+
+    ``prior`` and ``screen`` as :func:`run_calibration`'s (None: with ``fit: auto``).
+    """
+    spec = project.calibrate
+    assert spec is not None
+    problem = problem_for(project, fit_ranges(project, site), levels=site.main_stops.levels,
+                          rocks=rocks, kind=spec.distance, sizes=profile_sizes(site.sets, ""),
+                          sets=site.sets, profiles=site.profiles,
+                          prior=spec.auto if prior is None else prior)
+    _load_on_this_thread(problem)
+    data = site.main_observations.x if not problem.terms \
+        else tuple(s.values for s in site.sets)
+    problem, screened = _screened(problem, data, seed,
+                                  bool(problem.prior) if screen is None else screen)
+    return problem, data, screened
+
+
+def _screened(problem: FitProblem, data: Any, seed: int, on: bool
+              ) -> tuple[FitProblem, list[Screened]]:
+    """The problem without the inputs the screen leaves out (:func:`~.screen.screen`).
+
+    Off, or without a prior (whose modes the screen starts from): the problem
+    as it is and no screen.
+    """
+    if not on or not problem.prior:
+        return problem, []
+    screened = screen_inputs(problem, data, seed)
+    keep = [j for j, s in enumerate(screened) if s.kept]
+    if len(keep) == problem.dimension:
+        return problem, screened
+    return replace(problem, paths=tuple(problem.paths[j] for j in keep),
+                   low=tuple(problem.low[j] for j in keep),
+                   high=tuple(problem.high[j] for j in keep),
+                   prior=tuple(problem.prior[j] for j in keep)), screened
 
 
 def _statistics(problem: Any, site: Site, simulated: list[Any], confidence: float

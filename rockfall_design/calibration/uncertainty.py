@@ -38,6 +38,7 @@ import numpy as np
 
 from ..studies.scenarios import scenario_seed
 from .fit import FitProblem, fit
+from .prior import HELD_BY_PRIOR_SHARE
 
 __all__ = ["IDENTIFIED_SD_SHARE", "INTERVAL", "MIN_INTERVAL_REPLICATES", "FittedParameter",
            "Replicate", "ReplicateTask", "Rounded", "decimals", "expanded_tail", "intervals_flag",
@@ -112,6 +113,14 @@ class Replicate:
     simulated : list of ndarray or None
         Replicate 0 with observation sets only: each set's simulated values
         (m or m/s).
+    penalty : float
+        The prior's term at the fitted values (-; :mod:`.prior`); 0 without a prior.
+    noise : float or None
+        s_D, the criterion's sampling noise that weighed the prior (-); None
+        without a prior.
+    prior_shares : tuple of float or None
+        Replicate 0 with a prior: each input's posterior sd over its prior sd
+        (:func:`~.prior.posterior_shares`).
     """
 
     index: int
@@ -121,6 +130,9 @@ class Replicate:
     evaluations: int
     stops: np.ndarray | None = None
     simulated: list[Any] | None = None
+    penalty: float = 0.0
+    noise: float | None = None
+    prior_shares: tuple[float, ...] | None = None
 
 
 @dataclass(frozen=True)
@@ -146,6 +158,11 @@ class FittedParameter:
         None without replicates.
     at_bound : str or None
         ``"low"`` or ``"high"``: the best value lies at that end of the range.
+    prior_share : float or None
+        A regularised fit: the input's posterior sd over its prior sd
+        (:func:`~.prior.posterior_shares`); above
+        :data:`~.prior.HELD_BY_PRIOR_SHARE` the prior, not the observations,
+        holds it (``identified`` False). None without a prior.
     """
 
     path: str
@@ -157,12 +174,19 @@ class FittedParameter:
     width_share: float | None = None
     identified: bool | None = None
     at_bound: str | None = None
+    prior_share: float | None = None
+
+    @property
+    def held_by_prior(self) -> bool:
+        """Whether the prior, not the observations, holds the value (``prior_share``)."""
+        return self.prior_share is not None and self.prior_share > HELD_BY_PRIOR_SHARE
 
     def to_json(self) -> dict[str, Any]:
         """The entry of ``parameters`` in ``calibrate --json`` (``range`` as a list)."""
         return {"path": self.path, "value": self.value, "low": self.low, "high": self.high,
                 "sd": self.sd, "range": list(self.range), "width_share": self.width_share,
-                "identified": self.identified, "at_bound": self.at_bound}
+                "identified": self.identified, "at_bound": self.at_bound,
+                "prior_share": self.prior_share}
 
 
 @dataclass(frozen=True)
@@ -213,11 +237,12 @@ def run_replicate(task: ReplicateTask) -> Replicate:
             key = [int(task.seed), int(task.index)] + ([j] if j else [])
             rng = np.random.default_rng(key)
             sets[j] = rng.choice(observed, size=observed.size, replace=True)
-    out = fit(task.problem, sets[0] if single else sets, seed)
     first = task.index == 0
+    out = fit(task.problem, sets[0] if single else sets, seed, diagnose=first)
     return Replicate(index=task.index, seed=seed, values=out.values, objective=out.objective,
                      evaluations=out.evaluations, stops=out.stops if first else None,
-                     simulated=list(out.simulated) if first and not single else None)
+                     simulated=list(out.simulated) if first and not single else None,
+                     penalty=out.penalty, noise=out.noise, prior_shares=out.prior_shares)
 
 
 def expanded_tail(confidence: float, n: int) -> float:
@@ -277,6 +302,7 @@ def summarise(problem: FitProblem, replicates: list[Replicate], confidence: floa
         one parameter).
     """
     best = replicates[0].values
+    shares = replicates[0].prior_shares or (None,) * len(problem.paths)
     boot = np.array([[r.values[p] for p in problem.paths] for r in replicates[1:]])
     tail = expanded_tail(confidence, observed) if observed else (1.0 - confidence) / 2
     params = []
@@ -286,7 +312,10 @@ def summarise(problem: FitProblem, replicates: list[Replicate], confidence: floa
         value = float(best[path])
         near = AT_BOUND_SHARE * width
         at_bound = "low" if value <= lo + near else "high" if value >= hi - near else None
-        entry = FittedParameter(path=path, value=value, range=(lo, hi), at_bound=at_bound)
+        share = shares[j]
+        held = share is not None and share > HELD_BY_PRIOR_SHARE
+        entry = FittedParameter(path=path, value=value, range=(lo, hi), at_bound=at_bound,
+                                identified=False if held else None, prior_share=share)
         if len(boot) >= 2:
             a, b = np.quantile(boot[:, j], [tail, 1 - tail])
             # The interval holds the best value itself (a percentile interval
@@ -295,8 +324,9 @@ def summarise(problem: FitProblem, replicates: list[Replicate], confidence: floa
             sd = float(boot[:, j].std(ddof=1))
             entry = FittedParameter(path=path, value=value, low=a, high=b, sd=sd,
                                     range=(lo, hi), width_share=(b - a) / width,
-                                    identified=bool(sd <= IDENTIFIED_SD_SHARE * width),
-                                    at_bound=at_bound)
+                                    identified=bool(sd <= IDENTIFIED_SD_SHARE * width
+                                                    and not held),
+                                    at_bound=at_bound, prior_share=share)
         params.append(entry)
     correlation = None
     if len(boot) >= 3 and len(problem.paths) > 1:

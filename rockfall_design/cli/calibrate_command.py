@@ -67,17 +67,16 @@ def add_calibrate_parser(sub: Any) -> None:
                    metavar="B", help="bootstrap replicates (default: calibrate.bootstrap; 0: "
                    "the best fit only, no intervals)")
     p.add_argument("--out", type=Path, metavar="DIR",
-                   help="write calibrated.yaml (the project with the fitted values, their "
-                   "spread added to the materials' scatter), materials.yaml (its materials as "
-                   "a library, each entry's source the observations, date and seed), "
+                   help="write calibrated.yaml (the project with the fitted values, the "
+                   "materials' own scatter, the values' uncertainty as comments), "
+                   "materials.yaml (its materials as a library, each entry's source the "
+                   "observations, date and seed), "
                    "parameters.csv, replicates.csv and summary.json (with the run record) "
                    "into DIR")
     p.add_argument("--save-materials", type=Path, metavar="FILE",
                    help="write the calibrated project's materials as a materials library "
                    "(materials: {library: FILE}), as --out's materials.yaml")
-    p.add_argument("--keep-scatter", action="store_true",
-                   help="write calibrated.yaml and --save-materials with the materials' "
-                   "scatter as it was, without the spread of the fit")
+    _fit_options(p)
     p.add_argument("--workers", type=int_at_least(1, "number of workers"), metavar="N",
                    help="fit N replicates at once on the local pool (default: one per core)")
     p.add_argument("--pool", choices=("threads", "processes"), default="threads",
@@ -109,6 +108,29 @@ def add_calibrate_parser(sub: Any) -> None:
     c.set_defaults(func=cmd_compare)
 
 
+def _fit_options(p: argparse.ArgumentParser) -> None:
+    """calibrate's options on what is written and how the fit is regularised."""
+    scatter = p.add_mutually_exclusive_group()
+    scatter.add_argument("--keep-scatter", action="store_true",
+                         help="write calibrated.yaml and --save-materials with the "
+                         "materials' scatter as it was, without the spread of the fit "
+                         "(the default)")
+    scatter.add_argument("--widen-scatter", action="store_true",
+                         help="add each fitted material parameter's bootstrap standard "
+                         "deviation to its per-impact scatter in calibrated.yaml and "
+                         "--save-materials (the former default)")
+    p.add_argument("--prior", action=argparse.BooleanOptionalAction, default=None,
+                   help="regularise the fit by the literature: each input's project value "
+                   "as the prior's mode, its range as +-2 sd, weighed by the criterion's "
+                   "sampling noise (default: on with fit: auto, off for inputs listed "
+                   "under fit:); --no-prior fits the criterion alone, the ranges as bounds")
+    p.add_argument("--screen", action=argparse.BooleanOptionalAction, default=None,
+                   help="before a regularised fit, leave out each input that moves the "
+                   "criterion by less than its sampling noise over its range (it keeps its "
+                   "class's value; a warning names it); default: with the prior; "
+                   "--no-screen fits every input")
+
+
 def run_record(args: argparse.Namespace, project: Any, seed: int, rocks: int
                ) -> dict[str, Any]:
     """What is needed to repeat the command exactly: version, seed, rocks, project."""
@@ -123,10 +145,11 @@ def _header(result: Any, spread: bool) -> str:
     scatter = ("the scatter of a fitted material parameter\n# includes the spread of its fit"
                if spread else "the materials' scatter\n# is the project's, without the spread "
                "of the fit")
+    lines = "".join(f"# {line}\n" for line in result.uncertainty_lines(spread))
     return (f"# Calibrated by rockfall-design calibrate from {result.observations.source} "
             f"({result.observations.n} blocks), seed {result.seed}.\n"
             f"# Fitted values and their intervals: parameters.csv; {scatter} "
-            "(see docs/calibration.md).\n")
+            f"(see docs/calibration.md).\n{lines}")
 
 
 def _one_section(args: argparse.Namespace) -> tuple[Any, Any]:
@@ -202,9 +225,10 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         result = calibrate(project, observed=args.observed, rocks=args.rocks,
                            bootstrap=args.bootstrap, seed=args.seed, workers=args.workers,
                            scheduler=args.scheduler, pool=args.pool,
-                           progress=sys.stderr.isatty(), registry=registry)
+                           progress=sys.stderr.isatty(), registry=registry,
+                           prior=args.prior, screen=args.screen)
         summary = result.summary
-        spread = not args.keep_scatter
+        spread = bool(args.widen_scatter)
         if args.out:
             out: Path = args.out
             files.write_text(out / "calibrated.yaml", _header(result, spread)

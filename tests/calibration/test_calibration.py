@@ -106,7 +106,13 @@ def test_json_out_plot_and_calibrated_project(site, tmp_path, capsys):
                                       "range": tuple(summary["parameters"][0]["range"])}))
     assert soil.restitution == best.value
     assert soil.restitution == pytest.approx(summary["parameters"][0]["value"], abs=5e-3)
-    assert soil.scatter.restitution == float(f"{summary['parameters'][0]['sd']:.2g}")
+    # The ground's own (aleatory) scatter is written; the fitted value's
+    # uncertainty (epistemic) is recorded beside it, never drawn (issue 35).
+    assert soil.scatter.restitution == 0.0
+    sd = float(f"{summary['parameters'][0]['sd']:.2g}")
+    header = (out / "calibrated.yaml").read_text()
+    assert "NOT drawn by a run" in header
+    assert f"#   {PATH} = {best.value:g}, sd {sd:g}, interval [{best.low:g}, " in header
     assert yaml.safe_load(lib.read_text())["soil"]["restitution"] == soil.restitution
     # The library says where each entry comes from, as projects/materials.yaml does.
     text = (out / "materials.yaml").read_text()
@@ -120,8 +126,11 @@ def test_json_out_plot_and_calibrated_project(site, tmp_path, capsys):
     assert summary["method"]["rough_intervals"].startswith("rough intervals from only 3")
     assert "# law: spang\n# source: the project " in text  # rock and unused: not fitted
     assert set(yaml.safe_load(text)) == {"soil", "rock", "unused"}
-    kept = rd.calibrate(site, workers=1, bootstrap=3).calibrated_project(spread=False)
-    assert kept.materials["soil"].scatter.restitution == 0.0
+    assert f"fitted: restitution {best.value:g} [{best.low:g}, {best.high:g}] sd {sd:g}" in text
+    again = rd.calibrate(site, workers=1, bootstrap=3)
+    assert again.calibrated_project().materials["soil"].scatter.restitution == 0.0
+    widened = again.calibrated_project(spread=True).materials["soil"].scatter.restitution
+    assert widened == float(f"{again.parameters[0].sd:.2g}") > 0.0
     # compare: the calibrated project against the same observations, nothing fitted
     code = main(["compare", str(out / "calibrated.yaml"), "--observed",
                  str(site.parent / "stops.csv"), "--json", "--rocks", "200"])

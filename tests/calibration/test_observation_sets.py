@@ -279,7 +279,7 @@ def test_the_bootstrap_resamples_every_set_each_on_its_own(monkeypatch):
 
     seen = []
 
-    def fake_fit(problem, observed, seed):
+    def fake_fit(problem, observed, seed, diagnose=False):
         seen.append(observed)
         return FitOutcome({}, 0.0, 0, np.zeros(1), ())
 
