@@ -560,8 +560,9 @@ def proof_line(alt: Alternative, tally: Tally, looks: LookSchedule, where: str =
     those not decided is a least count.
     """
     top = ", ".join(f"{k} ({v:,})" for k, v in tally.reasons.most_common() if v)
-    capped = (f"; in {tally.capped_levels} catalogue combinations only the "
-              f"{MAX_SCREENS_PER_LEVEL} placements with fewest rocks through were screened"
+    capped = (f"; in {tally.capped_levels} catalogue combinations only "
+              f"{MAX_SCREENS_PER_LEVEL} placements were screened (those that may hold on the "
+              "search rocks first, then fewest rocks through)"
               if tally.capped_levels else "")
     # Of its family: a cheaper design of another family is that family's to prove
     # or list (design_ditch_or_fence at seed 11: a fence chosen, ditches cheaper).
