@@ -607,6 +607,26 @@ class Screening:
                                                          self.protect_x)).sum())
         return judgement, _Approx(uncertain, bool(approx.any()), touched), first
 
+    def reaching_with(self, fp: Barrier, out: np.ndarray, table: Table) -> np.ndarray:
+        """Which rocks reach the protected zone with barrier ``fp`` alone on ``table``.
+
+        ``out`` are its outcomes (:func:`~rockfall_design.judge.outcomes.barrier_outcomes`
+        on all rocks). Counted as :meth:`_judge` counts them: a rock it catches
+        or returns ends there (a net carries it on by its braking distance),
+        every other goes on along the table's path.
+
+        Returns
+        -------
+        ndarray of float32
+            1 where the rock counts as reaching, 0 elsewhere (rocks,).
+        """
+        fates = RockFates(max_x=table.max_x.copy(), x_end=table.x_end.copy(),
+                          status=table.status.copy(), mass=self.mass, radius=self.radius)
+        stopped = (out == columns.O_CAUGHT) | (out == columns.O_REBOUNDED)
+        self._stop(fates, fp, out, stopped, table.column(self.station(fp.x))[1])
+        return reaches_protected_zone(fates.max_x, fates.status,
+                                      self.protect_x).astype(np.float32)
+
     def _stop(self, fates: RockFates, fp: Barrier, out: np.ndarray, stopped: np.ndarray,
               e_kj: np.ndarray) -> None:
         """End the paths of the rocks a barrier stopped (caught, or returned) at it."""

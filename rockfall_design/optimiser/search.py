@@ -41,7 +41,8 @@ from .space import (
     variables_of,
 )
 
-#: Placements of one combination of catalogue choices screened in full, fewest through first.
+#: Placements of one combination of catalogue choices screened in full: those that may
+#: hold on the search rocks first, then fewest through (:func:`_capped`).
 MAX_SCREENS_PER_LEVEL = 80
 #: Designs of one combination of catalogue choices decided exactly, at most.
 MAX_EXACT_PER_LEVEL = 3
@@ -56,8 +57,9 @@ class BarrierSlots:
 
     Per table (bare, or edited by a ground edit) and option, lazily: which
     rocks it lets on for sure (neither stopped nor broken through, see
-    :meth:`passes`) and whether its checks hold as the first barrier the
-    rocks meet (:meth:`first_ok`).
+    :meth:`passes`), which reach the protected zone with it alone as the
+    screening counts them (:meth:`reaching`) and whether its checks hold
+    as the first barrier the rocks meet (:meth:`first_ok`, :meth:`first_holds`).
     """
 
     def __init__(self, screen: Screening) -> None:
@@ -66,6 +68,7 @@ class BarrierSlots:
         self.skipped: dict[int, Counter] = {}
         self._rows: dict[tuple[int, int, int], np.ndarray] = {}
         self._alone: dict[tuple[int, int], np.ndarray] = {}
+        self._reach: dict[tuple[int, int, int], np.ndarray] = {}
         # Outcome codes first_ok computed, for passes() of the same level (both
         # ask for the options of the level at hand): (ci, k, table key) -> codes.
         self._recent: dict[tuple[int, int, int], np.ndarray] = {}
@@ -154,9 +157,22 @@ class BarrierSlots:
         Only checks that fail with confidence (their favourable bound misses
         the target) count as failed: the rest is left to more rocks.
         """
+        return self._alone_codes(ci, ks, table, table_id) >= 1
+
+    def first_holds(self, ci: int, ks: np.ndarray, table: Table, table_id: int) -> np.ndarray:
+        """Do options ks meet their checks on the point values as the first barrier?
+
+        As :meth:`first_ok`, with the point values in place of the bounds: a
+        design whose first barrier misses them does not hold on the search rocks.
+        """
+        return self._alone_codes(ci, ks, table, table_id) == 2
+
+    def _alone_codes(self, ci: int, ks: np.ndarray, table: Table, table_id: int) -> np.ndarray:
+        """Per option, its checks as the first barrier: 0 some fails with confidence, 1 none
+        does but some misses on its point value, 2 every one meets its target there."""
         sc = self.screen
         opts = self.options[ci]
-        out = np.empty(len(ks), dtype=bool)
+        out = np.empty(len(ks), dtype=np.int8)
         for i, k in enumerate(ks):
             o = opts[k]
             tk = self._table_key(o.j, table, table_id)
@@ -174,8 +190,37 @@ class BarrierSlots:
                 (res,) = judge_measures([placed], [oc], [np.column_stack([h, v, e_kj])],
                                         fates, None).results
                 checks = guard(sc.registry).concept(sc.concept).checks(res)
-                arr[k] = not any(c.rejects for c in checks)
-            out[i] = bool(arr[k])
+                arr[k] = (0 if any(c.rejects for c in checks)
+                          else 2 if all(c.ok for c in checks) else 1)
+            out[i] = arr[k]
+        return out
+
+    def reaching(self, ci: int, ks: np.ndarray, table: Table, table_id: int) -> np.ndarray:
+        """(len(ks), rocks) float32: 1 where the rock reaches the protected zone with option
+        k alone on the table, as the screening counts it (:meth:`~.screening.Screening.
+        reaching_with`): a rock it lets on or breaks through goes on along its path.
+
+        A rock reaches with several barriers only if it reaches with each alone
+        (the product of their rows), but for a rock a net upslope carries into
+        the zone by its braking distance: the product is a lower bound of the
+        screening's count, exact for one barrier.
+        """
+        opts = self.options[ci]
+        out = np.empty((len(ks), self.screen.n), dtype=np.float32)
+        for i, k in enumerate(ks):
+            o = opts[k]
+            # Its outcomes are those of the bare table upslope of an edit, but
+            # the rocks' fates below it are the table's own: one row per table.
+            key = (ci, int(k), table_id)
+            row = self._reach.get(key)
+            if row is None:
+                oc = self._recent.get((ci, int(k), self._table_key(o.j, table, table_id)))
+                if oc is None:
+                    oc = self._outcome(o, table)[0]
+                if len(self._reach) > 100_000:
+                    self._reach.clear()
+                row = self._reach[key] = self.screen.reaching_with(o.footprint, oc, table)
+            out[i] = row
         return out
 
 
@@ -341,8 +386,8 @@ def barrier_designs(
             tally.over_limit = total if tally.over_limit is None else min(tally.over_limit, total)
             return
         ks = [members[s][idx[s]] for s in range(k_slots)]
-        valid, all_ok = _placements(slots, barrier_cis, opts, ks, stretches, table, table_id,
-                                    tally)
+        valid, all_ok, first_holds = _placements(slots, barrier_cis, opts, ks, stretches,
+                                                 table, table_id, tally)
         if not valid.any():
             continue
         residual = _residuals(slots, barrier_cis, ks, valid, reach, table, table_id, tally)
@@ -355,13 +400,38 @@ def barrier_designs(
         order = cand[np.lexsort((residual.ravel()[cand], ~all_ok.ravel()[cand]))]
         if order.size > MAX_SCREENS_PER_LEVEL:
             tally.capped_levels += 1
-            order = order[:MAX_SCREENS_PER_LEVEL]
+            order = _capped(screen, slots, barrier_cis, ks, valid, first_holds, order,
+                            table, table_id)
         found = _screen_placements(screen, opts, ks, fixed, order, residual.shape, table,
                                    table_id, idx, tally)
         # Within one level of cost, designs that pass come before those within the margin.
         found.sort(key=lambda d: (d.cost, not d.result.feasible, d.result.violation,
                                   d.result.residual))
         yield from found
+
+
+def _capped(screen: Screening, slots: BarrierSlots, barrier_cis: Sequence[int],
+            ks: list[np.ndarray], valid: np.ndarray, first_holds: np.ndarray,
+            order: np.ndarray, table: Table, table_id: int) -> np.ndarray:
+    """The :data:`MAX_SCREENS_PER_LEVEL` placements of a level screened, of ``order``.
+
+    Those that may hold on the search rocks come first: their first barrier
+    meets its checks on the point values (it meets every rock) and no more
+    rocks reach the zone than allowed with every barrier standing alone
+    (:meth:`BarrierSlots.reaching`: a lower bound of the screening's count).
+    A placement that fails either does not hold there. For one barrier the
+    two are exactly what the screening asks of a design on point values, so
+    no placement that holds is dropped for one that does not. Ranked by
+    rocks through for sure alone, design_two_zones at seed 14 never screened
+    the 339,000 RX-500 at x = 137 to 139 m, which holds on the search rocks
+    (more rocks through for sure, fewer broken through), while 80 placements
+    nearer the toe that do not hold were. ``order`` (every barrier holding
+    on its own first, then fewest through) is kept within each part.
+    """
+    reaching = _counts(slots.reaching, barrier_cis, ks, valid,
+                       np.ones(screen.n, dtype=np.float32), table, table_id)
+    may = (first_holds & (reaching <= screen.allowed_residual)).ravel()[order]
+    return order[np.argsort(~may, kind="stable")][:MAX_SCREENS_PER_LEVEL]
 
 
 def _shaped(a: np.ndarray, s: int, k_slots: int) -> np.ndarray:
@@ -371,9 +441,10 @@ def _shaped(a: np.ndarray, s: int, k_slots: int) -> np.ndarray:
 
 def _placements(slots: BarrierSlots, barrier_cis: Sequence[int], opts: list[list[Option]],
                 ks: list[np.ndarray], stretches: list[tuple[float, float]], table: Table,
-                table_id: int, tally: Tally) -> tuple[np.ndarray, np.ndarray]:
-    """Which placements of one level may hold, and which have every barrier's checks hold
-    on its own: (valid, all_ok), one axis per barrier.
+                table_id: int, tally: Tally) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which placements of one level may hold, which have every barrier's checks hold
+    on its own, and which have the first barrier's checks met on the point values:
+    (valid, all_ok, first_holds), one axis per barrier.
 
     A placement is out when a barrier stands on a ground edit's stretch, two
     stand closer than :data:`~rockfall_design.judge.placing.MIN_BARRIER_SPACING_M`
@@ -397,35 +468,50 @@ def _placements(slots: BarrierSlots, barrier_cis: Sequence[int], opts: list[list
     xb = np.stack(np.broadcast_arrays(*[_shaped(xs[s], s, k_slots) for s in range(k_slots)]))
     first = np.argmin(xb, axis=0)
     alone = [slots.first_ok(barrier_cis[s], ks[s], table, table_id) for s in range(k_slots)]
+    holds = [slots.first_holds(barrier_cis[s], ks[s], table, table_id) for s in range(k_slots)]
     first_ok = np.zeros(valid.shape, dtype=bool)
+    first_holds = np.zeros(valid.shape, dtype=bool)
     all_ok = np.ones(valid.shape, dtype=bool)
     for s in range(k_slots):
         ok_s = np.broadcast_to(_shaped(alone[s], s, k_slots), valid.shape)
         first_ok |= (first == s) & ok_s
+        first_holds |= (first == s) & np.broadcast_to(_shaped(holds[s], s, k_slots),
+                                                      valid.shape)
         all_ok &= ok_s
     tally.reasons["first barrier's checks"] += int((valid & ~first_ok).sum())
-    return valid & first_ok, all_ok
+    return valid & first_ok, all_ok, first_holds
 
 
 def _residuals(slots: BarrierSlots, barrier_cis: Sequence[int], ks: list[np.ndarray],
                valid: np.ndarray, reach: np.ndarray, table: Table, table_id: int,
                tally: Tally) -> np.ndarray:
     """Rocks through every barrier for sure, per valid placement (int64 max elsewhere)."""
-    k_slots = len(ks)
-    # Count only over the options that appear in some admissible placement.
-    used = [np.flatnonzero(valid.any(axis=tuple(u for u in range(k_slots) if u != s)))
-            for s in range(k_slots)]
-    sub = _through(reach, [slots.passes(barrier_cis[s], ks[s][used[s]], table, table_id)
-                           for s in range(k_slots)])
+    residual = _counts(slots.passes, barrier_cis, ks, valid, reach, table, table_id)
     big = np.iinfo(np.int64).max
-    residual = np.full(valid.shape, big, dtype=np.int64)
-    residual[np.ix_(*used)] = sub
-    residual = np.where(valid, residual, big)
     rmin = int(residual.min())
     if rmin < big:
         tally.min_residual = rmin if tally.min_residual is None else min(tally.min_residual,
                                                                         rmin)
     return residual
+
+
+def _counts(rows: Any, barrier_cis: Sequence[int], ks: list[np.ndarray], valid: np.ndarray,
+            weights: np.ndarray, table: Table, table_id: int) -> np.ndarray:
+    """``sum_r weights[r] * prod_s rows_s[r]`` per valid placement (int64 max elsewhere).
+
+    ``rows(ci, ks, table, table_id)`` gives each option's row over the rocks
+    (:meth:`BarrierSlots.passes`, :meth:`BarrierSlots.reaching`).
+    """
+    k_slots = len(ks)
+    # Count only over the options that appear in some admissible placement.
+    used = [np.flatnonzero(valid.any(axis=tuple(u for u in range(k_slots) if u != s)))
+            for s in range(k_slots)]
+    sub = _through(weights, [rows(barrier_cis[s], ks[s][used[s]], table, table_id)
+                             for s in range(k_slots)])
+    big = np.iinfo(np.int64).max
+    out = np.full(valid.shape, big, dtype=np.int64)
+    out[np.ix_(*used)] = sub
+    return np.where(valid, out, big)
 
 
 def _most_through(screen: Screening) -> int:

@@ -8,9 +8,10 @@ On a single section (one scenario) a design's decision is that scenario's.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any
 
@@ -223,6 +224,8 @@ class FamilyDecision:
     unjudged_failures: int = 0
     per_level: Counter = field(default_factory=Counter)
     marginal_levels: set = field(default_factory=set)  # levels with a design marginal at max
+    #: Some stream was left unread once the family's decisions were used up (:meth:`_skip_rest`).
+    unread: bool = False
 
     def settle(self, designs: Any) -> int:
         """Decide ``designs`` in order of cost until one holds; returns the rocks simulated.
@@ -242,20 +245,24 @@ class FamilyDecision:
         most :data:`MAX_DEFERRED_PER_FAMILY`, cheapest first, at most
         :data:`MAX_DEFERRED_PER_COST` per cost; the rest are counted as not
         decided). Each call has its own budgets; the undecided designs are
-        counted over all calls.
+        counted over all calls. Once the family's decisions are used up, the
+        rest of the stream is not decided but read on for the listing
+        (:meth:`_skip_rest`).
         """
         self.decisions = self.simulated = self.unjudged_failures = 0
         self.per_level, self.marginal_levels = Counter(), set()
         alt = self.alt
         deferred: list[Screened] = []
-        for d in designs:
+        stream = iter(designs)
+        for d in stream:
             if self.decisions >= MAX_EXACT_PER_FAMILY:
-                self.tallies[d.scenario].reasons[
-                    "not decided: the family's decisions were used up"] += 1
+                self._skip_rest(d, stream)
                 break
             if not d.result.feasible and not d.result.point_ok:
                 if len(deferred) < MAX_DEFERRED_KEPT:
                     deferred.append(d)
+                else:
+                    self._skip(d, "more designs set aside than the family keeps")
                 continue
             if self.decide(d):
                 break
@@ -333,6 +340,32 @@ class FamilyDecision:
                             reason=(f"not decided ({why}); on the {screen.n:,} search rocks"
                                     f"{where} it neither holds nor fails with {conf} "
                                     "confidence"))
+
+    def _skip_rest(self, first: Screened, stream: Iterator[Screened]) -> None:
+        """The designs of a stream left once the family's decisions are used up: not decided.
+
+        They are dearer than every design decided so far, but may be cheaper
+        than the family's design (a deferred one) or than another family's:
+        each is counted and may be listed (:meth:`list_undecided`), never
+        dropped unsaid. Cutting the stream here dropped them, and
+        design_ditch_or_fence at seed 11 chose a 67,500 fence without naming
+        the 29,551 ditch that seeds 12 to 15 choose or name (40 decisions
+        spent on ditches of 23,418 to 28,099, its three placements never
+        decided). The stream is read on until :data:`MAX_UNDECIDED_LISTED`
+        costs could be listed (a stream of barriers screens as it is read;
+        no later design would be listed); :attr:`unread` says whether some
+        of it was left.
+        """
+        why = "the family's decisions were used up"
+        costs: set[float] = set()
+        for d in itertools.chain([first], stream):
+            if len(costs) >= MAX_UNDECIDED_LISTED:
+                self.unread = True
+                return
+            self._skip(d, why)
+            if not self.scenarios[d.scenario].screen.rejects(d.result.checks,
+                                                              int(d.result.residual)):
+                costs.add(round(float(d.cost), 2))
 
     def _skip(self, d: Screened, why: str) -> bool:
         self.tallies[d.scenario].reasons[f"not decided: {why}"] += 1
@@ -513,33 +546,40 @@ class FamilyDecision:
         """What was proven about the family's chosen design (never cut short)."""
         k = len(self.scenarios)
         where = "" if k == 1 else f" in more than {k - self.required} of the {k} scenarios"
-        return proof_line(self.alt, Tally.merged(self.tallies), self.scenarios[0].looks, where)
+        return proof_line(self.alt, Tally.merged(self.tallies), self.scenarios[0].looks, where,
+                          unread=self.unread)
 
 
-def proof_line(alt: Alternative, tally: Tally, looks: LookSchedule, where: str = "") -> str:
+def proof_line(alt: Alternative, tally: Tally, looks: LookSchedule, where: str = "",
+               unread: bool = False) -> str:
     """What was proven about a family's chosen design (never cut short).
 
     ``where``: where every cheaper design fails (across scenarios: in more
-    of them than may fail), after the confidence.
+    of them than may fail), after the confidence. ``unread``: designs were
+    left unread once the family's decisions were used up, so the count of
+    those not decided is a least count.
     """
     top = ", ".join(f"{k} ({v:,})" for k, v in tally.reasons.most_common() if v)
-    capped = (f"; in {tally.capped_levels} catalogue combinations only the "
-              f"{MAX_SCREENS_PER_LEVEL} placements with fewest rocks through were screened"
+    capped = (f"; in {tally.capped_levels} catalogue combinations only "
+              f"{MAX_SCREENS_PER_LEVEL} placements were screened (those that may hold on the "
+              "search rocks first, then fewest rocks through)"
               if tally.capped_levels else "")
-    space = ("designs the search over its ground edits evaluated"
-             if tally.searched else "designs in the space")
+    # Of its family: a cheaper design of another family is that family's to prove
+    # or list (design_ditch_or_fence at seed 11: a fence chosen, ditches cheaper).
+    space = ("designs of its family the search over its ground edits evaluated"
+             if tally.searched else "designs of its family in the space")
     conf = f"{100 * looks.confidence:g} %"
     k = sum(1 for m in alt.marginal if m.get("decided", True) and not m.get("short_of_margin"))
     marginal = ""
     if k or alt.undecided:
         parts = [f"is marginal ({k})"] if k else []
         if alt.undecided:
-            parts.append(f"was not decided ({alt.undecided:,})")
+            parts.append(f"was not decided ({alt.undecided:,}{' or more' if unread else ''})")
         marginal = ", or " + " or ".join(parts) + " (the cheapest that may hold listed)"
     short = (", or falls short of the checker's margin,"
              if any(k.startswith(SHORT) and v for k, v in tally.reasons.items()) else "")
     return (f"cheapest admitted of {tally.designs:,} {space} ({alt.exact_evaluations} "
-            f"evaluated exactly); every cheaper design fails{short} with {conf} confidence"
+            f"evaluated exactly); every cheaper one fails{short} with {conf} confidence"
             f"{where} (looks of {looks.sizes[0]:,} to {looks.sizes[-1]:,} rocks){marginal}: "
             f"{top or 'none cheaper'}{capped}")
 

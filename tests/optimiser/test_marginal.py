@@ -270,3 +270,71 @@ def test_a_design_that_holds_on_fresh_rocks_records_the_fresh_look_that_decided(
     assert alt.holds_on_fresh_rocks and alt.cost == 90_000.0
     assert alt.fresh_rocks == 18_412 and alt.fresh_seed == 1_000_010
     assert alt.decision_rocks == 4603
+
+
+class _Rejects:
+    """Every design it decides fails with confidence (on 4,603 rocks)."""
+
+    margin = None
+
+    def __init__(self) -> None:
+        self.decided: list[float] = []
+
+    def decide(self, measures, first):
+        self.decided.append(float(first.labels[0].split()[-1]))
+        return Decision(Verdict.REJECTED, 4603, None, reason="fails", exact=1,
+                        simulated=4603, values={})
+
+
+def _contender(cost: float) -> _Design:
+    """A design that meets its targets on the point values of the search rocks."""
+    d = _design(cost, int(cost), 0.0)
+    d.result.feasible, d.result.point_ok, d.result.near = False, True, True
+    return d
+
+
+@pytest.mark.parametrize("as_generator", [False, True])
+def test_designs_left_once_the_decisions_are_used_up_are_listed_not_dropped(
+        monkeypatch, as_generator):
+    """design_ditch_or_fence at seed 11: the ditch family spent its 40 decisions on ditches of
+    23,418 to 28,099, and the stream was cut there; the 29,551 ditch that seeds 12 to 15
+    choose or name was never decided and never listed, and the run chose a 67,500 fence.
+    The rest of the stream is now counted and listed (one per cost), and a stream of
+    barriers, which screens as it is read, is read only as far as a listing can reach."""
+    monkeypatch.setattr(settle, "MAX_EXACT_PER_FAMILY", 2)
+    monkeypatch.setattr(settle, "MAX_UNDECIDED_LISTED", 3)
+    decider = _Rejects()
+    sc = fake_scenario(decider)
+    sc.screen, sc.looks = _screen(), plan_looks(4603, 50000, 0.95, 0.001)
+    alt = Alternative(name="ditch", family=(1,))
+    family = FamilyDecision(alt, [sc], 1, [Tally()])
+    costs = [10.0, 11.0, 12.0, 12.0, 13.0, 14.0, 15.0, 16.0]
+    read: list[float] = []
+
+    def stream():
+        for c in costs:
+            read.append(c)
+            yield _contender(c)
+
+    family.settle(stream() if as_generator else [_contender(c) for c in costs])
+    assert decider.decided == [10.0, 11.0]
+    # Not one of them dropped unsaid: the cheapest three costs are listed as not decided.
+    listed = [m["cost"] for m in alt.marginal if not m["decided"]]
+    assert listed == [12.0, 13.0, 14.0]
+    assert all("decisions were used up" in m["reason"] for m in alt.marginal)
+    # Read up to the first design past three listable costs; the rest left unread.
+    assert alt.undecided == 4 and family.unread
+    if as_generator:
+        assert read == costs[:7]
+    assert "was not decided (4 or more)" in family.proof()
+
+
+def test_a_stream_read_to_its_end_says_how_many_were_not_decided(monkeypatch):
+    monkeypatch.setattr(settle, "MAX_EXACT_PER_FAMILY", 1)
+    sc = fake_scenario(_Rejects())
+    sc.screen = _screen()
+    alt = Alternative(name="ditch", family=(1,))
+    family = FamilyDecision(alt, [sc], 1, [Tally()])
+    family.settle([_contender(c) for c in (10.0, 20.0, 20.0)])
+    assert alt.undecided == 2 and not family.unread
+    assert [m["cost"] for m in alt.marginal] == [20.0]
