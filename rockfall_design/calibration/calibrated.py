@@ -39,6 +39,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
     from rich.console import Console
 
+    from ..report.context import ReportContext
+
 __all__ = ["CalibrationResult", "ComparisonResult", "FIGURES", "SCATTER_KEYS"]
 
 #: The figures of ``calibrate --plot`` by file stem (``compare`` draws the first).
@@ -151,7 +153,7 @@ class ComparisonResult:
         return {FIGURES[0]: stops_figure(self.observations.x, self.simulated, levels,
                                          f"{self.project.name}: {self.observations.source}")}
 
-    def report_context(self, figures: Mapping[str, Figure] | None = None) -> dict[str, Any]:
+    def report_context(self, figures: Mapping[str, Figure] | None = None) -> ReportContext:
         """The report's context (:func:`~.document.report_context`)."""
         return report_context(self, figures)
 
@@ -483,7 +485,7 @@ class CalibrationResult:
             FIGURES[1]: cloud_figure(self.problem.paths, self.bootstrap, self.parameters),
         }
 
-    def report_context(self, figures: Mapping[str, Figure] | None = None) -> dict[str, Any]:
+    def report_context(self, figures: Mapping[str, Figure] | None = None) -> ReportContext:
         """The report's context (:func:`~.document.report_context`)."""
         return report_context(self, figures)
 

@@ -21,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from ..report.documents import MODEL_LIMITS
+from ..report.context import LimitsPart, ReportContext, ReportFigure
+from ..report.documents import model_limits
 from ..report.sections import Table, inputs_table
 from ..version import __version__
 from .charts import CAPTIONS
@@ -289,7 +290,7 @@ def _verdict(result: Any, command: str, warnings: Sequence[str]) -> tuple[str, s
 
 
 def report_context(result: Any,
-                   figures: Mapping[str, Any] | None = None) -> dict[str, Any]:
+                   figures: Mapping[str, Any] | None = None) -> ReportContext:
     """Everything the report templates show for ``calibrate`` or ``compare``, as plain data.
 
     Parameters
@@ -300,7 +301,7 @@ def report_context(result: Any,
 
     Returns
     -------
-    dict
+    ReportContext
         The context of :func:`rockfall_design.report.documents.render_html`
         and :func:`~rockfall_design.report.documents.render_markdown`.
 
@@ -333,33 +334,18 @@ def report_context(result: Any,
             _sets_table(getattr(result, "sets", []), calibrated))
     results += [table for table in more if table is not None]
     figs = figures if figures is not None else result.figures()
-    limits = [{"heading": CALIBRATION_LIMITS[0], "items": list(CALIBRATION_LIMITS[1])}]
-    limits += [{"heading": h, "items": list(items)} for h, items in MODEL_LIMITS[:2]]
+    limits = [LimitsPart(CALIBRATION_LIMITS[0], list(CALIBRATION_LIMITS[1])),
+              *model_limits(command)]
     if calibrated:
         note = ("The fitted inputs first, then the statistics of the stops simulated at the "
                 "best fit against the observed ones.")
     else:
         note = ("The project as it is (nothing fitted) against observations: how well a "
                 "calibration predicts blocks it did not see.")
-    return {
-        "title": f"{project.name}: rockfall {'calibration' if calibrated else 'comparison'}",
-        "project": project.name,
-        "description": project.description,
-        "command": command,
-        "version": __version__,
-        "generated": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
-        "run": _run_table(result, command),
-        "inputs": inputs,
-        "results": results,
-        "results_note": note,
-        "protect": "",
-        "verdict": verdict,
-        "verdict_state": state,
-        "failures": warnings,
-        "bill": None,
-        "limits": limits,
-        "chosen": "",
-        "chosen_measures": [],
-        "figures": [{"name": name, "caption": CAPTIONS.get(name, ""), "fig": fig}
-                    for name, fig in figs.items()],
-    }
+    return ReportContext(
+        title=f"{project.name}: rockfall {'calibration' if calibrated else 'comparison'}",
+        project=project.name, description=project.description, command=command,
+        version=__version__, generated=_dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        run=_run_table(result, command), inputs=inputs, results=results, results_note=note,
+        verdict=verdict, verdict_state=state, failures=warnings, limits=limits,
+        figures=[ReportFigure(name, CAPTIONS.get(name, ""), fig) for name, fig in figs.items()])

@@ -19,11 +19,14 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..judge.records import CheckSummary, MeasureRecord, State, check_of
 from ..plugins.concept import Check
 from .rounding import round_value
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..optimiser.alternatives import Alternative
 
 __all__ = ["DesignTable", "design_tables", "design_columns", "fresh_statements", "how_sure",
            "state_of"]
@@ -186,10 +189,10 @@ def how_sure(summary: CheckSummary | Mapping[str, Any]) -> list[str]:
     return lines
 
 
-def fresh_statements(best: Mapping[str, Any]) -> list[str]:
+def fresh_statements(best: Alternative) -> list[str]:
     """The safety concept's sentences on the fresh rocks that verified the chosen design."""
-    said = list(best.get("fresh_statements") or [])
+    said = list(best.fresh_statements or [])
     if not said:
         return []
-    return [f"On the {int(best.get('fresh_rocks') or 0):,} fresh rocks (seed "
-            f"{best.get('fresh_seed')}) that verified the chosen design:", *said]
+    return [f"On the {int(best.fresh_rocks or 0):,} fresh rocks (seed "
+            f"{best.fresh_seed}) that verified the chosen design:", *said]

@@ -17,13 +17,16 @@ import os
 import re
 import warnings
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from pathlib import Path
+from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
 from ..judge.records import CheckSummary, DesignVerdict, State
 from ..project.study import values_text
 from ..run.summary import RunSummary
 from ..version import __version__
+from .context import LimitsPart, ReportContext, ReportFigure
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
 from .listed import listed_lines
 from .pdf import html_to_pdf, pdf_turned_off, pdf_unavailable
@@ -45,10 +48,12 @@ from .sections import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..optimiser.alternatives import OptimisationResult
+    from ..studies.scenario_checks import ScenariosCheck
     from .outputs import OutputSet
 
-__all__ = ["Table", "MODEL_LIMITS", "report_context", "render_html", "render_markdown",
-           "write_report"]
+__all__ = ["Table", "MODEL_LIMITS", "ReportContext", "model_limits", "report_context",
+           "report_figures", "render_html", "render_markdown", "write_report"]
 
 
 #: The report's section "Model and limits": (heading, bullets). docs/model-and-limits.md
@@ -191,46 +196,43 @@ MODEL_LIMITS: tuple[tuple[str, tuple[str, ...]], ...] = (
 # ---- the parts of the context -------------------------------------------------
 
 
-def _opening_context(result: Any) -> dict[str, Any]:
+def _opening_context(result: Any) -> ReportContext:
     """The head of the context: titles, the run's table, the inputs, empty result parts."""
     project, command = result.project, result.command
-    summary = result.summary if command == "optimise" else result.record
-    return {
-        "title": f"{project.name}: rockfall {'design' if command == 'optimise' else command}",
-        "project": project.name,
-        "description": project.description,
-        "command": command,
-        "version": __version__,
-        "generated": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
-        "run": run_table(result, summary),
-        "inputs": inputs_table(project, command, *resolved_inputs(result)),
-        "results": [],
-        "protect": "",
-        "verdict": "",
-        "verdict_state": "",
-        "failures": [],
-        "bill": None,
-        "limits": [],
-        "chosen": "",
-        "chosen_measures": [],
-        "design_values": [],
-        "how_sure": [],
-    }
+    run = run_table(result, None if command == "optimise" else result.record)
+    return ReportContext(
+        title=f"{project.name}: rockfall {'design' if command == 'optimise' else command}",
+        project=project.name, description=project.description, command=command,
+        version=__version__, generated=_dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        run=run, inputs=inputs_table(project, command, *resolved_inputs(result)))
 
 
-def _statistics_context(ctx: dict[str, Any], stats: RunSummary | CheckSummary) -> None:
+def _statistics_context(ctx: ReportContext, stats: RunSummary | CheckSummary) -> None:
     """The run's tables (ends, stations, checks, passages), the protected zone, how sure."""
-    ctx["results"].append(ends_table(stats))
+    ctx.results.append(ends_table(stats))
     for table in (stations_table(stats), checks_table(stats), passages_table(stats)):
         if table is not None:
-            ctx["results"].append(table)
-    ctx["protect"] = protect_text(stats)
+            ctx.results.append(table)
+    ctx.protect = protect_text(stats)
     if isinstance(stats, CheckSummary):
-        ctx["design_values"] = _design_value_tables(stats)
-        ctx["how_sure"] = how_sure(stats)
+        ctx.design_values = _design_value_tables(stats)
+        ctx.how_sure = how_sure(stats)
 
 
-def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dict[str, Any]:
+def model_limits(command: str) -> list[LimitsPart]:
+    """The section "Model and limits": the concepts' part where a command judged."""
+    return [LimitsPart(h, list(items)) for h, items in MODEL_LIMITS
+            if command in ("check", "optimise") or not h.startswith("Safety")]
+
+
+def report_figures(figures: Mapping[str, Any]) -> list[ReportFigure]:
+    """The report's figures in their order, each with its caption."""
+    from .figures import CAPTIONS
+
+    return [ReportFigure(name, CAPTIONS.get(name, ""), fig) for name, fig in figures.items()]
+
+
+def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> ReportContext:
     """Everything the report templates show, as plain data.
 
     Parameters
@@ -241,8 +243,6 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
     figures : mapping of str to Figure, optional
         Default: ``result.figures()``.
     """
-    from .figures import CAPTIONS
-
     if getattr(result, "across", False):  # check --scenarios
         return _scenarios_context(result, figures)
     command = result.command
@@ -251,25 +251,22 @@ def report_context(result: Any, figures: Mapping[str, Any] | None = None) -> dic
     stats = design.record if design is not None else (
         result.record if command != "optimise" else None)
     if command == "optimise":
-        ctx["chosen"], ctx["chosen_measures"] = chosen_text(result.summary)
-        ctx["results"].append(alternatives_table(result.summary))
+        ctx.chosen, ctx.chosen_measures = chosen_text(result.result)
+        ctx.results.append(alternatives_table(result.result))
     if stats is not None:
         _statistics_context(ctx, stats)
     if command == "optimise":
-        ctx["how_sure"] += optimiser_sentences(result.summary)
+        ctx.how_sure += optimiser_sentences(result.result)
         _set_verdict(ctx, result.verdict)
         if result.bill_record is not None:
-            ctx["bill"] = bill_table(result.bill_record)
+            ctx.bill = bill_table(result.bill_record)
     elif isinstance(stats, CheckSummary):
         _set_verdict(ctx, stats.verdict)
     if design is not None:
-        ctx["results_note"] = _decided_note(result, design.record)
+        ctx.results_note = _decided_note(result, design.record)
     # Every report says what the model is and is not; the concepts' part where one judged.
-    ctx["limits"] = [{"heading": h, "items": list(items)} for h, items in MODEL_LIMITS
-                     if command in ("check", "optimise") or not h.startswith("Safety")]
-    figs = figures if figures is not None else result.figures()
-    ctx["figures"] = [{"name": name, "caption": CAPTIONS.get(name, ""), "fig": fig}
-                      for name, fig in figs.items()]
+    ctx.limits = model_limits(command)
+    ctx.figures = report_figures(figures if figures is not None else result.figures())
     return ctx
 
 
@@ -290,63 +287,91 @@ def _design_value_tables(summary: CheckSummary) -> list[Table]:
             for t in design_tables(summary)]
 
 
-def optimiser_sentences(summary: Mapping[str, Any]) -> list[str]:
+def optimiser_sentences(opt: OptimisationResult) -> list[str]:
     """How ``optimise`` searched and decided, and its record of the decision, as sentences."""
-    conf = 100 * float(summary.get("confidence") or 0.95)
-    out = [f"The optimiser searched with {int(summary.get('search_rocks') or 0):,} rocks "
-           f"(seed {summary.get('seed')}), screening "
-           f"{int(summary.get('designs_evaluated') or 0):,} designs, "
-           f"{int(summary.get('exact_evaluations') or 0):,} of them evaluated exactly; the "
-           f"chosen design was decided with {int(summary.get('rocks') or 0):,} rocks and "
-           f"checked again on {int(summary.get('fresh_rocks') or 0):,} fresh rocks (seed "
-           f"{summary.get('fresh_seed')}), every bound at {conf:g} % confidence."]
-    best = summary.get("best")
-    if isinstance(best, Mapping) and best.get("proof"):
-        out.append(f"The optimiser's record of the decision: {best['proof']}.")
-    if isinstance(best, Mapping):
+    out = [f"The optimiser searched with {int(opt.search_rocks or 0):,} rocks "
+           f"(seed {opt.seed}), screening {int(opt.evaluations or 0):,} designs, "
+           f"{int(opt.exact_evaluations or 0):,} of them evaluated exactly; the "
+           f"chosen design was decided with {int(opt.rocks or 0):,} rocks and "
+           f"checked again on {int(opt.fresh_rocks or 0):,} fresh rocks (seed "
+           f"{opt.fresh_seed}), every bound at {100 * float(opt.confidence or 0.95):g} % "
+           "confidence."]
+    best = opt.best
+    if best is not None and best.proof:
+        out.append(f"The optimiser's record of the decision: {best.proof}.")
+    if best is not None:
         out += fresh_statements(best)
     # The cheaper designs it could not decide, each with the rocks that would.
-    return out + listed_lines(summary.get("marginal"), str(summary.get("currency") or ""))
+    return out + listed_lines(opt.marginal, str(opt.currency or ""))
 
 
-def _set_verdict(ctx: dict[str, Any], verdict: DesignVerdict | Mapping[str, Any] | None) -> None:
+def _set_verdict(ctx: ReportContext, verdict: DesignVerdict | None) -> None:
     """The verdict as the report's first lines.
 
     What fails is said at once; what is open with confidence belongs to the
     statistics and is said under "How sure" (its ``details`` are there).
     """
-    if not verdict:
+    if verdict is None:
         return
-    if isinstance(verdict, Mapping):  # a summary's JSON (check --scenarios)
-        verdict = DesignVerdict.from_json(verdict)
-    ctx["verdict"] = verdict.headline
-    ctx["verdict_state"] = verdict.state.value
-    ctx["verdict_ok"] = verdict.with_confidence
-    ctx["failures"] = list(verdict.details) if verdict.state == State.FAILS else []
+    ctx.verdict = verdict.headline
+    ctx.verdict_state = verdict.state.value
+    ctx.verdict_ok = verdict.with_confidence
+    ctx.failures = list(verdict.details) if verdict.state == State.FAILS else []
 
 
-def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[str, Any]:
+def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> ReportContext:
     """The report of ``check --scenarios``: every scenario, the binding one in full.
 
     The binding scenario's part is the report of ``check`` in that scenario
     (:func:`report_context` of its :class:`~rockfall_design.results.CheckResult`),
-    its tables and figures titled with the scenario.
+    its tables and figures titled with the scenario. ``result.check`` is the
+    :class:`~rockfall_design.studies.scenario_checks.ScenariosCheck` it reads.
     """
-    from types import SimpleNamespace
-
-    from .figures import CAPTIONS
-
-    summary = result.summary
+    found: ScenariosCheck = result.check
     project = result.project
-    binding = result.binding_check
-    b = summary["binding"]
+    b = found.binding
     figs = dict(figures) if figures is not None else result.figures()
-    ctx = report_context(binding, {k: v for k, v in figs.items() if k != "margins"})
-    name = f"binding scenario {b['index']} ({values_text(b['values'])})"
-    # The run: the project as written, the run seed the scenarios' seeds derive from.
+    margins = figs.pop("margins", None)
+    ctx = report_context(result.binding_check, figs)
+    name = f"Binding scenario {b.index} ({values_text(b.values)})"
+    ctx.run = _scenarios_run_table(result, found)
+    study = project.resolved_dict().get("study") or {}
+    vary = study.get("vary") or {}
+    ctx.inputs = inputs_table(project, "check") + [Table(
+        "Study: the varied inputs", ["input (path in the project)", "values"],
+        [[k, ", ".join(map(str, v)) if isinstance(v, list) else str(v)]
+         for k, v in vary.items()],
+        note=f"Scenarios: {study.get('scenarios')}; seeds: {study.get('seeds')}. The other "
+        "inputs are as written above.")]
+    paths = list(dict.fromkeys(k for p in found.scenarios for k in p.binding.values))
+    ctx.results = [scenarios_table(found, paths)] + [
+        Table(f"{name}: {t.title}", t.columns, t.rows, t.note, t.highlight)
+        for t in ctx.results]
+    if ctx.protect:
+        ctx.protect = f"{name}: {ctx.protect}"
+    ctx.results_note = (
+        "Every scenario of the study first; then the binding scenario (the one that decides "
+        "the count required), "
+        f"in full as check shows one scenario: scenario {b.index}, seed {b.seed}, "
+        + margin_text(b.margin, b.binds_at) + ".")
+    ctx.title = f"{project.name}: rockfall check over {found.of} scenarios"
+    ctx.command = "check --scenarios"
+    _scenarios_verdict(ctx, found)
+    for f in ctx.figures:
+        f.caption = f"{name}: {f.caption}"
+    if margins is not None:  # first: the report begins with every scenario
+        ctx.figures[:0] = report_figures({"margins": margins})
+    return ctx
+
+
+def _scenarios_run_table(result: Any, found: ScenariosCheck) -> Table:
+    """The run of ``check --scenarios``: the project as written, the run seed the
+    scenarios' seeds derive from, the scenarios and the binding one."""
+    project, b = result.project, found.binding
+    record = result.binding_check.record
     head = SimpleNamespace(project=project, command="check")
-    run = run_table(head, {**binding.summary, "seed": summary["seed"],
-                            "project_hash": project.resolved_hash()})
+    run = run_table(head, replace(record, run=replace(
+        record.run, seed=found.seed, project_hash=project.resolved_hash())))
     for row in run.rows:
         if row[0] == "seed":
             row[0] = "run seed (each scenario's seed derives from it)"
@@ -356,55 +381,30 @@ def _scenarios_context(result: Any, figures: Mapping[str, Any] | None) -> dict[s
             row[1] = f"rockfall-design {__version__}, command check --scenarios"
     at = next(i for i, row in enumerate(run.rows) if row[0].startswith("run seed")) + 1
     run.rows[at:at] = [
-        ["scenarios", f"{summary['of']}; the design must hold in {summary['required']} "
-         f"(design.scenarios share {summary['share']:g})"],
-        ["binding scenario", f"{b['index']} ({values_text(b['values'])}), seed {b['seed']}: "
-         + margin_text(b["margin"], b["binds_at"])],
+        ["scenarios", f"{found.of}; the design must hold in {found.required} "
+         f"(design.scenarios share {found.share:g})"],
+        ["binding scenario", f"{b.index} ({values_text(b.values)}), seed {b.seed}: "
+         + margin_text(b.margin, b.binds_at)],
     ]
-    ctx["run"] = run
-    study = project.resolved_dict().get("study") or {}
-    vary = study.get("vary") or {}
-    ctx["inputs"] = inputs_table(project, "check") + [Table(
-        "Study: the varied inputs", ["input (path in the project)", "values"],
-        [[k, ", ".join(map(str, v)) if isinstance(v, list) else str(v)]
-         for k, v in vary.items()],
-        note=f"Scenarios: {study.get('scenarios')}; seeds: {study.get('seeds')}. The other "
-        "inputs are as written above.")]
-    paths = list(dict.fromkeys(k for p in summary["scenarios"] for k in p["values"]))
-    ctx["results"] = [scenarios_table(summary, paths)] + [
-        Table(f"{name[0].upper()}{name[1:]}: {t.title}", t.columns, t.rows, t.note, t.highlight)
-        for t in ctx["results"]]
-    if ctx["protect"]:
-        ctx["protect"] = f"{name[0].upper()}{name[1:]}: {ctx['protect']}"
-    ctx["results_note"] = (
-        "Every scenario of the study first; then the binding scenario (the one that decides "
-        "the count required), "
-        f"in full as check shows one scenario: scenario {b['index']}, seed {b['seed']}, "
-        + margin_text(b["margin"], b["binds_at"]) + ".")
-    ok = bool(summary["ok"])
-    ctx["title"] = f"{project.name}: rockfall check over {summary['of']} scenarios"
-    ctx["command"] = "check --scenarios"
-    ctx["verdict"] = (
-        f"Design {'holds' if ok else 'fails'}: it holds in {summary['holds_in']} of "
-        f"{summary['of']} scenarios (on the point values; "
-        f"{summary['holds_with_confidence_in']} with the confidence bounds); required: "
-        f"{summary['required']}. Binding: scenario {b['index']}, "
-        + margin_text(b["margin"], b["binds_at"]) + ".")
-    ctx["verdict_ok"] = ok
-    ctx["failures"] = list(summary.get("failures", []))
-    if summary.get("verdict"):
-        ctx["scenarios_note"] = ctx["verdict"]
-        _set_verdict(ctx, summary["verdict"])
-        if summary["verdict"]["state"] != "fails":  # what is open: under "How sure"
-            ctx["how_sure"] = [*ctx["how_sure"], "Over the scenarios:",
-                               *(f"- {d}" for d in summary["verdict"].get("details") or [])]
-        ctx["failures"] = [ctx["scenarios_note"], *ctx["failures"]]
-    for f in ctx["figures"]:
-        f["caption"] = f"{name[0].upper()}{name[1:]}: {f['caption']}"
-    if "margins" in figs:  # first: the report begins with every scenario
-        ctx["figures"].insert(0, {"name": "margins", "caption": CAPTIONS["margins"],
-                                  "fig": figs["margins"]})
-    return ctx
+    return run
+
+
+def _scenarios_verdict(ctx: ReportContext, found: ScenariosCheck) -> None:
+    """The verdict over the scenarios, then the verdict's own words and what is open."""
+    b = found.binding
+    ctx.verdict = (
+        f"Design {'holds' if found.ok else 'fails'}: it holds in {found.holds_in} of "
+        f"{found.of} scenarios (on the point values; "
+        f"{found.holds_with_confidence_in} with the confidence bounds); required: "
+        f"{found.required}. Binding: scenario {b.index}, "
+        + margin_text(b.margin, b.binds_at) + ".")
+    ctx.verdict_ok = bool(found.ok)
+    ctx.scenarios_note = ctx.verdict
+    _set_verdict(ctx, found.verdict)  # its failures: the verdict's details where it fails
+    if found.verdict.state != State.FAILS:  # what is open: under "How sure"
+        ctx.how_sure = [*ctx.how_sure, "Over the scenarios:",
+                        *(f"- {d}" for d in found.verdict.details)]
+    ctx.failures = [ctx.scenarios_note, *ctx.failures]
 
 
 # ---- rendering ------------------------------------------------------------------
@@ -473,7 +473,7 @@ def _md_cell(text: Any) -> str:
     return " ".join(str(text).split()).replace("|", "\\|")
 
 
-def render_html(context: Mapping[str, Any], for_print: bool = False,
+def render_html(context: ReportContext, for_print: bool = False,
                 svgs: Mapping[str, str] | None = None) -> str:
     """report.html: self-contained, every figure inline as SVG.
 
@@ -486,17 +486,17 @@ def render_html(context: Mapping[str, Any], for_print: bool = False,
 
     from .figures import figure_svg
 
-    figs = [{**f, "svg": Markup(svgs[f["name"]] if svgs and f["name"] in svgs
-                                else figure_svg(f["fig"]))} for f in context["figures"]]
+    figs = [replace(f, svg=Markup(svgs[f.name] if svgs and f.name in svgs
+                                  else figure_svg(f.fig))) for f in context.figures]
     return _environment(False).get_template("report.html.j2").render(
-        **{**context, "figures": figs, "for_print": for_print})
+        **context.template_values(figures=figs, for_print=for_print))
 
 
-def render_markdown(context: Mapping[str, Any]) -> str:
+def render_markdown(context: ReportContext) -> str:
     """report.md: figures referenced as NAME.svg beside it."""
-    figs = [{**f, "file": f"{f['name']}.svg"} for f in context["figures"]]
-    return _environment(True).get_template("report.md.j2").render(**{**context,
-                                                                     "figures": figs})
+    figs = [replace(f, file=f"{f.name}.svg") for f in context.figures]
+    return _environment(True).get_template("report.md.j2").render(
+        **context.template_values(figures=figs))
 
 
 def write_report(result: Any, directory: str | os.PathLike[str],
@@ -543,7 +543,7 @@ def write_report(result: Any, directory: str | os.PathLike[str],
     # the same templates; the others' context is built here.
     own = getattr(result, "report_context", None)
     ctx = own(figures) if callable(own) else report_context(result, figures)
-    figs = {f["name"]: f["fig"] for f in ctx["figures"]}
+    figs = {f.name: f.fig for f in ctx.figures}
     # Each figure drawn once: its SVG file and the pages' inline copy are the same text.
     documents = {name: svg_document(fig) for name, fig in figs.items()}
     written = []
@@ -563,15 +563,14 @@ def write_report(result: Any, directory: str | os.PathLike[str],
     return written
 
 
-def _write_pdf(page: str, ctx: Mapping[str, Any], path: Path, outputs: OutputSet,
+def _write_pdf(page: str, ctx: ReportContext, path: Path, outputs: OutputSet,
                note: Callable[[str], None] | None) -> bool:
     """report.pdf from report.html into the output set; False (and the note) where it
     cannot be made, a stale report.pdf removed."""
     why = pdf_unavailable()
     if why is None:
         try:
-            data = html_to_pdf(page, str(ctx.get("project") or ctx.get("title", "")),
-                               str(ctx.get("generated", "")))
+            data = html_to_pdf(page, str(ctx.project or ctx.title), str(ctx.generated))
         except RuntimeError as exc:
             why = str(exc)
         else:

@@ -26,8 +26,8 @@ from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
 from ..engine.columns import STOPPED
-from ..engine.trajectory import end_counts
 from ..run.passages import property_marks
+from ..run.summary import EndCounts
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -278,7 +278,7 @@ def profile_figure(study: Study | StreamedStudy, evaluation: Evaluation | None =
             [np.column_stack((x, y)) for x, y in paths], linewidths=0.6, alpha=0.55,
             colors="#c0392b", zorder=4, label="rock centre paths", rasterized=True))
         ax.autoscale_view()
-    n_stopped = study.ends()["stopped"]
+    n_stopped = EndCounts.of(study.ends()).stopped
     rest_x, rest_y = study.rest_positions()
     if rest_x.size:
         ax.plot(rest_x, rest_y, "k.", ms=2, alpha=0.4, zorder=5, rasterized=True,
@@ -397,14 +397,15 @@ def envelopes_figure(
     return fig
 
 
-def no_stop_reason(counts: Mapping[str, int] | Sequence[int] | np.ndarray) -> str:
+def no_stop_reason(counts: EndCounts | Mapping[str, int] | Sequence[int] | np.ndarray) -> str:
     """Why no rock came to rest on the section, from the counts of end states.
 
     Parameters
     ----------
-    counts : mapping of str to int, or array of int
-        Rocks per end state by name (``Study.ends()``), or indexed by the
-        engine's status codes (``Study.status_counts()``).
+    counts : EndCounts, mapping of str to int, or array of int
+        Rocks per end state (:class:`~rockfall_design.run.summary.EndCounts`), by
+        name (``Study.ends()``), or indexed by the engine's status codes
+        (``Study.status_counts()``).
 
     Returns
     -------
@@ -413,12 +414,13 @@ def no_stop_reason(counts: Mapping[str, int] | Sequence[int] | np.ndarray) -> st
         caught by the measures"`` or the mix, e.g. ``"of 500 rocks, 300 left
         the section downslope and 200 were caught by the measures"``.
     """
-    ends = dict(counts) if isinstance(counts, Mapping) else end_counts(np.asarray(counts))
-    n = sum(ends.values())
-    parts = [(ends["exit_downslope"], "left the section downslope"),
-             (ends["exit_upslope"], "left the section upslope"),
-             (ends["caught"], "were caught by the measures"),
-             (ends["unresolved"], "reached the event limit (unresolved)")]
+    ends = counts if isinstance(counts, EndCounts) else EndCounts.of(
+        counts if isinstance(counts, Mapping) else np.asarray(counts))
+    n = ends.total
+    parts = [(ends.exit_downslope, "left the section downslope"),
+             (ends.exit_upslope, "left the section upslope"),
+             (ends.caught, "were caught by the measures"),
+             (ends.unresolved, "reached the event limit (unresolved)")]
     parts = [(k, what) for k, what in parts if k]
     if len(parts) == 1:
         return f"all {n:,} rocks {parts[0][1]}"
@@ -456,12 +458,11 @@ def _rest_layers(study: Study | StreamedStudy, evaluation: Evaluation | None,
     return layers
 
 
-def _leavers(ax: Axes, counts: Mapping[str, int], bins: np.ndarray, n: int) -> None:
+def _leavers(ax: Axes, counts: EndCounts, bins: np.ndarray, n: int) -> None:
     """Bars beyond the section's ends for the rocks that left it, saying how many."""
     width = float(bins[1] - bins[0])
-    for key, x, side in (("exit_downslope", bins[-1], "downslope"),
-                         ("exit_upslope", bins[0] - width, "upslope")):
-        k = int(counts.get(key, 0))
+    for k, x, side in ((counts.exit_downslope, bins[-1], "downslope"),
+                       (counts.exit_upslope, bins[0] - width, "upslope")):
         if not k:
             continue
         ax.bar(x, k, width=width, align="edge", color="white", edgecolor="#c0392b",
@@ -485,7 +486,7 @@ def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = N
     -------
     matplotlib.figure.Figure
     """
-    counts = study.ends()
+    counts = EndCounts.of(study.ends())
     fig = RockfallFigure(figsize=(11, 6), layout="constrained")
     a1, a2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1]})
     sec = study.section
@@ -496,7 +497,7 @@ def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = N
                edgecolor="white", label=label)
         bottom = bottom + k
     _leavers(a1, counts, bins, study.n)
-    if not counts["stopped"] and not counts["caught"]:
+    if not counts.stopped and not counts.caught:
         a1.text(0.5, 0.5, f"No rock came to rest on the section:\n{no_stop_reason(counts)}.",
                 transform=a1.transAxes, ha="center", va="center", fontsize=11, zorder=5,
                 bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "#999999"})
@@ -517,13 +518,13 @@ def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = N
     return fig
 
 
-def _ends_text(counts: Mapping[str, int]) -> str:
+def _ends_text(counts: EndCounts) -> str:
     """'600 at rest, 380 caught by measures, 20 left downslope' (the non-zero ones)."""
-    parts = [(counts["stopped"], "at rest on the section"),
-             (counts["caught"], "caught by a barrier"),
-             (counts["exit_downslope"], "left downslope"),
-             (counts["exit_upslope"], "left upslope"),
-             (counts["unresolved"], "unresolved")]
+    parts = [(counts.stopped, "at rest on the section"),
+             (counts.caught, "caught by a barrier"),
+             (counts.exit_downslope, "left downslope"),
+             (counts.exit_upslope, "left upslope"),
+             (counts.unresolved, "unresolved")]
     return ", ".join(f"{k:,} {what}" for k, what in parts if k) or "no rock"
 
 

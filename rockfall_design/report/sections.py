@@ -9,19 +9,29 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
-from ..judge.records import Bill, CheckSummary, MeasureRecord, ProtectRecord, check_of, run_of
+from ..judge.records import (
+    Bill,
+    CheckSummary,
+    MeasureRecord,
+    ProtectRecord,
+    check_from_json,
+    check_of,
+    run_of,
+)
+from ..plugins.concept import Check
 from ..run.passages import QUANTITIES
 from ..run.summary import RunStatistics, RunSummary
 from ..version import __version__
 from .design_values import state_of
 from .listed import forest_text
-from .tables import chosen_name, measure_text, passages_frame, round_value
+from .tables import measure_text, passages_frame, round_value
 
 if TYPE_CHECKING:  # pragma: no cover
-    pass
+    from ..optimiser.alternatives import Alternative, OptimisationResult
+    from ..studies.scenario_checks import ScenariosCheck
 
 
 @dataclass
@@ -101,17 +111,65 @@ def _survey_table(block: Mapping[str, Any], per_row: int = 10) -> Table:
                  f"{_text(block.get('percentile'))}th percentile.")
 
 
-def _ground_inputs(d: Mapping[str, Any]) -> list[Table]:
+@dataclass(frozen=True)
+class ProjectInputs:
+    """The project as run, section by section, in the project file's own syntax.
+
+    A :meth:`Project.resolved_dict <rockfall_design.project.Project.resolved_dict>`
+    (every default filled in) read once, with what the run resolved in place of
+    what the file wrote (:func:`resolved_inputs`): the report lists every input
+    from it, so that the report alone rebuilds the project.
+
+    Attributes
+    ----------
+    slope : mapping
+        ``points`` ([x, y] in m) and ``materials`` (one per segment).
+    materials : mapping
+        Each ground material's parameters and ``scatter``, by name.
+    rocks, analysis, engine : mapping
+        The sections of those names.
+    protect : mapping or None
+        The protected zone; None without one.
+    measures : list of mapping
+        ``{type, **params}`` each (every parameter resolved where a check ran).
+    safety : mapping or None
+        The safety concept's ``concept`` and parameters.
+    design : mapping or None
+        The design section (candidates, settings, catalogues inline).
+    """
+
+    slope: Mapping[str, Any]
+    materials: Mapping[str, Mapping[str, Any]]
+    rocks: Mapping[str, Any]
+    analysis: Mapping[str, Any]
+    engine: Mapping[str, Any]
+    protect: Mapping[str, Any] | None = None
+    measures: list[Mapping[str, Any]] = field(default_factory=list)
+    safety: Mapping[str, Any] | None = None
+    design: Mapping[str, Any] | None = None
+
+    @classmethod
+    def of(cls, resolved: Mapping[str, Any]) -> ProjectInputs:
+        """From a project's resolved dict (its sections beyond these are not inputs of a run
+        the report lists: ``study`` and ``calibrate`` have their own tables)."""
+        return cls(slope=resolved["slope"], materials=resolved["materials"],
+                   rocks=resolved["rocks"], analysis=resolved["analysis"],
+                   engine=resolved.get("engine") or {}, protect=resolved.get("protect"),
+                   measures=list(resolved.get("measures") or []),
+                   safety=resolved.get("safety"), design=resolved.get("design"))
+
+
+def _ground_inputs(d: ProjectInputs) -> list[Table]:
     """The slope section's points and the ground materials, as resolved."""
     out = []
-    slope = d["slope"]
-    pts = slope["points"]
+    pts = d.slope["points"]
+    per_segment = d.slope["materials"]
     rows = [[_text(float(p[0])), _text(float(p[1])),
-             slope["materials"][i] if i < len(pts) - 1 else ""] for i, p in enumerate(pts)]
+             per_segment[i] if i < len(pts) - 1 else ""] for i, p in enumerate(pts)]
     out.append(Table("Slope section", ["x (m)", "elevation (m)", "material of the next segment"],
                      rows, note=f"{len(pts)} points, as resolved from the project's slope "
                      "(a survey file's points included)."))
-    mats = d["materials"]
+    mats = d.materials
     keys = list(dict.fromkeys(k for m in mats.values() for k in m if k != "scatter"))
     sc_keys = list(dict.fromkeys(k for m in mats.values() for k in (m.get("scatter") or {})))
     out.append(Table(
@@ -125,19 +183,24 @@ def _ground_inputs(d: Mapping[str, Any]) -> list[Table]:
     return out
 
 
-def inputs_table(project: Any, command: str, resolved: Mapping[str, Any] | None = None,
-            concepts: Mapping[str, str] | None = None) -> list[Table]:
+def inputs_table(project: Any, command: str,
+                 resolved: ProjectInputs | Mapping[str, Any] | None = None,
+                 concepts: Mapping[str, str] | None = None) -> list[Table]:
     """Every input of the run, so that the report alone rebuilds the project.
 
     ``resolved`` is the project as run (measures and safety concept with
-    every parameter resolved, defaults included); ``concepts`` the summary
-    line of each safety concept (what it follows).
+    every parameter resolved, defaults included; a resolved dict is read as
+    :class:`ProjectInputs`), default the project's resolved dict;
+    ``concepts`` the summary line of each safety concept (what it follows).
     """
-    d = dict(resolved) if resolved is not None else project.resolved_dict()
+    if not isinstance(resolved, ProjectInputs):
+        resolved = ProjectInputs.of(resolved if resolved is not None
+                                    else project.resolved_dict())
+    d = resolved
     out = _ground_inputs(d)
-    r = d["rocks"]
+    r = d.rocks
     block = r.get("design_block") or {}
-    rows = [[k, _text(r[k])] for k in r if k not in ("release", "design_block")]
+    rows = [[k, _text(v)] for k, v in r.items() if k not in ("release", "design_block")]
     for i, z in enumerate(r["release"]):
         rows.append([f"release zone {i + 1}", _text(z)])
     if block:
@@ -150,20 +213,16 @@ def inputs_table(project: Any, command: str, resolved: Mapping[str, Any] | None 
                      "table gives the rocks and seeds used."))
     if block.get("blocks"):
         out.append(_survey_table(block))
-    a = d["analysis"]
-    rows = [[k, _text(v)] for k, v in a.items()]
-    if d.get("protect"):
-        rows += [[f"protect.{k}", _text(v)] for k, v in d["protect"].items()]
+    rows = [[k, _text(v)] for k, v in d.analysis.items()]
+    if d.protect:
+        rows += [[f"protect.{k}", _text(v)] for k, v in d.protect.items()]
     out.append(Table("Analysis", ["setting", "value"], rows))
-    out.append(Table("Engine", ["setting", "value"], _flat(d.get("engine") or {})))
-    if d.get("measures"):
+    out.append(Table("Engine", ["setting", "value"], _flat(d.engine)))
+    if d.measures:
         out.append(Table("Measures checked" if command == "check" else "Measures of the project",
-                         ["measure", "parameters"],
-                         [[m["type"], ", ".join(f"{k} {_text(v)}" for k, v in m.items()
-                                                if k != "type")]
-                          for m in d["measures"]]))
+                         ["measure", "parameters"], _measure_rows(d.measures)))
     if command in ("check", "optimise"):
-        sft = d.get("safety") or {}
+        sft = d.safety or {}
         name = str(sft.get("concept", "spang"))
         rows = [[k, _text(v)] for k, v in sft.items()]
         if concepts and concepts.get(name):
@@ -171,9 +230,15 @@ def inputs_table(project: Any, command: str, resolved: Mapping[str, Any] | None 
         out.append(Table("Safety concept", ["parameter", "value"], rows,
                          note="Its standard or paper, and how its factors map to it: the "
                          "section 'Model and limits' below."))
-    if command == "optimise" and d.get("design"):
-        out += _design_inputs(dict(d["design"]))
+    if command == "optimise" and d.design:
+        out += _design_inputs(dict(d.design))
     return out
+
+
+def _measure_rows(measures: list[Mapping[str, Any]]) -> list[list[str]]:
+    """A row per measure: its type, then its parameters as ``name value``."""
+    return [[m["type"], ", ".join(f"{k} {_text(v)}" for k, v in m.items() if k != "type")]
+            for m in measures]
 
 
 def _design_inputs(des: dict[str, Any]) -> list[Table]:
@@ -209,13 +274,15 @@ def _plugin_rows(registry: Any, used: list[tuple[str, str]]) -> list[list[str]]:
     return rows
 
 
-def _used_plugins(d: Mapping[str, Any], command: str) -> list[tuple[str, str]]:
-    used = [("measure", str(m["type"])) for m in d.get("measures") or []]
-    if command == "optimise" and d.get("design"):
-        used += [("measure", str(c["type"])) for c in d["design"].get("candidates", [])]
-        used.append(("cost", str((d["design"].get("costs") or {}).get("model", "unit_prices"))))
+def _used_plugins(d: ProjectInputs, command: str) -> list[tuple[str, str]]:
+    """The plugins a run of ``command`` used, as (kind, name): its measures, candidates,
+    cost model and safety concept."""
+    used = [("measure", str(m["type"])) for m in d.measures]
+    if command == "optimise" and d.design:
+        used += [("measure", str(c["type"])) for c in d.design.get("candidates", [])]
+        used.append(("cost", str((d.design.get("costs") or {}).get("model", "unit_prices"))))
     if command in ("check", "optimise"):
-        used.append(("safety", str((d.get("safety") or {}).get("concept", "spang"))))
+        used.append(("safety", str((d.safety or {}).get("concept", "spang"))))
     return used
 
 
@@ -245,8 +312,13 @@ def _statistics_row(stats: RunStatistics) -> list[list[str]]:
     return [["statistics", "exact, over every rock"]] if stats.method else []
 
 
-def run_table(result: Any, summary: RunSummary | CheckSummary | Mapping[str, Any]) -> Table:
-    """The report's table of the run: program, project and its hash, rocks, seeds, engine."""
+def run_table(result: Any, summary: RunSummary | CheckSummary | Mapping[str, Any] | None,
+              ) -> Table:
+    """The report's table of the run: program, project and its hash, rocks, seeds, engine.
+
+    ``summary`` is the run's or the check's (None for ``optimise``, whose
+    run is the optimiser's result).
+    """
     import platform
 
     project = result.project
@@ -279,7 +351,8 @@ def run_table(result: Any, summary: RunSummary | CheckSummary | Mapping[str, Any
                  f"height, {e.contact_hop_ratio:g} r); v_contact {e.v_contact:g} m/s, "
                  f"v_stop {e.v_stop:g} m/s, max_events {e.max_events:,}"])
     registry = getattr(result, "registry", None) or getattr(result, "_registry", None)
-    rows += _plugin_rows(registry, _used_plugins(project.resolved_dict(), result.command))
+    rows += _plugin_rows(registry, _used_plugins(ProjectInputs.of(project.resolved_dict()),
+                                                 result.command))
     return Table("", ["item", "value"], rows)
 
 
@@ -379,10 +452,9 @@ def checks_table(summary: RunSummary | CheckSummary) -> Table | None:
 def passages_table(summary: RunSummary | CheckSummary | Mapping[str, Any]) -> Table | None:
     """Results at every station and barrier: a row per place and quantity (barriers.csv).
 
-    The rows of barriers.csv (:func:`.tables.passages_frame`, which reads a
-    summary's JSON as the file does).
+    The rows of barriers.csv (:func:`.tables.passages_frame`).
     """
-    frame = passages_frame(summary if isinstance(summary, Mapping) else summary.to_json())
+    frame = passages_frame(summary)
     if frame.empty:
         return None
     cols = ["place", "quantity", "unit", "rocks", "mean", "p50", "p95", "p99", "max",
@@ -406,43 +478,52 @@ def passages_table(summary: RunSummary | CheckSummary | Mapping[str, Any]) -> Ta
                  "figures passing_station_N and passing_measure_N show the distributions.")
 
 
-def alternatives_table(summary: Mapping[str, Any]) -> Table:
+def _alternative_cost(a: Alternative) -> float | None:
+    """An alternative's cost as ``--json`` gives it: to the cent, None where not priced."""
+    return None if not math.isfinite(a.cost) else round(a.cost, 2)
+
+
+def _alternative_measures(a: Alternative) -> str:
+    """An alternative's measures, a text each, as the project file would write them."""
+    return "; ".join(measure_text({"type": m.kind, **m.params.model_dump(mode="json")})
+                     for m in a.measures) or "-"
+
+
+def _keyed_checks(checks: list[Check]) -> list[tuple[str, Check]]:
+    """Each check with its column key: ``name``, ``name_2`` for a second of that name."""
+    seen: dict[str, int] = {}
+    out = []
+    for c in checks:
+        seen[c.name] = seen.get(c.name, 0) + 1
+        out.append((c.name if seen[c.name] == 1 else f"{c.name}_{seen[c.name]}", c))
+    return out
+
+
+def alternatives_table(opt: OptimisationResult) -> Table:
     """The optimiser's alternatives with their costs and outcomes."""
-    cur = summary.get("currency") or ""
-    best = chosen_name(summary)
-    alts = sorted(summary.get("alternatives", []),
-                  key=lambda a: (not a.get("feasible"), a.get("cost") is None,
-                                 a.get("cost") or 0))
+    cur = opt.currency or ""
+    best = None if opt.best is None else opt.best.name
+    alts = sorted(opt.alternatives, key=lambda a: (
+        not a.feasible, _alternative_cost(a) is None, _alternative_cost(a) or 0))
+    keyed = [_keyed_checks([check_from_json(c) for c in a.checks]) for a in alts]
     names: list[tuple[str, str]] = []
-    for a in alts:
-        seen: dict[str, int] = {}
-        for c in a.get("checks") or []:
-            seen[c["name"]] = seen.get(c["name"], 0) + 1
-            key = c["name"] if seen[c["name"]] == 1 else f"{c['name']}_{seen[c['name']]}"
+    for checks in keyed:
+        for key, c in checks:
             if key not in [n for n, _ in names]:
-                names.append((key, str(c.get("unit", "-"))))
+                names.append((key, c.unit))
     cols = ["", "family", f"cost ({cur})" if cur else "cost", "measures", "residual",
             "fresh rocks", *(n.removesuffix("_factor") + ("" if u == "-" else f" ({u})")
                              for n, u in names), "reason"]
     rows, marks = [], []
-    for a in alts:
-        values: dict[str, Any] = {}
-        seen = {}
-        for c in a.get("checks") or []:
-            seen[c["name"]] = seen.get(c["name"], 0) + 1
-            key = c["name"] if seen[c["name"]] == 1 else f"{c['name']}_{seen[c['name']]}"
-            values[key] = _num(c.get("value"), str(c.get("unit", "-"))) + (
-                "" if c.get("ok") else " !")
-        fresh = a.get("holds_on_fresh_rocks")
-        chosen = best is not None and a.get("name") == best
-        rows.append(["*" if chosen else "", str(a.get("name")),
-                     _num(a.get("cost"), "cost") if a.get("feasible")
-                     else f"({_num(a.get('cost'), 'cost')})",
-                     "; ".join(measure_text(m) for m in a.get("measures") or []) or "-",
-                     _num(a.get("residual"), "count"),
+    for a, checks in zip(alts, keyed, strict=True):
+        values = {key: _num(c.value, c.unit) + ("" if c.ok else " !") for key, c in checks}
+        fresh = a.holds_on_fresh_rocks
+        chosen = best is not None and a.name == best
+        cost = _num(_alternative_cost(a), "cost")
+        rows.append(["*" if chosen else "", str(a.name), cost if a.feasible else f"({cost})",
+                     _alternative_measures(a), _num(a.residual, "count"),
                      "-" if fresh is None else ("holds" if fresh else "FAILS"),
-                     *(values.get(n, "") for n, _ in names),
-                     str(a.get("reason") or "")])
+                     *(values.get(n, "") for n, _ in names), str(a.reason or "")])
         marks.append(chosen)
     return Table("Alternatives: the cheapest design of each family", cols, rows,
                  note="* the chosen design; a cost in brackets: not admissible; ! a check "
@@ -451,40 +532,40 @@ def alternatives_table(summary: Mapping[str, Any]) -> Table:
                  highlight=marks)
 
 
-def chosen_text(summary: Mapping[str, Any]) -> tuple[str, list[str]]:
+def chosen_text(opt: OptimisationResult) -> tuple[str, list[str]]:
     """The sentence naming the chosen design, and the reasons listed under it."""
-    best = chosen_name(summary)
+    best = opt.best
     if best is None:
-        return f"No admissible design: {summary.get('reason', '')}", []
-    alt = next(a for a in summary["alternatives"] if a.get("name") == best)
-    cur = summary.get("currency") or ""
-    head = f"Chosen design: {best}, cost {_num(alt.get('cost'), 'cost')} {cur}".rstrip() + "."
-    if summary.get("reason"):
-        head += f" Note: {summary['reason']}."
-    return head, [measure_text(m) for m in alt.get("measures") or []]
+        return f"No admissible design: {opt.reason}", []
+    cur = opt.currency or ""
+    head = (f"Chosen design: {best.name}, cost {_num(_alternative_cost(best), 'cost')} "
+            f"{cur}").rstrip() + "."
+    if opt.reason:
+        head += f" Note: {opt.reason}."
+    return head, [measure_text({"type": m.kind, **m.params.model_dump(mode="json")})
+                  for m in best.measures]
 
 
-def resolved_inputs(result: Any) -> tuple[dict[str, Any], dict[str, str]]:
+def resolved_inputs(result: Any) -> tuple[ProjectInputs, dict[str, str]]:
     """The project as run (every parameter resolved) and each safety concept's summary."""
-    d = result.project.resolved_dict()
+    d = ProjectInputs.of(result.project.resolved_dict())
     evaluation = getattr(result, "evaluation", None)
     if result.command == "optimise" and getattr(result, "best", None) is not None:
         evaluation = result.design.evaluation
     if evaluation is not None:
-        run = evaluation.resolved_project().resolved_dict()
-        if result.command == "check":
-            d["measures"] = run.get("measures") or []
-        d["safety"] = run.get("safety") or d.get("safety")
-    if result.command == "optimise" and d.get("protect") and result.project.design:
+        run = ProjectInputs.of(evaluation.resolved_project().resolved_dict())
+        d = replace(d, measures=run.measures if result.command == "check" else d.measures,
+                    safety=run.safety or d.safety)
+    if result.command == "optimise" and d.protect and result.project.design:
         # optimise judges the residual against design.residual, not the file's
         # protect.allowed_fraction: the table says what the checks used.
         design = result.project.design
         allowed = design.residual_fraction
         if allowed is None:
             allowed = (design.residual_count or 0) / max(int(result.n_rocks), 1)
-        d["protect"] = {**d["protect"], "allowed_fraction": (
+        d = replace(d, protect={**d.protect, "allowed_fraction": (
             f"{allowed:.6g} ({100 * allowed:.2f} %): design.residual, which every check of "
-            "optimise uses (the file's protect.allowed_fraction does not apply)")}
+            "optimise uses (the file's protect.allowed_fraction does not apply)")})
     registry = getattr(result, "registry", None) or getattr(result, "_registry", None)
     concepts = {} if registry is None else {
         name: str(getattr(cls, "summary", "") or "")
@@ -518,24 +599,25 @@ def margin_text(margin: Any, binds_at: Any) -> str:
         f"margin {100 * float(margin):+.1f} % at {binds_at}")
 
 
-def scenarios_table(summary: Mapping[str, Any], paths: list[str]) -> Table:
+def scenarios_table(found: ScenariosCheck, paths: list[str]) -> Table:
     """Every scenario of ``check --scenarios``: values, seed, verdicts, margin, what binds."""
-    b = summary["binding"]["index"]
+    b = found.binding.index
     cols = ["", "#", *paths, "seed", "reaching", "holds", "with confidence", "margin",
             "binds at"]
     rows, marks = [], []
-    for p in summary["scenarios"]:
-        prot = p.get("protect")
-        rows.append(["*" if p["index"] == b else "", str(p["index"]),
-                     *(str(p["values"].get(k, "-")) for k in paths), str(p["seed"]),
-                     "-" if not prot else f"{prot['reaching']:,}",
-                     "yes" if p["ok"] else "FAILS",
-                     "yes" if p["holds_with_confidence"] else "no",
-                     "-" if p["margin"] is None else f"{100 * p['margin']:+.1f} %",
-                     str(p["binds_at"] or "-")])
-        marks.append(p["index"] == b)
-    return Table(f"Scenarios: {summary['of']}, each with its own rocks "
-                 f"({int(summary['rocks']):,} rocks, its own seed)", cols, rows,
+    for p in found.scenarios:
+        s = p.binding
+        reach = p.reaching
+        rows.append(["*" if s.index == b else "", str(s.index),
+                     *(str(s.values.get(k, "-")) for k in paths), str(s.seed),
+                     "-" if reach is None else f"{reach:,}",
+                     "yes" if p.ok else "FAILS",
+                     "yes" if p.holds_with_confidence else "no",
+                     "-" if s.margin is None else f"{100 * s.margin:+.1f} %",
+                     str(s.binds_at or "-")])
+        marks.append(s.index == b)
+    return Table(f"Scenarios: {found.of}, each with its own rocks "
+                 f"({int(found.rocks):,} rocks, its own seed)", cols, rows,
                  note="* the binding scenario (the one that decides the count required; with every "
                  "scenario required, the least margin). holds: every check and the "
                  "residual on the point values, as check judges them; with confidence: with "

@@ -16,6 +16,8 @@ from typing import Any
 
 import pandas as pd
 
+from ..judge.records import CheckSummary, check_of, run_of
+from ..run.summary import RunSummary
 from .rounding import round_value
 
 __all__ = [
@@ -226,14 +228,15 @@ def _passage_rows(place: str, number: int, label: str, x: float,
     return rows
 
 
-def passages_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
+def passages_frame(summary: RunSummary | CheckSummary | Mapping[str, Any]) -> pd.DataFrame:
     """barriers.csv: one row per place (analysis station or barrier) and quantity.
 
     Parameters
     ----------
-    summary : dict
-        What ``simulate --json`` or ``check --json`` prints: its ``stations``
-        and, for a check, each barrier's ``passing`` block.
+    summary : RunSummary, CheckSummary or dict
+        A run's or a check's record, or what ``simulate --json`` or ``check
+        --json`` prints (read back as its record): its stations and, for a
+        check, each barrier's ``passing`` block.
 
     Returns
     -------
@@ -249,12 +252,14 @@ def passages_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
         capacity), empty where there are none. A ground edit (ditch, berm)
         has no rows: no rock passes it at a station.
     """
+    if isinstance(summary, Mapping):  # a summary's JSON: its record
+        summary = check_of(summary) if "safety_concept" in summary else run_of(summary)
     rows: list[dict[str, Any]] = []
-    for j, st in enumerate(summary.get("stations") or []):
-        block = {**st, "rocks": st.get("crossings")}
-        rows += _passage_rows("station", j + 1, f"station at x = {st['x']:g} m", st["x"], block)
-    for i, m in enumerate(summary.get("measures") or []):
-        if m.get("passing"):
-            rows += _passage_rows("measure", i + 1, str(m.get("label")), m.get("x"),
-                                  m["passing"])
+    for j, st in enumerate(run_of(summary).stations):
+        block = {**st.to_json(), "rocks": st.crossings}
+        rows += _passage_rows("station", j + 1, f"station at x = {st.x:g} m", st.x, block)
+    measures = summary.measures if isinstance(summary, CheckSummary) else ()
+    for i, m in enumerate(measures):
+        if m.passing:
+            rows += _passage_rows("measure", i + 1, str(m.label), m.x, m.passing)
     return pd.DataFrame(rows, columns=PASSAGE_COLUMNS)

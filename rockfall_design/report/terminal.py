@@ -17,7 +17,15 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from ..judge.records import Bill, CheckSummary, DesignVerdict, State, check_of, run_of
+from ..judge.records import (
+    Bill,
+    CheckSummary,
+    DesignVerdict,
+    State,
+    check_from_json,
+    check_of,
+    run_of,
+)
 from ..run.summary import RunSummary
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
 from .listed import SHOWN, forest_text, listed_lines
@@ -313,12 +321,13 @@ def _measure_short(m: Any) -> str:
 
 
 def _factors(alt: Any) -> str:
+    """An alternative's factors in a few characters each: 'h 1.52 e 2.10!' (! misses)."""
     out = []
-    for c in alt.checks:
-        if c["value"] is None:
+    for c in map(check_from_json, alt.checks):
+        if c.value is None:
             continue
-        mark = "" if c["ok"] else "!"
-        out.append(f"{c['name'].removesuffix('_factor')[:1]} {c['value']:.2f}{mark}")
+        mark = "" if c.ok else "!"
+        out.append(f"{c.name.removesuffix('_factor')[:1]} {c.value:.2f}{mark}")
     return " ".join(out)
 
 
@@ -417,7 +426,7 @@ def print_optimise(result: Any, project: Any, console: Console | None = None,
     if result.best is not None and result.best.proof:
         extra.append(f"The optimiser's record of the decision: {result.best.proof}.")
     if result.best is not None:
-        extra += fresh_statements(result.best.as_dict())
+        extra += fresh_statements(result.best)
     extra += _marginal_lines(result)
     if design is not None:
         parts.append(_how_sure_renderable(design, extra))
@@ -477,19 +486,17 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
     ev = best.evaluation
     data = ev.study.project.resolved_dict()
     data.pop("design", None)
-    # The rocks that decided the design (the exact run that admitted it).
-    data["rocks"]["count"] = int(ev.study.result.n)
-    data["rocks"]["seed"] = int(ev.study.seed)
-    data["measures"] = [
-        {"type": m.kind, **m.params.model_dump(mode="json")} for m in best.measures
-    ]
-    data["safety"] = {"concept": ev.concept.name, **ev.concept.params.model_dump(mode="json")}
+    safety = {"concept": ev.concept.name, **ev.concept.params.model_dump(mode="json")}
     if looks is not None:
         # The project's confidence, not the look's (each look bounds at a higher
         # one, its share of the error): a checker's check of this one design is
         # one look, and the checker's margin the design was admitted with is
         # for a check at the project's confidence.
-        data["safety"]["confidence"] = float(looks.confidence)
+        safety["confidence"] = float(looks.confidence)
+    # The rocks that decided the design (the exact run that admitted it).
+    rocks = {**data["rocks"], "count": int(ev.study.result.n), "seed": int(ev.study.seed)}
+    data.update(rocks=rocks, safety=safety, measures=[
+        {"type": m.kind, **m.params.model_dump(mode="json")} for m in best.measures])
     head = (
         f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
         f"cost {best.cost:,.0f}.\n"
@@ -508,7 +515,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
         + "; reproduce with\n"
         f"#   rockfall-design check design.yaml --seed {best.fresh_seed} "
         f"--rocks {best.fresh_rocks}\n"
-        + _margin_line(best, ev.study.result.n, data["safety"]["confidence"])
+        + _margin_line(best, ev.study.result.n, safety["confidence"])
         + _listed_head(getattr(best, "marginal", None) if listed is None else listed)
         + "# The design: section is left out (its catalogue paths are relative to the\n"
         "# original project); check this file with: rockfall-design check design.yaml\n"

@@ -94,23 +94,58 @@ STOP_STATISTICS = ("mean", "p50", "p95", "max")
 
 
 @dataclass(frozen=True)
-class StopsSummary:
-    """How the paths ended: counts per end state and where the rocks at rest lie.
+class EndCounts:
+    """Rocks per end state of a run: how every path ended.
 
     Attributes
     ----------
-    x : StatBlock
-        Stop positions x of the rocks at rest (m); no p99.
-    stopped, exit_downslope, exit_upslope, unresolved, caught : int
-        Rocks per end state (unresolved: reached the event limit).
+    stopped : int
+        At rest on the section.
+    exit_downslope, exit_upslope : int
+        Left the section at its downslope or upslope end.
+    unresolved : int
+        Reached the event limit.
+    caught : int
+        Caught by a barrier.
     """
 
-    x: StatBlock
     stopped: int
     exit_downslope: int
     exit_upslope: int
     unresolved: int
     caught: int
+
+    @property
+    def total(self) -> int:
+        """Every rock of the run."""
+        return (self.stopped + self.exit_downslope + self.exit_upslope + self.unresolved
+                + self.caught)
+
+    @classmethod
+    def of(cls, counts: Mapping[str, int] | np.ndarray) -> EndCounts:
+        """From counts by name (``Study.ends()``) or indexed by the engine's status codes
+        (``Study.status_counts()``)."""
+        if isinstance(counts, Mapping):
+            return cls(**{name: int(k) for name, k in counts.items()})
+        c = np.asarray(counts)
+        return cls(stopped=int(c[STOPPED]), exit_downslope=int(c[EXIT_DOWNSLOPE]),
+                   exit_upslope=int(c[EXIT_UPSLOPE]), unresolved=int(c[UNRESOLVED]),
+                   caught=int(c[CAUGHT]))
+
+
+@dataclass(frozen=True)
+class StopsSummary(EndCounts):
+    """How the paths ended: counts per end state and where the rocks at rest lie.
+
+    Attributes
+    ----------
+    stopped, exit_downslope, exit_upslope, unresolved, caught : int
+        Rocks per end state (:class:`EndCounts`).
+    x : StatBlock
+        Stop positions x of the rocks at rest (m); no p99.
+    """
+
+    x: StatBlock
 
     @property
     def out_of_section(self) -> int:
@@ -129,9 +164,10 @@ class StopsSummary:
 
     @classmethod
     def from_json(cls, d: Mapping[str, Any]) -> StopsSummary:
-        return cls(StatBlock.from_json(d.get("x") or {}), int(d.get("stopped", 0)),
-                   int(d.get("exit_downslope", 0)), int(d.get("exit_upslope", 0)),
-                   int(d.get("unresolved", 0)), int(d.get("caught", 0)))
+        return cls(x=StatBlock.from_json(d.get("x") or {}), stopped=int(d.get("stopped", 0)),
+                   exit_downslope=int(d.get("exit_downslope", 0)),
+                   exit_upslope=int(d.get("exit_upslope", 0)),
+                   unresolved=int(d.get("unresolved", 0)), caught=int(d.get("caught", 0)))
 
 
 @dataclass(frozen=True)

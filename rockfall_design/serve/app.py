@@ -266,7 +266,12 @@ class _Endpoints:
         self.jobs = JobStore()
         self.token = token
 
+    def entry_of(self, request: Request) -> ProjectEntry:
+        """The served project a request's path names (``/api/projects/{pid}/...``)."""
+        return self.entry(request.path_params["pid"])
+
     def entry(self, pid: str) -> ProjectEntry:
+        """The served project of id ``pid``; a 404 naming the served ones where none is."""
         e = self.by_id.get(pid)
         if e is None:
             known = ", ".join(self.by_id) or "none"
@@ -287,23 +292,23 @@ class _Endpoints:
                                    for e in self.entries]})
 
     async def project(self, request: Request) -> Response:
-        return _json(self.entry(request.path_params["pid"]).describe())
+        return _json(self.entry_of(request).describe())
 
     async def run(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         if e.bench is None:
             raise ServeError(409, f"{e.id} has not been simulated yet (POST .../simulate)")
         return _json(e.run_dict())
 
     async def simulate(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         data = await _body(request)
         job = e.start_run(_optional_int(data, "rocks"), _optional_int(data, "seed"))
         self.jobs.add(job)
         return _json(job.as_dict(), 202)
 
     async def check(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         data = await _body(request)
         raws = data.get("measures")
         if raws is not None and not isinstance(raws, list):
@@ -313,21 +318,21 @@ class _Endpoints:
         return _json(job.as_dict(), 202)
 
     async def optimise(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         data = await _body(request)
         job = e.start_optimise(_optional_int(data, "rocks"), _optional_int(data, "seed"))
         self.jobs.add(job)
         return _json(job.as_dict(), 202)
 
     async def study(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         data = await _body(request)
         job = e.start_study(_optional_int(data, "rocks"), _optional_int(data, "seed"))
         self.jobs.add(job)
         return _json(job.as_dict(), 202)
 
     async def calibrate(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         data = await _body(request)
         job = e.start_calibrate(_optional_int(data, "rocks"), _optional_int(data, "seed"),
                                 _optional_int(data, "bootstrap"))
@@ -356,9 +361,10 @@ class _Endpoints:
                         headers={"Content-Disposition": f'attachment; filename="{name}"'})
 
     def job_of(self, request: Request) -> Any:
-        job = self.jobs.get(request.path_params["jid"])
+        jid = request.path_params["jid"]
+        job = self.jobs.get(jid)
         if job is None:  # never started, or forgotten (the app keeps the latest jobs)
-            raise ServeError(404, f"unknown job {request.path_params['jid']!r}")
+            raise ServeError(404, f"unknown job {jid!r}")
         return job
 
     async def job(self, request: Request) -> Response:
@@ -403,7 +409,7 @@ class _Endpoints:
         return _json(plugins_json(reg))
 
     async def file(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         name = request.query_params.get("path", e.path.name)
         target = _inside(e, name)
         if not target.is_file():
@@ -420,13 +426,13 @@ class _Endpoints:
                             headers={"ETag": f'"{version}"'})
 
     async def validate(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         data = await _body(request)
         e.validate(data.get("text"))
         return _json({"ok": True})
 
     async def save(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         data = await _body(request)
         name = data.get("path")
         if name is not None and name != e.path.name:
@@ -438,11 +444,11 @@ class _Endpoints:
                       "version": version_of(target)})
 
     async def materials(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         return _json(e.library(request.query_params.get("path")))
 
     async def apply_material(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         data = await _body(request)
         name, library = data.get("material"), data.get("library")
         if not isinstance(name, str):
@@ -452,7 +458,7 @@ class _Endpoints:
         return _json(e.apply_material(data.get("segment"), name, library))
 
     async def upload(self, request: Request) -> Response:
-        e = self.entry(request.path_params["pid"])
+        e = self.entry_of(request)
         data = await _body(request)
         name = data.get("path")
         if not isinstance(name, str):

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -40,7 +40,7 @@ from ..project.messages import describe
 from ..run.reach import protected_zone_counts
 from ..run.releases import section_from_project
 from ..run.simulation import Study, simulate
-from ..run.summary import STATION_QUANTITIES, STATISTICS, run_summary, stat_block
+from ..run.summary import STATION_QUANTITIES, STATISTICS, RunSummary, run_record, stat_block
 from .executors import run_tasks
 from .paths import ALIASES, parse_path, scenario_base, shown, with_values
 from .scenario_result import BarrierBlock, BoundsLadder, ScenarioBounds, ScenarioResult
@@ -236,19 +236,19 @@ def run_scenario(task: ScenarioTask) -> ScenarioResult:
     extra = sorted({x for _, _, x in task.barriers if x not in own})
     t0 = time.perf_counter()
     study = simulate(_with_stations(project, extra), rocks=task.rocks, seed=task.seed)
-    summary = _summary_of(study, own, project.resolved_hash())
+    record = _summary_of(study, own, project.resolved_hash())
     runtime = time.perf_counter() - t0
-    stations = summary["stations"]
-    by_x = {st["x"]: st for st in stations}
-    protect = summary.get("protect")
+    by_x = {st.x: st for st in record.stations}
+    protect = None if record.protect is None else record.protect.to_json()
     with_measures = _residual_with_measures(task) if protect and project.measures else None
-    barriers = [BarrierBlock(i, label, x, by_x[x]["crossings"], by_x[x]["passing_height_m"],
-                             by_x[x]["energy_kj"]) for i, label, x in task.barriers]
+    barriers = [BarrierBlock(i, label, x, by_x[x].crossings, by_x[x].passing_height_m.to_json(),
+                             by_x[x].energy_kj.to_json()) for i, label, x in task.barriers]
     return ScenarioResult(
-        index=task.index, seed=task.seed, rocks=summary["rocks"], events=summary["events"],
-        project_hash=summary["project_hash"],
-        stations=[st for st in stations if st["x"] in own], stops=summary["stops"],
-        bounds=_bounds(study, summary, task, _confidence(project), with_measures),
+        index=task.index, seed=task.seed, rocks=record.rocks, events=record.events,
+        project_hash=record.project_hash,
+        stations=[st.to_json() for st in record.stations if st.x in own],
+        stops=record.stops.to_json(),
+        bounds=_bounds(study, record, task, _confidence(project), with_measures),
         runtime_s=runtime, protect=protect, protect_with_measures=with_measures,
         measures=barriers or None,
         envelope=_envelope(study, envelope_percentile(project)) if task.envelope else None)
@@ -287,8 +287,9 @@ def _registry() -> Any:
     return _REGISTRY[0]
 
 
-def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> dict[str, Any]:
-    """``study.summary()``, less what the study drops: a fifth of a scenario's statistics.
+def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> RunSummary:
+    """The run's record (``study.run_summary()``), less what the study drops: a fifth of a
+    scenario's statistics.
 
     At a station of the project (``own``) every block, as ``simulate
     --json`` gives it; at a station added for a barrier only the blocks the
@@ -300,7 +301,7 @@ def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> dict[str
     (not that of its copy with the barriers' stations).
     """
     if not isinstance(study, Study):
-        return {**study.summary(), "project_hash": project_hash}
+        return replace(study.run_summary(), project_hash=project_hash)
     r = study.result
     a = study.crossing_arrays()
     kept = {float(x) for x in own}
@@ -315,8 +316,8 @@ def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> dict[str
     stop_block = stat_block(r.x_end[r.status == STOPPED])
     protect = study.project.protect
     reaching = None if protect is None else protected_zone_counts(r.max_x, r.status, protect.x)
-    return run_summary(study, r.events_total, crossings, blocks, stop_block, reaching,
-                    project_hash)
+    return run_record(study, r.events_total, crossings, blocks, stop_block, reaching,
+                      project_hash)
 
 
 #: Confidence of the design values' upper bounds when the safety concept gives none.
@@ -330,7 +331,7 @@ def _confidence(project: Project) -> float:
     return float(value) if ok else DEFAULT_CONFIDENCE
 
 
-def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
+def _bounds(study: Any, summary: RunSummary, task: ScenarioTask,
             confidence: float, with_measures: dict[str, Any] | None = None
             ) -> ScenarioBounds:
     """Confidence bounds of the scenario's design values, by name.
@@ -363,7 +364,8 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
         arrays = study.crossing_arrays()
         columns = {float(x): j for j, x in enumerate(study.stations)}
         names, samples, qs = [], [], []
-        for where, x in place_names(summary["stations"], task.barriers, task.project):
+        for where, x in place_names([st.x for st in summary.stations], task.barriers,
+                                    task.project):
             j = columns[x]
             for quantity, array, scale in (("passing_height_m", "passing_height_m", 1.0),
                                            ("energy_kj", "energy_j", 1e3)):
@@ -378,10 +380,9 @@ def _bounds(study: Any, summary: dict[str, Any], task: ScenarioTask,
         for name, (lower, upper, low_ladder, high_ladder) in zip(names, found, strict=True):
             out.lower[name], out.upper[name] = lower, upper
             ladder.lower[name], ladder.upper[name] = low_ladder, high_ladder
-    protect = summary.get("protect")
-    if protect is not None:
-        n = int(summary["rocks"])
-        for name, block in residual_names(protect, with_measures):
+    if summary.protect is not None:
+        n = int(summary.rocks)
+        for name, block in residual_names(summary.protect.to_json(), with_measures):
             x = int(block["reaching"])
             out.upper[name] = fraction_upper_bound(x, n, confidence)
             out.lower[name] = fraction_lower_bound(x, n, confidence)

@@ -18,6 +18,7 @@ from ..judge.plan import validate_plugin_sections
 from ..judge.verdict import UNTESTED, DesignVerdict, verdict_of_scenarios, with_verdict
 from ..plugins import default_registry
 from ..project.study import values_text
+from ..run.summary import ReachSummary
 from .executors import run_tasks
 from .scenarios import required_scenarios, scenario_runs
 
@@ -108,6 +109,12 @@ class ScenarioCheck:
                    bool(data["holds_with_confidence"]), int(data["rocks"]),
                    tuple(data.get("failures", ())),
                    {k: v for k, v in data.items() if k not in head})
+
+    @property
+    def reaching(self) -> int | None:
+        """Rocks of the scenario's run reaching the protected zone; None without one."""
+        protect = self.check.get("protect")
+        return None if not protect else ReachSummary.from_json(protect).reaching
 
     def to_json(self) -> dict[str, Any]:
         """The entry of ``scenarios``: the scenario's keys, then its ``check --json``."""

@@ -130,13 +130,13 @@ def _value(block: Mapping[str, Any] | None, stat: str) -> float:
     return math.nan if v is None else float(v)
 
 
-def place_names(stations: Sequence[Mapping[str, Any]], barriers: Sequence[tuple[int, str, float]],
+def place_names(stations: Sequence[float], barriers: Sequence[tuple[int, str, float]],
                 project: Any = None) -> list[tuple[str, float]]:
-    """(name, x) of the places of design values: ``x=100`` per station of ``stations``
-    (the analysis stations of a summary), ``measures[0] x=160`` per barrier."""
+    """(name, x) of the places of design values: ``x=100`` per station x of ``stations``
+    (m: the stations of a summary, of which those of the project's analysis),
+    ``measures[0] x=160`` per barrier."""
     own = [float(x) for x in project.analysis.stations] if project is not None else None
-    out = [(f"x={fmt(st['x'])}", float(st["x"])) for st in stations
-           if own is None or float(st["x"]) in own]
+    out = [(f"x={fmt(x)}", float(x)) for x in stations if own is None or float(x) in own]
     out += [(f"measures[{i}] x={fmt(x)}", float(x)) for i, _, x in barriers]
     return out
 

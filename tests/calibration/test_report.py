@@ -87,9 +87,9 @@ def test_calibrate_report_says_what_json_says(site, tmp_path, capsys):
 def test_an_input_not_pinned_down_is_flagged_and_headlined(result):
     loose = [dataclasses.replace(result.parameters[0], identified=False, width_share=0.9)]
     ctx = report_context(dataclasses.replace(result, parameters=loose), figures={})
-    assert "not pinned down" in ctx["verdict"] and PATH in ctx["verdict"]
-    assert ctx["verdict_state"] == "fit with warnings"
-    assert any("not identified" in f for f in ctx["failures"])
+    assert "not pinned down" in ctx.verdict and PATH in ctx.verdict
+    assert ctx.verdict_state == "fit with warnings"
+    assert any("not identified" in f for f in ctx.failures)
     html = render_html(ctx)
     row = _row(_cells(html), PATH)
     assert row[5] == "90 %" and row[7] == "NO: not pinned down"
@@ -125,7 +125,7 @@ def test_project_text_is_escaped_in_both_files(tmp_path):
     assert "&lt;script>alert(1)&lt;/script> a|b" in md  # the title, as report.md escapes it
     assert "&lt;b>bench\\|&lt;/b>" in md  # a table cell: its pipe escaped too
     # No bootstrap: no interval, and the headline says so.
-    assert "no bootstrap" in result.report_context({})["verdict"]
+    assert "no bootstrap" in result.report_context({}).verdict
 
 
 def test_compare_report_and_plot_in_one_folder(site, tmp_path):

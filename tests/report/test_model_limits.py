@@ -36,16 +36,14 @@ def test_the_readme_links_the_page():
 
 
 def test_the_section_is_in_the_reports_of_check_and_optimise():
+    from rockfall_design.report.context import LimitsPart, ReportContext
     from rockfall_design.report.documents import render_markdown
-
-    context = {"title": "t", "version": "0", "command": "check", "generated": "now",
-               "description": "", "verdict": "", "failures": [], "chosen": "",
-               "chosen_measures": [], "bill": None, "run": None, "inputs": [], "results": [],
-               "protect": "", "figures": [],
-               "limits": [{"heading": h, "items": list(i)} for h, i in MODEL_LIMITS]}
     from rockfall_design.report.sections import Table
 
-    context["run"] = Table("", ["item", "value"], [])
+    context = ReportContext(title="t", project="p", description="", command="check",
+                            version="0", generated="now", run=Table("", ["item", "value"], []),
+                            inputs=[],
+                            limits=[LimitsPart(h, list(i)) for h, i in MODEL_LIMITS])
     md = render_markdown(context)
     assert "## Model and limits" in md
     for heading, items in MODEL_LIMITS:

@@ -99,7 +99,7 @@ def test_every_table_header_and_every_verdict_is_in_the_pdf(printed, pdf_read):
     text, _ = pdf_read
     flat = _squeezed(text)
     ctx = report_context(result, {})
-    tables = [ctx["run"], *ctx["inputs"], *ctx["results"], *ctx["design_values"]]
+    tables = [ctx.run, *ctx.inputs, *ctx.results, *ctx.design_values]
     assert len(tables) >= 10
     missing = [(t.title, c) for t in tables for c in t.columns
                if c and _squeezed(c) not in flat]
@@ -110,7 +110,7 @@ def test_every_table_header_and_every_verdict_is_in_the_pdf(printed, pdf_read):
         for c in m["checks"]:
             assert _squeezed(c["state"]) in flat
     # The last column of the widest table (the ground materials) made it onto the page.
-    materials = next(t for t in ctx["inputs"] if t.title == "Ground materials")
+    materials = next(t for t in ctx.inputs if t.title == "Ground materials")
     assert _squeezed(materials.columns[-1]) in flat
 
 
@@ -132,10 +132,10 @@ def test_without_the_pdf_extra_the_report_is_written_and_says_how_to_get_it(tmp_
     assert "Model and limits" in html  # simulate's report too
 
 
-def _tables(ctx: dict) -> list:
+def _tables(ctx) -> list:
     """Every table of a report's context (objects with a title and columns), wherever it sits."""
     found = []
-    for value in ctx.values():
+    for value in ctx.template_values().values():
         for item in value if isinstance(value, list) else [value]:
             if hasattr(item, "columns") and hasattr(item, "title"):
                 found.append(item)
