@@ -14,12 +14,14 @@ design the screening approximates (rocks breaking through or returned) or
 that edits the ground is looked at by exact runs. An admission by the
 screening is always confirmed by the exact run of the same rocks (the two
 agree where nothing is approximated; the exact run is what the report shows).
+Every look's verdict, with the checker's margin, is the judge's
+(:mod:`rockfall_design.judge.looks`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -27,6 +29,7 @@ import numpy as np
 
 from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
 from ..judge.evaluation import Evaluation, evaluate_design
+from ..judge.looks import checks_at, judge_look, look_concept, with_margin
 from ..judge.margin import CheckerMargin
 from ..judge.plan import confidence_of
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
@@ -34,7 +37,6 @@ from ..plugins import guard
 from ..plugins.measure import Barrier
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..judge.design_spec import DesignSpec
     from ..plugins import Registry
     from ..plugins.concept import Check, SafetyConcept
     from ..plugins.measure import ProtectiveMeasure
@@ -46,10 +48,7 @@ __all__ = [
     "SHORT",
     "Decider",
     "Decision",
-    "checker_margin",
     "decide",
-    "judge_look",
-    "look_concept",
     "rocks_to_decide",
     "verify_fresh",
 ]
@@ -106,133 +105,6 @@ class Decision:
 
 #: The tally's words for a design rejected for the checker's margin (not for failing).
 SHORT = "short of the checker's margin with confidence"
-
-
-def checker_margin(spec: DesignSpec, confidence: float) -> CheckerMargin | None:
-    """The project's checker's margin (``design.checker_power``; None: turned off)."""
-    power = spec.checker_power
-    return None if power is None else CheckerMargin(float(confidence), float(power))
-
-
-def look_concept(registry: Registry, concept: SafetyConcept, confidence: float) -> SafetyConcept:
-    """The project's safety concept with its bounds at a look's ``confidence``."""
-    params = concept.params.model_copy(update={"confidence": float(confidence)})
-    look = guard(registry).instantiate(type(concept), params)
-    # The design block keeps its bounds at the project's confidence: the
-    # survey is one fixed sample, looked at once, not the growing rock sample
-    # the looks' confidences are spent on.
-    look.design_block = concept.design_block
-    return look
-
-
-def _verdict_of(ev: Evaluation) -> Verdict:
-    if ev.holds_with_confidence:
-        return Verdict.ADMITTED
-    if ev.fails_with_confidence:
-        return Verdict.REJECTED
-    return Verdict.UNDECIDED
-
-
-def _checks_at(registry: Registry, concept: SafetyConcept, results: Sequence[Any],
-               confidence: float) -> list[list[Check]]:
-    """A look's checks again, its measures' ``results`` judged by ``concept`` with its
-    bounds at ``confidence`` (no rock runs)."""
-    judge = guard(registry).concept(look_concept(registry, concept, confidence))
-    return [judge.checks(res) for res in results]
-
-
-def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
-               checker_rocks: int,
-               last_checker_rocks: int | None = None) -> tuple[Verdict, list[str]]:
-    """A look's verdict, with the checker's margin (:mod:`rockfall_design.judge.margin`).
-
-    Parameters
-    ----------
-    ev : Evaluation
-        The look's exact run, judged at the look's confidence.
-    registry : Registry
-    margin : CheckerMargin or None
-        None: admitted when it holds with the look's bounds, as such.
-    checker_rocks : int
-        Rocks of the checker's check the margin is for, if this look decides.
-    last_checker_rocks : int, optional
-        Rocks of the checker's check if the last look decides (default
-        ``checker_rocks``). A design is rejected as short of the margin only
-        when it misses the margin for this check too: a larger check needs a
-        smaller margin, so a design short of the margin at an early look may
-        still show it at a later one; rejecting it early made the choice hang
-        on the seed (design_two_zones' 339,000 fence at seeds 14 and 15).
-
-    Returns
-    -------
-    verdict, notes : Verdict, list of str
-        REJECTED with ``notes`` empty: fails with confidence; with ``notes``
-        (one line): short of the margin with confidence, what and why.
-        UNDECIDED with ``notes`` (one line): it holds with the look's bounds,
-        but the margin is neither shown nor missed.
-    """
-    prot = ev.protect
-    return _with_margin(
-        _verdict_of(ev), lambda c: _checks_at(registry, ev.concept, ev.judgement.results, c),
-        [p.label for p in ev.placed],
-        None if prot is None else int(prot["reaching"]),
-        None if prot is None else float(prot["allowed_fraction"]),
-        ev.study.result.n, ev.confidence, margin, checker_rocks, last_checker_rocks)
-
-
-def _with_margin(verdict: Verdict, checks_at: Callable[[float], list[list[Check]]],
-                 labels: Sequence[str], reaching: int | None, allowed: float | None, n: int,
-                 confidence: float, margin: CheckerMargin | None,
-                 checker_rocks: int,
-                 last_checker_rocks: int | None = None) -> tuple[Verdict, list[str]]:
-    """:func:`judge_look` of any look: its verdict without the margin, its checks at any
-    confidence (``checks_at``), the rocks reaching the protected zone of its ``n``."""
-    if margin is None or verdict is Verdict.REJECTED:
-        return verdict, []
-    m = margin.at_look(confidence, n, checker_rocks, None if reaching is None else allowed)
-    # The margin's bounds are stricter than the look's: only what holds with the
-    # look's can hold with them (no checks again for the rest).
-    holds = verdict is Verdict.ADMITTED and all(
-        c.holds_with_confidence for cs in checks_at(m.admit) for c in cs)
-    if holds and reaching is not None and m.residual_rate is not None:
-        holds = fraction_upper_bound(reaching, n, confidence) <= m.residual_rate
-    if holds:
-        return Verdict.ADMITTED, []
-    power = f"{100 * margin.power:g} %"
-    # Short of the margin only if short of the smallest margin a later look
-    # could still ask for: the checker's check of the last look's rocks.
-    last = checker_rocks if last_checker_rocks is None else max(checker_rocks,
-                                                                last_checker_rocks)
-    if last != checker_rocks:
-        m = margin.at_look(confidence, n, last, None if reaching is None else allowed)
-
-    def why(rocks: int, than: str = "less than") -> str:
-        return (f"a check of {rocks:,} rocks at another seed would confirm it with "
-                f"{100 * margin.confidence:g} % confidence {than} {power} of the time")
-
-    short = []
-    for lab, cs in zip(labels, checks_at(m.short), strict=True):
-        for c in cs:
-            if c.ok_with_confidence is None:
-                missed = not c.ok
-            elif m.short_pessimistic:
-                # its pessimistic bound at `short` misses: not merely too few rocks
-                missed = c.bound is not None and not c.ok_with_confidence
-            else:
-                missed = c.rejects
-            if missed:
-                value = "-" if c.value is None else f"{c.value:.2f}"
-                short.append(f"{lab}: {c.name} {value}, target {c.target:.2f}")
-    if (reaching is not None and m.residual_rate is not None
-            and fraction_lower_bound(reaching, n, confidence) > m.residual_rate):
-        short.append(f"{reaching:,} of {n:,} rocks reach the protected zone")
-    if short:
-        return Verdict.REJECTED, [f"{'; '.join(short)} ({why(last)})"]
-    if verdict is Verdict.ADMITTED:
-        return Verdict.UNDECIDED, [
-            f"it holds with {100 * confidence:.4g} % confidence on {n:,} rocks, but neither "
-            f"shows nor misses the checker's margin ({why(checker_rocks, 'at least')})"]
-    return Verdict.UNDECIDED, []
 
 
 def _screen_verdict(sr: ScreenResult) -> Verdict:
@@ -380,7 +252,7 @@ def decide(
         The schedule (default :func:`~rockfall_design.judge.sequential.plan_looks`
         from ``rocks`` to ``max_rocks`` at the concept's confidence).
     margin : CheckerMargin, optional
-        Admit only with the checker's margin (:func:`judge_look`).
+        Admit only with the checker's margin (:func:`~rockfall_design.judge.looks.judge_look`).
     checker_rocks : int, optional
         Rocks of the checker's check the margin is for (default: twice
         each look's rocks, the check design.yaml asks for if that look decides).
@@ -467,12 +339,12 @@ class Decider:
     ----------
     screen : Screening
         The search rocks' screening (the first look), built with the look
-        concept (:func:`look_concept`).
+        concept (:func:`~rockfall_design.judge.looks.look_concept`).
     looks : LookSchedule
         ``looks.sizes[0]`` is ``screen.n``.
     margin : CheckerMargin, optional
         Admit only with the checker's margin for a check of twice the
-        deciding look's rocks (:func:`judge_look`).
+        deciding look's rocks (:func:`~rockfall_design.judge.looks.judge_look`).
     """
 
     def __init__(self, screen: Screening, looks: LookSchedule,
@@ -531,7 +403,7 @@ class Decider:
             return verdict, []
         s0 = self.screen
         reaching = None if s0.project.protect is None else int(sr.residual)
-        return _with_margin(verdict, lambda c: _checks_at(s0.registry, s0.concept, sr.results, c),
+        return with_margin(verdict, lambda c: checks_at(s0.registry, s0.concept, sr.results, c),
                             sr.labels, reaching, s0.allowed_fraction, n, s0.confidence,
                             self.margin, 2 * n, 2 * self.looks.sizes[-1])
 
