@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -48,7 +48,11 @@ __all__ = [
     "SHORT",
     "Decider",
     "Decision",
+    "LookCheck",
+    "LookResidual",
+    "LookValues",
     "decide",
+    "look_values",
     "rocks_to_decide",
     "verify_fresh",
 ]
@@ -74,8 +78,9 @@ class Decision:
         Exact runs made.
     simulated : int
         Rocks simulated for this decision (exact runs and look screenings).
-    values : dict
-        Point values and bounds of the deciding look (see :func:`look_values`).
+    values : LookValues or None
+        Point values and bounds of the deciding look (:func:`look_values`; None
+        across scenarios, which have one set each).
     schedule : LookSchedule or None
         The looks planned (:func:`decide` sets it).
     short_of_margin : bool
@@ -93,7 +98,7 @@ class Decision:
     looks: int = 1
     exact: int = 0
     simulated: int = 0
-    values: dict[str, Any] = field(default_factory=dict)
+    values: LookValues | None = None
     schedule: LookSchedule | None = None
     short_of_margin: bool = False
     margin_undecided: bool = False
@@ -119,28 +124,64 @@ def _finite(x: float | None) -> float | None:
     return None if x is None or not math.isfinite(x) else float(x)
 
 
-def look_values(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
-                n: int, allowed: float | None, confidence: float) -> dict[str, Any]:
+@dataclass(frozen=True)
+class LookCheck:
+    """One check of a look, its point value and both bounds (None: not finite)."""
+
+    measure: str
+    name: str
+    value: float | None
+    bound: float | None
+    optimistic: float | None
+    target: float
+    unit: str
+
+
+@dataclass(frozen=True)
+class LookResidual:
+    """The rocks reaching the protected zone at a look: count, fraction, both bounds (-)."""
+
+    reaching: int
+    fraction: float
+    lower: float
+    upper: float
+    allowed: float
+
+
+@dataclass(frozen=True)
+class LookValues:
     """Point values and both bounds of a look, for the report of a marginal design.
 
-    Returns ``{rocks, confidence, checks: [{measure, name, value, bound,
-    optimistic, target}], residual: {reaching, fraction, lower, upper,
-    allowed}}`` (``residual`` None without a protected zone).
+    ``residual`` is None without a protected zone. :meth:`to_json` is the
+    ``values`` object of a listed design in --json.
     """
-    rows = [{"measure": lab, "name": c.name, "value": _finite(c.value),
-             "bound": _finite(c.bound), "optimistic": _finite(c.optimistic),
-             "target": c.target, "unit": c.unit}
+
+    rocks: int
+    confidence: float
+    checks: list[LookCheck]
+    residual: LookResidual | None
+
+    def to_json(self) -> dict[str, Any]:
+        """``{rocks, confidence, checks: [{measure, name, value, bound, optimistic, target,
+        unit}], residual: {reaching, fraction, lower, upper, allowed}}``."""
+        return asdict(self)
+
+
+def look_values(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
+                n: int, allowed: float | None, confidence: float) -> LookValues:
+    """Point values and both bounds of a look, for the report of a marginal design."""
+    rows = [LookCheck(lab, c.name, _finite(c.value), _finite(c.bound), _finite(c.optimistic),
+                      c.target, c.unit)
             for lab, cs in zip(labels, checks, strict=True) for c in cs]
     res = None
     if residual is not None and allowed is not None:
-        res = {"reaching": int(residual), "fraction": residual / max(n, 1),
-               "lower": fraction_lower_bound(residual, n, confidence),
-               "upper": fraction_upper_bound(residual, n, confidence),
-               "allowed": allowed}
-    return {"rocks": int(n), "confidence": confidence, "checks": rows, "residual": res}
+        res = LookResidual(int(residual), residual / max(n, 1),
+                           fraction_lower_bound(residual, n, confidence),
+                           fraction_upper_bound(residual, n, confidence), allowed)
+    return LookValues(int(n), confidence, rows, res)
 
 
-def rocks_to_decide(values: dict[str, Any]) -> int | None:
+def rocks_to_decide(values: LookValues) -> int | None:
     """About how many rocks would decide a marginal design (None: it sits on the target).
 
     Each bound's distance from its point value shrinks about as 1/sqrt(n)
@@ -149,51 +190,51 @@ def rocks_to_decide(values: dict[str, Any]) -> int | None:
     value at ``n`` rocks is decided at about ``n (w / d)**2`` rocks. The
     largest such count over the undecided items.
     """
-    n = values["rocks"]
+    n = values.rocks
     need = 0.0
-    for c in values["checks"]:
-        v, t = c["value"], c["target"]
+    for c in values.checks:
+        v, t = c.value, c.target
         if v is None:
             continue
-        sides = [abs(b - v) for b in (c["bound"], c["optimistic"])
+        sides = [abs(b - v) for b in (c.bound, c.optimistic)
                  if b is not None and math.isfinite(b)]
         if not sides:
             continue
         w, d = max(sides), abs(v - t)
-        holds = (c["bound"] is not None and (c["bound"] >= t if v >= t else c["bound"] <= t))
-        rejects = c["optimistic"] is not None and not (
-            c["optimistic"] >= t if v >= t else c["optimistic"] <= t)
+        holds = (c.bound is not None and (c.bound >= t if v >= t else c.bound <= t))
+        rejects = c.optimistic is not None and not (
+            c.optimistic >= t if v >= t else c.optimistic <= t)
         if holds or rejects:
             continue
         if d <= 0.0:
             return None
         need = max(need, n * (w / d) ** 2)
-    r = values.get("residual")
-    if r is not None and r["upper"] > r["allowed"] and r["lower"] <= r["allowed"]:
-        d = abs(r["fraction"] - r["allowed"])
-        w = max(r["upper"] - r["fraction"], r["fraction"] - r["lower"])
+    r = values.residual
+    if r is not None and r.upper > r.allowed and r.lower <= r.allowed:
+        d = abs(r.fraction - r.allowed)
+        w = max(r.upper - r.fraction, r.fraction - r.lower)
         if d <= 0.0:
             return None
         need = max(need, n * (w / d) ** 2)
     return int(math.ceil(need)) if need > n else None
 
 
-def _reason(verdict: Verdict, values: dict[str, Any], failures: Sequence[str],
+def _reason(verdict: Verdict, values: LookValues, failures: Sequence[str],
             short: Sequence[str] = ()) -> str:
-    conf = f"{100 * values['confidence']:.4g} %"
+    conf = f"{100 * values.confidence:.4g} %"
     if verdict is Verdict.REJECTED and short:
         return (f"short of the checker's margin with {conf} confidence on "
-                f"{values['rocks']:,} rocks: " + "; ".join(short))
+                f"{values.rocks:,} rocks: " + "; ".join(short))
     if short:  # marginal: holds, the margin undecided
         return "marginal: " + "; ".join(short) + "; more rocks would decide it (--max-rocks)"
     if verdict is Verdict.REJECTED:
-        return f"fails with {conf} confidence on {values['rocks']:,} rocks: " + "; ".join(
+        return f"fails with {conf} confidence on {values.rocks:,} rocks: " + "; ".join(
             failures)
     need = rocks_to_decide(values)
     more = (f"about {need:,} rocks would decide it (--max-rocks)" if need else
             "its point value sits on the target")
     return (f"marginal: neither holds nor fails with {conf} confidence on "
-            f"{values['rocks']:,} rocks; {more}")
+            f"{values.rocks:,} rocks; {more}")
 
 
 def _rejections(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
@@ -214,9 +255,9 @@ def _rejections(checks: Sequence[Sequence[Check]], labels: Sequence[str], residu
     return out or ["fails"]
 
 
-def _ev_values(ev: Evaluation, allowed: float | None) -> tuple[dict[str, Any], list[str]]:
-    prot = ev.protect
-    residual = None if prot is None else int(prot["reaching"])
+def _ev_values(ev: Evaluation, allowed: float | None) -> tuple[LookValues, list[str]]:
+    prot = ev.residual
+    residual = None if prot is None else int(prot.reaching)
     labels = [p.label for p in ev.placed]
     n = ev.study.result.n
     args = (ev.checks, labels, residual, n, allowed, ev.confidence)
