@@ -1,4 +1,4 @@
-"""A look's verdict with the checker's margin: admitted, rejected or undecided.
+"""A look's verdict with the checker's margin, and its values for the report.
 
 A look judges a design on its rocks at the look's confidence
 (:mod:`~rockfall_design.judge.sequential`); with ``design.checker_power`` it
@@ -6,7 +6,10 @@ admits only what a checker's check would confirm often enough, and rejects
 as short of that margin only what misses it with confidence
 (:mod:`~rockfall_design.judge.margin`). The optimiser's decisions
 (:mod:`rockfall_design.optimiser.decide`) take every look's verdict from here,
-whether the look is an exact run or a screening that judged every rock exactly.
+whether the look is an exact run or a screening that judged every rock exactly,
+and a look's point values and bounds (:class:`LookValues`) with the rocks
+that would decide it (:func:`rocks_to_decide`) and what fails with
+confidence (:func:`rejections`).
 
 See Also
 --------
@@ -16,7 +19,9 @@ rockfall_design.judge.bounds : the bounds.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Any
 
 from ..plugins import guard
@@ -30,8 +35,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from .design_spec import DesignSpec
     from .evaluation import Evaluation
 
-__all__ = ["checker_margin", "checks_at", "judge_look", "look_concept", "verdict_of",
-           "with_margin"]
+__all__ = ["LookCheck", "LookResidual", "LookValues", "checker_margin", "checks_at",
+           "judge_look", "look_concept", "look_values", "rejections", "rocks_to_decide",
+           "verdict_of", "with_margin"]
 
 
 def checker_margin(spec: DesignSpec, confidence: float) -> CheckerMargin | None:
@@ -160,3 +166,122 @@ def with_margin(verdict: Verdict, checks_at: Callable[[float], list[list[Check]]
             f"it holds with {100 * confidence:.4g} % confidence on {n:,} rocks, but neither "
             f"shows nor misses the checker's margin ({why(checker_rocks, 'at least')})"]
     return Verdict.UNDECIDED, []
+
+
+def _finite(x: float | None) -> float | None:
+    """``x``, or None where it is not a finite number (JSON has no infinity: a factor
+    over a demand whose lower bound is 0 is unbounded)."""
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
+@dataclass(frozen=True)
+class LookCheck:
+    """One check of a look, its point value and both bounds (None: not finite)."""
+
+    measure: str
+    name: str
+    value: float | None
+    bound: float | None
+    optimistic: float | None
+    target: float
+    unit: str
+
+
+@dataclass(frozen=True)
+class LookResidual:
+    """The rocks reaching the protected zone at a look: count, fraction, both bounds (-)."""
+
+    reaching: int
+    fraction: float
+    lower: float
+    upper: float
+    allowed: float
+
+
+@dataclass(frozen=True)
+class LookValues:
+    """Point values and both bounds of a look, for the report of a marginal design.
+
+    ``residual`` is None without a protected zone. :meth:`to_json` is the
+    ``values`` object of a listed design in --json.
+    """
+
+    rocks: int
+    confidence: float
+    checks: list[LookCheck]
+    residual: LookResidual | None
+
+    def to_json(self) -> dict[str, Any]:
+        """``{rocks, confidence, checks: [{measure, name, value, bound, optimistic, target,
+        unit}], residual: {reaching, fraction, lower, upper, allowed}}``."""
+        return asdict(self)
+
+
+def look_values(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
+                n: int, allowed: float | None, confidence: float) -> LookValues:
+    """Point values and both bounds of a look, for the report of a marginal design."""
+    rows = [LookCheck(lab, c.name, _finite(c.value), _finite(c.bound), _finite(c.optimistic),
+                      c.target, c.unit)
+            for lab, cs in zip(labels, checks, strict=True) for c in cs]
+    res = None
+    if residual is not None and allowed is not None:
+        res = LookResidual(int(residual), residual / max(n, 1),
+                           fraction_lower_bound(residual, n, confidence),
+                           fraction_upper_bound(residual, n, confidence), allowed)
+    return LookValues(int(n), confidence, rows, res)
+
+
+def rocks_to_decide(values: LookValues) -> int | None:
+    """About how many rocks would decide a marginal design (None: it sits on the target).
+
+    Each bound's distance from its point value shrinks about as 1/sqrt(n)
+    (order statistics and Clopper-Pearson alike): a check or residual whose
+    point value is ``d`` from the target and whose bounds are ``w`` from the
+    value at ``n`` rocks is decided at about ``n (w / d)**2`` rocks. The
+    largest such count over the undecided items.
+    """
+    n = values.rocks
+    need = 0.0
+    for c in values.checks:
+        v, t = c.value, c.target
+        if v is None:
+            continue
+        sides = [abs(b - v) for b in (c.bound, c.optimistic)
+                 if b is not None and math.isfinite(b)]
+        if not sides:
+            continue
+        w, d = max(sides), abs(v - t)
+        holds = (c.bound is not None and (c.bound >= t if v >= t else c.bound <= t))
+        rejects = c.optimistic is not None and not (
+            c.optimistic >= t if v >= t else c.optimistic <= t)
+        if holds or rejects:
+            continue
+        if d <= 0.0:
+            return None
+        need = max(need, n * (w / d) ** 2)
+    r = values.residual
+    if r is not None and r.upper > r.allowed and r.lower <= r.allowed:
+        d = abs(r.fraction - r.allowed)
+        w = max(r.upper - r.fraction, r.fraction - r.lower)
+        if d <= 0.0:
+            return None
+        need = max(need, n * (w / d) ** 2)
+    return int(math.ceil(need)) if need > n else None
+
+
+def rejections(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
+               n: int, allowed: float | None, confidence: float) -> list[str]:
+    """One line per check (and the residual) that fails with confidence."""
+    out = []
+    for lab, cs in zip(labels, checks, strict=True):
+        for c in cs:
+            if c.rejects:
+                unit = "" if c.unit == "-" else f" {c.unit}"
+                best = "-" if c.optimistic is None else f"{c.optimistic:.2f}{unit}"
+                out.append(f"{lab}: {c.name} at best {best}, target {c.target:.2f}{unit}")
+    if residual is not None and allowed is not None:
+        low = fraction_lower_bound(residual, n, confidence)
+        if residual > 0 and low > allowed:
+            out.append(f"{residual:,} of {n:,} rocks reach the protected zone: at least "
+                       f"{100 * low:.3f} %, allowed {100 * allowed:.3f} %")
+    return out or ["fails"]

@@ -19,7 +19,7 @@ from ..judge.sequential import LookSchedule
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
     from ..studies.scenarios import ScenarioRun
-from .decide import LookValues, rocks_to_decide
+from ..judge.looks import LookValues, rocks_to_decide
 
 #: Designs that miss their targets on the point values of the search rocks, but not
 #: with confidence, decided per family when cheaper than its design (cheapest first).
@@ -237,9 +237,10 @@ def measure_dicts(measures: Sequence[ProtectiveMeasure]) -> list[dict[str, Any]]
 class Listed:
     """A cheaper design listed as marginal or undecided beside a family's design.
 
-    ``values`` are the look's point values and bounds (:func:`~.decide.look_values`), None
-    for a design across scenarios; ``rocks_to_decide`` follows from them (None
-    when they hold: ``margin_undecided``, the checker's margin is what is open).
+    ``values`` are the look's point values and bounds
+    (:func:`~rockfall_design.judge.looks.look_values`), None for a design across
+    scenarios; ``rocks_to_decide`` follows from them (None when they hold:
+    ``margin_undecided``, the checker's margin is what is open).
     ``short_of_margin``: it holds with its bounds, but falls short of the
     checker's margin with confidence (listed so that the engineer knows of it).
     :meth:`to_json` is its entry of ``marginal`` in --json.
@@ -258,7 +259,8 @@ class Listed:
 
     @property
     def rocks_to_decide(self) -> int | None:
-        """About how many rocks would decide it (:func:`~.decide.rocks_to_decide`)."""
+        """About how many rocks would decide it
+        (:func:`~rockfall_design.judge.looks.rocks_to_decide`)."""
         if self.values is None or self.margin_undecided or self.short_of_margin:
             return None
         return rocks_to_decide(self.values)

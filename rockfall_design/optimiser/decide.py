@@ -20,16 +20,23 @@ Every look's verdict, with the checker's margin, is the judge's
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
 from ..judge.evaluation import Evaluation, evaluate_design
-from ..judge.looks import checks_at, judge_look, look_concept, with_margin
+from ..judge.looks import (
+    LookValues,
+    checks_at,
+    judge_look,
+    look_concept,
+    look_values,
+    rejections,
+    rocks_to_decide,
+    with_margin,
+)
 from ..judge.margin import CheckerMargin
 from ..judge.plan import confidence_of
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
@@ -38,7 +45,7 @@ from ..plugins.measure import Barrier
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
-    from ..plugins.concept import Check, SafetyConcept
+    from ..plugins.concept import SafetyConcept
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
 
@@ -48,12 +55,7 @@ __all__ = [
     "SHORT",
     "Decider",
     "Decision",
-    "LookCheck",
-    "LookResidual",
-    "LookValues",
     "decide",
-    "look_values",
-    "rocks_to_decide",
     "verify_fresh",
 ]
 
@@ -79,7 +81,8 @@ class Decision:
     simulated : int
         Rocks simulated for this decision (exact runs and look screenings).
     values : LookValues or None
-        Point values and bounds of the deciding look (:func:`look_values`; None
+        Point values and bounds of the deciding look
+        (:func:`~rockfall_design.judge.looks.look_values`; None
         across scenarios, which have one set each).
     schedule : LookSchedule or None
         The looks planned (:func:`decide` sets it).
@@ -118,107 +121,6 @@ def _screen_verdict(sr: ScreenResult) -> Verdict:
     return Verdict.UNDECIDED if sr.near else Verdict.REJECTED
 
 
-def _finite(x: float | None) -> float | None:
-    """``x``, or None where it is not a finite number (JSON has no infinity: a factor
-    over a demand whose lower bound is 0 is unbounded)."""
-    return None if x is None or not math.isfinite(x) else float(x)
-
-
-@dataclass(frozen=True)
-class LookCheck:
-    """One check of a look, its point value and both bounds (None: not finite)."""
-
-    measure: str
-    name: str
-    value: float | None
-    bound: float | None
-    optimistic: float | None
-    target: float
-    unit: str
-
-
-@dataclass(frozen=True)
-class LookResidual:
-    """The rocks reaching the protected zone at a look: count, fraction, both bounds (-)."""
-
-    reaching: int
-    fraction: float
-    lower: float
-    upper: float
-    allowed: float
-
-
-@dataclass(frozen=True)
-class LookValues:
-    """Point values and both bounds of a look, for the report of a marginal design.
-
-    ``residual`` is None without a protected zone. :meth:`to_json` is the
-    ``values`` object of a listed design in --json.
-    """
-
-    rocks: int
-    confidence: float
-    checks: list[LookCheck]
-    residual: LookResidual | None
-
-    def to_json(self) -> dict[str, Any]:
-        """``{rocks, confidence, checks: [{measure, name, value, bound, optimistic, target,
-        unit}], residual: {reaching, fraction, lower, upper, allowed}}``."""
-        return asdict(self)
-
-
-def look_values(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
-                n: int, allowed: float | None, confidence: float) -> LookValues:
-    """Point values and both bounds of a look, for the report of a marginal design."""
-    rows = [LookCheck(lab, c.name, _finite(c.value), _finite(c.bound), _finite(c.optimistic),
-                      c.target, c.unit)
-            for lab, cs in zip(labels, checks, strict=True) for c in cs]
-    res = None
-    if residual is not None and allowed is not None:
-        res = LookResidual(int(residual), residual / max(n, 1),
-                           fraction_lower_bound(residual, n, confidence),
-                           fraction_upper_bound(residual, n, confidence), allowed)
-    return LookValues(int(n), confidence, rows, res)
-
-
-def rocks_to_decide(values: LookValues) -> int | None:
-    """About how many rocks would decide a marginal design (None: it sits on the target).
-
-    Each bound's distance from its point value shrinks about as 1/sqrt(n)
-    (order statistics and Clopper-Pearson alike): a check or residual whose
-    point value is ``d`` from the target and whose bounds are ``w`` from the
-    value at ``n`` rocks is decided at about ``n (w / d)**2`` rocks. The
-    largest such count over the undecided items.
-    """
-    n = values.rocks
-    need = 0.0
-    for c in values.checks:
-        v, t = c.value, c.target
-        if v is None:
-            continue
-        sides = [abs(b - v) for b in (c.bound, c.optimistic)
-                 if b is not None and math.isfinite(b)]
-        if not sides:
-            continue
-        w, d = max(sides), abs(v - t)
-        holds = (c.bound is not None and (c.bound >= t if v >= t else c.bound <= t))
-        rejects = c.optimistic is not None and not (
-            c.optimistic >= t if v >= t else c.optimistic <= t)
-        if holds or rejects:
-            continue
-        if d <= 0.0:
-            return None
-        need = max(need, n * (w / d) ** 2)
-    r = values.residual
-    if r is not None and r.upper > r.allowed and r.lower <= r.allowed:
-        d = abs(r.fraction - r.allowed)
-        w = max(r.upper - r.fraction, r.fraction - r.lower)
-        if d <= 0.0:
-            return None
-        need = max(need, n * (w / d) ** 2)
-    return int(math.ceil(need)) if need > n else None
-
-
 def _reason(verdict: Verdict, values: LookValues, failures: Sequence[str],
             short: Sequence[str] = ()) -> str:
     conf = f"{100 * values.confidence:.4g} %"
@@ -237,22 +139,18 @@ def _reason(verdict: Verdict, values: LookValues, failures: Sequence[str],
             f"{values.rocks:,} rocks; {more}")
 
 
-def _rejections(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
-                n: int, allowed: float | None, confidence: float) -> list[str]:
-    """One line per check (and the residual) that fails with confidence."""
-    out = []
-    for lab, cs in zip(labels, checks, strict=True):
-        for c in cs:
-            if c.rejects:
-                unit = "" if c.unit == "-" else f" {c.unit}"
-                best = "-" if c.optimistic is None else f"{c.optimistic:.2f}{unit}"
-                out.append(f"{lab}: {c.name} at best {best}, target {c.target:.2f}{unit}")
-    if residual is not None and allowed is not None:
-        low = fraction_lower_bound(residual, n, confidence)
-        if residual > 0 and low > allowed:
-            out.append(f"{residual:,} of {n:,} rocks reach the protected zone: at least "
-                       f"{100 * low:.3f} %, allowed {100 * allowed:.3f} %")
-    return out or ["fails"]
+def _decided(dec: Decision, failures: Sequence[str], short: Sequence[str]) -> Decision:
+    """The decision at its last look: undecided there is MARGINAL; why, unless admitted.
+
+    ``short``: the checker's margin's one line (:func:`~rockfall_design.judge.looks.judge_look`).
+    """
+    if dec.verdict is Verdict.UNDECIDED:
+        dec.verdict = Verdict.MARGINAL
+    if dec.verdict is not Verdict.ADMITTED:
+        dec.reason = _reason(dec.verdict, dec.values, failures, short)
+    dec.short_of_margin = dec.verdict is Verdict.REJECTED and bool(short)
+    dec.margin_undecided = dec.verdict is Verdict.MARGINAL and bool(short)
+    return dec
 
 
 def _ev_values(ev: Evaluation, allowed: float | None) -> tuple[LookValues, list[str]]:
@@ -261,7 +159,7 @@ def _ev_values(ev: Evaluation, allowed: float | None) -> tuple[LookValues, list[
     labels = [p.label for p in ev.placed]
     n = ev.study.result.n
     args = (ev.checks, labels, residual, n, allowed, ev.confidence)
-    return look_values(*args), _rejections(*args)
+    return look_values(*args), rejections(*args)
 
 
 def decide(
@@ -315,12 +213,8 @@ def decide(
         if verdict is Verdict.UNDECIDED and j + 1 < len(looks):
             continue
         values, fails = _ev_values(ev, allowed)
-        if verdict is Verdict.UNDECIDED:
-            verdict = Verdict.MARGINAL
-        reason = "" if verdict is Verdict.ADMITTED else _reason(verdict, values, fails, short)
-        return Decision(verdict, n, ev, reason, j + 1, j + 1, simulated, values, looks,
-                        verdict is Verdict.REJECTED and bool(short),
-                        verdict is Verdict.MARGINAL and bool(short))
+        return _decided(Decision(verdict, n, ev, "", j + 1, j + 1, simulated, values, looks),
+                        fails, short)
     raise AssertionError("a schedule has at least one look")  # pragma: no cover
 
 
@@ -486,10 +380,6 @@ class Decider:
         else:
             prot = None if s0.project.protect is None else sr.residual
             args = (sr.checks, sr.labels, prot, sizes[j], allowed, s0.confidence)
-            values, fails = look_values(*args), _rejections(*args)
-        if verdict is Verdict.UNDECIDED:
-            verdict = Verdict.MARGINAL
-        reason = "" if verdict is Verdict.ADMITTED else _reason(verdict, values, fails, short)
-        return Decision(verdict, sizes[j], ev, reason, j + 1, exact, simulated, values,
-                        short_of_margin=verdict is Verdict.REJECTED and bool(short),
-                        margin_undecided=verdict is Verdict.MARGINAL and bool(short))
+            values, fails = look_values(*args), rejections(*args)
+        return _decided(Decision(verdict, sizes[j], ev, "", j + 1, exact, simulated, values),
+                        fails, short)

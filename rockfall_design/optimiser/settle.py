@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..judge.looks import look_values
 from ..judge.sequential import LookSchedule, Verdict
 from ..run.reach import reaches_protected_zone
 from .alternatives import (
@@ -32,7 +33,7 @@ from .alternatives import (
     listed_entry,
     measure_dicts,
 )
-from .decide import SHORT, Decision, look_values, verify_fresh
+from .decide import SHORT, Decision, verify_fresh
 from .search import MAX_EXACT_PER_LEVEL, MAX_SCREENS_PER_LEVEL, Screened, Tally
 
 if TYPE_CHECKING:  # pragma: no cover

@@ -10,10 +10,11 @@ from typing import Any
 
 import pytest
 
+from rockfall_design.judge.looks import LookResidual, LookValues
 from rockfall_design.judge.sequential import Verdict, plan_looks
 from rockfall_design.optimiser import settle
 from rockfall_design.optimiser.alternatives import Alternative, Listed
-from rockfall_design.optimiser.decide import Decision, LookResidual, LookValues
+from rockfall_design.optimiser.decide import Decision
 from rockfall_design.optimiser.driver import bare_slope
 from rockfall_design.optimiser.scenario import set_up
 from rockfall_design.optimiser.search import Tally
@@ -197,7 +198,7 @@ def test_a_marginal_designs_values_are_json_whatever_its_bounds():
     import json
     import math
 
-    from rockfall_design.optimiser.decide import look_values, rocks_to_decide
+    from rockfall_design.judge.looks import look_values, rocks_to_decide
 
     c = Check(name="energy_factor", value=0.9, target=1.0, ok=False, bound=0.5,
               optimistic=math.inf)

@@ -5,9 +5,10 @@ from __future__ import annotations
 from types import SimpleNamespace
 from typing import Any
 
+from rockfall_design.judge.looks import LookValues
 from rockfall_design.judge.sequential import Verdict
 from rockfall_design.optimiser.alternatives import Alternative
-from rockfall_design.optimiser.decide import Decision, LookValues
+from rockfall_design.optimiser.decide import Decision
 from rockfall_design.optimiser.search import Tally
 from rockfall_design.optimiser.settle import FamilyDecision
 
