@@ -94,7 +94,7 @@ def build_concept(project: Project, registry: Registry) -> SafetyConcept:
                 "design block: choose a concept that uses it (uni11211, onr24810) or remove "
                 "rocks.design_block"))
         # Bounded at the concept's confidence; a look of the optimiser at another
-        # confidence keeps these bounds (optimiser.decide.look_concept).
+        # confidence keeps these bounds (judge.looks.look_concept).
         concept.design_block = design_block_of(project, params.confidence)
     return concept
 

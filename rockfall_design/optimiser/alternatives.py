@@ -19,7 +19,7 @@ from ..judge.sequential import LookSchedule
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
     from ..studies.scenarios import ScenarioRun
-from .decide import rocks_to_decide
+from ..judge.looks import LookValues, rocks_to_decide
 
 #: Designs that miss their targets on the point values of the search rocks, but not
 #: with confidence, decided per family when cheaper than its design (cheapest first).
@@ -91,7 +91,7 @@ class Alternative:
     fresh_looks: dict[str, Any] | None = None
     proof: str = ""
     dominated: str = ""
-    marginal: list[dict[str, Any]] = field(default_factory=list)
+    marginal: list[Listed] = field(default_factory=list)
     rejected: int = 0
     undecided: int = 0  # cheaper designs left undecided by a budget (cheapest listed)
 
@@ -120,7 +120,7 @@ class Alternative:
             "dominated": self.dominated or None,
             "evaluations": self.evaluations,
             "exact_evaluations": self.exact_evaluations,
-            "marginal": self.marginal,
+            "marginal": [m.to_json() for m in self.marginal],
             "undecided": self.undecided,
         }
 
@@ -143,6 +143,8 @@ class OptimisationResult:
     exact_evaluations: int = 0
     rocks_simulated: int = 0
     looks: LookSchedule | None = None
+    #: The designs listed cheaper than the chosen one, as their JSON
+    #: (:meth:`Listed.to_json`): what the report and the browser app read.
     marginal: list[dict[str, Any]] = field(default_factory=list)
     decided: int = 0
     bare_slope: dict[str, Any] | None = None
@@ -161,7 +163,7 @@ class OptimisationResult:
             "rocks_simulated": self.rocks_simulated,
             "edit_runs": self.edit_runs,
             "currency": self.currency,
-            "alternatives": [a.as_dict() for a in self.alternatives],
+            "alternatives": [self.alternative_json(a) for a in self.alternatives],
             # the chosen design, the same object as the Python API's ``best``;
             # ``best_name`` is the string ``best`` was, kept for older readers
             "best": None if self.best is None else self.best.as_dict(),
@@ -175,6 +177,10 @@ class OptimisationResult:
                 "rocks": list(self.looks.sizes), "confidence": self.looks.confidence,
                 "look_confidence": self.looks.look_confidence},
         }
+
+    def alternative_json(self, alt: Alternative) -> dict[str, Any]:
+        """A family's entry of ``alternatives`` in :meth:`summary`."""
+        return alt.as_dict()
 
 
 @dataclass
@@ -206,14 +212,14 @@ class AcrossResult(OptimisationResult):
                 "per_scenario": info.get("per_scenario"), "binding": info.get("binding"),
                 "next_cheaper": info.get("next_cheaper")}
 
+    def alternative_json(self, alt: Alternative) -> dict[str, Any]:
+        """A family's entry, with its design's row in each scenario and the binding one."""
+        info = self.per_family.get(alt.name, {})
+        return {**alt.as_dict(), "scenarios": info.get("per_scenario"),
+                "binding": info.get("binding")}
+
     def summary(self) -> dict[str, Any]:
-        out = super().summary()
-        for alt in out["alternatives"]:
-            info = self.per_family.get(alt["name"], {})
-            alt["scenarios"] = info.get("per_scenario")
-            alt["binding"] = info.get("binding")
-        out["scenarios"] = self.scenarios_block()
-        return out
+        return {**super().summary(), "scenarios": self.scenarios_block()}
 
 
 def fresh_failures(fresh: Evaluation) -> str:
@@ -227,22 +233,52 @@ def measure_dicts(measures: Sequence[ProtectiveMeasure]) -> list[dict[str, Any]]
     return [{"type": m.kind, **m.params.model_dump(mode="json")} for m in measures]
 
 
-def listed_entry(family: str, measures: Sequence[ProtectiveMeasure], labels: Sequence[str],
-                 cost: float, *, rocks: int | None, values: dict[str, Any] | None,
-                 reason: str, decided: bool, margin_undecided: bool = False,
-                 short_of_margin: bool = False) -> dict[str, Any]:
-    """A cheaper design listed as marginal or undecided (``marginal`` in --json).
+@dataclass
+class Listed:
+    """A cheaper design listed as marginal or undecided beside a family's design.
 
-    ``values`` are the look's point values and bounds (:func:`~.decide.look_values`), None
-    for a design across scenarios; ``rocks_to_decide`` follows from them (None
-    when they hold: ``margin_undecided``, the checker's margin is what is open).
+    ``values`` are the look's point values and bounds
+    (:func:`~rockfall_design.judge.looks.look_values`), None for a design across
+    scenarios; ``rocks_to_decide`` follows from them (None when they hold:
+    ``margin_undecided``, the checker's margin is what is open).
     ``short_of_margin``: it holds with its bounds, but falls short of the
     checker's margin with confidence (listed so that the engineer knows of it).
+    :meth:`to_json` is its entry of ``marginal`` in --json.
     """
-    return {"name": family, "family": family, "measures": measure_dicts(measures),
-            "labels": list(labels), "cost": round(float(cost), 2), "rocks": rocks,
-            "rocks_to_decide": None if values is None or margin_undecided or short_of_margin
-            else rocks_to_decide(values),
-            "values": values, "reason": reason, "decided": decided,
-            "margin_undecided": bool(margin_undecided),
-            "short_of_margin": bool(short_of_margin)}
+
+    family: str
+    measures: list[dict[str, Any]]
+    labels: list[str]
+    cost: float
+    rocks: int | None
+    values: LookValues | None
+    reason: str
+    decided: bool
+    margin_undecided: bool = False
+    short_of_margin: bool = False
+
+    @property
+    def rocks_to_decide(self) -> int | None:
+        """About how many rocks would decide it
+        (:func:`~rockfall_design.judge.looks.rocks_to_decide`)."""
+        if self.values is None or self.margin_undecided or self.short_of_margin:
+            return None
+        return rocks_to_decide(self.values)
+
+    def to_json(self) -> dict[str, Any]:
+        return {"name": self.family, "family": self.family, "measures": self.measures,
+                "labels": self.labels, "cost": self.cost, "rocks": self.rocks,
+                "rocks_to_decide": self.rocks_to_decide,
+                "values": None if self.values is None else self.values.to_json(),
+                "reason": self.reason, "decided": self.decided,
+                "margin_undecided": self.margin_undecided,
+                "short_of_margin": self.short_of_margin}
+
+
+def listed_entry(family: str, measures: Sequence[ProtectiveMeasure], labels: Sequence[str],
+                 cost: float, *, rocks: int | None, values: LookValues | None,
+                 reason: str, decided: bool, margin_undecided: bool = False,
+                 short_of_margin: bool = False) -> Listed:
+    """A cheaper design listed as marginal or undecided (see :class:`Listed`)."""
+    return Listed(family, measure_dicts(measures), list(labels), round(float(cost), 2), rocks,
+                  values, reason, decided, bool(margin_undecided), bool(short_of_margin))

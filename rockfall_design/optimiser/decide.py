@@ -14,19 +14,29 @@ design the screening approximates (rocks breaking through or returned) or
 that edits the ground is looked at by exact runs. An admission by the
 screening is always confirmed by the exact run of the same rocks (the two
 agree where nothing is approximated; the exact run is what the report shows).
+Every look's verdict, with the checker's margin, is the judge's
+(:mod:`rockfall_design.judge.looks`).
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..judge.bounds import fraction_lower_bound, fraction_upper_bound
 from ..judge.evaluation import Evaluation, evaluate_design
+from ..judge.looks import (
+    LookValues,
+    checks_at,
+    judge_look,
+    look_concept,
+    look_values,
+    rejections,
+    rocks_to_decide,
+    with_margin,
+)
 from ..judge.margin import CheckerMargin
 from ..judge.plan import confidence_of
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
@@ -34,9 +44,8 @@ from ..plugins import guard
 from ..plugins.measure import Barrier
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..judge.design_spec import DesignSpec
     from ..plugins import Registry
-    from ..plugins.concept import Check, SafetyConcept
+    from ..plugins.concept import SafetyConcept
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
 
@@ -46,11 +55,7 @@ __all__ = [
     "SHORT",
     "Decider",
     "Decision",
-    "checker_margin",
     "decide",
-    "judge_look",
-    "look_concept",
-    "rocks_to_decide",
     "verify_fresh",
 ]
 
@@ -75,8 +80,10 @@ class Decision:
         Exact runs made.
     simulated : int
         Rocks simulated for this decision (exact runs and look screenings).
-    values : dict
-        Point values and bounds of the deciding look (see :func:`look_values`).
+    values : LookValues or None
+        Point values and bounds of the deciding look
+        (:func:`~rockfall_design.judge.looks.look_values`; None
+        across scenarios, which have one set each).
     schedule : LookSchedule or None
         The looks planned (:func:`decide` sets it).
     short_of_margin : bool
@@ -94,7 +101,7 @@ class Decision:
     looks: int = 1
     exact: int = 0
     simulated: int = 0
-    values: dict[str, Any] = field(default_factory=dict)
+    values: LookValues | None = None
     schedule: LookSchedule | None = None
     short_of_margin: bool = False
     margin_undecided: bool = False
@@ -108,247 +115,51 @@ class Decision:
 SHORT = "short of the checker's margin with confidence"
 
 
-def checker_margin(spec: DesignSpec, confidence: float) -> CheckerMargin | None:
-    """The project's checker's margin (``design.checker_power``; None: turned off)."""
-    power = spec.checker_power
-    return None if power is None else CheckerMargin(float(confidence), float(power))
-
-
-def look_concept(registry: Registry, concept: SafetyConcept, confidence: float) -> SafetyConcept:
-    """The project's safety concept with its bounds at a look's ``confidence``."""
-    params = concept.params.model_copy(update={"confidence": float(confidence)})
-    look = guard(registry).instantiate(type(concept), params)
-    # The design block keeps its bounds at the project's confidence: the
-    # survey is one fixed sample, looked at once, not the growing rock sample
-    # the looks' confidences are spent on.
-    look.design_block = concept.design_block
-    return look
-
-
-def _verdict_of(ev: Evaluation) -> Verdict:
-    if ev.holds_with_confidence:
-        return Verdict.ADMITTED
-    if ev.fails_with_confidence:
-        return Verdict.REJECTED
-    return Verdict.UNDECIDED
-
-
-def _checks_at(registry: Registry, concept: SafetyConcept, results: Sequence[Any],
-               confidence: float) -> list[list[Check]]:
-    """A look's checks again, its measures' ``results`` judged by ``concept`` with its
-    bounds at ``confidence`` (no rock runs)."""
-    judge = guard(registry).concept(look_concept(registry, concept, confidence))
-    return [judge.checks(res) for res in results]
-
-
-def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
-               checker_rocks: int,
-               last_checker_rocks: int | None = None) -> tuple[Verdict, list[str]]:
-    """A look's verdict, with the checker's margin (:mod:`rockfall_design.judge.margin`).
-
-    Parameters
-    ----------
-    ev : Evaluation
-        The look's exact run, judged at the look's confidence.
-    registry : Registry
-    margin : CheckerMargin or None
-        None: admitted when it holds with the look's bounds, as such.
-    checker_rocks : int
-        Rocks of the checker's check the margin is for, if this look decides.
-    last_checker_rocks : int, optional
-        Rocks of the checker's check if the last look decides (default
-        ``checker_rocks``). A design is rejected as short of the margin only
-        when it misses the margin for this check too: a larger check needs a
-        smaller margin, so a design short of the margin at an early look may
-        still show it at a later one; rejecting it early made the choice hang
-        on the seed (design_two_zones' 339,000 fence at seeds 14 and 15).
-
-    Returns
-    -------
-    verdict, notes : Verdict, list of str
-        REJECTED with ``notes`` empty: fails with confidence; with ``notes``
-        (one line): short of the margin with confidence, what and why.
-        UNDECIDED with ``notes`` (one line): it holds with the look's bounds,
-        but the margin is neither shown nor missed.
-    """
-    prot = ev.protect
-    return _with_margin(
-        _verdict_of(ev), lambda c: _checks_at(registry, ev.concept, ev.judgement.results, c),
-        [p.label for p in ev.placed],
-        None if prot is None else int(prot["reaching"]),
-        None if prot is None else float(prot["allowed_fraction"]),
-        ev.study.result.n, ev.confidence, margin, checker_rocks, last_checker_rocks)
-
-
-def _with_margin(verdict: Verdict, checks_at: Callable[[float], list[list[Check]]],
-                 labels: Sequence[str], reaching: int | None, allowed: float | None, n: int,
-                 confidence: float, margin: CheckerMargin | None,
-                 checker_rocks: int,
-                 last_checker_rocks: int | None = None) -> tuple[Verdict, list[str]]:
-    """:func:`judge_look` of any look: its verdict without the margin, its checks at any
-    confidence (``checks_at``), the rocks reaching the protected zone of its ``n``."""
-    if margin is None or verdict is Verdict.REJECTED:
-        return verdict, []
-    m = margin.at_look(confidence, n, checker_rocks, None if reaching is None else allowed)
-    # The margin's bounds are stricter than the look's: only what holds with the
-    # look's can hold with them (no checks again for the rest).
-    holds = verdict is Verdict.ADMITTED and all(
-        c.holds_with_confidence for cs in checks_at(m.admit) for c in cs)
-    if holds and reaching is not None and m.residual_rate is not None:
-        holds = fraction_upper_bound(reaching, n, confidence) <= m.residual_rate
-    if holds:
-        return Verdict.ADMITTED, []
-    power = f"{100 * margin.power:g} %"
-    # Short of the margin only if short of the smallest margin a later look
-    # could still ask for: the checker's check of the last look's rocks.
-    last = checker_rocks if last_checker_rocks is None else max(checker_rocks,
-                                                                last_checker_rocks)
-    if last != checker_rocks:
-        m = margin.at_look(confidence, n, last, None if reaching is None else allowed)
-
-    def why(rocks: int, than: str = "less than") -> str:
-        return (f"a check of {rocks:,} rocks at another seed would confirm it with "
-                f"{100 * margin.confidence:g} % confidence {than} {power} of the time")
-
-    short = []
-    for lab, cs in zip(labels, checks_at(m.short), strict=True):
-        for c in cs:
-            if c.ok_with_confidence is None:
-                missed = not c.ok
-            elif m.short_pessimistic:
-                # its pessimistic bound at `short` misses: not merely too few rocks
-                missed = c.bound is not None and not c.ok_with_confidence
-            else:
-                missed = c.rejects
-            if missed:
-                value = "-" if c.value is None else f"{c.value:.2f}"
-                short.append(f"{lab}: {c.name} {value}, target {c.target:.2f}")
-    if (reaching is not None and m.residual_rate is not None
-            and fraction_lower_bound(reaching, n, confidence) > m.residual_rate):
-        short.append(f"{reaching:,} of {n:,} rocks reach the protected zone")
-    if short:
-        return Verdict.REJECTED, [f"{'; '.join(short)} ({why(last)})"]
-    if verdict is Verdict.ADMITTED:
-        return Verdict.UNDECIDED, [
-            f"it holds with {100 * confidence:.4g} % confidence on {n:,} rocks, but neither "
-            f"shows nor misses the checker's margin ({why(checker_rocks, 'at least')})"]
-    return Verdict.UNDECIDED, []
-
-
 def _screen_verdict(sr: ScreenResult) -> Verdict:
     if sr.feasible:
         return Verdict.ADMITTED
     return Verdict.UNDECIDED if sr.near else Verdict.REJECTED
 
 
-def _finite(x: float | None) -> float | None:
-    """``x``, or None where it is not a finite number (JSON has no infinity: a factor
-    over a demand whose lower bound is 0 is unbounded)."""
-    return None if x is None or not math.isfinite(x) else float(x)
-
-
-def look_values(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
-                n: int, allowed: float | None, confidence: float) -> dict[str, Any]:
-    """Point values and both bounds of a look, for the report of a marginal design.
-
-    Returns ``{rocks, confidence, checks: [{measure, name, value, bound,
-    optimistic, target}], residual: {reaching, fraction, lower, upper,
-    allowed}}`` (``residual`` None without a protected zone).
-    """
-    rows = [{"measure": lab, "name": c.name, "value": _finite(c.value),
-             "bound": _finite(c.bound), "optimistic": _finite(c.optimistic),
-             "target": c.target, "unit": c.unit}
-            for lab, cs in zip(labels, checks, strict=True) for c in cs]
-    res = None
-    if residual is not None and allowed is not None:
-        res = {"reaching": int(residual), "fraction": residual / max(n, 1),
-               "lower": fraction_lower_bound(residual, n, confidence),
-               "upper": fraction_upper_bound(residual, n, confidence),
-               "allowed": allowed}
-    return {"rocks": int(n), "confidence": confidence, "checks": rows, "residual": res}
-
-
-def rocks_to_decide(values: dict[str, Any]) -> int | None:
-    """About how many rocks would decide a marginal design (None: it sits on the target).
-
-    Each bound's distance from its point value shrinks about as 1/sqrt(n)
-    (order statistics and Clopper-Pearson alike): a check or residual whose
-    point value is ``d`` from the target and whose bounds are ``w`` from the
-    value at ``n`` rocks is decided at about ``n (w / d)**2`` rocks. The
-    largest such count over the undecided items.
-    """
-    n = values["rocks"]
-    need = 0.0
-    for c in values["checks"]:
-        v, t = c["value"], c["target"]
-        if v is None:
-            continue
-        sides = [abs(b - v) for b in (c["bound"], c["optimistic"])
-                 if b is not None and math.isfinite(b)]
-        if not sides:
-            continue
-        w, d = max(sides), abs(v - t)
-        holds = (c["bound"] is not None and (c["bound"] >= t if v >= t else c["bound"] <= t))
-        rejects = c["optimistic"] is not None and not (
-            c["optimistic"] >= t if v >= t else c["optimistic"] <= t)
-        if holds or rejects:
-            continue
-        if d <= 0.0:
-            return None
-        need = max(need, n * (w / d) ** 2)
-    r = values.get("residual")
-    if r is not None and r["upper"] > r["allowed"] and r["lower"] <= r["allowed"]:
-        d = abs(r["fraction"] - r["allowed"])
-        w = max(r["upper"] - r["fraction"], r["fraction"] - r["lower"])
-        if d <= 0.0:
-            return None
-        need = max(need, n * (w / d) ** 2)
-    return int(math.ceil(need)) if need > n else None
-
-
-def _reason(verdict: Verdict, values: dict[str, Any], failures: Sequence[str],
+def _reason(verdict: Verdict, values: LookValues, failures: Sequence[str],
             short: Sequence[str] = ()) -> str:
-    conf = f"{100 * values['confidence']:.4g} %"
+    conf = f"{100 * values.confidence:.4g} %"
     if verdict is Verdict.REJECTED and short:
         return (f"short of the checker's margin with {conf} confidence on "
-                f"{values['rocks']:,} rocks: " + "; ".join(short))
+                f"{values.rocks:,} rocks: " + "; ".join(short))
     if short:  # marginal: holds, the margin undecided
         return "marginal: " + "; ".join(short) + "; more rocks would decide it (--max-rocks)"
     if verdict is Verdict.REJECTED:
-        return f"fails with {conf} confidence on {values['rocks']:,} rocks: " + "; ".join(
+        return f"fails with {conf} confidence on {values.rocks:,} rocks: " + "; ".join(
             failures)
     need = rocks_to_decide(values)
     more = (f"about {need:,} rocks would decide it (--max-rocks)" if need else
             "its point value sits on the target")
     return (f"marginal: neither holds nor fails with {conf} confidence on "
-            f"{values['rocks']:,} rocks; {more}")
+            f"{values.rocks:,} rocks; {more}")
 
 
-def _rejections(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
-                n: int, allowed: float | None, confidence: float) -> list[str]:
-    """One line per check (and the residual) that fails with confidence."""
-    out = []
-    for lab, cs in zip(labels, checks, strict=True):
-        for c in cs:
-            if c.rejects:
-                unit = "" if c.unit == "-" else f" {c.unit}"
-                best = "-" if c.optimistic is None else f"{c.optimistic:.2f}{unit}"
-                out.append(f"{lab}: {c.name} at best {best}, target {c.target:.2f}{unit}")
-    if residual is not None and allowed is not None:
-        low = fraction_lower_bound(residual, n, confidence)
-        if residual > 0 and low > allowed:
-            out.append(f"{residual:,} of {n:,} rocks reach the protected zone: at least "
-                       f"{100 * low:.3f} %, allowed {100 * allowed:.3f} %")
-    return out or ["fails"]
+def _decided(dec: Decision, failures: Sequence[str], short: Sequence[str]) -> Decision:
+    """The decision at its last look: undecided there is MARGINAL; why, unless admitted.
+
+    ``short``: the checker's margin's one line (:func:`~rockfall_design.judge.looks.judge_look`).
+    """
+    if dec.verdict is Verdict.UNDECIDED:
+        dec.verdict = Verdict.MARGINAL
+    if dec.verdict is not Verdict.ADMITTED:
+        dec.reason = _reason(dec.verdict, dec.values, failures, short)
+    dec.short_of_margin = dec.verdict is Verdict.REJECTED and bool(short)
+    dec.margin_undecided = dec.verdict is Verdict.MARGINAL and bool(short)
+    return dec
 
 
-def _ev_values(ev: Evaluation, allowed: float | None) -> tuple[dict[str, Any], list[str]]:
-    prot = ev.protect
-    residual = None if prot is None else int(prot["reaching"])
+def _ev_values(ev: Evaluation, allowed: float | None) -> tuple[LookValues, list[str]]:
+    prot = ev.residual
+    residual = None if prot is None else int(prot.reaching)
     labels = [p.label for p in ev.placed]
     n = ev.study.result.n
     args = (ev.checks, labels, residual, n, allowed, ev.confidence)
-    return look_values(*args), _rejections(*args)
+    return look_values(*args), rejections(*args)
 
 
 def decide(
@@ -380,7 +191,7 @@ def decide(
         The schedule (default :func:`~rockfall_design.judge.sequential.plan_looks`
         from ``rocks`` to ``max_rocks`` at the concept's confidence).
     margin : CheckerMargin, optional
-        Admit only with the checker's margin (:func:`judge_look`).
+        Admit only with the checker's margin (:func:`~rockfall_design.judge.looks.judge_look`).
     checker_rocks : int, optional
         Rocks of the checker's check the margin is for (default: twice
         each look's rocks, the check design.yaml asks for if that look decides).
@@ -402,12 +213,8 @@ def decide(
         if verdict is Verdict.UNDECIDED and j + 1 < len(looks):
             continue
         values, fails = _ev_values(ev, allowed)
-        if verdict is Verdict.UNDECIDED:
-            verdict = Verdict.MARGINAL
-        reason = "" if verdict is Verdict.ADMITTED else _reason(verdict, values, fails, short)
-        return Decision(verdict, n, ev, reason, j + 1, j + 1, simulated, values, looks,
-                        verdict is Verdict.REJECTED and bool(short),
-                        verdict is Verdict.MARGINAL and bool(short))
+        return _decided(Decision(verdict, n, ev, "", j + 1, j + 1, simulated, values, looks),
+                        fails, short)
     raise AssertionError("a schedule has at least one look")  # pragma: no cover
 
 
@@ -467,12 +274,12 @@ class Decider:
     ----------
     screen : Screening
         The search rocks' screening (the first look), built with the look
-        concept (:func:`look_concept`).
+        concept (:func:`~rockfall_design.judge.looks.look_concept`).
     looks : LookSchedule
         ``looks.sizes[0]`` is ``screen.n``.
     margin : CheckerMargin, optional
         Admit only with the checker's margin for a check of twice the
-        deciding look's rocks (:func:`judge_look`).
+        deciding look's rocks (:func:`~rockfall_design.judge.looks.judge_look`).
     """
 
     def __init__(self, screen: Screening, looks: LookSchedule,
@@ -531,7 +338,7 @@ class Decider:
             return verdict, []
         s0 = self.screen
         reaching = None if s0.project.protect is None else int(sr.residual)
-        return _with_margin(verdict, lambda c: _checks_at(s0.registry, s0.concept, sr.results, c),
+        return with_margin(verdict, lambda c: checks_at(s0.registry, s0.concept, sr.results, c),
                             sr.labels, reaching, s0.allowed_fraction, n, s0.confidence,
                             self.margin, 2 * n, 2 * self.looks.sizes[-1])
 
@@ -573,10 +380,6 @@ class Decider:
         else:
             prot = None if s0.project.protect is None else sr.residual
             args = (sr.checks, sr.labels, prot, sizes[j], allowed, s0.confidence)
-            values, fails = look_values(*args), _rejections(*args)
-        if verdict is Verdict.UNDECIDED:
-            verdict = Verdict.MARGINAL
-        reason = "" if verdict is Verdict.ADMITTED else _reason(verdict, values, fails, short)
-        return Decision(verdict, sizes[j], ev, reason, j + 1, exact, simulated, values,
-                        short_of_margin=verdict is Verdict.REJECTED and bool(short),
-                        margin_undecided=verdict is Verdict.MARGINAL and bool(short))
+            values, fails = look_values(*args), rejections(*args)
+        return _decided(Decision(verdict, sizes[j], ev, "", j + 1, exact, simulated, values),
+                        fails, short)

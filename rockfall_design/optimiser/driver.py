@@ -30,6 +30,7 @@ from .alternatives import (
     SEARCH_SEED,
     AcrossResult,
     Alternative,
+    Listed,
     OptimisationResult,
 )
 from .scenario import Scenario, set_up
@@ -74,7 +75,7 @@ class FamiliesSearched:
     best: Alternative | None
     exact_evaluations: int
     rocks_simulated: int
-    marginal: list[dict[str, Any]]
+    marginal: list[Listed]
 
 
 def search_families(
@@ -142,8 +143,8 @@ def search_families(
     best = min(pool, key=lambda a: a.cost) if pool else None
     # Marginal designs cheaper than the chosen one (all of them when none holds).
     top = math.inf if best is None else best.cost
-    marginal = sorted((m for a in alternatives for m in a.marginal if m["cost"] < top),
-                      key=lambda m: m["cost"])
+    marginal = sorted((m for a in alternatives for m in a.marginal if m.cost < top),
+                      key=lambda m: m.cost)
     return FamiliesSearched(alternatives=alternatives, best=best, exact_evaluations=exact_total,
                             rocks_simulated=simulated, marginal=marginal)
 
@@ -264,7 +265,7 @@ def search_family(scs: Sequence[Scenario], required: int,
             break
         # What was listed as cheaper than the earlier choice and is not
         # cheaper than this one is no longer an alternative to it.
-        alt.marginal = [m for m in alt.marginal if m["cost"] < alt.cost]
+        alt.marginal = [m for m in alt.marginal if m.cost < alt.cost]
     if not alt.holds_on_fresh_rocks and not alt.dominated:
         alt.reason = alt.reason or family.cause()
     elif alt.holds:
@@ -317,7 +318,7 @@ def _result(scs: Sequence[Scenario], searched: FamiliesSearched, reason: str, s:
         confidence=scs[0].looks.confidence, exact_evaluations=searched.exact_evaluations,
         rocks_simulated=searched.rocks_simulated + sum(
             sc.screen.n + sc.screen.edit_rocks + sc.decider.simulated for sc in scs),
-        marginal=searched.marginal, decided=sum(a.exact_evaluations
+        marginal=[m.to_json() for m in searched.marginal], decided=sum(a.exact_evaluations
                                                 for a in searched.alternatives))
     if across:
         return AcrossResult(**common, share=share, required=required,

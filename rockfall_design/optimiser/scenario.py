@@ -11,11 +11,12 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from ..judge.design_spec import DesignSpec, resolve_design, with_residual_target
+from ..judge.looks import checker_margin, look_concept
 from ..judge.plan import confidence_of, plan_for
 from ..judge.sequential import LookSchedule, plan_looks
 from ..studies.scenarios import ScenarioRun
 from .alternatives import FRESH_OFFSET
-from .decide import Decider, checker_margin, look_concept
+from .decide import Decider
 from .screening import Screening
 from .search import BarrierSlots
 

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..judge.looks import look_values
 from ..judge.sequential import LookSchedule, Verdict
 from ..run.reach import reaches_protected_zone
 from .alternatives import (
@@ -28,11 +29,12 @@ from .alternatives import (
     MAX_UNDECIDED_LISTED,
     MAX_UNJUDGED_FAILURES,
     Alternative,
+    Listed,
     fresh_failures,
     listed_entry,
     measure_dicts,
 )
-from .decide import SHORT, Decision, look_values, verify_fresh
+from .decide import SHORT, Decision, verify_fresh
 from .search import MAX_EXACT_PER_LEVEL, MAX_SCREENS_PER_LEVEL, Screened, Tally
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -54,32 +56,49 @@ class ScenarioDecision(Decision):
     ----------
     per_scenario : list of Decision or None
         Each scenario's decision (None: not decided there).
-    rows : list of dict
-        Each scenario's row of the report (``index``, ``values``, ``seed``,
-        ``admitted``, ``decision_rocks``, ``margin``, ``binds_at``,
-        ``holds_on_fresh_rocks``, ``fresh_seed``, ``fresh_rocks``, ``reason``).
+    rows : list of ScenarioRow
+        Each scenario's row of the report.
     failed_in : list of int
         Indices (into the scenarios) of those where it failed or was marginal.
     """
 
     per_scenario: list[Decision | None] = field(default_factory=list)
-    rows: list[dict[str, Any]] = field(default_factory=list)
+    rows: list[ScenarioRow] = field(default_factory=list)
     failed_in: list[int] = field(default_factory=list)
 
     def held(self) -> list[int]:
         """The scenarios where it was admitted and held on fresh rocks."""
         return [j for j, r in enumerate(self.rows)
-                if r["admitted"] and r["holds_on_fresh_rocks"]]
+                if r.admitted and r.holds_on_fresh_rocks]
 
 
-def _row(sc: Scenario) -> dict[str, Any]:
-    return {**sc.run.head(), "admitted": False, "decision_rocks": None, "margin": None,
-            "binds_at": "", "holds_on_fresh_rocks": None, "fresh_seed": None,
-            "fresh_rocks": None, "reason": ""}
+@dataclass
+class ScenarioRow:
+    """A design's row in one scenario (``per_scenario`` in --json, through :meth:`to_json`).
+
+    ``head`` is the scenario's ``{index, values, seed}``
+    (:meth:`~rockfall_design.studies.scenarios.ScenarioRun.head`); ``margin``
+    and ``binds_at`` are the deciding run's slack and where it binds
+    (:meth:`~rockfall_design.judge.evaluation.Evaluation.margin`).
+    """
+
+    head: dict[str, Any]
+    admitted: bool = False
+    decision_rocks: int | None = None
+    margin: float | None = None
+    binds_at: str = ""
+    holds_on_fresh_rocks: bool | None = None
+    fresh_seed: int | None = None
+    fresh_rocks: int | None = None
+    reason: str = ""
+
+    def to_json(self) -> dict[str, Any]:
+        return {**self.head, **{f.name: getattr(self, f.name) for f in fields(self)
+                                if f.name != "head"}}
 
 
 def _aggregate(scs: Sequence[Scenario], required: int, per: list[Decision | None],
-               rows: list[dict[str, Any]], failed: list[int]) -> ScenarioDecision:
+               rows: list[ScenarioRow], failed: list[int]) -> ScenarioDecision:
     """The decision across the scenarios from each one's (see :class:`ScenarioDecision`)."""
     decided = [d for d in per if d is not None]
     if len(scs) == 1:
@@ -93,7 +112,7 @@ def _aggregate(scs: Sequence[Scenario], required: int, per: list[Decision | None
     verdict = (Verdict.ADMITTED if len(admitted) >= required else
                Verdict.REJECTED if k - len(rejected) < required else Verdict.MARGINAL)
     reason = "" if verdict is Verdict.ADMITTED else "; ".join(
-        f"scenario {scs[j].run.index}: {rows[j]['reason']}" for j in failed if rows[j]["reason"])
+        f"scenario {scs[j].run.index}: {rows[j].reason}" for j in failed if rows[j].reason)
     ev = None
     if admitted:
         ev = per[min(admitted, key=lambda j: _margin(rows[j]))].evaluation
@@ -108,8 +127,8 @@ def _aggregate(scs: Sequence[Scenario], required: int, per: list[Decision | None
         per_scenario=per, rows=rows, failed_in=failed)
 
 
-def _margin(row: dict[str, Any]) -> float:
-    return math.inf if row["margin"] is None else row["margin"]
+def _margin(row: ScenarioRow) -> float:
+    return math.inf if row.margin is None else row.margin
 
 
 def decide_in_scenarios(scs: Sequence[Scenario], required: int, d: Screened) -> ScenarioDecision:
@@ -122,27 +141,27 @@ def decide_in_scenarios(scs: Sequence[Scenario], required: int, d: Screened) -> 
     enough are admitted or too few are left.
     """
     k = len(scs)
-    rows = [_row(sc) for sc in scs]
+    rows = [ScenarioRow(sc.run.head()) for sc in scs]
     screened = [d.result if j == d.scenario else sc.screen.screen(d.measures)
                 for j, sc in enumerate(scs)]
     passing = [j for j, sr in enumerate(screened) if sr.feasible or sr.near]
     failed = [j for j in range(k) if j not in passing]
     for j in failed:
-        rows[j]["reason"] = "fails the screening"
+        rows[j].reason = "fails the screening"
     per: list[Decision | None] = [None] * k
     passing.sort(key=lambda j: (-screened[j].violation, screened[j].feasible))
     for j in passing:
         if k - len(failed) < required:
             break  # too few scenarios left to admit it
         dec = per[j] = scs[j].decider.decide(d.measures, screened[j])
-        rows[j]["decision_rocks"] = dec.rocks
+        rows[j].decision_rocks = dec.rocks
         if dec.evaluation is not None:
-            slack, rows[j]["binds_at"] = dec.evaluation.margin()
-            rows[j]["margin"] = round(slack, 4) if math.isfinite(slack) else None
+            slack, rows[j].binds_at = dec.evaluation.margin()
+            rows[j].margin = round(slack, 4) if math.isfinite(slack) else None
         if dec.admitted:
-            rows[j]["admitted"] = True
+            rows[j].admitted = True
         else:
-            rows[j]["reason"] = dec.reason
+            rows[j].reason = dec.reason
             failed.append(j)
     return _aggregate(scs, required, per, rows, failed)
 
@@ -157,7 +176,7 @@ def verify_in_scenarios(scs: Sequence[Scenario], required: int, measures: Sequen
     Fills ``dec.rows``' fresh columns.
     """
     k, rows = len(scs), dec.rows
-    admitted = [j for j, r in enumerate(rows) if r["admitted"]]
+    admitted = [j for j, r in enumerate(rows) if r.admitted]
     per: list[Decision | None] = [None] * k
     failed = [j for j in range(k) if j not in admitted]
     holding = 0
@@ -169,12 +188,12 @@ def verify_in_scenarios(scs: Sequence[Scenario], required: int, measures: Sequen
             rocks=max(2 * first.rocks, int(sc.spec.fresh_rocks or 0)), seed=sc.fresh_seed,
             max_rocks=sc.looks.sizes[-1], margin=sc.decider.margin)
         held = check.verdict is Verdict.ADMITTED
-        rows[j].update(holds_on_fresh_rocks=held, fresh_seed=sc.fresh_seed,
-                       fresh_rocks=check.rocks)
+        rows[j].holds_on_fresh_rocks, rows[j].fresh_seed = held, sc.fresh_seed
+        rows[j].fresh_rocks = check.rocks
         if held:
             holding += 1
             continue
-        rows[j]["reason"] = (("marginal" if check.verdict is Verdict.MARGINAL else "fails")
+        rows[j].reason = (("marginal" if check.verdict is Verdict.MARGINAL else "fails")
                              + " on fresh rocks: " + check.reason)
         failed.append(j)
         if holding + len(admitted) - i - 1 < required:
@@ -188,7 +207,7 @@ def verify_in_scenarios(scs: Sequence[Scenario], required: int, measures: Sequen
     if k > 1 and fresh.admitted:
         bind = min(dec.held(), key=lambda j: _margin(rows[j]))
         fresh.evaluation, fresh.schedule = per[bind].evaluation, per[bind].schedule
-        fresh.rocks = max(rows[j]["fresh_rocks"] for j in dec.held())
+        fresh.rocks = max(rows[j].fresh_rocks for j in dec.held())
     return fresh
 
 
@@ -307,8 +326,8 @@ class FamilyDecision:
         cheaper = sorted(((d, why) for d, why in self.skipped if d.cost < top),
                          key=lambda t: (t[0].cost, t[0].result.violation))
         alt.undecided = len(cheaper)
-        decided = {round(m["cost"], 2) for m in alt.marginal}
-        listed: list[dict[str, Any]] = []
+        decided = {round(m.cost, 2) for m in alt.marginal}
+        listed: list[Listed] = []
         for d, why in cheaper:
             key = round(float(d.cost), 2)
             screen = self.scenarios[d.scenario].screen
@@ -318,9 +337,9 @@ class FamilyDecision:
                 continue
             decided.add(key)
             listed.append(self._undecided_entry(d, why))
-        alt.marginal = sorted(alt.marginal + listed, key=lambda m: m["cost"])
+        alt.marginal = sorted(alt.marginal + listed, key=lambda m: m.cost)
 
-    def _undecided_entry(self, d: Screened, why: str) -> dict[str, Any]:
+    def _undecided_entry(self, d: Screened, why: str) -> Listed:
         """A cheaper design a budget left undecided, as its stream's search rocks saw it.
 
         Listed beside the marginal designs so that the report names every cheaper
@@ -423,22 +442,22 @@ class FamilyDecision:
         self.unjudged_failures += unjudged
         return False
 
-    def _entry(self, d: Screened, dec: Decision, reason: str) -> dict[str, Any]:
+    def _entry(self, d: Screened, dec: Decision, reason: str) -> Listed:
         """A design decided and not chosen, as the report lists it."""
         return listed_entry(self.alt.name, d.measures, d.result.labels, d.cost, rocks=dec.rocks,
-                            values=dec.values or None, reason=reason, decided=True,
+                            values=dec.values, reason=reason, decided=True,
                             margin_undecided=dec.margin_undecided,
                             short_of_margin=dec.short_of_margin)
 
     def _listed_at(self, cost: float) -> bool:
         """Is a design of this cost already listed beside the family's design?"""
-        return any(round(m["cost"], 2) == round(float(cost), 2) for m in self.alt.marginal)
+        return any(round(m.cost, 2) == round(float(cost), 2) for m in self.alt.marginal)
 
-    def _keep(self, entry: dict[str, Any]) -> None:
+    def _keep(self, entry: Listed) -> None:
         """Add a marginal or undecided entry; the family keeps the cheapest ones."""
         marginal = self.alt.marginal
         marginal.append(entry)
-        marginal.sort(key=lambda m: m["cost"])
+        marginal.sort(key=lambda m: m.cost)
         del marginal[MAX_MARGINAL_PER_FAMILY:]
 
     def _failed(self, d: Screened, dec: ScenarioDecision) -> None:
@@ -508,17 +527,17 @@ class FamilyDecision:
         alt.measures = sorted(d.measures, key=lambda m: m.x)
         alt.cost = d.cost
         alt.evaluation = ev
-        alt.decision_rocks = max(rows[j]["decision_rocks"] for j in held)
+        alt.decision_rocks = max(rows[j].decision_rocks for j in held)
         alt.checks = [c.as_dict() for cs in ev.checks for c in cs]
-        alt.residual = ev.protect["reaching"] if ev.protect else None
+        alt.residual = ev.residual.reaching if ev.residual is not None else None
         alt.holds_on_fresh_rocks = True
-        alt.fresh_rocks, alt.fresh_seed = check.rocks, rows[bind]["fresh_seed"]
+        alt.fresh_rocks, alt.fresh_seed = check.rocks, rows[bind].fresh_seed
         if check.schedule is not None:
             margin = self.scenarios[bind].decider.margin
             alt.fresh_looks = {"rocks": list(check.schedule.sizes),
                                "look_confidence": check.schedule.look_confidence,
                                "checker_power": None if margin is None else margin.power}
-        alt.fresh_residual = fresh.protect["reaching"] if fresh.protect else None
+        alt.fresh_residual = fresh.residual.reaching if fresh.residual is not None else None
         alt.fresh_failures = fresh.failures()
         alt.fresh_statements = fresh.statements()
         alt.feasible = True  # admitted with confidence on the deciding rocks
@@ -527,9 +546,9 @@ class FamilyDecision:
         alt.reason = ""
         cheaper = [(c, e) for c, e in self.failed if c < d.cost]
         self.scenarios_report = {
-            "per_scenario": rows,
-            "binding": {**self.scenarios[bind].run.head(), "margin": rows[bind]["margin"],
-                        "binds_at": rows[bind]["binds_at"]},
+            "per_scenario": [r.to_json() for r in rows],
+            "binding": {**self.scenarios[bind].run.head(), "margin": rows[bind].margin,
+                        "binds_at": rows[bind].binds_at},
             "next_cheaper": max(cheaper, key=lambda t: t[0])[1] if cheaper else None,
         }
 
@@ -569,7 +588,7 @@ def proof_line(alt: Alternative, tally: Tally, looks: LookSchedule, where: str =
     space = ("designs of its family the search over its ground edits evaluated"
              if tally.searched else "designs of its family in the space")
     conf = f"{100 * looks.confidence:g} %"
-    k = sum(1 for m in alt.marginal if m.get("decided", True) and not m.get("short_of_margin"))
+    k = sum(1 for m in alt.marginal if m.decided and not m.short_of_margin)
     marginal = ""
     if k or alt.undecided:
         parts = [f"is marginal ({k})"] if k else []

@@ -10,9 +10,10 @@ from typing import Any
 
 import pytest
 
+from rockfall_design.judge.looks import LookResidual, LookValues
 from rockfall_design.judge.sequential import Verdict, plan_looks
 from rockfall_design.optimiser import settle
-from rockfall_design.optimiser.alternatives import Alternative
+from rockfall_design.optimiser.alternatives import Alternative, Listed
 from rockfall_design.optimiser.decide import Decision
 from rockfall_design.optimiser.driver import bare_slope
 from rockfall_design.optimiser.scenario import set_up
@@ -79,7 +80,7 @@ def _screen() -> Any:
 
 def test_cheaper_designs_a_budget_left_undecided_are_counted_and_listed_once_per_cost():
     alt = Alternative(name="fence", family=(0,))
-    alt.marginal = [{"cost": 20.0, "decided": True, "labels": ["m"]}]
+    alt.marginal = [Listed("fence", [], ["m"], 20.0, None, None, "", decided=True)]
     skipped = [(_design(10.0, 1, 0.5), "budget"), (_design(10.0, 2, 0.1), "budget"),
                (_design(20.0, 3, 0.1), "budget"), (_design(30.0, 4, 0.1), "budget"),
                (_design(35.0, 6, 0.1, value=0.5), "budget"), (_design(50.0, 5, 0.1), "budget")]
@@ -89,22 +90,24 @@ def test_cheaper_designs_a_budget_left_undecided_are_counted_and_listed_once_per
     family.list_undecided(40.0)
     # Five designs are cheaper than the family's design (40); the one at 50 is not.
     assert alt.undecided == 5
-    costs = [m["cost"] for m in alt.marginal]
+    costs = [m.cost for m in alt.marginal]
     # One entry per cost, the decided marginal one at 20 kept, sorted by cost; the one
     # at 35, which fails with confidence as the screening counts it, is not listed.
     assert costs == [10.0, 20.0, 30.0]
     first = alt.marginal[0]
-    assert first["decided"] is False and first["labels"] == ["fence at 10.0"]
-    assert "not decided (budget)" in first["reason"] and "4,603 search rocks" in first["reason"]
-    assert first["values"]["residual"]["reaching"] == 3
-    assert alt.marginal[1]["decided"] is True
+    assert first.decided is False and first.labels == ["fence at 10.0"]
+    assert "not decided (budget)" in first.reason and "4,603 search rocks" in first.reason
+    assert first.values.residual.reaching == 3
+    assert first.to_json()["values"]["residual"]["reaching"] == 3
+    assert alt.marginal[1].decided is True
 
 
 def test_the_proof_line_names_marginal_and_undecided_designs():
     from collections import Counter
 
     alt = Alternative(name="fence", family=(0,))
-    alt.marginal = [{"cost": 1.0, "decided": True}, {"cost": 2.0, "decided": False}]
+    alt.marginal = [Listed("fence", [], [], 1.0, None, None, "", decided=True),
+                    Listed("fence", [], [], 2.0, None, None, "", decided=False)]
     alt.undecided = 7
     tally = SimpleNamespace(reasons=Counter({"height": 3}), capped_levels=0, searched=False,
                             designs=12)
@@ -171,7 +174,7 @@ def test_a_design_across_scenarios_is_rejected_only_where_it_fails_with_confiden
     assert dec.exact == sum(p is not None for p in dec.per_scenario)
     if verdict is not Verdict.ADMITTED:
         assert all(f"scenario {j}:" in dec.reason for j in failed_in)
-        assert dec.values == {}  # one set of values per scenario: none for the design
+        assert dec.values is None  # one set of values per scenario: none for the design
 
 
 def test_a_residual_of_nothing_is_said_at_once(registry):
@@ -195,23 +198,21 @@ def test_a_marginal_designs_values_are_json_whatever_its_bounds():
     import json
     import math
 
-    from rockfall_design.optimiser.decide import look_values, rocks_to_decide
+    from rockfall_design.judge.looks import look_values, rocks_to_decide
 
     c = Check(name="energy_factor", value=0.9, target=1.0, ok=False, bound=0.5,
               optimistic=math.inf)
     v = look_values([[c]], ["fence"], 3, 4603, 0.001, 0.99)
-    json.dumps(v, allow_nan=False)
-    assert v["checks"][0]["optimistic"] is None and v["checks"][0]["bound"] == 0.5
+    json.dumps(v.to_json(), allow_nan=False)
+    assert v.checks[0].optimistic is None and v.checks[0].bound == 0.5
     rocks_to_decide(v)
 
 
 def _settling(monkeypatch, verdict):
     """A family that decides one design admitted on 4,603 search rocks, with the fresh check's
     verdict forced to ``verdict``."""
-    values = {"rocks": 9206, "confidence": 0.9875, "checks": [],
-              "residual": {"reaching": 12, "fraction": 12 / 9206, "lower": 6e-4,
-                           "upper": 2.2e-3, "allowed": 1e-3}}
-    fresh = SimpleNamespace(results=[], checks=[], protect={"reaching": 12},
+    values = LookValues(9206, 0.9875, [], LookResidual(12, 12 / 9206, 6e-4, 2.2e-3, 1e-3))
+    fresh = SimpleNamespace(results=[], checks=[], residual=SimpleNamespace(reaching=12),
                             failures=lambda: [], statements=lambda: [],
                             margin=lambda: (0.1, "residual"))
     calls = []
@@ -247,8 +248,8 @@ def test_a_design_neither_held_nor_failed_on_fresh_rocks_is_listed_not_dropped(m
     assert family.decide(design) is False
     assert calls == [(9206, 1_000_010, 50_000)]  # twice the deciding rocks, up to the cap
     (entry,) = family.alt.marginal
-    assert entry["cost"] == 90_000.0 and entry["decided"] is True
-    assert "admitted on 4,603 search rocks; on fresh rocks" in entry["reason"]
+    assert entry.cost == 90_000.0 and entry.decided is True
+    assert "admitted on 4,603 search rocks; on fresh rocks" in entry.reason
     assert family.tallies[0].reasons["marginal on fresh rocks"] == 1
     assert not family.alt.holds_on_fresh_rocks and family.alt.rejected == 0
     assert family.simulated == 4603 + 18_412

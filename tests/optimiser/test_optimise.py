@@ -14,9 +14,10 @@ from hypothesis import strategies as st
 from rockfall_design.cli.program import main
 from rockfall_design.judge.candidates import build_candidate_measure
 from rockfall_design.judge.design_spec import resolve_design
+from rockfall_design.judge.looks import checker_margin
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import STATION_STEP_M, Screening, decide, optimise
-from rockfall_design.optimiser.decide import checker_margin, verify_fresh
+from rockfall_design.optimiser.decide import verify_fresh
 from rockfall_design.project import load_project_text
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -5,6 +5,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 from typing import Any
 
+from rockfall_design.judge.looks import LookValues
 from rockfall_design.judge.sequential import Verdict
 from rockfall_design.optimiser.alternatives import Alternative
 from rockfall_design.optimiser.decide import Decision
@@ -37,7 +38,7 @@ class _Marginal:
 
     def decide(self, measures, first):
         self.decided.append(first.labels[0])
-        values = {"rocks": 50_000, "confidence": 0.95, "checks": [], "residual": None}
+        values = LookValues(50_000, 0.95, [], None)
         return Decision(Verdict.MARGINAL, 50_000, None, reason="marginal", exact=1,
                         simulated=50_000, values=values)
 
@@ -61,4 +62,4 @@ def test_a_level_with_a_marginal_placement_spends_no_more_rocks_on_its_neighbour
     (skipped, why), = family.skipped
     assert skipped.result.labels == ["fence at 137 m"]
     assert "marginal at max_rocks" in why
-    assert [m["cost"] for m in family.alt.marginal if m["decided"]] == [339_000.0, 352_000.0]
+    assert [m.cost for m in family.alt.marginal if m.decided] == [339_000.0, 352_000.0]
