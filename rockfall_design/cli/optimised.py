@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..api import optimise
+from ..report.terminal import design_yaml, print_optimise
 from ..version import __version__
 from .common import (
     FIGURES,
@@ -14,6 +16,7 @@ from .common import (
     figures_and_report,
     stage_progress,
 )
+from .scenario_commands import across_design_yaml, print_across
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..report.outputs import OutputSet
@@ -44,8 +47,6 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     -------
     OptimiseResult
     """
-    from ..api import optimise
-    from ..report.terminal import design_yaml
 
     n = args.rocks or project.rocks.count
     prog, callback = stage_progress(sys.stderr.isatty())
@@ -62,7 +63,6 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
         out: Path = args.out
         if result.best is not None and project.design.scenarios is not None:
             # a design across a study's scenarios
-            from .scenario_commands import across_design_yaml
 
             files.write_text(out / "design.yaml", across_design_yaml(result, source, project))
         elif result.best is not None:
@@ -97,10 +97,8 @@ def print_optimised(result: Any, project: Any, summary: dict[str, Any] | None = 
     """The terminal report of ``optimise``: the verdict, the chosen design's design values
     (from ``design``, its check summary) and bill (from ``summary``), the alternatives,
     how sure, and the scenarios if any."""
-    from ..report.terminal import print_optimise
 
     print_optimise(result, project, summary=summary, design=design)
     if project.design.scenarios is not None:
-        from .scenario_commands import print_across
 
         print_across(result)

@@ -17,8 +17,7 @@ from __future__ import annotations
 import io
 import math
 from collections.abc import Mapping, Sequence
-from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib import colormaps
@@ -28,6 +27,7 @@ from matplotlib.figure import Figure
 from ..engine.columns import STOPPED
 from ..engine.trajectory import end_counts
 from ..run.passages import property_marks
+from .formats import FIGURE_FORMATS, save_figures, write_figure
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -35,7 +35,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..judge.evaluation import Evaluation
     from ..run.simulation import Study
     from ..run.streamed import StreamedStudy
-    from .outputs import OutputSet
 
 __all__ = [
     "RockfallFigure",
@@ -51,8 +50,6 @@ __all__ = [
     "no_stop_reason",
 ]
 
-#: File formats the figures can be written in (``--plot-format``).
-FIGURE_FORMATS = ("png", "svg", "pdf")
 
 #: Envelope points passed by fewer rocks than this are not drawn (when the
 #: project does not say otherwise): a percentile of a handful of rocks is noise.
@@ -540,70 +537,12 @@ def study_figures(
     }
 
 
-def save_figures(
-    figures: Mapping[str, Figure],
-    directory: str | Path,
-    formats: Sequence[str] = ("png",),
-    outputs: OutputSet | None = None,
-) -> list[Path]:
-    """Write every figure as ``directory/NAME.FORMAT`` for each format.
-
-    Parameters
-    ----------
-    figures : mapping of str to Figure
-    directory : path
-    formats : sequence of str
-        Some of :data:`FIGURE_FORMATS`.
-    outputs : OutputSet, optional
-        The command's output set: the files land when it commits. Without
-        one they land together on return.
-
-    Returns
-    -------
-    list of Path
-        The files written, in order.
-    """
-    from .outputs import OutputSet
-
-    if outputs is None:
-        with OutputSet() as own:
-            return save_figures(figures, directory, formats, own)
-    out = Path(directory)
-    written: list[Path] = []
-    for name, fig in figures.items():
-        for fmt in formats:
-            if fmt not in FIGURE_FORMATS:
-                raise ValueError(f"unknown figure format {fmt!r}; use one of "
-                                 f"{', '.join(FIGURE_FORMATS)}")
-            path = out / f"{name}.{fmt}"
-
-            def writer(fh: io.BufferedWriter, fig: Figure = fig, fmt: str = fmt) -> None:
-                _write_figure(fig, fh, fmt)
-
-            outputs.write_with(path, writer)
-            written.append(path)
-    return written
-
-
-#: Fixed metadata per format, so that the same run writes the same bytes.
-_FIXED_METADATA = {"svg": {"Date": None}, "pdf": {"CreationDate": None}}
-
-
-def _write_figure(fig: Figure, fh: IO[Any], fmt: str) -> None:
-    """Write ``fig`` in ``fmt`` to ``fh``: the one place the figures' file settings live."""
-    # A figure with a layout engine (the constrained layout) already fits its
-    # page; cropping it "tight" costs a second full draw for a few points of
-    # margin: 53 s against 40 s for a simulate's six figures in PNG and SVG
-    # (load 14, alternated runs). The fixed grids (passage panels) are cropped.
-    tight = "tight" if fig.get_layout_engine() is None else None
-    fig.savefig(fh, format=fmt, dpi=150, bbox_inches=tight,
-                metadata=_FIXED_METADATA.get(fmt, {}))
 
 
 def svg_document(fig: Figure) -> str:
     """The figure as a whole SVG file's text, as :func:`save_figures` writes it."""
     buf = io.StringIO()
-    _write_figure(fig, buf, "svg")
+    write_figure(fig, buf, "svg")
     return buf.getvalue()
 
 

@@ -12,11 +12,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from .rounding import round_value
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
 
 __all__ = [
     "chosen_name",
@@ -111,6 +112,8 @@ def alternatives_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
         (every check as ``name=value/target:ok``, for readers of earlier
         files).
     """
+    import pandas as pd  # heavy (a fifth of a second): only where a table is built
+
     best = chosen_name(summary)
     rows: list[dict[str, Any]] = []
     for a in summary.get("alternatives", []):
@@ -158,6 +161,8 @@ def alternatives_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
 
 def measures_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
     """One row per measure of a ``check`` summary: what the rocks did there and whether it holds."""
+    import pandas as pd  # heavy (a fifth of a second): only where a table is built
+
     rows = []
     for i, m in enumerate(summary.get("measures", [])):
         rows.append({
@@ -182,6 +187,8 @@ def measures_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
 
 def checks_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
     """One row per safety check of a ``check`` summary, with its target and verdict."""
+    import pandas as pd  # heavy (a fifth of a second): only where a table is built
+
     rows = []
     for i, m in enumerate(summary.get("measures", [])):
         for c in m.get("checks") or []:
@@ -249,6 +256,8 @@ def passages_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
         capacity), empty where there are none. A ground edit (ditch, berm)
         has no rows: no rock passes it at a station.
     """
+    import pandas as pd  # heavy (a fifth of a second): only where a table is built
+
     rows: list[dict[str, Any]] = []
     for j, st in enumerate(summary.get("stations") or []):
         block = {**st, "rocks": st.get("crossings")}
