@@ -22,9 +22,22 @@ from typing import TYPE_CHECKING, Any
 
 from .arguments import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .errors import InputError
+from .judge.evaluation import evaluate
+from .judge.plan import validate_plugin_sections
+from .plugins import load_registry
 from .project import Corridor
 from .project import load_corridor as _load_corridor
+from .project import load_project as _load
 from .results import DEFAULT_TRAJECTORIES, CheckResult, OptimiseResult, SimulationResult
+from .run.simulation import EXACT_ROCKS
+from .run.simulation import simulate as _simulate
+from .studies.corridor import COMMANDS, SectionOutcome, run_sections
+from .studies.paths import check_study
+
+# optimise, study, calibrate, compare and trial_run import their room where they
+# run: the optimiser imports scipy.optimize at its top, a study's and a
+# calibration's results matplotlib (their figures subclass its Figure) and a
+# calibration pandas, and simulate and check must not pay for them.
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -61,7 +74,6 @@ def default_registry(block: tuple[str, ...] = ()) -> Registry:
     A plugin that fails to load is named in a :class:`UserWarning`; the
     others are used.
     """
-    from .plugins import load_registry
 
     key = tuple(sorted(block))
     if key not in _REGISTRIES:
@@ -94,7 +106,6 @@ def load_project(path: str | os.PathLike[str], *, registry: Registry | None = No
     ProjectError
         The file is not a valid project: one line ``file:line: key.path: message``.
     """
-    from .project import load_project as _load
 
 
     project = _load(path)
@@ -160,7 +171,6 @@ def run_corridor(
     """
     # Imported here: the corridor's run loads the judge and the engine (numba), which
     # `import rockfall_design.api` does not.
-    from .studies.corridor import COMMANDS, run_sections
 
     if command not in COMMANDS:
         raise InputError(f"a corridor runs {', '.join(COMMANDS)}, not {command!r}")
@@ -182,7 +192,6 @@ def run_corridor(
 def _section_outcome(command: str, project: Project, rocks: int | None, seed: int,
                      registry: Registry) -> SectionOutcome:
     """One section's run of ``command`` through this API: its JSON, cost and result."""
-    from .studies.corridor import SectionOutcome  # as in run_corridor
 
     if command == "simulate":
         result: Any = simulate(project, rocks=rocks, seed=seed, trajectories=0)
@@ -277,7 +286,6 @@ def simulate(
         ``.summary`` (as ``--json``), ``.rocks`` (one row per rock),
         ``.stations``, ``.crossings``, ``.envelopes``, ``.plot()``.
     """
-    from .run.simulation import EXACT_ROCKS
 
     _checked(seed=seed, trajectories=trajectories)
     p = _project(project)
@@ -301,7 +309,6 @@ def run_simulation(project: Project, *, rocks: int | None, seed: int | None,
                    progress: bool | Callable[[int], None], trajectories: int,
                    on_chunk: Callable[[Study], None] | None = None) -> Study | StreamedStudy:
     """The run behind :func:`simulate` (and the CLI, which streams its tables to files)."""
-    from .run.simulation import simulate as _simulate
 
     n = _count(project, rocks)
     return _call(progress, n, _simulate, project=project, rocks=n, seed=seed,
@@ -360,7 +367,6 @@ def check(
         (DataFrames), ``.rocks`` (with ``caught_by_measure``), ``.crossings``,
         ``.plot()``.
     """
-    from .judge.evaluation import evaluate
 
     _checked(seed=seed, trajectories=trajectories)
     p = _project(project, registry)
@@ -653,8 +659,6 @@ def validate_project(project: Project, registry: Registry) -> None:
     PluginError
         Exit code 3, if a plugin misbehaves.
     """
-    from .judge.plan import validate_plugin_sections
-    from .studies.paths import check_study
 
     validate_plugin_sections(project, registry)
     if project.study is not None:

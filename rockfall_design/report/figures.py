@@ -26,8 +26,14 @@ from matplotlib.figure import Figure
 
 from ..engine.columns import STOPPED
 from ..engine.trajectory import end_counts
+from ..plugins.manager import plugin_code
+from ..plugins.measure import Barrier
 from ..run.passages import property_marks
-from .formats import FIGURE_FORMATS, save_figures, write_figure
+from .formats import (
+    CAPTIONS,
+    FIGURE_FORMATS,
+    save_figures,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -54,32 +60,6 @@ __all__ = [
 #: Envelope points passed by fewer rocks than this are not drawn (when the
 #: project does not say otherwise): a percentile of a handful of rocks is noise.
 DEFAULT_MIN_ROCKS_ENVELOPE = 30
-
-#: One sentence per figure, for reports.
-CAPTIONS = {
-    "profile": "Slope section (x and elevation in m, equal scales) with a sample of rock "
-    "centre paths, the rest positions, the analysis stations, the protected zone and the "
-    "measures (barriers with product, height and capacity).",
-    "envelopes": "Envelopes along the section of the passing height of the rock centre above "
-    "the ground (m), of the total kinetic energy (kJ) and of the translational speed (m/s), "
-    "over the rocks passing each point downslope for the first time; drawn only where enough "
-    "rocks pass (bottom: how many). Each barrier's heights and energies (nominal height, "
-    "capacity and any other figure its product gives) are ticks at its station.",
-    "stops": "Where the rocks ended along the section (count per bin): at rest, or held by a "
-    "measure where it held them (a colour per measure); the rocks that left the section are "
-    "a hatched bar beyond its end, with their count; the title says how every rock ended. "
-    "The ground below.",
-    "alternatives": "The optimiser's alternatives: cost of the cheapest design of each family "
-    "(admissible ones coloured, the chosen one marked), with the rocks still reaching the "
-    "protected zone and the check that binds or fails.",
-    "margins": "The design's margin in every scenario of the study: the smallest relative "
-    "slack of a check or of the residual with the confidence bounds in place (%, negative "
-    "where it fails), with what binds; green where the design holds on the point values "
-    "(hatched: not with the confidence bounds), red where it fails; * the binding scenario "
-    "(the one that decides the count required: with every scenario required, the least "
-    "margin). Below: the scenarios it holds in against the number required.",
-}
-
 
 class RockfallFigure(Figure):
     """A matplotlib Figure that shows itself in a notebook without pyplot.
@@ -185,7 +165,6 @@ def _measure_text(placed: Any) -> str:
     does not give the height and capacity gets them from the footprint, so
     every barrier on a figure says how high it is and what it takes.
     """
-    from ..plugins.measure import Barrier
 
     text = str(placed.label).split(" at x = ")[0]
     fp = placed.footprint
@@ -203,7 +182,6 @@ def _measure_text(placed: Any) -> str:
 def _draw_measures(ax: Axes, evaluation: Evaluation, label: bool = True,
                    annotate: bool = True) -> None:
     """Barriers as bars of their height; edited ground over the original (dashed)."""
-    from ..plugins.measure import Barrier
 
     sec0 = evaluation.original_section
     ax.plot(sec0.x, sec0.y, color=_GROUND_LINE, lw=0.9, ls="--", zorder=3,
@@ -235,7 +213,6 @@ def _measure_lines(ax: Axes, evaluation: Evaluation | None) -> None:
     """A vertical line at each measure's station (for the envelope panels)."""
     if evaluation is None:
         return
-    from ..plugins.measure import Barrier
 
     for p in evaluation.placed:
         fp = p.footprint
@@ -300,8 +277,6 @@ def _figure_marks(axes: Mapping[str, Axes], evaluation: Evaluation | None) -> No
     :func:`rockfall_design.run.passages.property_marks`)."""
     if evaluation is None:
         return
-    from ..plugins.manager import plugin_code
-    from ..plugins.measure import Barrier
 
     panel = {"passing_height_m": "height", "energy_kj": "energy"}
     for p in evaluation.placed:
@@ -535,23 +510,3 @@ def study_figures(
         "envelopes": envelopes_figure(study, evaluation, min_rocks),
         "stops": stops_figure(study, evaluation),
     }
-
-
-
-
-def svg_document(fig: Figure) -> str:
-    """The figure as a whole SVG file's text, as :func:`save_figures` writes it."""
-    buf = io.StringIO()
-    write_figure(fig, buf, "svg")
-    return buf.getvalue()
-
-
-def inline_svg(document: str) -> str:
-    """An SVG file's text without its XML prolog and DOCTYPE, for inline use in HTML."""
-    start = document.find("<svg")
-    return document[start:] if start >= 0 else document
-
-
-def figure_svg(fig: Figure) -> str:
-    """The figure as an SVG document (text), for embedding in an HTML report."""
-    return inline_svg(svg_document(fig))

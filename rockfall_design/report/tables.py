@@ -14,6 +14,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
+from ..run.passages import QUANTITIES
 from .rounding import round_value
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -216,7 +217,6 @@ PASSAGE_COLUMNS = ["place", "number", "label", "x_m", "quantity", "unit", "rocks
 def _passage_rows(place: str, number: int, label: str, x: float,
                   block: Mapping[str, Any]) -> list[dict[str, Any]]:
     """The rows of one place: one per quantity of ``run.passages.QUANTITIES`` it has."""
-    from ..run.passages import QUANTITIES
 
     marks = block.get("marks") or []
     rows = []
