@@ -29,6 +29,13 @@ from .run.simulation import EXACT_ROCKS
 from .run.streamed import StreamedStudy
 from .run.summary import RunSummary
 
+# The typed results of corridors, scenario checks and terrain sections, for
+# the front ends (each documented where it is defined).
+from .studies.corridor import CorridorSummary, SectionBlock, SectionOutcome  # noqa: F401
+from .studies.scenario_checks import Binding, ScenariosCheck  # noqa: F401
+from .terrain.cut import TerrainSection  # noqa: F401
+from .terrain.dem import Dem  # noqa: F401
+
 # The drawing modules (report.figures, report.passage_figures,
 # report.design_figures) import matplotlib at their top, a fifth of a second,
 # as their figures subclass its Figure: the plot methods import them, so that

@@ -14,17 +14,15 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..api import validate_project
+from ..api import load_plugins, never_holding, validate_project
 from ..arguments import MAX_ROCKS as _MAX_ROCKS
 from ..errors import InputError
-from ..judge.verdict import requirement_warnings as never_holding
-from ..plugins import load_registry
 from ..project import dump_yaml, load_corridor, load_project_text
 from ..project.inputs import read_text
 from ..project.messages import unquoted
 from ..report.documents import write_report
 from ..report.formats import save_figures
-from ..report.interrupts import check_interrupt
+from ..report.progress import interruptible_rocks
 from ..results import DEFAULT_TRAJECTORIES
 from ..version import __version__
 from .options import (
@@ -83,46 +81,6 @@ def decision_memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
                  "analysis.envelope_points.")
 
 
-def _rich_progress(elapsed: bool) -> Any:
-    """A transient rich progress display on stderr (time remaining, or elapsed)."""
-    from rich.console import Console
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
-    return Progress(
-        "[progress.description]{task.description}",
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn() if elapsed else TimeRemainingColumn(),
-        console=Console(stderr=True),
-        transient=True,
-    )
-
-
-def _progress(console_needed: bool, total: int):
-    """A rich progress bar on stderr for long interactive runs (or None), and its callback.
-
-    The callback is also a safe point: between batches of rocks it stops the
-    run if an interrupt was noted whose exception got lost.
-    """
-
-    if not console_needed:
-        return None, (lambda done: check_interrupt())
-    prog = _rich_progress(elapsed=False)
-    task = prog.add_task("rocks", total=total)
-
-    def update(done: int) -> None:
-        check_interrupt()
-        prog.update(task, completed=done)
-
-    return prog, update
-
-
 def run_with_progress(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:
     """Call the API's ``run(project, rocks=..., seed=..., ...)``, with a progress bar if
     interactive, keeping the paths of the first rocks when a figure will need them."""
@@ -130,7 +88,7 @@ def run_with_progress(run: Any, project: Any, args: argparse.Namespace, **kw: An
     n = args.rocks or project.rocks.count
     drawn = args.plot or args.report
     kw.update(rocks=n, seed=args.seed, trajectories=DEFAULT_TRAJECTORIES if drawn else 0)
-    prog, callback = _progress(sys.stderr.isatty() and n >= 20_000, n)
+    prog, callback = interruptible_rocks(sys.stderr.isatty() and n >= 20_000, n)
     if prog is None:
         return run(project, progress=callback, **kw)
     with prog:
@@ -184,7 +142,7 @@ def plugins_for(project: Any, args: argparse.Namespace) -> Any:
     command reads it (``simulate`` runs the bare slope but still says so).
     """
 
-    registry = load_registry(blocked=args.block)
+    registry = load_plugins(args.block)
     warn_failures(registry)
     validate_project(project, registry)
     return registry
@@ -279,29 +237,6 @@ def load(path: Path) -> Any:
 def comparable(summary: dict[str, Any]) -> dict[str, Any]:
     """A summary without what legitimately changes between runs (timing, the run record)."""
     return {k: v for k, v in summary.items() if k not in ("runtime_s", "run")}
-
-
-def stage_progress(interactive: bool):
-    """A rich progress display of the optimiser's stages on stderr (or None), and its callback.
-
-    The callback is also a safe point, between families: it stops the run if
-    an interrupt was noted whose exception got lost.
-    """
-
-    if not interactive:
-        return None, (lambda stage, done, total: check_interrupt())
-    prog = _rich_progress(elapsed=True)
-    tasks: dict[str, Any] = {}
-
-    def callback(stage: str, done: int, total: int) -> None:
-        check_interrupt()
-        label = {"search": "searching families", "check": "exact and fresh checks"}.get(
-            stage, stage)
-        if stage not in tasks:
-            tasks[stage] = prog.add_task(label, total=total)
-        prog.update(tasks[stage], completed=done, total=total)
-
-    return prog, callback
 
 
 def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:

@@ -46,15 +46,28 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..api import check, default_registry, run_simulation, validate_project
+from ..api import (
+    EXACT_ROCKS,
+    check,
+    default_registry,
+    load_plugins,
+    run_elsewhere,
+    run_sections,
+    run_simulation,
+    section_seeds,
+    simulation_memory,
+    validate_project,
+)
 from ..errors import ExitCode, InputError
-from ..plugins import load_registry
 from ..report.outputs import OutputSet
 from ..report.terminal import print_check, print_simulation
-from ..results import DEFAULT_TRAJECTORIES, CheckResult, SimulationResult
-from ..run.simulation import EXACT_ROCKS, study_memory
-from ..studies.corridor import CorridorSummary, SectionOutcome, run_sections, section_seeds
-from ..studies.executors import run_tasks as run_elsewhere
+from ..results import (
+    DEFAULT_TRAJECTORIES,
+    CheckResult,
+    CorridorSummary,
+    SectionOutcome,
+    SimulationResult,
+)
 from .common import (
     FIGURES,
     REPORT_FILES,
@@ -141,7 +154,7 @@ def _on_executors(fn: Callable[[Any], Any], corridor: Corridor,
 def _registry(corridor: Corridor, args: argparse.Namespace) -> Registry:
     """The plugins, loaded once, with every section's plugin sections checked."""
 
-    registry = load_registry(blocked=args.block)
+    registry = load_plugins(args.block)
     warn_failures(registry)
     for section in corridor.sections:
         validate_project(section.project, registry)
@@ -320,7 +333,7 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
     def guard(section: CorridorSection) -> None:
         project = section.project
         n = args.rocks or project.rocks.count
-        memory_guard(study_memory(project, n), f"section {section.name!r}: {n:,} rocks "
+        memory_guard(simulation_memory(project, n), f"section {section.name!r}: {n:,} rocks "
                       f"with {project.analysis.envelope_points} envelope points",
                       "Use fewer analysis.envelope_points or analysis.stations.")
 

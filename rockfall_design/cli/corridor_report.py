@@ -12,8 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..report.tables import chosen_name
 from ..report.terminal import fitted_console
-from ..studies.corridor import CorridorSummary, SectionBlock
-from ..studies.scenario_checks import Binding
+from ..results import Binding, CorridorSummary, SectionBlock
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..project import CorridorSection

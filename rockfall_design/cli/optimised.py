@@ -8,13 +8,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..api import optimise
+from ..report.progress import interruptible_stages
 from ..report.terminal import design_yaml, print_optimise
 from ..version import __version__
 from .common import (
     FIGURES,
     figure_files,
     figures_and_report,
-    stage_progress,
 )
 from .scenario_commands import across_design_yaml, print_across
 
@@ -49,7 +49,7 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     """
 
     n = args.rocks or project.rocks.count
-    prog, callback = stage_progress(sys.stderr.isatty())
+    prog, callback = interruptible_stages(sys.stderr.isatty())
     if prog is None:
         report = optimise(project, rocks=n, seed=args.seed, registry=registry,
                           progress=callback)

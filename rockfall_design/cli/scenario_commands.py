@@ -37,15 +37,13 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..api import check
+from ..api import check, check_across, scenario_runs
 from ..errors import ExitCode
 from ..project import dump_yaml
 from ..project.study import values_text
 from ..report.outputs import OutputSet
 from ..report.terminal import fitted_console
-from ..results import DEFAULT_TRAJECTORIES
-from ..studies.scenario_checks import Binding, ScenariosCheck, check_across
-from ..studies.scenarios import scenario_runs
+from ..results import DEFAULT_TRAJECTORIES, Binding, ScenariosCheck
 from .common import REPORT_FILES, figure_files, figures_and_report, reserve
 
 if TYPE_CHECKING:  # pragma: no cover

@@ -8,15 +8,13 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..api import check, run_simulation
+from ..api import check, load_plugins, plugins_json, run_simulation, simulation_memory
 from ..errors import ExitCode, InputError
-from ..plugins import load_registry, plugins_json
 from ..project import Project
 from ..report.interrupts import forget_interrupts
 from ..report.outputs import OutputSet
 from ..report.terminal import fitted_console, plugins_table, print_check, print_simulation
 from ..results import SimulationResult
-from ..run.simulation import study_memory
 from ..serve import serve
 from .common import (
     FIGURES,
@@ -66,7 +64,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                          "file with sections:); this file has none")
     plugins_for(project, args)
     n = args.rocks or project.rocks.count
-    memory_guard(study_memory(project, n), f"{n:,} rocks with "
+    memory_guard(simulation_memory(project, n), f"{n:,} rocks with "
                   f"{project.analysis.envelope_points} envelope points",
                   "Use fewer analysis.envelope_points or analysis.stations.")
     with OutputSet() as files:
@@ -190,7 +188,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
 def cmd_plugins(args: argparse.Namespace) -> int:
     """List the plugins; exit 0 even if some failed (they are listed), 3 on duplicates."""
 
-    registry = load_registry(blocked=args.block)  # PluginError -> exit 3 in main()
+    registry = load_plugins(args.block)  # PluginError -> exit 3 in main()
     if args.json:
         sys.stdout.write(json.dumps(plugins_json(registry), allow_nan=False) + "\n")
     else:

@@ -12,15 +12,18 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..api import study
+from ..api import (
+    EXTRA_HINT,
+    design_points,
+    salib_available,
+    simulation_memory,
+    study,
+    usable_cores,
+)
 from ..errors import ExitCode
 from ..project import Project
 from ..report.formats import save_figures
 from ..report.outputs import OutputSet
-from ..run.simulation import study_memory
-from ..studies.executors import EXTRA_HINT, usable_cores
-from ..studies.scenarios import design_points
-from ..studies.sensitivity import salib_available
 from ..studies.study_result import FIGURES
 from ..version import __version__
 from .common import figure_files, load, memory_guard, plugins_for, reserve
@@ -66,7 +69,7 @@ def cmd_study(args: argparse.Namespace) -> int:
 
         # No more at once than there are scenarios, whatever --workers says.
         at_once = min(args.workers or usable_cores(), len(design_points(project.study)))
-        memory_guard(at_once * study_memory(project, n),
+        memory_guard(at_once * simulation_memory(project, n),
                       f"{at_once} scenarios of {n:,} rocks at once",
                       "Use fewer --workers, fewer rocks or fewer analysis.envelope_points.")
     if project.study.sampled and not salib_available():

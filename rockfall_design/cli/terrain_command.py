@@ -16,11 +16,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..api import cut_section, read_dem, trace_fall_line
 from ..errors import ExitCode, InputError
 from ..report.outputs import OutputSet
-from ..terrain.cut import TerrainSection, cut_section
-from ..terrain.dem import Dem, read_dem
-from ..terrain.fall_line import trace_fall_line
+from ..results import Dem, TerrainSection
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
