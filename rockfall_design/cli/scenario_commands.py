@@ -207,8 +207,8 @@ def print_across(result: AcrossResult) -> None:
 
 
     block = result.scenarios_block()
-    lines = [f"Scenarios: a design must hold in {block['required']} of {block['of']} "
-             f"(design.scenarios share {block['share']:g}), each with its own rocks."]
+    lines = [f"Scenarios: a design must hold in {result.required} of {len(result.runs)} "
+             f"(design.scenarios share {result.share:g}), each with its own rocks."]
     if result.best is not None and block["binding"] is not None:
         b = Binding.from_json(block["binding"])
         lines.append(f"Binding scenario {b.index} ({values_text(b.values)}, seed "
@@ -248,7 +248,7 @@ def across_design_yaml(result: AcrossResult, project_file: Path | str,
     b = Binding.from_json(block["binding"])
     head = (
         f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
-        f"cost {best.cost:,.0f}, holding in {block['required']} of {block['of']} scenarios "
+        f"cost {best.cost:,.0f}, holding in {result.required} of {len(result.runs)} scenarios "
         "of the study.\n"
         f"# Each scenario has its own rocks: seeds derived from rocks.seed ({result.seed}); "
         f"rocks.count is the most rocks that decided it in a scenario.\n"
