@@ -31,7 +31,7 @@ from .project import load_corridor as _load_corridor
 from .project import load_project as _load
 from .report.progress import fits_progress, rocks_progress, scenarios_progress
 from .results import DEFAULT_TRAJECTORIES, CheckResult, OptimiseResult, SimulationResult
-from .run.simulation import EXACT_ROCKS, study_memory
+from .run import simulation
 from .run.simulation import simulate as _simulate
 from .studies.corridor import (
     COMMANDS,
@@ -282,7 +282,7 @@ def simulate(
     n = _count(p, rocks)
     tables: list[pd.DataFrame] | None = None
     on_chunk = None
-    if n > EXACT_ROCKS:
+    if n > simulation.EXACT_ROCKS:
         # A streamed run keeps statistics only; the per-rock rows are small
         # enough to keep for a DataFrame (not the crossings: rows x stations).
         tables = []
@@ -685,7 +685,7 @@ def simulation_memory(project: Project, rocks: int) -> int:
     int
         Bytes.
     """
-    return study_memory(project, rocks)
+    return simulation.study_memory(project, rocks)
 
 
 def never_holding(project: Project, command: str) -> list[str]:
@@ -708,3 +708,16 @@ def never_holding(project: Project, command: str) -> list[str]:
         One line per requirement, located in the project file.
     """
     return requirement_warnings(project, command)
+
+
+def exact_rocks() -> int:
+    """Most rocks of a run kept whole; a larger run is streamed (statistics from histograms).
+
+    Read from :data:`rockfall_design.run.simulation.EXACT_ROCKS` at each
+    call, so that a changed limit holds everywhere.
+
+    Returns
+    -------
+    int
+    """
+    return simulation.EXACT_ROCKS

@@ -23,9 +23,9 @@ from .judge.verdict import judged
 from .report.documents import write_report
 from .report.formats import save_figures
 from .report.tables import alternatives_frame, checks_frame, measures_frame, passages_frame
+from .run import simulation
 from .run.passages import station_passages
 from .run.releases import section_from_project
-from .run.simulation import EXACT_ROCKS
 from .run.streamed import StreamedStudy
 from .run.summary import RunSummary
 
@@ -151,7 +151,7 @@ class SimulationResult:
     @staticmethod
     def _exact_rocks() -> int:
 
-        return EXACT_ROCKS
+        return simulation.EXACT_ROCKS
 
     @cached_property
     def stations(self) -> pd.DataFrame:

@@ -12,7 +12,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..api import calibrate, compare
+from .. import api
 from ..calibration.calibrated import FIGURES
 from ..errors import ExitCode, InputError
 from ..project import Project, dump_yaml
@@ -106,7 +106,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         reserve(files, args.plot, figure_files(FIGURES, args))
         reserve(files, args.report, REPORT_FILES)
         library = _library_file(args, files)
-        result = calibrate(project, observed=args.observed, rocks=args.rocks,
+        result = api.calibrate(project, observed=args.observed, rocks=args.rocks,
                            bootstrap=args.bootstrap, seed=args.seed, workers=args.workers,
                            scheduler=args.scheduler, pool=args.pool,
                            progress=sys.stderr.isatty(), registry=registry)
@@ -137,7 +137,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         reserve(files, args.out, ("summary.json",))
         reserve(files, args.plot, figure_files(FIGURES[:1], args))
         reserve(files, args.report, REPORT_FILES)
-        result = compare(project, args.observed, rocks=args.rocks, seed=args.seed,
+        result = api.compare(project, args.observed, rocks=args.rocks, seed=args.seed,
                          registry=registry)
         summary = result.summary
         if args.out:

@@ -47,9 +47,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..api import (
-    EXACT_ROCKS,
     check,
     default_registry,
+    exact_rocks,
     load_plugins,
     run_elsewhere,
     run_sections,
@@ -339,7 +339,7 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
 
     def elsewhere(subs: Sequence[argparse.Namespace]) -> list[Any] | None:
         pooled = _pooled(args) and all(
-            (args.rocks or s.project.rocks.count) <= EXACT_ROCKS for s in corridor.sections)
+            (args.rocks or s.project.rocks.count) <= exact_rocks() for s in corridor.sections)
         return _on_executors(_simulate_task, corridor, subs, args) if pooled else None
 
     def body(run: SectionRun) -> SectionDone:

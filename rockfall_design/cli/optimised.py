@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..api import optimise
+from .. import api
 from ..report.progress import interruptible_stages
 from ..report.terminal import design_yaml, print_optimise
 from ..version import __version__
@@ -51,11 +51,11 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     n = args.rocks or project.rocks.count
     prog, callback = interruptible_stages(sys.stderr.isatty())
     if prog is None:
-        report = optimise(project, rocks=n, seed=args.seed, registry=registry,
+        report = api.optimise(project, rocks=n, seed=args.seed, registry=registry,
                           progress=callback)
     else:
         with prog:
-            report = optimise(project, rocks=n, seed=args.seed, registry=registry,
+            report = api.optimise(project, rocks=n, seed=args.seed, registry=registry,
                               progress=callback)
     result = report.result
     summary = report.summary
