@@ -17,14 +17,48 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 from .arguments import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .errors import InputError
+from .judge.evaluation import evaluate
+from .judge.plan import validate_plugin_sections
+from .judge.verdict import requirement_warnings
+from .plugins import load_registry, plugins_json  # noqa: F401
 from .project import Corridor
 from .project import load_corridor as _load_corridor
+from .project import load_project as _load
+from .report.progress import fits_progress, rocks_progress, scenarios_progress
 from .results import DEFAULT_TRAJECTORIES, CheckResult, OptimiseResult, SimulationResult
+from .run import simulation
+from .run.simulation import simulate as _simulate
+from .studies.corridor import (
+    COMMANDS,
+    SectionOutcome,
+    run_sections,
+    section_seeds,  # noqa: F401
+)
+from .studies.executors import EXTRA_HINT, usable_cores  # noqa: F401
+from .studies.executors import run_tasks as run_elsewhere  # noqa: F401
+from .studies.paths import check_study
+from .studies.scenario_checks import check_across  # noqa: F401
+from .studies.scenarios import design_points, scenario_runs  # noqa: F401
+from .studies.sensitivity import salib_available  # noqa: F401
+from .terrain.cut import cut_section  # noqa: F401
+from .terrain.dem import read_dem  # noqa: F401
+from .terrain.fall_line import trace_fall_line  # noqa: F401
+from .terrain.map_figure import corridor_map  # noqa: F401
+from .terrain.mapping import chosen_measures, write_measures  # noqa: F401
+
+# The names marked noqa (F401) are the front ends' way in: the command line
+# imports only the API, the results, the report, the errors and the project,
+# and calls these besides the commands (each documented where it is defined).
+#
+# optimise, study, calibrate, compare and trial_run import their room where they
+# run: the optimiser imports scipy.optimize at its top, a study's and a
+# calibration's results matplotlib (their figures subclass its Figure) and a
+# calibration pandas, and simulate and check must not pay for them.
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -61,7 +95,6 @@ def default_registry(block: tuple[str, ...] = ()) -> Registry:
     A plugin that fails to load is named in a :class:`UserWarning`; the
     others are used.
     """
-    from .plugins import load_registry
 
     key = tuple(sorted(block))
     if key not in _REGISTRIES:
@@ -94,7 +127,6 @@ def load_project(path: str | os.PathLike[str], *, registry: Registry | None = No
     ProjectError
         The file is not a valid project: one line ``file:line: key.path: message``.
     """
-    from .project import load_project as _load
 
 
     project = _load(path)
@@ -160,7 +192,6 @@ def run_corridor(
     """
     # Imported here: the corridor's run loads the judge and the engine (numba), which
     # `import rockfall_design.api` does not.
-    from .studies.corridor import COMMANDS, run_sections
 
     if command not in COMMANDS:
         raise InputError(f"a corridor runs {', '.join(COMMANDS)}, not {command!r}")
@@ -182,7 +213,6 @@ def run_corridor(
 def _section_outcome(command: str, project: Project, rocks: int | None, seed: int,
                      registry: Registry) -> SectionOutcome:
     """One section's run of ``command`` through this API: its JSON, cost and result."""
-    from .studies.corridor import SectionOutcome  # as in run_corridor
 
     if command == "simulate":
         result: Any = simulate(project, rocks=rocks, seed=seed, trajectories=0)
@@ -198,40 +228,9 @@ def _section_outcome(command: str, project: Project, rocks: int | None, seed: in
     return SectionOutcome(result.summary, None, result)
 
 
-def _progress_callback(progress: bool | Callable[..., None], total: int,
-                       stages: bool = False) -> tuple[Any, Any]:
-    """(context manager or None, callback or None) for ``progress``.
-
-    True shows a rich progress bar on stderr; a callable is called as the
-    engine reports (``done`` rocks, or ``stage, done, total`` for the
-    optimiser); False shows nothing.
-    """
-    if callable(progress):
-        return None, progress
-    if not progress:
-        return None, None
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
-
-    bar = Progress("[progress.description]{task.description}", BarColumn(),
-                   MofNCompleteColumn(), TimeElapsedColumn(),
-                   console=Console(stderr=True), transient=True)
-    if not stages:
-        task = bar.add_task("rocks", total=total)
-        return bar, (lambda done: bar.update(task, completed=done))
-    tasks: dict[str, Any] = {}
-
-    def staged(stage: str, done: int, of: int) -> None:
-        if stage not in tasks:
-            tasks[stage] = bar.add_task(stage, total=of)
-        bar.update(tasks[stage], completed=done, total=of)
-
-    return bar, staged
-
-
 def _call(progress: bool | Callable[..., None], total: int, fn: Callable[..., Any],
           stages: bool = False, **kw: Any) -> Any:
-    bar, callback = _progress_callback(progress, total, stages)
+    bar, callback = rocks_progress(progress, total, stages)
     if callback is not None:
         kw["progress"] = callback
     if bar is None:
@@ -277,14 +276,13 @@ def simulate(
         ``.summary`` (as ``--json``), ``.rocks`` (one row per rock),
         ``.stations``, ``.crossings``, ``.envelopes``, ``.plot()``.
     """
-    from .run.simulation import EXACT_ROCKS
 
     _checked(seed=seed, trajectories=trajectories)
     p = _project(project)
     n = _count(p, rocks)
     tables: list[pd.DataFrame] | None = None
     on_chunk = None
-    if n > EXACT_ROCKS:
+    if n > simulation.EXACT_ROCKS:
         # A streamed run keeps statistics only; the per-rock rows are small
         # enough to keep for a DataFrame (not the crossings: rows x stations).
         tables = []
@@ -301,7 +299,6 @@ def run_simulation(project: Project, *, rocks: int | None, seed: int | None,
                    progress: bool | Callable[[int], None], trajectories: int,
                    on_chunk: Callable[[Study], None] | None = None) -> Study | StreamedStudy:
     """The run behind :func:`simulate` (and the CLI, which streams its tables to files)."""
-    from .run.simulation import simulate as _simulate
 
     n = _count(project, rocks)
     return _call(progress, n, _simulate, project=project, rocks=n, seed=seed,
@@ -360,7 +357,6 @@ def check(
         (DataFrames), ``.rocks`` (with ``caught_by_measure``), ``.crossings``,
         ``.plot()``.
     """
-    from .judge.evaluation import evaluate
 
     _checked(seed=seed, trajectories=trajectories)
     p = _project(project, registry)
@@ -487,7 +483,7 @@ def study(
     registry = registry or default_registry()
     p = _project(project, registry)
     n = _count(p, rocks)
-    bar, callback = _study_progress(progress)
+    bar, callback = scenarios_progress(progress)
     kw = dict(rocks=n, seed=seed, workers=workers, scheduler=scheduler, progress=callback,
               pool=pool, envelopes=envelopes)
     if bar is None:
@@ -564,7 +560,7 @@ def calibrate(
     p = _project(project, registry or default_registry())
     kw = dict(observed=observed, rocks=rocks, bootstrap=bootstrap, seed=seed, workers=workers,
               scheduler=scheduler, pool=pool, prior=prior, screen=screen)
-    bar, callback = _replicate_progress(progress)
+    bar, callback = fits_progress(progress)
     if bar is None:
         return run_calibration(p, on_done=callback, **kw)
     with bar:
@@ -611,43 +607,6 @@ def compare(
                           confidence=confidence)
 
 
-def _replicate_progress(progress: bool | Callable[[int, int], None]) -> tuple[Any, Any]:
-    """(rich progress or None, callback(done, total) or None) of a calibration's replicates."""
-    if callable(progress):
-        return None, progress
-    if not progress:
-        return None, None
-    bar, update = _progress_callback(True, 0, stages=True)
-    return bar, (lambda done, total: update("fits (best + bootstrap)", done, total))
-
-
-def _study_progress(progress: bool | Callable[[int, int, int], None]) -> tuple[Any, Any]:
-    """(rich progress or None, callback(done, total, rocks_done) or None) of a study."""
-    if callable(progress):
-        return None, progress
-    if not progress:
-        return None, None
-    import time
-
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn
-
-    bar = Progress("[progress.description]{task.description}", BarColumn(),
-                   MofNCompleteColumn(), "{task.fields[rate]}", TimeElapsedColumn(),
-                   console=Console(stderr=True), transient=True)
-    task: list[Any] = []
-    start = time.perf_counter()
-
-    def callback(done: int, total: int, rocks_done: int) -> None:
-        if not task:
-            task.append(bar.add_task("scenarios", total=total, rate=""))
-        elapsed = time.perf_counter() - start
-        rate = f"{rocks_done / elapsed:,.0f} rocks/s" if rocks_done and elapsed > 0 else ""
-        bar.update(task[0], completed=done, rate=rate)
-
-    return bar, callback
-
-
 def validate_project(project: Project, registry: Registry) -> None:
     """Check the sections of a project that its plugins own, whatever the command.
 
@@ -665,8 +624,6 @@ def validate_project(project: Project, registry: Registry) -> None:
     PluginError
         Exit code 3, if a plugin misbehaves.
     """
-    from .judge.plan import validate_plugin_sections
-    from .studies.paths import check_study
 
     validate_plugin_sections(project, registry)
     if project.study is not None:
@@ -698,3 +655,81 @@ def trial_run(project: Project, registry: Registry, rocks: int, seed: int, *,
     return _trial_run(project, registry, int(rocks), int(seed),
                       table_step_m=table_step_m, restart_step_m=restart_step_m,
                       paths_drawn=paths_drawn, progress=progress)
+
+
+# ---- what the command line needs besides the commands -------------------------------
+
+
+def load_plugins(block: Sequence[str] = ()) -> Registry:
+    """The installed plugins, loaded afresh (the command line's load: one per command).
+
+    Unlike :func:`default_registry`, nothing is cached and no warning is
+    issued: a plugin that failed to load is listed in ``registry.failures``
+    for the caller to report.
+
+    Parameters
+    ----------
+    block
+        Entry-point or distribution names not to load (``--block``).
+
+    Returns
+    -------
+    Registry
+    """
+    return load_registry(blocked=tuple(block))
+
+
+def simulation_memory(project: Project, rocks: int) -> int:
+    """Estimated peak memory (bytes) of simulating ``rocks`` rocks of ``project``.
+
+    What the command line compares with the machine's memory before a run
+    (see :func:`rockfall_design.run.simulation.study_memory`).
+
+    Parameters
+    ----------
+    project
+        The project (its analysis grid sets the memory per rock).
+    rocks
+        Rocks of the run.
+
+    Returns
+    -------
+    int
+        Bytes.
+    """
+    return simulation.study_memory(project, rocks)
+
+
+def never_holding(project: Project, command: str) -> list[str]:
+    """Requirements of ``project`` that can never hold with confidence, one line each.
+
+    An allowed fraction of 0 is shown by no finite number of rocks (see
+    :func:`rockfall_design.judge.verdict.requirement_warnings`).
+
+    Parameters
+    ----------
+    project
+        The project.
+    command : {"check", "optimise"}
+        Which requirement is judged: the protected zone's allowed fraction
+        (``check``) or the design's residual (``optimise``).
+
+    Returns
+    -------
+    list of str
+        One line per requirement, located in the project file.
+    """
+    return requirement_warnings(project, command)
+
+
+def exact_rocks() -> int:
+    """Most rocks of a run kept whole; a larger run is streamed (statistics from histograms).
+
+    Read from :data:`rockfall_design.run.simulation.EXACT_ROCKS` at each
+    call, so that a changed limit holds everywhere.
+
+    Returns
+    -------
+    int
+    """
+    return simulation.EXACT_ROCKS

@@ -17,6 +17,8 @@ from typing import Any
 from .errors import InputError
 
 __all__ = [
+    "DEFAULT_FLAT_DEG",
+    "DEFAULT_TOLERANCE_M",
     "MAX_BOOTSTRAP",
     "MAX_ROCKS",
     "ArgumentError",
@@ -30,6 +32,19 @@ __all__ = [
 MAX_ROCKS = 1_000_000_000
 #: Most bootstrap replicates of a calibration.
 MAX_BOOTSTRAP = 2000
+
+# The defaults of ``section`` (rockfall_design.terrain), here so that its
+# --help says them without importing the terrain room.
+#: Vertical tolerance (m) of the simplified section: 5 cm, well below the
+#: roughness heights calibrated for talus (Bourrier et al. 2009 report
+#: 0.1-0.5 m) and below the vertical accuracy of airborne LiDAR DEMs (USGS
+#: 3DEP quality level 2: 10 cm RMSE). ILLUSTRATIVE as a default; state yours.
+DEFAULT_TOLERANCE_M = 0.05
+#: Below this slope (deg) the ground counts as flat and the fall line ends:
+#: rocks come to rest on slopes below about 5-10 deg (rolling friction of
+#: 0.1-0.2, e.g. Dorren 2003), so a path that reaches 3 deg has left the
+#: slope. ILLUSTRATIVE default; set it per project.
+DEFAULT_FLAT_DEG = 3.0
 
 
 class ArgumentError(InputError, ValueError):

@@ -15,9 +15,31 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .judge.costing import design_bill
+from .judge.design_spec import resolve_design
+from .judge.evaluation import evaluate
 from .judge.records import Bill, CheckSummary, DesignVerdict, State, run_of
 from .judge.verdict import judged
+from .report.documents import write_report
+from .report.formats import save_figures
+from .report.tables import alternatives_frame, checks_frame, measures_frame, passages_frame
+from .run import simulation
+from .run.passages import station_passages
+from .run.releases import section_from_project
+from .run.streamed import StreamedStudy
 from .run.summary import RunSummary
+
+# The typed results of corridors, scenario checks and terrain sections, for
+# the front ends (each documented where it is defined).
+from .studies.corridor import CorridorSummary, SectionBlock, SectionOutcome  # noqa: F401
+from .studies.scenario_checks import Binding, ScenariosCheck  # noqa: F401
+from .terrain.cut import TerrainSection  # noqa: F401
+from .terrain.dem import Dem  # noqa: F401
+
+# The drawing modules (report.figures, report.passage_figures,
+# report.design_figures) import matplotlib at their top, a fifth of a second,
+# as their figures subclass its Figure: the plot methods import them, so that
+# a result that is not drawn (simulate --json) never loads matplotlib.
 
 FAILS, HOLDS_ON_POINT_VALUES = State.FAILS, State.HOLDS_ON_POINT_VALUES
 
@@ -102,7 +124,6 @@ class SimulationResult:
     @property
     def streamed(self) -> bool:
         """True for a run of more than ``EXACT_ROCKS`` rocks (statistics from histograms)."""
-        from .run.streamed import StreamedStudy
 
         return isinstance(self.study, StreamedStudy)
 
@@ -129,9 +150,8 @@ class SimulationResult:
 
     @staticmethod
     def _exact_rocks() -> int:
-        from .run.simulation import EXACT_ROCKS
 
-        return EXACT_ROCKS
+        return simulation.EXACT_ROCKS
 
     @cached_property
     def stations(self) -> pd.DataFrame:
@@ -175,7 +195,6 @@ class SimulationResult:
         which keeps no rock's values; its summary still has each station's
         statistics.
         """
-        from .run.passages import station_passages
 
         if self.streamed:
             return []
@@ -190,7 +209,6 @@ class SimulationResult:
 
         See :func:`rockfall_design.report.tables.passages_frame`.
         """
-        from .report.tables import passages_frame
 
         return passages_frame(self.summary)
 
@@ -230,14 +248,12 @@ class SimulationResult:
     def save_figures(self, directory: str | os.PathLike[str],
                      formats: tuple[str, ...] = ("png",)) -> list[Path]:
         """Write every figure into ``directory`` as NAME.FORMAT (png, svg, pdf)."""
-        from .report.figures import save_figures
 
         return save_figures(self.figures(), directory, formats)
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``report.html`` (self-contained), ``report.md`` (with SVG figures) and
         ``report.pdf`` (with the pdf extra; else a warning says how to get it)."""
-        from .report.documents import write_report
 
         return write_report(self, directory)
 
@@ -308,14 +324,12 @@ class CheckResult(SimulationResult):
     @cached_property
     def measures(self) -> pd.DataFrame:
         """One row per measure: rocks met, caught, over, through; a column per check."""
-        from .report.tables import measures_frame
 
         return measures_frame(self.summary)
 
     @cached_property
     def checks(self) -> pd.DataFrame:
         """One row per safety check: value, confidence bound (if any), target, verdict."""
-        from .report.tables import checks_frame
 
         return checks_frame(self.summary)
 
@@ -399,9 +413,6 @@ class OptimiseResult:
         best = self.result.best
         if best is None:
             return None
-        from .judge.costing import design_bill
-        from .judge.design_spec import resolve_design
-        from .run.releases import section_from_project
 
         d = self.project.design
         source = (f"catalogue {d.costs.file}" if d.costs.file else "design.costs.params")
@@ -436,7 +447,6 @@ class OptimiseResult:
     @cached_property
     def alternatives(self) -> pd.DataFrame:
         """One row per family: cost (currency units), residual, a column per check, reason."""
-        from .report.tables import alternatives_frame
 
         return alternatives_frame(self.summary)
 
@@ -450,7 +460,6 @@ class OptimiseResult:
         best = self.best
         if best is None:
             return None
-        from .judge.evaluation import evaluate
 
         project = self.design_project()
         ev = evaluate(project, self._registry, rocks=self.n_rocks, seed=self.seed,
@@ -499,13 +508,11 @@ class OptimiseResult:
     def save_figures(self, directory: str | os.PathLike[str],
                      formats: tuple[str, ...] = ("png",)) -> list[Path]:
         """Write every figure into ``directory`` as NAME.FORMAT (png, svg, pdf)."""
-        from .report.figures import save_figures
 
         return save_figures(self.figures(), directory, formats)
 
     def save_report(self, directory: str | os.PathLike[str]) -> list[Path]:
         """Write ``report.html`` (self-contained), ``report.md`` (with SVG figures) and
         ``report.pdf`` (with the pdf extra; else a warning says how to get it)."""
-        from .report.documents import write_report
 
         return write_report(self, directory)

@@ -43,9 +43,14 @@ import math
 import types
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import pytest
+
+from . import CostModel, ProtectiveMeasure, SafetyConcept, hookimpl
+from .plugins import load_registry
+from .project import load_project_text
 
 if TYPE_CHECKING:  # pragma: no cover
     from .plugins import Registry
@@ -81,9 +86,22 @@ OUTCOMES = ("not_met", "caught", "passed_over", "broken_through", "rebounded",
 # registries
 
 
+
+def _api() -> ModuleType:
+    """The API module, imported on first use.
+
+    pytest imports this module in every run of every project that has this
+    package installed (its pytest11 entry point); the API imports the engine
+    and numba (seconds), which a run that uses none of these fixtures must
+    not pay. The one import of the package made inside a function here.
+    """
+    from . import api
+
+    return api
+
+
 def _plugin_for(classes: Sequence[type]) -> object:
     """A plugin object whose hooks return ``classes``, by their base class."""
-    from . import CostModel, ProtectiveMeasure, SafetyConcept, hookimpl
 
     def hook(base: type) -> Any:
         chosen = [c for c in classes if isinstance(c, type) and issubclass(c, base)]
@@ -125,7 +143,6 @@ def make_registry(*plugins: object, blocked: Iterable[str] = (),
     AssertionError
         If one of ``plugins`` failed to load (the message gives the reason).
     """
-    from .plugins import load_registry
 
     classes = [p for p in plugins if isinstance(p, type)]
     extra: list[tuple[str, object]] = []
@@ -144,8 +161,6 @@ def make_registry(*plugins: object, blocked: Iterable[str] = (),
 
 def _measure_dicts(measures: Any) -> tuple[list[dict[str, Any]], list[type]]:
     """(the measures as project entries, the classes of those given as objects)."""
-    from .plugins.measure import ProtectiveMeasure
-
 
     if measures is None:
         return [], []
@@ -170,16 +185,12 @@ def _registry(registry: Registry | None, classes: Sequence[type]) -> Registry:
     if registry is not None:
         return registry
     if classes:
-        from .api import default_registry
-
-        known = default_registry()
+        known = _api().default_registry()
         missing = [c for c in dict.fromkeys(classes) if known.measures.get(c.kind) is not c]
         if missing:
             return make_registry(*missing)
         return known
-    from .api import default_registry
-
-    return default_registry()
+    return _api().default_registry()
 
 
 # ---------------------------------------------------------------------------
@@ -219,8 +230,6 @@ def tiny_slope(
         a bad measure raises :class:`~rockfall_design.errors.ProjectError`
         naming the key, e.g. ``<tiny_slope>:1: measures[0].height: ...``.
     """
-    from .api import validate_project
-    from .project import load_project_text
 
     entries, classes = _measure_dicts(measures)
     data: dict[str, Any] = {
@@ -239,7 +248,7 @@ def tiny_slope(
         data["protect"] = {"x": protect_x}
     # JSON is YAML: one line, so every message points at line 1.
     project = load_project_text(json.dumps(data), "<tiny_slope>")
-    validate_project(project, _registry(registry, classes))
+    _api().validate_project(project, _registry(registry, classes))
     return project
 
 
@@ -439,9 +448,8 @@ def run_one_rock(
         {"count": 1, "seed": seed, "density": density, "radius": radius, "release": release})
     project = project.model_copy(update={"rocks": rocks})
 
-    from .api import check
 
-    result = check(project, rocks=1, seed=seed, registry=reg, trajectories=0)
+    result = _api().check(project, rocks=1, seed=seed, registry=reg, trajectories=0)
     return _rock_run(result, release)
 
 

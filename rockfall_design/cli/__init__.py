@@ -1,11 +1,18 @@
 """The command room: every ``rockfall-design`` command, and only commands.
 
 Each command turns its arguments into calls of the API, prints and writes
-what they return, and maps errors to exit codes (:mod:`.main`, the only
-place that does). Files:
+what they return, and maps errors to exit codes (:mod:`.program`, the only
+place that does). Among the package's rooms it imports only the API, the
+results, the report, the errors and the project (and the light
+``arguments`` and ``version``); the exceptions: ``plugins.check_blocked_names``
+in :mod:`.program` (the API would load numba for ``--help``), the figure names
+of the calibration and the study, and ``serve``, the other front end. Files:
 
-* :mod:`.program`: ``main``, the parser's dispatch, signals and exit codes;
-* :mod:`.options`: the argument parser and the options commands share;
+* :mod:`.program`: ``main``, the table of which module runs each command
+  (imported when the command is chosen), signals and exit codes;
+* :mod:`.parsers`: every command's parser, light (``--help`` imports no
+  engine, numba, scipy, pandas or matplotlib);
+* :mod:`.options`: the options commands share;
 * :mod:`.common`: what every command does around its run (plugins,
   progress, memory guard, files reserved, figures and report);
 * :mod:`.section_commands`: ``simulate``, ``check``, ``optimise``,
@@ -13,8 +20,8 @@ place that does). Files:
 * :mod:`.scenario_commands`: ``check --scenarios`` and the optimiser's
   scenario report;
 * :mod:`.corridor_commands`: every command over the sections of a corridor;
-* :mod:`.study_command`, :mod:`.calibrate_command`: ``study``,
-  ``calibrate`` and ``compare``.
+* :mod:`.study_command`, :mod:`.calibrate_command`, :mod:`.terrain_command`:
+  ``study``, ``calibrate`` and ``compare``, ``section``.
 """
 
 from .program import main

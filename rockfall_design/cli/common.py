@@ -14,8 +14,16 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..api import load_plugins, never_holding, validate_project
 from ..arguments import MAX_ROCKS as _MAX_ROCKS
 from ..errors import InputError
+from ..project import dump_yaml, load_corridor, load_project_text
+from ..project.inputs import read_text
+from ..project.messages import unquoted
+from ..report.documents import write_report
+from ..report.formats import save_figures
+from ..report.progress import interruptible_rocks
+from ..results import DEFAULT_TRAJECTORIES
 from ..version import __version__
 from .options import (
     PROG,
@@ -73,56 +81,14 @@ def decision_memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
                  "analysis.envelope_points.")
 
 
-def _rich_progress(elapsed: bool) -> Any:
-    """A transient rich progress display on stderr (time remaining, or elapsed)."""
-    from rich.console import Console
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
-    return Progress(
-        "[progress.description]{task.description}",
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn() if elapsed else TimeRemainingColumn(),
-        console=Console(stderr=True),
-        transient=True,
-    )
-
-
-def _progress(console_needed: bool, total: int):
-    """A rich progress bar on stderr for long interactive runs (or None), and its callback.
-
-    The callback is also a safe point: between batches of rocks it stops the
-    run if an interrupt was noted whose exception got lost.
-    """
-    from ..report.interrupts import check_interrupt
-
-    if not console_needed:
-        return None, (lambda done: check_interrupt())
-    prog = _rich_progress(elapsed=False)
-    task = prog.add_task("rocks", total=total)
-
-    def update(done: int) -> None:
-        check_interrupt()
-        prog.update(task, completed=done)
-
-    return prog, update
-
-
 def run_with_progress(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:
     """Call the API's ``run(project, rocks=..., seed=..., ...)``, with a progress bar if
     interactive, keeping the paths of the first rocks when a figure will need them."""
-    from ..results import DEFAULT_TRAJECTORIES
 
     n = args.rocks or project.rocks.count
     drawn = args.plot or args.report
     kw.update(rocks=n, seed=args.seed, trajectories=DEFAULT_TRAJECTORIES if drawn else 0)
-    prog, callback = _progress(sys.stderr.isatty() and n >= 20_000, n)
+    prog, callback = interruptible_rocks(sys.stderr.isatty() and n >= 20_000, n)
     if prog is None:
         return run(project, progress=callback, **kw)
     with prog:
@@ -139,12 +105,10 @@ def figures_and_report(result: Any, args: argparse.Namespace, files: OutputSet) 
         return
     figures = result.figures()  # drawn once for both
     if args.report:
-        from ..report.documents import write_report
 
         write_report(result, args.report, outputs=files, figures=figures,
                      note=lambda line: sys.stderr.write(f"{PROG}: {line}\n"))
     if args.plot:
-        from ..report.figures import save_figures
 
         # --plot and --report into one directory with --plot-format svg: the
         # report has written those figures already, from the same drawings.
@@ -165,10 +129,9 @@ def requirement_warnings(project: Any, args: argparse.Namespace) -> list[str]:
     Found when the project is loaded and written once the run has ended, so
     that a run that fails on bad input or a plugin fault still says one line.
     """
-    from ..judge.verdict import requirement_warnings
 
     command = "check" if args.command == "check" else "optimise"
-    return [f"{PROG}: warning: {line}\n" for line in requirement_warnings(project, command)]
+    return [f"{PROG}: warning: {line}\n" for line in never_holding(project, command)]
 
 
 def plugins_for(project: Any, args: argparse.Namespace) -> Any:
@@ -178,10 +141,8 @@ def plugins_for(project: Any, args: argparse.Namespace) -> Any:
     and ``design:`` included, so that a bad file is reported whichever
     command reads it (``simulate`` runs the bare slope but still says so).
     """
-    from ..api import validate_project
-    from ..plugins import load_registry
 
-    registry = load_registry(blocked=args.block)
+    registry = load_plugins(args.block)
     warn_failures(registry)
     validate_project(project, registry)
     return registry
@@ -228,11 +189,9 @@ def table_writers(files: OutputSet, out: Path) -> Any:
 
 def load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
     """The project, seed and rock count recorded in a summary.json, for --repeat."""
-    from ..project import dump_yaml, load_project_text
 
     path: Path = args.repeat
     try:
-        from ..project.inputs import read_text
 
         recorded = json.loads(read_text(path, "summary to repeat"))
         run = recorded["run"]
@@ -260,7 +219,6 @@ def load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
     if run.get("version") != __version__:
         sys.stderr.write(f"{PROG}: warning: {path} was written by version "
                          f"{run.get('version')}, this is {__version__}\n")
-    from ..project.messages import unquoted
 
     with unquoted():  # a value of the recorded project is not quoted back either
         project = load_project_text(text, f"{path} (run.project)")
@@ -272,7 +230,6 @@ def load_repeat(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
 
 def load(path: Path) -> Any:
     """The project file: a Project, or a Corridor when it lists ``sections:``."""
-    from ..project import load_corridor
 
     return load_corridor(path)
 
@@ -280,30 +237,6 @@ def load(path: Path) -> Any:
 def comparable(summary: dict[str, Any]) -> dict[str, Any]:
     """A summary without what legitimately changes between runs (timing, the run record)."""
     return {k: v for k, v in summary.items() if k not in ("runtime_s", "run")}
-
-
-def stage_progress(interactive: bool):
-    """A rich progress display of the optimiser's stages on stderr (or None), and its callback.
-
-    The callback is also a safe point, between families: it stops the run if
-    an interrupt was noted whose exception got lost.
-    """
-    from ..report.interrupts import check_interrupt
-
-    if not interactive:
-        return None, (lambda stage, done, total: check_interrupt())
-    prog = _rich_progress(elapsed=True)
-    tasks: dict[str, Any] = {}
-
-    def callback(stage: str, done: int, total: int) -> None:
-        check_interrupt()
-        label = {"search": "searching families", "check": "exact and fresh checks"}.get(
-            stage, stage)
-        if stage not in tasks:
-            tasks[stage] = prog.add_task(label, total=total)
-        prog.update(tasks[stage], completed=done, total=total)
-
-    return prog, callback
 
 
 def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:

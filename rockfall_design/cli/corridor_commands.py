@@ -46,10 +46,45 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..api import (
+    check,
+    default_registry,
+    exact_rocks,
+    load_plugins,
+    run_elsewhere,
+    run_sections,
+    run_simulation,
+    section_seeds,
+    simulation_memory,
+    validate_project,
+)
 from ..errors import ExitCode, InputError
-from ..studies.corridor import CorridorSummary, SectionOutcome, run_sections, section_seeds
+from ..report.outputs import OutputSet
+from ..report.terminal import print_check, print_simulation
+from ..results import (
+    DEFAULT_TRAJECTORIES,
+    CheckResult,
+    CorridorSummary,
+    SectionOutcome,
+    SimulationResult,
+)
+from .common import (
+    FIGURES,
+    REPORT_FILES,
+    figure_files,
+    figures_and_report,
+    in_memory_guard,
+    memory_guard,
+    reserve,
+    run_record,
+    run_with_progress,
+    table_writers,
+    warn_failures,
+)
 from .corridor_map import map_files, write_map
 from .corridor_report import print_section_rule, print_totals
+from .optimised import optimise_with_files, print_optimised
+from .scenario_commands import SCENARIO_FIGURES, check_scenarios_with_files, print_check_across
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
@@ -72,14 +107,12 @@ def _pooled(args: argparse.Namespace) -> bool:
 
 
 def _trajectories(args: argparse.Namespace) -> int:
-    from ..results import DEFAULT_TRAJECTORIES
 
     return DEFAULT_TRAJECTORIES if (args.plot or args.report) else 0
 
 
 def _simulate_task(task: tuple[Any, int, int, int]) -> Any:
     """One section's run of ``simulate`` (a task for a pool or a cluster): its Study."""
-    from ..api import run_simulation
 
     project, rocks, seed, trajectories = task
     return run_simulation(project, rocks=rocks, seed=seed, progress=False,
@@ -91,7 +124,6 @@ def _check_task(task: tuple[Any, int, int, int, tuple[str, ...]]) -> Any:
 
     The plugins are loaded where the task runs, as the command loads them.
     """
-    from ..api import check, default_registry
 
     project, rocks, seed, trajectories, block = task
     return check(project, rocks=rocks, seed=seed, trajectories=trajectories,
@@ -105,7 +137,6 @@ def _on_executors(fn: Callable[[Any], Any], corridor: Corridor,
     Each section carries its project, rocks and seed, so the numbers are
     those of the run in this process, wherever it runs.
     """
-    from ..studies.executors import run_tasks as run_elsewhere
 
     tasks = []
     for section, sub in zip(corridor.sections, subs, strict=True):
@@ -122,11 +153,8 @@ def _on_executors(fn: Callable[[Any], Any], corridor: Corridor,
 
 def _registry(corridor: Corridor, args: argparse.Namespace) -> Registry:
     """The plugins, loaded once, with every section's plugin sections checked."""
-    from ..api import validate_project
-    from ..plugins import load_registry
-    from .common import warn_failures
 
-    registry = load_registry(blocked=args.block)
+    registry = load_plugins(args.block)
     warn_failures(registry)
     for section in corridor.sections:
         validate_project(section.project, registry)
@@ -195,7 +223,6 @@ def _reserve(files: OutputSet, args: argparse.Namespace, subs: Sequence[argparse
              out_files: Sequence[str], figures: Sequence[str], report: bool,
              extra: Sequence[Path] = ()) -> None:
     """Reserve every section's files, the corridor's ``summary.json`` and ``extra``."""
-    from .common import REPORT_FILES, figure_files, reserve
 
     for sub in subs:
         reserve(files, sub.out, out_files)
@@ -269,7 +296,6 @@ def each_section(
     CorridorSummary
         The corridor's result (its ``to_json()`` the corridor's JSON object).
     """
-    from ..report.outputs import OutputSet
 
     registry = _registry(corridor, args)
     _, seeds = section_seeds(corridor, args.seed)
@@ -303,29 +329,17 @@ def each_section(
 
 def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
     """``simulate`` of a corridor: every section's run, files and report, then the totals."""
-    from ..api import run_simulation
-    from ..report.terminal import print_simulation
-    from ..results import SimulationResult
-    from ..run.simulation import EXACT_ROCKS, study_memory
-    from .common import (
-        FIGURES,
-        figures_and_report,
-        memory_guard,
-        run_record,
-        run_with_progress,
-        table_writers,
-    )
 
     def guard(section: CorridorSection) -> None:
         project = section.project
         n = args.rocks or project.rocks.count
-        memory_guard(study_memory(project, n), f"section {section.name!r}: {n:,} rocks "
+        memory_guard(simulation_memory(project, n), f"section {section.name!r}: {n:,} rocks "
                       f"with {project.analysis.envelope_points} envelope points",
                       "Use fewer analysis.envelope_points or analysis.stations.")
 
     def elsewhere(subs: Sequence[argparse.Namespace]) -> list[Any] | None:
         pooled = _pooled(args) and all(
-            (args.rocks or s.project.rocks.count) <= EXACT_ROCKS for s in corridor.sections)
+            (args.rocks or s.project.rocks.count) <= exact_rocks() for s in corridor.sections)
         return _on_executors(_simulate_task, corridor, subs, args) if pooled else None
 
     def body(run: SectionRun) -> SectionDone:
@@ -353,10 +367,6 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
 
 def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
     """``check`` of a corridor: every section checked; exit 0 only if every section holds."""
-    from ..api import check
-    from ..report.terminal import print_check
-    from ..results import CheckResult
-    from .common import FIGURES, figures_and_report, in_memory_guard, run_record, run_with_progress
 
     def guard(section: CorridorSection) -> None:
         a = section.project.analysis
@@ -401,8 +411,6 @@ def cli_optimise(args: argparse.Namespace, corridor: Corridor) -> int:
     Sections share no measure, so the corridor's cheapest design is the
     cheapest design of every section; exit 0 only if every section has one.
     """
-    from .common import FIGURES, in_memory_guard
-    from .optimised import optimise_with_files, print_optimised
 
     for section in corridor.sections:
         if section.project.design is None:
@@ -448,7 +456,6 @@ def _check_scenarios(args: argparse.Namespace, corridor: Corridor,
     runs (exit 2), as is a section without one: checking it plainly would
     hide that nothing varies there.
     """
-    from .scenario_commands import SCENARIO_FIGURES, check_scenarios_with_files, print_check_across
 
     missing = [s for s in corridor.sections if s.project.study is None]
     if len(missing) == len(corridor.sections):

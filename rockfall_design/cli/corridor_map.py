@@ -15,9 +15,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..terrain.dem import read_dem
-from ..terrain.map_figure import corridor_map
-from ..terrain.mapping import chosen_measures, write_measures
+from ..api import chosen_measures, corridor_map, read_dem, write_measures
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..project import Corridor

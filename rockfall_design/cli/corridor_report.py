@@ -10,8 +10,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from ..studies.corridor import CorridorSummary, SectionBlock
-from ..studies.scenario_checks import Binding
+from ..report.tables import chosen_name
+from ..report.terminal import fitted_console
+from ..results import Binding, CorridorSummary, SectionBlock
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..project import CorridorSection
@@ -23,7 +24,6 @@ def _optimise_cells(block: SectionBlock) -> list[Any]:
     """A section's design and its cost, as the table of ``optimise`` shows them."""
     from rich.text import Text
 
-    from ..report.tables import chosen_name
 
     best = chosen_name(block.data)
     cost = next((a["cost"] for a in block.data.get("alternatives", ()) if a["name"] == best),
@@ -37,7 +37,6 @@ def print_totals(summary: CorridorSummary) -> None:
     from rich.table import Table
     from rich.text import Text
 
-    from ..report.terminal import fitted_console
 
     command, totals = summary.command, summary.totals
     if summary.across:
@@ -107,7 +106,6 @@ def _print_scenario_totals(summary: CorridorSummary) -> None:
     from rich.table import Table
     from rich.text import Text
 
-    from ..report.terminal import fitted_console
 
     totals = summary.totals
     table = Table(show_edge=False)
@@ -145,7 +143,6 @@ def print_section_rule(section: CorridorSection, of: int, seed: int) -> None:
     """The heading of a section's report; ``seed`` is the one it ran with (``--seed`` too)."""
     from rich.rule import Rule
 
-    from ..report.terminal import fitted_console
 
     rule = Rule(f"section {section.index + 1} of {of}: {section.name} (seed {seed})")
     fitted_console(rule).print(rule)

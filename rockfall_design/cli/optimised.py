@@ -7,13 +7,16 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .. import api
+from ..report.progress import interruptible_stages
+from ..report.terminal import design_yaml, print_optimise
 from ..version import __version__
 from .common import (
     FIGURES,
     figure_files,
     figures_and_report,
-    stage_progress,
 )
+from .scenario_commands import across_design_yaml, print_across
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..report.outputs import OutputSet
@@ -44,17 +47,15 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
     -------
     OptimiseResult
     """
-    from ..api import optimise
-    from ..report.terminal import design_yaml
 
     n = args.rocks or project.rocks.count
-    prog, callback = stage_progress(sys.stderr.isatty())
+    prog, callback = interruptible_stages(sys.stderr.isatty())
     if prog is None:
-        report = optimise(project, rocks=n, seed=args.seed, registry=registry,
+        report = api.optimise(project, rocks=n, seed=args.seed, registry=registry,
                           progress=callback)
     else:
         with prog:
-            report = optimise(project, rocks=n, seed=args.seed, registry=registry,
+            report = api.optimise(project, rocks=n, seed=args.seed, registry=registry,
                               progress=callback)
     result = report.result
     summary = report.summary
@@ -62,7 +63,6 @@ def optimise_with_files(project: Any, args: argparse.Namespace, registry: Any,
         out: Path = args.out
         if result.best is not None and project.design.scenarios is not None:
             # a design across a study's scenarios
-            from .scenario_commands import across_design_yaml
 
             files.write_text(out / "design.yaml", across_design_yaml(result, source, project))
         elif result.best is not None:
@@ -97,10 +97,8 @@ def print_optimised(result: Any, project: Any, summary: dict[str, Any] | None = 
     """The terminal report of ``optimise``: the verdict, the chosen design's design values
     (from ``design``, its check summary) and bill (from ``summary``), the alternatives,
     how sure, and the scenarios if any."""
-    from ..report.terminal import print_optimise
 
     print_optimise(result, project, summary=summary, design=design)
     if project.design.scenarios is not None:
-        from .scenario_commands import print_across
 
         print_across(result)

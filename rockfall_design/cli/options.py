@@ -8,14 +8,12 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import TYPE_CHECKING, NoReturn
+from typing import NoReturn
 
 from ..arguments import MAX_ROCKS as _MAX_ROCKS
+from ..arguments import bounds_problem
 from ..errors import ExitCode
-
-if TYPE_CHECKING:  # pragma: no cover
-    pass
-
+from ..report.formats import FIGURE_FORMATS
 
 PROG = "rockfall-design"
 
@@ -31,8 +29,6 @@ def int_at_least(low: int, what: str, high: int | None = None):
     """An argparse type: a whole number >= ``low`` ("expected a {what} >= {low}"), <= ``high``."""
 
     def parse(text: str) -> int:
-        from ..arguments import bounds_problem
-
         try:
             v = int(text)
         except ValueError:
@@ -51,8 +47,6 @@ positive_int = int_at_least(1, "number", _MAX_ROCKS)
 
 def formats(text: str) -> tuple[str, ...]:
     """An argparse type: 'png,svg' -> ('png', 'svg'), each a known figure format."""
-    from ..report.figures import FIGURE_FORMATS
-
     out = tuple(dict.fromkeys(f.strip().lower() for f in text.split(",") if f.strip()))
     bad = [f for f in out if f not in FIGURE_FORMATS]
     if bad or not out:

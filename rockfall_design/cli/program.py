@@ -8,30 +8,62 @@ import os
 import signal
 import sys
 from collections.abc import Sequence
+from importlib import import_module
 from typing import Any
 
-# The project's limit (rockfall_design.project.MAX_ROCKS), from a module
-# light enough for every --help (no pydantic).
 from ..errors import ExitCode, InputError, Interrupted, RockfallError
+from ..plugins import check_blocked_names
+from ..project.inputs import forget_inputs, strip_controls
+from ..report.interrupts import check_interrupt, committed_sets, forget_interrupts, note_interrupt
 from ..version import __version__
 from .options import PROG, CommandParser
-from .section_commands import (
+from .parsers import (
+    add_calibrate_parser,
     add_check_parser,
     add_optimise_parser,
     add_plugins_parser,
+    add_section_parser,
     add_serve_parser,
     add_simulate_parser,
+    add_study_parser,
 )
 
-__all__ = ["main"]
+__all__ = ["COMMANDS", "build_parser", "main"]
+
+#: Every command (aliases too) and the function that runs it, as (module of
+#: rockfall_design.cli, function). The ONE place where the command line
+#: imports a module by name: a runner's module imports what its command runs
+#: (the engine, numba, the optimiser...) at its top, so it is imported only
+#: when its command is chosen, never for ``--help``, a usage error or another
+#: command (each parser lives in the light :mod:`.parsers`).
+COMMANDS: dict[str, tuple[str, str]] = {
+    "simulate": ("section_commands", "cmd_simulate"),
+    "check": ("section_commands", "cmd_check"),
+    "optimise": ("section_commands", "cmd_optimise"),
+    "optimize": ("section_commands", "cmd_optimise"),
+    "study": ("study_command", "cmd_study"),
+    "calibrate": ("calibrate_command", "cmd_calibrate"),
+    "compare": ("calibrate_command", "cmd_compare"),
+    "plugins": ("section_commands", "cmd_plugins"),
+    "serve": ("section_commands", "cmd_serve"),
+    "section": ("terrain_command", "cmd_section"),
+}
+
+
+class Runner:
+    """A command's runner, imported when its command runs (see :data:`COMMANDS`)."""
+
+    def __init__(self, module: str, function: str) -> None:
+        self.module = module
+        self.function = function
+
+    def __call__(self, args: argparse.Namespace) -> int:
+        run = getattr(import_module(f".{self.module}", __package__), self.function)
+        return int(run(args))
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The command line: every command's parser, each added by the module that runs it."""
-    from .calibrate_command import add_calibrate_parser
-    from .study_command import add_study_parser
-    from .terrain_command import add_section_parser
-
+    """The command line: every command's parser, and the runner of each command."""
     parser = CommandParser(prog=PROG, description="Rockfall trajectories and protection design.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=CommandParser)
@@ -43,6 +75,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_plugins_parser(sub)
     add_serve_parser(sub)
     add_section_parser(sub)
+    for name, command in sub.choices.items():
+        command.set_defaults(func=Runner(*COMMANDS[name]))
     return parser
 
 
@@ -67,8 +101,6 @@ def _on_signal(signum: int, frame: Any) -> None:
     # discarded and the previous results stay as they were.
     if _exiting[0]:
         return  # the command is over, its output complete: nothing to stop
-    from ..report.interrupts import note_interrupt
-
     # Noted first: the exception may be swallowed where it lands (numpy does,
     # in its __array_ufunc__ lookup); the note stops the next safe point and
     # every commit all the same.
@@ -147,13 +179,9 @@ def _silence_stdout() -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``rockfall-design`` console script."""
-    from ..report.interrupts import check_interrupt, committed_sets, forget_interrupts
-
     parser = build_parser()
     args = parser.parse_args(argv)
     committed_before = committed_sets()
-    from ..project.inputs import forget_inputs
-
     forget_inputs()  # the files this command reads are noted anew
     forget_interrupts()
     handled = [signal.SIGTERM]
@@ -167,8 +195,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     sys.stdout = _GuardedStdout(stdout)
     try:
         if getattr(args, "block", None):
-            from ..plugins import check_blocked_names
-
             check_blocked_names(args.block)
         code = int(args.func(args))
         sys.stdout.flush()  # here, where a failure can still be reported
@@ -179,8 +205,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         if isinstance(exc, _StdoutFailed):
             sys.stdout = stdout
             _silence_stdout()
-        from ..project.inputs import strip_controls
-
         # One line, and nothing in it that steers the terminal (a name from a file).
         msg = strip_controls(" ".join(str(exc).split("\n")))
         sys.stderr.write(f"{PROG}: error: {msg}\n")

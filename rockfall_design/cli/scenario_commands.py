@@ -37,9 +37,14 @@ from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..api import check, check_across, scenario_runs
 from ..errors import ExitCode
+from ..project import dump_yaml
 from ..project.study import values_text
-from ..studies.scenario_checks import Binding, ScenariosCheck, check_across
+from ..report.outputs import OutputSet
+from ..report.terminal import fitted_console
+from ..results import DEFAULT_TRAJECTORIES, Binding, ScenariosCheck
+from .common import REPORT_FILES, figure_files, figures_and_report, reserve
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..optimiser.alternatives import AcrossResult
@@ -62,7 +67,6 @@ def print_check_across(check: ScenariosCheck) -> None:
     """The terminal report of ``check --scenarios``: a row per scenario, the verdict."""
     from rich.table import Table
 
-    from ..report.terminal import fitted_console
 
     table = Table(show_edge=False)
     for col, just in (("#", "right"), ("values", "left"), ("seed", "right"),
@@ -131,9 +135,6 @@ class ScenariosCheckResult:
         Its own project (the study's values set) and its own seed and rocks:
         the same rocks as in :func:`check_across`, so the same numbers.
         """
-        from ..api import check
-        from ..results import DEFAULT_TRAJECTORIES
-        from ..studies.scenarios import scenario_runs
 
         found = self.check
         run = next(r for r in scenario_runs(self.project, found.seed)
@@ -143,7 +144,10 @@ class ScenariosCheckResult:
 
     def plot_margins(self) -> Any:
         """A bar per scenario: the margin, the binding scenario, the count required."""
+        # Drawn only for --plot and --report: the drawing module imports matplotlib
+        # (a fifth of a second) at its top, as it subclasses its Figure.
         from ..report.design_figures import margins_figure
+
 
         c = self.check
         return margins_figure([p.to_json() for p in c.scenarios], c.required, c.binding.index,
@@ -156,7 +160,6 @@ class ScenariosCheckResult:
 
 def reserve_scenarios_files(files: OutputSet, args: argparse.Namespace) -> None:
     """Reserve the files of ``check --scenarios`` (``--out``, ``--plot``, ``--report``)."""
-    from .common import REPORT_FILES, figure_files, reserve
 
     reserve(files, args.out, ("summary.json",))
     reserve(files, args.report, REPORT_FILES)
@@ -172,7 +175,6 @@ def check_scenarios_with_files(project: Project, args: argparse.Namespace, regis
     (:data:`SCENARIO_FIGURES` in every ``--plot-format``) and ``report``.
     Returns what :func:`check_across` found.
     """
-    from .common import figures_and_report
 
     found = check_across(project, registry, rocks=args.rocks, seed=args.seed,
                          block=tuple(args.block), workers=args.workers,
@@ -186,7 +188,6 @@ def check_scenarios_with_files(project: Project, args: argparse.Namespace, regis
 
 def cli_check_scenarios(args: argparse.Namespace, project: Project, registry: Registry) -> int:
     """``check --scenarios``: exit 0 when the design holds in the required scenarios, else 1."""
-    from ..report.outputs import OutputSet
 
     if project.study is None:
         raise project.error_at((), "check --scenarios needs a study: section (its scenarios)")
@@ -204,11 +205,10 @@ def print_across(result: AcrossResult) -> None:
     """The scenario lines of the optimiser's report: where the chosen design binds."""
     from rich.text import Text
 
-    from ..report.terminal import fitted_console
 
     block = result.scenarios_block()
-    lines = [f"Scenarios: a design must hold in {block['required']} of {block['of']} "
-             f"(design.scenarios share {block['share']:g}), each with its own rocks."]
+    lines = [f"Scenarios: a design must hold in {result.required} of {len(result.runs)} "
+             f"(design.scenarios share {result.share:g}), each with its own rocks."]
     if result.best is not None and block["binding"] is not None:
         b = Binding.from_json(block["binding"])
         lines.append(f"Binding scenario {b.index} ({values_text(b.values)}, seed "
@@ -230,7 +230,6 @@ def across_design_yaml(result: AcrossResult, project_file: Path | str,
     seed the scenarios' seeds derive from and ``rocks.count`` the most rocks
     that decided the design in a scenario.
     """
-    from ..project import dump_yaml
 
     best = result.best
     assert best is not None and best.evaluation is not None
@@ -249,7 +248,7 @@ def across_design_yaml(result: AcrossResult, project_file: Path | str,
     b = Binding.from_json(block["binding"])
     head = (
         f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
-        f"cost {best.cost:,.0f}, holding in {block['required']} of {block['of']} scenarios "
+        f"cost {best.cost:,.0f}, holding in {result.required} of {len(result.runs)} scenarios "
         "of the study.\n"
         f"# Each scenario has its own rocks: seeds derived from rocks.seed ({result.seed}); "
         f"rocks.count is the most rocks that decided it in a scenario.\n"

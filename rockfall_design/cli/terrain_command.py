@@ -11,76 +11,23 @@ hillshaded DEM. Needs the extra ``[terrain]``.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
-from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..api import cut_section, read_dem, trace_fall_line
 from ..errors import ExitCode, InputError
 from ..report.outputs import OutputSet
-from ..terrain.cut import DEFAULT_TOLERANCE_M, TerrainSection, cut_section
-from ..terrain.dem import Dem, read_dem
-from ..terrain.fall_line import DEFAULT_FLAT_DEG, trace_fall_line
+from ..results import Dem, TerrainSection
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
-__all__ = ["add_section_parser", "cmd_section"]
+__all__ = ["cmd_section", "section_figure"]
 
 #: The figure formats of --plot (those of every other command's --plot-format).
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
-
-
-def _point(text: str) -> tuple[float, float]:
-    parts = text.split(",")
-    try:
-        e, n = (float(p) for p in parts)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a map point E,N (m), got {text!r}") from None
-    if not (math.isfinite(e) and math.isfinite(n)):
-        raise argparse.ArgumentTypeError(f"expected finite coordinates, got {text!r}")
-    return e, n
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {text!r}")
-    return value
-
-
-def add_section_parser(sub: Any) -> None:
-    """The ``section`` command and its options."""
-    p = sub.add_parser(
-        "section", help="cut a slope section from a DEM (along a line or a fall line)",
-        description="Cut a slope section from a DEM (projected CRS in metres), along a map "
-        "line or down the fall line from a point, and write it as a survey CSV (x along the "
-        "line from its top, y the height). Needs the terrain extra: "
-        "pip install 'rockfall-design[terrain]'.")
-    p.add_argument("dem", type=Path, help="the DEM (GeoTIFF)")
-    how = p.add_mutually_exclusive_group(required=True)
-    how.add_argument("--fall-line", type=_point, metavar="E,N",
-                     help="follow the steepest descent from this map point")
-    how.add_argument("--line", type=_point, nargs="+", metavar="E,N",
-                     help="the section's map line: two or more points")
-    p.add_argument("--stop", type=_point, nargs="+", metavar="E,N",
-                   help="a map line (a road) where the fall line ends")
-    p.add_argument("--flat-deg", type=_positive, default=DEFAULT_FLAT_DEG,
-                   help=f"the fall line ends where the ground is flatter (deg; default "
-                   f"{DEFAULT_FLAT_DEG:g})")
-    p.add_argument("--spacing", type=_positive, default=None,
-                   help="sampling step along the line (m; default the DEM's resolution)")
-    p.add_argument("--tolerance", type=_positive, default=DEFAULT_TOLERANCE_M,
-                   help=f"vertical tolerance of the simplified section (m; default "
-                   f"{DEFAULT_TOLERANCE_M:g})")
-    p.add_argument("--out", type=Path, required=True, help="the section's CSV (x, y)")
-    p.add_argument("--plot", type=Path, help="a figure of the section (.png, .svg, .pdf)")
-    p.set_defaults(func=cmd_section)
 
 
 def cmd_section(args: argparse.Namespace) -> int:

@@ -22,13 +22,16 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
 
+from ..errors import InputError
 from ..judge.records import CheckSummary, DesignVerdict, State
 from ..project.study import values_text
 from ..run.summary import RunSummary
 from ..version import __version__
 from .context import LimitsPart, ReportContext, ReportFigure
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
+from .formats import CAPTIONS, figure_svg, inline_svg, svg_document
 from .listed import listed_lines
+from .outputs import OutputSet
 from .pdf import html_to_pdf, pdf_turned_off, pdf_unavailable
 from .sections import (
     Table,
@@ -227,8 +230,6 @@ def model_limits(command: str) -> list[LimitsPart]:
 
 def report_figures(figures: Mapping[str, Any]) -> list[ReportFigure]:
     """The report's figures in their order, each with its caption."""
-    from .figures import CAPTIONS
-
     return [ReportFigure(name, CAPTIONS.get(name, ""), fig) for name, fig in figures.items()]
 
 
@@ -414,7 +415,6 @@ def _environment(markdown: bool) -> Any:
     try:
         import jinja2
     except ImportError:  # pragma: no cover - a core dependency
-        from ..errors import InputError
 
         raise InputError("--report needs Jinja2: python -m pip install jinja2") from None
     env = jinja2.Environment(
@@ -454,7 +454,6 @@ _HTML_START = re.compile(r"<(?=[A-Za-z/!?])|&(?=#|[A-Za-z][A-Za-z0-9]*;)")
 class _Rendered(str):
     """Markdown the template has escaped already (a macro's output, ``|rendered``)."""
 
-
 def _md_text(value: Any) -> Any:
     """A value shown in report.md, with whatever could start HTML as an entity.
 
@@ -484,7 +483,6 @@ def render_html(context: ReportContext, for_print: bool = False,
     """
     from markupsafe import Markup
 
-    from .figures import figure_svg
 
     figs = [replace(f, svg=Markup(svgs[f.name] if svgs and f.name in svgs
                                   else figure_svg(f.fig))) for f in context.figures]
@@ -532,8 +530,6 @@ def write_report(result: Any, directory: str | os.PathLike[str],
     -------
     list of Path
     """
-    from .figures import inline_svg, svg_document
-    from .outputs import OutputSet
 
     if outputs is None:
         with OutputSet() as own:

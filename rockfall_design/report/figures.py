@@ -17,8 +17,7 @@ from __future__ import annotations
 import io
 import math
 from collections.abc import Mapping, Sequence
-from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from matplotlib import colormaps
@@ -26,8 +25,15 @@ from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
 from ..engine.columns import STOPPED
+from ..plugins.manager import plugin_code
+from ..plugins.measure import Barrier
 from ..run.passages import property_marks
 from ..run.summary import EndCounts
+from .formats import (
+    CAPTIONS,
+    FIGURE_FORMATS,
+    save_figures,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -35,7 +41,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..judge.evaluation import Evaluation
     from ..run.simulation import Study
     from ..run.streamed import StreamedStudy
-    from .outputs import OutputSet
 
 __all__ = [
     "RockfallFigure",
@@ -51,38 +56,10 @@ __all__ = [
     "no_stop_reason",
 ]
 
-#: File formats the figures can be written in (``--plot-format``).
-FIGURE_FORMATS = ("png", "svg", "pdf")
 
 #: Envelope points passed by fewer rocks than this are not drawn (when the
 #: project does not say otherwise): a percentile of a handful of rocks is noise.
 DEFAULT_MIN_ROCKS_ENVELOPE = 30
-
-#: One sentence per figure, for reports.
-CAPTIONS = {
-    "profile": "Slope section (x and elevation in m, equal scales) with a sample of rock "
-    "centre paths, the rest positions, the analysis stations, the protected zone and the "
-    "measures (barriers with product, height and capacity).",
-    "envelopes": "Envelopes along the section of the passing height of the rock centre above "
-    "the ground (m), of the total kinetic energy (kJ) and of the translational speed (m/s), "
-    "over the rocks passing each point downslope for the first time; drawn only where enough "
-    "rocks pass (bottom: how many). Each barrier's heights and energies (nominal height, "
-    "capacity and any other figure its product gives) are ticks at its station.",
-    "stops": "Where the rocks ended along the section (count per bin): at rest, or held by a "
-    "measure where it held them (a colour per measure); the rocks that left the section are "
-    "a hatched bar beyond its end, with their count; the title says how every rock ended. "
-    "The ground below.",
-    "alternatives": "The optimiser's alternatives: cost of the cheapest design of each family "
-    "(admissible ones coloured, the chosen one marked), with the rocks still reaching the "
-    "protected zone and the check that binds or fails.",
-    "margins": "The design's margin in every scenario of the study: the smallest relative "
-    "slack of a check or of the residual with the confidence bounds in place (%, negative "
-    "where it fails), with what binds; green where the design holds on the point values "
-    "(hatched: not with the confidence bounds), red where it fails; * the binding scenario "
-    "(the one that decides the count required: with every scenario required, the least "
-    "margin). Below: the scenarios it holds in against the number required.",
-}
-
 
 class RockfallFigure(Figure):
     """A matplotlib Figure that shows itself in a notebook without pyplot.
@@ -188,7 +165,6 @@ def _measure_text(placed: Any) -> str:
     does not give the height and capacity gets them from the footprint, so
     every barrier on a figure says how high it is and what it takes.
     """
-    from ..plugins.measure import Barrier
 
     text = str(placed.label).split(" at x = ")[0]
     fp = placed.footprint
@@ -206,7 +182,6 @@ def _measure_text(placed: Any) -> str:
 def _draw_measures(ax: Axes, evaluation: Evaluation, label: bool = True,
                    annotate: bool = True) -> None:
     """Barriers as bars of their height; edited ground over the original (dashed)."""
-    from ..plugins.measure import Barrier
 
     sec0 = evaluation.original_section
     ax.plot(sec0.x, sec0.y, color=_GROUND_LINE, lw=0.9, ls="--", zorder=3,
@@ -238,7 +213,6 @@ def _measure_lines(ax: Axes, evaluation: Evaluation | None) -> None:
     """A vertical line at each measure's station (for the envelope panels)."""
     if evaluation is None:
         return
-    from ..plugins.measure import Barrier
 
     for p in evaluation.placed:
         fp = p.footprint
@@ -303,8 +277,6 @@ def _figure_marks(axes: Mapping[str, Axes], evaluation: Evaluation | None) -> No
     :func:`rockfall_design.run.passages.property_marks`)."""
     if evaluation is None:
         return
-    from ..plugins.manager import plugin_code
-    from ..plugins.measure import Barrier
 
     panel = {"passing_height_m": "height", "energy_kj": "energy"}
     for p in evaluation.placed:
@@ -539,81 +511,3 @@ def study_figures(
         "envelopes": envelopes_figure(study, evaluation, min_rocks),
         "stops": stops_figure(study, evaluation),
     }
-
-
-def save_figures(
-    figures: Mapping[str, Figure],
-    directory: str | Path,
-    formats: Sequence[str] = ("png",),
-    outputs: OutputSet | None = None,
-) -> list[Path]:
-    """Write every figure as ``directory/NAME.FORMAT`` for each format.
-
-    Parameters
-    ----------
-    figures : mapping of str to Figure
-    directory : path
-    formats : sequence of str
-        Some of :data:`FIGURE_FORMATS`.
-    outputs : OutputSet, optional
-        The command's output set: the files land when it commits. Without
-        one they land together on return.
-
-    Returns
-    -------
-    list of Path
-        The files written, in order.
-    """
-    from .outputs import OutputSet
-
-    if outputs is None:
-        with OutputSet() as own:
-            return save_figures(figures, directory, formats, own)
-    out = Path(directory)
-    written: list[Path] = []
-    for name, fig in figures.items():
-        for fmt in formats:
-            if fmt not in FIGURE_FORMATS:
-                raise ValueError(f"unknown figure format {fmt!r}; use one of "
-                                 f"{', '.join(FIGURE_FORMATS)}")
-            path = out / f"{name}.{fmt}"
-
-            def writer(fh: io.BufferedWriter, fig: Figure = fig, fmt: str = fmt) -> None:
-                _write_figure(fig, fh, fmt)
-
-            outputs.write_with(path, writer)
-            written.append(path)
-    return written
-
-
-#: Fixed metadata per format, so that the same run writes the same bytes.
-_FIXED_METADATA = {"svg": {"Date": None}, "pdf": {"CreationDate": None}}
-
-
-def _write_figure(fig: Figure, fh: IO[Any], fmt: str) -> None:
-    """Write ``fig`` in ``fmt`` to ``fh``: the one place the figures' file settings live."""
-    # A figure with a layout engine (the constrained layout) already fits its
-    # page; cropping it "tight" costs a second full draw for a few points of
-    # margin: 53 s against 40 s for a simulate's six figures in PNG and SVG
-    # (load 14, alternated runs). The fixed grids (passage panels) are cropped.
-    tight = "tight" if fig.get_layout_engine() is None else None
-    fig.savefig(fh, format=fmt, dpi=150, bbox_inches=tight,
-                metadata=_FIXED_METADATA.get(fmt, {}))
-
-
-def svg_document(fig: Figure) -> str:
-    """The figure as a whole SVG file's text, as :func:`save_figures` writes it."""
-    buf = io.StringIO()
-    _write_figure(fig, buf, "svg")
-    return buf.getvalue()
-
-
-def inline_svg(document: str) -> str:
-    """An SVG file's text without its XML prolog and DOCTYPE, for inline use in HTML."""
-    start = document.find("<svg")
-    return document[start:] if start >= 0 else document
-
-
-def figure_svg(fig: Figure) -> str:
-    """The figure as an SVG document (text), for embedding in an HTML report."""
-    return inline_svg(svg_document(fig))

@@ -22,6 +22,7 @@ from types import FrameType
 from typing import IO, Any, Literal
 
 from ..errors import InputError
+from ..project.inputs import input_at
 from .interrupts import HELD_SIGNALS
 from .temporaries import make
 
@@ -155,7 +156,6 @@ def discard_entries(entries: dict[Path, StagedEntry], created: list[Path]) -> No
 
 def refuse_input(target: Path) -> None:
     """Raise :class:`OutputError` if ``target`` is a file the run reads."""
-    from ..project.inputs import input_at
 
     found = input_at(target)
     if found is not None:

@@ -12,13 +12,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any
-
-import pandas as pd
+from typing import TYPE_CHECKING, Any
 
 from ..judge.records import CheckSummary, check_of, run_of
+from ..run.passages import QUANTITIES
 from ..run.summary import RunSummary
 from .rounding import round_value
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
 
 __all__ = [
     "chosen_name",
@@ -113,6 +115,8 @@ def alternatives_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
         (every check as ``name=value/target:ok``, for readers of earlier
         files).
     """
+    import pandas as pd  # heavy (a fifth of a second): only where a table is built
+
     best = chosen_name(summary)
     rows: list[dict[str, Any]] = []
     for a in summary.get("alternatives", []):
@@ -160,6 +164,8 @@ def alternatives_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
 
 def measures_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
     """One row per measure of a ``check`` summary: what the rocks did there and whether it holds."""
+    import pandas as pd  # heavy (a fifth of a second): only where a table is built
+
     rows = []
     for i, m in enumerate(summary.get("measures", [])):
         rows.append({
@@ -184,6 +190,8 @@ def measures_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
 
 def checks_frame(summary: Mapping[str, Any]) -> pd.DataFrame:
     """One row per safety check of a ``check`` summary, with its target and verdict."""
+    import pandas as pd  # heavy (a fifth of a second): only where a table is built
+
     rows = []
     for i, m in enumerate(summary.get("measures", [])):
         for c in m.get("checks") or []:
@@ -211,7 +219,6 @@ PASSAGE_COLUMNS = ["place", "number", "label", "x_m", "quantity", "unit", "rocks
 def _passage_rows(place: str, number: int, label: str, x: float,
                   block: Mapping[str, Any]) -> list[dict[str, Any]]:
     """The rows of one place: one per quantity of ``run.passages.QUANTITIES`` it has."""
-    from ..run.passages import QUANTITIES
 
     marks = block.get("marks") or []
     rows = []
@@ -252,6 +259,8 @@ def passages_frame(summary: RunSummary | CheckSummary | Mapping[str, Any]) -> pd
         capacity), empty where there are none. A ground edit (ditch, berm)
         has no rows: no rock passes it at a station.
     """
+    import pandas as pd  # heavy (a fifth of a second): only where a table is built
+
     if isinstance(summary, Mapping):  # a summary's JSON: its record
         summary = check_of(summary) if "safety_concept" in summary else run_of(summary)
     rows: list[dict[str, Any]] = []

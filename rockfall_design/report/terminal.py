@@ -26,10 +26,13 @@ from ..judge.records import (
     check_of,
     run_of,
 )
+from ..plugins.listing import SECTIONS, parameter_list
+from ..project import dump_yaml
 from ..run.summary import RunSummary
 from .design_values import design_columns, design_tables, fresh_statements, how_sure
 from .listed import SHOWN, forest_text, listed_lines
 from .outputs import OutputSet
+from .tables import alternatives_frame
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
@@ -446,7 +449,6 @@ def alternatives_table(result: Any) -> Any:
 
     See :func:`rockfall_design.report.tables.alternatives_frame`.
     """
-    from .tables import alternatives_frame
 
     return alternatives_frame(result.summary())
 
@@ -481,7 +483,6 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
     undecided (``listed``: ``OptimisationResult.marginal``; default the
     chosen family's own) with the rocks that would decide each.
     """
-    from ..project import dump_yaml
 
     ev = best.evaluation
     data = ev.study.project.resolved_dict()
@@ -542,6 +543,7 @@ def plot_study(
     The figures are built by :mod:`rockfall_design.report.figures` (no pyplot, no
     backend switch). Returns the paths written.
     """
+    # The drawing module imports matplotlib at its top (a fifth of a second).
     from .figures import save_figures, study_figures
 
     return save_figures(study_figures(study, evaluation), directory, formats, outputs)
@@ -552,7 +554,6 @@ def plot_study(
 
 def plugins_table(registry: Registry) -> Group:
     """The registry as rich tables (``rockfall-design plugins``)."""
-    from ..plugins.listing import SECTIONS, parameter_list
 
     titles = {"measures": "Measures", "safety_concepts": "Safety concepts",
               "cost_models": "Cost models"}

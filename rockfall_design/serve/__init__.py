@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import TextIO
 
 from ..errors import InputError, RockfallError
+from ..plugins import load_registry
 
 __all__ = ["serve", "DEFAULT_PORT", "find_projects"]
 
@@ -117,9 +118,10 @@ def serve(paths: Sequence[Path], *, host: str = "127.0.0.1", port: int | None = 
         A project file is not valid.
     """
     _needs_web()
+    # The web extra (uvicorn, starlette) is optional: the app's modules import it
+    # at their top, so they are imported once _needs_web() has found it.
     import uvicorn
 
-    from ..plugins import load_registry
     from .app import create_app
     from .workbench import load_entries
 

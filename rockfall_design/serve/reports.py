@@ -14,7 +14,7 @@ import threading
 from collections.abc import Callable
 
 from ..report.documents import render_html, report_context
-from ..report.figures import inline_svg, svg_document
+from ..report.formats import inline_svg, svg_document
 from ..results import CheckResult, OptimiseResult
 
 #: Figure formats the page offers for download.

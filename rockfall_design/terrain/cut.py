@@ -15,17 +15,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+# Defined beside the command line's other numbers, which --help shows without this room.
+from ..arguments import DEFAULT_TOLERANCE_M
 from .dem import Dem
 from .extra import TerrainError
 
 __all__ = ["DEFAULT_TOLERANCE_M", "TerrainSection", "cut_section", "line_stations",
            "simplify_vertical"]
 
-#: Vertical tolerance (m) of the simplified section: 5 cm, well below the
-#: roughness heights calibrated for talus (Bourrier et al. 2009 report
-#: 0.1-0.5 m) and below the vertical accuracy of airborne LiDAR DEMs (USGS
-#: 3DEP quality level 2: 10 cm RMSE). ILLUSTRATIVE as a default; state yours.
-DEFAULT_TOLERANCE_M = 0.05
 
 
 @dataclass(frozen=True)

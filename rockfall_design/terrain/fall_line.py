@@ -28,16 +28,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+# Defined beside the command line's other numbers, which --help shows without this room.
+from ..arguments import DEFAULT_FLAT_DEG
 from .dem import Dem
 from .extra import TerrainError
 
 __all__ = ["DEFAULT_FLAT_DEG", "FallLine", "trace_fall_line"]
 
-#: Below this slope (deg) the ground counts as flat and the fall line ends:
-#: rocks come to rest on slopes below about 5-10 deg (rolling friction of
-#: 0.1-0.2, e.g. Dorren 2003), so a path that reaches 3 deg has left the
-#: slope. ILLUSTRATIVE default; set it per project.
-DEFAULT_FLAT_DEG = 3.0
 
 #: Most steps of one trace (at half a pixel, 20 km on a 1 m DEM).
 MAX_STEPS = 40_000
