@@ -160,8 +160,8 @@ def _run_line(seed: int, res, wall: float, cpu: float) -> tuple[str, dict]:
     than the wall time)."""
     b = res.best
     cost = b.cost if b is not None else math.inf
-    short = sum(1 for m in res.marginal if m.get("short_of_margin"))
-    marginal = sum(1 for m in res.marginal if m.get("decided", True)) - short
+    short = sum(1 for m in res.marginal if m.short_of_margin)
+    marginal = sum(1 for m in res.marginal if m.decided) - short
     undecided = len(res.marginal) - marginal - short
     per = res.rocks_simulated / b.decision_rocks if b is not None else float("nan")
     line = (f"  seed {seed}: {cost:>12,.0f} {b.name if b else 'none':30s} {wall:5.1f} s "
@@ -183,10 +183,10 @@ def _listed_lines(res) -> list[str]:
         out.append(f"      the bare slope already meets the residual target "
                    f"({res.bare_slope['reaching']} of {res.bare_slope['rocks']:,} reach)")
     for m in res.marginal[:8]:
-        kind = ("short of the margin" if m.get("short_of_margin") else
-                "marginal" if m.get("decided", True) else "not decided")
-        out.append(f"      {kind}, cheaper: {m['cost']:,.0f} {'; '.join(m['labels'])} "
-                   f"(about {m['rocks_to_decide'] or '?'} rocks would decide it)")
+        kind = ("short of the margin" if m.short_of_margin else
+                "marginal" if m.decided else "not decided")
+        out.append(f"      {kind}, cheaper: {m.cost:,.0f} {'; '.join(m.labels)} "
+                   f"(about {m.rocks_to_decide or '?'} rocks would decide it)")
     if len(res.marginal) > 8:
         out.append(f"      ... {len(res.marginal) - 8} more listed")
     return out
@@ -206,7 +206,7 @@ def _spread_lines(seeds: list[int], rows: list[dict], named: list[dict]) -> list
             m = nm.get(round(low, 2))
             out.append(f"  seed {seed}: {c:,.0f} is dearer than {low:,.0f} by more than "
                        f"3 %; its report names {low:,.0f}: "
-                       + ("NO" if m is None else f"yes: {m['reason'][:300]}"))
+                       + ("NO" if m is None else f"yes: {m.reason[:300]}"))
     return out
 
 
@@ -223,7 +223,7 @@ def _project_seeds(path: Path, project, registry, args, budget: int | None) -> l
         line, row = _run_line(seed, res, wall, cpu)
         print(line, flush=True)
         rows.append(row)
-        named.append({round(m["cost"], 2): m for m in res.marginal})
+        named.append({round(m.cost, 2): m for m in res.marginal})
         b = res.best
         if b is not None and args.check_seeds:
             held = _check_in_process(project, registry, b, args.check_seeds)

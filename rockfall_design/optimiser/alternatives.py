@@ -143,9 +143,9 @@ class OptimisationResult:
     exact_evaluations: int = 0
     rocks_simulated: int = 0
     looks: LookSchedule | None = None
-    #: The designs listed cheaper than the chosen one, as their JSON
-    #: (:meth:`Listed.to_json`): what the report and the browser app read.
-    marginal: list[dict[str, Any]] = field(default_factory=list)
+    #: The designs listed cheaper than the chosen one, cheapest first
+    #: (``summary()["marginal"]`` is their :meth:`Listed.to_json`).
+    marginal: list[Listed] = field(default_factory=list)
     decided: int = 0
     bare_slope: dict[str, Any] | None = None
 
@@ -171,7 +171,7 @@ class OptimisationResult:
             "proof": "" if self.best is None else self.best.proof,
             "reason": self.reason,
             "decided": self.decided,
-            "marginal": self.marginal,
+            "marginal": [m.to_json() for m in self.marginal],
             "bare_slope": self.bare_slope,
             "looks": None if self.looks is None else {
                 "rocks": list(self.looks.sizes), "confidence": self.looks.confidence,

@@ -318,7 +318,7 @@ def _result(scs: Sequence[Scenario], searched: FamiliesSearched, reason: str, s:
         confidence=scs[0].looks.confidence, exact_evaluations=searched.exact_evaluations,
         rocks_simulated=searched.rocks_simulated + sum(
             sc.screen.n + sc.screen.edit_rocks + sc.decider.simulated for sc in scs),
-        marginal=[m.to_json() for m in searched.marginal], decided=sum(a.exact_evaluations
+        marginal=list(searched.marginal), decided=sum(a.exact_evaluations
                                                 for a in searched.alternatives))
     if across:
         return AcrossResult(**common, share=share, required=required,

@@ -3,7 +3,7 @@
 The terminal panel, the report's "How sure" and the head of ``design.yaml``
 name them alike: each one's point values and confidence bounds, and what
 would decide it, the rocks the 1/sqrt(n) trend of its look's bounds needs
-(:func:`rockfall_design.optimiser.decide.rocks_to_decide`), to be given as
+(:func:`rockfall_design.judge.looks.rocks_to_decide`), to be given as
 ``--max-rocks``.
 
 See Also
@@ -14,10 +14,13 @@ rockfall_design.optimiser.alternatives.listed_entry : the entries themselves.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..judge.records import CheckSummary, run_of
 from ..run.summary import RunSummary, Share
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ..optimiser.alternatives import Listed
 
 __all__ = ["forest_text", "listed_lines", "what_decides", "values_phrase"]
 
@@ -26,19 +29,19 @@ __all__ = ["forest_text", "listed_lines", "what_decides", "values_phrase"]
 SHOWN = 6
 
 
-def what_decides(m: Mapping[str, Any]) -> str:
+def what_decides(m: Listed) -> str:
     """What would decide a listed design: the rocks it needs, or why no number says so."""
-    if m.get("short_of_margin"):
+    if m.short_of_margin:
         return ("it holds with these bounds, but a checker's check would confirm it less "
                 "often than design.checker_power asks, with confidence")
-    if m.get("margin_undecided"):
+    if m.margin_undecided:
         return ("it holds with these bounds, but whether a checker's check would confirm "
                 "it often enough (design.checker_power) is open; more rocks (--max-rocks) "
                 "may decide it")
-    need = m.get("rocks_to_decide")
+    need = m.rocks_to_decide
     if need:
         return f"about {need:,} rocks would decide it (--max-rocks {_round_up(need)})"
-    if m.get("values"):
+    if m.values is not None:
         return "its point value sits on the target: no number of rocks is likely to decide it"
     return "more rocks (--max-rocks) may decide it"
 
@@ -49,22 +52,22 @@ def _round_up(n: int) -> int:
     return -(-int(n) // step) * step
 
 
-def values_phrase(m: Mapping[str, Any]) -> str:
-    """A listed design's point values and bounds, one phrase each (see optimiser.decide)."""
-    v = m["values"]
+def values_phrase(m: Listed) -> str:
+    """A listed design's point values and bounds, one phrase each (see judge.looks)."""
+    v = m.values
     if v is None:  # a design across scenarios: why it is undecided
-        return str(m["reason"])
+        return str(m.reason)
     parts = []
-    for c in v["checks"]:
-        if c["value"] is None:
+    for c in v.checks:
+        if c.value is None:
             continue
-        rng = check_range(c["bound"], c["optimistic"])
-        parts.append(f"{c['name']} {c['value']:.2f}{rng}, target {c['target']:.2f}")
-    r = v.get("residual")
+        rng = check_range(c.bound, c.optimistic)
+        parts.append(f"{c.name} {c.value:.2f}{rng}, target {c.target:.2f}")
+    r = v.residual
     if r is not None:
-        parts.append(f"residual {100 * r['fraction']:.3f} % ({100 * r['lower']:.3f} to "
-                     f"{100 * r['upper']:.3f} %), allowed {100 * r['allowed']:.3f} %")
-    return f"on {v['rocks']:,} rocks at {100 * v['confidence']:.4g} %: " + ", ".join(parts)
+        parts.append(f"residual {100 * r.fraction:.3f} % ({100 * r.lower:.3f} to "
+                     f"{100 * r.upper:.3f} %), allowed {100 * r.allowed:.3f} %")
+    return f"on {v.rocks:,} rocks at {100 * v.confidence:.4g} %: " + ", ".join(parts)
 
 
 def check_range(bound: float | None, optimistic: float | None) -> str:
@@ -85,14 +88,14 @@ def check_range(bound: float | None, optimistic: float | None) -> str:
     return ""
 
 
-def listed_lines(marginal: Sequence[Mapping[str, Any]] | None, currency: str = "",
+def listed_lines(marginal: Sequence[Listed] | None, currency: str = "",
                  shown: int = SHOWN) -> list[str]:
     """The cheaper designs that are marginal or not decided, one sentence each ("- ...").
 
     Parameters
     ----------
-    marginal : sequence of mapping
-        ``OptimisationResult.marginal`` (or ``summary["marginal"]``), cheapest first.
+    marginal : sequence of Listed
+        ``OptimisationResult.marginal``, cheapest first.
     currency : str
         Written after each cost.
     shown : int
@@ -101,10 +104,10 @@ def listed_lines(marginal: Sequence[Mapping[str, Any]] | None, currency: str = "
     marginal = list(marginal or [])
     out = []
     for m in marginal[:shown]:
-        head = ("Short of the checker's margin, cheaper" if m.get("short_of_margin") else
-                "Marginal, cheaper" if m.get("decided", True) else "Not decided, cheaper")
-        cost = f"{m['cost']:,.0f}" + (f" {currency}" if currency else "")
-        out.append(f"- {head}: {m['name']} {cost}: {'; '.join(m['labels'])}: "
+        head = ("Short of the checker's margin, cheaper" if m.short_of_margin else
+                "Marginal, cheaper" if m.decided else "Not decided, cheaper")
+        cost = f"{m.cost:,.0f}" + (f" {currency}" if currency else "")
+        out.append(f"- {head}: {m.family} {cost}: {'; '.join(m.labels)}: "
                    f"{values_phrase(m)}; {what_decides(m)}")
     if len(marginal) > shown:
         out.append(f"- ... and {len(marginal) - shown} more cheaper designs marginal or not "

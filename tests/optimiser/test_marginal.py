@@ -320,9 +320,9 @@ def test_designs_left_once_the_decisions_are_used_up_are_listed_not_dropped(
     family.settle(stream() if as_generator else [_contender(c) for c in costs])
     assert decider.decided == [10.0, 11.0]
     # Not one of them dropped unsaid: the cheapest three costs are listed as not decided.
-    listed = [m["cost"] for m in alt.marginal if not m["decided"]]
+    listed = [m.cost for m in alt.marginal if not m.decided]
     assert listed == [12.0, 13.0, 14.0]
-    assert all("decisions were used up" in m["reason"] for m in alt.marginal)
+    assert all("decisions were used up" in m.reason for m in alt.marginal)
     # Read up to the first design past three listable costs; the rest left unread.
     assert alt.undecided == 4 and family.unread
     if as_generator:
@@ -338,4 +338,4 @@ def test_a_stream_read_to_its_end_says_how_many_were_not_decided(monkeypatch):
     family = FamilyDecision(alt, [sc], 1, [Tally()])
     family.settle([_contender(c) for c in (10.0, 20.0, 20.0)])
     assert alt.undecided == 2 and not family.unread
-    assert [m["cost"] for m in alt.marginal] == [20.0]
+    assert [m.cost for m in alt.marginal] == [20.0]

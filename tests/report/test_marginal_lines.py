@@ -2,14 +2,15 @@
 design.yaml (report.listed)."""
 
 from pathlib import Path
+from types import SimpleNamespace
 
+from rockfall_design.judge.looks import LookCheck, LookValues
 from rockfall_design.report.listed import values_phrase as _marginal_values
 
 
 def _design(bound, optimistic, value=0.66):
-    check = {"name": "reach_factor", "value": value, "bound": bound, "optimistic": optimistic,
-             "target": 1.0, "unit": "-"}
-    return {"values": {"rocks": 4603, "confidence": 0.99, "checks": [check], "residual": None}}
+    check = LookCheck("fence", "reach_factor", value, bound, optimistic, 1.0, "-")
+    return SimpleNamespace(values=LookValues(4603, 0.99, [check], None), reason="")
 
 
 def test_both_ends_read_as_a_range():
@@ -27,11 +28,13 @@ def test_one_end_is_not_shown_as_a_range_of_one_value():
 
 
 def _entry(**kw):
-    check = {"name": "height_factor", "value": 1.02, "bound": 0.97, "optimistic": 1.08,
-             "target": 1.0, "unit": "-"}
-    values = {"rocks": 200_000, "confidence": 0.993, "checks": [check], "residual": None}
-    return {"name": "fence", "labels": ["fence RX-100 3.5 m at x = 92 m"], "cost": 68_000.0,
-            "values": values, "rocks_to_decide": 512_345, "decided": True, **kw}
+    """A listed design as report.listed reads it (the attributes of optimiser's Listed)."""
+    check = LookCheck("fence", "height_factor", 1.02, 0.97, 1.08, 1.0, "-")
+    fields = {"family": "fence", "labels": ["fence RX-100 3.5 m at x = 92 m"],
+              "cost": 68_000.0, "values": LookValues(200_000, 0.993, [check], None),
+              "rocks_to_decide": 512_345, "decided": True, "short_of_margin": False,
+              "margin_undecided": False, "reason": ""}
+    return SimpleNamespace(**{**fields, **kw})
 
 
 def test_a_listed_design_says_the_rocks_that_would_decide_it():
