@@ -55,8 +55,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 #: Position in the chain of rooms; a lower number is further up.
-CHAIN = {"cli": 0, "testing": 0, "api": 1, "optimiser": 2, "studies": 2, "calibration": 2,
-         "judge": 3, "run": 4, "engine": 6}
+CHAIN = {"cli": 0, "testing": 0, "api": 1, "trial": 2, "optimiser": 2, "studies": 2,
+         "calibration": 2, "judge": 3, "run": 4, "engine": 6}
 #: Rooms beside the chain: imported from anywhere, importing neither cli nor api.
 BESIDE = {"project", "plugins", "report", "errors", "arguments"}
 
@@ -64,7 +64,7 @@ BESIDE = {"project", "plugins", "report", "errors", "arguments"}
 PACKAGES = {"cli": "cli", "engine": "engine", "judge": "judge", "run": "run",
             "optimise": "optimiser", "optimiser": "optimiser", "study": "studies",
             "studies": "studies", "calibration": "calibration", "project": "project",
-            "plugins": "plugins", "report": "report", "serve": "cli"}
+            "plugins": "plugins", "report": "report", "serve": "cli", "trial": "trial"}
 
 #: Files inside a sub-package whose room is another one (what they do, not where they are).
 MOVED: dict[str, str] = {}

@@ -63,12 +63,12 @@ from .terrain.mapping import chosen_measures, write_measures  # noqa: F401
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
 
-    from .optimiser.trials import TrialRun
     from .plugins import Registry
     from .project import CorridorSection, Project
     from .run.simulation import Study
     from .run.streamed import StreamedStudy
     from .studies.corridor import CorridorSummary, SectionOutcome
+    from .trial.placements import TrialRun
 
 __all__ = [
     "load_project",
@@ -637,9 +637,9 @@ def trial_run(project: Project, registry: Registry, rocks: int, seed: int, *,
     """The bare slope's rocks kept at dense stations, to judge measures placed by hand.
 
     The run behind the browser app's section page: its
-    :meth:`~rockfall_design.optimiser.trials.TrialRun.place` judges measures
+    :meth:`~rockfall_design.trial.placements.TrialRun.place` judges measures
     placed anywhere from the kept table, in milliseconds for barriers (see
-    :func:`rockfall_design.optimiser.trials.trial_run` for the parameters).
+    :func:`rockfall_design.trial.placements.trial_run` for the parameters).
 
     Raises
     ------
@@ -650,7 +650,7 @@ def trial_run(project: Project, registry: Registry, rocks: int, seed: int, *,
     """
     # Imported on first use, as every command's machinery here: `rockfall-design
     # --help` does not load the engine.
-    from .optimiser.trials import trial_run as _trial_run
+    from .trial.placements import trial_run as _trial_run
 
     return _trial_run(project, registry, int(rocks), int(seed),
                       table_step_m=table_step_m, restart_step_m=restart_step_m,

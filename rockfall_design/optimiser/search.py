@@ -197,8 +197,9 @@ class BarrierSlots:
 
     def reaching(self, ci: int, ks: np.ndarray, table: Table, table_id: int) -> np.ndarray:
         """(len(ks), rocks) float32: 1 where the rock reaches the protected zone with option
-        k alone on the table, as the screening counts it (:meth:`~.screening.Screening.
-        reaching_with`): a rock it lets on or breaks through goes on along its path.
+        k alone on the table, as the screening counts it
+        (:meth:`~.screening.Screening.reaching_with`): a rock it lets on or breaks through
+        goes on along its path.
 
         A rock reaches with several barriers only if it reaches with each alone
         (the product of their rows), but for a rock a net upslope carries into

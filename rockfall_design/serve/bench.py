@@ -6,7 +6,7 @@ Built once per project run (:func:`build_bench`, over
 :func:`rockfall_design.api.trial_run`: the optimiser's screening on the
 run's rocks); :meth:`Bench.place` judges measures placed anywhere through
 the one judgement of :mod:`rockfall_design.judge.outcomes`
-(:meth:`rockfall_design.optimiser.trials.TrialRun.place`). This module only
+(:meth:`rockfall_design.trial.placements.TrialRun.place`). This module only
 turns those results into the page's JSON.
 """
 
@@ -29,9 +29,9 @@ from .guards import ServeError
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..optimiser.screening import Screening
-    from ..optimiser.trials import Trial, TrialRun
     from ..plugins import Registry
     from ..project import Project
+    from ..trial.placements import Trial, TrialRun
     from .workbench import ProjectEntry
 
 

@@ -16,11 +16,11 @@ from starlette.testclient import TestClient  # noqa: E402
 import rockfall_design as rd  # noqa: E402
 from rockfall_design.cli.program import main  # noqa: E402
 from rockfall_design.judge.placing import place_measures
-from rockfall_design.optimiser.trials import trial_spec
 from rockfall_design.serve.app import TOKEN_HEADER, create_app  # noqa: E402
 from rockfall_design.serve.bench import TABLE_STEP_M
 from rockfall_design.serve.guards import MAX_BODY_BYTES
 from rockfall_design.serve.workbench import load_entries
+from rockfall_design.trial.placements import trial_spec
 
 from .conftest import TWO_ZONES_FILES
 from .conftest import wait_job as _wait

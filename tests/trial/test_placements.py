@@ -1,4 +1,4 @@
-"""Measures placed by hand, judged from the trial run's table (optimiser/trials.py).
+"""Measures placed by hand, judged from the trial run's table (trial/placements.py).
 
 The browser app reaches them through rockfall_design.api.trial_run; these
 tests call it as the app does, on a bundled project with few rocks.

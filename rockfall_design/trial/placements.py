@@ -34,11 +34,11 @@ from ..judge.design_spec import DesignSpec, resolve_design
 from ..judge.evaluation import protect_summary
 from ..judge.placing import PlacedMeasure, build_concept, edited_section, place_measures
 from ..judge.verdict import DesignVerdict, verdict_of
+from ..optimiser.screening import Screening, ScreenResult
 from ..plugins.measure import ProfileEdit
 from ..project.schema import Protect
 from ..run.reach import reaches_protected_zone
 from ..run.releases import section_from_project
-from .screening import Screening, ScreenResult
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..engine import Section

@@ -1,0 +1,1 @@
+"""Tests of rockfall_design.trial."""
