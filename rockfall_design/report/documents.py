@@ -53,7 +53,6 @@ from .sections import (
 if TYPE_CHECKING:  # pragma: no cover
     from ..optimiser.alternatives import OptimisationResult
     from ..studies.scenario_checks import ScenariosCheck
-    from .outputs import OutputSet
 
 __all__ = ["Table", "MODEL_LIMITS", "ReportContext", "model_limits", "report_context",
            "report_figures", "render_html", "render_markdown", "write_report"]
