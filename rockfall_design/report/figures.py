@@ -71,6 +71,10 @@ class RockfallFigure(Figure):
     formatter for Figures takes precedence, so a figure is never shown twice.
     """
 
+    #: True for a figure whose margins are set by hand to hold every text:
+    #: written as it is, not cropped "tight" (which draws it a second time).
+    fits_page: bool = False
+
     def draw(self, renderer: Any) -> None:
         """Draw the figure, its words drawn as written (see :func:`literal_texts`)."""
         literal_texts(self)

@@ -116,6 +116,7 @@ def passage_figure(p: Passages, project: str = "") -> Figure:
     fig = RockfallFigure(figsize=(11, 12))
     fig.subplots_adjust(left=0.07, right=0.93, bottom=0.05, top=0.94, wspace=0.38,
                         hspace=0.32)
+    fig.fits_page = True  # these margins hold every label: written without a crop
     axes = fig.subplots(4, 2).ravel()
     for ax, (key, what, unit) in zip(axes, QUANTITIES, strict=False):
         marks = [(m.label, m.value) for m in p.marks if m.quantity == key]

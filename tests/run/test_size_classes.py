@@ -229,9 +229,14 @@ def test_size_classes_keep_the_statistics_of_exact_sizes(seed):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [3, 4, 5, 6])
+@pytest.mark.parametrize("seed", [3, 4])
 def test_size_classes_keep_the_statistics_of_exact_sizes_heavier(seed):
-    """The same with 10,000 rocks on a 2,000-point survey, at four more seeds."""
+    """The same with 10,000 rocks on a 2,000-point survey, at two more seeds.
+
+    Each seed is three runs of 10,000 rocks on the long survey (about 25 s of
+    CPU); seeds 5 and 6 passed too (2026-11-28) and were dropped to keep CI
+    inside its time: with seeds 1 and 2 above the claim is checked at four.
+    """
     _compare(seed, 10_000, 2_000)
 
 

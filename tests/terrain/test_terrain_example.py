@@ -16,7 +16,11 @@ EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "terrain" / "corrid
 @pytest.mark.slow
 def test_the_bundled_terrain_corridor_is_designed_and_mapped(tmp_path, capsys):
     out = tmp_path / "results"
-    code = main(["optimise", str(EXAMPLE), "--out", str(out), "--plot", str(out), "--json"])
+    # What is checked here is the corridor's way from the DEM to the map, not the
+    # designs: a last look of 20,000 rocks instead of 400,000 gives every section a
+    # design in 14 s instead of 60-90 s (2026-11-28).
+    code = main(["optimise", str(EXAMPLE), "--out", str(out), "--plot", str(out), "--json",
+                 "--max-rocks", "20000"])
     summary = json.loads(capsys.readouterr().out)
     assert code == 0
     assert summary["totals"]["sections"] >= 10
