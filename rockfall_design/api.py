@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 from .arguments import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .errors import InputError
 from .judge.evaluation import evaluate
-from .judge.plan import validate_plugin_sections
+from .judge.plan import planned_section, validate_plugin_sections
 from .judge.verdict import requirement_warnings
 from .plugins import load_registry, plugins_json  # noqa: F401
 from .project import Corridor
@@ -302,7 +302,8 @@ def run_simulation(project: Project, *, rocks: int | None, seed: int | None,
 
     n = _count(project, rocks)
     return _call(progress, n, _simulate, project=project, rocks=n, seed=seed,
-                 n_trajectories=trajectories, on_chunk=on_chunk)
+                 n_trajectories=trajectories, on_chunk=on_chunk,
+                 section=planned_section(project))
 
 
 def _count(project: Project, rocks: int | None) -> int:

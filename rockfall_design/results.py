@@ -16,8 +16,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from .judge.costing import design_bill
-from .judge.design_spec import resolve_design
 from .judge.evaluation import evaluate
+from .judge.plan import design_of, plan_for
 from .judge.records import Bill, CheckSummary, DesignVerdict, State, run_of
 from .judge.verdict import judged
 from .report.documents import write_report
@@ -25,7 +25,6 @@ from .report.formats import save_figures
 from .report.tables import alternatives_frame, checks_frame, measures_frame, passages_frame
 from .run import simulation
 from .run.passages import station_passages
-from .run.releases import section_from_project
 from .run.streamed import StreamedStudy
 from .run.summary import RunSummary
 
@@ -416,8 +415,9 @@ class OptimiseResult:
 
         d = self.project.design
         source = (f"catalogue {d.costs.file}" if d.costs.file else "design.costs.params")
-        bill = design_bill(self._registry, resolve_design(self.project, self._registry),
-                           best.measures, section_from_project(self.project), source)
+        plan = plan_for(self.project, self._registry)
+        bill = design_bill(self._registry, design_of(self.project, self._registry),
+                           best.measures, plan.bare, source)
         return replace(bill, currency=self.result.currency or "")
 
     @property
@@ -462,6 +462,8 @@ class OptimiseResult:
             return None
 
         project = self.design_project()
+        # The same ground as the optimised project's: its section is not built again.
+        plan_for(project, self._registry, bare=plan_for(self.project, self._registry).bare)
         ev = evaluate(project, self._registry, rocks=self.n_rocks, seed=self.seed,
                       n_trajectories=DEFAULT_TRAJECTORIES)
         return CheckResult(project, ev, self._registry)

@@ -159,12 +159,14 @@ def design_bill(
 
 
 def check_prices(
-    project: Project, registry: Registry, candidates: Sequence[CandidateSpec], model: CostModel
+    project: Project, registry: Registry, candidates: Sequence[CandidateSpec], model: CostModel,
+    bare: Section | None = None,
 ) -> None:
     """Every candidate's quantities have a price: else an error at ``design.costs``.
 
     A sample design of each candidate is built, its bill taken on the bare
-    section, and the cost model asked whether it prices every quantity
+    section (``bare``, the plan's; default: built from the project), and the
+    cost model asked whether it prices every quantity
     (:meth:`CostModel.missing_price`). A candidate none of whose samples fits
     on the section is left to the search (which reports designs that do not
     fit, or have no price).
@@ -175,7 +177,7 @@ def check_prices(
     assert design is not None
     if type(model).missing_price is CostModel.missing_price:
         return  # the model says nothing in advance: the search reports what it cannot price
-    section = section_from_project(project)
+    section = section_from_project(project) if bare is None else bare
     source = (f"catalogue {design.costs.file}" if design.costs.file
               else "catalogue in design.costs.params")
     for spec in candidates:

@@ -68,7 +68,9 @@ from .placing import build_concept, required_figures_problem, unknown_measure_ty
 
 if TYPE_CHECKING:  # pragma: no cover
 
+    from ..engine import Section
     from ..plugins import Registry
+    from ..plugins.concept import SafetyConcept
     from ..project import Project
 
 __all__ = [
@@ -130,8 +132,12 @@ class DesignSpec:
     checker_power: float | None = DEFAULT_CHECKER_POWER
 
 
-def resolve_design(project: Project, registry: Registry) -> DesignSpec:
+def resolve_design(project: Project, registry: Registry, *, bare: Section | None = None,
+                   concept: SafetyConcept | None = None) -> DesignSpec:
     """Resolve the project's ``design:`` section against the plugins.
+
+    A command reads it from its plan (:func:`~rockfall_design.judge.plan.design_of`),
+    which resolves it once; this builds it.
 
     Parameters
     ----------
@@ -139,6 +145,11 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
         A loaded project with a ``design:`` section.
     registry
         The plugins (measures and cost models).
+    bare
+        The project's slope section, if the caller has it (the plan): the
+        prices are checked on it. Default: built from the project.
+    concept
+        The project's safety concept, if the caller has it (the plan).
 
     Returns
     -------
@@ -181,8 +192,9 @@ def resolve_design(project: Project, registry: Registry) -> DesignSpec:
         for i, raw in enumerate(design.candidates)
     )
     cost_model = resolve_cost_model(project, registry)
-    check_prices(project, registry, candidates, cost_model)
-    concept = build_concept(project, registry)
+    check_prices(project, registry, candidates, cost_model, bare)
+    if concept is None:
+        concept = build_concept(project, registry)
     _check_required_figures(project, registry, concept)
     residual_count, residual_fraction = design.residual_count, design.residual_fraction
     by_concept = concept.allowed_residual_fraction()

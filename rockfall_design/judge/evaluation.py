@@ -415,6 +415,7 @@ def evaluate_design(
     n_trajectories: int = 0,
     progress: Callable[[int], None] | None = None,
     after: Evaluation | None = None,
+    bare: Section | None = None,
 ) -> Evaluation:
     """Like :func:`evaluate`, for given measure and concept objects (the optimiser's designs).
 
@@ -422,13 +423,16 @@ def evaluate_design(
     run (same project and seed, fewer rocks); only the rocks after them are
     simulated (``run_study``'s ``after``) and the whole is judged again with
     ``concept``. A sequential look at more rocks goes on from the last look.
+    ``bare``: the project's slope section, when the caller holds it (the
+    optimiser's screening: every design of a search stands on one section).
     """
     if after is not None:
         study = after.study
         return _evaluate_placed(project, registry, after.original_section, after.placed,
                                 study.section, concept, rocks=rocks, seed=seed,
                                 n_trajectories=0, progress=progress, after=study)
-    bare = section_from_project(project)
+    if bare is None:
+        bare = section_from_project(project)
     placed = place_measures(project, registry, measures, bare)
     section = edited_section(project, bare, placed)
     return _evaluate_placed(project, registry, bare, placed, section, concept, rocks=rocks,

@@ -44,6 +44,7 @@ from ..plugins import guard
 from ..plugins.measure import Barrier
 
 if TYPE_CHECKING:  # pragma: no cover
+    from ..engine import Section
     from ..plugins import Registry
     from ..plugins.concept import SafetyConcept
     from ..plugins.measure import ProtectiveMeasure
@@ -174,6 +175,7 @@ def decide(
     looks: LookSchedule | None = None,
     margin: CheckerMargin | None = None,
     checker_rocks: int | None = None,
+    bare: Section | None = None,
 ) -> Decision:
     """Decide a design sequentially by exact runs (see the module docs).
 
@@ -195,6 +197,9 @@ def decide(
     checker_rocks : int, optional
         Rocks of the checker's check the margin is for (default: twice
         each look's rocks, the check design.yaml asks for if that look decides).
+    bare : Section, optional
+        The project's slope section (the screening's; default: built from the
+        project).
     """
     confidence = confidence_of(concept)
     if looks is None:
@@ -206,7 +211,8 @@ def decide(
     for j, n in enumerate(looks.sizes):
         # Each look goes on from the last one's rocks (nested: the same seed).
         done = 0 if ev is None else ev.study.n
-        ev = evaluate_design(project, registry, measures, lc, rocks=n, seed=seed, after=ev)
+        ev = evaluate_design(project, registry, measures, lc, rocks=n, seed=seed, after=ev,
+                             bare=bare)
         simulated += n - done
         verdict, short = judge_look(ev, registry, margin, checker_rocks or 2 * n,
                                     checker_rocks or 2 * looks.sizes[-1])
@@ -228,6 +234,7 @@ def verify_fresh(
     seed: int,
     max_rocks: int,
     margin: CheckerMargin | None = None,
+    bare: Section | None = None,
 ) -> Decision:
     """Check an admitted design on fresh rocks: held, failed or marginal there too.
 
@@ -255,6 +262,8 @@ def verify_fresh(
         The last look (``design.max_rocks``; at least ``rocks``).
     margin : CheckerMargin, optional
         The checker's margin, for a check of ``rocks`` (the first look's).
+    bare : Section, optional
+        The project's slope section, as :func:`decide`.
 
     Returns
     -------
@@ -264,7 +273,7 @@ def verify_fresh(
     """
     return decide(project, registry, measures, concept, rocks=rocks, seed=seed,
                   max_rocks=max(int(max_rocks), int(rocks)), margin=margin,
-                  checker_rocks=int(rocks))
+                  checker_rocks=int(rocks), bare=bare)
 
 
 class Decider:
@@ -317,7 +326,7 @@ class Decider:
             prev = self._screening(j - 1, sorted(want)) if j > 1 else s0
         xs = np.array(sorted(exact.get(k, k) for k in want))
         sc = Screening(s0.project, s0.registry, s0.spec, s0.concept, rocks=self.looks.sizes[j],
-                       seed=s0.seed, stations=xs, after=prev)
+                       seed=s0.seed, stations=xs, after=prev, section=s0.section)
         self.simulated += sc.rocks_run
         self._screens[j] = sc
         return sc
@@ -327,7 +336,8 @@ class Decider:
         """The exact run of look ``j``, going on from an earlier exact look's rocks."""
         s0 = self.screen
         return evaluate_design(s0.project, s0.registry, measures, s0.concept,
-                               rocks=self.looks.sizes[j], seed=s0.seed, after=after)
+                               rocks=self.looks.sizes[j], seed=s0.seed, after=after,
+                               bare=s0.section)
 
     def _screen_verdict(self, sr: ScreenResult, n: int) -> tuple[Verdict, list[str]]:
         """A screening look's verdict, with the margin where the screening judged every rock

@@ -10,9 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from ..judge.design_spec import DesignSpec, resolve_design, with_residual_target
+from ..judge.design_spec import DesignSpec, with_residual_target
 from ..judge.looks import checker_margin, look_concept
-from ..judge.plan import confidence_of, plan_for
+from ..judge.plan import confidence_of, design_of, plan_for
 from ..judge.sequential import LookSchedule, plan_looks
 from ..studies.scenarios import ScenarioRun
 from .alternatives import FRESH_OFFSET
@@ -85,9 +85,10 @@ def set_up(run: ScenarioRun, registry: Registry, rocks: int | None) -> Scenario:
         which none reaching shows the residual target at the look's
         confidence (:func:`~rockfall_design.judge.sequential.plan_looks`).
     """
-    concept = plan_for(run.project, registry).concept
-    # Without a design section, resolve_design says so at the project's line.
-    spec = resolve_design(run.project, registry)
+    plan = plan_for(run.project, registry)
+    concept = plan.concept
+    # Without a design section, design_of says so at the project's line.
+    spec = design_of(run.project, registry)
     confidence = confidence_of(concept)
     n = int(run.project.rocks.count if rocks is None else rocks)
     # The design's residual target becomes the protected zone's allowance, so
@@ -98,6 +99,7 @@ def set_up(run: ScenarioRun, registry: Registry, rocks: int | None) -> Scenario:
     looks = plan_looks(n, max(n, int(spec.max_rocks)), confidence,
                        allowed if allowed > 0 else None)
     lc = look_concept(registry, concept, looks.look_confidence)
-    screen = Screening(project, registry, spec, lc, rocks=looks.sizes[0], seed=run.seed)
+    screen = Screening(project, registry, spec, lc, rocks=looks.sizes[0], seed=run.seed,
+                       section=plan.bare)
     return Scenario(run, project, spec, concept, screen, BarrierSlots(screen), looks,
                     Decider(screen, looks, checker_margin(spec, confidence)), allowed)

@@ -194,6 +194,7 @@ class Screening:
         rock_progress: Callable[[int], None] | None = None,
         restart_stations: np.ndarray | None = None,
         after: Screening | None = None,
+        section: Section | None = None,
     ) -> None:
         """Run the search rocks on the bare slope and keep the table (see the class docs).
 
@@ -213,6 +214,8 @@ class Screening:
         is then the look of ``n`` and ``n`` new ones, bit for bit the table of
         all ``2n`` run at once (each rock draws from its own stream, and the
         stations a run records at do not change its paths).
+        ``section``, when given, is the project's slope section (the plan's),
+        so that a command builds it once.
         """
         self.project = project
         self.registry = registry
@@ -222,7 +225,8 @@ class Screening:
         self.seed = int(seed)
         self._build = build_candidate_measure
         self._measure_cache: dict[tuple, Any] = {}
-        self.section = section_from_project(project)
+        # The plan's section when the caller passes it: one per command.
+        self.section = section_from_project(project) if section is None else section
         self.releases = draw_releases(project, self.n, self.seed)
         self.key = engine_key(self.seed)
         self.settings = engine_settings(project)

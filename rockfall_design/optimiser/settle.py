@@ -186,7 +186,7 @@ def verify_in_scenarios(scs: Sequence[Scenario], required: int, measures: Sequen
         check = per[j] = verify_fresh(
             sc.project, sc.screen.registry, measures, sc.concept,
             rocks=max(2 * first.rocks, int(sc.spec.fresh_rocks or 0)), seed=sc.fresh_seed,
-            max_rocks=sc.looks.sizes[-1], margin=sc.decider.margin)
+            max_rocks=sc.looks.sizes[-1], margin=sc.decider.margin, bare=sc.screen.section)
         held = check.verdict is Verdict.ADMITTED
         rows[j].holds_on_fresh_rocks, rows[j].fresh_seed = held, sc.fresh_seed
         rows[j].fresh_rocks = check.rocks

@@ -443,6 +443,7 @@ def simulate(
     progress: Callable[[int], None] | None = None,
     on_chunk: Callable[[Study], None] | None = None,
     chunk: int | None = None,
+    section: Section | None = None,
 ) -> Study | StreamedStudy:
     """Run the study of ``simulate``: exact up to ``EXACT_ROCKS`` rocks, else streamed.
 
@@ -461,6 +462,9 @@ def simulate(
     chunk : int, optional
         Stream in chunks of this many rocks whatever the run's size (the
         default: exact up to ``EXACT_ROCKS``, else :func:`chunk_rocks`).
+    section : Section, optional
+        The project's slope section, when the caller holds it (the command's
+        plan); default: built from the project.
 
     Returns
     -------
@@ -470,20 +474,23 @@ def simulate(
     s = int(project.rocks.seed if seed is None else seed)
     if chunk is None and n <= EXACT_ROCKS:
         study = run_study(project, rocks=n, seed=s, n_trajectories=n_trajectories,
-                          progress=progress, record_speed=True)
+                          progress=progress, record_speed=True, section=section)
         if on_chunk is not None:
             on_chunk(study)
         return study
     size = int(chunk) if chunk is not None else chunk_rocks(project)
-    return _simulate_streamed(project, n, s, size, n_trajectories, progress, on_chunk)
+    return _simulate_streamed(project, n, s, size, n_trajectories, progress, on_chunk,
+                              section)
 
 
 def _simulate_streamed(
     project: Project, n: int, s: int, size: int, n_trajectories: int,
     progress: Callable[[int], None] | None, on_chunk: Callable[[Study], None] | None,
+    section: Section | None = None,
 ) -> StreamedStudy:
     """:func:`simulate`'s streamed run: ``n`` rocks of seed ``s`` in chunks of ``size``."""
-    section = section_from_project(project)
+    if section is None:
+        section = section_from_project(project)
     grid = np.linspace(section.x[0], section.x[-1], int(project.analysis.envelope_points))
     stations = np.asarray(project.analysis.stations, dtype=float)
     key = engine_key(s)

@@ -73,7 +73,7 @@ def _design(cost: float, level: int, violation: float, value: float = 1.2) -> _D
 
 def _screen() -> Any:
     # rejects: the design of cost 30 fails with confidence as the screening counts its rocks.
-    return SimpleNamespace(project=SimpleNamespace(protect=object()), n=4603,
+    return SimpleNamespace(project=SimpleNamespace(protect=object()), n=4603, section=None,
                            allowed_fraction=0.001, confidence=0.99,
                            rejects=lambda checks, residual: checks[0][0].value == 0.5)
 
@@ -218,7 +218,7 @@ def _settling(monkeypatch, verdict):
     calls = []
 
     def verify_fresh(project, registry, measures, concept, *, rocks, seed, max_rocks,
-                     margin=None):
+                     margin=None, bare=None):
         calls.append((rocks, seed, max_rocks))
         return Decision(verdict, rocks * 2, fresh, "" if verdict is Verdict.ADMITTED else
                         "marginal: neither holds nor fails", looks=2, exact=2,

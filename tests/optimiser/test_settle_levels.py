@@ -22,7 +22,8 @@ def fake_scenario(decider: Any, *, sizes: tuple[int, ...] = (4603, 9206, 50_000)
     return SimpleNamespace(run=run,
                            project=None, concept=None,
                            # its screening rejects every design it is asked about
-                           screen=SimpleNamespace(registry=None, rejects=lambda c, r: True),
+                           screen=SimpleNamespace(registry=None, section=None,
+                                                  rejects=lambda c, r: True),
                            spec=SimpleNamespace(fresh_rocks=None),
                            looks=SimpleNamespace(sizes=sizes), decider=decider,
                            fresh_seed=fresh_seed)
