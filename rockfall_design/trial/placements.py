@@ -30,15 +30,15 @@ from ..engine.columns import STOPPED
 from ..engine.trajectory import centre_points
 from ..errors import InputError
 from ..judge.bounds import quantile_lower_bound, quantile_upper_bound
-from ..judge.design_spec import DesignSpec, resolve_design
+from ..judge.design_spec import DesignSpec
 from ..judge.evaluation import protect_summary
-from ..judge.placing import PlacedMeasure, build_concept, edited_section, place_measures
+from ..judge.placing import PlacedMeasure, edited_section, place_measures
+from ..judge.plan import design_of, plan_for
 from ..judge.verdict import DesignVerdict, verdict_of
 from ..optimiser.screening import Screening, ScreenResult
 from ..plugins.measure import ProfileEdit
 from ..project.schema import Protect
 from ..run.reach import reaches_protected_zone
-from ..run.releases import section_from_project
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..engine import Section
@@ -57,7 +57,7 @@ def trial_spec(project: Project, registry: Registry) -> DesignSpec:
     priced.
     """
     if project.design is not None:
-        return resolve_design(project, registry)
+        return design_of(project, registry)
     allowed = float(project.protect.allowed_fraction) if project.protect is not None else 0.0
     return DesignSpec(max_measures=4, residual_count=None, residual_fraction=allowed,
                       fresh_rocks=None, fresh_seed=None, length_m=1.0, candidates=(),
@@ -230,7 +230,8 @@ def trial_run(project: Project, registry: Registry, rocks: int, seed: int, *,
     progress
         Called with the rocks done; an exception it raises stops the run.
     """
-    section = section_from_project(project)
+    plan = plan_for(project, registry)
+    section = plan.bare
     x0, x1 = float(section.x[0]), float(section.x[-1])
     judged = project
     if project.protect is None:
@@ -238,10 +239,11 @@ def trial_run(project: Project, registry: Registry, rocks: int, seed: int, *,
         # the foot of the section stands in (the page says there is none).
         judged = project.model_copy(update={"protect": Protect(x=x1)})
     t0 = time.perf_counter()
-    sc = Screening(judged, registry, trial_spec(project, registry),
-                   build_concept(project, registry), rocks=rocks, seed=seed,
+    sc = Screening(judged, registry, trial_spec(project, registry), plan.concept,
+                   rocks=rocks, seed=seed,
                    stations=np.arange(x0, x1 + 1e-9, table_step_m), rock_progress=progress,
-                   restart_stations=np.arange(x0, x1 + 1e-9, restart_step_m))
+                   restart_stations=np.arange(x0, x1 + 1e-9, restart_step_m),
+                   section=section)
     runtime = time.perf_counter() - t0
     t = sc.bare
     reaching = 0
