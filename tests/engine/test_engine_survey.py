@@ -203,28 +203,31 @@ def test_leaving_hidden_pieces_out_keeps_the_centre_path_to_the_bit(n, noise, se
 
 
 def _hidden_by_the_window(xa, ya, xb, yb, ex, ey, r, tol):
-    """profile.hidden_pieces as it was, vertex by vertex through the whole window (plain Python)."""
-    out = np.zeros(xa.size, dtype=bool)
-    for i in range(xa.size):
-        dx = xb[i] - xa[i]
-        dy = yb[i] - ya[i]
-        if dx <= 0.0 or abs(dy) > 100.0 * dx:
-            continue
-        m = 1e-9 * (1.0 + abs(ya[i]) + abs(yb[i])) + 1e5 * tol
-        j = np.searchsorted(ex, 0.5 * (xa[i] + xb[i]) + r * dy / np.hypot(dx, dy))
-        for d in range(2 * HIDE_WINDOW):
-            w = j + (d + 1) // 2 if d % 2 else j - d // 2 - 1
-            if not 0 <= w < ex.size:
-                continue
-            da = xa[i] - ex[w]
-            db = xb[i] - ex[w]
-            if abs(da) >= r or abs(db) >= r:
-                continue
-            if ey[w] + np.sqrt(r * r - da * da) > ya[i] + m and \
-                    ey[w] + np.sqrt(r * r - db * db) > yb[i] + m:
-                out[i] = True
-                break
-    return out
+    """profile.hidden_pieces as it was: every vertex of the whole window tried, for every piece.
+
+    Written with arrays (a piece per row, a vertex of its window per column,
+    in the order the kernel tries them), not as the kernel's loop with its
+    early exits: a piece is hidden if any vertex of its window hides both
+    ends. The plain-Python loop it replaces took 25 s of the suite.
+    """
+    dx = xb - xa
+    dy = yb - ya
+    tried = (dx > 0.0) & (np.abs(dy) <= 100.0 * dx)
+    m = 1e-9 * (1.0 + np.abs(ya) + np.abs(yb)) + 1e5 * tol
+    with np.errstate(divide="ignore", invalid="ignore"):
+        j = np.searchsorted(ex, 0.5 * (xa + xb) + r * dy / np.hypot(dx, dy))
+    d = np.arange(2 * HIDE_WINDOW)
+    step = np.where(d % 2 == 1, (d + 1) // 2, -(d // 2) - 1)
+    w = j[:, None] + step[None, :]
+    inside = (w >= 0) & (w < ex.size)
+    wc = np.clip(w, 0, ex.size - 1)
+    da = xa[:, None] - ex[wc]
+    db = xb[:, None] - ex[wc]
+    near = inside & (np.abs(da) < r) & (np.abs(db) < r)
+    with np.errstate(invalid="ignore"):
+        over_a = ey[wc] + np.sqrt(r * r - da * da) > (ya + m)[:, None]
+        over_b = ey[wc] + np.sqrt(r * r - db * db) > (yb + m)[:, None]
+    return tried & (near & over_a & over_b).any(axis=1)
 
 
 @SETTINGS
