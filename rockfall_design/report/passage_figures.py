@@ -67,7 +67,13 @@ def _panel(ax: Axes, values: np.ndarray, what: str, unit: str,
         return
     top = max([float(v.max())] + [m for _, m in marks])
     bins = np.linspace(min(0.0, float(v.min())), top * 1.02 if top > 0 else 1.0, 31)
-    ax.hist(v, bins=bins, color=_BAR, edgecolor="white", linewidth=0.4)
+    # One filled outline and one set of white separators, not a patch per bar
+    # (ax.hist): 31 bars in 7 panels of 3 to 5 figures were a thousand artists,
+    # a third of the time a report took to build its figures.
+    counts, edges = np.histogram(v, bins=bins)
+    ax.stairs(counts, edges, fill=True, color=_BAR)
+    ax.vlines(edges[1:-1], 0, np.maximum(counts[:-1], counts[1:]), colors="white",
+              linewidth=0.4)
     ax.set_ylabel("rocks", fontsize=7)
     cdf = ax.twinx()
     xs = np.sort(v)
