@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any
 from .arguments import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .errors import InputError
 from .judge.evaluation import evaluate
-from .judge.plan import planned_section, validate_plugin_sections
+from .judge.plan import Plan, plan_for, planned_section, validate_plugin_sections
 from .judge.verdict import requirement_warnings
 from .plugins import load_registry, plugins_json  # noqa: F401
 from .project import Corridor
@@ -630,6 +630,26 @@ def validate_project(project: Project, registry: Registry) -> None:
     if project.study is not None:
         # the study's paths and values, against this project (after the sections above it)
         check_study(project, registry)
+
+
+def plan(project: Project, registry: Registry) -> Plan:
+    """The project resolved against its plugins, as every command builds it before a rock.
+
+    Its bare section, its measures placed on it (labels, footprints, fit and
+    overlaps checked), the edited section, the safety concept and the
+    resolved ``design:`` section (:class:`~rockfall_design.judge.plan.Plan`);
+    built once and kept with the project. The browser app draws the section
+    and labels the measures from it.
+
+    Raises
+    ------
+    ProjectError
+        Exit code 2, located at the offending key (a measure that does not
+        fit or overlaps another, a parameter its plugin rejects).
+    PluginError
+        Exit code 3, if a plugin misbehaves.
+    """
+    return plan_for(project, registry)
 
 
 def trial_run(project: Project, registry: Registry, rocks: int, seed: int, *,

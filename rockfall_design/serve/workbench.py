@@ -25,22 +25,16 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..api import validate_project
+from ..api import calibrate, check, optimise, plan, study, validate_project
 from ..arguments import MAX_BOOTSTRAP
-from ..calibration.procedure import run_calibration
 from ..errors import ProjectError, RockfallError
-from ..judge.evaluation import evaluate
-from ..judge.placing import build_measures, place_measures
-from ..optimiser.driver import optimise
 from ..plugins import guard
 from ..project import dump_yaml, load_project
 from ..project.loading import load_project_text
 from ..project.locator import params_problem
 from ..project.schema import Material
 from ..report.terminal import design_yaml
-from ..results import DEFAULT_TRAJECTORIES, CheckResult, OptimiseResult
-from ..run.releases import section_from_project
-from ..studies.runner import run_parametric
+from ..results import DEFAULT_TRAJECTORIES
 from .bench import Bench, build_bench, placed_message
 from .guards import (
     MAX_BODY_BYTES,
@@ -103,7 +97,8 @@ class ProjectEntry:
     def describe(self) -> dict[str, Any]:
         """The section and everything on it, in metres, for the page."""
         p = self.project
-        sec = section_from_project(p)
+        planned = plan(p, self.registry)  # built when the project was loaded: kept
+        sec = planned.bare
         # Material of every segment of the ground, by its name in the project
         # where the slope names them segment by segment.
         named = list(getattr(p.slope, "materials", None) or [])
@@ -116,8 +111,7 @@ class ProjectEntry:
             releases.append({k: d.get(k) for k in ("x", "height", "weight")})
         measures = [{k: plain_json(v) for k, v in dict(raw).items()} for raw in p.measures]
         # Their labels, as the reports write them (the project validated when loaded).
-        placed = place_measures(p, self.registry, build_measures(p, self.registry), sec)
-        labels = {q.index: q.label for q in placed}
+        labels = {q.index: q.label for q in planned.placed}
         for i, m in enumerate(measures):
             m["label"] = labels.get(i, m.get("type", ""))
         return {
@@ -237,18 +231,20 @@ class ProjectEntry:
         n, s = self._rocks_seed(rocks, seed)
         project = self.project
         if raws is not None:
-            measures = [self.build_measure(raw, i) for i, raw in enumerate(raws)]
-            try:
-                place_measures(project, self.registry, measures, section_from_project(project))
-            except ProjectError as exc:
-                raise ServeError(400, placed_message(exc.message)) from None
+            for i, raw in enumerate(raws):
+                self.build_measure(raw, i)  # each measure's parameters, named for the page
             project = project.model_copy(update={"measures": [
                 {k: v for k, v in r.items() if k != "label"} for r in raws]})
+            try:
+                # The measures placed on the section (fit, overlaps) before a job
+                # starts; the check's run uses this plan.
+                plan(project, self.registry)
+            except ProjectError as exc:
+                raise ServeError(400, placed_message(exc.message)) from None
 
         def work(job: Job) -> None:
-            ev = evaluate(project, self.registry, rocks=n, seed=s, progress=job.progress,
-                          n_trajectories=DEFAULT_TRAJECTORIES)
-            report = CheckResult(project, ev, self.registry)
+            report = check(project, rocks=n, seed=s, progress=job.progress,
+                           trajectories=DEFAULT_TRAJECTORIES, registry=self.registry)
             job.result = report.summary
             job.files.update(lazy_files(report))
             job.done = n
@@ -278,14 +274,16 @@ class ProjectEntry:
         project = self.project
 
         def work(job: Job) -> None:
-            res = optimise(project, self.registry, rocks=n, seed=s, progress=job.staged)
+            out = optimise(project, rocks=n, seed=s, progress=job.staged,
+                           registry=self.registry)
+            res = out.result
             job.result = res.summary()
             if res.best is not None:
                 job.files["design.yaml"] = design_yaml(res.best, self.path.name,
                                                        res.search_rocks, res.looks,
                                                        res.marginal)
             # The report checks the chosen design again (for its figures): on request.
-            job.files.update(lazy_files(OptimiseResult(project, res, self.registry)))
+            job.files.update(lazy_files(out))
 
         return self._start("optimise", n, work)
 
@@ -312,8 +310,8 @@ class ProjectEntry:
                 job.total = int(total)
                 job.progress(done)
 
-            res = run_parametric(project, self.registry, rocks=n, seed=s, progress=progress,
-                                 envelopes=False)
+            res = study(project, rocks=n, seed=s, progress=progress, registry=self.registry,
+                        envelopes=False)
             job.result = res.summary
             job.tables = study_tables(res)
 
@@ -350,7 +348,8 @@ class ProjectEntry:
                 job.total = int(total)
                 job.progress(done)
 
-            res = run_calibration(project, rocks=n, bootstrap=b, seed=s, on_done=on_done)
+            res = calibrate(project, rocks=n, bootstrap=b, seed=s, progress=on_done,
+                            registry=self.registry)
             job.result = res.summary
             job.tables = calibration_tables(res)
 
