@@ -132,12 +132,28 @@ class DesignSpec:
     checker_power: float | None = DEFAULT_CHECKER_POWER
 
 
+def _products(catalogue: dict[str, dict[str, dict]]) -> dict[str, dict[str, Product]]:
+    """The catalogue's products (as loaded from ``design.catalogue``), by kind and name."""
+    return {
+        kind: {
+            name: Product(
+                name=name,
+                kind=kind,
+                capacity_kj=float(entry["capacity_kj"]),
+                heights=tuple(sorted(float(h) for h in entry["heights"])),
+                extra={k: v for k, v in entry.items() if k not in ("capacity_kj", "heights")},
+            )
+            for name, entry in table.items()
+        }
+        for kind, table in catalogue.items()
+    }
+
+
 def resolve_design(project: Project, registry: Registry, *, bare: Section | None = None,
                    concept: SafetyConcept | None = None) -> DesignSpec:
     """Resolve the project's ``design:`` section against the plugins.
 
-    A command reads it from its plan (:func:`~rockfall_design.judge.plan.design_of`),
-    which resolves it once; this builds it.
+    A command reads it from its plan (:func:`~rockfall_design.judge.plan.design_of`).
 
     Parameters
     ----------
@@ -145,11 +161,9 @@ def resolve_design(project: Project, registry: Registry, *, bare: Section | None
         A loaded project with a ``design:`` section.
     registry
         The plugins (measures and cost models).
-    bare
-        The project's slope section, if the caller has it (the plan): the
-        prices are checked on it. Default: built from the project.
-    concept
-        The project's safety concept, if the caller has it (the plan).
+    bare, concept
+        The project's slope section and safety concept, if the caller has
+        them (the plan); default: built from the project.
 
     Returns
     -------
@@ -174,19 +188,7 @@ def resolve_design(project: Project, registry: Registry, *, bare: Section | None
         raise project.error_at(
             ("design",), "the project has no design: section (what the optimiser may build)"
         )
-    catalogue = {
-        kind: {
-            name: Product(
-                name=name,
-                kind=kind,
-                capacity_kj=float(entry["capacity_kj"]),
-                heights=tuple(sorted(float(h) for h in entry["heights"])),
-                extra={k: v for k, v in entry.items() if k not in ("capacity_kj", "heights")},
-            )
-            for name, entry in table.items()
-        }
-        for kind, table in design.catalogue.items()
-    }
+    catalogue = _products(design.catalogue)
     candidates = tuple(
         resolve_candidate(project, registry, i, raw, catalogue)
         for i, raw in enumerate(design.candidates)
