@@ -17,23 +17,21 @@ from ..calibration.calibrated import FIGURES
 from ..errors import ExitCode, InputError
 from ..project import Project, dump_yaml
 from ..report.outputs import OutputSet
-from ..version import __version__
-from .common import REPORT_FILES, figure_files, figures_and_report, load, plugins_for, reserve
+from .common import (
+    REPORT_FILES,
+    figure_files,
+    figures_and_report,
+    load,
+    plugins_for,
+    repeat_record,
+    reserve,
+)
 
 __all__ = ["cmd_calibrate", "cmd_compare"]
 
 #: The files of calibrate --out DIR.
 OUT_FILES = ("calibrated.yaml", "materials.yaml", "parameters.csv", "replicates.csv",
              "summary.json")
-
-
-def run_record(args: argparse.Namespace, project: Any, seed: int, rocks: int
-               ) -> dict[str, Any]:
-    """What is needed to repeat the command exactly: version, seed, rocks, project."""
-
-    return {"command": args.command, "version": __version__, "seed": seed, "rocks": rocks,
-            "project_file": str(args.project), "project_hash": project.resolved_hash(),
-            "project": project.resolved_dict()}
 
 
 def _header(result: Any, spread: bool) -> str:
@@ -122,7 +120,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                              + result.materials_library_text(spread=spread))
             files.write_csv(out / "parameters.csv", result.parameters_table())
             files.write_csv(out / "replicates.csv", result.replicates_table())
-            record = run_record(args, project, result.seed, result.problem.rocks)
+            record = repeat_record(args, project, result.seed, result.problem.rocks)
             files.write_json(out / "summary.json", {**summary, "run": record})
         if library is not None:
             files.write_text(library, _header(result, spread)
@@ -143,7 +141,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                          registry=registry)
         summary = result.summary
         if args.out:
-            record = run_record(args, project, result.seed, result.rocks)
+            record = repeat_record(args, project, result.seed, result.rocks)
             files.write_json(args.out / "summary.json", {**summary, "run": record})
         _save_plots(args, result, files)
     return _show(args, summary, result)

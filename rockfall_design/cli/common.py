@@ -239,14 +239,25 @@ def comparable(summary: dict[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in summary.items() if k not in ("runtime_s", "run")}
 
 
-def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:
-    """What is needed to repeat a run exactly: version, seed, rocks, project."""
+def repeat_record(args: argparse.Namespace, project: Any, seed: int, rocks: int
+                  ) -> dict[str, Any]:
+    """What is needed to repeat a command exactly: command, version, seed, rocks, project.
+
+    The ``run`` of every command's summary.json (simulate, check, optimise,
+    study, calibrate): the project as resolved (every default filled in) and
+    its hash, so that the run repeats with another version's defaults too.
+    """
     return {
         "command": args.command,
         "version": __version__,
-        "seed": int(study.seed),
-        "rocks": int(study.n),
+        "seed": int(seed),
+        "rocks": int(rocks),
         "project_file": str(args.project),
-        "project_hash": study.project.resolved_hash(),
-        "project": study.project.resolved_dict(),
+        "project_hash": project.resolved_hash(),
+        "project": project.resolved_dict(),
     }
+
+
+def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:
+    """:func:`repeat_record` of a run (its project, seed and rocks)."""
+    return repeat_record(args, study.project, study.seed, study.n)

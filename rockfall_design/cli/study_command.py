@@ -10,7 +10,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ..api import (
     EXTRA_HINT,
@@ -25,8 +25,7 @@ from ..project import Project
 from ..report.formats import save_figures
 from ..report.outputs import OutputSet
 from ..studies.study_result import FIGURES
-from ..version import __version__
-from .common import figure_files, load, memory_guard, plugins_for, reserve
+from .common import figure_files, load, memory_guard, plugins_for, repeat_record, reserve
 from .corridor_commands import SectionDone, SectionRun, each_section
 from .options import PROG
 
@@ -37,20 +36,6 @@ __all__ = ["cmd_study", "cli_study"]
 
 #: The files of --out DIR.
 OUT_FILES = ("scenarios.csv", "sensitivity.csv", "summary.json")
-
-
-def run_record(result: Any, args: argparse.Namespace) -> dict[str, Any]:
-    """What is needed to repeat a study exactly: version, seed, rocks, project."""
-
-    return {
-        "command": "study",
-        "version": __version__,
-        "seed": result.seed,
-        "rocks": result.n_rocks,
-        "project_file": str(args.project),
-        "project_hash": result.project.resolved_hash(),
-        "project": result.project.resolved_dict(),
-    }
 
 
 def cmd_study(args: argparse.Namespace) -> int:
@@ -87,7 +72,8 @@ def cmd_study(args: argparse.Namespace) -> int:
             out: Path = args.out
             files.write_csv(out / "scenarios.csv", result.scenarios)
             files.write_csv(out / "sensitivity.csv", result.sensitivity)
-            files.write_json(out / "summary.json", {**summary, "run": run_record(result, args)})
+            record = repeat_record(args, result.project, result.seed, result.n_rocks)
+            files.write_json(out / "summary.json", {**summary, "run": record})
         if args.plot:
 
             save_figures(result.figures(), args.plot, args.plot_format, files)
@@ -124,7 +110,8 @@ def cli_study(args: argparse.Namespace, corridor: Corridor) -> int:
         if sub.out:
             files.write_csv(sub.out / "scenarios.csv", result.scenarios)
             files.write_csv(sub.out / "sensitivity.csv", result.sensitivity)
-            record = {**run_record(result, sub), "section": section.name}
+            record = {**repeat_record(sub, result.project, result.seed, result.n_rocks),
+                      "section": section.name}
             files.write_json(sub.out / "summary.json", {**summary, "run": record})
         if sub.plot:
 

@@ -460,20 +460,6 @@ def run_record(
     )
 
 
-def run_summary(
-    study: Study | StreamedStudy,
-    events: int,
-    crossings: np.ndarray,
-    blocks: dict[str, list[dict[str, float | None]]],
-    stop_block: dict[str, float | None],
-    reaching: tuple[int, int] | None,
-    project_hash: str | None = None,
-) -> dict[str, Any]:
-    """The summary dict (``simulate --json``): :func:`run_record`'s ``to_json()``."""
-    return run_record(study, events, crossings, blocks, stop_block, reaching,
-                      project_hash).to_json()
-
-
 #: Two-sided confidence of the bounds of the forest's counts in a summary.
 FOREST_CONFIDENCE = 0.95
 
