@@ -399,7 +399,8 @@ class EnsembleResult:
             raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
         value = np.concatenate(parts)
         self.__dict__[name] = value
-        pending.pop(name, None)
+        # A new dict, not a pop: a copy of this result (copy.copy) shares the old one.
+        self.__dict__[_PENDING] = {k: v for k, v in pending.items() if k != name}
         return value
 
 

@@ -8,7 +8,9 @@ every field must be bit for bit that of one run of all the rocks.
 
 from __future__ import annotations
 
+import copy
 import itertools
+import pickle
 from dataclasses import fields
 
 import numpy as np
@@ -101,3 +103,12 @@ def test_an_unknown_attribute_is_still_an_attribute_error():
     with pytest.raises(AttributeError, match="no_such_field"):
         _ = b.no_such_field
     assert not hasattr(b, "no_such_field")
+
+
+def test_a_copy_or_a_pickle_of_a_joined_run_reads_alike():
+    b = _run(_rows(RELEASES, 0, 25)).joined(_run(_rows(RELEASES, 25, N), 25))
+    c = copy.copy(b)
+    np.testing.assert_array_equal(c.grid_height, WHOLE.grid_height)  # joined in the copy
+    np.testing.assert_array_equal(b.grid_height, WHOLE.grid_height)  # and still in b
+    _same(pickle.loads(pickle.dumps(b)), WHOLE)
+    _same(copy.deepcopy(b), WHOLE)
