@@ -45,6 +45,7 @@ OTHER_PROGRAMS_OPTIONS = {
     "--volume": "examples/stops_from_points.py",
     "--corridor": "examples/stops_from_points.py",
     "--against": "benchmarks/optimise.py",
+    "--repeats": "benchmarks/optimise_speed.py and benchmarks/engine.py",
     "--across-only": "benchmarks/across.py",
     "--no-check": "benchmarks/across.py",
     "--project": "benchmarks/across.py",

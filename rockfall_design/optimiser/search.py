@@ -68,6 +68,7 @@ class BarrierSlots:
         self.skipped: dict[int, Counter] = {}
         self._rows: dict[tuple[int, int, int], np.ndarray] = {}
         self._alone: dict[tuple[int, int], np.ndarray] = {}
+        self._stations: dict[int, np.ndarray] = {}  # per candidate: each option's table column
         self._reach: dict[tuple[int, int, int], np.ndarray] = {}
         # Outcome codes first_ok computed, for passes() of the same level (both
         # ask for the options of the level at hand): (ci, k, table key) -> codes.
@@ -157,7 +158,7 @@ class BarrierSlots:
         Only checks that fail with confidence (their favourable bound misses
         the target) count as failed: the rest is left to more rocks.
         """
-        return self._alone_codes(ci, ks, table, table_id) >= 1
+        return self.first_codes(ci, ks, table, table_id) >= 1
 
     def first_holds(self, ci: int, ks: np.ndarray, table: Table, table_id: int) -> np.ndarray:
         """Do options ks meet their checks on the point values as the first barrier?
@@ -165,35 +166,51 @@ class BarrierSlots:
         As :meth:`first_ok`, with the point values in place of the bounds: a
         design whose first barrier misses them does not hold on the search rocks.
         """
-        return self._alone_codes(ci, ks, table, table_id) == 2
+        return self.first_codes(ci, ks, table, table_id) == 2
 
-    def _alone_codes(self, ci: int, ks: np.ndarray, table: Table, table_id: int) -> np.ndarray:
+    def first_codes(self, ci: int, ks: np.ndarray, table: Table, table_id: int) -> np.ndarray:
         """Per option, its checks as the first barrier: 0 some fails with confidence, 1 none
-        does but some misses on its point value, 2 every one meets its target there."""
-        sc = self.screen
-        opts = self.options[ci]
-        out = np.empty(len(ks), dtype=np.int8)
-        for i, k in enumerate(ks):
-            o = opts[k]
-            tk = self._table_key(o.j, table, table_id)
+        does but some misses on its point value, 2 every one meets its target there
+        (:meth:`first_ok` is ``>= 1``, :meth:`first_holds` ``== 2``).
+
+        Judged once per option and table (an option upslope of an edit's first
+        changed station shares the bare table's); the rest is a look-up, by
+        array: a level asks for every station of its catalogue choices.
+        """
+        ks = np.asarray(ks, dtype=np.intp)
+        js = self._stations.get(ci)
+        if js is None:
+            js = self._stations[ci] = np.array([o.j for o in self.options[ci]], dtype=np.intp)
+        # The table each option reads (_table_key, for all of ks at once).
+        keys = (np.zeros(ks.size, dtype=np.intp) if table.rows is None
+                else np.where(js[ks] < table.first_col, 0, table_id))
+        out = np.empty(ks.size, dtype=np.int8)
+        for tk in np.unique(keys).tolist():
+            sel = keys == tk
             arr = self._alone.get((ci, tk))
             if arr is None:
-                arr = self._alone[(ci, tk)] = np.full(len(opts), -1, dtype=np.int8)
-            if arr[k] < 0:
-                oc, h, e_kj, v = self._outcome(o, table)
-                if len(self._recent) >= 4096:
-                    self._recent.clear()
-                self._recent[(ci, int(k), tk)] = oc
-                placed = PlacedMeasure(0, o.measure, o.footprint, o.label)
-                fates = RockFates(max_x=table.max_x, x_end=table.x_end, status=table.status,
-                                  mass=sc.mass, radius=sc.radius)
-                (res,) = judge_measures([placed], [oc], [np.column_stack([h, v, e_kj])],
-                                        fates, None).results
-                checks = guard(sc.registry).concept(sc.concept).checks(res)
-                arr[k] = (0 if any(c.rejects for c in checks)
-                          else 2 if all(c.ok for c in checks) else 1)
-            out[i] = arr[k]
+                arr = self._alone[(ci, tk)] = np.full(len(self.options[ci]), -1, dtype=np.int8)
+            for k in ks[sel][arr[ks[sel]] < 0].tolist():
+                if arr[k] < 0:  # (a k given twice is judged once)
+                    arr[k] = self._judge_first(ci, k, tk, table)
+            out[sel] = arr[ks[sel]]
         return out
+
+    def _judge_first(self, ci: int, k: int, tk: int, table: Table) -> int:
+        """The code of :meth:`first_codes` of option ``k`` of candidate ``ci`` on ``table``."""
+        sc = self.screen
+        o = self.options[ci][k]
+        oc, h, e_kj, v = self._outcome(o, table)
+        if len(self._recent) >= 4096:
+            self._recent.clear()
+        self._recent[(ci, k, tk)] = oc
+        placed = PlacedMeasure(0, o.measure, o.footprint, o.label)
+        fates = RockFates(max_x=table.max_x, x_end=table.x_end, status=table.status,
+                          mass=sc.mass, radius=sc.radius)
+        (res,) = judge_measures([placed], [oc], [np.column_stack([h, v, e_kj])],
+                                fates, None).results
+        checks = guard(sc.registry).concept(sc.concept).checks(res)
+        return 0 if any(c.rejects for c in checks) else 2 if all(c.ok for c in checks) else 1
 
     def reaching(self, ci: int, ks: np.ndarray, table: Table, table_id: int) -> np.ndarray:
         """(len(ks), rocks) float32: 1 where the rock reaches the protected zone with option
@@ -468,8 +485,9 @@ def _placements(slots: BarrierSlots, barrier_cis: Sequence[int], opts: list[list
     tally.designs += int(valid.size)
     xb = np.stack(np.broadcast_arrays(*[_shaped(xs[s], s, k_slots) for s in range(k_slots)]))
     first = np.argmin(xb, axis=0)
-    alone = [slots.first_ok(barrier_cis[s], ks[s], table, table_id) for s in range(k_slots)]
-    holds = [slots.first_holds(barrier_cis[s], ks[s], table, table_id) for s in range(k_slots)]
+    codes = [slots.first_codes(barrier_cis[s], ks[s], table, table_id) for s in range(k_slots)]
+    alone = [c >= 1 for c in codes]  # slots.first_ok
+    holds = [c == 2 for c in codes]  # slots.first_holds
     first_ok = np.zeros(valid.shape, dtype=bool)
     first_holds = np.zeros(valid.shape, dtype=bool)
     all_ok = np.ones(valid.shape, dtype=bool)

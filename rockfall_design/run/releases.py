@@ -9,6 +9,7 @@ rocks of a run of N: a run can be cut short or extended and stay comparable.
 
 from __future__ import annotations
 
+import copy
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -202,6 +203,15 @@ class ReleaseStream:
         #: Relative step of the size classes radii are rounded to (0: none).
         self.size_step = project.size_step
         self.drawn = 0
+
+    def fork(self) -> ReleaseStream:
+        """A copy of this stream where it stands: it draws the rocks this one would draw
+        next, and drawing from it leaves this one where it is."""
+        out = copy.copy(self)
+        out._zone_rng = copy.deepcopy(self._zone_rng)
+        out._x_rng = copy.deepcopy(self._x_rng)
+        out._size_rng = copy.deepcopy(self._size_rng)
+        return out
 
     def draw(self, n: int) -> Releases:
         """The next ``n`` rocks.

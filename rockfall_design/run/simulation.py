@@ -88,6 +88,10 @@ class Study:
     first_rock : int
         Index in the whole run of the first rock of this one (a chunk of a
         streamed run starts past 0); the rock column of the tables counts from it.
+    stream : ReleaseStream or None
+        The run's release stream past its rocks, for a run that goes on from
+        them (``run_study``'s ``after``) to draw the next ones without drawing
+        these again; None where not kept.
     """
 
     project: Project
@@ -97,6 +101,7 @@ class Study:
     runtime_s: float
     section: Section
     first_rock: int = 0
+    stream: ReleaseStream | None = field(default=None, repr=False)
     _cache: dict[str, Any] = field(default_factory=dict, repr=False)
 
     #: How the statistics were obtained (recorded in the summary).
@@ -294,21 +299,28 @@ class Study:
 
 
 def _releases_after(project: Project, seed: int, n: int,
-                    after: Study | None) -> tuple[int, Releases]:
-    """The first rock to run and the releases of rocks ``first .. n - 1`` of a run.
+                    after: Study | None) -> tuple[int, Releases, ReleaseStream]:
+    """The first rock to run, the releases of rocks ``first .. n - 1`` of a run, and the
+    run's release stream past them.
 
     Without ``after`` the run starts at rock 0. With it, the run goes on from
-    ``after``'s rocks: their releases are drawn (and dropped) first, in rock
-    order, so that the rocks after them get the releases a run of all ``n``
-    rocks at once would give them.
+    ``after``'s rocks: the rocks after them get the releases a run of all
+    ``n`` rocks at once would give them, drawn from ``after``'s kept stream
+    (a copy: ``after`` can be gone on from again), or else after drawing
+    (and dropping) the releases of ``after``'s rocks first, in rock order.
     """
-    stream = ReleaseStream(project, seed)
     if after is None:
-        return 0, stream.draw(n)
+        stream = ReleaseStream(project, seed)
+        return 0, stream.draw(n), stream
     if after.seed != seed or after.first_rock != 0 or after.n > n:
         raise ValueError("a run goes on only from the first rocks of the same run")
-    stream.draw(after.n)  # the releases of the rocks already run, in order
-    return after.n, stream.draw(n - after.n)
+    kept = after.stream
+    if kept is not None and after.project is project and kept.drawn == after.n:
+        stream = kept.fork()
+    else:
+        stream = ReleaseStream(project, seed)
+        stream.draw(after.n)  # the releases of the rocks already run, in order
+    return after.n, stream.draw(n - after.n), stream
 
 
 def run_study(
@@ -357,7 +369,7 @@ def run_study(
     s = int(project.rocks.seed if seed is None else seed)
     if section is None:
         section = section_from_project(project)
-    first, releases = _releases_after(project, s, n, after)
+    first, releases, stream = _releases_after(project, s, n, after)
     if after is not None:
         n_trajectories = 0
     x0, x1 = section.x[0], section.x[-1]
@@ -388,6 +400,7 @@ def run_study(
         seed=s,
         runtime_s=runtime,
         section=section,
+        stream=stream,
     )
 
 

@@ -74,3 +74,20 @@ def test_joined_results_keep_their_types():
     assert b.result.grid_height.dtype == a.result.grid_height.dtype
     assert b.releases.zone.size == 70
 
+
+
+def test_a_run_goes_on_twice_from_one_look_alike_and_without_its_stream():
+    """The next rocks' releases come from the look's kept stream, a copy of it: going on
+    from the same look twice, or from a look without its stream, gives the same rocks."""
+    project = load_project(PROJECTS / "design_two_zones.yaml")
+    whole = run_study(project, rocks=90, seed=8)
+    part = run_study(project, rocks=40, seed=8)
+    assert part.stream is not None and part.stream.drawn == 40
+    once = run_study(project, rocks=90, seed=8, after=part)
+    twice = run_study(project, rocks=90, seed=8, after=part)
+    part.stream = None  # as a look made elsewhere: the releases are drawn again
+    redrawn = run_study(project, rocks=90, seed=8, after=part)
+    for other in (once, twice, redrawn):
+        _same(whole.releases, other.releases)
+        _same(whole.result, other.result)
+    assert once.stream.drawn == 90

@@ -37,11 +37,9 @@ from .shared import (
     NO_ROCK,
     design_mass,
     number_text,
-    percentile,
     percentile_label,
     rocks_text,
-    statistic_lower_bound,
-    statistic_upper_bound,
+    statistic_with_bounds,
 )
 
 __all__ = [
@@ -95,7 +93,9 @@ def design_energy_check(result: MeasureResult, capacity_kj: float, params: Parti
         return Check("design_energy", None, target, True, "kJ", NO_ROCK, None, True,
                      **named)
     p = percentile_label(params.percentile)
-    speed = percentile(speeds, params.percentile)
+    # One partial sort for each array's percentile and its two bounds.
+    speed, speed_l, speed_b = statistic_with_bounds(speeds, p, params.confidence,
+                                                    params.percentile)
     mass, mass_l, mass_b, mass_text = design_mass(design_block, masses, p,
                                                   params.confidence)
     e_d = design_energy(params, mass, speed)
@@ -106,7 +106,6 @@ def design_energy_check(result: MeasureResult, capacity_kj: float, params: Parti
         f"limit {number_text(capacity_kj, 'kJ')} / gamma_E {params.gamma_e:g} = "
         f"{number_text(target, 'kJ')}"
     )
-    speed_b = statistic_upper_bound(speeds, p, params.confidence)
     e_b = (None if speed_b is None or mass_b is None
            else design_energy(params, mass_b, speed_b))
     m_f = params.gamma_volf * params.gamma_gamma
@@ -118,7 +117,6 @@ def design_energy_check(result: MeasureResult, capacity_kj: float, params: Parti
                     mass * m_f,
                     "kg", None if mass_b is None else mass_b * m_f),
         DesignValue("E_d", "design energy 1/2 m_d v_d^2", e_d, "kJ", e_b), *figures)
-    speed_l = statistic_lower_bound(speeds, p, params.confidence)
     e_l = None if speed_l is None or mass_l is None else design_energy(params, mass_l,
                                                                               speed_l)
     return limit_check("design_energy", e_d, target, "kJ", detail, e_b, e_l, p, speeds.size,
@@ -164,9 +162,14 @@ def design_height_check(result: MeasureResult, nominal_m: float, residual_m: flo
         return Check("design_height", None, height_m, True, "m", NO_ROCK, None, True,
                      **named)
     p = percentile_label(params.percentile)
-    height = percentile(heights, params.percentile)
+    # One partial sort for each array's percentile and its two bounds.
+    height, height_l, height_b = statistic_with_bounds(heights, p, params.confidence,
+                                                       params.percentile)
+    radius, radius_l, radius_b = (statistic_with_bounds(radii, p, params.confidence,
+                                                        params.percentile)
+                                  if radii.size else (0.0, 0.0, 0.0))
     h_d = height * g_f
-    d_d = 2.0 * percentile(radii, params.percentile) if radii.size else 0.0
+    d_d = 2.0 * radius
     freeboard = max(params.f_min_m, d_d / 2.0)
     required = h_d + freeboard
     detail = (
@@ -175,8 +178,6 @@ def design_height_check(result: MeasureResult, nominal_m: float, residual_m: flo
         f"d_d/2 = {number_text(d_d / 2.0, 'm')}), over {rocks_text(heights.size)}; "
         f"{against}"
     )
-    height_b = statistic_upper_bound(heights, p, params.confidence)
-    radius_b = statistic_upper_bound(radii, p, params.confidence) if radii.size else 0.0
     required_b = (None if height_b is None or radius_b is None
                   else required_height(params, height_b, radius_b))
     named["design_values"] = (
@@ -184,8 +185,6 @@ def design_height_check(result: MeasureResult, nominal_m: float, residual_m: flo
                     None if height_b is None else height_b * g_f),
         DesignValue("f", "freeboard: max(f_min, d_d / 2)", freeboard, "m"),
         DesignValue("h_d + f", "required height", required, "m", required_b), *figure)
-    height_l = statistic_lower_bound(heights, p, params.confidence)
-    radius_l = statistic_lower_bound(radii, p, params.confidence) if radii.size else 0.0
     required_l = (None if height_l is None or radius_l is None
                   else required_height(params, height_l, radius_l))
     return limit_check("design_height", required, height_m, "m", detail, required_b,

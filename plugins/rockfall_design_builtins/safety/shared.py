@@ -31,6 +31,7 @@ from rockfall_design import (
     SafetyParams,
     quantile_lower_bound,
     quantile_upper_bound,
+    quantile_with_bounds,
     rocks_to_bound_quantile,
 )
 
@@ -144,17 +145,30 @@ def number_text(value: float, unit: str) -> str:
     return f"{value:.{digits}f} {unit}"
 
 
-def statistic_with_bounds(values: np.ndarray, statistic: str,
-                          confidence: float) -> tuple[float, float | None, float | None]:
+def statistic_with_bounds(values: np.ndarray, statistic: str, confidence: float,
+                          percent: float | None = None
+                          ) -> tuple[float, float | None, float | None]:
     """A percentile statistic of non-empty ``values`` with its lower and upper bound.
 
-    :func:`percentile`, :func:`statistic_lower_bound` and
-    :func:`statistic_upper_bound` of ``statistic`` (``"p95"`` ...), in that
-    order; a bound is None where the rocks are too few to give it.
+    :func:`percentile` (of ``percent``, by default the statistic's own),
+    :func:`statistic_lower_bound` and :func:`statistic_upper_bound` of
+    ``statistic`` (``"p95"`` ...), in that order; a bound is None where the
+    rocks are too few to give it. The same numbers, bit for bit, from one
+    partial sort where it can (:func:`rockfall_design.quantile_with_bounds`:
+    its point value is this one where its rank ``(n - 1) q`` is the one
+    :func:`percentile` takes), else two: a check asks for all three of each
+    of its arrays, and the optimiser for tens of thousands of checks.
     """
-    return (percentile(values, float(statistic[1:])),
-            statistic_lower_bound(values, statistic, confidence),
-            statistic_upper_bound(values, statistic, confidence))
+    if statistic == "max" or float(statistic[1:]) >= 100.0:
+        top = float(np.max(values))
+        return percentile(values, 100.0 if percent is None else percent), top, top
+    v = np.asarray(values, dtype=float).ravel()
+    pct = float(statistic[1:]) if percent is None else float(percent)
+    q = float(statistic[1:]) / 100.0
+    point, lower, upper = quantile_with_bounds(v, q, confidence)
+    if (v.size - 1) * pct / 100.0 != (v.size - 1) * q:  # another rank: percentile's own
+        point = percentile(v, pct)
+    return point, lower, upper
 
 
 def design_mass(block: DesignBlock | None, masses: np.ndarray, statistic: str,
@@ -169,7 +183,5 @@ def design_mass(block: DesignBlock | None, masses: np.ndarray, statistic: str,
     if block is not None:
         return (block.mass_kg, block.lower_kg, block.upper_kg,
                 f"design block {block.mass_kg:.1f} kg (rocks.design_block: {block.source})")
-    point = percentile(masses, float(statistic[1:]))
-    return (point, statistic_lower_bound(masses, statistic, confidence),
-            statistic_upper_bound(masses, statistic, confidence),
-            f"{statistic} mass {point:.1f} kg of the simulated rocks")
+    point, lower, upper = statistic_with_bounds(masses, statistic, confidence)
+    return (point, lower, upper, f"{statistic} mass {point:.1f} kg of the simulated rocks")
