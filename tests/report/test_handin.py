@@ -172,9 +172,24 @@ def _bundled(kind: str) -> list[Path]:
     return out
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("command, path", [("check", p) for p in _bundled("check")]
-                         + [("optimise", p) for p in _bundled("optimise")],
+def _optimise_cases() -> list:
+    """Every bundled design project; in CI's slow set only design_ditch_or_fence.
+
+    Its optimisation is shared with the fresh-seed test of test_optimise.py
+    (``optimised``); the others' (design_two_zones, design_forest_or_fence,
+    design_quarry, about 3 minutes of CPU between them) are ``heavy``: CI ran
+    over its 20 minutes with them, and the one verdict on every face is also
+    tested on the small design (above) and on design_ditch_or_fence here.
+    """
+    return [pytest.param("optimise", p, marks=(pytest.mark.slow
+                                              if p.stem == "design_ditch_or_fence"
+                                              else pytest.mark.heavy))
+            for p in _bundled("optimise")]
+
+
+@pytest.mark.parametrize("command, path",
+                         [pytest.param("check", p, marks=pytest.mark.slow)
+                          for p in _bundled("check")] + _optimise_cases(),
                          ids=lambda v: getattr(v, "stem", v))
 def test_every_bundled_project_gives_one_verdict_everywhere(command, path, tmp_path, optimised):
     """The done-when of issue 25: the same verdict first in all four faces, every project.
