@@ -206,17 +206,12 @@ def _check_dict(c: Any) -> dict[str, Any]:
 
 def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
                 progress: Callable[[int], None] | None = None) -> Bench:
-    """Run the rocks on the bare slope once and keep the screening table.
+    """:func:`~rockfall_design.api.trial_run` at the app's spacings, with what the page draws.
 
-    Parameters
-    ----------
-    project, registry
-        The project and its plugins.
-    rocks, seed
-        Rocks of the run and its seed (the same rocks as ``simulate`` and
-        the optimiser's screening draw for this seed).
-    progress
-        Called with the rocks done; an exception it raises stops the run.
+    The parameters are ``trial_run``'s; the table's and restart stations'
+    spacings and the paths kept are the app's (``TABLE_STEP_M``,
+    ``RESTART_STEP_M``, ``PATHS_DRAWN``). The bench adds the envelopes, the
+    stops' histogram and the first rocks' paths for the page.
     """
     run = trial_run(project, registry, rocks, seed, table_step_m=TABLE_STEP_M,
                     restart_step_m=RESTART_STEP_M, paths_drawn=PATHS_DRAWN, progress=progress)
