@@ -110,8 +110,16 @@ def write_figure(fig: Figure, fh: IO[Any], fmt: str) -> None:
     # and the crop only took off a few millimetres of white.
     fits = fig.get_layout_engine() is not None or getattr(fig, "fits_page", False)
     tight = None if fits else "tight"
-    fig.savefig(fh, format=fmt, dpi=150, bbox_inches=tight,
-                metadata=_FIXED_METADATA.get(fmt, {}))
+    # An SVG's words as <text>, not as a path per glyph (matplotlib's default):
+    # a report's figures are searchable and selectable in the HTML and its PDF,
+    # a fifth smaller, and written in about half the time (a check report's
+    # seven SVGs, 300 rocks: 14.7-15.7 s against 7.3-9.7 s, load 4). They name
+    # DejaVu Sans, matplotlib's font, which Debian's fontconfig brings.
+    import matplotlib  # heavy, and loaded already with the figure: kept out of parsing
+
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        fig.savefig(fh, format=fmt, dpi=150, bbox_inches=tight,
+                    metadata=_FIXED_METADATA.get(fmt, {}))
 
 
 def svg_document(fig: Figure) -> str:

@@ -14,7 +14,7 @@ import threading
 from collections.abc import Callable
 
 from ..report.documents import render_html, report_context
-from ..report.formats import inline_svg, svg_document
+from ..report.formats import inline_svg, svg_document, write_figure
 from ..results import CheckResult, OptimiseResult
 
 #: Figure formats the page offers for download.
@@ -44,8 +44,10 @@ def report_files(result: CheckResult | OptimiseResult) -> dict[str, bytes]:
     for name, fig in figures.items():
         files[f"{name}.svg"] = documents[name].encode("utf-8")
         buf = io.BytesIO()
-        # The settings of --plot: the same figure as the command line's file.
-        fig.savefig(buf, format="png", dpi=150, bbox_inches="tight")
+        # Through --plot's own writer: the same file as the command line's (a
+        # figure laid out to fit its page is not cropped "tight", which drew it
+        # twice: 0.9-1.7 s against 0.8-1.1 s for a passage figure's PNG).
+        write_figure(fig, buf, "png")
         files[f"{name}.png"] = buf.getvalue()
     return files
 
