@@ -112,7 +112,7 @@ def _trajectories(args: argparse.Namespace) -> int:
 
 
 def _simulate_task(task: tuple[Any, int, int, int]) -> Any:
-    """One section's run of ``simulate`` (a task for a pool or a cluster): its Study."""
+    """One section's run of ``simulate`` (a task for a pool or a cluster): its SimulationRun."""
 
     project, rocks, seed, trajectories = task
     return run_simulation(project, rocks=rocks, seed=seed, progress=False,

@@ -36,8 +36,8 @@ from .tables import alternatives_frame
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
-    from ..run.simulation import Study
-    from ..run.streamed import StreamedStudy
+    from ..run.simulation import SimulationRun
+    from ..run.streamed import StreamedRun
 
 __all__ = [
     "print_simulation",
@@ -529,7 +529,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
 
 
 def plot_study(
-    study: Study | StreamedStudy,
+    study: SimulationRun | StreamedRun,
     directory: str | Path,
     evaluation: Any = None,
     outputs: OutputSet | None = None,
