@@ -47,7 +47,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from .judge.evaluation import Evaluation
-    from .optimiser.alternatives import OptimisationResult
+    from .optimiser.alternatives import SearchOutcome
     from .plugins import Registry
     from .project import Project
     from .run.passages import Passages
@@ -347,13 +347,14 @@ class OptimiseResult:
     Attributes
     ----------
     project : Project
-    result : OptimisationResult
-        The optimiser's own result object.
+    result : SearchOutcome
+        The optimiser's own outcome
+        (:class:`~rockfall_design.optimiser.alternatives.SearchOutcome`).
     """
 
     command = "optimise"
 
-    def __init__(self, project: Project, result: OptimisationResult,
+    def __init__(self, project: Project, result: SearchOutcome,
                  registry: Registry) -> None:
         self.project = project
         self.result = result

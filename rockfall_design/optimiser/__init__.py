@@ -56,7 +56,7 @@ Any other failure of plugin code is a
 
 from __future__ import annotations
 
-from .alternatives import Alternative, OptimisationResult
+from .alternatives import Alternative, SearchOutcome
 from .decide import Decider, Decision, decide
 from .driver import optimise
 from .screening import RESTART_STEP_M, Screening, ScreenResult
@@ -79,7 +79,7 @@ __all__ = [
     "Alternative",
     "Decider",
     "Decision",
-    "OptimisationResult",
+    "SearchOutcome",
     "ScreenResult",
     "Screening",
     "candidate_name",

@@ -480,7 +480,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
     Its head records how the design was decided (the looks of the sequential
     decision, see :mod:`rockfall_design.judge.sequential`), how to repeat
     the verification on fresh rocks, and the cheaper designs left marginal or
-    undecided (``listed``: ``OptimisationResult.marginal``; default the
+    undecided (``listed``: ``SearchOutcome.marginal``; default the
     chosen family's own) with the rocks that would decide each.
     """
 
