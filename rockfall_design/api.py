@@ -20,11 +20,11 @@ import warnings
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
-from .arguments import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .errors import InputError
 from .judge.evaluation import evaluate
 from .judge.plan import Plan, plan_for, planned_section, validate_plugin_sections
 from .judge.verdict import requirement_warnings
+from .limits import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .plugins import load_registry, plugins_json  # noqa: F401
 from .project import Corridor
 from .project import load_corridor as _load_corridor

@@ -4,7 +4,7 @@ Each command turns its arguments into calls of the API, prints and writes
 what they return, and maps errors to exit codes (:mod:`.program`, the only
 place that does). Among the package's rooms it imports only the API, the
 results, the report, the errors and the project (and the light
-``arguments`` and ``version``); the exceptions: ``plugins.check_blocked_names``
+``limits`` and ``version``); the exceptions: ``plugins.check_blocked_names``
 in :mod:`.program` (the API would load numba for ``--help``), the figure names
 of the calibration and the study, and ``serve``, the other front end. Files:
 

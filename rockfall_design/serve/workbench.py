@@ -26,8 +26,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..api import calibrate, check, optimise, plan, study, validate_project
-from ..arguments import MAX_BOOTSTRAP
 from ..errors import ProjectError, RockfallError
+from ..limits import MAX_BOOTSTRAP
 from ..plugins import guard
 from ..project import dump_yaml, load_project
 from ..project.loading import load_project_text
