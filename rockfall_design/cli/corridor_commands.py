@@ -83,7 +83,7 @@ from .common import (
 )
 from .corridor_map import map_files, write_map
 from .corridor_report import print_section_rule, print_totals
-from .optimised import optimise_with_files, print_optimised
+from .optimise_outputs import optimise_with_files, print_optimised
 from .scenario_commands import SCENARIO_FIGURES, check_scenarios_with_files, print_check_across
 
 if TYPE_CHECKING:  # pragma: no cover
