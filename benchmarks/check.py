@@ -4,7 +4,7 @@
 
 Runs projects/benchmark.yaml (three measures: a boulder row, a fence and a
 ditch) through ``evaluate`` (what ``check`` does) and the same project
-without measures through ``run_study`` (what ``simulate`` does), on the same
+without measures through ``run_in_memory`` (what ``simulate`` does), on the same
 rocks and seed, and prints rocks per second of each and their ratio. The
 issue's target: check at no less than half the speed of simulate.
 """
@@ -18,7 +18,7 @@ from pathlib import Path
 from rockfall_design.judge.evaluation import evaluate
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
-from rockfall_design.run.simulation import run_study
+from rockfall_design.run.simulation import run_in_memory
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -41,8 +41,8 @@ def main() -> None:
     registry = load_registry()
     n = args.rocks
     evaluate(project, registry, rocks=10)  # compile / load numba's cache
-    run_study(project, rocks=10)
-    t_sim = best_of(lambda: run_study(project, rocks=n), args.repeat)
+    run_in_memory(project, rocks=10)
+    t_sim = best_of(lambda: run_in_memory(project, rocks=n), args.repeat)
     t_chk = best_of(lambda: evaluate(project, registry, rocks=n), args.repeat)
     print(f"rocks: {n:,}  (best of {args.repeat})")
     print(f"simulate (no measures):   {t_sim:7.2f} s  {n / t_sim:>10,.0f} rocks/s")

@@ -13,7 +13,7 @@ interpreter from the peer-case folder), measured in the same run. Printed:
 * cold: ``runtime_s`` of a fresh process at the smallest N (the engine run
   as the JSON reports it, loading of the compiled engine included), the best
   and the median of ``--repeats`` processes;
-* warm: the same run in one process after a first one (``run_study``, what
+* warm: the same run in one process after a first one (``run_in_memory``, what
   ``runtime_s`` times), and the cost of that process's first run of 1 rock
   (loading the engine);
 * whole process: wall time and resident peak of a fresh process at each N;
@@ -330,15 +330,15 @@ def against(tree: Path, n: int, repeats: int) -> None:
 def warm(n: int, repeats: int) -> tuple[float, float, list[float]]:
     """In this process: the first 1-rock run (s), then ``repeats`` runs of n rocks (s each).
 
-    Timed as ``runtime_s`` is (``run_study``). Returns (first 1-rock run, first run of n
+    Timed as ``runtime_s`` is (``run_in_memory``). Returns (first 1-rock run, first run of n
     after it, every run of n).
     """
     from rockfall_design.project import load_project
-    from rockfall_design.run.simulation import run_study
+    from rockfall_design.run.simulation import run_in_memory
 
     project = load_project(PROJECT)
-    first = run_study(project, rocks=1).runtime_s
-    runs = [run_study(project, rocks=n).runtime_s for _ in range(repeats)]
+    first = run_in_memory(project, rocks=1).runtime_s
+    runs = [run_in_memory(project, rocks=n).runtime_s for _ in range(repeats)]
     return first, runs[0], runs
 
 

@@ -58,7 +58,7 @@ ROOT = Path(__file__).resolve().parents[1]
 CHAIN = {"cli": 0, "testing": 0, "api": 1, "trial": 2, "optimiser": 2, "studies": 2,
          "calibration": 2, "judge": 3, "run": 4, "engine": 6}
 #: Rooms beside the chain: imported from anywhere, importing neither cli nor api.
-BESIDE = {"project", "plugins", "report", "errors", "arguments"}
+BESIDE = {"project", "plugins", "report", "errors", "limits"}
 
 #: Sub-packages (first directory under the package) -> room.
 PACKAGES = {"cli": "cli", "engine": "engine", "judge": "judge", "run": "run",
@@ -72,7 +72,7 @@ MOVED: dict[str, str] = {}
 #: Files loose at the top of the package -> the room they belong to (what each does).
 LOOSE = {
     "__init__.py": "api", "__main__.py": "cli", "api.py": "api", "testing.py": "testing",
-    "errors.py": "errors", "version.py": "errors", "arguments.py": "arguments",
+    "errors.py": "errors", "version.py": "errors", "limits.py": "limits",
     "results.py": "api",
 }
 

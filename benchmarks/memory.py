@@ -48,7 +48,7 @@ def _peak_mib() -> float:
 
 def one(name: str, rocks: int) -> dict[str, float]:
     """Run one size in this process; return its figures."""
-    from rockfall_design.run.simulation import EXACT_ROCKS, simulate, study_memory
+    from rockfall_design.run.simulation import EXACT_ROCKS, simulate, simulation_memory
 
     project = _project(name)
     simulate(project, rocks=10)  # compile or load numba's cache
@@ -67,7 +67,7 @@ def one(name: str, rocks: int) -> dict[str, float]:
         "rocks_per_s": rocks / wall,
         "peak_mib": _peak_mib(),
         "base_mib": base,
-        "estimate_mib": study_memory(project, rocks) / 2**20,
+        "estimate_mib": simulation_memory(project, rocks) / 2**20,
         "keep_all_mib": keep_all / 2**20,
     }
 

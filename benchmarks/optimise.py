@@ -60,7 +60,7 @@ from rockfall_design.optimiser import Screening
 from rockfall_design.optimiser.driver import optimise
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
-from rockfall_design.run.simulation import run_study
+from rockfall_design.run.simulation import run_in_memory
 
 ROOT = Path(__file__).resolve().parents[1]
 PROJECTS = sorted((ROOT / "projects").glob("design_*.yaml"))
@@ -269,7 +269,7 @@ def _warm_json(args: argparse.Namespace) -> None:
     import rockfall_design
 
     registry = load_registry()
-    run_study(load_project(args.projects[0]), rocks=10)
+    run_in_memory(load_project(args.projects[0]), rocks=10)
     out = {"package": str(Path(rockfall_design.__file__).parent)}
     for path in args.projects:
         project = load_project(path)
@@ -317,7 +317,7 @@ def _table(rows: list[dict], other: dict[str, dict], tree: Path | None) -> None:
 def _seeds(args: argparse.Namespace) -> None:
     """Each project at each seed and budget: the choice, the spread, the listed designs."""
     registry = load_registry()
-    run_study(load_project(args.projects[0]), rocks=10)  # compile or load the engine first
+    run_in_memory(load_project(args.projects[0]), rocks=10)  # compile or load the engine first
     projects = []
     for path in args.projects:
         project = load_project(path)
@@ -387,7 +387,7 @@ def main() -> None:
         return _seeds(args)
     registry = load_registry()
     t0 = time.perf_counter()
-    run_study(load_project(args.projects[0]), rocks=10)
+    run_in_memory(load_project(args.projects[0]), rocks=10)
     print(f"first call (compile or load numba's cache): {time.perf_counter() - t0:.1f} s")
     for path in args.projects:
         project = load_project(path)

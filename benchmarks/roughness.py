@@ -37,14 +37,14 @@ QS = (5, 25, 50, 75, 95, 99)
 def ours(convention: str, rocks: int) -> dict[str, float]:
     from rockfall_design.engine.columns import STOPPED
     from rockfall_design.project import load_project_text
-    from rockfall_design.run.simulation import run_study
+    from rockfall_design.run.simulation import run_in_memory
 
     text = PROJECT.read_text()
     if convention == "height":
         text = text.replace("roughness_deg: 5", "roughness_deg: 0\n    roughness_height_m: 0.1")
     elif convention == "none":
         text = text.replace("roughness_deg: 5", "roughness_deg: 0")
-    study = run_study(load_project_text(text, str(PROJECT)), rocks=rocks)
+    study = run_in_memory(load_project_text(text, str(PROJECT)), rocks=rocks)
     r = study.result
     x = r.x_end[r.status == STOPPED]
     return {"stopped": int(x.size), **{f"p{q}": float(np.percentile(x, q)) for q in QS},

@@ -7,7 +7,7 @@ builds the per-rock table, then a 5 m, 2000 kJ fence is moved to M stations
 along the slope and judged at each. Printed per move (median, 95th
 percentile and maximum, ms):
 
-* judge: the judgement alone, in process (``Bench.place``: checks with
+* judge: the judgement alone, in process (``PageRun.place``: checks with
   their bounds and the residual, from the table);
 * HTTP: ``POST /api/place`` to a running server (the address it printed),
   request to decoded answer;
@@ -46,19 +46,19 @@ def stats(ms: list[float]) -> str:
 
 def in_process(rocks: int, moves: int) -> None:
     from rockfall_design.plugins import load_registry
-    from rockfall_design.serve.bench import build_bench
+    from rockfall_design.serve.page_run import build_page_run
     from rockfall_design.serve.workbench import load_entries
 
     registry = load_registry()
     (entry,) = load_entries([PROJECT], registry)
     t0 = time.perf_counter()
-    bench = build_bench(entry.project, registry, rocks, entry.project.rocks.seed)
+    run = build_page_run(entry.project, registry, rocks, entry.project.rocks.seed)
     print(f"run of {rocks:,} rocks (the table): {time.perf_counter() - t0:.2f} s, "
-          f"{bench.screening.grid.size} table stations")
+          f"{run.screening.grid.size} table stations")
     ms = []
     for x in np.linspace(30, 285, moves):
         t = time.perf_counter()
-        bench.place(entry, [{**FENCE, "x": float(x)}])
+        run.place(entry, [{**FENCE, "x": float(x)}])
         ms.append((time.perf_counter() - t) * 1e3)
     print(f"judge (in process):  {stats(ms)}")
 

@@ -77,8 +77,8 @@ def main() -> None:
     from rockfall_design.api import default_registry
 
     registry = default_registry()
-    for module in ("evaluate", "judge.bounds", "study.run", "study.result",
-                   "study.sensitivity", "study.executors"):
+    for module in ("judge.evaluation", "judge.bounds", "studies.runner", "studies.study_result",
+                   "studies.sensitivity", "studies.executors"):
         importlib.import_module(f"rockfall_design.{module}")
 
     _, tasks = prepare(project, registry, rocks=n)

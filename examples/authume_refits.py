@@ -41,7 +41,7 @@ from rockfall_design.calibration.observations import (
 )
 from rockfall_design.engine.columns import STOPPED
 from rockfall_design.project import load_project
-from rockfall_design.run.simulation import run_study
+from rockfall_design.run.simulation import run_in_memory
 from rockfall_design.studies.paths import with_values
 
 
@@ -108,8 +108,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     both = rho_ok = runs = 0
     for name, values in refits(args.replicates):
-        run = run_study(with_values(problem.project, values, base=problem.base),
-                        rocks=args.rocks, seed=seed).result
+        run = run_in_memory(with_values(problem.project, values, base=problem.base),
+                            rocks=args.rocks, seed=seed).result
         stops = stop_positions(run.x_end, run.status, problem.x_range)
         shares = level_shares(obs.x, stops, problem.levels)
         inside = sum(s.consistent for s in shares)

@@ -39,7 +39,7 @@ from rockfall_design.calibration.observations import (
     size_limits,
 )
 from rockfall_design.project import load_project
-from rockfall_design.run.simulation import run_study
+from rockfall_design.run.simulation import run_in_memory
 from rockfall_design.studies.paths import with_values
 
 
@@ -71,8 +71,8 @@ def load(name: str, project_path: Path, observed_path: Path, rocks: int,
 
 def summary(p: Profile, values: dict[str, float], rocks: int) -> str:
     """One run of profile ``p`` at ``values``: level shares, median stop, passages."""
-    study = run_study(with_values(p.problem.project, values, base=p.problem.base),
-                      rocks=rocks, seed=p.seed)
+    study = run_in_memory(with_values(p.problem.project, values, base=p.problem.base),
+                          rocks=rocks, seed=p.seed)
     run = study.result
     stops = stop_positions(run.x_end, run.status, p.problem.x_range)
     shares = level_shares(p.observed.x, stops, p.problem.levels)

@@ -44,7 +44,7 @@ _LAZY: dict[str, str] = {
     **dict.fromkeys(("check", "load_project", "optimise", "simulate", "study", "calibrate",
                      "compare", "run_corridor"), ".api"),
     **dict.fromkeys(("CheckResult", "OptimiseResult", "SimulationResult"), ".results"),
-    **dict.fromkeys(("CalibrationResult", "ComparisonResult"), ".calibration.calibrated"),
+    **dict.fromkeys(("CalibrationResult", "ComparisonResult"), ".calibration.calibration_result"),
     "StudyResult": ".studies.study_result",
     **dict.fromkeys(("Corridor", "load_corridor"), ".project"),
     **dict.fromkeys(("fraction_lower_bound", "fraction_upper_bound", "quantile_lower_bound",
@@ -63,7 +63,7 @@ if TYPE_CHECKING:  # pragma: no cover
         simulate,
         study,
     )
-    from .calibration.calibrated import CalibrationResult, ComparisonResult
+    from .calibration.calibration_result import CalibrationResult, ComparisonResult
     from .judge.bounds import (
         fraction_lower_bound,
         fraction_upper_bound,

@@ -20,11 +20,11 @@ import warnings
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
-from .arguments import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .errors import InputError
 from .judge.evaluation import evaluate
 from .judge.plan import Plan, plan_for, planned_section, validate_plugin_sections
 from .judge.verdict import requirement_warnings
+from .limits import MAX_BOOTSTRAP, MAX_ROCKS, whole_number
 from .plugins import load_registry, plugins_json  # noqa: F401
 from .project import Corridor
 from .project import load_corridor as _load_corridor
@@ -65,8 +65,8 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from .plugins import Registry
     from .project import CorridorSection, Project
-    from .run.simulation import Study
-    from .run.streamed import StreamedStudy
+    from .run.simulation import SimulationRun
+    from .run.streamed import StreamedRun
     from .studies.corridor import CorridorSummary, SectionOutcome
     from .trial.placements import TrialRun
 
@@ -297,7 +297,8 @@ def simulate(
 
 def run_simulation(project: Project, *, rocks: int | None, seed: int | None,
                    progress: bool | Callable[[int], None], trajectories: int,
-                   on_chunk: Callable[[Study], None] | None = None) -> Study | StreamedStudy:
+                   on_chunk: Callable[[SimulationRun], None] | None = None,
+                   ) -> SimulationRun | StreamedRun:
     """The run behind :func:`simulate` (and the CLI, which streams its tables to files)."""
 
     n = _count(project, rocks)
@@ -704,7 +705,7 @@ def simulation_memory(project: Project, rocks: int) -> int:
     """Estimated peak memory (bytes) of simulating ``rocks`` rocks of ``project``.
 
     What the command line compares with the machine's memory before a run
-    (see :func:`rockfall_design.run.simulation.study_memory`).
+    (see :func:`rockfall_design.run.simulation.simulation_memory`).
 
     Parameters
     ----------
@@ -718,7 +719,7 @@ def simulation_memory(project: Project, rocks: int) -> int:
     int
         Bytes.
     """
-    return simulation.study_memory(project, rocks)
+    return simulation.simulation_memory(project, rocks)
 
 
 def never_holding(project: Project, command: str) -> list[str]:

@@ -25,7 +25,7 @@ from .report.formats import save_figures
 from .report.tables import alternatives_frame, checks_frame, measures_frame, passages_frame
 from .run import simulation
 from .run.passages import station_passages
-from .run.streamed import StreamedStudy
+from .run.streamed import StreamedRun
 from .run.summary import RunSummary
 
 # The typed results of corridors, scenario checks and terrain sections, for
@@ -47,12 +47,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
     from .judge.evaluation import Evaluation
-    from .optimiser.alternatives import OptimisationResult
+    from .optimiser.alternatives import SearchOutcome
     from .plugins import Registry
     from .project import Project
     from .run.passages import Passages
-    from .run.simulation import Study
-    from .run.streamed import StreamedStudy
+    from .run.simulation import SimulationRun
+    from .run.streamed import StreamedRun
 
 
 #: Rock paths kept for the profile figure (the first rocks of the run).
@@ -80,14 +80,14 @@ class SimulationResult:
     Attributes
     ----------
     project : Project
-    study : Study or StreamedStudy
+    study : SimulationRun or StreamedRun
         The run itself (engine-level; prefer the tables below).
     """
 
     #: The command whose ``--json`` :attr:`summary` matches.
     command = "simulate"
 
-    def __init__(self, project: Project, study: Study | StreamedStudy,
+    def __init__(self, project: Project, study: SimulationRun | StreamedRun,
                  rocks_tables: list[pd.DataFrame] | None = None) -> None:
         self.project = project
         self.study = study
@@ -124,7 +124,7 @@ class SimulationResult:
     def streamed(self) -> bool:
         """True for a run of more than ``EXACT_ROCKS`` rocks (statistics from histograms)."""
 
-        return isinstance(self.study, StreamedStudy)
+        return isinstance(self.study, StreamedRun)
 
     @cached_property
     def rocks(self) -> pd.DataFrame:
@@ -347,13 +347,14 @@ class OptimiseResult:
     Attributes
     ----------
     project : Project
-    result : OptimisationResult
-        The optimiser's own result object.
+    result : SearchOutcome
+        The optimiser's own outcome
+        (:class:`~rockfall_design.optimiser.alternatives.SearchOutcome`).
     """
 
     command = "optimise"
 
-    def __init__(self, project: Project, result: OptimisationResult,
+    def __init__(self, project: Project, result: SearchOutcome,
                  registry: Registry) -> None:
         self.project = project
         self.result = result

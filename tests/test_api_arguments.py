@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 import rockfall_design as rd
-from rockfall_design.arguments import ArgumentError, ArgumentTypeError
 from rockfall_design.cli.program import main
 from rockfall_design.errors import ExitCode, InputError
+from rockfall_design.limits import ArgumentError, ArgumentTypeError
 
 ROOT = Path(__file__).resolve().parents[1]
 PROJECTS = ROOT / "projects"

@@ -136,7 +136,7 @@ def test_releases_drawn_in_chunks_are_the_releases_drawn_at_once(quarry):
 @pytest.fixture(scope="module")
 def exact_and_streamed(quarry):
     """The same 3,000 rocks, exact and streamed in chunks of 700 (with their tables)."""
-    tables: list[simulation.Study] = []
+    tables: list[simulation.SimulationRun] = []
     exact = simulate(quarry, rocks=3_000, seed=4)
     streamed = simulate(quarry, rocks=3_000, seed=4, chunk=700, on_chunk=tables.append)
     return exact, streamed, tables

@@ -1,7 +1,7 @@
 """The calibration's and the comparison's report: report.html and report.md.
 
-:func:`report_context` builds, from a :class:`~.calibrated.CalibrationResult`
-or a :class:`~.calibrated.ComparisonResult`, the same plain context the other
+:func:`report_context` builds, from a :class:`~.calibration_result.CalibrationResult`
+or a :class:`~.calibration_result.ComparisonResult`, the same plain context the other
 commands' reports are rendered from (:mod:`rockfall_design.report.documents`,
 whose templates and escaping it shares): the observed set, the fitted
 inputs with their intervals and a flag for those the observations do not

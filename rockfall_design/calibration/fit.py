@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import ProjectError
 from ..project import Project
-from ..run.simulation import run_study
+from ..run.simulation import run_in_memory
 from ..studies.executors import stop_if_cancelled
 from ..studies.paths import with_values
 from ..studies.scenarios import scenario_seed
@@ -306,8 +306,8 @@ def simulated_stops(problem: FitProblem, values: Mapping[str, float], seed: int
     # calibration is given up (Ctrl-C): a thread cannot be stopped from outside.
     stop_if_cancelled()
     project = with_values(problem.project, values, base=problem.base)
-    run = run_study(project, rocks=problem.rocks, seed=seed,
-                    progress=lambda _done: stop_if_cancelled()).result
+    run = run_in_memory(project, rocks=problem.rocks, seed=seed,
+                        progress=lambda _done: stop_if_cancelled()).result
     return stop_positions(run.x_end, run.status, problem.x_range)
 
 
@@ -322,8 +322,8 @@ def _run(problem: FitProblem, k: int, values: Mapping[str, float], seed: int) ->
         mine = {p: v for p, v in values.items() if p.startswith("materials.")}
         project = with_values(other.project, mine, base=other.base)
         seed = scenario_seed(int(seed), PROFILE_SEED + k)
-    return run_study(project, rocks=problem.rocks, seed=seed,
-                     progress=lambda _done: stop_if_cancelled())
+    return run_in_memory(project, rocks=problem.rocks, seed=seed,
+                         progress=lambda _done: stop_if_cancelled())
 
 
 def simulated_sets(problem: FitProblem, values: Mapping[str, float], seed: int

@@ -23,7 +23,7 @@ import numpy as np
 from ..project import Project
 from ..project.calibrate import auto_fit_ranges
 from ..studies.executors import run_tasks
-from .calibrated import CalibrationResult, ComparisonResult
+from .calibration_result import CalibrationResult, ComparisonResult
 from .distances import fit_statistics, level_shares
 from .fit import FitProblem, problem_for, simulated_sets, simulated_stops
 from .observations import (

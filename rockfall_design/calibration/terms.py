@@ -15,7 +15,7 @@ values, L_i the observed values' interquartile range (at least
 - passing heights and speeds at a station: the heights (vertical or normal
   to the slope) or speeds the run records for every rock that passes the
   station downslope (its first passage: the analysis stations' records,
-  :meth:`~rockfall_design.run.simulation.Study.crossing_arrays`). The
+  :meth:`~rockfall_design.run.simulation.SimulationRun.crossing_arrays`). The
   observed marks are of blocks that passed, so the simulated values are of
   the rocks that passed too (how many reach the station is the stops'
   business). When no simulated rock passes, the simulated set is one value

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import api
-from ..calibration.calibrated import FIGURES
+from ..calibration.calibration_result import FIGURES
 from ..errors import ExitCode, InputError
 from ..project import Project, dump_yaml
 from ..report.outputs import OutputSet

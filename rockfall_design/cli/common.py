@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..api import load_plugins, never_holding, validate_project
-from ..arguments import MAX_ROCKS as _MAX_ROCKS
 from ..errors import InputError
+from ..limits import MAX_ROCKS as _MAX_ROCKS
 from ..project import dump_yaml, load_corridor, load_project_text
 from ..project.inputs import read_text
 from ..project.messages import unquoted

@@ -83,7 +83,7 @@ from .common import (
 )
 from .corridor_map import map_files, write_map
 from .corridor_report import print_section_rule, print_totals
-from .optimised import optimise_with_files, print_optimised
+from .optimise_outputs import optimise_with_files, print_optimised
 from .scenario_commands import SCENARIO_FIGURES, check_scenarios_with_files, print_check_across
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -112,7 +112,7 @@ def _trajectories(args: argparse.Namespace) -> int:
 
 
 def _simulate_task(task: tuple[Any, int, int, int]) -> Any:
-    """One section's run of ``simulate`` (a task for a pool or a cluster): its Study."""
+    """One section's run of ``simulate`` (a task for a pool or a cluster): its SimulationRun."""
 
     project, rocks, seed, trajectories = task
     return run_simulation(project, rocks=rocks, seed=seed, progress=False,

@@ -10,9 +10,9 @@ import argparse
 from pathlib import Path
 from typing import NoReturn
 
-from ..arguments import MAX_ROCKS as _MAX_ROCKS
-from ..arguments import bounds_problem
 from ..errors import ExitCode
+from ..limits import MAX_ROCKS as _MAX_ROCKS
+from ..limits import bounds_problem
 from ..report.formats import FIGURE_FORMATS
 
 PROG = "rockfall-design"
@@ -33,7 +33,7 @@ def int_at_least(low: int, what: str, high: int | None = None):
             v = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-        # The API's checks and words (rockfall_design.arguments).
+        # The API's checks and words (rockfall_design.limits).
         problem = bounds_problem(v, low, high, what)
         if problem is not None:
             raise argparse.ArgumentTypeError(problem)

@@ -2,7 +2,7 @@
 
 Light on purpose: ``rockfall-design --help`` (and a usage error) builds
 every parser, so this module imports only argparse, the shared options and
-the numbers they check (:mod:`rockfall_design.arguments`), never the engine,
+the numbers they check (:mod:`rockfall_design.limits`), never the engine,
 numba, scipy, pandas or matplotlib. Which function runs a command is said
 in one table, :data:`rockfall_design.cli.program.COMMANDS`; the module of
 that function is imported only when its command is chosen.
@@ -15,7 +15,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from ..arguments import DEFAULT_FLAT_DEG, DEFAULT_TOLERANCE_M, MAX_BOOTSTRAP
+from ..limits import DEFAULT_FLAT_DEG, DEFAULT_TOLERANCE_M, MAX_BOOTSTRAP
 from .options import (
     add_block_option,
     add_run_options,

@@ -47,7 +47,7 @@ from ..results import DEFAULT_TRAJECTORIES, Binding, ScenariosCheck
 from .common import REPORT_FILES, figure_files, figures_and_report, reserve
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..optimiser.alternatives import AcrossResult
+    from ..optimiser.alternatives import AcrossOutcome
     from ..plugins import Registry
     from ..project import Project
     from ..report.outputs import OutputSet
@@ -201,7 +201,7 @@ def cli_check_scenarios(args: argparse.Namespace, project: Project, registry: Re
     return int(ExitCode.OK if found.ok else ExitCode.CHECK_FAILED)
 
 
-def print_across(result: AcrossResult) -> None:
+def print_across(result: AcrossOutcome) -> None:
     """The scenario lines of the optimiser's report: where the chosen design binds."""
     from rich.text import Text
 
@@ -221,7 +221,7 @@ def print_across(result: AcrossResult) -> None:
     fitted_console(text).print(text)
 
 
-def across_design_yaml(result: AcrossResult, project_file: Path | str,
+def across_design_yaml(result: AcrossOutcome, project_file: Path | str,
                        project: Project) -> str:
     """design.yaml of a design across scenarios: ``check --scenarios`` checks it as decided.
 

@@ -35,7 +35,7 @@ from .common import (
     table_writers,
 )
 from .corridor_commands import cli_check, cli_optimise, cli_simulate
-from .optimised import optimise_with_files, print_optimised
+from .optimise_outputs import optimise_with_files, print_optimised
 from .options import (
     PROG,
 )

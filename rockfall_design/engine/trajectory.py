@@ -4,7 +4,7 @@ The engine writes a rock's path as event states (one row per event, columns
 ``T_*``) and its end as a status code. These functions turn them into what a
 report draws or counts: the path of the rock's centre as points, and the
 number of rocks per end state by name. The result objects
-(:class:`~rockfall_design.run.simulation.Study` and its streamed twin) use them,
+(:class:`~rockfall_design.run.simulation.SimulationRun` and its streamed twin) use them,
 so that figures and tables never read an engine column.
 """
 

@@ -24,7 +24,7 @@ from ..plugins.manager import plugin_code
 from ..plugins.measure import Barrier, MeasureResult, Outcome
 from ..run.passages import Passages, barrier_values, property_marks, slope_deg_at
 from ..run.releases import section_from_project
-from ..run.simulation import Study, run_study
+from ..run.simulation import SimulationRun, run_in_memory
 from .bounds import fraction_lower_bound, fraction_upper_bound
 from .outcomes import Judgement, RockFates, judge_measures
 from .placing import (
@@ -110,7 +110,7 @@ class Evaluation:
 
     Attributes
     ----------
-    study : Study
+    study : SimulationRun
         The run on the edited section (its ``section`` is the edited one).
     original_section : Section
         The bare section.
@@ -122,7 +122,7 @@ class Evaluation:
     concept : SafetyConcept
     """
 
-    study: Study
+    study: SimulationRun
     original_section: Section
     placed: list[PlacedMeasure]
     results: list[MeasureResult]
@@ -353,7 +353,7 @@ class Evaluation:
         return r.barrier_meeting[:, owners.index(p.index), :3]
 
 
-def _judge_run(placed: Sequence[PlacedMeasure], owners: list[int], study: Study,
+def _judge_run(placed: Sequence[PlacedMeasure], owners: list[int], study: SimulationRun,
                protect_x: float | None) -> Judgement:
     """Judge the exact run: barrier outcomes and meetings as the engine recorded them."""
     r = study.result
@@ -421,7 +421,7 @@ def evaluate_design(
 
     ``after``: an evaluation of the same design on the first rocks of this
     run (same project and seed, fewer rocks); only the rocks after them are
-    simulated (``run_study``'s ``after``) and the whole is judged again with
+    simulated (``run_in_memory``'s ``after``) and the whole is judged again with
     ``concept``. A sequential look at more rocks goes on from the last look.
     ``bare``: the project's slope section, when the caller holds it (the
     optimiser's screening: every design of a search stands on one section).
@@ -451,7 +451,7 @@ def _evaluate_placed(
     seed: int | None,
     n_trajectories: int,
     progress: Callable[[int], None] | None,
-    after: Study | None = None,
+    after: SimulationRun | None = None,
     record_speed: bool = False,
 ) -> Evaluation:
     """Run the rocks against measures already placed on ``bare`` (``section``: edited).
@@ -460,9 +460,9 @@ def _evaluate_placed(
     envelope (``check`` and the chosen design's figures; not the optimiser).
     """
     bars, owners = barrier_rows(placed)
-    study = run_study(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
-                      progress=progress, section=section, barriers=bars, after=after,
-                      record_speed=record_speed)
+    study = run_in_memory(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
+                          progress=progress, section=section, barriers=bars, after=after,
+                          record_speed=record_speed)
     protect = project.protect
     judgement = _judge_run(placed, owners, study, None if protect is None else protect.x)
     checks = [guard(registry).concept(concept).checks(res) for res in judgement.results]

@@ -45,7 +45,10 @@ The strategy seam: a family's designs come from :mod:`.search`
 (:func:`~.search.barrier_designs` with :class:`~.search.BarrierSlots`,
 :class:`~.search.EditSearch`), are decided by :class:`~.settle.FamilyDecision`
 in every scenario (:mod:`.scenario`; one on a single section), and
-:func:`~.driver.optimise` drives the families.
+:func:`~.driver.optimise` drives the families. What a search found is a
+:class:`~.alternatives.SearchOutcome` (:mod:`.alternatives`, with each
+family's :class:`~.alternatives.Alternative`), which the API hands out inside
+the public :class:`rockfall_design.results.OptimiseResult`.
 
 A design that does not fit (a measure's ``footprint`` raises ValueError, two
 measures stand in one place) or that the cost model has no price for (its
@@ -56,7 +59,7 @@ Any other failure of plugin code is a
 
 from __future__ import annotations
 
-from .alternatives import Alternative, OptimisationResult
+from .alternatives import Alternative, SearchOutcome
 from .decide import Decider, Decision, decide
 from .driver import optimise
 from .screening import RESTART_STEP_M, Screening, ScreenResult
@@ -79,7 +82,7 @@ __all__ = [
     "Alternative",
     "Decider",
     "Decision",
-    "OptimisationResult",
+    "SearchOutcome",
     "ScreenResult",
     "Screening",
     "candidate_name",

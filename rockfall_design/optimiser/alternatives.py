@@ -2,7 +2,7 @@
 
 :class:`Alternative` is one family's outcome (its cheapest design that holds,
 or why none does; the marginal and undecided designs cheaper than it),
-:class:`OptimisationResult` a whole search; the constants bound the work of
+:class:`SearchOutcome` a whole search; the constants bound the work of
 one family (on one section or across the scenarios of a study).
 """
 
@@ -126,7 +126,16 @@ class Alternative:
 
 
 @dataclass
-class OptimisationResult:
+class SearchOutcome:
+    """What one search of the optimiser found: the families' alternatives, the
+    chosen design (``best``, None without one, then ``reason``) and how the
+    search went (rocks, seeds, looks, designs evaluated, wall time in s).
+
+    The optimiser's own outcome, not the public result: the API hands it
+    out wrapped in :class:`rockfall_design.results.OptimiseResult` (whose
+    ``result`` it is).
+    """
+
     alternatives: list[Alternative]
     best: Alternative | None
     reason: str
@@ -184,8 +193,8 @@ class OptimisationResult:
 
 
 @dataclass
-class AcrossResult(OptimisationResult):
-    """:class:`OptimisationResult` of a design across scenarios, with what each scenario said.
+class AcrossOutcome(SearchOutcome):
+    """:class:`SearchOutcome` of a design across scenarios, with what each scenario said.
 
     ``summary()`` has the keys of the single-scenario optimiser and
     ``scenarios``: ``share``, ``required``, ``of``, ``per_scenario`` (the

@@ -28,10 +28,10 @@ from ..studies.scenarios import ScenarioRun, required_scenarios, scenario_runs
 from .alternatives import (
     FRESH_OFFSET,
     SEARCH_SEED,
-    AcrossResult,
+    AcrossOutcome,
     Alternative,
     Listed,
-    OptimisationResult,
+    SearchOutcome,
 )
 from .scenario import Scenario, set_up
 from .search import EditSearch, Screened, Tally, barrier_designs
@@ -156,7 +156,7 @@ def optimise(
     rocks: int | None = None,
     seed: int | None = None,
     progress: Callable[[str, int, int], None] | None = None,
-) -> OptimisationResult:
+) -> SearchOutcome:
     """The cheapest design of every family that holds, proven on fresh rocks.
 
     Parameters
@@ -175,8 +175,8 @@ def optimise(
 
     Returns
     -------
-    OptimisationResult
-        An :class:`~.alternatives.AcrossResult` with ``design.scenarios``.
+    SearchOutcome
+        An :class:`~.alternatives.AcrossOutcome` with ``design.scenarios``.
 
     Notes
     -----
@@ -300,7 +300,7 @@ def _tagged(j: int, stream: Iterable[Screened]) -> Iterator[Screened]:
 
 def _result(scs: Sequence[Scenario], searched: FamiliesSearched, reason: str, s: int,
             t0: float, currency: str, across: bool, share: float, required: int,
-            per_family: dict[str, dict[str, Any]]) -> OptimisationResult:
+            per_family: dict[str, dict[str, Any]]) -> SearchOutcome:
     """The search's result (with the scenarios' report across a study)."""
     best, n = searched.best, max(sc.screen.n for sc in scs)
     spec = scs[0].spec
@@ -321,10 +321,10 @@ def _result(scs: Sequence[Scenario], searched: FamiliesSearched, reason: str, s:
         marginal=list(searched.marginal), decided=sum(a.exact_evaluations
                                                 for a in searched.alternatives))
     if across:
-        return AcrossResult(**common, share=share, required=required,
-                            runs=[sc.run for sc in scs], per_family=per_family)
-    return OptimisationResult(**common, looks=scs[0].looks,
-                              bare_slope=bare_slope(scs[0]))
+        return AcrossOutcome(**common, share=share, required=required,
+                             runs=[sc.run for sc in scs], per_family=per_family)
+    return SearchOutcome(**common, looks=scs[0].looks,
+                         bare_slope=bare_slope(scs[0]))
 
 
 def bare_slope(sc: Scenario) -> dict[str, Any] | None:

@@ -17,7 +17,7 @@ from pydantic import (
     model_validator,
 )
 
-from ..arguments import MAX_ROCKS as _ARGUMENT_MAX_ROCKS
+from ..limits import MAX_ROCKS as _LIMIT_MAX_ROCKS
 from .design_block import DesignBlockSpec
 from .fields import (
     Boolean,
@@ -230,7 +230,7 @@ MIN_DENSITY = 100.0
 #: Most rocks in one run (rocks.count, --rocks, rocks=, design.fresh_rocks): a
 #: streamed run of a billion rocks takes about six hours on one core. One
 #: value for the project file, the command line and the API.
-MAX_ROCKS = _ARGUMENT_MAX_ROCKS
+MAX_ROCKS = _LIMIT_MAX_ROCKS
 #: Most analysis stations: each adds a column per rock and its histograms.
 MAX_STATIONS = 1_000
 #: Most percentiles of the envelopes.

@@ -51,7 +51,7 @@ from .sections import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..optimiser.alternatives import OptimisationResult
+    from ..optimiser.alternatives import SearchOutcome
     from ..studies.scenario_checks import ScenariosCheck
 
 __all__ = ["Table", "MODEL_LIMITS", "ReportContext", "model_limits", "report_context",
@@ -287,7 +287,7 @@ def _design_value_tables(summary: CheckSummary) -> list[Table]:
             for t in design_tables(summary)]
 
 
-def optimiser_sentences(opt: OptimisationResult) -> list[str]:
+def optimiser_sentences(opt: SearchOutcome) -> list[str]:
     """How ``optimise`` searched and decided, and its record of the decision, as sentences."""
     out = [f"The optimiser searched with {int(opt.search_rocks or 0):,} rocks "
            f"(seed {opt.seed}), screening {int(opt.evaluations or 0):,} designs, "

@@ -39,8 +39,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
     from ..judge.evaluation import Evaluation
-    from ..run.simulation import Study
-    from ..run.streamed import StreamedStudy
+    from ..run.simulation import SimulationRun
+    from ..run.streamed import StreamedRun
 
 __all__ = [
     "RockfallFigure",
@@ -134,7 +134,7 @@ def _ground(ax: Axes, section: Any) -> None:
     ax.set_ylim(bottom=ymin)
 
 
-def _forest(ax: Axes, study: Study | StreamedStudy) -> None:
+def _forest(ax: Axes, study: SimulationRun | StreamedRun) -> None:
     """Shade the forested segments up to their stem height, with what the forest did."""
     section = study.section
     counts = study.forest_counts()
@@ -152,7 +152,7 @@ def _forest(ax: Axes, study: Study | StreamedStudy) -> None:
         label = None
 
 
-def _marks(ax: Axes, study: Study | StreamedStudy, label: bool = True) -> None:
+def _marks(ax: Axes, study: SimulationRun | StreamedRun, label: bool = True) -> None:
     """Analysis stations (dashed) and the protected zone (shaded)."""
     for j, xs in enumerate(study.stations):
         ax.axvline(xs, color=_STATION, ls="--", lw=0.9, zorder=2,
@@ -227,12 +227,13 @@ def _measure_lines(ax: Axes, evaluation: Evaluation | None) -> None:
 # ---- the figures ----------------------------------------------------------------
 
 
-def profile_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = None) -> Figure:
+def profile_figure(study: SimulationRun | StreamedRun,
+                   evaluation: Evaluation | None = None) -> Figure:
     """The slope section with a sample of paths, rest positions, stations and measures.
 
     Parameters
     ----------
-    study : Study or StreamedStudy
+    study : SimulationRun or StreamedRun
         The run; its ``trajectories`` (kept with ``n_trajectories``) are drawn.
     evaluation : Evaluation, optional
         A check of measures: barriers are drawn with product, height (m) and
@@ -300,7 +301,7 @@ def _figure_marks(axes: Mapping[str, Axes], evaluation: Evaluation | None) -> No
 
 
 def envelopes_figure(
-    study: Study | StreamedStudy,
+    study: SimulationRun | StreamedRun,
     evaluation: Evaluation | None = None,
     min_rocks: int | None = None,
 ) -> Figure:
@@ -308,7 +309,7 @@ def envelopes_figure(
 
     Parameters
     ----------
-    study : Study or StreamedStudy
+    study : SimulationRun or StreamedRun
     evaluation : Evaluation, optional
         Measures are marked by a vertical line at their station, and each
         barrier's heights and energies (nominal height, capacity, and any
@@ -380,8 +381,8 @@ def no_stop_reason(counts: EndCounts | Mapping[str, int] | Sequence[int] | np.nd
     ----------
     counts : EndCounts, mapping of str to int, or array of int
         Rocks per end state (:class:`~rockfall_design.run.summary.EndCounts`), by
-        name (``Study.ends()``), or indexed by the engine's status codes
-        (``Study.status_counts()``).
+        name (``SimulationRun.ends()``), or indexed by the engine's status codes
+        (``SimulationRun.status_counts()``).
 
     Returns
     -------
@@ -404,7 +405,7 @@ def no_stop_reason(counts: EndCounts | Mapping[str, int] | Sequence[int] | np.nd
     return f"of {n:,} rocks, " + ", ".join(text[:-1]) + " and " + text[-1]
 
 
-def _rest_layers(study: Study | StreamedStudy, evaluation: Evaluation | None,
+def _rest_layers(study: SimulationRun | StreamedRun, evaluation: Evaluation | None,
                  bins: np.ndarray) -> list[tuple[str, np.ndarray, str]]:
     """Where the rocks ended, a layer per measure: (label, counts per bin, colour).
 
@@ -449,7 +450,8 @@ def _leavers(ax: Axes, counts: EndCounts, bins: np.ndarray, n: int) -> None:
                     color="#c0392b")
 
 
-def stops_figure(study: Study | StreamedStudy, evaluation: Evaluation | None = None) -> Figure:
+def stops_figure(study: SimulationRun | StreamedRun,
+                 evaluation: Evaluation | None = None) -> Figure:
     """Where the rocks end: at rest, held by each measure (a colour each), or gone.
 
     Rocks at rest are counted per bin along x; with measures, the rocks a
@@ -505,7 +507,7 @@ def _ends_text(counts: EndCounts) -> str:
 
 
 def study_figures(
-    study: Study | StreamedStudy,
+    study: SimulationRun | StreamedRun,
     evaluation: Evaluation | None = None,
     min_rocks: int | None = None,
 ) -> dict[str, Figure]:

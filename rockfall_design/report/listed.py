@@ -95,7 +95,7 @@ def listed_lines(marginal: Sequence[Listed] | None, currency: str = "",
     Parameters
     ----------
     marginal : sequence of Listed
-        ``OptimisationResult.marginal``, cheapest first.
+        ``SearchOutcome.marginal``, cheapest first.
     currency : str
         Written after each cost.
     shown : int

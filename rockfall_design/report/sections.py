@@ -30,7 +30,7 @@ from .listed import forest_text
 from .tables import measure_text, passages_frame, round_value
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..optimiser.alternatives import Alternative, OptimisationResult
+    from ..optimiser.alternatives import Alternative, SearchOutcome
     from ..studies.scenario_checks import ScenariosCheck
 
 
@@ -499,7 +499,7 @@ def _keyed_checks(checks: list[Check]) -> list[tuple[str, Check]]:
     return out
 
 
-def alternatives_table(opt: OptimisationResult) -> Table:
+def alternatives_table(opt: SearchOutcome) -> Table:
     """The optimiser's alternatives with their costs and outcomes."""
     cur = opt.currency or ""
     best = None if opt.best is None else opt.best.name
@@ -532,7 +532,7 @@ def alternatives_table(opt: OptimisationResult) -> Table:
                  highlight=marks)
 
 
-def chosen_text(opt: OptimisationResult) -> tuple[str, list[str]]:
+def chosen_text(opt: SearchOutcome) -> tuple[str, list[str]]:
     """The sentence naming the chosen design, and the reasons listed under it."""
     best = opt.best
     if best is None:

@@ -36,8 +36,8 @@ from .tables import alternatives_frame
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry
-    from ..run.simulation import Study
-    from ..run.streamed import StreamedStudy
+    from ..run.simulation import SimulationRun
+    from ..run.streamed import StreamedRun
 
 __all__ = [
     "print_simulation",
@@ -480,7 +480,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
     Its head records how the design was decided (the looks of the sequential
     decision, see :mod:`rockfall_design.judge.sequential`), how to repeat
     the verification on fresh rocks, and the cheaper designs left marginal or
-    undecided (``listed``: ``OptimisationResult.marginal``; default the
+    undecided (``listed``: ``SearchOutcome.marginal``; default the
     chosen family's own) with the rocks that would decide each.
     """
 
@@ -529,7 +529,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
 
 
 def plot_study(
-    study: Study | StreamedStudy,
+    study: SimulationRun | StreamedRun,
     directory: str | Path,
     evaluation: Any = None,
     outputs: OutputSet | None = None,

@@ -33,7 +33,7 @@ from .summary import stat_block
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..engine import Section
-    from .simulation import Study
+    from .simulation import SimulationRun
 
 __all__ = ["QUANTITIES", "Mark", "Passages", "slope_deg_at", "barrier_values",
            "station_passages", "property_marks", "passage_block"]
@@ -203,7 +203,7 @@ def property_marks(properties: Mapping[str, float]) -> tuple[Mark, ...]:
     return tuple(out)
 
 
-def station_passages(study: Study) -> list[Passages]:
+def station_passages(study: SimulationRun) -> list[Passages]:
     """The passages of every analysis station of an in-memory run (first passage downslope)."""
     a = study.crossing_arrays()
     out = []
@@ -216,7 +216,7 @@ def station_passages(study: Study) -> list[Passages]:
     return out
 
 
-#: Keys of QUANTITIES whose array in ``Study.crossing_arrays`` is named otherwise, in J.
+#: Keys of QUANTITIES whose array in ``SimulationRun.crossing_arrays`` is named otherwise, in J.
 _ARRAY = {"translational_energy_kj": "translational_energy_j",
           "rotational_energy_kj": "rotational_energy_j", "energy_kj": "energy_j"}
 _SCALE = {"translational_energy_kj": 1e3, "rotational_energy_kj": 1e3, "energy_kj": 1e3}

@@ -1,14 +1,17 @@
 """From a validated project to an ensemble run and its statistics.
 
 Data flow: ``Project`` -> engine inputs (section, per-rock releases drawn
-from the seed) -> :func:`rockfall_design.engine.run_ensemble` -> ``Study``
-(the run, its record and its statistics as tables and JSON-ready dicts).
+from the seed) -> :func:`rockfall_design.engine.run_ensemble` ->
+``SimulationRun`` (one simulation's run, its record and its statistics as
+tables and JSON-ready dicts; not a parametric study, which is
+:mod:`rockfall_design.studies`).
 
 The jobs live in rooms of their own, whose names this module re-exports:
 ``releases`` (the engine's inputs: section, settings, rocks drawn from the
 seed), ``summary`` (the JSON summary), ``streamed`` (statistics of runs too
-large to keep). Here: the in-memory :class:`Study`, :func:`run_study`, and
-:func:`simulate`, which chooses between an exact and a streamed run.
+large to keep). Here: the in-memory :class:`SimulationRun`,
+:func:`run_in_memory`, and :func:`simulate`, which chooses between an exact
+and a streamed run (:class:`~.streamed.StreamedRun`).
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ from .releases import (
     engine_settings,
     section_from_project,
 )
-from .streamed import REST_SAMPLE, STOP_BUCKETS, STREAM_REL_ERROR, StreamedStudy
+from .streamed import REST_SAMPLE, STOP_BUCKETS, STREAM_REL_ERROR, StreamedRun
 from .summary import (
     STATION_QUANTITIES,
     STATISTICS,
@@ -55,11 +58,11 @@ if TYPE_CHECKING:  # pragma: no cover
 # with a fixed rock size writes no table unless asked.
 
 __all__ = [
-    "Study",
-    "StreamedStudy",
+    "SimulationRun",
+    "StreamedRun",
     "ReleaseStream",
     "simulate",
-    "study_memory",
+    "simulation_memory",
     "chunk_rocks",
     "EXACT_ROCKS",
     "section_from_project",
@@ -67,13 +70,13 @@ __all__ = [
     "draw_releases",
     "protected_zone_counts",
     "reaches_protected_zone",
-    "run_study",
+    "run_in_memory",
     "STATISTICS",
 ]
 
 
 @dataclass
-class Study:
+class SimulationRun:
     """An ensemble run of a project, with what is needed to repeat it.
 
     Attributes
@@ -90,7 +93,7 @@ class Study:
         streamed run starts past 0); the rock column of the tables counts from it.
     stream : ReleaseStream or None
         The run's release stream past its rocks, for a run that goes on from
-        them (``run_study``'s ``after``) to draw the next ones without drawing
+        them (``run_in_memory``'s ``after``) to draw the next ones without drawing
         these again; None where not kept.
     """
 
@@ -111,7 +114,7 @@ class Study:
     def n(self) -> int:
         return self.result.n
 
-    # ---- what the figures need (a streamed study answers the same) -----------
+    # ---- what the figures need (a streamed run answers the same) -------------
     @property
     def stations(self) -> np.ndarray:
         """The user's analysis stations x (m)."""
@@ -299,7 +302,7 @@ class Study:
 
 
 def _releases_after(project: Project, seed: int, n: int,
-                    after: Study | None) -> tuple[int, Releases, ReleaseStream]:
+                    after: SimulationRun | None) -> tuple[int, Releases, ReleaseStream]:
     """The first rock to run, the releases of rocks ``first .. n - 1`` of a run, and the
     run's release stream past them.
 
@@ -323,7 +326,7 @@ def _releases_after(project: Project, seed: int, n: int,
     return after.n, stream.draw(n - after.n), stream
 
 
-def run_study(
+def run_in_memory(
     project: Project,
     *,
     rocks: int | None = None,
@@ -332,10 +335,10 @@ def run_study(
     progress: Callable[[int], None] | None = None,
     section: Section | None = None,
     barriers: np.ndarray | None = None,
-    after: Study | None = None,
+    after: SimulationRun | None = None,
     record_speed: bool = False,
-) -> Study:
-    """Run the project's rockfall study.
+) -> SimulationRun:
+    """Run the project's rocks once, keeping every rock's result (exact statistics).
 
     Parameters
     ----------
@@ -353,7 +356,7 @@ def run_study(
         the slope with its ditches and berms).
     barriers : ndarray, optional
         The engine's barrier table (``check``'s fences, walls, boulder rows).
-    after : Study, optional
+    after : SimulationRun, optional
         The first rocks of this very run (same project, seed, section and
         barriers, fewer rocks, from rock 0): only the rocks after them are
         simulated and joined on, and the result is that of a run of all the
@@ -393,7 +396,7 @@ def run_study(
         result = after.result.joined(result)
         releases = after.releases.joined(releases)
         runtime += after.runtime_s
-    return Study(
+    return SimulationRun(
         project=project,
         result=result,
         releases=releases,
@@ -422,7 +425,7 @@ def chunk_rocks(project: Project) -> int:
     return int(min(EXACT_ROCKS, max(1_000, _CHUNK_VALUES // s)))
 
 
-def study_memory(project: Project, rocks: int) -> int:
+def simulation_memory(project: Project, rocks: int) -> int:
     """Memory (bytes) that ``simulate`` of ``rocks`` rocks needs at its peak.
 
     An exact run holds every rock's envelope values (float32 height and
@@ -454,24 +457,24 @@ def simulate(
     seed: int | None = None,
     n_trajectories: int = 0,
     progress: Callable[[int], None] | None = None,
-    on_chunk: Callable[[Study], None] | None = None,
+    on_chunk: Callable[[SimulationRun], None] | None = None,
     chunk: int | None = None,
     section: Section | None = None,
-) -> Study | StreamedStudy:
-    """Run the study of ``simulate``: exact up to ``EXACT_ROCKS`` rocks, else streamed.
+) -> SimulationRun | StreamedRun:
+    """Run the simulation of ``simulate``: exact up to ``EXACT_ROCKS`` rocks, else streamed.
 
     Parameters
     ----------
     project : Project
     rocks, seed : int, optional
-        As :func:`run_study`.
+        As :func:`run_in_memory`.
     n_trajectories : int
         Keep the paths of the first rocks, for figures.
     progress : callable, optional
         Called with the number of rocks done.
     on_chunk : callable, optional
-        Called with each chunk's :class:`Study` (the whole run's, if exact)
-        in rock order, e.g. to write the per-rock tables as they come.
+        Called with each chunk's :class:`SimulationRun` (the whole run's, if
+        exact) in rock order, e.g. to write the per-rock tables as they come.
     chunk : int, optional
         Stream in chunks of this many rocks whatever the run's size (the
         default: exact up to ``EXACT_ROCKS``, else :func:`chunk_rocks`).
@@ -481,13 +484,13 @@ def simulate(
 
     Returns
     -------
-    Study or StreamedStudy
+    SimulationRun or StreamedRun
     """
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
     if chunk is None and n <= EXACT_ROCKS:
-        study = run_study(project, rocks=n, seed=s, n_trajectories=n_trajectories,
-                          progress=progress, record_speed=True, section=section)
+        study = run_in_memory(project, rocks=n, seed=s, n_trajectories=n_trajectories,
+                              progress=progress, record_speed=True, section=section)
         if on_chunk is not None:
             on_chunk(study)
         return study
@@ -498,9 +501,9 @@ def simulate(
 
 def _simulate_streamed(
     project: Project, n: int, s: int, size: int, n_trajectories: int,
-    progress: Callable[[int], None] | None, on_chunk: Callable[[Study], None] | None,
+    progress: Callable[[int], None] | None, on_chunk: Callable[[SimulationRun], None] | None,
     section: Section | None = None,
-) -> StreamedStudy:
+) -> StreamedRun:
     """:func:`simulate`'s streamed run: ``n`` rocks of seed ``s`` in chunks of ``size``."""
     if section is None:
         section = section_from_project(project)
@@ -509,7 +512,7 @@ def _simulate_streamed(
     key = engine_key(s)
     settings = engine_settings(project)
     stream = ReleaseStream(project, s)
-    out: StreamedStudy | None = None
+    out: StreamedRun | None = None
     t0 = time.perf_counter()
 
     def compute(first: int, releases: Releases) -> EnsembleResult:
@@ -537,11 +540,11 @@ def _simulate_streamed(
                 nxt = firsts[i + 1]
                 releases = stream.draw(min(size, n - nxt))
                 pending = ahead.submit(copy_context().run, compute, nxt, releases)
-            part = Study(project=project, result=result, releases=current, seed=s,
-                         runtime_s=0.0, section=section, first_rock=first)
+            part = SimulationRun(project=project, result=result, releases=current, seed=s,
+                                 runtime_s=0.0, section=section, first_rock=first)
             if out is None:
-                out = StreamedStudy(project=project, seed=s, section=section,
-                                    stations=result.stations, grid=result.grid, chunk=size)
+                out = StreamedRun(project=project, seed=s, section=section,
+                                  stations=result.stations, grid=result.grid, chunk=size)
             out.add(part)
             if on_chunk is not None:
                 on_chunk(part)

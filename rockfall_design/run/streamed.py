@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from ..engine import Section
     from ..project import Project
-    from .simulation import Study
+    from .simulation import SimulationRun
 
 #: Relative error of the streamed percentiles of heights, speeds and energies.
 STREAM_REL_ERROR = 0.002
@@ -41,11 +41,11 @@ STOP_BUCKETS = 80 * 820
 
 
 @dataclass
-class StreamedStudy:
+class StreamedRun:
     """The statistics of a run too large to keep: accumulated chunk by chunk.
 
-    Answers what :class:`Study` answers for the summary, the envelopes and
-    the figures (not the per-rock tables: those went to ``on_chunk``).
+    Answers what :class:`~.simulation.SimulationRun` answers for the summary,
+    the envelopes and the figures (not the per-rock tables: those went to ``on_chunk``).
     Counts, means and maxima are exact; percentiles of heights, speeds and
     energies within ``STREAM_REL_ERROR`` (relative), of the stop position
     within half a bucket of the stop histogram.
@@ -91,8 +91,8 @@ class StreamedStudy:
             "stop_x_error_m": float(self._stops.width / 2),
         }
 
-    def add(self, part: Study) -> None:
-        """Add the rocks of one chunk (a :class:`Study` of consecutive rocks)."""
+    def add(self, part: SimulationRun) -> None:
+        """Add the rocks of one chunk (a :class:`SimulationRun` of consecutive rocks)."""
         r = part.result
         a = part.crossing_arrays()
         for key, (arr, scale) in STATION_QUANTITIES.items():
@@ -126,15 +126,21 @@ class StreamedStudy:
         return self._counts.copy()
 
     def forest_counts(self) -> tuple[int, int] | None:
-        """Rocks that met a stem and rocks a stem stopped, as :meth:`Study.forest_counts`."""
+        """Rocks that met a stem and rocks a stem stopped.
+
+        As :meth:`SimulationRun.forest_counts`.
+        """
         return (self.met_stems, self.forest_stopped) if self.section.forested else None
 
     def ends(self) -> dict[str, int]:
-        """Rocks per end state by name, as :meth:`Study.ends`."""
+        """Rocks per end state by name, as :meth:`SimulationRun.ends`."""
         return end_counts(self._counts)
 
     def paths(self, pts_per_flight: int = 24) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Points (x, y in m) along the centre paths of the first rocks, as :meth:`Study.paths`."""
+        """Points (x, y in m) along the centre paths of the first rocks.
+
+        As :meth:`SimulationRun.paths`.
+        """
         return [centre_points(tr, pts_per_flight) for tr in self.trajectories]
 
     def rest_positions(self) -> tuple[np.ndarray, np.ndarray]:
@@ -150,7 +156,7 @@ class StreamedStudy:
 
     # ---- statistics ------------------------------------------------------
     def envelopes(self) -> pd.DataFrame:
-        """As :meth:`Study.envelopes`, from the histograms."""
+        """As :meth:`SimulationRun.envelopes`, from the histograms."""
         import pandas as pd
 
         out: dict[str, np.ndarray] = {
@@ -168,11 +174,11 @@ class StreamedStudy:
         return pd.DataFrame(out)
 
     def summary(self) -> dict[str, Any]:
-        """As :meth:`Study.summary`, from the histograms."""
+        """As :meth:`SimulationRun.summary`, from the histograms."""
         return self.run_summary().to_json()
 
     def run_summary(self) -> RunSummary:
-        """As :meth:`Study.run_summary`, from the histograms."""
+        """As :meth:`SimulationRun.run_summary`, from the histograms."""
         blocks = {key: histogram_blocks(h) for key, h in self._station.items()}
         crossings = self._station["passing_height_m"].n
         stop_block = histogram_blocks(self._stops)[0]

@@ -13,8 +13,8 @@ from ..version import __version__
 from .histograms import LinearHistogram, LogHistogram
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .simulation import Study
-    from .streamed import StreamedStudy
+    from .simulation import SimulationRun
+    from .streamed import StreamedRun
 
 #: The statistics reported for every station quantity, in this order.
 STATISTICS = ("mean", "p50", "p95", "p99", "max")
@@ -123,8 +123,8 @@ class EndCounts:
 
     @classmethod
     def of(cls, counts: Mapping[str, int] | np.ndarray) -> EndCounts:
-        """From counts by name (``Study.ends()``) or indexed by the engine's status codes
-        (``Study.status_counts()``)."""
+        """From counts by name (``SimulationRun.ends()``) or indexed by the engine's status codes
+        (``SimulationRun.status_counts()``)."""
         if isinstance(counts, Mapping):
             return cls(**{name: int(k) for name, k in counts.items()})
         c = np.asarray(counts)
@@ -405,7 +405,7 @@ class RunSummary:
 
 
 def run_record(
-    study: Study | StreamedStudy,
+    study: SimulationRun | StreamedRun,
     events: int,
     crossings: np.ndarray,
     blocks: dict[str, list[dict[str, float | None]]],

@@ -8,6 +8,17 @@ and energy at every metre, through the optimiser's screening and the
 project's safety concept, so its checks and the residual at the protected
 zone follow the mouse without running a rock again.
 
+- :mod:`.app`: the ASGI application, the page, its assets and the API;
+- :mod:`.workbench`: what the app works on: the projects, their runs and
+  the measures placed on the table;
+- :mod:`.page_run`: :class:`~.page_run.PageRun`, one finished run of the
+  page (the trial run's table, the envelopes, the stops and the paths the
+  page draws) and the judgement of measures placed on it;
+- :mod:`.jobs` and :mod:`.job_tables`: the jobs a page starts (a run, a
+  check, an optimisation, a study, a calibration) and their tables;
+- :mod:`.reports`: the report and figures of a check or optimise;
+- :mod:`.guards`: which files a page may read and write.
+
 Import :func:`serve` lazily: it needs Starlette and uvicorn
 (``pip install "rockfall-design[web]"``).
 """

@@ -296,7 +296,7 @@ class _Endpoints:
 
     async def run(self, request: Request) -> Response:
         e = self.entry_of(request)
-        if e.bench is None:
+        if e.run is None:
             raise ServeError(409, f"{e.id} has not been simulated yet (POST .../simulate)")
         return _json(e.run_dict())
 
@@ -394,13 +394,13 @@ class _Endpoints:
             if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
                 raise ServeError(400, f"x: expected the station in m, got {x!r}")
             raws = [{**m, "x": float(x)}]
-        bench = e.bench
-        if bench is None:
+        run = e.run
+        if run is None:
             raise ServeError(409, f"{e.id} has not been simulated yet (POST "
                              f"/api/projects/{e.id}/simulate first)")
         # A few milliseconds of numpy: run here, on the event loop, for the
         # lowest latency while the mouse moves.
-        return _json(bench.place(e, raws))
+        return _json(run.place(e, raws))
 
     async def plugins(self, request: Request) -> Response:
         reg = self.entries[0].registry if self.entries else None

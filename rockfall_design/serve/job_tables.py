@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ..calibration.calibrated import CalibrationResult
+    from ..calibration.calibration_result import CalibrationResult
 
 
 def study_tables(res: Any) -> list[dict[str, Any]]:

@@ -6,10 +6,10 @@ Nothing here knows about HTTP: :mod:`rockfall_design.serve.app` turns a
 A run (:meth:`ProjectEntry.start_run`) is the optimiser's screening run
 (:class:`~rockfall_design.optimiser.screening.Screening`) of the project's
 rocks on the bare slope, with its table stations every
-:data:`~.bench.TABLE_STEP_M` along the whole section: per rock, its passing height,
+:data:`~.page_run.TABLE_STEP_M` along the whole section: per rock, its passing height,
 energy and speed at its first passage of every station. A fence or wall
 placed anywhere is then judged from that table by the screening's own
-judgement and the project's safety concept (:meth:`Bench.place`), in
+judgement and the project's safety concept (:meth:`PageRun.place`), in
 milliseconds, without running a rock again.
 """
 
@@ -26,8 +26,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..api import calibrate, check, optimise, plan, study, validate_project
-from ..arguments import MAX_BOOTSTRAP
 from ..errors import ProjectError, RockfallError
+from ..limits import MAX_BOOTSTRAP
 from ..plugins import guard
 from ..project import dump_yaml, load_project
 from ..project.loading import load_project_text
@@ -35,7 +35,6 @@ from ..project.locator import params_problem
 from ..project.schema import Material
 from ..report.terminal import design_yaml
 from ..results import DEFAULT_TRAJECTORIES
-from .bench import Bench, build_bench, placed_message
 from .guards import (
     MAX_BODY_BYTES,
     UPLOAD_KINDS,
@@ -51,6 +50,7 @@ from .guards import (
 )
 from .job_tables import calibration_tables, plain_json, study_tables
 from .jobs import Cancelled, Job
+from .page_run import PageRun, build_page_run, placed_message
 from .reports import lazy_files
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -82,7 +82,7 @@ class ProjectEntry:
     path: Path
     project: Project
     registry: Registry
-    bench: Bench | None = None
+    run: PageRun | None = None
     job: Job | None = None
     lock: threading.Lock = field(default_factory=threading.Lock)
     #: Changes made in the page and not saved (the project in memory differs from its file).
@@ -129,12 +129,12 @@ class ProjectEntry:
             "has_calibrate": p.calibrate is not None,
             "library": self.library_name(),
             "edits": list(self.edits),
-            "run": None if self.bench is None else self.run_dict(),
+            "run": None if self.run is None else self.run_dict(),
             "job": None if self.job is None else self.job.as_dict(),
         }
 
     def run_dict(self) -> dict[str, Any]:
-        b = self.bench
+        b = self.run
         assert b is not None
         return {"rocks": b.rocks, "seed": b.seed, "runtime_s": round(b.runtime_s, 3),
                 "envelopes": b.envelopes, "stops": b.stops, "paths": b.paths}
@@ -199,7 +199,7 @@ class ProjectEntry:
         job.runtime_s = time.monotonic() - job.started
 
     def start_run(self, rocks: int | None, seed: int | None) -> Job:
-        """Start the screening run of the project (see :func:`build_bench`).
+        """Start the screening run of the project (see :func:`build_page_run`).
 
         Raises
         ------
@@ -210,7 +210,7 @@ class ProjectEntry:
         n, s = self._rocks_seed(rocks, seed)
 
         def work(job: Job) -> None:
-            self.bench = build_bench(self.project, self.registry, n, s, job.progress)
+            self.run = build_page_run(self.project, self.registry, n, s, job.progress)
             job.done = n
 
         return self._start("simulate", n, work)
@@ -480,7 +480,7 @@ class ProjectEntry:
                 validate_project(project, self.registry)
             except RockfallError as exc:
                 raise ServeError(400, " ".join(str(exc).split())) from None
-            self.project, self.bench = project, None
+            self.project, self.run = project, None
             self.edits.append(f"segment {segment + 1}: {p.slope.materials[segment]} -> "
                               f"{name} from {lib['path']}")
         return {**self.describe(), "yaml": dump_yaml(project.resolved_dict())}
@@ -534,7 +534,7 @@ class ProjectEntry:
                                  "removed): reload it and make your edits again; nothing was "
                                  "written")
             write_atomically(target, text)
-            self.project, self.bench, self.edits = project, None, []
+            self.project, self.run, self.edits = project, None, []
         return target
 
     def upload(self, name: str, text: str, replace: bool = False) -> Path:

@@ -5,11 +5,21 @@
   :func:`check_study`, every path and value of a ``study:`` section checked;
 - :mod:`.scenarios`: the scenarios of a ``study:`` section (grid or Latin
   hypercube), each with its values and its own rock seed;
-- :mod:`.runner`: the scenarios as tasks, and the task (one ``simulate`` run);
-- :mod:`.executors`: tasks in-process, on a local process pool or on Dask;
+- :mod:`.runner`: the scenarios as tasks, and the task (one ``simulate``
+  run); not ``run.py``, which would read as the package's
+  :mod:`rockfall_design.run` room;
+- :mod:`.executors`: tasks in-process, on a local process pool or on Dask
+  (:mod:`._warm` is what the pool's forkserver imports first);
+- :mod:`.scenario_result`: :class:`~.scenario_result.ScenarioResult`, what
+  one scenario found;
 - :mod:`.sensitivity`: which input moves each design value (main-effect
   ranges; RBD-FAST indices of SALib for a sampled study);
-- :mod:`.study_result`: :class:`.StudyResult` (JSON, tables, figures, report);
+- :mod:`.study_result`: :class:`.StudyResult` (JSON, tables, figures, report),
+  named as :mod:`.scenario_result` beside it;
+- :mod:`.scenario_checks`: designs checked across the scenarios (``check
+  --scenarios``);
+- :mod:`.corridor`: a corridor's result, its sections' JSON objects and the
+  totals over them;
 - :mod:`~rockfall_design.cli.study_command`: the ``rockfall-design study`` command.
 
 The engineer's entry point is :func:`rockfall_design.study` (the function of

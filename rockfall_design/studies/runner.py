@@ -39,7 +39,7 @@ from ..project import Project
 from ..project.messages import describe
 from ..run.reach import protected_zone_counts
 from ..run.releases import section_from_project
-from ..run.simulation import Study, simulate
+from ..run.simulation import SimulationRun, simulate
 from ..run.summary import STATION_QUANTITIES, STATISTICS, RunSummary, run_record, stat_block
 from .executors import run_tasks
 from .paths import ALIASES, parse_path, scenario_base, shown, with_values
@@ -294,13 +294,13 @@ def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> RunSumma
     At a station of the project (``own``) every block, as ``simulate
     --json`` gives it; at a station added for a barrier only the blocks the
     study keeps (:data:`QUANTITIES`), the others left empty (None). Each
-    block is computed as :meth:`~rockfall_design.run.simulation.Study.summary`
+    block is computed as :meth:`~rockfall_design.run.simulation.SimulationRun.summary`
     computes it, so the numbers are the same to the bit (a test holds the
     scenario to ``simulate``). A streamed run: its own summary, whole.
     ``project_hash``: the hash the summary gives, the scenario's project's
     (not that of its copy with the barriers' stations).
     """
-    if not isinstance(study, Study):
+    if not isinstance(study, SimulationRun):
         return replace(study.run_summary(), project_hash=project_hash)
     r = study.result
     a = study.crossing_arrays()
@@ -360,7 +360,7 @@ def _bounds(study: Any, summary: RunSummary, task: ScenarioTask,
     out = ScenarioBounds(confidence, upper={}, lower={},
                          ladder=BoundsLadder(scenarios=rungs, lower={}, upper={}))
     ladder = out.ladder
-    if isinstance(study, Study):
+    if isinstance(study, SimulationRun):
         arrays = study.crossing_arrays()
         columns = {float(x): j for j, x in enumerate(study.stations)}
         names, samples, qs = [], [], []
@@ -455,7 +455,7 @@ def column_percentile(values: np.ndarray, q: float,
 def _envelope(study: Any, q: float) -> dict[str, list[float]]:
     """x (m), crossings and the ``q`` envelopes of height (m) and energy (kJ) of a run."""
     label = f"{q:g}".replace(".", "_")
-    if isinstance(study, Study):
+    if isinstance(study, SimulationRun):
         r = study.result
         crossings = _finite_counts(r.grid_height)
         return {

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 # Defined beside the command line's other numbers, which --help shows without this room.
-from ..arguments import DEFAULT_TOLERANCE_M
+from ..limits import DEFAULT_TOLERANCE_M
 from .dem import Dem
 from .extra import TerrainError
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 # Defined beside the command line's other numbers, which --help shows without this room.
-from ..arguments import DEFAULT_FLAT_DEG
+from ..limits import DEFAULT_FLAT_DEG
 from .dem import Dem
 from .extra import TerrainError
 

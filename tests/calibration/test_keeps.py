@@ -188,7 +188,7 @@ def test_ctrl_c_stops_the_replicates_under_way(site, monkeypatch):
     """
     calls, after = [0], [0]
     raised = threading.Event()
-    run_study = fit.run_study  # imported at fit's top: patched where it is called
+    run_in_memory = fit.run_in_memory  # imported at fit's top: patched where it is called
 
     def counted(*args, **kwargs):
         calls[0] += 1
@@ -198,9 +198,9 @@ def test_ctrl_c_stops_the_replicates_under_way(site, monkeypatch):
             # Ctrl-C as Python notes it when the kernel hands SIGINT to another
             # thread: the main thread, waiting for the replicates, must still see it.
             _thread.interrupt_main()
-        return run_study(*args, **kwargs)
+        return run_in_memory(*args, **kwargs)
 
-    monkeypatch.setattr(fit, "run_study", counted)
+    monkeypatch.setattr(fit, "run_in_memory", counted)
     with pytest.raises(KeyboardInterrupt):
         rd.calibrate(site, bootstrap=6, workers=2, pool="threads", rocks=60)
     raised.set()  # the calibration has given up; count what still starts

@@ -37,15 +37,15 @@ def _observed(text: str, name: str, seed: int, n: int = 40) -> tuple[np.ndarray,
     """
     from rockfall_design.calibration.distances import stop_positions
     from rockfall_design.calibration.fit import problem_for
-    from rockfall_design.run.simulation import run_study
+    from rockfall_design.run.simulation import run_in_memory
     from rockfall_design.studies.paths import with_values
 
     problem = problem_for(load_project_text(text, name), {})
     base = {**problem.base, "analysis": {**problem.base["analysis"], "stations": [STATION]}}
     site = load_project_text(SITE, "site.yaml").resolved_dict()["materials"]
     base["materials"] = {**base["materials"], **site}
-    run = run_study(with_values(problem.project, TRUTH, base=base), rocks=n,
-                    seed=10_000 + seed)
+    run = run_in_memory(with_values(problem.project, TRUTH, base=base), rocks=n,
+                        seed=10_000 + seed)
     heights = run.crossing_arrays()["passing_height_m"][:, 0]
     return (stop_positions(run.result.x_end, run.result.status, problem.x_range),
             heights[np.isfinite(heights)])

@@ -101,7 +101,7 @@ def test_a_blocked_cost_model_says_blocked(capsys):
 def test_the_study_memory_guard_counts_the_scenarios_there_are(capsys, monkeypatch):
     from rockfall_design.run import simulation
 
-    monkeypatch.setattr(simulation, "study_memory", lambda project, n: 2**50)
+    monkeypatch.setattr(simulation, "simulation_memory", lambda project, n: 2**50)
     code = main(["study", str(PROJECTS / "study_talus.yaml"), "--rocks", "20",
                  "--workers", "100000"])
     err = one_line(capsys)

@@ -2,7 +2,7 @@
 
 The optimiser's sequential looks at a design (and its fresh-rock check) are
 nested: look j + 1 has the rocks of look j and more, at the same seed. They
-simulate only the new rocks (``run_study``'s and ``evaluate_design``'s
+simulate only the new rocks (``run_in_memory``'s and ``evaluate_design``'s
 ``after``); the joined run must be bit for bit the run of all rocks at once,
 or a decision would depend on the schedule of looks.
 """
@@ -20,7 +20,7 @@ from rockfall_design.judge.evaluation import evaluate_design
 from rockfall_design.judge.plan import plan_for
 from rockfall_design.plugins import load_registry
 from rockfall_design.project import load_project
-from rockfall_design.run.simulation import run_study
+from rockfall_design.run.simulation import run_in_memory
 
 PROJECTS = Path(__file__).resolve().parents[2] / "projects"
 
@@ -59,17 +59,17 @@ def test_a_run_that_goes_on_is_the_run_of_all_its_rocks(name, seed):
 
 def test_a_run_goes_on_only_from_its_own_first_rocks():
     project = load_project(PROJECTS / "design_two_zones.yaml")
-    part = run_study(project, rocks=50, seed=5)
+    part = run_in_memory(project, rocks=50, seed=5)
     with pytest.raises(ValueError, match="first rocks of the same run"):
-        run_study(project, rocks=100, seed=6, after=part)
+        run_in_memory(project, rocks=100, seed=6, after=part)
     with pytest.raises(ValueError, match="first rocks of the same run"):
-        run_study(project, rocks=40, seed=5, after=part)
+        run_in_memory(project, rocks=40, seed=5, after=part)
 
 
 def test_joined_results_keep_their_types():
     project = load_project(PROJECTS / "design_two_zones.yaml")
-    a = run_study(project, rocks=30, seed=2)
-    b = run_study(project, rocks=70, seed=2, after=a)
+    a = run_in_memory(project, rocks=30, seed=2)
+    b = run_in_memory(project, rocks=70, seed=2, after=a)
     assert isinstance(b.result, EnsembleResult) and isinstance(b.releases, Releases)
     assert b.result.grid_height.dtype == a.result.grid_height.dtype
     assert b.releases.zone.size == 70
@@ -80,13 +80,13 @@ def test_a_run_goes_on_twice_from_one_look_alike_and_without_its_stream():
     """The next rocks' releases come from the look's kept stream, a copy of it: going on
     from the same look twice, or from a look without its stream, gives the same rocks."""
     project = load_project(PROJECTS / "design_two_zones.yaml")
-    whole = run_study(project, rocks=90, seed=8)
-    part = run_study(project, rocks=40, seed=8)
+    whole = run_in_memory(project, rocks=90, seed=8)
+    part = run_in_memory(project, rocks=40, seed=8)
     assert part.stream is not None and part.stream.drawn == 40
-    once = run_study(project, rocks=90, seed=8, after=part)
-    twice = run_study(project, rocks=90, seed=8, after=part)
+    once = run_in_memory(project, rocks=90, seed=8, after=part)
+    twice = run_in_memory(project, rocks=90, seed=8, after=part)
     part.stream = None  # as a look made elsewhere: the releases are drawn again
-    redrawn = run_study(project, rocks=90, seed=8, after=part)
+    redrawn = run_in_memory(project, rocks=90, seed=8, after=part)
     for other in (once, twice, redrawn):
         _same(whole.releases, other.releases)
         _same(whole.result, other.result)

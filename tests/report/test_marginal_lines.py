@@ -65,7 +65,7 @@ def test_design_yaml_and_the_report_name_the_undecided_designs():
 
     import yaml
 
-    from rockfall_design.optimiser.alternatives import OptimisationResult
+    from rockfall_design.optimiser.alternatives import SearchOutcome
     from rockfall_design.project import load_project
     from rockfall_design.report.documents import optimiser_sentences
     from rockfall_design.report.terminal import design_yaml
@@ -84,8 +84,8 @@ def test_design_yaml_and_the_report_name_the_undecided_designs():
     assert "(--max-rocks 520000)" in text
     assert yaml.safe_load(text)["rocks"]["count"] == 9_206  # still a project check reads
     assert "not admitted" not in design_yaml(best, "p.yaml", 4_603, None, [])
-    opt = OptimisationResult(alternatives=[], best=None, reason="", rocks=4_603, seed=5,
-                             fresh_rocks=0, fresh_seed=6, wall_s=0.0, evaluations=0,
-                             edit_runs=0, currency="EUR", marginal=[_entry()])
+    opt = SearchOutcome(alternatives=[], best=None, reason="", rocks=4_603, seed=5,
+                        fresh_rocks=0, fresh_seed=6, wall_s=0.0, evaluations=0,
+                        edit_runs=0, currency="EUR", marginal=[_entry()])
     lines = optimiser_sentences(opt)
     assert lines[-1].endswith("about 512,345 rocks would decide it (--max-rocks 520000)")

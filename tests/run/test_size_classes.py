@@ -32,7 +32,7 @@ from rockfall_design.run.releases import (
     section_from_project,
     size_classes,
 )
-from rockfall_design.run.simulation import run_study
+from rockfall_design.run.simulation import run_in_memory
 
 #: The standard slope (projects/benchmark.yaml's vertices), resampled as a noisy survey.
 STANDARD = np.array([(0, 100), (30, 60), (60, 30), (80, 20), (120, 15), (200, 12)], float)
@@ -126,24 +126,24 @@ def test_the_step_is_in_the_run_record_and_summary_where_sizes_were_rounded():
     # The record loads back to the same project (and hash).
     again = load_project_text(survey_yaml(400, LOGNORMAL, "  size_step: 0.005\n"))
     assert again.resolved_hash() == survey.resolved_hash()
-    assert run_study(survey, rocks=20, seed=2).summary()["size_step"] == DEFAULT_SIZE_STEP
+    assert run_in_memory(survey, rocks=20, seed=2).summary()["size_step"] == DEFAULT_SIZE_STEP
     exact = load_project_text(survey_yaml(400, LOGNORMAL, "  size_step: 0\n"))
     assert exact.resolved_dict()["rocks"]["size_step"] == 0
     assert exact.resolved_hash() != survey.resolved_hash()
-    assert "size_step" not in run_study(exact, rocks=20, seed=2).summary()
+    assert "size_step" not in run_in_memory(exact, rocks=20, seed=2).summary()
     # A section of few points records nothing new: its record and hash are as before.
     few = load_project_text(survey_yaml(6, LOGNORMAL))
     assert "size_step" not in few.resolved_dict()["rocks"]
-    assert "size_step" not in json.dumps(run_study(few, rocks=20, seed=2).summary())
+    assert "size_step" not in json.dumps(run_in_memory(few, rocks=20, seed=2).summary())
 
 
 def test_rocks_of_one_class_run_as_they_would_alone():
     """The engine's grouping by size changes no rock: each as in a run of its own."""
     survey = load_project_text(survey_yaml(400, LOGNORMAL))
-    whole = run_study(survey, rocks=300, seed=4).result
+    whole = run_in_memory(survey, rocks=300, seed=4).result
     some = [7, 150, 299]
     for i in some:
-        alone = run_study(survey, rocks=i + 1, seed=4).result
+        alone = run_in_memory(survey, rocks=i + 1, seed=4).result
         assert alone.radius[i] == whole.radius[i]
         for name in ("x_end", "y_end", "max_x", "n_events", "status"):
             assert getattr(alone, name)[i] == getattr(whole, name)[i], name
@@ -172,7 +172,7 @@ FAMILY_ALPHA = 0.01
 
 def _samples(project, rocks: int, seed: int) -> dict[str, np.ndarray]:
     """The compared quantities of a run: energy and passing height at each station, stops."""
-    study = run_study(project, rocks=rocks, seed=seed)
+    study = run_in_memory(project, rocks=rocks, seed=seed)
     r = study.result
     out = {}
     for j, x in enumerate(r.stations):

@@ -17,8 +17,8 @@ import rockfall_design as rd  # noqa: E402
 from rockfall_design.cli.program import main  # noqa: E402
 from rockfall_design.judge.placing import place_measures
 from rockfall_design.serve.app import TOKEN_HEADER, create_app  # noqa: E402
-from rockfall_design.serve.bench import TABLE_STEP_M
 from rockfall_design.serve.guards import MAX_BODY_BYTES
+from rockfall_design.serve.page_run import TABLE_STEP_M
 from rockfall_design.serve.workbench import load_entries
 from rockfall_design.trial.placements import trial_spec
 
@@ -152,7 +152,7 @@ def test_a_run_reports_progress_and_can_be_cancelled(entries, registry, project_
         c.post(f"/api/jobs/{job['id']}/cancel", json={})
         job = _wait(c, job["id"])
         assert job["state"] == "cancelled" and job["done"] < 30000
-        assert entry.bench is None
+        assert entry.run is None
         assert c.get("/api/projects/design_two_zones/run").status_code == 409
 
 
@@ -174,7 +174,7 @@ def test_place_judges_a_fence_from_the_table_as_the_optimisers_screening(client,
     assert res["rocks"] == ROCKS and res["lower_bound"] <= res["fraction"] <= res["upper_bound"]
     # The same numbers as the optimiser's screening of that fence on the same table.
     entry = entries[0]
-    sc = entry.bench.screening
+    sc = entry.run.screening
     placed = place_measures(entry.project, entry.registry,
                             [entry.build_measure({**FENCE, "x": 60.2}, 0)], sc.section)
     ref = sc.screen_placed(placed, sc.bare, 0.0)

@@ -1,10 +1,10 @@
-"""The bench: a barrier dragged along the section, judged in milliseconds.
+"""The page's run: a barrier dragged along the section, judged in milliseconds.
 
 The bare slope's rocks are kept at dense stations.
 
-Built once per project run (:func:`build_bench`, over
+Built once per run the page asks for (:func:`build_page_run`, over
 :func:`rockfall_design.api.trial_run`: the optimiser's screening on the
-run's rocks); :meth:`Bench.place` judges measures placed anywhere through
+run's rocks); :meth:`PageRun.place` judges measures placed anywhere through
 the one judgement of :mod:`rockfall_design.judge.outcomes`
 (:meth:`rockfall_design.trial.placements.TrialRun.place`). This module only
 turns those results into the page's JSON.
@@ -76,10 +76,10 @@ def _num(v: float | None) -> float | None:
 
 
 @dataclass
-class Bench:
-    """One finished run: the trial run's table and what the page draws from it."""
+class PageRun:
+    """One finished run of the page: the trial run's table and what the page draws from it."""
 
-    run: TrialRun
+    trial_run: TrialRun
     rocks: int
     seed: int
     runtime_s: float
@@ -90,7 +90,7 @@ class Bench:
     @property
     def screening(self) -> Screening:
         """The optimiser's screening behind the table (its rocks, allowance, confidence)."""
-        return self.run.screening
+        return self.trial_run.screening
 
     def place(self, entry: ProjectEntry, raws: Sequence[Any]) -> dict[str, Any]:
         """Judge fences and walls at the given stations from the table.
@@ -131,14 +131,14 @@ class Bench:
         t0 = time.perf_counter()
         measures = [entry.build_measure(raw, i) for i, raw in enumerate(raws)]
         try:
-            trial = self.run.place(entry.project, entry.registry, measures)
+            trial = self.trial_run.place(entry.project, entry.registry, measures)
         except ProjectError as exc:
             raise ServeError(400, placed_message(exc.message)) from None
         except InputError as exc:  # a ditch or berm with no restart station above it
             raise ServeError(400, str(exc)) from None
         res = trial.result
-        out_measures = _measure_dicts(self.run, trial, raws)
-        verdict = self.run.verdict(
+        out_measures = _measure_dicts(self.trial_run, trial, raws)
+        verdict = self.trial_run.verdict(
             [{k: m[k] for k in ("label", "type", "met", "checks")} for m in out_measures],
             trial.protect if entry.project.protect is not None else None)
         return {
@@ -204,13 +204,13 @@ def _check_dict(c: Any) -> dict[str, Any]:
     return d
 
 
-def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
-                progress: Callable[[int], None] | None = None) -> Bench:
+def build_page_run(project: Project, registry: Registry, rocks: int, seed: int,
+                   progress: Callable[[int], None] | None = None) -> PageRun:
     """:func:`~rockfall_design.api.trial_run` at the app's spacings, with what the page draws.
 
     The parameters are ``trial_run``'s; the table's and restart stations'
     spacings and the paths kept are the app's (``TABLE_STEP_M``,
-    ``RESTART_STEP_M``, ``PATHS_DRAWN``). The bench adds the envelopes, the
+    ``RESTART_STEP_M``, ``PATHS_DRAWN``). The page's run adds the envelopes, the
     stops' histogram and the first rocks' paths for the page.
     """
     run = trial_run(project, registry, rocks, seed, table_step_m=TABLE_STEP_M,
@@ -240,4 +240,4 @@ def build_bench(project: Project, registry: Registry, rocks: int, seed: int,
     # The first rocks' paths, from the same random streams (rock i draws from
     # stream i of the run's key): the rocks of the table, drawn.
     paths = [p.round(3).tolist() for p in run.paths]
-    return Bench(run, rocks, seed, run.runtime_s, envelopes, stops, paths)
+    return PageRun(run, rocks, seed, run.runtime_s, envelopes, stops, paths)
