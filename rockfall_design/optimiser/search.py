@@ -592,6 +592,24 @@ def _screen_placements(screen: Screening, opts: list, ks: list, fixed: list,
     return found
 
 
+def screened_slack(sr: ScreenResult) -> float:
+    """How far a screened design is from failing its checks: the least relative slack.
+
+    As :meth:`~rockfall_design.judge.evaluation.Evaluation.margin` on the search
+    rocks: over every check, ``|b - t| / |t|`` with ``b`` the bounded value (the
+    point value where there is none) and ``t`` the target, negative where the
+    check does not hold with confidence; ``inf`` when nothing is checked.
+    """
+    worst = math.inf
+    for c in (c for cs in sr.checks for c in cs):
+        v = c.bound if c.bound is not None else c.value
+        if v is None:
+            continue
+        slack = abs(v - c.target) / max(abs(c.target), 1e-9)
+        worst = min(worst, slack if c.holds_with_confidence else -slack)
+    return worst
+
+
 #: Station shifts (lattice steps either way) tried with each cheaper step of a geometry.
 POLISH_SHIFTS = 4
 
@@ -678,10 +696,12 @@ class EditSearch:
         return self.geometries.setdefault(geometry, len(self.geometries))
 
     def _designs(self, keys: Any, limit: float) -> list[Screened]:
-        # Of one cost (one geometry at several stations) the placement closest to
-        # holding first: a level's budget goes to its likeliest placements.
+        # Of one cost (one geometry at several stations) the placement likeliest
+        # to hold first: a level's budget goes to those. Placements that pass the
+        # screening all have no violation; of them the one with most slack.
         return sorted((self.kept[k] for k in keys if self.kept[k].cost <= limit),
-                      key=lambda d: (d.cost, not d.result.feasible, d.result.violation))
+                      key=lambda d: (d.cost, not d.result.feasible, d.result.violation,
+                                     -screened_slack(d.result)))
 
     def run(self, seed: int) -> list[Screened]:
         """Differential evolution over the lattice; the designs kept, cheapest first."""

@@ -10,7 +10,13 @@ import numpy as np
 from rockfall_design.judge.design_spec import resolve_design
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import Screening
-from rockfall_design.optimiser.search import POLISH_SHIFTS, BarrierSlots, EditSearch, Tally
+from rockfall_design.optimiser.search import (
+    POLISH_SHIFTS,
+    BarrierSlots,
+    EditSearch,
+    Tally,
+    screened_slack,
+)
 from rockfall_design.optimiser.space import STATION_STEP_M, decode
 from rockfall_design.project import load_project
 
@@ -53,3 +59,27 @@ def test_around_runs_the_cheaper_steps_of_the_chosen_geometry_near_its_station(r
     # Run again: nothing new to return, nothing run again.
     assert search.around([ditch], cost) == []
     assert set(search.seen) == ran
+
+
+def test_the_stations_of_one_geometry_share_a_level_and_the_likeliest_comes_first(registry):
+    """A ditch geometry run at several stations is one level of decisions (three at most,
+    as a barrier product's stations): a level per station let design_ditch_or_fence at
+    seed 11 spend its family's 40 decisions on 4 to 7 stations of each of nine ditches.
+    Of one cost, the placement with most slack on the search rocks comes first."""
+    search = _search(registry)
+    names = [v.name for v in search.variables]
+    start = np.array([109.0 if n == "x" else 5.25 if n == "width" else 1.0 for n in names])
+    (ditch,) = search.screen.measures(decode(search.cands, search.edit_slots, search.variables,
+                                             start))
+    near = search.around([ditch], search.screen.cost([ditch]))
+    by_geometry: dict[tuple, set] = {}
+    for d in near:
+        (m,) = d.measures
+        by_geometry.setdefault((m.params.width, m.params.depth), set()).add(d.level)
+    assert by_geometry and all(len(levels) == 1 for levels in by_geometry.values())
+    assert len({lv for levels in by_geometry.values() for lv in levels}) == len(by_geometry)
+    for cost in {d.cost for d in near}:
+        same = [d for d in near if d.cost == cost]
+        keys = [(not d.result.feasible, d.result.violation, -screened_slack(d.result))
+                for d in same]
+        assert keys == sorted(keys)
