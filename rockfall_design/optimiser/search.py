@@ -373,13 +373,8 @@ def barrier_designs(
     the combinations within the residual target (plus the screening margin)
     are screened in full, fewest reaching first, and those that pass (or
     miss within the margin) are yielded as :class:`Screened`, in order of
-    cost. Yields nothing more once the cost exceeds ``cost_limit``.
-
-    Each design's level (the decisions of one level are budgeted together,
-    :data:`MAX_EXACT_PER_LEVEL`) starts with ``level_id``, by default
-    ``table_id``: :class:`EditSearch` gives one id to every station of one
-    ground-edit geometry, so that its placements share a budget as a
-    barrier's stations do.
+    cost. Yields nothing more once the cost exceeds ``cost_limit``. A design's level
+    begins with ``level_id`` (``table_id`` by default; see :meth:`EditSearch._level_id`).
     """
     fixed = list(fixed)
     level_id = table_id if level_id is None else level_id
