@@ -279,10 +279,13 @@ def verify_fresh(
                   checker_rocks=int(rocks), bare=bare)
 
 
-#: Chains of look screenings of ground edits kept, one per restart station, least
-#: recently used dropped first: a chain holds its looks' rocks' states at its one
-#: station, 14 float64 per rock (45 MB at 400,000 rocks; peak: docs/speed.md).
+#: Chains of look screenings of ground edits kept (by restart station, least recently
+#: used dropped): each holds its looks' rocks' states at its one station, 14 float64
+#: per rock (45 MB at 400,000 rocks; peak memory: docs/speed.md).
 EDIT_CHAINS_KEPT = 2
+#: How far (m) above a design's own restart station a kept chain's may serve it:
+#: resuming more rocks costs less than a new chain's bare runs (docs/speed.md).
+CHAIN_REACH_M = 10.0
 
 
 class Decider:
@@ -309,16 +312,15 @@ class Decider:
         self.screen = screen
         self.looks = looks
         self.margin = margin
-        # The chains of look screenings, by restart station (None: barriers
-        # only, no restart station); each maps a look to its screening.
+        # The chains of look screenings (look -> screening), by restart station (None:
+        # barriers only).
         self._chains: OrderedDict[float | None, dict[int, Screening]] = OrderedDict(
             [(None, {0: screen})])
         self._restart_margin: float | None = None
         self.simulated = 0  # rocks of the look screenings' bare runs (each counted when run)
 
     def _chain(self, restart: float | None) -> dict[int, Screening]:
-        """The chain of look screenings resumed at ``restart`` (m), made if new (see
-        :data:`EDIT_CHAINS_KEPT`)."""
+        """The chain of looks resumed at ``restart`` (m), made if new (EDIT_CHAINS_KEPT)."""
         chain = self._chains.get(restart)
         if chain is None:
             if len(self._chains) > EDIT_CHAINS_KEPT:  # the barriers' chain stays
@@ -331,19 +333,23 @@ class Decider:
     def restart_for(self, edits: Sequence[ProfileEdit]) -> float | None:
         """The search's restart station (m) from which the looks resume a design's edits.
 
-        The last one upslope of the first edit by the margin of the largest
-        look's rocks (:func:`~.screening.restart_margin`), so that every look
-        of the chain resumes there; None when the search has none so far up
-        (the design is then looked at by exact runs).
+        Upslope of the first edit by the margin of the largest look's rocks
+        (:func:`~.screening.restart_margin`), so that every look of the chain
+        resumes there: a kept chain's station up to :data:`CHAIN_REACH_M`
+        above the last such station, else that station; None when the search
+        has none so far up (the design is then looked at by exact runs).
         """
         if self._restart_margin is None:
             s0 = self.screen
             radius = draw_releases(s0.project, self.looks.sizes[-1], s0.seed).radius
             self._restart_margin = restart_margin(float(np.max(radius)))
-        first = min(e.x_start for e in edits)
         rx = self.screen.restart_x
-        q = int(np.searchsorted(rx, first - self._restart_margin, side="right")) - 1
-        return None if q < 0 else float(rx[q])
+        q = int(np.searchsorted(rx, min(e.x_start for e in edits) - self._restart_margin,
+                                side="right")) - 1
+        if q < 0:
+            return None
+        kept = [x for x in self._chains if x is not None and rx[q] - CHAIN_REACH_M <= x <= rx[q]]
+        return max(kept, default=float(rx[q]))
 
     def _screening(self, j: int, stations: Sequence[float],
                    restart: float | None = None) -> Screening:
@@ -354,8 +360,7 @@ class Decider:
         ``sizes[j] - sizes[j - 1]`` of them. A station new to look ``j`` is
         added to every earlier look it is missing from, each again only with
         its own new rocks, so a look of ``2n`` rocks is never a fresh ``2n``.
-        ``restart`` (m), one of the search's restart stations: the chain
-        that keeps the rocks' states there (and only there), for ground edits.
+        ``restart`` (m): the chain keeping the rocks' states there only (ground edits).
         """
         chain = self._chain(restart)
         sc = chain.get(j)
@@ -430,10 +435,8 @@ class Decider:
     def decide(self, measures: Sequence[ProtectiveMeasure], first: ScreenResult) -> Decision:
         """Decide a design that the first look (the search's screening) did not reject.
 
-        Later looks are screened (:meth:`_look`) while the screening judges
-        every rock exactly; an exact run confirms an admission, or decides a
-        look whose screening approximates some rock (or could not judge it).
-        """
+        Looks are screened (:meth:`_look`) while they judge every rock exactly; an
+        exact run confirms an admission, or decides a look that could not."""
         s0 = self.screen
         allowed = s0.allowed_fraction
         screened, stations, restart = self._look_plan(measures)
