@@ -12,12 +12,20 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rockfall_design.judge.sequential import Verdict
-from rockfall_design.optimiser.decide import EDIT_CHAINS_KEPT, Decider, Decision
+from rockfall_design.optimiser.decide import (
+    CHAIN_REACH_M,
+    EDIT_CHAINS_KEPT,
+    Decider,
+    Decision,
+)
 from rockfall_design.optimiser.scenario import set_up
 from rockfall_design.plugins import guard, load_registry
 from rockfall_design.project import load_project_text
@@ -104,3 +112,32 @@ def test_the_restart_station_holds_for_the_largest_look() -> None:
     last = dec._screening(len(sc.looks.sizes) - 1, [], xs)
     assert np.array_equal(last.restart_x, [xs])
     assert xs <= edit.x_start - last.margin  # its own rocks' margin holds too
+
+
+@pytest.fixture(scope="module")
+def search3():
+    return _scenario(3)
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(starts=st.lists(st.floats(0.0, 180.0), min_size=1, max_size=4),
+       kept=st.lists(st.integers(0, 40), max_size=3))
+def test_a_design_resumes_above_its_edits(search3, starts, kept) -> None:
+    """The station is the search's, upslope of the first edit by the margin of the last
+    look's rocks, and at most CHAIN_REACH_M above the last such station."""
+    s0 = search3.screen
+    dec = Decider(s0, search3.looks)
+    rx = s0.restart_x
+    for k in kept:  # chains already kept (made empty: nothing runs)
+        dec._chain(float(rx[min(k, rx.size - 1)]))
+    assert len(dec._chains) <= EDIT_CHAINS_KEPT + 1 and None in dec._chains
+    xs = dec.restart_for([SimpleNamespace(x_start=x) for x in starts])
+    limit = min(starts) - dec._restart_margin
+    assert dec._restart_margin >= s0.margin
+    own = rx[rx <= limit]
+    if own.size == 0:
+        assert xs is None
+        return
+    assert xs in rx and xs <= limit
+    assert own[-1] - CHAIN_REACH_M <= xs <= own[-1]
+    assert xs == own[-1] or xs in dec._chains
