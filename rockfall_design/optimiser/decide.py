@@ -303,8 +303,8 @@ class Decider:
         deciding look's rocks (:func:`~rockfall_design.judge.looks.judge_look`).
     """
 
-    #: Look at ground edits by exact runs after the first look (before issue 37;
-    #: the tests compare the two).
+    #: Look at ground edits by exact runs after the first look (the way before the
+    #: look screenings of edits; the tests compare the two).
     edits_by_exact: bool = False
 
     def __init__(self, screen: Screening, looks: LookSchedule,
