@@ -7,11 +7,12 @@ more rocks otherwise, up to ``design.max_rocks``, where it is *marginal*.
 The looks and the confidence of each are fixed before the first rock runs,
 so that looking again does not inflate either error.
 
-Barrier designs whose every rock the screening judges exactly are looked at
-through the screening (a run of more rocks on the bare slope, with the
-stations of the designs under decision only, serves every such design); a
-design the screening approximates (rocks breaking through or returned) or
-that edits the ground is looked at by exact runs. An admission by the
+Designs whose every rock the screening judges exactly are looked at through
+the screening: a run of more rocks on the bare slope, with the stations of the
+designs under decision only, serves every such design; one that keeps the rocks'
+states at a restart station serves the ground edits below it, whose rocks are
+resumed there. A design the screening approximates (rocks breaking through or
+returned, forest) is looked at by exact runs. An admission by the
 screening is always confirmed by the exact run of the same rocks (the two
 agree where nothing is approximated; the exact run is what the report shows).
 Every look's verdict, with the checker's margin, is the judge's
@@ -20,6 +21,7 @@ Every look's verdict, with the checker's margin, is the judge's
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -41,7 +43,8 @@ from ..judge.margin import CheckerMargin
 from ..judge.plan import confidence_of
 from ..judge.sequential import LookSchedule, Verdict, plan_looks
 from ..plugins import guard
-from ..plugins.measure import Barrier
+from ..plugins.measure import Barrier, ProfileEdit
+from ..run.releases import draw_releases
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..engine import Section
@@ -50,7 +53,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
 
-from .screening import Screening, ScreenResult
+from .screening import Screening, ScreenResult, restart_margin
 
 __all__ = [
     "SHORT",
@@ -276,6 +279,15 @@ def verify_fresh(
                   checker_rocks=int(rocks), bare=bare)
 
 
+#: Chains of look screenings of ground edits kept (by restart station, least recently
+#: used dropped): each holds its looks' rocks' states at its one station, 14 float64
+#: per rock (45 MB at 400,000 rocks; peak memory: docs/speed.md).
+EDIT_CHAINS_KEPT = 2
+#: How far (m) above a design's own restart station a kept chain's may serve it:
+#: resuming more rocks costs less than a new chain's bare runs (docs/speed.md).
+CHAIN_REACH_M = 10.0
+
+
 class Decider:
     """Sequential decisions of one section's designs, through the screening where it is exact.
 
@@ -291,15 +303,56 @@ class Decider:
         deciding look's rocks (:func:`~rockfall_design.judge.looks.judge_look`).
     """
 
+    #: Look at ground edits by exact runs after the first look (the way before the
+    #: look screenings of edits; the tests compare the two).
+    edits_by_exact: bool = False
+
     def __init__(self, screen: Screening, looks: LookSchedule,
                  margin: CheckerMargin | None = None) -> None:
         self.screen = screen
         self.looks = looks
         self.margin = margin
-        self._screens: dict[int, Screening] = {0: screen}
-        self.simulated = 0  # rocks of the look screenings (each counted when run)
+        # The chains of look screenings (look -> screening), by restart station (None:
+        # barriers only).
+        self._chains: OrderedDict[float | None, dict[int, Screening]] = OrderedDict(
+            [(None, {0: screen})])
+        self._restart_margin: float | None = None
+        self.simulated = 0  # rocks of the look screenings' bare runs (each counted when run)
 
-    def _screening(self, j: int, stations: Sequence[float]) -> Screening:
+    def _chain(self, restart: float | None) -> dict[int, Screening]:
+        """The chain of looks resumed at ``restart`` (m), made if new (EDIT_CHAINS_KEPT)."""
+        chain = self._chains.get(restart)
+        if chain is None:
+            if len(self._chains) > EDIT_CHAINS_KEPT:  # the barriers' chain stays
+                oldest = next(k for k in self._chains if k is not None)
+                del self._chains[oldest]
+            chain = self._chains[restart] = {0: self.screen}
+        self._chains.move_to_end(restart)
+        return chain
+
+    def restart_for(self, edits: Sequence[ProfileEdit]) -> float | None:
+        """The search's restart station (m) from which the looks resume a design's edits.
+
+        Upslope of the first edit by the margin of the largest look's rocks
+        (:func:`~.screening.restart_margin`), so that every look of the chain
+        resumes there: a kept chain's station up to :data:`CHAIN_REACH_M`
+        above the last such station, else that station; None when the search
+        has none so far up (the design is then looked at by exact runs).
+        """
+        if self._restart_margin is None:
+            s0 = self.screen
+            radius = draw_releases(s0.project, self.looks.sizes[-1], s0.seed).radius
+            self._restart_margin = restart_margin(float(np.max(radius)))
+        rx = self.screen.restart_x
+        q = int(np.searchsorted(rx, min(e.x_start for e in edits) - self._restart_margin,
+                                side="right")) - 1
+        if q < 0:
+            return None
+        kept = [x for x in self._chains if x is not None and rx[q] - CHAIN_REACH_M <= x <= rx[q]]
+        return max(kept, default=float(rx[q]))
+
+    def _screening(self, j: int, stations: Sequence[float],
+                   restart: float | None = None) -> Screening:
         """The screening of look ``j``, with at least ``stations`` (m) in its table.
 
         Look ``j`` goes on from look ``j - 1``'s rocks (the first look's are
@@ -307,8 +360,10 @@ class Decider:
         ``sizes[j] - sizes[j - 1]`` of them. A station new to look ``j`` is
         added to every earlier look it is missing from, each again only with
         its own new rocks, so a look of ``2n`` rocks is never a fresh ``2n``.
+        ``restart`` (m): the chain keeping the rocks' states there only (ground edits).
         """
-        sc = self._screens.get(j)
+        chain = self._chain(restart)
+        sc = chain.get(j)
         want = {round(float(x), 6) for x in stations}
         if sc is not None and want <= {round(float(x), 6) for x in sc.grid}:
             return sc
@@ -323,12 +378,13 @@ class Decider:
         exact = {round(float(x), 6): float(x) for x in s0.grid}
         prev: Screening | None = None
         if want <= exact.keys():
-            prev = self._screening(j - 1, sorted(want)) if j > 1 else s0
+            prev = self._screening(j - 1, sorted(want), restart) if j > 1 else s0
         xs = np.array(sorted(exact.get(k, k) for k in want))
         sc = Screening(s0.project, s0.registry, s0.spec, s0.concept, rocks=self.looks.sizes[j],
-                       seed=s0.seed, stations=xs, after=prev, section=s0.section)
+                       seed=s0.seed, stations=xs, after=prev, section=s0.section,
+                       restart_stations=None if restart is None else np.array([restart]))
         self.simulated += sc.rocks_run
-        self._screens[j] = sc
+        chain[j] = sc
         return sc
 
     def _exact(self, measures: Sequence[ProtectiveMeasure], j: int,
@@ -352,13 +408,38 @@ class Decider:
                             sr.labels, reaching, s0.allowed_fraction, n, s0.confidence,
                             self.margin, 2 * n, 2 * self.looks.sizes[-1])
 
+    def _look_plan(self, measures: Sequence[ProtectiveMeasure]
+                   ) -> tuple[bool, list[float], float | None]:
+        """Are the looks after the first screened; at which stations; resumed where
+        (:meth:`restart_for`; None: barriers only, on the bare table)."""
+        s0 = self.screen
+        fps = [guard(s0.registry).measure(m).footprint(s0.section) for m in measures]
+        stations = [fp.x for fp in fps if isinstance(fp, Barrier)]
+        edits = [fp for fp in fps if isinstance(fp, ProfileEdit)]
+        if len(stations) + len(edits) < len(fps):  # a footprint of another kind
+            return False, stations, None
+        if not edits:
+            return True, stations, None
+        restart = None if self.edits_by_exact else self.restart_for(edits)
+        return restart is not None, stations, restart
+
+    def _look(self, measures: Sequence[ProtectiveMeasure], j: int, stations: Sequence[float],
+              restart: float | None) -> tuple[ScreenResult, int]:
+        """Look ``j`` through its screening: the result, and the rocks resumed for it."""
+        sc = self._screening(j, stations, restart)
+        before = sc.edit_rocks
+        sr = sc.screen(measures)
+        sc.drop_edit_tables()  # each design is judged once per look
+        return sr, sc.edit_rocks - before
+
     def decide(self, measures: Sequence[ProtectiveMeasure], first: ScreenResult) -> Decision:
-        """Decide a design that the first look (the search's screening) did not reject."""
+        """Decide a design that the first look (the search's screening) did not reject.
+
+        Looks are screened (:meth:`_look`) while they judge every rock exactly; an
+        exact run confirms an admission, or decides a look that could not."""
         s0 = self.screen
         allowed = s0.allowed_fraction
-        fps = [guard(s0.registry).measure(m).footprint(s0.section) for m in measures]
-        barriers_only = all(isinstance(fp, Barrier) for fp in fps)
-        stations = [fp.x for fp in fps if isinstance(fp, Barrier)]
+        screened, stations, restart = self._look_plan(measures)
         sizes = self.looks.sizes
         j, sr, ev = 0, first, None
         last: Evaluation | None = None  # the latest exact look, which the next goes on from
@@ -378,11 +459,12 @@ class Decider:
                 break
             j += 1
             ev, short = None, []
-            if barriers_only and not by_exact:
-                sc = self._screening(j, stations)
-                sr = sc.screen(measures)
+            if screened and not by_exact:
+                sr, resumed = self._look(measures, j, stations, restart)
+                simulated += resumed
                 verdict, short = self._screen_verdict(sr, sizes[j])
-                by_exact = sr.approximate
+                # A design the look could not judge (sr.reason) goes to the exact run.
+                by_exact = sr.approximate or bool(sr.reason)
             else:
                 by_exact = True
         if ev is not None:

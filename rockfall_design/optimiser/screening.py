@@ -55,6 +55,12 @@ RESTART_STEP_M = 2.0
 FIRST_BARRIERS_KEPT = 512
 
 
+def restart_margin(radius_max: float) -> float:
+    """Least distance (m) of a restart station upslope of its edit, for rocks of radius
+    up to ``radius_max`` (m): a rock there has not yet touched ground the edit changes."""
+    return 2.0 * float(radius_max) + 0.5
+
+
 # ---- screening --------------------------------------------------------------------
 
 
@@ -239,8 +245,7 @@ class Screening:
                                  else self.allowed_residual / max(self.n, 1))
         self.max_rocks = max(self.n, int(spec.max_rocks))
         self.confidence = confidence_of(concept)
-        r_max = float(np.max(self.releases.radius))
-        self.margin = 2.0 * r_max + 0.5
+        self.margin = restart_margin(float(np.max(self.releases.radius)))
         self.edit_candidates = {i for i, c in enumerate(spec.candidates) if self._is_edit(i)}
         self.grid, self.restart_x = self._stations(stations, restart_stations)
         #: Rocks this screening ran (those of ``after`` are not run again).
@@ -451,6 +456,11 @@ class Screening:
             self._edit_cache.clear()
         self._edit_cache[key] = t
         return t
+
+    def drop_edit_tables(self) -> None:
+        """Forget the tables of edited ground (:meth:`table_for` keeps 256; about 10 MB
+        each at 400,000 rocks): the decider's looks judge each design once."""
+        self._edit_cache.clear()
 
     # -- one design -----------------------------------------------------------------
     def screen(self, measures: Sequence[ProtectiveMeasure]) -> ScreenResult:

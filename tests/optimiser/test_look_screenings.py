@@ -88,6 +88,6 @@ def test_decider_runs_only_the_new_rocks() -> None:
     s2 = dec._screening(2, [b])
     # b is added to looks 1 and 2: each of their new rocks once more.
     assert dec.simulated == 2 * (looks.sizes[2] - looks.sizes[0])
-    assert b in s2.grid and a in s2.grid and dec._screens[1] is not s1
+    assert b in s2.grid and a in s2.grid and dec._chains[None][1] is not s1
     _same_table(s2, Screening(project, registry, spec, concept, rocks=looks.sizes[2], seed=2,
                               stations=s2.grid))
