@@ -104,6 +104,24 @@ def protect_summary(x: float, reaching: int, n: int, allowed: float, confidence:
     return protect_record(x, reaching, n, allowed, confidence, unresolved).to_json()
 
 
+
+def check_slack(c: Check) -> float:
+    """A check's relative slack: ``|b - t| / |t|``, negative where it does not hold.
+
+    ``b`` is the value with the confidence bounds in place (the point value
+    where there is no bound) and ``t`` the target; ``inf`` for a check with
+    no value (nothing to judge).
+
+    See Also
+    --------
+    Evaluation.margin : the least slack over a design's checks and its residual.
+    """
+    v = c.bound if c.bound is not None else c.value
+    if v is None:
+        return math.inf
+    slack = abs(v - c.target) / max(abs(c.target), 1e-9)
+    return slack if c.holds_with_confidence else -slack
+
 @dataclass
 class Evaluation:
     """A design evaluated on one set of rocks.
@@ -202,12 +220,7 @@ class Evaluation:
         worst, what = math.inf, ""
         for p, cs in zip(self.placed, self.checks, strict=True):
             for c in cs:
-                v = c.bound if c.bound is not None else c.value
-                if v is None:
-                    continue
-                slack = abs(v - c.target) / max(abs(c.target), 1e-9)
-                if not c.holds_with_confidence:
-                    slack = -slack
+                slack = check_slack(c)
                 if slack < worst:
                     worst, what = slack, f"{p.label}: {c.name}"
         prot = self.residual

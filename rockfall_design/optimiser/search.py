@@ -15,6 +15,7 @@ import math
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from itertools import chain
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -22,6 +23,7 @@ from scipy.optimize import differential_evolution
 
 from ..engine import columns
 from ..errors import ProjectError
+from ..judge.evaluation import check_slack
 from ..judge.outcomes import RockFates, barrier_outcomes, judge_measures
 from ..judge.placing import MIN_BARRIER_SPACING_M, PlacedMeasure, edited_section, place_measures
 from ..plugins import guard
@@ -587,24 +589,6 @@ def _screen_placements(screen: Screening, opts: list, ks: list, fixed: list,
     return found
 
 
-def screened_slack(sr: ScreenResult) -> float:
-    """How far a screened design is from failing its checks: the least relative slack.
-
-    As :meth:`~rockfall_design.judge.evaluation.Evaluation.margin` on the search
-    rocks: over every check, ``|b - t| / |t|`` with ``b`` the bounded value (the
-    point value where there is none) and ``t`` the target, negative where the
-    check does not hold with confidence; ``inf`` when nothing is checked.
-    """
-    worst = math.inf
-    for c in (c for cs in sr.checks for c in cs):
-        v = c.bound if c.bound is not None else c.value
-        if v is None:
-            continue
-        slack = abs(v - c.target) / max(abs(c.target), 1e-9)
-        worst = min(worst, slack if c.holds_with_confidence else -slack)
-    return worst
-
-
 #: Station shifts (lattice steps either way) tried with each cheaper step of a geometry.
 POLISH_SHIFTS = 4
 
@@ -696,7 +680,8 @@ class EditSearch:
         # screening all have no violation; of them the one with most slack.
         return sorted((self.kept[k] for k in keys if self.kept[k].cost <= limit),
                       key=lambda d: (d.cost, not d.result.feasible, d.result.violation,
-                                     -screened_slack(d.result)))
+                                     -min(map(check_slack, chain(*d.result.checks)),
+                                          default=math.inf)))
 
     def run(self, seed: int) -> list[Screened]:
         """Differential evolution over the lattice; the designs kept, cheapest first."""

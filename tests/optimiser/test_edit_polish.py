@@ -3,11 +3,14 @@
 
 from __future__ import annotations
 
+import math
+from itertools import chain
 from pathlib import Path
 
 import numpy as np
 
 from rockfall_design.judge.design_spec import resolve_design
+from rockfall_design.judge.evaluation import check_slack
 from rockfall_design.judge.placing import build_concept
 from rockfall_design.optimiser import Screening
 from rockfall_design.optimiser.search import (
@@ -15,7 +18,6 @@ from rockfall_design.optimiser.search import (
     BarrierSlots,
     EditSearch,
     Tally,
-    screened_slack,
 )
 from rockfall_design.optimiser.space import STATION_STEP_M, decode
 from rockfall_design.project import load_project
@@ -80,6 +82,7 @@ def test_the_stations_of_one_geometry_share_a_level_and_the_likeliest_comes_firs
     assert len({lv for levels in by_geometry.values() for lv in levels}) == len(by_geometry)
     for cost in {d.cost for d in near}:
         same = [d for d in near if d.cost == cost]
-        keys = [(not d.result.feasible, d.result.violation, -screened_slack(d.result))
+        keys = [(not d.result.feasible, d.result.violation,
+                 -min(map(check_slack, chain(*d.result.checks)), default=math.inf))
                 for d in same]
         assert keys == sorted(keys)
