@@ -104,7 +104,6 @@ def protect_summary(x: float, reaching: int, n: int, allowed: float, confidence:
     return protect_record(x, reaching, n, allowed, confidence, unresolved).to_json()
 
 
-
 def check_slack(c: Check) -> float:
     """A check's relative slack: ``|b - t| / |t|``, negative where it does not hold.
 
@@ -121,6 +120,7 @@ def check_slack(c: Check) -> float:
         return math.inf
     slack = abs(v - c.target) / max(abs(c.target), 1e-9)
     return slack if c.holds_with_confidence else -slack
+
 
 @dataclass
 class Evaluation:
