@@ -53,7 +53,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
     from ..project import Project
 
-from .screening import Screening, ScreenResult, restart_margin
+from .screening import Screening, ScreenResult, restart_index, restart_margin
 
 __all__ = [
     "SHORT",
@@ -344,8 +344,7 @@ class Decider:
             radius = draw_releases(s0.project, self.looks.sizes[-1], s0.seed).radius
             self._restart_margin = restart_margin(float(np.max(radius)))
         rx = self.screen.restart_x
-        q = int(np.searchsorted(rx, min(e.x_start for e in edits) - self._restart_margin,
-                                side="right")) - 1
+        q = restart_index(rx, edits, self._restart_margin)
         if q < 0:
             return None
         kept = [x for x in self._chains if x is not None and rx[q] - CHAIN_REACH_M <= x <= rx[q]]

@@ -61,6 +61,13 @@ def restart_margin(radius_max: float) -> float:
     return 2.0 * float(radius_max) + 0.5
 
 
+def restart_index(restart_x: np.ndarray, edits: Sequence[ProfileEdit], margin: float) -> int:
+    """Index into ``restart_x`` (m) of the last restart station upslope of the first of
+    ``edits`` by ``margin`` (m, :func:`restart_margin`); -1 when there is none."""
+    first = min(e.x_start for e in edits)
+    return int(np.searchsorted(restart_x, first - margin, side="right")) - 1
+
+
 # ---- screening --------------------------------------------------------------------
 
 
@@ -416,8 +423,7 @@ class Screening:
         hit = self._edit_cache.get(key)
         if hit is not None:
             return hit
-        first = min(e.x_start for e in edits)
-        q = np.searchsorted(self.restart_x, first - self.margin, side="right") - 1
+        q = restart_index(self.restart_x, edits, self.margin)
         if q < 0:
             raise ValueError("no restart station upslope of the edit")
         xs = self.restart_x[q]

@@ -661,15 +661,9 @@ class EditSearch:
         return value
 
     def _level_id(self, key: tuple) -> int:
-        """One level id for every station of one edit geometry (``key`` without its x).
-
-        The decisions of a level are budgeted together (:data:`MAX_EXACT_PER_LEVEL`,
-        and a placement marginal at ``max_rocks`` ends its level). With a level per
-        station, a geometry the search and :meth:`around` ran at four to seven
-        stations took that many decisions: design_ditch_or_fence at seed 11 spent the
-        family's 40 on nine ditches of 23,418 to 28,099 EUR (3 to 7 stations each,
-        none holding) and never decided the 29,551 and 31,009 ditches the other
-        seeds choose, so a 67,500 fence was chosen.
+        """One level id for every station of one edit geometry (``key`` without its x):
+        its placements share :data:`MAX_EXACT_PER_LEVEL` decisions, as a barrier
+        product's stations do (why: docs/sequential-decisions.md, the family's decisions).
         """
         geometry = tuple((ci, tuple(kv for kv in params if kv[0] != "x")) for ci, params in key)
         return self.geometries.setdefault(geometry, len(self.geometries))
