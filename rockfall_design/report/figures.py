@@ -80,6 +80,10 @@ class RockfallFigure(Figure):
         literal_texts(self)
         super().draw(renderer)
 
+    def prepare_texts(self) -> None:
+        """Words drawn as written, set before a layout measures them (:func:`.laid_out`)."""
+        literal_texts(self)
+
     def _repr_png_(self) -> bytes:
         buf = io.BytesIO()
         self.savefig(buf, format="png", dpi=100, bbox_inches="tight")

@@ -9,7 +9,8 @@ modules itself.
 from __future__ import annotations
 
 import io
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
@@ -19,7 +20,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
 __all__ = ["CAPTIONS", "FIGURE_FORMATS", "figure_svg", "inline_svg", "save_figures",
-           "svg_document", "write_figure"]
+           "laid_out", "svg_document", "write_figure"]
 
 #: File formats the figures can be written in (``--plot-format``): those
 #: matplotlib writes without extra software, raster PNG and vector SVG and PDF.
@@ -80,18 +81,20 @@ def save_figures(
             return save_figures(figures, directory, formats, own)
     out = Path(directory)
     written: list[Path] = []
+    for fmt in formats:
+        if fmt not in FIGURE_FORMATS:
+            raise ValueError(f"unknown figure format {fmt!r}; use one of "
+                             f"{', '.join(FIGURE_FORMATS)}")
     for name, fig in figures.items():
-        for fmt in formats:
-            if fmt not in FIGURE_FORMATS:
-                raise ValueError(f"unknown figure format {fmt!r}; use one of "
-                                 f"{', '.join(FIGURE_FORMATS)}")
-            path = out / f"{name}.{fmt}"
+        with laid_out(fig):  # one layout for all the figure's formats
+            for fmt in formats:
+                path = out / f"{name}.{fmt}"
 
-            def writer(fh: io.BufferedWriter, fig: Figure = fig, fmt: str = fmt) -> None:
-                write_figure(fig, fh, fmt)
+                def writer(fh: io.BufferedWriter, fig: Figure = fig, fmt: str = fmt) -> None:
+                    write_figure(fig, fh, fmt)
 
-            outputs.write_with(path, writer)
-            written.append(path)
+                outputs.write_with(path, writer)
+                written.append(path)
     return written
 
 
@@ -99,8 +102,64 @@ def save_figures(
 _FIXED_METADATA = {"svg": {"Date": None}, "pdf": {"CreationDate": None}}
 
 
+#: Resolution of every figure file (dots per inch); a figure's layout is made for it.
+DPI = 150
+
+#: ``id`` of the figures inside :func:`laid_out` now: laid out by their engine.
+_LAID_OUT: set[int] = set()
+
+
+@contextmanager
+def laid_out(fig: Figure) -> Iterator[None]:
+    """Lay out ``fig`` once, for :data:`DPI`, and keep it so while the block writes it.
+
+    matplotlib runs a figure's layout engine (the constrained layout of the
+    report's figures) at every ``savefig``, in a draw of its own before the
+    draw that writes the file: a figure written as SVG and PNG was drawn four
+    times. Inside this block the layout is made once and the engine set
+    aside, so each file is one draw; on leaving, the figure has its engine
+    and resolution back, and lays itself out again if drawn again (a
+    notebook's display, a later change). A figure without an engine, or
+    inside another such block, is left as it is.
+    """
+    engine = fig.get_layout_engine()
+    if engine is None:
+        yield
+        return
+    import matplotlib  # loaded already with the figure
+
+    dpi = fig.get_dpi()
+    fig.set_dpi(DPI)
+    try:
+        # The words as drawn (a RockfallFigure's literal texts) before they are
+        # measured: text between two "$" measures otherwise as mathematics.
+        prepare = getattr(fig, "prepare_texts", None)
+        if prepare is not None:
+            prepare()
+        if fig.axes:
+            try:
+                engine.execute(fig)
+            except ValueError:  # as matplotlib's own draw: a layout that cannot be made is left
+                pass
+        with matplotlib.rc_context({"figure.autolayout": False,
+                                    "figure.constrained_layout.use": False}):
+            fig.set_layout_engine(None)
+        _LAID_OUT.add(id(fig))
+        yield
+    finally:
+        _LAID_OUT.discard(id(fig))
+        fig.set_layout_engine(engine)
+        fig.set_dpi(dpi)
+
+
 def write_figure(fig: Figure, fh: IO[Any], fmt: str) -> None:
     """Write ``fig`` in ``fmt`` to ``fh``: the one place the figures' file settings live."""
+    with laid_out(fig):
+        _save(fig, fh, fmt)
+
+
+def _save(fig: Figure, fh: IO[Any], fmt: str) -> None:
+    """``fig.savefig`` with the files' settings; ``fig`` laid out already (:func:`laid_out`)."""
     # A figure with a layout engine (the constrained layout) already fits its
     # page; cropping it "tight" costs a second full draw for a few points of
     # margin: 53 s against 40 s for a simulate's six figures in PNG and SVG
@@ -108,7 +167,7 @@ def write_figure(fig: Figure, fh: IO[Any], fmt: str) -> None:
     # hold its texts says so (``fits_page``, the passage panels): cropping one
     # cost 1.5 s against 0.5 s for a passage figure's SVG (2026-11-28, quiet),
     # and the crop only took off a few millimetres of white.
-    fits = fig.get_layout_engine() is not None or getattr(fig, "fits_page", False)
+    fits = id(fig) in _LAID_OUT or getattr(fig, "fits_page", False)
     tight = None if fits else "tight"
     # An SVG's words as <text>, not as a path per glyph (matplotlib's default):
     # a report's figures are searchable and selectable in the HTML and its PDF,
@@ -118,7 +177,7 @@ def write_figure(fig: Figure, fh: IO[Any], fmt: str) -> None:
     import matplotlib  # heavy, and loaded already with the figure: kept out of parsing
 
     with matplotlib.rc_context({"svg.fonttype": "none"}):
-        fig.savefig(fh, format=fmt, dpi=150, bbox_inches=tight,
+        fig.savefig(fh, format=fmt, dpi=DPI, bbox_inches=tight,
                     metadata=_FIXED_METADATA.get(fmt, {}))
 
 
