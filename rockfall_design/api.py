@@ -42,8 +42,8 @@ from .studies.corridor import (
 from .studies.executors import EXTRA_HINT, usable_cores  # noqa: F401
 from .studies.executors import run_tasks as run_elsewhere  # noqa: F401
 from .studies.paths import check_study
+from .studies.sampling import design_points, scenario_runs  # noqa: F401
 from .studies.scenario_checks import check_across  # noqa: F401
-from .studies.scenarios import design_points, scenario_runs  # noqa: F401
 from .studies.sensitivity import salib_available  # noqa: F401
 from .terrain.cut import cut_section  # noqa: F401
 from .terrain.dem import read_dem  # noqa: F401

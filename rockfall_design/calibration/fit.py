@@ -35,7 +35,7 @@ from ..project import Project
 from ..run.simulation import run_in_memory
 from ..studies.executors import stop_if_cancelled
 from ..studies.paths import with_values
-from ..studies.scenarios import scenario_seed
+from ..studies.sampling import scenario_seed
 from .distances import objective, stop_positions
 from .prior import (
     criterion_noise,

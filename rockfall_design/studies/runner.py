@@ -43,8 +43,8 @@ from ..run.simulation import SimulationRun, simulate
 from ..run.summary import STATION_QUANTITIES, STATISTICS, RunSummary, run_record, stat_block
 from .executors import run_tasks
 from .paths import ALIASES, parse_path, scenario_base, shown, with_values
+from .sampling import Scenario, scenarios
 from .scenario_result import BarrierBlock, BoundsLadder, ScenarioBounds, ScenarioResult
-from .scenarios import Scenario, scenarios
 from .sensitivity import (
     LADDER,
     TARGET_STATISTICS,
@@ -151,7 +151,7 @@ def prepare(
         Rocks per scenario (default: ``rocks.count``).
     seed
         The run's seed (default: ``rocks.seed``); each scenario's seed is
-        derived from it (:func:`~.scenarios.scenario_seed`).
+        derived from it (:func:`~.sampling.scenario_seed`).
     envelopes
         Whether each scenario computes its envelopes (:attr:`ScenarioTask.envelope`).
 
