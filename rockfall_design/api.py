@@ -290,9 +290,9 @@ def simulate(
         def on_chunk(part: Any) -> None:
             tables.append(part.rocks_table())
 
-    study = run_simulation(p, rocks=n, seed=seed, progress=progress,
-                           trajectories=trajectories, on_chunk=on_chunk)
-    return SimulationResult(p, study, tables)
+    run = run_simulation(p, rocks=n, seed=seed, progress=progress,
+                         trajectories=trajectories, on_chunk=on_chunk)
+    return SimulationResult(p, run, tables)
 
 
 def run_simulation(project: Project, *, rocks: int | None, seed: int | None,
