@@ -148,7 +148,7 @@ def plugins_for(project: Any, args: argparse.Namespace) -> Any:
     return registry
 
 
-#: The figures of --plot (report.plot_study writes all three).
+#: The figures of --plot (report.plot_run writes all three).
 #: The figures of a run (``--plot``), one file per --plot-format each.
 FIGURES = ("profile", "envelopes", "stops")
 

@@ -51,7 +51,7 @@ __all__ = [
     "profile_figure",
     "envelopes_figure",
     "stops_figure",
-    "study_figures",
+    "run_figures",
     "save_figures",
     "no_stop_reason",
 ]
@@ -506,7 +506,7 @@ def _ends_text(counts: EndCounts) -> str:
     return ", ".join(f"{k:,} {what}" for k, what in parts if k) or "no rock"
 
 
-def study_figures(
+def run_figures(
     run: SimulationRun | StreamedRun,
     evaluation: Evaluation | None = None,
     min_rocks: int | None = None,

@@ -45,7 +45,7 @@ __all__ = [
     "print_optimise",
     "alternatives_table",
     "design_yaml",
-    "plot_study",
+    "plot_run",
     "plugins_table",
 ]
 
@@ -528,7 +528,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
 # ---- figures -----------------------------------------------------------------
 
 
-def plot_study(
+def plot_run(
     run: SimulationRun | StreamedRun,
     directory: str | Path,
     evaluation: Any = None,
@@ -544,9 +544,9 @@ def plot_study(
     backend switch). Returns the paths written.
     """
     # The drawing module imports matplotlib at its top (a fifth of a second).
-    from .figures import save_figures, study_figures
+    from .figures import run_figures, save_figures
 
-    return save_figures(study_figures(run, evaluation), directory, formats, outputs)
+    return save_figures(run_figures(run, evaluation), directory, formats, outputs)
 
 
 # ---- the plugins command ------------------------------------------------------
