@@ -54,9 +54,9 @@ def one(name: str, rocks: int) -> dict[str, float]:
     simulate(project, rocks=10)  # compile or load numba's cache
     base = _peak_mib()
     t0 = time.perf_counter()
-    study = simulate(project, rocks=rocks)
-    study.summary()
-    study.envelopes()
+    run = simulate(project, rocks=rocks)
+    run.summary()
+    run.envelopes()
     wall = time.perf_counter() - t0
     s = project.analysis.envelope_points + len(project.analysis.stations)
     keep_all = rocks * (32 * s + 40 * len(project.analysis.stations) + 200)

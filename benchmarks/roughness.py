@@ -44,8 +44,8 @@ def ours(convention: str, rocks: int) -> dict[str, float]:
         text = text.replace("roughness_deg: 5", "roughness_deg: 0\n    roughness_height_m: 0.1")
     elif convention == "none":
         text = text.replace("roughness_deg: 5", "roughness_deg: 0")
-    study = run_in_memory(load_project_text(text, str(PROJECT)), rocks=rocks)
-    r = study.result
+    run = run_in_memory(load_project_text(text, str(PROJECT)), rocks=rocks)
+    r = run.result
     x = r.x_end[r.status == STOPPED]
     return {"stopped": int(x.size), **{f"p{q}": float(np.percentile(x, q)) for q in QS},
             "beyond_150": float(np.mean(r.max_x >= 150.0))}

@@ -71,20 +71,20 @@ def load(name: str, project_path: Path, observed_path: Path, rocks: int,
 
 def summary(p: Profile, values: dict[str, float], rocks: int) -> str:
     """One run of profile ``p`` at ``values``: level shares, median stop, passages."""
-    study = run_in_memory(with_values(p.problem.project, values, base=p.problem.base),
-                          rocks=rocks, seed=p.seed)
-    run = study.result
-    stops = stop_positions(run.x_end, run.status, p.problem.x_range)
+    run = run_in_memory(with_values(p.problem.project, values, base=p.problem.base),
+                        rocks=rocks, seed=p.seed)
+    r = run.result
+    stops = stop_positions(r.x_end, r.status, p.problem.x_range)
     shares = level_shares(p.observed.x, stops, p.problem.levels)
     cells = " ".join(f"{s.name} {s.simulated_share:.2f}{'' if s.consistent else '*'}"
                      for s in shares)
     text = f"{p.name}: {cells}; median {np.median(stops):.1f} m"
-    if run.stations.size:
-        speed = study.crossing_arrays()["velocity_ms"]
-        for j, xs in enumerate(run.stations):
+    if r.stations.size:
+        speed = run.crossing_arrays()["velocity_ms"]
+        for j, xs in enumerate(r.stations):
             v = speed[:, j][np.isfinite(speed[:, j])]
             med = f"{np.median(v):.1f} m/s" if v.size else "-"
-            text += f"; at {xs:g} m {v.size / run.n:.2f} passed, median {med}"
+            text += f"; at {xs:g} m {v.size / r.n:.2f} passed, median {med}"
     return text
 
 

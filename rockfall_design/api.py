@@ -42,8 +42,8 @@ from .studies.corridor import (
 from .studies.executors import EXTRA_HINT, usable_cores  # noqa: F401
 from .studies.executors import run_tasks as run_elsewhere  # noqa: F401
 from .studies.paths import check_study
+from .studies.sampling import design_points, scenario_runs  # noqa: F401
 from .studies.scenario_checks import check_across  # noqa: F401
-from .studies.scenarios import design_points, scenario_runs  # noqa: F401
 from .studies.sensitivity import salib_available  # noqa: F401
 from .terrain.cut import cut_section  # noqa: F401
 from .terrain.dem import read_dem  # noqa: F401
@@ -290,9 +290,9 @@ def simulate(
         def on_chunk(part: Any) -> None:
             tables.append(part.rocks_table())
 
-    study = run_simulation(p, rocks=n, seed=seed, progress=progress,
-                           trajectories=trajectories, on_chunk=on_chunk)
-    return SimulationResult(p, study, tables)
+    run = run_simulation(p, rocks=n, seed=seed, progress=progress,
+                         trajectories=trajectories, on_chunk=on_chunk)
+    return SimulationResult(p, run, tables)
 
 
 def run_simulation(project: Project, *, rocks: int | None, seed: int | None,

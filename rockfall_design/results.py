@@ -80,39 +80,39 @@ class SimulationResult:
     Attributes
     ----------
     project : Project
-    study : SimulationRun or StreamedRun
+    run : SimulationRun or StreamedRun
         The run itself (engine-level; prefer the tables below).
     """
 
     #: The command whose ``--json`` :attr:`summary` matches.
     command = "simulate"
 
-    def __init__(self, project: Project, study: SimulationRun | StreamedRun,
+    def __init__(self, project: Project, run: SimulationRun | StreamedRun,
                  rocks_tables: list[pd.DataFrame] | None = None) -> None:
         self.project = project
-        self.study = study
+        self.run = run
         self._rocks_tables = rocks_tables
         self._evaluation: Evaluation | None = None
 
     def __repr__(self) -> str:
-        return (f"<{type(self).__name__} {self.project.name!r}: {self.study.n:,} rocks, "
-                f"seed {self.study.seed}>")
+        return (f"<{type(self).__name__} {self.project.name!r}: {self.run.n:,} rocks, "
+                f"seed {self.run.seed}>")
 
     @property
     def seed(self) -> int:
         """The seed of the run."""
-        return int(self.study.seed)
+        return int(self.run.seed)
 
     @property
     def n_rocks(self) -> int:
         """The number of rocks of the run."""
-        return int(self.study.n)
+        return int(self.run.n)
 
     @cached_property
     def record(self) -> RunSummary:
         """The run's summary as an object (:class:`~rockfall_design.run.summary.RunSummary`):
         what the report reads."""
-        return self.study.run_summary()
+        return self.run.run_summary()
 
     @cached_property
     def summary(self) -> dict[str, Any]:
@@ -124,7 +124,7 @@ class SimulationResult:
     def streamed(self) -> bool:
         """True for a run of more than ``EXACT_ROCKS`` rocks (statistics from histograms)."""
 
-        return isinstance(self.study, StreamedRun)
+        return isinstance(self.run, StreamedRun)
 
     @cached_property
     def rocks(self) -> pd.DataFrame:
@@ -135,7 +135,7 @@ class SimulationResult:
             import pandas as pd
 
             return pd.concat(self._rocks_tables, ignore_index=True)
-        return self.study.rocks_table()
+        return self.run.rocks_table()
 
     @property
     def crossings(self) -> pd.DataFrame:
@@ -145,7 +145,7 @@ class SimulationResult:
                 f"a run of more than {self._exact_rocks():,} rocks is streamed and does not keep "
                 "its crossings; use fewer rocks, or rockfall-design simulate --out DIR, which "
                 "writes crossings.csv as the run goes")
-        return self.study.crossings_table()
+        return self.run.crossings_table()
 
     @staticmethod
     def _exact_rocks() -> int:
@@ -161,14 +161,14 @@ class SimulationResult:
     @property
     def envelopes(self) -> pd.DataFrame:
         """Envelopes along x of passing height (m) and energy (kJ), and rocks passing."""
-        return self.study.envelopes()
+        return self.run.envelopes()
 
     # ---- figures ---------------------------------------------------------
     def plot_profile(self) -> Figure:
         """The slope section with a sample of paths, stations and measures."""
         from .report.figures import profile_figure
 
-        return profile_figure(self.study, self._evaluation)
+        return profile_figure(self.run, self._evaluation)
 
     def plot_envelopes(self, min_rocks: int | None = None) -> Figure:
         """Envelopes of height and energy where at least ``min_rocks`` rocks pass.
@@ -177,13 +177,13 @@ class SimulationResult:
         """
         from .report.figures import envelopes_figure
 
-        return envelopes_figure(self.study, self._evaluation, min_rocks)
+        return envelopes_figure(self.run, self._evaluation, min_rocks)
 
     def plot_stops(self) -> Figure:
         """Where the rocks come to rest (says why when none does)."""
         from .report.figures import stops_figure
 
-        return stops_figure(self.study, self._evaluation)
+        return stops_figure(self.run, self._evaluation)
 
     def passages(self) -> list[Passages]:
         """The rocks passing each analysis station and meeting each barrier.
@@ -197,7 +197,7 @@ class SimulationResult:
 
         if self.streamed:
             return []
-        out = station_passages(self.study)
+        out = station_passages(self.run)
         if self._evaluation is not None:
             out += self._evaluation.passages()
         return out
@@ -270,7 +270,7 @@ class CheckResult(SimulationResult):
 
     def __init__(self, project: Project, evaluation: Evaluation,
                  registry: Registry | None = None) -> None:
-        super().__init__(project, evaluation.study)
+        super().__init__(project, evaluation.run)
         self.evaluation = evaluation
         self._evaluation = evaluation
         #: The plugins the check ran with (for the report's provenance); None if not known.
@@ -316,7 +316,7 @@ class CheckResult(SimulationResult):
     @cached_property
     def rocks(self) -> pd.DataFrame:
         """One row per rock, with ``caught_by_measure`` (index in ``measures:``, -1 none)."""
-        rocks = self.study.rocks_table()
+        rocks = self.run.rocks_table()
         rocks["caught_by_measure"] = self.evaluation.caught_by_measure()
         return rocks
 

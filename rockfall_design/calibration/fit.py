@@ -35,7 +35,7 @@ from ..project import Project
 from ..run.simulation import run_in_memory
 from ..studies.executors import stop_if_cancelled
 from ..studies.paths import with_values
-from ..studies.scenarios import scenario_seed
+from ..studies.sampling import scenario_seed
 from .distances import objective, stop_positions
 from .prior import (
     criterion_noise,
@@ -339,15 +339,15 @@ def simulated_sets(problem: FitProblem, values: Mapping[str, float], seed: int
     """
     if not problem.terms:
         return [simulated_stops(problem, values, seed)]
-    studies = {k: _run(problem, k, values, seed) for k in sorted({t.run for t in problem.terms})}
+    runs = {k: _run(problem, k, values, seed) for k in sorted({t.run for t in problem.terms})}
     ranges = [problem.x_range, *(o.x_range for o in problem.others)]
     out = []
     for t in problem.terms:
-        study = studies[t.run]
+        run = runs[t.run]
         if t.kind == "stops":
-            out.append(stop_positions(study.result.x_end, study.result.status, ranges[t.run]))
+            out.append(stop_positions(run.result.x_end, run.result.status, ranges[t.run]))
         else:
-            a = study.crossing_arrays()[t.quantity][:, t.station]
+            a = run.crossing_arrays()[t.quantity][:, t.station]
             out.append(np.asarray(a[np.isfinite(a)], dtype=float))
     return out
 

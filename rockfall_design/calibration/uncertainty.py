@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from ..studies.scenarios import scenario_seed
+from ..studies.sampling import scenario_seed
 from .fit import FitProblem, fit
 from .prior import HELD_BY_PRIOR_SHARE
 

@@ -148,7 +148,7 @@ def plugins_for(project: Any, args: argparse.Namespace) -> Any:
     return registry
 
 
-#: The figures of --plot (report.plot_study writes all three).
+#: The figures of --plot (report.plot_run writes all three).
 #: The figures of a run (``--plot``), one file per --plot-format each.
 FIGURES = ("profile", "envelopes", "stops")
 
@@ -258,6 +258,6 @@ def repeat_record(args: argparse.Namespace, project: Any, seed: int, rocks: int
     }
 
 
-def run_record(study: Any, args: argparse.Namespace) -> dict[str, Any]:
+def run_record(run: Any, args: argparse.Namespace) -> dict[str, Any]:
     """:func:`repeat_record` of a run (its project, seed and rocks)."""
-    return repeat_record(args, study.project, study.seed, study.n)
+    return repeat_record(args, run.project, run.seed, run.n)

@@ -345,18 +345,18 @@ def cli_simulate(args: argparse.Namespace, corridor: Corridor) -> int:
     def body(run: SectionRun) -> SectionDone:
         section, sub, files = run.section, run.args, run.files
         if run.ran is not None:  # run elsewhere, kept whole: its tables written here
-            study = run.ran
+            sim_run = run.ran
             if sub.out:
-                files.write_csv(sub.out / "rocks.csv", study.rocks_table())
-                files.write_csv(sub.out / "crossings.csv", study.crossings_table())
+                files.write_csv(sub.out / "rocks.csv", sim_run.rocks_table())
+                files.write_csv(sub.out / "crossings.csv", sim_run.crossings_table())
         else:
             on_chunk = table_writers(files, sub.out) if sub.out else None
-            study = run_with_progress(run_simulation, section.project, sub, on_chunk=on_chunk)
-        result = SimulationResult(section.project, study)
+            sim_run = run_with_progress(run_simulation, section.project, sub, on_chunk=on_chunk)
+        result = SimulationResult(section.project, sim_run)
         summary = result.summary
         if sub.out:
             files.write_json(sub.out / "summary.json",
-                             {**summary, "run": run_record(study, sub)})
+                             {**summary, "run": run_record(sim_run, sub)})
         figures_and_report(result, sub, files)
         return SectionDone(summary, lambda: print_simulation(summary))
 
@@ -390,9 +390,9 @@ def cli_check(args: argparse.Namespace, corridor: Corridor) -> int:
         if sub.out:
             out: Path = sub.out
             files.write_csv(out / "rocks.csv", result.rocks)
-            files.write_csv(out / "crossings.csv", evaluation.study.crossings_table())
+            files.write_csv(out / "crossings.csv", evaluation.run.crossings_table())
             files.write_csv(out / "measures.csv", evaluation.outcomes_table())
-            record = run_record(evaluation.study, sub)
+            record = run_record(evaluation.run, sub)
             record["project"] = evaluation.resolved_project().resolved_dict()
             record["project_hash"] = evaluation.resolved_project().resolved_hash()
             files.write_json(out / "summary.json", {**summary, "run": record})

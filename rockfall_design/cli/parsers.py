@@ -42,7 +42,7 @@ def add_simulate_parser(sub: Any) -> None:
     """The ``simulate`` command and its options."""
     sim = sub.add_parser(
         "simulate",
-        help="run the rockfall study of a project",
+        help="simulate the rocks of a project (one Monte Carlo run)",
         description="Simulate the rocks of a project: where they go, how high and how fast "
         "they pass the analysis stations, and where they stop.",
     )

@@ -238,7 +238,7 @@ def across_design_yaml(result: AcrossOutcome, project_file: Path | str,
     data["rocks"]["count"] = int(best.decision_rocks or result.rocks)
     data["rocks"]["seed"] = int(result.seed)
     # the residual target as the protected zone's allowance, as the optimiser judged it
-    data["protect"] = ev.study.project.resolved_dict()["protect"]
+    data["protect"] = ev.run.project.resolved_dict()["protect"]
     data["measures"] = [{"type": m.kind, **m.params.model_dump(mode="json")}
                         for m in best.measures]
     data["safety"] = {"concept": ev.concept.name, **ev.concept.params.model_dump(mode="json")}

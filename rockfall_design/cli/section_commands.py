@@ -73,13 +73,13 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         reserve(files, args.report, REPORT_FILES)
         reserve(files, args.plot, figure_files(FIGURES, args))
         on_chunk = table_writers(files, args.out) if args.out else None
-        study = run_with_progress(run_simulation, project, args, on_chunk=on_chunk)
-        result = SimulationResult(project, study)
+        run = run_with_progress(run_simulation, project, args, on_chunk=on_chunk)
+        result = SimulationResult(project, run)
         summary = result.summary
         if args.out:
             files.write_csv(args.out / "barriers.csv", result.barriers)
             files.write_json(args.out / "summary.json",
-                             {**summary, "run": run_record(study, args)})
+                             {**summary, "run": run_record(run, args)})
         figures_and_report(result, args, files)
     if recorded is not None:
         same = comparable(summary) == comparable(recorded)
@@ -125,14 +125,14 @@ def cmd_check(args: argparse.Namespace) -> int:
         result = run_with_progress(check, project, args, registry=registry)
         evaluation = result.evaluation
         summary = result.summary
-        study = evaluation.study
+        run = evaluation.run
         if args.out:
             out: Path = args.out
             files.write_csv(out / "rocks.csv", result.rocks)
-            files.write_csv(out / "crossings.csv", study.crossings_table())
+            files.write_csv(out / "crossings.csv", run.crossings_table())
             files.write_csv(out / "measures.csv", evaluation.outcomes_table())
             files.write_csv(out / "barriers.csv", result.barriers)
-            record = run_record(study, args)
+            record = run_record(run, args)
             record["project"] = evaluation.resolved_project().resolved_dict()
             record["project_hash"] = evaluation.resolved_project().resolved_hash()
             files.write_json(out / "summary.json", {**summary, "run": record})

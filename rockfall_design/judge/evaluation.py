@@ -128,7 +128,7 @@ class Evaluation:
 
     Attributes
     ----------
-    study : SimulationRun
+    run : SimulationRun
         The run on the edited section (its ``section`` is the edited one).
     original_section : Section
         The bare section.
@@ -140,7 +140,7 @@ class Evaluation:
     concept : SafetyConcept
     """
 
-    study: SimulationRun
+    run: SimulationRun
     original_section: Section
     placed: list[PlacedMeasure]
     results: list[MeasureResult]
@@ -164,7 +164,7 @@ class Evaluation:
         (the residual misses its target with confidence). None without
         ``protect:``.
         """
-        p = self.study.project.protect
+        p = self.run.project.protect
         if p is None:
             return None
         allowed = float(getattr(p, "allowed_fraction", 0.0))
@@ -172,7 +172,7 @@ class Evaluation:
         by_concept = self.concept.allowed_residual_fraction()
         if by_concept is not None:
             allowed = min(allowed, by_concept) if allowed > 0.0 else by_concept
-        return protect_record(float(p.x), self.judgement.reaching, self.study.result.n,
+        return protect_record(float(p.x), self.judgement.reaching, self.run.result.n,
                               allowed, self.confidence, self.judgement.unresolved)
 
     @property
@@ -263,7 +263,7 @@ class Evaluation:
         A rock is credited to a barrier that caught it, to a wall that returned it
         for good, or to the catch area (ditch, berm) it came to rest in.
         """
-        r = self.study.result
+        r = self.run.result
         out = np.full(r.n, -1, dtype=np.int64)
         for res, held in zip(self.results, self.judgement.held, strict=True):
             out[held & (out < 0)] = res.index
@@ -273,7 +273,7 @@ class Evaluation:
         """One row per rock and measure: outcome of the first meeting and its values."""
         import pandas as pd
 
-        r = self.study.result
+        r = self.run.result
         frames = []
         names = {int(v): v.name.lower() for v in Outcome}
         for p, res, out in zip(self.placed, self.results, self.judgement.outcomes, strict=True):
@@ -307,7 +307,7 @@ class Evaluation:
             fp = p.footprint
             if not isinstance(fp, Barrier):
                 continue
-            slope = slope_deg_at(self.study.section, float(fp.x))
+            slope = slope_deg_at(self.run.section, float(fp.x))
             values = barrier_values(res.passing_height_m, res.velocity_ms, res.energy_kj,
                                     res.mass_kg, res.radius_m, slope)
             with plugin_code():  # checked when placed; what it prints goes to stderr
@@ -318,8 +318,8 @@ class Evaluation:
 
     def statements(self) -> list[str]:
         """The safety concept's own sentences on this evaluation (``SafetyConcept.statements``)."""
-        reaching = None if self.study.project.protect is None else self.judgement.reaching
-        return list(self.concept.statements(reaching, self.study.result.n, self.results,
+        reaching = None if self.run.project.protect is None else self.judgement.reaching
+        return list(self.concept.statements(reaching, self.run.result.n, self.results,
                                             [p.label for p in self.placed]))
 
     def resolved_project(self) -> Project:
@@ -329,7 +329,7 @@ class Evaluation:
             for p in self.placed
         ]
         safety = {"concept": self.concept.name, **self.concept.params.model_dump(mode="json")}
-        return self.study.project.with_resolved_plugins(measures, safety)
+        return self.run.project.with_resolved_plugins(measures, safety)
 
     def summary(self) -> dict[str, Any]:
         """JSON-ready: the simulate summary plus ``measures``, ``protect`` and ``ok``.
@@ -352,24 +352,24 @@ class Evaluation:
                 passing=passing.get(res.index))
             for p, res, cs in zip(self.placed, self.results, self.checks, strict=True))
         return CheckSummary(
-            run=self.study.run_summary(), safety_concept=self.concept.name, measures=measures,
+            run=self.run.run_summary(), safety_concept=self.concept.name, measures=measures,
             protect=self.residual, concept_statements=tuple(self.statements()), ok=self.ok,
             failures=tuple(self.failures()), confidence=self.confidence,
             holds_with_confidence=self.holds_with_confidence)
 
     def _meeting(self, p: PlacedMeasure) -> np.ndarray:
         """(n, 3) record of each rock's first meeting of a barrier (NaN for edits)."""
-        r = self.study.result
+        r = self.run.result
         if not isinstance(p.footprint, Barrier):
             return np.full((r.n, 3), np.nan)
         _, owners = barrier_rows(self.placed)
         return r.barrier_meeting[:, owners.index(p.index), :3]
 
 
-def _judge_run(placed: Sequence[PlacedMeasure], owners: list[int], study: SimulationRun,
+def _judge_run(placed: Sequence[PlacedMeasure], owners: list[int], run: SimulationRun,
                protect_x: float | None) -> Judgement:
     """Judge the exact run: barrier outcomes and meetings as the engine recorded them."""
-    r = study.result
+    r = run.result
     outcomes: list[np.ndarray | None] = []
     meetings: list[np.ndarray | None] = []
     for p in placed:
@@ -440,10 +440,10 @@ def evaluate_design(
     optimiser's screening: every design of a search stands on one section).
     """
     if after is not None:
-        study = after.study
+        run = after.run
         return _evaluate_placed(project, registry, after.original_section, after.placed,
-                                study.section, concept, rocks=rocks, seed=seed,
-                                n_trajectories=0, progress=progress, after=study)
+                                run.section, concept, rocks=rocks, seed=seed,
+                                n_trajectories=0, progress=progress, after=run)
     if bare is None:
         bare = section_from_project(project)
     placed = place_measures(project, registry, measures, bare)
@@ -473,14 +473,14 @@ def _evaluate_placed(
     envelope (``check`` and the chosen design's figures; not the optimiser).
     """
     bars, owners = barrier_rows(placed)
-    study = run_in_memory(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
-                          progress=progress, section=section, barriers=bars, after=after,
-                          record_speed=record_speed)
+    run = run_in_memory(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
+                        progress=progress, section=section, barriers=bars, after=after,
+                        record_speed=record_speed)
     protect = project.protect
-    judgement = _judge_run(placed, owners, study, None if protect is None else protect.x)
+    judgement = _judge_run(placed, owners, run, None if protect is None else protect.x)
     checks = [guard(registry).concept(concept).checks(res) for res in judgement.results]
     return Evaluation(
-        study=study,
+        run=run,
         original_section=bare,
         placed=placed,
         results=judgement.results,

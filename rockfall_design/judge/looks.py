@@ -110,7 +110,7 @@ def judge_look(ev: Evaluation, registry: Registry, margin: CheckerMargin | None,
         [p.label for p in ev.placed],
         None if prot is None else int(prot.reaching),
         None if prot is None else float(prot.allowed_fraction),
-        ev.study.result.n, ev.confidence, margin, checker_rocks, last_checker_rocks)
+        ev.run.result.n, ev.confidence, margin, checker_rocks, last_checker_rocks)
 
 
 def with_margin(verdict: Verdict, checks_at: Callable[[float], list[list[Check]]],

@@ -18,7 +18,7 @@ from ..judge.sequential import LookSchedule
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
-    from ..studies.scenarios import ScenarioRun
+    from ..studies.sampling import ScenarioRun
 from ..judge.looks import LookValues, rocks_to_decide
 
 #: Designs that miss their targets on the point values of the search rocks, but not

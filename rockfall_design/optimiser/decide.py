@@ -161,7 +161,7 @@ def _ev_values(ev: Evaluation, allowed: float | None) -> tuple[LookValues, list[
     prot = ev.residual
     residual = None if prot is None else int(prot.reaching)
     labels = [p.label for p in ev.placed]
-    n = ev.study.result.n
+    n = ev.run.result.n
     args = (ev.checks, labels, residual, n, allowed, ev.confidence)
     return look_values(*args), rejections(*args)
 
@@ -213,7 +213,7 @@ def decide(
     ev: Evaluation | None = None
     for j, n in enumerate(looks.sizes):
         # Each look goes on from the last one's rocks (nested: the same seed).
-        done = 0 if ev is None else ev.study.n
+        done = 0 if ev is None else ev.run.n
         ev = evaluate_design(project, registry, measures, lc, rocks=n, seed=seed, after=ev,
                              bare=bare)
         simulated += n - done
@@ -450,7 +450,7 @@ class Decider:
                 # Confirm an admission, or decide what the screening approximates.
                 ev = self._exact(measures, j, last)
                 exact += 1
-                simulated += sizes[j] - (0 if last is None else last.study.n)
+                simulated += sizes[j] - (0 if last is None else last.run.n)
                 last = ev
                 verdict, short = judge_look(ev, s0.registry, self.margin, 2 * sizes[j],
                                             2 * sizes[-1])

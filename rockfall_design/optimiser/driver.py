@@ -24,7 +24,7 @@ import numpy as np
 
 from ..judge.bounds import fraction_upper_bound
 from ..run.reach import reaches_protected_zone
-from ..studies.scenarios import ScenarioRun, required_scenarios, scenario_runs
+from ..studies.sampling import ScenarioRun, required_scenarios, scenario_runs
 from .alternatives import (
     FRESH_OFFSET,
     SEARCH_SEED,

@@ -14,7 +14,7 @@ from ..judge.design_spec import DesignSpec, with_residual_target
 from ..judge.looks import checker_margin, look_concept
 from ..judge.plan import confidence_of, design_of, plan_for
 from ..judge.sequential import LookSchedule, plan_looks
-from ..studies.scenarios import ScenarioRun
+from ..studies.sampling import ScenarioRun
 from .alternatives import FRESH_OFFSET
 from .decide import Decider
 from .screening import Screening

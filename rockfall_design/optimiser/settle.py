@@ -77,7 +77,7 @@ class ScenarioRow:
     """A design's row in one scenario (``per_scenario`` in --json, through :meth:`to_json`).
 
     ``head`` is the scenario's ``{index, values, seed}``
-    (:meth:`~rockfall_design.studies.scenarios.ScenarioRun.head`); ``margin``
+    (:meth:`~rockfall_design.studies.sampling.ScenarioRun.head`); ``margin``
     and ``binds_at`` are the deciding run's slack and where it binds
     (:meth:`~rockfall_design.judge.evaluation.Evaluation.margin`).
     """

@@ -28,7 +28,7 @@ if TYPE_CHECKING:  # pragma: no cover
         check_renderable,
         design_yaml,
         fitted_console,
-        plot_study,
+        plot_run,
         plugins_table,
         print_check,
         print_optimise,
@@ -43,7 +43,7 @@ __all__ = [
     "print_optimise",
     "alternatives_table",
     "design_yaml",
-    "plot_study",
+    "plot_run",
     "plugins_table",
 ]
 

@@ -51,7 +51,7 @@ __all__ = [
     "profile_figure",
     "envelopes_figure",
     "stops_figure",
-    "study_figures",
+    "run_figures",
     "save_figures",
     "no_stop_reason",
 ]
@@ -138,13 +138,13 @@ def _ground(ax: Axes, section: Any) -> None:
     ax.set_ylim(bottom=ymin)
 
 
-def _forest(ax: Axes, study: SimulationRun | StreamedRun) -> None:
+def _forest(ax: Axes, run: SimulationRun | StreamedRun) -> None:
     """Shade the forested segments up to their stem height, with what the forest did."""
-    section = study.section
-    counts = study.forest_counts()
+    section = run.section
+    counts = run.forest_counts()
     if counts is None:
         return
-    label = (f"forest: {counts[0]:,} of {study.n:,} rocks met stems, "
+    label = (f"forest: {counts[0]:,} of {run.n:,} rocks met stems, "
              f"{counts[1]:,} stopped by it")
     for k, mi in enumerate(section.segment_material):
         mat = section.materials[mi]
@@ -156,13 +156,13 @@ def _forest(ax: Axes, study: SimulationRun | StreamedRun) -> None:
         label = None
 
 
-def _marks(ax: Axes, study: SimulationRun | StreamedRun, label: bool = True) -> None:
+def _marks(ax: Axes, run: SimulationRun | StreamedRun, label: bool = True) -> None:
     """Analysis stations (dashed) and the protected zone (shaded)."""
-    for j, xs in enumerate(study.stations):
+    for j, xs in enumerate(run.stations):
         ax.axvline(xs, color=_STATION, ls="--", lw=0.9, zorder=2,
                    label="analysis station" if (label and j == 0) else None)
-    if study.project.protect is not None:
-        ax.axvspan(study.project.protect.x, study.section.x[-1], color=_PROTECT, alpha=0.25,
+    if run.project.protect is not None:
+        ax.axvspan(run.project.protect.x, run.section.x[-1], color=_PROTECT, alpha=0.25,
                    zorder=0, label="protected zone" if label else None)
 
 
@@ -195,7 +195,7 @@ def _draw_measures(ax: Axes, evaluation: Evaluation, label: bool = True,
     ax.plot(sec0.x, sec0.y, color=_GROUND_LINE, lw=0.9, ls="--", zorder=3,
             label="original ground" if label else None)
     first = True
-    section = evaluation.study.section
+    section = evaluation.run.section
     for p in evaluation.placed:
         fp = p.footprint
         if isinstance(fp, Barrier):
@@ -231,13 +231,13 @@ def _measure_lines(ax: Axes, evaluation: Evaluation | None) -> None:
 # ---- the figures ----------------------------------------------------------------
 
 
-def profile_figure(study: SimulationRun | StreamedRun,
+def profile_figure(run: SimulationRun | StreamedRun,
                    evaluation: Evaluation | None = None) -> Figure:
     """The slope section with a sample of paths, rest positions, stations and measures.
 
     Parameters
     ----------
-    study : SimulationRun or StreamedRun
+    run : SimulationRun or StreamedRun
         The run; its ``trajectories`` (kept with ``n_trajectories``) are drawn.
     evaluation : Evaluation, optional
         A check of measures: barriers are drawn with product, height (m) and
@@ -250,9 +250,9 @@ def profile_figure(study: SimulationRun | StreamedRun,
     """
     fig = RockfallFigure(figsize=(11, 5.5), layout="constrained")
     ax = fig.add_subplot()
-    _ground(ax, study.section)
-    _forest(ax, study)
-    paths = study.paths()
+    _ground(ax, run.section)
+    _forest(ax, run)
+    paths = run.paths()
     if paths:
         # One collection, rasterised in SVG and PDF: hundreds of paths as vector
         # lines made the report's files heavy and slow to draw, print and read,
@@ -261,19 +261,19 @@ def profile_figure(study: SimulationRun | StreamedRun,
             [np.column_stack((x, y)) for x, y in paths], linewidths=0.6, alpha=0.55,
             colors="#c0392b", zorder=4, label="rock centre paths", rasterized=True))
         ax.autoscale_view()
-    n_stopped = EndCounts.of(study.ends()).stopped
-    rest_x, rest_y = study.rest_positions()
+    n_stopped = EndCounts.of(run.ends()).stopped
+    rest_x, rest_y = run.rest_positions()
     if rest_x.size:
         ax.plot(rest_x, rest_y, "k.", ms=2, alpha=0.4, zorder=5, rasterized=True,
                 label="rest positions" if rest_x.size == n_stopped
                 else f"rest positions (first {rest_x.size:,} of {n_stopped:,})")
-    _marks(ax, study)
+    _marks(ax, run)
     if evaluation is not None:
         _draw_measures(ax, evaluation)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("elevation (m)")
-    ax.set_title(f"{study.project.name}: slope section and {len(paths)} of "
-                 f"{study.n:,} paths")
+    ax.set_title(f"{run.project.name}: slope section and {len(paths)} of "
+                 f"{run.n:,} paths")
     ax.set_aspect("equal", adjustable="box")
     ax.legend(loc="upper right", fontsize=8)
     ax.grid(alpha=0.3)
@@ -305,7 +305,7 @@ def _figure_marks(axes: Mapping[str, Axes], evaluation: Evaluation | None) -> No
 
 
 def envelopes_figure(
-    study: SimulationRun | StreamedRun,
+    run: SimulationRun | StreamedRun,
     evaluation: Evaluation | None = None,
     min_rocks: int | None = None,
 ) -> Figure:
@@ -313,7 +313,7 @@ def envelopes_figure(
 
     Parameters
     ----------
-    study : SimulationRun or StreamedRun
+    run : SimulationRun or StreamedRun
     evaluation : Evaluation, optional
         Measures are marked by a vertical line at their station, and each
         barrier's heights and energies (nominal height, capacity, and any
@@ -329,9 +329,9 @@ def envelopes_figure(
         The speed panel only where the run recorded speeds along the section.
     """
     if min_rocks is None:
-        min_rocks = int(getattr(study.project.analysis, "min_rocks_envelope",
+        min_rocks = int(getattr(run.project.analysis, "min_rocks_envelope",
                                 DEFAULT_MIN_ROCKS_ENVELOPE))
-    env = study.envelopes()
+    env = run.envelopes()
     x = env["x_m"].to_numpy()
     count = env["crossings"].to_numpy()
     enough = count >= min_rocks
@@ -362,7 +362,7 @@ def envelopes_figure(
     a3.axhline(min_rocks, color="#c0392b", lw=0.9, ls=":",
                label=f"minimum for an envelope ({min_rocks})")
     for ax in axes:
-        _marks(ax, study, label=False)
+        _marks(ax, run, label=False)
         _measure_lines(ax, evaluation)
         ax.grid(alpha=0.3)
     if not enough.any():
@@ -373,7 +373,7 @@ def envelopes_figure(
     a3.set_ylim(bottom=0)
     a3.set_ylabel("rocks passing")
     a3.set_xlabel("x (m)")
-    tops[0].set_title(f"{study.project.name}: envelopes over {study.n:,} rocks (first passage "
+    tops[0].set_title(f"{run.project.name}: envelopes over {run.n:,} rocks (first passage "
                       f"downslope), drawn where at least {min_rocks} rocks pass")
     return fig
 
@@ -409,7 +409,7 @@ def no_stop_reason(counts: EndCounts | Mapping[str, int] | Sequence[int] | np.nd
     return f"of {n:,} rocks, " + ", ".join(text[:-1]) + " and " + text[-1]
 
 
-def _rest_layers(study: SimulationRun | StreamedRun, evaluation: Evaluation | None,
+def _rest_layers(run: SimulationRun | StreamedRun, evaluation: Evaluation | None,
                  bins: np.ndarray) -> list[tuple[str, np.ndarray, str]]:
     """Where the rocks ended, a layer per measure: (label, counts per bin, colour).
 
@@ -419,9 +419,9 @@ def _rest_layers(study: SimulationRun | StreamedRun, evaluation: Evaluation | No
     and the rocks at rest that no measure holds in grey.
     """
     if evaluation is None:
-        counts = study.stop_counts(len(bins) - 1)
+        counts = run.stop_counts(len(bins) - 1)
         return [("rocks at rest", counts, "#7f8c8d")] if counts.sum() else []
-    r = evaluation.study.result
+    r = evaluation.run.result
     by = evaluation.caught_by_measure()
     layers = []
     free = (by < 0) & (r.status == STOPPED)
@@ -454,7 +454,7 @@ def _leavers(ax: Axes, counts: EndCounts, bins: np.ndarray, n: int) -> None:
                     color="#c0392b")
 
 
-def stops_figure(study: SimulationRun | StreamedRun,
+def stops_figure(run: SimulationRun | StreamedRun,
                  evaluation: Evaluation | None = None) -> Figure:
     """Where the rocks end: at rest, held by each measure (a colour each), or gone.
 
@@ -468,25 +468,25 @@ def stops_figure(study: SimulationRun | StreamedRun,
     -------
     matplotlib.figure.Figure
     """
-    counts = EndCounts.of(study.ends())
+    counts = EndCounts.of(run.ends())
     fig = RockfallFigure(figsize=(11, 6), layout="constrained")
     a1, a2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1]})
-    sec = study.section
+    sec = run.section
     bins = np.linspace(sec.x[0], sec.x[-1], 81)
     bottom = np.zeros(len(bins) - 1)
-    for label, k, colour in _rest_layers(study, evaluation, bins):
+    for label, k, colour in _rest_layers(run, evaluation, bins):
         a1.bar(bins[:-1], k, width=np.diff(bins), align="edge", bottom=bottom, color=colour,
                edgecolor="white", label=label)
         bottom = bottom + k
-    _leavers(a1, counts, bins, study.n)
+    _leavers(a1, counts, bins, run.n)
     if not counts.stopped and not counts.caught:
         a1.text(0.5, 0.5, f"No rock came to rest on the section:\n{no_stop_reason(counts)}.",
                 transform=a1.transAxes, ha="center", va="center", fontsize=11, zorder=5,
                 bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "#999999"})
     a1.set_ylabel("rocks (per bin)")
-    a1.set_title(f"{study.project.name}: where the rocks ended: {_ends_text(counts)}",
+    a1.set_title(f"{run.project.name}: where the rocks ended: {_ends_text(counts)}",
                  fontsize=10)
-    _marks(a1, study)
+    _marks(a1, run)
     a1.grid(alpha=0.3)
     a1.set_ylim(0, max(a1.get_ylim()[1], 1.0) * 1.15)  # room for the leavers' count
     handles, _ = a1.get_legend_handles_labels()
@@ -510,14 +510,14 @@ def _ends_text(counts: EndCounts) -> str:
     return ", ".join(f"{k:,} {what}" for k, what in parts if k) or "no rock"
 
 
-def study_figures(
-    study: SimulationRun | StreamedRun,
+def run_figures(
+    run: SimulationRun | StreamedRun,
     evaluation: Evaluation | None = None,
     min_rocks: int | None = None,
 ) -> dict[str, Figure]:
     """The three figures of a run (or a check): profile, envelopes, stops, by name."""
     return {
-        "profile": profile_figure(study, evaluation),
-        "envelopes": envelopes_figure(study, evaluation, min_rocks),
-        "stops": stops_figure(study, evaluation),
+        "profile": profile_figure(run, evaluation),
+        "envelopes": envelopes_figure(run, evaluation, min_rocks),
+        "stops": stops_figure(run, evaluation),
     }

@@ -45,7 +45,7 @@ __all__ = [
     "print_optimise",
     "alternatives_table",
     "design_yaml",
-    "plot_study",
+    "plot_run",
     "plugins_table",
 ]
 
@@ -485,7 +485,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
     """
 
     ev = best.evaluation
-    data = ev.study.project.resolved_dict()
+    data = ev.run.project.resolved_dict()
     data.pop("design", None)
     safety = {"concept": ev.concept.name, **ev.concept.params.model_dump(mode="json")}
     if looks is not None:
@@ -495,15 +495,15 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
         # for a check at the project's confidence.
         safety["confidence"] = float(looks.confidence)
     # The rocks that decided the design (the exact run that admitted it).
-    rocks = {**data["rocks"], "count": int(ev.study.result.n), "seed": int(ev.study.seed)}
+    rocks = {**data["rocks"], "count": int(ev.run.result.n), "seed": int(ev.run.seed)}
     data.update(rocks=rocks, safety=safety, measures=[
         {"type": m.kind, **m.params.model_dump(mode="json")} for m in best.measures])
     head = (
         f"# Chosen by rockfall-design optimise from {project_file}: {best.name}, "
         f"cost {best.cost:,.0f}.\n"
-        f"# rocks: below are the rocks that decided it (seed {ev.study.seed}, "
-        f"{ev.study.result.n} rocks; search: {search_rocks} rocks).\n"
-        + (f"# decision: admitted at the look of {ev.study.result.n} rocks of the looks "
+        f"# rocks: below are the rocks that decided it (seed {ev.run.seed}, "
+        f"{ev.run.result.n} rocks; search: {search_rocks} rocks).\n"
+        + (f"# decision: admitted at the look of {ev.run.result.n} rocks of the looks "
            f"{', '.join(str(k) for k in looks.sizes)}, each at "
            f"{100 * looks.look_confidence:.4g} % (together {100 * looks.confidence:g} %)\n"
            if looks is not None else "")
@@ -516,7 +516,7 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
         + "; reproduce with\n"
         f"#   rockfall-design check design.yaml --seed {best.fresh_seed} "
         f"--rocks {best.fresh_rocks}\n"
-        + _margin_line(best, ev.study.result.n, safety["confidence"])
+        + _margin_line(best, ev.run.result.n, safety["confidence"])
         + _listed_head(getattr(best, "marginal", None) if listed is None else listed)
         + "# The design: section is left out (its catalogue paths are relative to the\n"
         "# original project); check this file with: rockfall-design check design.yaml\n"
@@ -528,8 +528,8 @@ def design_yaml(best: Any, project_file: Any, search_rocks: int | None = None,
 # ---- figures -----------------------------------------------------------------
 
 
-def plot_study(
-    study: SimulationRun | StreamedRun,
+def plot_run(
+    run: SimulationRun | StreamedRun,
     directory: str | Path,
     evaluation: Any = None,
     outputs: OutputSet | None = None,
@@ -544,9 +544,9 @@ def plot_study(
     backend switch). Returns the paths written.
     """
     # The drawing module imports matplotlib at its top (a fifth of a second).
-    from .figures import save_figures, study_figures
+    from .figures import run_figures, save_figures
 
-    return save_figures(study_figures(study, evaluation), directory, formats, outputs)
+    return save_figures(run_figures(run, evaluation), directory, formats, outputs)
 
 
 # ---- the plugins command ------------------------------------------------------

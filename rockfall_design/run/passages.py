@@ -203,16 +203,16 @@ def property_marks(properties: Mapping[str, float]) -> tuple[Mark, ...]:
     return tuple(out)
 
 
-def station_passages(study: SimulationRun) -> list[Passages]:
+def station_passages(run: SimulationRun) -> list[Passages]:
     """The passages of every analysis station of an in-memory run (first passage downslope)."""
-    a = study.crossing_arrays()
+    a = run.crossing_arrays()
     out = []
-    for j, xs in enumerate(study.stations):
+    for j, xs in enumerate(run.stations):
         passed = np.isfinite(a["passing_height_m"][:, j])
         values = {key: np.asarray(a[key if key in a else _ARRAY[key]][passed, j], dtype=float)
                   / _SCALE.get(key, 1.0) for key, _, _ in QUANTITIES}
         out.append(Passages("station", j, f"station at x = {float(xs):g} m", float(xs),
-                            slope_deg_at(study.section, float(xs)), values))
+                            slope_deg_at(run.section, float(xs)), values))
     return out
 
 

@@ -489,11 +489,11 @@ def simulate(
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
     if chunk is None and n <= EXACT_ROCKS:
-        study = run_in_memory(project, rocks=n, seed=s, n_trajectories=n_trajectories,
-                              progress=progress, record_speed=True, section=section)
+        run = run_in_memory(project, rocks=n, seed=s, n_trajectories=n_trajectories,
+                            progress=progress, record_speed=True, section=section)
         if on_chunk is not None:
-            on_chunk(study)
-        return study
+            on_chunk(run)
+        return run
     size = int(chunk) if chunk is not None else chunk_rocks(project)
     return _simulate_streamed(project, n, s, size, n_trajectories, progress, on_chunk,
                               section)

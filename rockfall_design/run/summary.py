@@ -405,7 +405,7 @@ class RunSummary:
 
 
 def run_record(
-    study: SimulationRun | StreamedRun,
+    run: SimulationRun | StreamedRun,
     events: int,
     crossings: np.ndarray,
     blocks: dict[str, list[dict[str, float | None]]],
@@ -413,19 +413,19 @@ def run_record(
     reaching: tuple[int, int] | None,
     project_hash: str | None = None,
 ) -> RunSummary:
-    """The summary of a run as a :class:`RunSummary`, the same for an exact and a streamed study.
+    """The summary of a run as a :class:`RunSummary`, the same for an exact and a streamed run.
 
     ``reaching`` is (rocks counted as reaching the protected zone, how many of
     them are unresolved paths counted so), None without a protected zone.
     ``project_hash``: the project's :meth:`~rockfall_design.project.Project.resolved_hash`
-    if the caller has it already (it hashes the whole project: a study's
+    if the caller has it already (it hashes the whole project: a parametric study's
     scenario computes it once).
     """
-    counts = study.status_counts()
+    counts = run.status_counts()
     stations = tuple(
         StationSummary(float(xs), int(crossings[j]),
                        {key: StatBlock.from_json(blocks[key][j]) for key in STATION_QUANTITIES})
-        for j, xs in enumerate(study.stations))
+        for j, xs in enumerate(run.stations))
     stops = StopsSummary(
         x=StatBlock.from_json(stop_block),
         stopped=int(counts[STOPPED]),
@@ -434,28 +434,28 @@ def run_record(
         unresolved=int(counts[UNRESOLVED]),
         caught=int(counts[CAUGHT]),
     )
-    forest = study.forest_counts()
-    protect = study.project.protect
+    forest = run.forest_counts()
+    protect = run.project.protect
     reach = None
     if protect is not None:
         n_reach, n_unresolved = reaching or (0, 0)
         reach = ReachSummary(float(protect.x), int(n_reach),
-                             n_reach / study.n if study.n else 0.0, int(n_unresolved))
+                             n_reach / run.n if run.n else 0.0, int(n_unresolved))
     return RunSummary(
-        project=study.project.name,
+        project=run.project.name,
         version=__version__,
-        rocks=int(study.n),
-        seed=int(study.seed),
+        rocks=int(run.n),
+        seed=int(run.seed),
         # The relative step of the size classes the radii were rounded to, where
         # they were (a survey, sizes that vary: run.releases.size_classes).
-        size_step=study.project.size_step if study.project.size_step > 0 else None,
-        project_hash=project_hash or study.project.resolved_hash(),
-        runtime_s=round(float(study.runtime_s), 6),
+        size_step=run.project.size_step if run.project.size_step > 0 else None,
+        project_hash=project_hash or run.project.resolved_hash(),
+        runtime_s=round(float(run.runtime_s), 6),
         events=int(events),
-        statistics=RunStatistics.from_json(study.statistics),
+        statistics=RunStatistics.from_json(run.statistics),
         stops=stops,
         stations=stations,
-        forest=None if forest is None else forest_record(*forest, int(study.n)),
+        forest=None if forest is None else forest_record(*forest, int(run.n)),
         protect=reach,
     )
 

@@ -3,8 +3,12 @@
 - :mod:`.paths`: :func:`with_values`, a project with inputs set by their path
   in the project file (``materials.talus.restitution``), validated again;
   :func:`check_study`, every path and value of a ``study:`` section checked;
-- :mod:`.scenarios`: the scenarios of a ``study:`` section (grid or Latin
-  hypercube), each with its values and its own rock seed;
+- :mod:`.sampling`: the scenarios of a ``study:`` section (grid or Latin
+  hypercube), each with its values and its own rock seed; named for how the
+  points are drawn (``sampling`` in ``study --json``), not ``scenarios.py``:
+  a submodule of that name would be bound to the package's name
+  ``scenarios`` when imported, which holds the function :func:`scenarios`
+  (so the import order here decided which of the two the name held);
 - :mod:`.runner`: the scenarios as tasks, and the task (one ``simulate``
   run); not ``run.py``, which would read as the package's
   :mod:`rockfall_design.run` room;
@@ -28,10 +32,8 @@ the public API, which shares its name with this package).
 
 from typing import TYPE_CHECKING, Any
 
-# Imported here, not on first use: the function ``scenarios`` must be bound
-# after its module of the same name, which importing the submodule binds.
 from .paths import PathError, check_study, parse_path, with_values
-from .scenarios import Scenario, scenario_seed, scenarios
+from .sampling import Scenario, scenario_seed, scenarios
 
 if TYPE_CHECKING:  # pragma: no cover
     from .study_result import StudyResult

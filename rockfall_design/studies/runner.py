@@ -43,8 +43,8 @@ from ..run.simulation import SimulationRun, simulate
 from ..run.summary import STATION_QUANTITIES, STATISTICS, RunSummary, run_record, stat_block
 from .executors import run_tasks
 from .paths import ALIASES, parse_path, scenario_base, shown, with_values
+from .sampling import Scenario, scenarios
 from .scenario_result import BarrierBlock, BoundsLadder, ScenarioBounds, ScenarioResult
-from .scenarios import Scenario, scenarios
 from .sensitivity import (
     LADDER,
     TARGET_STATISTICS,
@@ -151,7 +151,7 @@ def prepare(
         Rocks per scenario (default: ``rocks.count``).
     seed
         The run's seed (default: ``rocks.seed``); each scenario's seed is
-        derived from it (:func:`~.scenarios.scenario_seed`).
+        derived from it (:func:`~.sampling.scenario_seed`).
     envelopes
         Whether each scenario computes its envelopes (:attr:`ScenarioTask.envelope`).
 
@@ -235,8 +235,8 @@ def run_scenario(task: ScenarioTask) -> ScenarioResult:
     own = [float(x) for x in project.analysis.stations]
     extra = sorted({x for _, _, x in task.barriers if x not in own})
     t0 = time.perf_counter()
-    study = simulate(_with_stations(project, extra), rocks=task.rocks, seed=task.seed)
-    record = _summary_of(study, own, project.resolved_hash())
+    run = simulate(_with_stations(project, extra), rocks=task.rocks, seed=task.seed)
+    record = _summary_of(run, own, project.resolved_hash())
     runtime = time.perf_counter() - t0
     by_x = {st.x: st for st in record.stations}
     protect = None if record.protect is None else record.protect.to_json()
@@ -248,10 +248,10 @@ def run_scenario(task: ScenarioTask) -> ScenarioResult:
         project_hash=record.project_hash,
         stations=[st.to_json() for st in record.stations if st.x in own],
         stops=record.stops.to_json(),
-        bounds=_bounds(study, record, task, _confidence(project), with_measures),
+        bounds=_bounds(run, record, task, _confidence(project), with_measures),
         runtime_s=runtime, protect=protect, protect_with_measures=with_measures,
         measures=barriers or None,
-        envelope=_envelope(study, envelope_percentile(project)) if task.envelope else None)
+        envelope=_envelope(run, envelope_percentile(project)) if task.envelope else None)
 
 
 def _residual_with_measures(task: ScenarioTask) -> dict[str, Any]:
@@ -287,8 +287,8 @@ def _registry() -> Any:
     return _REGISTRY[0]
 
 
-def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> RunSummary:
-    """The run's record (``study.run_summary()``), less what the study drops: a fifth of a
+def _summary_of(run: Any, own: Sequence[float], project_hash: str) -> RunSummary:
+    """The run's record (``run.run_summary()``), less what the study drops: a fifth of a
     scenario's statistics.
 
     At a station of the project (``own``) every block, as ``simulate
@@ -300,10 +300,10 @@ def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> RunSumma
     ``project_hash``: the hash the summary gives, the scenario's project's
     (not that of its copy with the barriers' stations).
     """
-    if not isinstance(study, SimulationRun):
-        return replace(study.run_summary(), project_hash=project_hash)
-    r = study.result
-    a = study.crossing_arrays()
+    if not isinstance(run, SimulationRun):
+        return replace(run.run_summary(), project_hash=project_hash)
+    r = run.result
+    a = run.crossing_arrays()
     kept = {float(x) for x in own}
     empty = dict.fromkeys(STATISTICS)
     blocks = {
@@ -314,9 +314,9 @@ def _summary_of(study: Any, own: Sequence[float], project_hash: str) -> RunSumma
     }
     crossings = np.isfinite(a["passing_height_m"]).sum(axis=0)
     stop_block = stat_block(r.x_end[r.status == STOPPED])
-    protect = study.project.protect
+    protect = run.project.protect
     reaching = None if protect is None else protected_zone_counts(r.max_x, r.status, protect.x)
-    return run_record(study, r.events_total, crossings, blocks, stop_block, reaching,
+    return run_record(run, r.events_total, crossings, blocks, stop_block, reaching,
                       project_hash)
 
 
@@ -331,7 +331,7 @@ def _confidence(project: Project) -> float:
     return float(value) if ok else DEFAULT_CONFIDENCE
 
 
-def _bounds(study: Any, summary: RunSummary, task: ScenarioTask,
+def _bounds(run: Any, summary: RunSummary, task: ScenarioTask,
             confidence: float, with_measures: dict[str, Any] | None = None
             ) -> ScenarioBounds:
     """Confidence bounds of the scenario's design values, by name.
@@ -360,9 +360,9 @@ def _bounds(study: Any, summary: RunSummary, task: ScenarioTask,
     out = ScenarioBounds(confidence, upper={}, lower={},
                          ladder=BoundsLadder(scenarios=rungs, lower={}, upper={}))
     ladder = out.ladder
-    if isinstance(study, SimulationRun):
-        arrays = study.crossing_arrays()
-        columns = {float(x): j for j, x in enumerate(study.stations)}
+    if isinstance(run, SimulationRun):
+        arrays = run.crossing_arrays()
+        columns = {float(x): j for j, x in enumerate(run.stations)}
         names, samples, qs = [], [], []
         for where, x in place_names([st.x for st in summary.stations], task.barriers,
                                     task.project):
@@ -452,11 +452,11 @@ def column_percentile(values: np.ndarray, q: float,
     return out
 
 
-def _envelope(study: Any, q: float) -> dict[str, list[float]]:
+def _envelope(run: Any, q: float) -> dict[str, list[float]]:
     """x (m), crossings and the ``q`` envelopes of height (m) and energy (kJ) of a run."""
     label = f"{q:g}".replace(".", "_")
-    if isinstance(study, SimulationRun):
-        r = study.result
+    if isinstance(run, SimulationRun):
+        r = run.result
         crossings = _finite_counts(r.grid_height)
         return {
             "x_m": np.asarray(r.grid, dtype=float).tolist(),
@@ -464,7 +464,7 @@ def _envelope(study: Any, q: float) -> dict[str, list[float]]:
             f"height_p{label}_m": column_percentile(r.grid_height, q, crossings).tolist(),
             f"energy_p{label}_kj": (column_percentile(r.grid_energy, q) / 1e3).tolist(),
         }
-    env = study.envelopes()  # a streamed run: from its histograms
+    env = run.envelopes()  # a streamed run: from its histograms
     keep = ["x_m", "crossings", f"height_p{label}_m", f"energy_p{label}_kj"]
     return {c: env[c].tolist() for c in keep if c in env.columns}
 

@@ -20,7 +20,7 @@ from ..plugins import default_registry
 from ..project.study import values_text
 from ..run.summary import ReachSummary
 from .executors import run_tasks
-from .scenarios import required_scenarios, scenario_runs
+from .sampling import required_scenarios, scenario_runs
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins import Registry

@@ -23,8 +23,8 @@ from ..project.messages import fmt
 from ..report.figures import DEFAULT_MIN_ROCKS_ENVELOPE, RockfallFigure, save_figures
 from ..report.terminal import fitted_console
 from ..version import __version__
+from .sampling import Scenario
 from .scenario_result import ScenarioResult
-from .scenarios import Scenario
 from .sensitivity import SensitivityEntry, joint_bounds, rank, relative_effect, targets
 
 if TYPE_CHECKING:  # pragma: no cover

@@ -59,7 +59,7 @@ def test_fence_below_the_passing_height_lets_the_rock_over_and_above_it_catches(
     (hf,) = [c for c in high.checks[0] if c.name == "height_factor"]
     assert_allclose(hf.value, 5.0 / h, rtol=1e-10)
     assert hf.ok is (5.0 / h >= 2.0)
-    assert high.study.result.x_end[0] == pytest.approx(6.0)
+    assert high.run.result.x_end[0] == pytest.approx(6.0)
 
 
 def test_fence_too_weak_is_broken_through_and_the_rock_goes_on_with_the_surplus(registry):
@@ -74,8 +74,8 @@ def test_fence_too_weak_is_broken_through_and_the_rock_goes_on_with_the_surplus(
     (ef,) = [c for c in weak.checks[0] if c.name == "energy_factor"]
     assert not ef.ok and ef.value == pytest.approx(0.5)
     # Just past the fence the rock carries half its energy, plus what it gained falling.
-    m = weak.study.result.mass[0]
-    st = weak.study.summary()["stations"][0]
+    m = weak.run.result.mass[0]
+    st = weak.run.summary()["stations"][0]
     drop = passing_height(6.0) - st["passing_height_m"]["max"]
     assert_allclose(st["energy_kj"]["max"], 0.5 * e + m * G * drop / 1e3, rtol=1e-9)
 
@@ -87,11 +87,11 @@ def test_rolling_rock_meeting_a_ditch_stays_in_it(registry):
                           template=rolling), registry)
     res = ev.results[0]
     assert (res.met, res.caught) == (1, 1)
-    r = ev.study.result
+    r = ev.run.result
     assert 3.0 < r.x_end[0] < 7.0 and r.status[0] == 1
     # Without the ditch, the same rock rolls on: 36 / (2 * 5/7 * g * 0.4) = 6.4 m.
     bare = evaluate(project(template=rolling), registry)
-    assert_allclose(bare.study.result.x_end[0], 36 / (2 * 5 / 7 * G * 0.4), rtol=1e-9)
+    assert_allclose(bare.run.result.x_end[0], 36 / (2 * 5 / 7 * G * 0.4), rtol=1e-9)
 
 
 BERM_SLOPE = """
@@ -127,7 +127,7 @@ def test_wide_berm_holds_every_rock_and_a_narrow_one_does_not(registry):
     for ev, width in ((wide, 20.0), (narrow, 0.5)):
         res = ev.results[0]
         (rf,) = [c for c in ev.checks[0] if c.name == "reach_factor"]
-        reach = ev.study.result.max_x - 25.0
+        reach = ev.run.result.max_x - 25.0
         assert_allclose(res.reach_m, reach, rtol=1e-12)
         assert_allclose(rf.value, width / reach.max(), rtol=1e-12)
     assert [c.ok for c in wide.checks[0] if c.name == "reach_factor"] == [True]

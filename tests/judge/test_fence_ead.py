@@ -69,7 +69,7 @@ def test_a_zone_within_the_elongation_fails_and_ten_metres_further_holds(registr
 
 def test_a_caught_rock_rests_its_braking_distance_beyond_the_fence(registry):
     ev = evaluate(project("protect: {x: 9}"), registry)
-    r = ev.study.result
+    r = ev.run.result
     res = ev.results[0]
     assert res.caught == res.met == r.n
     # Below the SEL: the SEL elongation, 3.6 m, horizontally.

@@ -49,9 +49,9 @@ def test_a_run_that_goes_on_is_the_run_of_all_its_rocks(name, seed):
                            after=first)
     last = evaluate_design(project, registry, measures, plan.concept, rocks=260, seed=seed,
                            after=more)
-    assert last.study.n == 260 and more.study.n == 180
-    _same(whole.study.result, last.study.result)
-    _same(whole.study.releases, last.study.releases)
+    assert last.run.n == 260 and more.run.n == 180
+    _same(whole.run.result, last.run.result)
+    _same(whole.run.releases, last.run.releases)
     assert [c.as_dict() for cs in whole.checks for c in cs] == [
         c.as_dict() for cs in last.checks for c in cs]
     assert whole.protect == last.protect

@@ -41,8 +41,8 @@ def test_a_check_summary_is_its_record_and_reads_back_key_for_key(checked):
     # The run seen through the check carries the judge's residual, as the JSON does.
     assert run_of(record).protect == record.protect
     assert run_of(d).protect.reaching == record.protect.reaching
-    run = RunSummary.from_json(checked.study.summary())
-    assert json.dumps(run.to_json()) == json.dumps(checked.study.summary())
+    run = RunSummary.from_json(checked.run.summary())
+    assert json.dumps(run.to_json()) == json.dumps(checked.run.summary())
 
 
 def test_the_verdict_is_reached_from_the_record_and_carries_its_confidence(checked):

@@ -10,7 +10,7 @@ import pytest
 from rockfall_design.cli.program import main
 from rockfall_design.errors import ProjectError
 from rockfall_design.project import load_project_text
-from rockfall_design.studies.scenarios import required_scenarios
+from rockfall_design.studies.sampling import required_scenarios
 
 ROOT = Path(__file__).resolve().parents[2]
 PROJECTS = ROOT / "projects"

@@ -29,7 +29,7 @@ from rockfall_design.optimiser.decide import (
 from rockfall_design.optimiser.scenario import set_up
 from rockfall_design.plugins import guard, load_registry
 from rockfall_design.project import load_project_text
-from rockfall_design.studies.scenarios import ScenarioRun
+from rockfall_design.studies.sampling import ScenarioRun
 
 PROJECTS = Path(__file__).resolve().parents[2] / "projects"
 #: Ditches (x, width, depth) on the meadow, from clearly short to clearly enough,

@@ -21,7 +21,7 @@ from rockfall_design.optimiser.search import Tally
 from rockfall_design.optimiser.settle import FamilyDecision, proof_line
 from rockfall_design.plugins.concept import Check
 from rockfall_design.project import load_project_text
-from rockfall_design.studies.scenarios import ScenarioRun
+from rockfall_design.studies.sampling import ScenarioRun
 
 from .test_settle_levels import fake_scenario
 

@@ -72,8 +72,8 @@ def test_design_yaml_and_the_report_name_the_undecided_designs():
     project = load_project(Path(__file__).resolve().parents[1] / "data" / "design_small.yaml")
     concept = SimpleNamespace(name="spang", params=SimpleNamespace(
         model_dump=lambda mode: {"confidence": 0.95}))
-    ev = SimpleNamespace(study=SimpleNamespace(project=project, seed=5,
-                                               result=SimpleNamespace(n=9_206)),
+    ev = SimpleNamespace(run=SimpleNamespace(project=project, seed=5,
+                                             result=SimpleNamespace(n=9_206)),
                          concept=concept)
     best = SimpleNamespace(evaluation=ev, measures=[], name="fence", cost=75_000.0,
                            fresh_seed=1_000_008, fresh_rocks=18_412,

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[2]
 #: What ``from rockfall_design.report import X`` gave when it was one module,
 #: and still gives: its ``__all__`` and the public helpers the commands share.
 TERMINAL_NAMES = ("print_simulation", "print_check", "print_optimise", "alternatives_table",
-                  "design_yaml", "plot_study", "plugins_table", "fitted_console",
+                  "design_yaml", "plot_run", "plugins_table", "fitted_console",
                   "simulation_renderable", "check_renderable", "MAX_FILE_WIDTH")
 
 

@@ -172,13 +172,13 @@ FAMILY_ALPHA = 0.01
 
 def _samples(project, rocks: int, seed: int) -> dict[str, np.ndarray]:
     """The compared quantities of a run: energy and passing height at each station, stops."""
-    study = run_in_memory(project, rocks=rocks, seed=seed)
-    r = study.result
+    run = run_in_memory(project, rocks=rocks, seed=seed)
+    r = run.result
     out = {}
     for j, x in enumerate(r.stations):
-        out[f"energy at {x:g} m"] = study.crossing_arrays()["energy_j"][:, j]
-        out[f"passing height at {x:g} m"] = study.crossing_arrays()["passing_height_m"][:, j]
-    out["stop x"] = study.rest_positions()[0]
+        out[f"energy at {x:g} m"] = run.crossing_arrays()["energy_j"][:, j]
+        out[f"passing height at {x:g} m"] = run.crossing_arrays()["passing_height_m"][:, j]
+    out["stop x"] = run.rest_positions()[0]
     return {k: v[np.isfinite(v)] for k, v in out.items()}
 
 

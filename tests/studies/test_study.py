@@ -284,9 +284,23 @@ def test_scheduler_without_dask_names_the_extra(monkeypatch, capsys):
 
 
 def test_the_function_keeps_its_name_over_the_package():
-    import rockfall_design.studies.scenarios  # noqa: F401  (imports the subpackage)
+    import rockfall_design.studies.sampling  # noqa: F401  (imports a submodule)
 
     assert callable(rd.study) and rd.study is rd.api.study
+
+
+def test_the_package_exports_the_function_scenarios_not_a_module():
+    # The submodule is sampling.py: a submodule named scenarios.py would be
+    # bound to the package's name when imported, over the function.
+    import types
+
+    from rockfall_design import studies
+    from rockfall_design.studies import sampling
+
+    assert not isinstance(studies.scenarios, types.ModuleType)
+    assert studies.scenarios is sampling.scenarios
+    assert studies.Scenario is sampling.Scenario
+    assert studies.scenario_seed is sampling.scenario_seed
 
 
 def test_the_scenario_envelope_percentile_is_numpys():
