@@ -81,7 +81,7 @@ class RockfallFigure(Figure):
         super().draw(renderer)
 
     def prepare_texts(self) -> None:
-        """Words drawn as written, set before a layout measures them (:func:`.laid_out`)."""
+        """Words drawn as written, set before a layout measures them (:func:`.formats.laid_out`)."""
         literal_texts(self)
 
     def _repr_png_(self) -> bytes:
