@@ -394,8 +394,9 @@ class FamilyDecision:
     def decide(self, d: Screened) -> bool:
         """Decide one design; True when it is the family's (holds, or dominated)."""
         alt, tally = self.alt, self.tallies[d.scenario]
-        level = (d.scenario, d.level)
-        if self.per_level[level] >= MAX_EXACT_PER_LEVEL:
+        level = ((d.scenario, d.level) if len(self.scenarios) == 1  # its search's own ids;
+                 else tuple(sorted(m.without_station() for m in d.measures)))  # shared ones
+        if self.per_level[level] >= MAX_EXACT_PER_LEVEL * len(self.scenarios):
             return self._skip(d, "the catalogue combination's decisions were used up")
         if level in self.marginal_levels:
             # Its placements come closest to holding first: once one of them ran

@@ -492,6 +492,14 @@ class ProtectiveMeasure(ABC):
         """A short human-readable name, e.g. 'fence at x = 70 m'."""
         return f"{self.kind} at x = {self.x:g} m"
 
+    def without_station(self) -> tuple[str, str]:
+        """What the measure is wherever it stands: its kind and its parameters but ``x``.
+
+        Two designs whose measures agree in this differ only in where they
+        stand: the optimiser budgets their decisions together.
+        """
+        return self.kind, repr(sorted(self.params.model_dump(exclude={"x"}).items()))
+
     @abstractmethod
     def footprint(self, section: Section) -> Barrier | ProfileEdit:
         """Where the measure stands and what it does to rocks.
