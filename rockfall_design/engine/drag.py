@@ -27,7 +27,9 @@ def _logcosh(x):
 
 @hot
 def _logsinh(x):
-    """ln sinh x for x > 0 without overflow."""
+    """ln sinh x for x > 0 without overflow (nor, for x near 0, ln 0)."""
+    if x < 0.5:  # exp(-2 x) rounds to 1 for a tiny x; sinh itself is exact there
+        return np.log(np.sinh(x))
     return x + np.log1p(-np.exp(-2.0 * x)) - _LN2
 
 
@@ -64,7 +66,8 @@ def drag_time(v0, v1, a, c, d):
     ln(cosh th / cosh th0) / c (ln(sinh th / sinh th0) / c), so th follows
     from d without ever forming v = V (which a long piece reaches to round-off);
     with W = sqrt(-a/c), k = c W (a < 0): v(t) = W tan(th0 - k t), distance
-    ln(cos th / cos th0) / c; with a = 0: v = v0 / (1 + c v0 t),
+    ln(cos th / cos th0) / c, so t = arctan((v0 - v1) W / (W^2 + v0 v1)) / k
+    (the difference of the two angles as one); with a = 0: v = v0 / (1 + c v0 t),
     t = (exp(c d) - 1) / (c v0). Over a short distance the mean speed is
     exact enough and better conditioned.
     """
@@ -79,11 +82,12 @@ def drag_time(v0, v1, a, c, d):
         th0 = np.arctanh(vt / v0)
         return (_arc_from_log(_logsinh(th0) + c * d, True) - th0) / k
     if a < 0.0:
+        # th0 - th = arctan(v0 / W) - arctan(v1 / W), written as one arctan (the
+        # difference formula; v0, v1 >= 0): with W far below the speed (a Coulomb
+        # friction near zero: hypothesis found mu = 7e-129) both angles round to
+        # pi / 2 and their difference, and so the time, came out 0 or negative.
         wt = np.sqrt(-a / c)
-        th0 = np.arctan(v0 / wt)
-        q = np.cos(th0) * np.exp(c * d)
-        th = np.arccos(min(q, 1.0))
-        return (th0 - th) / (c * wt)
+        return np.arctan((v0 - v1) * wt / (wt * wt + v0 * v1)) / (c * wt)
     return np.expm1(c * d) / (c * v0)
 
 
@@ -112,10 +116,17 @@ def drag_state(v0, a, c, t):
             return vt / np.tanh(th), (_logsinh(th) - _logsinh(th0)) / c
         return vt, vt * t
     if a < 0.0:
+        # v = W tan(th0 - k t) and cos(th0 - k t) / cos th0 by the sum formulas
+        # (tan th0 = v0 / W): no angle near pi / 2 is formed, which lost v0
+        # where W is far below it (both tend to the a = 0 forms below).
         wt = np.sqrt(-a / c)
-        th0 = np.arctan(v0 / wt)
-        th = max(th0 - c * wt * t, 0.0)
-        return wt * np.tan(th), (np.log(np.cos(th)) - np.log(np.cos(th0))) / c
+        kt = c * wt * t
+        if kt >= np.arctan(v0 / wt):  # at rest by then
+            return 0.0, np.log1p(c * v0 * v0 / -a) / (2.0 * c)
+        tk = np.tan(kt)
+        v = wt * (v0 - wt * tk) / (wt + v0 * tk)
+        half = np.sin(0.5 * kt)
+        return max(v, 0.0), np.log1p(v0 * np.sin(kt) / wt - 2.0 * half * half) / c
     return v0 / (1.0 + c * v0 * t), np.log1p(c * v0 * t) / c
 
 

@@ -275,3 +275,23 @@ def test_rock_streams_do_not_depend_on_batches_or_other_rocks():
     assert not np.array_equal(a.duration, c.duration)
     # Scatter makes the rocks of one run differ from each other.
     assert np.unique(a.duration).size > n // 2
+
+
+def test_energy_never_increases_with_a_friction_near_zero_and_the_drag():
+    # Found by hypothesis (2026-11-28): a 1 m rock slipping on flat rough_soft
+    # ground with mu = 7e-129 and V_s = 2 m/s. The drag's closed forms took the
+    # difference of two angles that both round to pi / 2: the time of each 1 mm
+    # piece came out 0 or negative, the spin grew and the energy with it
+    # (116 kJ to 11.4 MJ over 8 mm).
+    soft = Material(impact_model="rough_soft", restitution=0.0, friction=7.010853489563978e-129,
+                    rolling_resistance=0.5, roughness_deg=0.0, drag_speed_ms=2.0)
+    x = np.linspace(0.0, 0.008, 9)
+    sec = Section(x=x, y=np.zeros(9), segment_material=np.zeros(8, dtype=int),
+                  materials=(soft,))
+    rel = Releases(radius=np.array([1.0]), density=2650.0, x=np.array([0.008]),
+                   height=np.array([0.0]), vx=np.array([-1.0]), vy=np.array([0.0]),
+                   spin=np.array([1.0]), spin_rolling=np.array([False]),
+                   zone=np.array([], dtype=np.int64))
+    _assert_energy_never_increases(sec, rel, [])
+    tr = _run(sec, rel).trajectories[0]
+    assert np.all(np.diff(tr[:, T_T]) > 0.0)
