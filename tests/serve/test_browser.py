@@ -15,6 +15,7 @@ import http.server
 import io
 import os
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -45,9 +46,15 @@ def _browser_or_skip():
     return sync_playwright
 
 
-@contextlib.contextmanager
-def _chromium(sync_playwright: Any) -> Any:
-    """Headless Chromium (the local one, never Playwright's download), closed after use."""
+@pytest.fixture(scope="module")
+def chromium() -> Iterator[Any]:
+    """One headless Chromium (the local one, never Playwright's download) for the module.
+
+    Each test opens a context of its own in it (its own cookies, storage and
+    pages) and closes it: a launch of Playwright's driver and Chromium is
+    1.8 s of CPU, once here rather than once per test.
+    """
+    sync_playwright = _browser_or_skip()
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=str(CHROMIUM),
                                      args=["--no-sandbox", "--disable-gpu"])
@@ -55,6 +62,16 @@ def _chromium(sync_playwright: Any) -> Any:
             yield browser
         finally:
             browser.close()
+
+
+@contextlib.contextmanager
+def _context(browser: Any, **options: Any) -> Iterator[Any]:
+    """A fresh browser context (as a browser of its own to the pages), closed after use."""
+    context = browser.new_context(**options)
+    try:
+        yield context
+    finally:
+        context.close()
 
 
 def _distinct_colours(png: bytes) -> int:
@@ -65,64 +82,58 @@ def _distinct_colours(png: bytes) -> int:
     return int(np.unique(rgb, axis=0).shape[0])
 
 
-def test_drag_a_fence_and_the_residual_follows(tmp_path):
-    sync_playwright = _browser_or_skip()
+def test_drag_a_fence_and_the_residual_follows(tmp_path, chromium):
     proc, url = start_server("projects/design_two_zones.yaml", cwd=ROOT)
     errors: list[str] = []
     try:
-        with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=str(CHROMIUM),
-                                         args=["--no-sandbox", "--disable-gpu"])
-            try:
-                page = browser.new_page(viewport={"width": 1400, "height": 1000})
-                page.on("pageerror", lambda e: errors.append(str(e)))
-                requested: list[str] = []
-                page.on("request", lambda r: requested.append(r.url))
-                page.goto(url)
-                page.wait_for_selector("body[data-ready='1']", timeout=60_000)
-                # The section is drawn: ground segments in their materials' colours.
-                assert page.locator("#section line[data-material]").count() == 8
-                assert page.locator("#protect-zone").count() == 1
-                page.click("#simulate")
-                page.wait_for_selector("#status[data-state='done']", timeout=300_000)
-                assert page.locator("#env-height path").count() >= 3
-                page.click("#place")
-                # Predicates as functions, not expressions: the page's CSP forbids
-                # eval, which Playwright uses for an expression it polls.
-                page.wait_for_function(
-                    "() => document.getElementById('residual').dataset.reaching !== undefined",
-                    timeout=30_000)
-                before = page.inner_text("#residual")
-                reaching_before = page.get_attribute("#residual", "data-reaching")
-                box = page.locator("#placed-handle").bounding_box()
-                x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
-                page.mouse.move(x, y)
-                page.mouse.down()
-                for i in range(1, 16):
-                    page.mouse.move(x + 15 * i, y)
-                page.mouse.up()
-                page.wait_for_function(
-                    "(before) => document.getElementById('residual').dataset.reaching "
-                    "!== before", arg=reaching_before, timeout=30_000)
-                after = page.inner_text("#residual")
-                assert after != before and "At the protected zone" in after
-                assert page.locator("#checks td").count() > 4
-                # Check that design with a few rocks; its report downloads from the page.
-                page.fill("#rocks", "300")
-                page.click("#check")
-                link = page.locator("#results .downloads a", has_text="report.html")
-                link.wait_for(timeout=300_000)
-                # Drawn on this first request: seconds, more on a busy machine.
-                report = page.request.get(url.split("/?", 1)[0]
-                                          + link.get_attribute("href"), timeout=300_000)
-                assert report.status == 200 and "<svg" in report.text()
-                shot = page.screenshot(path=str(tmp_path / "serve.png"), full_page=True)
-                # Everything came from the app itself: it works with no network.
-                origin = url.split("/?", 1)[0]
-                assert requested and all(u.startswith(origin + "/") or u.startswith("data:")
-                                         for u in requested), requested
-            finally:
-                browser.close()
+        with _context(chromium, viewport={"width": 1400, "height": 1000}) as context:
+            page = context.new_page()
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            requested: list[str] = []
+            page.on("request", lambda r: requested.append(r.url))
+            page.goto(url)
+            page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+            # The section is drawn: ground segments in their materials' colours.
+            assert page.locator("#section line[data-material]").count() == 8
+            assert page.locator("#protect-zone").count() == 1
+            page.click("#simulate")
+            page.wait_for_selector("#status[data-state='done']", timeout=300_000)
+            assert page.locator("#env-height path").count() >= 3
+            page.click("#place")
+            # Predicates as functions, not expressions: the page's CSP forbids
+            # eval, which Playwright uses for an expression it polls.
+            page.wait_for_function(
+                "() => document.getElementById('residual').dataset.reaching !== undefined",
+                timeout=30_000)
+            before = page.inner_text("#residual")
+            reaching_before = page.get_attribute("#residual", "data-reaching")
+            box = page.locator("#placed-handle").bounding_box()
+            x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+            page.mouse.move(x, y)
+            page.mouse.down()
+            for i in range(1, 16):
+                page.mouse.move(x + 15 * i, y)
+            page.mouse.up()
+            page.wait_for_function(
+                "(before) => document.getElementById('residual').dataset.reaching "
+                "!== before", arg=reaching_before, timeout=30_000)
+            after = page.inner_text("#residual")
+            assert after != before and "At the protected zone" in after
+            assert page.locator("#checks td").count() > 4
+            # Check that design with a few rocks; its report downloads from the page.
+            page.fill("#rocks", "300")
+            page.click("#check")
+            link = page.locator("#results .downloads a", has_text="report.html")
+            link.wait_for(timeout=300_000)
+            # Drawn on this first request: seconds, more on a busy machine.
+            report = page.request.get(url.split("/?", 1)[0]
+                                      + link.get_attribute("href"), timeout=300_000)
+            assert report.status == 200 and "<svg" in report.text()
+            shot = page.screenshot(path=str(tmp_path / "serve.png"), full_page=True)
+            # Everything came from the app itself: it works with no network.
+            origin = url.split("/?", 1)[0]
+            assert requested and all(u.startswith(origin + "/") or u.startswith("data:")
+                                     for u in requested), requested
     finally:
         code, err = stop_server(proc)
     assert not errors, errors
@@ -131,41 +142,35 @@ def test_drag_a_fence_and_the_residual_follows(tmp_path):
     assert _distinct_colours(shot) > 50
 
 
-def test_study_and_library_materials_from_the_page():
+def test_study_and_library_materials_from_the_page(chromium):
     """A study's scenarios table, and a library material put on a segment, in the page."""
-    sync_playwright = _browser_or_skip()
     proc, url = start_server("projects/study_talus.yaml", "projects/survey_slope.yaml",
                              cwd=ROOT)
     errors: list[str] = []
     try:
-        with sync_playwright() as pw:
-            browser = pw.chromium.launch(executable_path=str(CHROMIUM),
-                                         args=["--no-sandbox", "--disable-gpu"])
-            try:
-                page = browser.new_page(viewport={"width": 1400, "height": 1000})
-                page.on("pageerror", lambda e: errors.append(str(e)))
-                page.goto(url)
-                page.wait_for_selector("body[data-ready='1']", timeout=60_000)
-                page.fill("#rocks", "40")
-                page.click("#study")
-                page.wait_for_selector("#status[data-state='done']", timeout=300_000)
-                rows = page.locator(".job-table[data-title='Scenarios'] tr")
-                assert rows.count() == 10  # the header and nine scenarios
-                # The surveyed slope names a library: its entries are listed.
-                page.select_option("#project", "survey_slope")
-                page.locator("#library-material option[value='asphalt']").wait_for(
-                    state="attached", timeout=30_000)
-                page.click("#materials-box summary")
-                page.select_option("#segment", "0")
-                page.select_option("#library-material", "asphalt")
-                assert "law spang" in page.inner_text("#material-values")
-                page.click("#apply-material")
-                page.wait_for_function(
-                    "() => document.getElementById('material-status').textContent"
-                    ".includes('asphalt from')", timeout=30_000)
-                assert "asphalt" in page.input_value("#yaml")
-            finally:
-                browser.close()
+        with _context(chromium, viewport={"width": 1400, "height": 1000}) as context:
+            page = context.new_page()
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url)
+            page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+            page.fill("#rocks", "40")
+            page.click("#study")
+            page.wait_for_selector("#status[data-state='done']", timeout=300_000)
+            rows = page.locator(".job-table[data-title='Scenarios'] tr")
+            assert rows.count() == 10  # the header and nine scenarios
+            # The surveyed slope names a library: its entries are listed.
+            page.select_option("#project", "survey_slope")
+            page.locator("#library-material option[value='asphalt']").wait_for(
+                state="attached", timeout=30_000)
+            page.click("#materials-box summary")
+            page.select_option("#segment", "0")
+            page.select_option("#library-material", "asphalt")
+            assert "law spang" in page.inner_text("#material-values")
+            page.click("#apply-material")
+            page.wait_for_function(
+                "() => document.getElementById('material-status').textContent"
+                ".includes('asphalt from')", timeout=30_000)
+            assert "asphalt" in page.input_value("#yaml")
     finally:
         code, err = stop_server(proc)
     assert not errors, errors
@@ -205,12 +210,12 @@ def _form(action: str, target: str) -> str:
             '<button id="go">go</button></form>')
 
 
-def test_a_form_of_another_page_on_127_0_0_1_changes_nothing(tmp_path, projects_dir):
+def test_a_form_of_another_page_on_127_0_0_1_changes_nothing(tmp_path, projects_dir,
+                                                              chromium):
     """A page on another port posts a text/plain form to the app (with the token too, as
     if it had leaked): 403, and the observed stops are unchanged."""
     import shutil
 
-    sync_playwright = _browser_or_skip()
     for name in ("calibrate_quarry.yaml", "quarry_stops_a.csv", "quarry_stops_b.csv"):
         shutil.copy(projects_dir / name, tmp_path / name)
     target = tmp_path / "quarry_stops_a.csv"
@@ -225,8 +230,7 @@ def test_a_form_of_another_page_on_127_0_0_1_changes_nothing(tmp_path, projects_
                                + "</body></html>")
     statuses = []
     try:
-        with _chromium(sync_playwright) as browser:
-            context = browser.new_context()
+        with _context(chromium) as context:
             page = context.new_page()
             page.goto(url)  # the user has the app open in the same browser
             page.wait_for_selector("body[data-ready='1']", timeout=60_000)
@@ -247,16 +251,14 @@ def test_a_form_of_another_page_on_127_0_0_1_changes_nothing(tmp_path, projects_
     assert "Traceback" not in err, err
 
 
-def test_two_servers_in_one_browser_both_keep_working():
+def test_two_servers_in_one_browser_both_keep_working(chromium):
     """Two servers (two ports of 127.0.0.1) open in one browser: neither locks the other out
     (a token cookie of 127.0.0.1 was one for every port)."""
-    sync_playwright = _browser_or_skip()
     first, url_a = start_server("projects/design_two_zones.yaml", cwd=ROOT)
     second, url_b = start_server("projects/quarry_fence_ditch.yaml", cwd=ROOT)
     errors: list[str] = []
     try:
-        with _chromium(sync_playwright) as browser:
-            context = browser.new_context()
+        with _context(chromium) as context:
             pages = []
             for url in (url_a, url_b):
                 page = context.new_page()
@@ -280,15 +282,14 @@ def test_two_servers_in_one_browser_both_keep_working():
     assert not errors, errors
 
 
-def test_the_page_shows_the_verdict_untested_measures_and_keyed_charts():
+def test_the_page_shows_the_verdict_untested_measures_and_keyed_charts(chromium):
     """quarry_fence_ditch.yaml with its own measures: Place and Check work; a fence where no
     rock goes is "untested"; the charts have both axes with ticks and a keyed legend."""
-    sync_playwright = _browser_or_skip()
     proc, url = start_server("projects/quarry_fence_ditch.yaml", cwd=ROOT)
     errors: list[str] = []
     try:
-        with _chromium(sync_playwright) as browser:
-            page = browser.new_page(viewport={"width": 1400, "height": 1000})
+        with _context(chromium, viewport={"width": 1400, "height": 1000}) as context:
+            page = context.new_page()
             page.on("pageerror", lambda e: errors.append(str(e)))
             page.goto(url)
             page.wait_for_selector("body[data-ready='1']", timeout=60_000)
