@@ -119,10 +119,11 @@ def drag_state(v0, a, c, t):
         # v = W tan(th0 - k t) and cos(th0 - k t) / cos th0 by the sum formulas
         # (tan th0 = v0 / W): no angle near pi / 2 is formed, which lost v0
         # where W is far below it (both tend to the a = 0 forms below).
+        t_stop, d_stop = drag_stop(v0, a, c)
+        if t >= t_stop:  # at rest by then
+            return 0.0, d_stop
         wt = np.sqrt(-a / c)
         kt = c * wt * t
-        if kt >= np.arctan(v0 / wt):  # at rest by then
-            return 0.0, np.log1p(c * v0 * v0 / -a) / (2.0 * c)
         tk = np.tan(kt)
         v = wt * (v0 - wt * tk) / (wt + v0 * tk)
         half = np.sin(0.5 * kt)
