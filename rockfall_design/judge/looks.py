@@ -244,20 +244,18 @@ def rocks_to_decide(values: LookValues) -> int | None:
     need = 0.0
     for c in values.checks:
         v, t = c.value, c.target
-        if v is None:
+        ends = [b for b in (c.bound, c.optimistic) if b is not None and math.isfinite(b)]
+        if v is None or not ends:
             continue
-        sides = [abs(b - v) for b in (c.bound, c.optimistic)
-                 if b is not None and math.isfinite(b)]
-        if not sides:
+        # Decided (held or failed, whichever way the check runs) when both bounds
+        # lie on one side of the target; else the bound across it must come back.
+        lo, hi = min(ends + [v]), max(ends + [v])
+        if lo >= t or hi <= t:
             continue
-        w, d = max(sides), abs(v - t)
-        holds = (c.bound is not None and (c.bound >= t if v >= t else c.bound <= t))
-        rejects = c.optimistic is not None and not (
-            c.optimistic >= t if v >= t else c.optimistic <= t)
-        if holds or rejects:
-            continue
+        d = abs(v - t)
         if d <= 0.0:
             return None
+        w = v - lo if v > t else hi - v
         need = max(need, n * (w / d) ** 2)
     r = values.residual
     if r is not None and r.upper > r.allowed and r.lower <= r.allowed:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -48,3 +49,31 @@ def test_a_residual_whose_bounds_straddle_the_allowance_needs_more_rocks():
     need = rocks_to_decide(v)
     w = max(r.upper - r.fraction, r.fraction - r.lower)
     assert need == math.ceil(9206 * (w / abs(r.fraction - r.allowed)) ** 2) > 9206
+
+
+@pytest.mark.parametrize("value, bound, optimistic, target, decided", [
+    # An upper limit (value <= target): 606.6 kJ against 500, its bounds 807 and 497:
+    # fails at its point value, undecided (the optimistic bound is below the target).
+    (606.6, 807.2, 497.0, 500.0, False),
+    (606.6, 807.2, 503.0, 500.0, True),   # fails with confidence
+    (450.0, 480.0, 420.0, 500.0, True),   # holds with confidence
+    (450.0, 520.0, 420.0, 500.0, False),  # holds at its point value only
+    # A lower limit (value >= target): the pessimistic bound is the lower one.
+    (2.4, 1.9, 2.8, 2.0, False),
+    (1.7, 1.5, 2.1, 2.0, False),
+    (1.7, 1.5, 1.9, 2.0, True),
+])
+def test_a_check_is_undecided_whichever_way_it_runs_while_its_bounds_straddle_the_target(
+        value, bound, optimistic, target, decided):
+    """rocks_to_decide named a check that failed at its point value (606.6 kJ against a
+    limit of 500) "on the target" because it read the bounds as if every check were a
+    lower limit: the bounds' side of the target, not the check's direction, decides."""
+    c = Check(name="energy", value=value, target=target, ok=False, bound=bound,
+              optimistic=optimistic)
+    need = rocks_to_decide(look_values([[c]], ["fence"], None, 1000, None, 0.95))
+    if decided:
+        assert need is None
+    else:
+        far = min(bound, optimistic) if value > target else max(bound, optimistic)
+        w, d = abs(value - far), abs(value - target)
+        assert need == math.ceil(1000 * (w / d) ** 2) or (need is None and w <= d)
