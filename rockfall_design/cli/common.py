@@ -62,23 +62,21 @@ def in_memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
                   "Use fewer rocks or fewer analysis.envelope_points.")
 
 
-def decision_memory_guard(n_rocks: int, n_grid: int, n_stations: int) -> None:
+def decision_memory_guard(n_rocks: int, n_stations: int) -> None:
     """The guard for the last look of ``optimise``'s decisions (``design.max_rocks``).
 
-    A look keeps each rock's float32 height, energy and speed at the envelope
-    points (12 bytes a point, 14 counted for what the process holds besides)
-    but not :func:`in_memory_guard`'s float64 copies of all of them at once.
-    Measured, the peak resident memory of ``benchmarks/optimise.py`` at seeds
-    11-15 with looks up to 400,000 rocks (201 envelope points, 4 stations):
-    2.6 GiB deciding design_quarry, 3.1 GiB deciding design_ditch_or_fence,
-    design_embankment and design_two_zones in one process; this estimate
-    says 3.3 GiB, :func:`in_memory_guard` 10.0 GiB.
+    A look keeps each rock's records at the user's stations and the
+    barriers, its release and its end, not the envelope grid
+    (``run_in_memory``'s ``envelope``); the optimiser holds a few looks and
+    the search's tables at once. Counted: 40 bytes per rock and station and
+    2,000 for the rest. Measured, the peak resident memory of ``optimise
+    --max-rocks 1600000``: design_quarry 1.3 to 2.4 GiB at seeds 11-15 (this
+    estimate: 3.1 GiB), design_ditch_or_fence 2.8 GiB at seed 11 (3.2 GiB;
+    docs/speed.md, "Looks without the envelope grid").
     """
-    need = n_rocks * (14 * n_grid + 40 * n_stations + 200)
-    memory_guard(need, f"decisions of up to {n_rocks:,} rocks (design.max_rocks) with "
-                 f"{n_grid} envelope points",
-                 "Give a smaller --max-rocks (design.max_rocks) or fewer "
-                 "analysis.envelope_points.")
+    need = n_rocks * (40 * n_stations + 2_000)
+    memory_guard(need, f"decisions of up to {n_rocks:,} rocks (design.max_rocks)",
+                 "Give a smaller --max-rocks (design.max_rocks).")
 
 
 def run_with_progress(run: Any, project: Any, args: argparse.Namespace, **kw: Any) -> Any:

@@ -169,7 +169,7 @@ def cmd_optimise(args: argparse.Namespace) -> int:
     n = args.rocks or project.rocks.count
     grid = project.analysis.envelope_points + 400
     in_memory_guard(n, grid, len(project.analysis.stations))
-    decision_memory_guard(max(n, project.design.max_rocks), grid, len(project.analysis.stations))
+    decision_memory_guard(max(n, project.design.max_rocks), len(project.analysis.stations))
     with OutputSet() as files:
         reserve(files, args.out, ("design.yaml", "alternatives.csv", "barriers.csv",
                                   "summary.json"))

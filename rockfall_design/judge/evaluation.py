@@ -429,6 +429,7 @@ def evaluate_design(
     progress: Callable[[int], None] | None = None,
     after: Evaluation | None = None,
     bare: Section | None = None,
+    envelope: bool = True,
 ) -> Evaluation:
     """Like :func:`evaluate`, for given measure and concept objects (the optimiser's designs).
 
@@ -438,18 +439,23 @@ def evaluate_design(
     ``concept``. A sequential look at more rocks goes on from the last look.
     ``bare``: the project's slope section, when the caller holds it (the
     optimiser's screening: every design of a search stands on one section).
+    ``envelope``: record the envelope grid (``run_in_memory``'s ``envelope``);
+    the optimiser's decisions do not, so that a look of a million rocks holds
+    a few hundred MB; an ``after`` run must have been recorded the same way.
     """
     if after is not None:
         run = after.run
         return _evaluate_placed(project, registry, after.original_section, after.placed,
                                 run.section, concept, rocks=rocks, seed=seed,
-                                n_trajectories=0, progress=progress, after=run)
+                                n_trajectories=0, progress=progress, after=run,
+                                envelope=run.envelope_recorded)
     if bare is None:
         bare = section_from_project(project)
     placed = place_measures(project, registry, measures, bare)
     section = edited_section(project, bare, placed)
     return _evaluate_placed(project, registry, bare, placed, section, concept, rocks=rocks,
-                            seed=seed, n_trajectories=n_trajectories, progress=progress)
+                            seed=seed, n_trajectories=n_trajectories, progress=progress,
+                            envelope=envelope)
 
 
 def _evaluate_placed(
@@ -466,16 +472,18 @@ def _evaluate_placed(
     progress: Callable[[int], None] | None,
     after: SimulationRun | None = None,
     record_speed: bool = False,
+    envelope: bool = True,
 ) -> Evaluation:
     """Run the rocks against measures already placed on ``bare`` (``section``: edited).
 
     ``record_speed``: keep the speeds along the section for the speed
     envelope (``check`` and the chosen design's figures; not the optimiser).
+    ``envelope``: record the envelope grid (``run_in_memory``'s).
     """
     bars, owners = barrier_rows(placed)
     run = run_in_memory(project, rocks=rocks, seed=seed, n_trajectories=n_trajectories,
                         progress=progress, section=section, barriers=bars, after=after,
-                        record_speed=record_speed)
+                        record_speed=record_speed, envelope=envelope)
     protect = project.protect
     judgement = _judge_run(placed, owners, run, None if protect is None else protect.x)
     checks = [guard(registry).concept(concept).checks(res) for res in judgement.results]

@@ -215,7 +215,7 @@ def decide(
         # Each look goes on from the last one's rocks (nested: the same seed).
         done = 0 if ev is None else ev.run.n
         ev = evaluate_design(project, registry, measures, lc, rocks=n, seed=seed, after=ev,
-                             bare=bare)
+                             bare=bare, envelope=False)
         simulated += n - done
         verdict, short = judge_look(ev, registry, margin, checker_rocks or 2 * n,
                                     checker_rocks or 2 * looks.sizes[-1])
@@ -392,7 +392,7 @@ class Decider:
         s0 = self.screen
         return evaluate_design(s0.project, s0.registry, measures, s0.concept,
                                rocks=self.looks.sizes[j], seed=s0.seed, after=after,
-                               bare=s0.section)
+                               bare=s0.section, envelope=False)
 
     def _screen_verdict(self, sr: ScreenResult, n: int) -> tuple[Verdict, list[str]]:
         """A screening look's verdict, with the margin where the screening judged every rock

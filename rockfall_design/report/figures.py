@@ -373,7 +373,8 @@ def envelopes_figure(
     a3.set_ylim(bottom=0)
     a3.set_ylabel("rocks passing")
     a3.set_xlabel("x (m)")
-    tops[0].set_title(f"{run.project.name}: envelopes over {run.n:,} rocks (first passage "
+    over = int(env.attrs.get("rocks", run.n))  # a decision's run: its first rocks again
+    tops[0].set_title(f"{run.project.name}: envelopes over {over:,} rocks (first passage "
                       f"downslope), drawn where at least {min_rocks} rocks pass")
     return fig
 

@@ -106,6 +106,11 @@ class SimulationRun:
     first_rock: int = 0
     stream: ReleaseStream | None = field(default=None, repr=False)
     _cache: dict[str, Any] = field(default_factory=dict, repr=False)
+    #: The engine's barrier table the rocks ran against (None: none), kept so
+    #: that a run recorded without its envelope grid can draw it again.
+    barriers: np.ndarray | None = field(default=None, repr=False)
+    #: False where ``run_in_memory`` left the envelope grid out (``envelope``).
+    envelope_recorded: bool = field(default=True, repr=False)
 
     #: How the statistics were obtained (recorded in the summary).
     statistics = {"method": "exact"}
@@ -248,11 +253,20 @@ class SimulationRun:
         ``height_pXX_m`` for each configured percentile, and the same for
         ``energy_*_kj`` and, where the run recorded speeds, ``speed_*_ms`` (m/s).
         Statistics are over the rocks that pass each station downslope; NaN
-        where none does.
+        where none does. ``attrs["rocks"]`` is the number of rocks they are
+        over: the run's, or for a run recorded without the grid
+        (``run_in_memory``'s ``envelope``) its first ``EXACT_ROCKS``, run again.
         """
         import pandas as pd
 
         if "env" in self._cache:
+            return self._cache["env"]
+        if not self.envelope_recorded:
+            # Recorded without the grid (the optimiser's looks): the first rocks
+            # again, each from its own stream, so on the same paths, with it.
+            again = run_in_memory(self.project, rocks=min(self.n, EXACT_ROCKS), seed=self.seed,
+                                  section=self.section, barriers=self.barriers)
+            self._cache["env"] = again.envelopes()
             return self._cache["env"]
         r = self.result
         h = r.grid_height.astype(float)
@@ -278,6 +292,7 @@ class SimulationRun:
                     col[has] = np.nanpercentile(arr[:, has], q, axis=0)
                 out[f"{name}_p{percentile_label(q)}_{unit}"] = col
         df = pd.DataFrame(out)
+        df.attrs["rocks"] = r.n
         self._cache["env"] = df
         return df
 
@@ -337,6 +352,7 @@ def run_in_memory(
     barriers: np.ndarray | None = None,
     after: SimulationRun | None = None,
     record_speed: bool = False,
+    envelope: bool = True,
 ) -> SimulationRun:
     """Run the project's rocks once, keeping every rock's result (exact statistics).
 
@@ -367,6 +383,10 @@ def run_in_memory(
         Keep the speed at every envelope point too, for the speed envelope
         of the figures (4 bytes per rock and point; the optimiser's runs
         leave it out).
+    envelope : bool
+        Record the ``analysis.envelope_points`` grid (8 bytes a rock and point;
+        the optimiser's decisions leave it out, and ``envelopes()`` then runs the
+        first rocks again with it). ``after`` must have been recorded alike.
     """
     n = int(project.rocks.count if rocks is None else rocks)
     s = int(project.rocks.seed if seed is None else seed)
@@ -376,7 +396,7 @@ def run_in_memory(
     if after is not None:
         n_trajectories = 0
     x0, x1 = section.x[0], section.x[-1]
-    grid = np.linspace(x0, x1, int(project.analysis.envelope_points))
+    grid = np.linspace(x0, x1, int(project.analysis.envelope_points) if envelope else 0)
     t0 = time.perf_counter()
     result = run_ensemble(
         section,
@@ -396,15 +416,9 @@ def run_in_memory(
         result = after.result.joined(result)
         releases = after.releases.joined(releases)
         runtime += after.runtime_s
-    return SimulationRun(
-        project=project,
-        result=result,
-        releases=releases,
-        seed=s,
-        runtime_s=runtime,
-        section=section,
-        stream=stream,
-    )
+    return SimulationRun(project=project, result=result, releases=releases, seed=s,
+                         runtime_s=runtime, section=section, stream=stream,
+                         barriers=barriers, envelope_recorded=envelope)
 
 
 # ---- large runs: statistics accumulated chunk by chunk -------------------------

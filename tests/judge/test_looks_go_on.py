@@ -91,3 +91,34 @@ def test_a_run_goes_on_twice_from_one_look_alike_and_without_its_stream():
         _same(whole.releases, other.releases)
         _same(whole.result, other.result)
     assert once.stream.drawn == 90
+
+
+@pytest.mark.parametrize("seed", [3, 41])
+def test_a_look_without_the_envelope_grid_judges_alike_and_draws_it_again(seed):
+    """The optimiser's looks leave the envelope grid out (a few hundred bytes a rock
+    instead of kilobytes): the same rocks, records and checks as a look with it, and
+    its envelopes (the chosen design's figures) those of the same rocks run with it."""
+    project = load_project(PROJECTS / "quarry_fence_ditch.yaml")
+    registry = load_registry()
+    plan = plan_for(project, registry)
+    measures = [p.measure for p in plan.placed]
+    with_grid = evaluate_design(project, registry, measures, plan.concept, rocks=150, seed=seed)
+    first = evaluate_design(project, registry, measures, plan.concept, rocks=60, seed=seed,
+                            envelope=False)
+    lean = evaluate_design(project, registry, measures, plan.concept, rocks=150, seed=seed,
+                           after=first)
+    assert not lean.run.envelope_recorded
+    assert lean.run.result.grid.size < with_grid.run.result.grid.size
+    for f in fields(lean.run.result):
+        if not f.name.startswith("grid"):
+            a, b = getattr(lean.run.result, f.name), getattr(with_grid.run.result, f.name)
+            if not isinstance(a, list):
+                np.testing.assert_array_equal(np.asarray(a), np.asarray(b), err_msg=f.name)
+    assert [c.as_dict() for cs in lean.checks for c in cs] == [
+        c.as_dict() for cs in with_grid.checks for c in cs]
+    env, ref = lean.run.envelopes(), with_grid.run.envelopes()
+    assert env.attrs["rocks"] == 150
+    assert env.equals(ref)
+    with pytest.raises(ValueError, match="grid"):  # a lean look goes on only leanly
+        run_in_memory(project, rocks=200, seed=seed, after=run_in_memory(
+            project, rocks=100, seed=seed, envelope=False), envelope=True)

@@ -41,7 +41,8 @@ def test_the_default_schedule_is_what_the_docs_say():
 def test_the_default_budget_fits_a_16_gib_machine(monkeypatch):
     """optimise's guard of its last look: the default budget on a project of 201 envelope
     points passes on a machine of 16 GiB (the guard of a check's rocks, which keeps float64
-    copies of every point, would refuse it); a budget that does not fit says what to give."""
+    copies of every point, would refuse it); the largest budget passes there too, the
+    looks holding no envelope grid, and one that does not fit says what to give."""
     import os
 
     import pytest
@@ -52,8 +53,10 @@ def test_the_default_budget_fits_a_16_gib_machine(monkeypatch):
     pages = {"SC_PAGE_SIZE": 4096, "SC_PHYS_PAGES": 16 * 2**30 // 4096}
     monkeypatch.setattr(common.os, "sysconf", lambda name: pages[name])
     assert os.sysconf is common.os.sysconf
-    common.decision_memory_guard(DEFAULT_MAX_ROCKS, 201 + 400, 0)
+    common.decision_memory_guard(DEFAULT_MAX_ROCKS, 4)
+    common.decision_memory_guard(2_000_000, 4)
     with pytest.raises(InputError):
         common.in_memory_guard(DEFAULT_MAX_ROCKS, 201 + 400, 0)
+    pages["SC_PHYS_PAGES"] = 4 * 2**30 // 4096
     with pytest.raises(InputError, match="--max-rocks"):
-        common.decision_memory_guard(2_000_000, 201 + 400, 0)
+        common.decision_memory_guard(2_000_000, 4)
