@@ -35,9 +35,9 @@ if TYPE_CHECKING:  # pragma: no cover
     from .design_spec import DesignSpec
     from .evaluation import Evaluation
 
-__all__ = ["LookCheck", "LookResidual", "LookValues", "checker_margin", "checks_at",
-           "judge_look", "look_concept", "look_values", "rejections", "rocks_to_decide",
-           "verdict_of", "with_margin"]
+__all__ = ["LookCheck", "LookResidual", "LookValues", "beyond_rocks", "checker_margin",
+           "checks_at", "futile", "judge_look", "look_concept", "look_values", "rejections",
+           "rocks_to_decide", "verdict_of", "with_margin"]
 
 
 def checker_margin(spec: DesignSpec, confidence: float) -> CheckerMargin | None:
@@ -185,6 +185,8 @@ class LookCheck:
     optimistic: float | None
     target: float
     unit: str
+    #: The bounds with rocks without end (``Check.limits``); None: the value.
+    limits: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -213,15 +215,22 @@ class LookValues:
 
     def to_json(self) -> dict[str, Any]:
         """``{rocks, confidence, checks: [{measure, name, value, bound, optimistic, target,
-        unit}], residual: {reaching, fraction, lower, upper, allowed}}``."""
-        return asdict(self)
+        unit[, limits]}], residual: {reaching, fraction, lower, upper, allowed}}``
+        (``limits`` only where a check gives them)."""
+        out = asdict(self)
+        for c in out["checks"]:
+            if c["limits"] is None:
+                del c["limits"]
+            else:
+                c["limits"] = list(c["limits"])
+        return out
 
 
 def look_values(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,
                 n: int, allowed: float | None, confidence: float) -> LookValues:
     """Point values and both bounds of a look, for the report of a marginal design."""
     rows = [LookCheck(lab, c.name, _finite(c.value), _finite(c.bound), _finite(c.optimistic),
-                      c.target, c.unit)
+                      c.target, c.unit, _limits(c.limits))
             for lab, cs in zip(labels, checks, strict=True) for c in cs]
     res = None
     if residual is not None and allowed is not None:
@@ -231,40 +240,77 @@ def look_values(checks: Sequence[Sequence[Check]], labels: Sequence[str], residu
     return LookValues(int(n), confidence, rows, res)
 
 
-def rocks_to_decide(values: LookValues) -> int | None:
-    """About how many rocks would decide a marginal design (None: it sits on the target).
+def _limits(limits: tuple[float, float] | None) -> tuple[float, float] | None:
+    """``Check.limits`` as finite floats, or None."""
+    if limits is None or not all(math.isfinite(x) for x in limits):
+        return None
+    return float(limits[0]), float(limits[1])
 
-    Each bound's distance from its point value shrinks about as 1/sqrt(n)
+
+def rocks_to_decide(values: LookValues) -> int | None:
+    """About how many rocks would decide a marginal design (None: it sits on the target,
+    or no number would: :func:`beyond_rocks`).
+
+    Each bound's distance from where it tends with rocks without end (the
+    point value, or the check's ``limits``) shrinks about as 1/sqrt(n)
     (order statistics and Clopper-Pearson alike): a check or residual whose
-    point value is ``d`` from the target and whose bounds are ``w`` from the
-    value at ``n`` rocks is decided at about ``n (w / d)**2`` rocks. The
+    bound across the target is ``w`` from that end, the end ``d`` beyond the
+    target, at ``n`` rocks is decided at about ``n (w / d)**2`` rocks. The
     largest such count over the undecided items.
     """
-    n = values.rocks
-    need = 0.0
+    need = _need(values)
+    return int(math.ceil(need)) if values.rocks < need < math.inf else None
+
+
+def beyond_rocks(values: LookValues) -> str | None:
+    """Why no number of rocks decides a look's design, or None: a check whose bounds stay
+    across the target with rocks without end (its ``limits``, e.g. a design block's survey)."""
     for c in values.checks:
-        v, t = c.value, c.target
-        ends = [b for b in (c.bound, c.optimistic) if b is not None and math.isfinite(b)]
-        if v is None or not ends:
-            continue
-        # Decided (held or failed, whichever way the check runs) when both bounds
-        # lie on one side of the target; else the bound across it must come back.
-        lo, hi = min(ends + [v]), max(ends + [v])
-        if lo >= t or hi <= t:
-            continue
-        d = abs(v - t)
-        if d <= 0.0:
-            return None
-        w = v - lo if v > t else hi - v
-        need = max(need, n * (w / d) ** 2)
+        if _need_check(c, values.rocks) == math.inf and c.limits is not None:
+            return (f"{c.measure}: {c.name}'s bounds stay across the target "
+                    f"{c.target:g} {c.unit} with any number of rocks ({c.limits[0]:.4g} to "
+                    f"{c.limits[1]:.4g} {c.unit}: an uncertainty beside the rocks')")
+    return None
+
+
+def futile(values: LookValues, budget: int, factor: float = 4.0) -> bool:
+    """Would deciding this look's design take more than ``factor`` times ``budget`` rocks
+    (by :func:`rocks_to_decide`'s reckoning), or no number of them? The optimiser then
+    stops looking (the design is marginal, never admitted, so neither error grows)."""
+    return _need(values) > factor * budget
+
+
+def _need_check(c: LookCheck, n: int) -> float:
+    """Rocks that would decide one check (0: decided; inf: none would)."""
+    v, t = c.value, c.target
+    ends = [b for b in (c.bound, c.optimistic) if b is not None and math.isfinite(b)]
+    if v is None or not ends:
+        return 0.0
+    # Decided (held or failed, whichever way the check runs) when both bounds
+    # lie on one side of the target; else the bound across it must come back.
+    lo, hi = min(ends + [v]), max(ends + [v])
+    if lo >= t or hi <= t:
+        return 0.0
+    end_lo, end_hi = (v, v) if c.limits is None else c.limits
+    if v > t:
+        w, d = end_lo - lo, end_lo - t
+    else:
+        w, d = hi - end_hi, t - end_hi
+    if d <= 0.0:  # across the target even with rocks without end (or on it)
+        return math.inf
+    return n * (max(w, 0.0) / d) ** 2
+
+
+def _need(values: LookValues) -> float:
+    """:func:`rocks_to_decide` as a float: 0 when decided, inf when no number would."""
+    n = values.rocks
+    need = max([_need_check(c, n) for c in values.checks], default=0.0)
     r = values.residual
     if r is not None and r.upper > r.allowed and r.lower <= r.allowed:
         d = abs(r.fraction - r.allowed)
         w = max(r.upper - r.fraction, r.fraction - r.lower)
-        if d <= 0.0:
-            return None
-        need = max(need, n * (w / d) ** 2)
-    return int(math.ceil(need)) if need > n else None
+        need = max(need, n * (w / d) ** 2 if d > 0.0 else math.inf)
+    return need
 
 
 def rejections(checks: Sequence[Sequence[Check]], labels: Sequence[str], residual: int | None,

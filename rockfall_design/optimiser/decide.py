@@ -31,7 +31,9 @@ import numpy as np
 from ..judge.evaluation import Evaluation, evaluate_design
 from ..judge.looks import (
     LookValues,
+    beyond_rocks,
     checks_at,
+    futile,
     judge_look,
     look_concept,
     look_values,
@@ -55,13 +57,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 from .screening import Screening, ScreenResult, restart_index, restart_margin
 
-__all__ = [
-    "SHORT",
-    "Decider",
-    "Decision",
-    "decide",
-    "verify_fresh",
-]
+__all__ = ["SHORT", "Decider", "Decision", "decide", "verify_fresh"]
 
 
 @dataclass
@@ -138,7 +134,7 @@ def _reason(verdict: Verdict, values: LookValues, failures: Sequence[str],
             failures)
     need = rocks_to_decide(values)
     more = (f"about {need:,} rocks would decide it (--max-rocks)" if need else
-            "its point value sits on the target")
+            beyond_rocks(values) or "its point value sits on the target")
     return (f"marginal: neither holds nor fails with {conf} confidence on "
             f"{values.rocks:,} rocks; {more}")
 
@@ -309,9 +305,7 @@ class Decider:
 
     def __init__(self, screen: Screening, looks: LookSchedule,
                  margin: CheckerMargin | None = None) -> None:
-        self.screen = screen
-        self.looks = looks
-        self.margin = margin
+        self.screen, self.looks, self.margin = screen, looks, margin
         # The chains of look screenings (look -> screening), by restart station (None:
         # barriers only).
         self._chains: OrderedDict[float | None, dict[int, Screening]] = OrderedDict(
@@ -431,13 +425,22 @@ class Decider:
         sc.drop_edit_tables()  # each design is judged once per look
         return sr, sc.edit_rocks - before
 
+    def _values(self, ev: Evaluation | None, sr: ScreenResult, n: int
+                ) -> tuple[LookValues, list[str]]:
+        """A look's values and rejections: its exact run's, else its screening's."""
+        s0, allowed = self.screen, self.screen.allowed_fraction
+        if ev is not None:
+            return _ev_values(ev, allowed)
+        args = (sr.checks, sr.labels, None if s0.project.protect is None else sr.residual, n,
+                allowed, s0.confidence)
+        return look_values(*args), rejections(*args)
+
     def decide(self, measures: Sequence[ProtectiveMeasure], first: ScreenResult) -> Decision:
         """Decide a design that the first look (the search's screening) did not reject.
 
         Looks are screened (:meth:`_look`) while they judge every rock exactly; an
         exact run confirms an admission, or decides a look that could not."""
         s0 = self.screen
-        allowed = s0.allowed_fraction
         screened, stations, restart = self._look_plan(measures)
         sizes = self.looks.sizes
         j, sr, ev = 0, first, None
@@ -454,7 +457,9 @@ class Decider:
                 last = ev
                 verdict, short = judge_look(ev, s0.registry, self.margin, 2 * sizes[j],
                                             2 * sizes[-1])
-            if verdict is not Verdict.UNDECIDED or j + 1 == len(sizes):
+            values, fails = self._values(ev, sr, sizes[j])
+            # Stop where no budget near this one would decide it (it stays marginal).
+            if verdict is not Verdict.UNDECIDED or j + 1 == len(sizes) or futile(values, sizes[-1]):
                 break
             j += 1
             ev, short = None, []
@@ -466,11 +471,5 @@ class Decider:
                 by_exact = sr.approximate or bool(sr.reason)
             else:
                 by_exact = True
-        if ev is not None:
-            values, fails = _ev_values(ev, allowed)
-        else:
-            prot = None if s0.project.protect is None else sr.residual
-            args = (sr.checks, sr.labels, prot, sizes[j], allowed, s0.confidence)
-            values, fails = look_values(*args), rejections(*args)
         return _decided(Decision(verdict, sizes[j], ev, "", j + 1, exact, simulated, values),
                         fails, short)

@@ -169,6 +169,12 @@ class Check:
     design_values : tuple of DesignValue
         The design values and product figures the check was computed from, in
         the order a reader follows them (the report's table of design values).
+    limits : tuple of float, or None
+        ``optimistic`` and ``bound`` as the rocks grow without end: the part of
+        the bounds that more rocks do not narrow (an uncertainty beside the
+        rocks', such as a design block's survey), as (lower, upper). None: both
+        bounds close on ``value``. The optimiser stops looking at a design
+        that no budget of rocks would decide.
 
     See Also
     --------
@@ -190,6 +196,7 @@ class Check:
     relation: str = ""
     target_symbol: str = ""
     design_values: tuple[DesignValue, ...] = ()
+    limits: tuple[float, float] | None = None
 
     @property
     def holds_with_confidence(self) -> bool:
@@ -226,7 +233,7 @@ class Check:
             "relation": self.relation,
             "target_symbol": self.target_symbol,
             "design_values": [d.as_dict() for d in self.design_values],
-        }
+        } | ({} if self.limits is None else {"limits": list(self.limits)})
 
 
 class SafetyConcept(ABC):

@@ -6,11 +6,18 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rockfall_design.judge.looks import look_values, rejections, rocks_to_decide
+from rockfall_design.judge.looks import (
+    beyond_rocks,
+    futile,
+    look_values,
+    rejections,
+    rocks_to_decide,
+)
 from rockfall_design.plugins.concept import Check
 
 values = st.one_of(st.none(), st.floats(min_value=0.0, max_value=10.0),
@@ -77,3 +84,46 @@ def test_a_check_is_undecided_whichever_way_it_runs_while_its_bounds_straddle_th
         far = min(bound, optimistic) if value > target else max(bound, optimistic)
         w, d = abs(value - far), abs(value - target)
         assert need == math.ceil(1000 * (w / d) ** 2) or (need is None and w <= d)
+
+
+def _look(value, bound, optimistic, target, limits, n=21_184):
+    c = Check(name="design_energy", value=value, target=target, ok=value <= target,
+              unit="kJ", bound=bound, optimistic=optimistic, limits=limits)
+    return look_values([[c]], ["fence RX-050"], None, n, None, 0.995)
+
+
+def test_a_bound_the_rocks_cannot_narrow_decides_the_rocks_to_decide():
+    """design_quarry's RX-050 fence: design energy 606.6 kJ against 500, its optimistic
+    bound 497 kJ. The rocks' part of the bound shrinks as 1/sqrt(n), the design block's
+    survey part (limits: 0.82 and 1.33 times the point value) does not: with the survey's
+    lower end at 498.9 kJ no number of rocks decides it; at 501.4 kJ about n (w / d)^2,
+    d the 1.4 kJ from the end to the target, not the 106.6 from the value."""
+    stuck = _look(606.6, 807.2, 497.0, 500.0, (498.9, 808.0))
+    assert rocks_to_decide(stuck) is None
+    assert "any number of rocks" in beyond_rocks(stuck)
+    assert futile(stuck, 2_000_000)
+    slow = _look(606.6, 807.2, 497.0, 500.0, (501.4, 808.0))
+    assert rocks_to_decide(slow) == math.ceil(21_184 * ((501.4 - 497.0) / 1.4) ** 2)
+    assert beyond_rocks(slow) is None
+    assert futile(slow, 50_000) and not futile(slow, 400_000)
+    plain = _look(606.6, 807.2, 497.0, 500.0, None)  # no limits: the bounds close on 606.6
+    assert rocks_to_decide(plain) == math.ceil(21_184 * ((606.6 - 497.0) / 106.6) ** 2)
+    assert not futile(plain, 50_000)
+    assert plain.to_json()["checks"][0].keys() == {
+        "measure", "name", "value", "bound", "optimistic", "target", "unit"}
+    assert stuck.to_json()["checks"][0]["limits"] == [498.9, 808.0]
+
+
+def test_a_fractile_scaled_by_a_survey_gives_the_limits_of_its_bounds():
+    from rockfall_design_builtins.safety.limit_states import fractile_check
+
+    rng = np.random.default_rng(5)
+    values = rng.lognormal(5.0, 0.4, 30_000)
+    plain = fractile_check("design_energy", values, 0.0, 500.0, "MEL", "kJ", 1.1, "gamma_F",
+                           0.995)
+    scaled = fractile_check("design_energy", values, 0.0, 500.0, "MEL", "kJ", 1.1, "gamma_F",
+                            0.995, scale=(0.8, 1.3))
+    assert plain.limits is None and "limits" not in plain.as_dict()
+    lo, hi = scaled.limits
+    assert lo == pytest.approx(0.8 * scaled.value) and hi == pytest.approx(1.3 * scaled.value)
+    assert scaled.optimistic < lo < scaled.value < hi < scaled.bound

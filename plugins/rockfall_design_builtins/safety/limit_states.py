@@ -223,6 +223,8 @@ def fractile_check(name: str, values: Any, add: float, target: float, against: s
               + f" = {value:.2f} {unit} over {v.size} rocks, against {against}")
     optimistic = None if lower is None else g * lower + add
     fails = optimistic is not None and optimistic > target
+    if scale != (1.0, 1.0):  # what the rocks cannot narrow: the other uncertainty's bounds
+        named["limits"] = (g * point * scale[0] + add, g * point * scale[1] + add)
     symbol = named.get("symbol") or "value"
     meaning = f"design value: gamma_F {g:.3g} x 99 % fractile"
     if upper is None:
