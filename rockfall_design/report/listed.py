@@ -16,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
+from ..judge.looks import beyond_rocks
 from ..judge.records import CheckSummary, run_of
 from ..run.summary import RunSummary, Share
 
@@ -42,7 +43,8 @@ def what_decides(m: Listed) -> str:
     if need:
         return f"about {need:,} rocks would decide it (--max-rocks {_round_up(need)})"
     if m.values is not None:
-        return "its point value sits on the target: no number of rocks is likely to decide it"
+        return beyond_rocks(m.values) or ("its point value sits on the target: no number of "
+                                          "rocks is likely to decide it")
     return "more rocks (--max-rocks) may decide it"
 
 

@@ -127,3 +127,13 @@ def test_a_fractile_scaled_by_a_survey_gives_the_limits_of_its_bounds():
     lo, hi = scaled.limits
     assert lo == pytest.approx(0.8 * scaled.value) and hi == pytest.approx(1.3 * scaled.value)
     assert scaled.optimistic < lo < scaled.value < hi < scaled.bound
+
+
+def test_a_listed_design_no_budget_decides_says_what_holds_it_back():
+    from rockfall_design.optimiser.alternatives import Listed
+    from rockfall_design.report.listed import what_decides
+
+    stuck = _look(606.6, 807.2, 497.0, 500.0, (498.9, 808.0))
+    m = Listed(family="fence", measures=[], labels=["fence RX-050"],
+               cost=78_000.0, rocks=stuck.rocks, values=stuck, reason="marginal", decided=True)
+    assert "any number of rocks" in what_decides(m) and "design_energy" in what_decides(m)
