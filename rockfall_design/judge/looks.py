@@ -36,7 +36,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .evaluation import Evaluation
 
 __all__ = ["LookCheck", "LookResidual", "LookValues", "beyond_rocks", "checker_margin",
-           "checks_at", "futile", "judge_look", "look_concept", "look_values", "rejections",
+           "checks_at", "judge_look", "look_concept", "look_values", "rejections",
            "rocks_to_decide", "verdict_of", "with_margin"]
 
 
@@ -267,17 +267,11 @@ def beyond_rocks(values: LookValues) -> str | None:
     across the target with rocks without end (its ``limits``, e.g. a design block's survey)."""
     for c in values.checks:
         if _need_check(c, values.rocks) == math.inf and c.limits is not None:
-            return (f"{c.measure}: {c.name}'s bounds stay across the target "
-                    f"{c.target:g} {c.unit} with any number of rocks ({c.limits[0]:.4g} to "
-                    f"{c.limits[1]:.4g} {c.unit}: an uncertainty beside the rocks')")
+            return (f"{c.measure}: at this look's point value, {c.name}'s bounds would stay "
+                    f"across the target {c.target:g} {c.unit} with any number of rocks "
+                    f"({c.limits[0]:.4g} to {c.limits[1]:.4g} {c.unit}: an uncertainty beside "
+                    "the rocks')")
     return None
-
-
-def futile(values: LookValues, budget: int, factor: float = 4.0) -> bool:
-    """Would deciding this look's design take more than ``factor`` times ``budget`` rocks
-    (by :func:`rocks_to_decide`'s reckoning), or no number of them? The optimiser then
-    stops looking (the design is marginal, never admitted, so neither error grows)."""
-    return _need(values) > factor * budget
 
 
 def _need_check(c: LookCheck, n: int) -> float:

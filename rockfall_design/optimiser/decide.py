@@ -33,7 +33,6 @@ from ..judge.looks import (
     LookValues,
     beyond_rocks,
     checks_at,
-    futile,
     judge_look,
     look_concept,
     look_values,
@@ -457,9 +456,7 @@ class Decider:
                 last = ev
                 verdict, short = judge_look(ev, s0.registry, self.margin, 2 * sizes[j],
                                             2 * sizes[-1])
-            values, fails = self._values(ev, sr, sizes[j])
-            # Stop where no budget near this one would decide it (it stays marginal).
-            if verdict is not Verdict.UNDECIDED or j + 1 == len(sizes) or futile(values, sizes[-1]):
+            if verdict is not Verdict.UNDECIDED or j + 1 == len(sizes):
                 break
             j += 1
             ev, short = None, []
@@ -471,5 +468,6 @@ class Decider:
                 by_exact = sr.approximate or bool(sr.reason)
             else:
                 by_exact = True
+        values, fails = self._values(ev, sr, sizes[j])
         return _decided(Decision(verdict, sizes[j], ev, "", j + 1, exact, simulated, values),
                         fails, short)

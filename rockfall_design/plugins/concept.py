@@ -172,9 +172,9 @@ class Check:
     limits : tuple of float, or None
         ``optimistic`` and ``bound`` as the rocks grow without end: the part of
         the bounds that more rocks do not narrow (an uncertainty beside the
-        rocks', such as a design block's survey), as (lower, upper). None: both
-        bounds close on ``value``. The optimiser stops looking at a design
-        that no budget of rocks would decide.
+        rocks', such as a design block's survey), as (lower, upper), estimated
+        at ``value``. None: both bounds close on ``value``. The report reckons
+        the rocks that would decide a marginal design from them.
 
     See Also
     --------
