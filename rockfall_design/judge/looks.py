@@ -247,7 +247,7 @@ def _limits(limits: tuple[float, float] | None) -> tuple[float, float] | None:
     return float(limits[0]), float(limits[1])
 
 
-def rocks_to_decide(values: LookValues) -> int | None:
+def rocks_to_decide(values: LookValues, use_limits: bool = True) -> int | None:
     """About how many rocks would decide a marginal design (None: it sits on the target,
     or no number would: :func:`beyond_rocks`).
 
@@ -256,9 +256,11 @@ def rocks_to_decide(values: LookValues) -> int | None:
     (order statistics and Clopper-Pearson alike): a check or residual whose
     bound across the target is ``w`` from that end, the end ``d`` beyond the
     target, at ``n`` rocks is decided at about ``n (w / d)**2`` rocks. The
-    largest such count over the undecided items.
+    largest such count over the undecided items. ``use_limits`` False reckons
+    every check as if its bounds closed on its value: for a design looked at
+    on the search's rocks only, whose point value is too rough for its limits.
     """
-    need = _need(values)
+    need = _need(values, use_limits)
     return int(math.ceil(need)) if values.rocks < need < math.inf else None
 
 
@@ -274,7 +276,7 @@ def beyond_rocks(values: LookValues) -> str | None:
     return None
 
 
-def _need_check(c: LookCheck, n: int) -> float:
+def _need_check(c: LookCheck, n: int, use_limits: bool = True) -> float:
     """Rocks that would decide one check (0: decided; inf: none would)."""
     v, t = c.value, c.target
     ends = [b for b in (c.bound, c.optimistic) if b is not None and math.isfinite(b)]
@@ -285,7 +287,7 @@ def _need_check(c: LookCheck, n: int) -> float:
     lo, hi = min(ends + [v]), max(ends + [v])
     if lo >= t or hi <= t:
         return 0.0
-    end_lo, end_hi = (v, v) if c.limits is None else c.limits
+    end_lo, end_hi = (v, v) if c.limits is None or not use_limits else c.limits
     if v > t:
         w, d = end_lo - lo, end_lo - t
     else:
@@ -295,10 +297,10 @@ def _need_check(c: LookCheck, n: int) -> float:
     return n * (max(w, 0.0) / d) ** 2
 
 
-def _need(values: LookValues) -> float:
+def _need(values: LookValues, use_limits: bool = True) -> float:
     """:func:`rocks_to_decide` as a float: 0 when decided, inf when no number would."""
     n = values.rocks
-    need = max([_need_check(c, n) for c in values.checks], default=0.0)
+    need = max([_need_check(c, n, use_limits) for c in values.checks], default=0.0)
     r = values.residual
     if r is not None and r.upper > r.allowed and r.lower <= r.allowed:
         d = abs(r.fraction - r.allowed)

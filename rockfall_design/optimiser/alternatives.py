@@ -272,7 +272,7 @@ class Listed:
         (:func:`~rockfall_design.judge.looks.rocks_to_decide`)."""
         if self.values is None or self.margin_undecided or self.short_of_margin:
             return None
-        return rocks_to_decide(self.values)
+        return rocks_to_decide(self.values, use_limits=self.decided)  # else: search rocks
 
     def to_json(self) -> dict[str, Any]:
         return {"name": self.family, "family": self.family, "measures": self.measures,

@@ -43,8 +43,10 @@ def what_decides(m: Listed) -> str:
     if need:
         return f"about {need:,} rocks would decide it (--max-rocks {_round_up(need)})"
     if m.values is not None:
-        return beyond_rocks(m.values) or ("its point value sits on the target: no number of "
-                                          "rocks is likely to decide it")
+        # The limits only where the design was looked at to the end (not on search rocks).
+        why = beyond_rocks(m.values) if m.decided else None
+        return why or ("its point value sits on the target: no number of rocks is likely "
+                       "to decide it")
     return "more rocks (--max-rocks) may decide it"
 
 

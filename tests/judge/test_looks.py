@@ -133,3 +133,19 @@ def test_a_listed_design_no_budget_decides_says_what_holds_it_back():
     m = Listed(family="fence", measures=[], labels=["fence RX-050"],
                cost=78_000.0, rocks=stuck.rocks, values=stuck, reason="marginal", decided=True)
     assert "any number of rocks" in what_decides(m) and "design_energy" in what_decides(m)
+
+
+def test_a_design_not_decided_on_the_search_rocks_is_reckoned_without_its_limits():
+    """On the search's few thousand rocks a point value is too rough for its limits (design
+    quarry's RX-100 fences showed an upper end of 1,002-1,012 kJ against 1,000 at 5,296 and
+    10,592 rocks, and held at 813 kJ on 643,884): a design the budget left undecided gets the
+    plain 1/sqrt(n) reckoning, never 'no number of rocks'."""
+    from rockfall_design.optimiser.alternatives import Listed
+    from rockfall_design.report.listed import what_decides
+
+    stuck = _look(606.6, 807.2, 497.0, 500.0, (498.9, 808.0), n=5_296)
+    m = Listed(family="fence", measures=[], labels=["fence RX-050"], cost=78_000.0,
+               rocks=stuck.rocks, values=stuck, reason="not decided", decided=False)
+    assert m.rocks_to_decide == math.ceil(5_296 * ((606.6 - 497.0) / 106.6) ** 2)
+    assert "any number of rocks" not in what_decides(m)
+    assert "rocks would decide it" in what_decides(m)
