@@ -304,7 +304,9 @@ class Decider:
 
     def __init__(self, screen: Screening, looks: LookSchedule,
                  margin: CheckerMargin | None = None) -> None:
-        self.screen, self.looks, self.margin = screen, looks, margin
+        self.screen = screen
+        self.looks = looks
+        self.margin = margin
         # The chains of look screenings (look -> screening), by restart station (None:
         # barriers only).
         self._chains: OrderedDict[float | None, dict[int, Screening]] = OrderedDict(
@@ -424,22 +426,13 @@ class Decider:
         sc.drop_edit_tables()  # each design is judged once per look
         return sr, sc.edit_rocks - before
 
-    def _values(self, ev: Evaluation | None, sr: ScreenResult, n: int
-                ) -> tuple[LookValues, list[str]]:
-        """A look's values and rejections: its exact run's, else its screening's."""
-        s0, allowed = self.screen, self.screen.allowed_fraction
-        if ev is not None:
-            return _ev_values(ev, allowed)
-        args = (sr.checks, sr.labels, None if s0.project.protect is None else sr.residual, n,
-                allowed, s0.confidence)
-        return look_values(*args), rejections(*args)
-
     def decide(self, measures: Sequence[ProtectiveMeasure], first: ScreenResult) -> Decision:
         """Decide a design that the first look (the search's screening) did not reject.
 
         Looks are screened (:meth:`_look`) while they judge every rock exactly; an
         exact run confirms an admission, or decides a look that could not."""
         s0 = self.screen
+        allowed = s0.allowed_fraction
         screened, stations, restart = self._look_plan(measures)
         sizes = self.looks.sizes
         j, sr, ev = 0, first, None
@@ -468,6 +461,11 @@ class Decider:
                 by_exact = sr.approximate or bool(sr.reason)
             else:
                 by_exact = True
-        values, fails = self._values(ev, sr, sizes[j])
+        if ev is not None:
+            values, fails = _ev_values(ev, allowed)
+        else:
+            prot = None if s0.project.protect is None else sr.residual
+            args = (sr.checks, sr.labels, prot, sizes[j], allowed, s0.confidence)
+            values, fails = look_values(*args), rejections(*args)
         return _decided(Decision(verdict, sizes[j], ev, "", j + 1, exact, simulated, values),
                         fails, short)
