@@ -284,6 +284,9 @@ def test_report_shows_confidence_bounds_when_the_summary_has_them(tmp_path):
         assert "bound" in text and "1.23" in text and "upper confidence bound 1.23 %" in text
 
 
+# Slow set: four figures in two formats (6 s); PNG and SVG are written in the fast set
+# (tests/cli/test_cli.py, test_clean_failures.py), PDF of a figure by this test alone.
+@pytest.mark.slow
 def test_plot_format_writes_each_format(tmp_path, capsys):
     figs = tmp_path / "figs"
     assert main(["simulate", str(STANDARD), "--rocks", "40", "--plot", str(figs),

@@ -198,7 +198,8 @@ def named_files(command: str, option: str, capsys, monkeypatch) -> set[str]:
 
 @pytest.mark.parametrize("command, project, rocks", [
     ("simulate", "standard_slope.yaml", "40"),
-    ("check", "quarry_fence_ditch.yaml", "40"),
+    # check's figures and report take 9 s: the slow set; simulate's run here.
+    pytest.param("check", "quarry_fence_ditch.yaml", "40", marks=pytest.mark.slow),
     pytest.param("optimise", SMALL_DESIGN, "200", marks=pytest.mark.slow,
                  id="optimise-design_small.yaml-200"),  # PROJECTS / SMALL_DESIGN: itself
     ("study", "study_talus.yaml", "20"),

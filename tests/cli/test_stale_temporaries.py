@@ -115,6 +115,8 @@ def _wait_streaming(out: Path, proc: subprocess.Popen) -> list[Path]:
         time.sleep(0.02)
 
 
+# Slow set: three runs of the command, two of them held streaming (8 s).
+@pytest.mark.slow
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 def test_the_next_run_removes_what_a_killed_run_left(tmp_path):
     out = tmp_path / "out"

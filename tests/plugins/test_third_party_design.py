@@ -146,7 +146,7 @@ def test_its_space_is_its_declaration_plus_the_candidate(installed, tmp_path):
     assert {c["product"] for c in discrete_choices(fence)} == {"RX-050", "RX-100"}
 
 
-@pytest.mark.parametrize("seed", [5, 7])
+@pytest.mark.parametrize("seed", [5, pytest.param(7, marks=pytest.mark.slow)])  # 5 s each
 def test_optimise_chooses_it_and_check_accepts_the_design(installed, tmp_path, capsys, seed):
     path = _project(tmp_path, seed)
     out = tmp_path / f"out{seed}"

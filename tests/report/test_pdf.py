@@ -142,6 +142,9 @@ def _tables(ctx) -> list:
     return found
 
 
+# Slow set: a run, its report, a Chromium print and a pypdf read each (11 and 22 s);
+# the printing path and the every-header check run on check's report above.
+@pytest.mark.slow
 @pytest.mark.parametrize(("command", "project"), [
     ("simulate", PROJECTS / "standard_slope.yaml"),
     ("optimise", ROOT / "tests" / "data" / "design_small.yaml"),

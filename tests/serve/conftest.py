@@ -34,15 +34,24 @@ def project_copy(tmp_path_factory: pytest.TempPathFactory, projects_dir: Path) -
     return d / "design_two_zones.yaml"
 
 
+def _default_sigint() -> None:
+    """In the child before exec: SIGINT back to its default (a KeyboardInterrupt)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start_server(*args: str, cwd: Path | None = None) -> tuple[subprocess.Popen, str]:
     """``rockfall-design serve ARGS --port 0`` in a process of its own, and the address it printed.
 
     The first lines of its stdout hold the address; the caller stops it
     with :func:`stop_server`.
     """
+    # SIGINT as Ctrl-C has it: a suite started as a background job of a shell
+    # hands its children an ignored SIGINT, which the command keeps ignored (as
+    # it must for such a job), and stop_server then waited its 60 s twice.
     proc = subprocess.Popen(
         [sys.executable, "-m", "rockfall_design", "serve", *args, "--port", "0"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd)
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd,
+        preexec_fn=_default_sigint if sys.platform != "win32" else None)
     lines = []
     for _ in range(10):
         line = proc.stdout.readline()

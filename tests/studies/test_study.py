@@ -125,6 +125,9 @@ def test_a_task_on_the_thread_pool_runs_the_engine_on_one_thread():
         run_tasks(_engine_threads, range(2), workers=2, pool="fibres")
 
 
+# Slow set: two worker processes of Dask's own to start (7.6 s); the Dask path
+# (in-process workers) runs in the fast set in tests/calibration/test_calibration.py.
+@pytest.mark.slow
 def test_a_dask_local_cluster_gives_the_same_numbers(talus):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
