@@ -159,6 +159,27 @@ def test_energy_never_increases_under_a_vanishing_drag():
     _assert_energy_never_increases(sec, rel, [])
 
 
+def test_energy_never_increases_under_a_drag_just_above_round_off():
+    """hypothesis's next find (CI, 2026-11-28): mu_0 of 1e-12, V_s = 2 m/s.
+
+    c = 1.3e-12 1/m over a 1.85 m piece is above the cut-off of the test
+    before (c times the piece's length, 2.4e-12), so the closed forms ran,
+    and cancelled: a rock sliding down a 57-degree face ended 2.3e-5 too
+    fast. Now drag.drag_speed_at and drag._logcosh keep their digits.
+    """
+    soft = Material(impact_model="rough_soft", restitution=0.0, friction=0.0,
+                    rolling_resistance=1e-12, drag_speed_ms=2.0)
+    spang = Material(impact_model="spang", restitution=0.0, friction=0.0,
+                     rolling_resistance=0.0)
+    x = np.array([0.0, 0.001, 0.002, 0.003, 0.004, 0.005, 0.006, 4.006, 4.007, 4.008])
+    y = np.array([0.0] * 7 + [-6.2296309] * 3)
+    sec = Section(x=x, y=y, segment_material=np.zeros(9, dtype=int), materials=(soft, spang))
+    rel = Releases(radius=np.full(4, 0.05), density=2650.0, x=np.array([0.0, 0.0, 0.0, 3.006]),
+                   height=np.zeros(4), vx=np.zeros(4), vy=np.zeros(4), spin=np.zeros(4),
+                   spin_rolling=np.zeros(4, dtype=bool))
+    _assert_energy_never_increases(sec, rel, [])
+
+
 def _assert_energy_never_increases(sec, rel, bars):
     res = _run(sec, rel, bars)
     for i, tr in enumerate(res.trajectories):
