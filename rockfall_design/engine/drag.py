@@ -65,7 +65,13 @@ def _arc_from_log(y, hyper_sin):
     """th with ln sinh th = y (``hyper_sin``) or ln cosh th = y, without overflow."""
     if y > 30.0:
         return y + _LN2
-    return np.arcsinh(np.exp(y)) if hyper_sin else np.arccosh(np.exp(y))
+    if hyper_sin:
+        return np.arcsinh(np.exp(y))
+    # arccosh(1 + u) = ln(1 + u + sqrt(u (2 + u))), u = exp(y) - 1 as expm1: for a
+    # small y (a drag near zero) arccosh(exp(y)) read y through 1 + y, and lost
+    # a relative 3e-10 of the time at c = 1e-7 (against a long-double reckoning).
+    u = np.expm1(y)
+    return np.log1p(u + np.sqrt(u * (2.0 + u)))
 
 
 @hot

@@ -84,3 +84,23 @@ def test_a_drag_near_zero_gives_the_constant_acceleration_forms(a, c, v0):
     assert s == pytest.approx(s_plain, rel=tol, abs=1e-12)
     v1 = drag.drag_speed_at(v0, a, c, s_plain)
     assert v1 == pytest.approx(np.sqrt(v0 * v0 + 2.0 * a * s_plain), rel=tol, abs=1e-12)
+
+
+@pytest.mark.parametrize("c", [1e-7, 1e-6, 1e-5, 1e-4, 1e-2, 0.1])
+@pytest.mark.parametrize("v0", [0.0, 0.5, 3.0])
+def test_the_time_to_a_distance_keeps_its_digits_for_a_small_drag(c, v0):
+    """drag_time below the terminal speed against the same closed form in long double.
+
+    arccosh(exp(y)) read a small y through 1 + y: 3e-10 of the time lost at
+    c = 1e-7 over 2 m. The reckoning here takes arccosh(1 + u) as
+    ln(1 + u + sqrt(u (2 + u))) in numpy's long double (x87 extended on x86).
+    """
+    L = np.longdouble
+    a, d = 8.255, 2.0
+    aa, cc, vv, dd = L(a), L(c), L(v0), L(d)
+    vt = np.sqrt(aa / cc)
+    th0 = np.arctanh(vv / vt)
+    u = np.expm1(np.log1p(2 * np.sinh(th0 / 2) ** 2) + cc * dd)
+    exact = (np.log1p(u + np.sqrt(u * (2 + u))) - th0) / (cc * vt)
+    t = drag.drag_time(v0, drag.drag_speed_at(v0, a, c, d), a, c, d)
+    assert abs(float((L(t) - exact) / exact)) < 1e-14
