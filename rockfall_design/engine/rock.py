@@ -407,8 +407,10 @@ def simulate_rock(path, settings, rock, rng, stations, bars, out, resume, state0
             c = (5.0 / 7.0 if rolling else 1.0) * G * cosb * mur / (vdr * vdr)
             # The drag changes v^2 over the piece by a fraction of about
             # 2 c dist. Below round-off it is no drag: its closed forms divide
-            # by c and, with mu_0 near zero (hypothesis found 6e-74), cancel
-            # to noise that gained energy.
+            # by c, and with mu_0 near zero (hypothesis found 6e-74) they once
+            # cancelled to noise that gained energy. They are written not to
+            # cancel now (drag.py; a c of 1.3e-12, above this cut, was the
+            # next find), and this cut keeps such a c out of them all the same.
             if c * dist < 1e-12:
                 c = 0.0
         # The next event: end of piece, speed zero, slip zero, spin zero (and,
