@@ -125,14 +125,31 @@ def drag_state(v0, a, c, t):
     if a > 0.0:
         vt = np.sqrt(a / c)
         k = c * vt
+        # The distance ln(cosh th / cosh th0) / c (ln(sinh th / sinh th0) / c above
+        # V) as ln(1 + 2 sinh(th0 + kt/2) sinh(kt/2) / cosh th0) (cosh(...) and
+        # sinh th0 above V): the sum-to-product form, with th - th0 = kt never
+        # formed by a subtraction. The difference of two logarithms lost a
+        # relative 8e-8 of the distance on nearly level ground (a = 1e-6,
+        # c = 1e-7, 0.01 s; against a long-double reckoning). Far out (th > 20,
+        # the terminal speed reached) the difference is large and exact enough,
+        # and sinh and cosh would overflow.
+        kt = k * t
         if v0 < vt:
             th0 = np.arctanh(v0 / vt)
-            th = th0 + k * t
-            return vt * np.tanh(th), (_logcosh(th) - _logcosh(th0)) / c
+            th = th0 + kt
+            if th < 20.0:
+                d = np.log1p(2.0 * np.sinh(th0 + 0.5 * kt) * np.sinh(0.5 * kt) / np.cosh(th0))
+            else:
+                d = _logcosh(th) - _logcosh(th0)
+            return vt * np.tanh(th), d / c
         if v0 > vt:
             th0 = np.arctanh(vt / v0)
-            th = th0 + k * t
-            return vt / np.tanh(th), (_logsinh(th) - _logsinh(th0)) / c
+            th = th0 + kt
+            if th < 20.0:
+                d = np.log1p(2.0 * np.cosh(th0 + 0.5 * kt) * np.sinh(0.5 * kt) / np.sinh(th0))
+            else:
+                d = _logsinh(th) - _logsinh(th0)
+            return vt / np.tanh(th), d / c
         return vt, vt * t
     if a < 0.0:
         # v = W tan(th0 - k t) and cos(th0 - k t) / cos th0 by the sum formulas
