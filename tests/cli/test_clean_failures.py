@@ -40,7 +40,8 @@ def with_safety(directory: Path, safety: str) -> Path:
 
 @pytest.mark.parametrize("command, project", [
     ("simulate", "standard_slope.yaml"),
-    # check's seven figures drawn twice (8 s): the slow set, simulate's in the fast one.
+    # check's seven figures as plot files and in its report (8 s): the slow set;
+    # simulate's run in the fast one.
     pytest.param("check", "quarry_fence_ditch.yaml", marks=pytest.mark.slow),
 ])
 @pytest.mark.parametrize("formats", ["svg", pytest.param("svg,png", marks=pytest.mark.slow)])
