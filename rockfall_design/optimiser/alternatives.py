@@ -19,7 +19,7 @@ from ..judge.sequential import LookSchedule
 if TYPE_CHECKING:  # pragma: no cover
     from ..plugins.measure import ProtectiveMeasure
     from ..studies.sampling import ScenarioRun
-from ..judge.looks import LookValues, rocks_to_decide
+from ..judge.looks import LookValues, beyond_rocks, rocks_to_decide
 
 #: Designs that miss their targets on the point values of the search rocks, but not
 #: with confidence, decided per family when cheaper than its design (cheapest first).
@@ -273,6 +273,11 @@ class Listed:
         if self.values is None or self.margin_undecided or self.short_of_margin:
             return None
         return rocks_to_decide(self.values, use_limits=self.decided)  # else: search rocks
+
+    @property
+    def beyond_rocks(self) -> str | None:
+        """:func:`~rockfall_design.judge.looks.beyond_rocks`, as :attr:`rocks_to_decide` reckons."""
+        return beyond_rocks(self.values) if self.values is not None and self.decided else None
 
     def to_json(self) -> dict[str, Any]:
         return {"name": self.family, "family": self.family, "measures": self.measures,

@@ -16,7 +16,6 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
-from ..judge.looks import beyond_rocks
 from ..judge.records import CheckSummary, run_of
 from ..run.summary import RunSummary, Share
 
@@ -43,10 +42,8 @@ def what_decides(m: Listed) -> str:
     if need:
         return f"about {need:,} rocks would decide it (--max-rocks {_round_up(need)})"
     if m.values is not None:
-        # The limits only where the design was looked at to the end (not on search rocks).
-        why = beyond_rocks(m.values) if m.decided else None
-        return why or ("its point value sits on the target: no number of rocks is likely "
-                       "to decide it")
+        return m.beyond_rocks or ("its point value sits on the target: no number of rocks "
+                                  "is likely to decide it")
     return "more rocks (--max-rocks) may decide it"
 
 

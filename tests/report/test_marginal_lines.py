@@ -33,7 +33,7 @@ def _entry(**kw):
     fields = {"family": "fence", "labels": ["fence RX-100 3.5 m at x = 92 m"],
               "cost": 68_000.0, "values": LookValues(200_000, 0.993, [check], None),
               "rocks_to_decide": 512_345, "decided": True, "short_of_margin": False,
-              "margin_undecided": False, "reason": ""}
+              "margin_undecided": False, "reason": "", "beyond_rocks": None}
     return SimpleNamespace(**{**fields, **kw})
 
 
