@@ -117,6 +117,10 @@ def evil_project(directory: Path) -> Path:
             line = "name: " + json.dumps(EVIL_NAME)
         elif line.startswith("description:"):
             line = "description: " + json.dumps(EVIL_TEXT)
+        elif line.strip() == "stations: [50, 90, 115]":
+            # One station: its passage figure's title carries the name as the
+            # three did, and report.html draws two figures fewer.
+            line = line.replace("[50, 90, 115]", "[90]")
         lines.append(line)
     path = directory / "evil.yaml"
     path.write_text("\n".join(lines) + "\n")
