@@ -20,7 +20,7 @@ from . import columns, first_compile, native_code
 from .batching import FIRST_BATCH, FIRST_BATCH_FEW_POINTS, Batches, default_threads
 from .flight import path_tree
 from .forest import F_N, F_STOP
-from .jit import DIGEST, compile_notice, compiled
+from .jit import DIGEST, compile_notice, compiled, writable
 from .problem import (
     EngineSettings,
     EnsembleResult,
@@ -82,8 +82,7 @@ made once per run rather than once per batch, and, with rocks of several sizes, 
 ground elements the paths of the others can lie on (see :func:`run_ensemble`)."""
 
 
-@compiled(nogil=True)
-def rock_path(ground, r, max_chord, elems):
+def rock_path(ground: Ground, r: float, max_chord: float, elems: np.ndarray) -> Path:
     """The ground as a rock of radius ``r`` (m) meets it (``records.Path``).
 
     Its centre path (``profile.centre_path``) and the tree of its highest
@@ -91,19 +90,31 @@ def rock_path(ground, r, max_chord, elems):
     ``elems``: empty, or the ground elements (segment offsets and vertex
     arcs) that the path can lie on (``profile.path_elements``), of which
     ``profile.survey_path`` makes it.
+
+    Not compiled itself: the kernel's own variant of :func:`_path` (loaded
+    from the cache) does the work, so a run on a survey of many points, which
+    makes its first path here, compiles nothing more than the kernel (see
+    ``profile.sweep_centre_path``). It releases Python's lock.
     """
-    return _path(ground, r, max_chord, elems, no_units())
+    return _path(_kernel_ground(ground), float(r), float(max_chord),
+                 writable(elems, np.int64), no_units())
 
 
-@compiled(nogil=True)
-def rock_path_of(ground, r, max_chord, units):
+def rock_path_of(ground: Ground, r: float, max_chord: float, units: tuple) -> Path:
     """:func:`rock_path` from every element, from ``units`` (``profile.every_piece_units``).
 
     The same path, to the bit; what does not depend on the radius (the arcs'
     trigonometry, most of a small section's path) made once per batch, or
     here if ``units`` is ``profile.no_units()``.
     """
-    return _path(ground, r, max_chord, np.empty(0, dtype=np.int64), units)
+    return _path(_kernel_ground(ground), float(r), float(max_chord),
+                 np.empty(0, dtype=np.int64), units)
+
+
+def _kernel_ground(ground: Ground) -> Ground:
+    """``ground`` with arrays of the types the kernel is compiled for (:func:`.jit.writable`)."""
+    return Ground(writable(ground.x, np.float64), writable(ground.y, np.float64),
+                  writable(ground.seg_mat, np.int64), writable(ground.mats, np.float64))
 
 
 @compiled(nogil=True)
@@ -338,7 +349,7 @@ def run_ensemble(
     # numba wants a uint64 scalar; Python ints above 2**63 need the wrap.
     k64 = np.uint64(int(key) % (1 << 64))
     max_chord = float(np.radians(settings.max_chord_deg))
-    ground = Ground(*(_writable(a) for a in (section.x, section.y, section.segment_material,
+    ground = Ground(*(writable(a) for a in (section.x, section.y, section.segment_material,
                                               section.material_table())))
     path0, r0, elems, path_seconds = _shared_path(ground, radius, max_chord)
 
@@ -530,21 +541,8 @@ def _resume(resume: tuple[np.ndarray, np.ndarray, np.ndarray] | None, n: int) ->
     if resume is None:
         return Resume(np.zeros(n, dtype=bool), np.zeros((n, columns.N_RESTART_COLS)),
                       np.zeros(n, dtype=np.uint64))
-    return Resume(_writable(resume[0], bool), _writable(resume[1], float),
-                  _writable(resume[2], np.uint64))
-
-
-def _writable(a: np.ndarray, dtype: Any = None) -> np.ndarray:
-    """``a`` as a C-contiguous array numba types as writable (a copy only if it is not).
-
-    numba compiles a function anew for a read-only array (a type of its
-    own): the optimiser hands the engine its sections read-only (the plugin
-    proxy's guard), and its first run after an install compiled a second
-    variant of the kernel, about 30 s, for that alone. The kernel never
-    writes these; copying the few that are read-only costs microseconds.
-    """
-    out = np.ascontiguousarray(a, dtype=dtype)
-    return out if out.flags.writeable else out.copy()
+    return Resume(writable(resume[0], bool), writable(resume[1], float),
+                  writable(resume[2], np.uint64))
 
 
 def _run_all(batch_args: Callable[[int, int], tuple], batches: Batches, n: int,

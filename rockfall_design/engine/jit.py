@@ -39,6 +39,8 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 PROG = "rockfall-design"
 COMPILE_ESTIMATE = "about 20 to 60 s"
 """What the first compilation takes (measured 20 to 40 s on one core of a laptop-class CPU)."""
@@ -297,6 +299,22 @@ def compiled(fn: Callable[..., Any] | None = None, *, nogil: bool = False) -> An
         return one_variant(njit(cache=CACHE, nogil=nogil, no_cfunc_wrapper=True)(f))
 
     return wrap if fn is None else wrap(fn)
+
+
+def writable(a: Any, dtype: Any = None) -> Any:
+    """``a`` as a C-contiguous array numba types as writable (a copy only if it is not).
+
+    numba compiles a function anew for each type of argument, and a
+    read-only or strided array is a type of its own: the optimiser hands the
+    engine its sections read-only (the plugin proxy's guard), and its first
+    run after an install compiled a second variant of the kernel, about 30 s,
+    for that alone. Arrays given to a compiled function from Python pass
+    through here, so that one variant (the kernel's) serves every caller.
+    The engine never writes them; copying the few that are read-only costs
+    microseconds.
+    """
+    out = np.ascontiguousarray(a, dtype=dtype)
+    return out if out.flags.writeable else out.copy()
 
 
 def one_variant(dispatcher: Any) -> Any:
