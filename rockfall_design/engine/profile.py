@@ -801,6 +801,9 @@ def path_elements(gx: np.ndarray, gy: np.ndarray, r_min: float, r_max: float,
     Serra, J. (1982). Image Analysis and Mathematical Morphology. Academic
     Press (openings by discs; granulometries).
     """
+    # One compiled variant of near_path for every caller (read-only or
+    # strided arrays would each compile one of their own, see jit.writable).
+    gx, gy = writable(gx, np.float64), writable(gy, np.float64)
     n = gx.shape[0]
     s = 1.0 / np.cos(0.5 * max_chord)
     every = element_codes(n)

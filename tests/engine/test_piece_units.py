@@ -13,6 +13,7 @@ from rockfall_design.engine.profile import (
     centre_path_of,
     element_codes,
     every_piece_units,
+    near_path,
     path_elements,
     survey_path,
     sweep_centre_path,
@@ -63,17 +64,18 @@ def test_paths_made_from_python_use_the_kernels_sweep_and_compile_nothing():
     # path_elements are plain functions over the sweep the kernel compiles
     # (ensemble._path, profile.centre_path_of): whatever arrays they are given
     # (read-only, strided, int32, float lists), they add at most that one
-    # variant, loaded from the cache, and compile nothing.
+    # variant, loaded from the cache, and compile nothing; path_elements
+    # compiles one variant of near_path.
     rng = np.random.default_rng(4)
     x = np.linspace(0.0, 200.0, 400)
     y = np.interp(x, [0.0, 80.0, 200.0], [100.0, 20.0, 12.0]) + rng.normal(0.0, 0.01, x.size)
     sec = Section(x, y, np.zeros(x.size - 1, dtype=np.int64), (Material(),))
+    before = {d: (set(d.signatures), dict(d.stats.cache_misses))
+              for d in (ensemble._path, centre_path_of, near_path)}
     run_ensemble(sec, Releases(radius=np.array([0.4, 0.6]), density=2650.0,
                                x=np.full(2, 1.0), height=np.zeros(2), vx=np.full(2, 0.6),
                                vy=np.full(2, -0.8), spin=np.zeros(2),
                                spin_rolling=np.zeros(2, dtype=bool)), key=1, threads=1)
-    before = {d: (set(d.signatures), dict(d.stats.cache_misses))
-              for d in (ensemble._path, centre_path_of)}
     read_only = x.copy()
     read_only.flags.writeable = False
     mc = np.radians(5.0)
@@ -90,4 +92,5 @@ def test_paths_made_from_python_use_the_kernels_sweep_and_compile_nothing():
     sec.centre_path(0.5)
     for d, (sigs, misses) in before.items():
         assert len(set(d.signatures) - sigs) <= 1, d.py_func.__name__
-        assert dict(d.stats.cache_misses) == misses, d.py_func.__name__
+        if d is not near_path:  # not the kernel's: compiled on a first run
+            assert dict(d.stats.cache_misses) == misses, d.py_func.__name__
