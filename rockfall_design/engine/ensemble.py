@@ -82,7 +82,8 @@ made once per run rather than once per batch, and, with rocks of several sizes, 
 ground elements the paths of the others can lie on (see :func:`run_ensemble`)."""
 
 
-def rock_path(ground: Ground, r: float, max_chord: float, elems: np.ndarray) -> Path:
+@compiled(nogil=True)
+def rock_path(ground, r, max_chord, elems):
     """The ground as a rock of radius ``r`` (m) meets it (``records.Path``).
 
     Its centre path (``profile.centre_path``) and the tree of its highest
@@ -90,31 +91,19 @@ def rock_path(ground: Ground, r: float, max_chord: float, elems: np.ndarray) -> 
     ``elems``: empty, or the ground elements (segment offsets and vertex
     arcs) that the path can lie on (``profile.path_elements``), of which
     ``profile.survey_path`` makes it.
-
-    Not compiled itself: the kernel's own variant of :func:`_path` (loaded
-    from the cache) does the work, so a run on a survey of many points, which
-    makes its first path here, compiles nothing more than the kernel (see
-    ``profile.sweep_centre_path``). It releases Python's lock.
     """
-    return _path(_kernel_ground(ground), float(r), float(max_chord),
-                 writable(elems, np.int64), no_units())
+    return _path(ground, r, max_chord, elems, no_units())
 
 
-def rock_path_of(ground: Ground, r: float, max_chord: float, units: tuple) -> Path:
+@compiled(nogil=True)
+def rock_path_of(ground, r, max_chord, units):
     """:func:`rock_path` from every element, from ``units`` (``profile.every_piece_units``).
 
     The same path, to the bit; what does not depend on the radius (the arcs'
     trigonometry, most of a small section's path) made once per batch, or
     here if ``units`` is ``profile.no_units()``.
     """
-    return _path(_kernel_ground(ground), float(r), float(max_chord),
-                 np.empty(0, dtype=np.int64), units)
-
-
-def _kernel_ground(ground: Ground) -> Ground:
-    """``ground`` with arrays of the types the kernel is compiled for (:func:`.jit.writable`)."""
-    return Ground(writable(ground.x, np.float64), writable(ground.y, np.float64),
-                  writable(ground.seg_mat, np.int64), writable(ground.mats, np.float64))
+    return _path(ground, r, max_chord, np.empty(0, dtype=np.int64), units)
 
 
 @compiled(nogil=True)

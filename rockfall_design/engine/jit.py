@@ -309,9 +309,8 @@ def writable(a: Any, dtype: Any = None) -> Any:
     engine its sections read-only (the plugin proxy's guard), and its first
     run after an install compiled a second variant of the kernel, about 30 s,
     for that alone. Arrays given to a compiled function from Python pass
-    through here, so that one variant (the kernel's) serves every caller.
-    The engine never writes them; copying the few that are read-only costs
-    microseconds.
+    through here, so that one variant serves every caller. The engine never
+    writes them; copying the few that are read-only costs microseconds.
     """
     out = np.ascontiguousarray(a, dtype=dtype)
     return out if out.flags.writeable else out.copy()

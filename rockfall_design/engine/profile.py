@@ -17,10 +17,7 @@ never comes closer to the vertex than ``r``, so the rock never enters the
 ground, and each edge is tangent to the arc at its middle, so its normal is an
 exact normal of the arc.
 
-The geometry is compiled with numba and works on plain arrays; the entry
-points Python calls (:func:`centre_path`, :func:`survey_path`,
-:func:`sweep_centre_path`) are plain functions over the one compiled
-sweep the batch kernel uses, :func:`centre_path_of`.
+Everything here is compiled with numba and works on plain arrays.
 """
 
 from __future__ import annotations
@@ -727,16 +724,15 @@ def stable_order(a):
     return idx
 
 
-def centre_path(gx: np.ndarray, gy: np.ndarray, seg_mat: np.ndarray, r: float,
-                max_chord: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+@compiled
+def centre_path(gx, gy, seg_mat, r, max_chord):
     """Centre path of a sphere of radius ``r`` on the ground (:func:`sweep_centre_path`)."""
-    return sweep_centre_path(gx, gy, seg_mat, r, max_chord, True, element_codes(len(gx)),
-                             False)
+    return sweep_centre_path(gx, gy, seg_mat, r, max_chord, True,
+                             np.arange(2 * gx.shape[0] - 1), False)
 
 
-def survey_path(gx: np.ndarray, gy: np.ndarray, seg_mat: np.ndarray, r: float,
-                max_chord: float, elems: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+@compiled(nogil=True)
+def survey_path(gx, gy, seg_mat, r, max_chord, elems):
     """Centre path of radius ``r`` (m) made of the ground elements ``elems`` only.
 
     The path of :func:`centre_path`, from the offsets of the segments and
@@ -882,9 +878,8 @@ def _dist2(x, y, ax, ay, bx, by):
     return ex * ex + ey * ey
 
 
-def sweep_centre_path(gx: np.ndarray, gy: np.ndarray, seg_mat: np.ndarray, r: float,
-                      max_chord: float, prune: bool, elems: np.ndarray, canon: bool
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+@compiled
+def sweep_centre_path(gx, gy, seg_mat, r, max_chord, prune, elems, canon):
     """Centre path of a sphere of radius ``r`` on the ground polyline.
 
     Parameters
@@ -932,17 +927,7 @@ def sweep_centre_path(gx: np.ndarray, gy: np.ndarray, seg_mat: np.ndarray, r: fl
     convex). Pieces hidden below a vertex's circle (:func:`hidden_pieces`) are
     left out of the walk; every piece's ends stay breakpoints.
     """
-    # Not compiled itself: a compiled function called from Python is a unit
-    # of numba's of its own, with the whole sweep linked in and optimised and
-    # emitted again (some seconds of a first run each, for centre_path,
-    # survey_path and this). Called with the types the batch kernel calls it
-    # with, centre_path_of is the kernel's own compiled variant, loaded from
-    # the cache; its code, compiled for a compiled caller (jit.optimise_once),
-    # ran a 100,000-point survey's path 5 % slower than a wrapper of its own
-    # (91 against 87 ms, 29 November 2026), for a path made once a run.
-    return centre_path_of(writable(gx, np.float64), writable(gy, np.float64),
-                          writable(seg_mat, np.int64), float(r), float(max_chord), bool(prune),
-                          writable(elems, np.int64), bool(canon), no_units())
+    return centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, no_units())
 
 
 @compiled
@@ -998,7 +983,7 @@ def every_piece_units(gx, gy, max_chord):
     return _piece_units(ex, ey, eseg, max_chord, ecodes)
 
 
-@compiled(nogil=True)
+@compiled
 def centre_path_of(gx, gy, seg_mat, r, max_chord, prune, elems, canon, units):
     """:func:`sweep_centre_path`, from the pieces' ``units`` when given (not ``canon``).
 

@@ -230,6 +230,21 @@ def _hidden_by_the_window(xa, ya, xb, yb, ex, ey, r, tol):
     return tried & (near & over_a & over_b).any(axis=1)
 
 
+def test_path_elements_of_read_only_or_strided_arrays_compile_no_variant_of_their_own():
+    # numba types a read-only or strided array apart from a plain one and
+    # compiles a function anew for it; path_elements gives its compiled parts
+    # (survey_path, near_path) plain arrays whatever it is given.
+    x, y = noisy_survey(400, 0.01, 3)
+    plain = path_elements(x, y, 0.3, 0.7, np.radians(5.0))
+    before = {d: len(d.signatures) for d in (survey_path, near_path)}
+    read_only = x.copy()
+    read_only.flags.writeable = False
+    strided = np.stack([y, y], axis=1)[:, 0]
+    np.testing.assert_array_equal(
+        path_elements(read_only, strided, 0.3, 0.7, np.radians(5.0)), plain)
+    assert {d: len(d.signatures) for d in before} == before
+
+
 @SETTINGS
 @given(
     n=st.sampled_from([8, 60, 400, 3000]),
