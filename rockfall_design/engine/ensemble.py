@@ -248,8 +248,12 @@ def _run_batch(ground, path0, r0, elems, settings, max_chord, key, first_index, 
         out.n_ev[i] = ne
         out.max_x[i] = mx
         out.dur[i] = tt
-        out.grid_h[i, :] = gh
-        out.grid_e[i, :] = ge
+        # Element by element, not out.grid_h[i, :] = gh: numba compiles an
+        # array-to-array slice assignment with its shape check's error path,
+        # which formats a message (about a twentieth of the first compile).
+        for s in range(ns):
+            out.grid_h[i, s] = gh[s]
+            out.grid_e[i, s] = ge[s]
         if i < ntr:
             out.n_traj[i] = nt
 
