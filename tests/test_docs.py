@@ -35,6 +35,7 @@ OTHER_PROGRAMS_OPTIONS = {
     "--seeds": "benchmarks/optimise.py",
     "--no-reference": "benchmarks/optimise.py",
     "--check-seeds": "benchmarks/optimise.py",
+    "--projects": "benchmarks/optimise.py",
     "--points": "benchmarks/survey.py",
     "--varying-rocks": "benchmarks/survey.py",
     "--nthreads": "dask worker",
